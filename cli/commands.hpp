@@ -1,0 +1,11 @@
+#pragma once
+// One subcommand per file; each registers its options and callback on the app.
+namespace CLI {
+class App;
+}
+
+namespace orthomech::cli {
+struct GlobalOptions;
+// `orthomech info FILE [--json]`: mobility and structure (cli/info.cpp).
+void register_info(CLI::App& app, const GlobalOptions& globals, int& exit_code);
+}  // namespace orthomech::cli

@@ -1,0 +1,125 @@
+// `orthomech info FILE [--json]`: structure and mobility of a mechanism (design §8).
+// The design position is first projected onto f(q) = 0 (mass-metric Gauss–Newton), because the
+// rank of E, and so the redundancy, is a property of the constraint manifold.
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <spdlog/spdlog.h>
+
+#include "commands.hpp"
+#include "common.hpp"
+#include "orthomech/analysis/mobility.hpp"
+#include "orthomech/analysis/positions.hpp"
+
+namespace orthomech::cli {
+
+namespace {
+
+struct InfoOptions {
+  std::string file;
+  bool json = false;
+};
+
+std::string fmt_double(double v) {
+  std::ostringstream s;
+  s.precision(4);
+  s << v;
+  return s.str();
+}
+
+int run_info(const InfoOptions& opt) {
+  const Model model = load(opt.file);
+  VecX q = model.design_q();
+  const VecX q_design = q;
+  const SolveResult assembly = project_positions(model, q);
+  if (assembly.status != SolveStatus::converged) {
+    spdlog::warn("{}: the design position does not assemble ({}; residual {:.3g}); "
+                 "mobility is reported at the design position as given",
+                 model.file, to_string(assembly.status), assembly.residual);
+    q = q_design;
+  }
+  const double moved = (q - q_design).cwiseAbs().maxCoeff();
+  const Mobility mob = compute_mobility(model, q);
+
+  std::ostringstream out;
+  if (opt.json) {
+    nlohmann::json j;
+    j["mechanism"] = model.name;
+    j["file"] = model.file;
+    j["coordinates"] = mob.nq;
+    j["velocities"] = mob.n;
+    j["constraints"] = mob.nc;
+    j["rank"] = mob.rank;
+    j["dof"] = mob.dof;
+    j["grubler"] = mob.grubler;
+    j["redundant"] = mob.redundant;
+    j["rank_tolerance"] = mob.tolerance;
+    j["smallest_pivot"] = mob.smallest_pivot;
+    j["assembly"] = {{"status", to_string(assembly.status)},
+                     {"iterations", assembly.iterations},
+                     {"residual", assembly.residual},
+                     {"max_coordinate_change", moved}};
+    nlohmann::json bodies = nlohmann::json::array();
+    for (const Body& b : model.bodies)
+      bodies.push_back({{"name", b.name},
+                        {"type", b.kind == BodyKind::rigid ? "rigid" : "particle"},
+                        {"mass", b.mass},
+                        {"inertia", b.inertia}});
+    j["bodies"] = bodies;
+    nlohmann::json joints = nlohmann::json::array();
+    for (const Joint& jt : model.joints)
+      joints.push_back({{"name", jt.name}, {"type", jt.type_name()}, {"equations", jt.component_names()}});
+    j["joints"] = joints;
+    nlohmann::json measures = nlohmann::json::array();
+    for (const Measure& m : model.measures) measures.push_back({{"name", m.name}, {"unit", m.unit}});
+    j["measures"] = measures;
+    out << j.dump(2) << '\n';
+  } else {
+    out << "mechanism     " << model.name << "  (" << model.file << ")\n";
+    out << "bodies        " << model.bodies.size() << " moving + ground\n";
+    out << "coordinates   nq = " << mob.nq << ", n = " << mob.n << "\n";
+    out << "constraints   n_c = " << mob.nc << " in " << model.joints.size() << " joints\n";
+    out << "rank of E     " << mob.rank << "   (smallest kept pivot " << fmt_double(mob.smallest_pivot)
+        << ", tolerance " << fmt_double(mob.tolerance) << ")\n";
+    out << "DOF           " << mob.dof << "   (Grübler–Kutzbach count " << mob.grubler << ")\n";
+    out << "redundant     ";
+    if (mob.redundant.empty()) out << "none";
+    for (size_t k = 0; k < mob.redundant.size(); ++k) out << (k ? "; " : "") << mob.redundant[k];
+    out << "\n";
+    out << "design pose   " << to_string(assembly.status) << " onto f(q) = 0 in "
+        << assembly.iterations << " iterations, max coordinate change " << fmt_double(moved)
+        << ", residual " << fmt_double(assembly.residual) << "\n\n";
+    out << "joints\n";
+    for (const Joint& jt : model.joints) {
+      out << "  " << jt.name << "  " << jt.type_name() << "  (";
+      const auto comps = jt.component_names();
+      for (size_t k = 0; k < comps.size(); ++k) out << (k ? ", " : "") << comps[k];
+      out << ")\n";
+    }
+    if (!model.measures.empty()) {
+      out << "measures\n";
+      for (const Measure& m : model.measures) out << "  " << m.name << " [" << m.unit << "]\n";
+    }
+  }
+  std::cout << out.str();  // all at once: no partial output on failure
+  return kOk;
+}
+
+}  // namespace
+
+void register_info(CLI::App& app, const GlobalOptions& globals, int& exit_code) {
+  auto opt = std::make_shared<InfoOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "info", "bodies, joints, coordinates, constraints, rank of E, DOF, Grübler count, "
+              "redundant equations");
+  cmd->add_option("file", opt->file, "mechanism file (YAML)")->required();
+  cmd->add_flag("--json", opt->json, "one JSON document on stdout");
+  cmd->callback([opt, &globals, &exit_code] {
+    setup_logging(globals);
+    exit_code = run_info(*opt);
+  });
+}
+
+}  // namespace orthomech::cli

@@ -1,0 +1,43 @@
+// orthomech: command-line entry. Parses the command line, dispatches to one subcommand, and maps
+// every error to a documented exit code (docs/cli.md). Results go to stdout, logs to stderr.
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <exception>
+#include <iostream>
+
+#include "commands.hpp"
+#include "common.hpp"
+#include "orthomech/error.hpp"
+
+int main(int argc, char** argv) {
+  using namespace orthomech::cli;
+  CLI::App app{
+      "orthomech: analysis of planar linkages with the mass-orthogonal projection method"};
+  app.set_version_flag("--version", std::string("orthomech ") + ORTHOMECH_VERSION);
+  app.require_subcommand(1);
+  GlobalOptions globals;
+  app.add_flag("-q,--quiet", globals.quiet, "only errors on stderr");
+  app.add_flag("-v,--verbose", globals.verbose, "debug messages on stderr");
+  int exit_code = kOk;
+  register_info(app, globals, exit_code);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    app.exit(e);
+    return kBadInput;
+  } catch (const orthomech::InputError& e) {
+    std::fflush(stdout);
+    std::cerr << e.what() << '\n';
+    return kBadInput;
+  } catch (const std::exception& e) {
+    std::cerr << "orthomech: internal error: " << e.what() << '\n';
+    return kInternal;
+  }
+  return exit_code;
+}

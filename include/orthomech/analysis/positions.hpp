@@ -1,0 +1,36 @@
+#pragma once
+// Position solvers on f(q) = 0 (design §5), Eigen only. Results are data, not exceptions.
+#include <string>
+
+#include "orthomech/model/model.hpp"
+#include "orthomech/projection/workspace.hpp"
+
+namespace orthomech {
+
+enum class SolveStatus { converged, not_converged, singular };
+[[nodiscard]] const char* to_string(SolveStatus s);
+
+struct SolveResult {
+  SolveStatus status = SolveStatus::not_converged;
+  std::string message;
+  int iterations = 0;
+  double residual = 0.0;  // max |f_k| at the end (SI: m or rad)
+};
+
+struct PositionOptions {
+  double tolerance = 1e-12;  // max |f_k| (m, rad); positions of mechanisms of 1 mm–10 m
+  int max_iterations = 50;
+};
+
+// Gauss–Newton in the mass metric (the paper's natural metric): Δq = −A E_R (E_Rᵀ A E_R)⁻¹ f_R
+// on the independent rows R (rank-revealing), i.e. the smallest correction in the kinetic-energy
+// norm. Moves every body; works with redundant constraints. For one-off projections.
+SolveResult project_positions(const Model& model, VecX& q, const PositionOptions& options = {});
+
+// Newton in the current chart of ws: the independent coordinates stay fixed, the dependent ones
+// move: Δq_D = −(E_RDᵀ)⁻¹ f_R. The per-step corrector of continuation and integration;
+// allocation-free.
+SolveResult correct_positions_in_chart(const Model& model, VecX& q, Workspace& ws,
+                                       const PositionOptions& options = {});
+
+}  // namespace orthomech

@@ -1,0 +1,28 @@
+#pragma once
+// Constraints (paper §3, design §3): every joint supplies, analytically,
+//   f(q)            the geometric residual, eq. (20)  (holonomic joints),
+//   Eᵀ(q)           the constraint matrix acting on u, eq. (23): Eᵀ u = 0,
+//   Dᵀ(q, u)        its time derivative along the motion, Dᵀ = d/dt Eᵀ, eq. (76),
+// so that Dᵀu is the convective term of the acceleration constraint Eᵀu̇ + Dᵀu = 0.
+// Rows are stacked joint by joint in file order (Joint::row_offset).
+#include "orthomech/model/model.hpp"
+#include "orthomech/model/state.hpp"
+
+namespace orthomech {
+
+struct ConstraintWorkspace {
+  VecX f;    // nc:      geometric residual, eq. (20)
+  MatX Et;   // nc × n:  Eᵀ, eq. (23)
+  MatX Dt;   // nc × n:  Dᵀ = Ėᵀ, eq. (76)
+  VecX Dtu;  // nc:      Dᵀ u
+  explicit ConstraintWorkspace(const Model& model);
+};
+
+// f(q) only (cheap: used by position solvers).
+void compute_constraint_residual(const Model& model, const VecX& q, VecX& f);
+// Eᵀ(q) only.
+void compute_constraint_jacobian(const Model& model, const VecX& q, MatX& Et);
+// f, Eᵀ, Dᵀ and Dᵀu at a state. Allocation-free.
+void compute_constraints(const Model& model, const State& state, ConstraintWorkspace& ws);
+
+}  // namespace orthomech

@@ -1,0 +1,68 @@
+#pragma once
+// The free system (paper §2): M(q) (eq. (4)), A = M⁻¹ (eq. (6)), Ṁ, q̇ = B̃ u (eq. (19)), and the
+// kinematics of points fixed on bodies, shared by joints, loads and measures.
+//
+// For the planar bodies implemented here B̃ = I and M is constant, but every function takes q
+// (and u) so that configuration-dependent systems fit the same calls.
+#include <Eigen/Core>
+
+#include "orthomech/model/model.hpp"
+#include "orthomech/model/state.hpp"
+
+namespace orthomech {
+
+// M(q), eq. (4) (dense n × n; block diagonal for bodies).
+void compute_mass_matrix(const Model& model, const VecX& q, MatX& M);
+// A = M⁻¹, eq. (6).
+void compute_inverse_mass_matrix(const Model& model, const VecX& q, MatX& A);
+// Ṁ = dM/dt along u (zero for bodies in absolute coordinates).
+void compute_mass_matrix_rate(const Model& model, const VecX& q, const VecX& u, MatX& Mdot);
+[[nodiscard]] bool mass_matrix_is_constant(const Model& model);
+// q ← q ⊕ h·B̃(q)·du: moves the coordinates along a velocity (exact for planar bodies).
+void integrate_positions(const Model& model, VecX& q, const VecX& du, double h);
+// Kinetic energy T = ½ uᵀ M u, eq. (4).
+[[nodiscard]] double kinetic_energy(const Model& model, const State& state);
+
+// ---- Point kinematics: r_P = r + R(φ) s. -------------------------------------------------------
+struct PointKinematics {
+  Vec2 r = Vec2::Zero();    // world position
+  Vec2 Rs = Vec2::Zero();   // R(φ) s (world vector from the centre of mass)
+  Vec2 v = Vec2::Zero();    // world velocity
+  double phidot = 0.0;      // angular velocity of the body (0 for particles and ground)
+  bool rotates = false;     // body has an angle coordinate
+  bool moving = false;      // not the ground
+};
+// u may be null: then only r and Rs are filled (velocities zero).
+[[nodiscard]] PointKinematics point_kinematics(const Model& model, const PointRef& p,
+                                               const VecX& q, const VecX* u);
+[[nodiscard]] double body_angle(const Model& model, int body, const VecX& q);
+[[nodiscard]] double body_angular_velocity(const Model& model, int body, const VecX& u);
+[[nodiscard]] inline Vec2 perp(const Vec2& a) { return Vec2(-a.y(), a.x()); }  // rotate by +90°
+[[nodiscard]] inline Eigen::Matrix2d rotation(double phi) {
+  Eigen::Matrix2d R;
+  const double c = std::cos(phi), s = std::sin(phi);
+  R << c, -s, s, c;
+  return R;
+}
+
+// Adds w₁·(∂r_P/∂u)ᵀ… : writes the 1 × n row c ᵀ ∂r_P/∂u (the Jacobian of cᵀ r_P w.r.t. u) scaled
+// by `scale` into `row` (accumulating). ∂r_P/∂(x, y, φ) = [I, R'(φ) s] = [I, perp(R s)].
+template <typename Row>
+void add_point_jacobian(const Model& model, const PointRef& p, const PointKinematics& k,
+                        const Vec2& c, double scale, Row&& row) {
+  if (p.body == kGround) return;
+  const Body& b = model.bodies[static_cast<size_t>(p.body)];
+  row(b.u_offset) += scale * c.x();
+  row(b.u_offset + 1) += scale * c.y();
+  if (k.rotates) row(b.u_offset + 2) += scale * c.dot(perp(k.Rs));
+}
+// Time derivative of that row: d/dt (∂r_P/∂u) = [0, −R s φ̇].
+template <typename Row>
+void add_point_jacobian_rate(const Model& model, const PointRef& p, const PointKinematics& k,
+                             const Vec2& c, double scale, Row&& row) {
+  if (p.body == kGround || !k.rotates) return;
+  const Body& b = model.bodies[static_cast<size_t>(p.body)];
+  row(b.u_offset + 2) += -scale * k.phidot * c.dot(k.Rs);
+}
+
+}  // namespace orthomech

@@ -1,0 +1,27 @@
+#pragma once
+// Measures and inputs: scalar functions s(q) of the position, with their Jacobian row
+// d = ∂s/∂u (so ṡ = d u) and convective term ḋ u (so s̈ = d u̇ + ḋ u). Drivers use the same
+// functions for the input (design §6).
+#include "orthomech/model/model.hpp"
+
+namespace orthomech {
+
+struct ScalarKinematics {
+  double value = 0.0;  // s(q)
+  double rate = 0.0;   // ṡ = d u   (0 when u is null)
+  double ddot_u = 0.0; // ḋ u       (0 when u is null)
+};
+
+// s, ṡ and ḋu of the position measure underlying `kind`; if d is non-null it receives d (size n).
+ScalarKinematics compute_scalar(const Model& model, const MeasureKind& kind, const VecX& q,
+                                const VecX* u, Eigen::Ref<VecX> d);
+ScalarKinematics compute_scalar(const Model& model, const MeasureKind& kind, const VecX& q,
+                                const VecX* u);
+// The coordinate of a joint as an input: revolute φ_j − φ_i, prismatic axisᵀ(r_Pj − r_Pi).
+[[nodiscard]] MeasureKind joint_input(const Model& model, int joint);
+
+// Value of a measure (its derivative order applied). udot may be null for derivative < 2.
+[[nodiscard]] double evaluate_measure(const Model& model, const Measure& m, const VecX& q,
+                                      const VecX* u, const VecX* udot);
+
+}  // namespace orthomech

@@ -1,0 +1,218 @@
+#pragma once
+// The Model: an immutable description of a mechanism (house style: never mutated by
+// algorithms). It is built and validated once, by io/mechanism_file or by ModelBuilder in code.
+//
+// Free system (paper §2, design §2). Coordinates q (size nq) and velocity parameters u (size n),
+// q̇ = B̃(q) u (eq. (19)). Kinds of free system:
+//   - planar rigid body: q = (x, y, φ) of the centre of mass and the body-frame angle, u = q̇,
+//     M = diag(m, m, J_c);
+//   - planar particle:   q = (x, y), u = q̇, M = diag(m, m).
+// Interfaces never assume nq == n or a constant M (spatial bodies and M(q) systems come next);
+// see model/free_system.hpp.
+#include <Eigen/Core>
+#include <optional>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "orthomech/error.hpp"
+
+namespace orthomech {
+
+using Vec2 = Eigen::Vector2d;
+using Vec3 = Eigen::Vector3d;
+using VecX = Eigen::VectorXd;
+using MatX = Eigen::MatrixXd;
+
+inline constexpr int kGround = -1;  // body index of the ground (fixed frame = world frame)
+
+enum class BodyKind { rigid, particle };
+
+struct Body {
+  std::string name;
+  BodyKind kind = BodyKind::rigid;
+  double mass = 0.0;     // kg
+  double inertia = 0.0;  // kg·m² about the centre of mass (rigid only)
+  Vec2 com_local = Vec2::Zero();  // centre of mass in the body frame, m
+  Vec3 design_pose = Vec3::Zero();  // body frame in world at the design position: x, y, angle
+  std::vector<std::pair<std::string, Vec2>> points;  // named points, body frame, m
+  std::vector<Vec2> outline;  // drawing only, body frame
+  int q_offset = 0;  // first coordinate of this body in q
+  int u_offset = 0;  // first velocity parameter of this body in u
+  SourceLocation where;
+  [[nodiscard]] int nq() const { return kind == BodyKind::rigid ? 3 : 2; }
+  [[nodiscard]] int nu() const { return kind == BodyKind::rigid ? 3 : 2; }
+};
+
+// A point fixed on a body (or on the ground). s is measured from the centre of mass, in the body
+// frame (for the ground: the world position).
+struct PointRef {
+  int body = kGround;
+  Vec2 s = Vec2::Zero();
+  std::string label;  // "body.point" as written by the user
+};
+
+// ---- Joints (design §3). Each supplies f (eq. (20)), Eᵀ (eq. (23)) and Dᵀ (eq. (76)). ----------
+// Sign convention: λ of a joint is the force (and moment) that body j exerts on body i, in the
+// world frame, for f = (point on i) − (point on j). docs/notation.md.
+struct Revolute {  // rows: x, y.  f = r_i + R_i s_i − r_j − R_j s_j
+  PointRef pi, pj;
+};
+struct Prismatic {  // rows: n, angle.  f = (nᵀ(r_Pj − r_Pi), φ_j − φ_i − φ0)
+  PointRef pi, pj;
+  Vec2 axis_local = Vec2::UnitX();  // slide direction, body i frame, unit
+  double phi0 = 0.0;
+};
+struct Fixed {  // rows: x, y, angle.  f = (r_Pi − r_Pj, φ_j − φ_i − φ0)
+  PointRef pi, pj;
+  double phi0 = 0.0;
+};
+struct PinInSlot {  // rows: n.  Point Pj of body j on the line through Pi of body i along axis.
+  PointRef pi, pj;
+  Vec2 axis_local = Vec2::UnitX();
+};
+struct GearPair {  // rows: ratio.  f = (φ_j − φ_c) − k (φ_i − φ_c) − c0, c = carrier
+  int bi = kGround, bj = kGround, carrier = kGround;
+  double ratio = 1.0;
+  double c0 = 0.0;
+};
+struct Distance {  // rows: length.  f = (|r_Pj − r_Pi|² − L²) / (2L): a massless pin-ended rod
+  PointRef pi, pj;
+  double length = 1.0;
+};
+using JointKind = std::variant<Revolute, Prismatic, Fixed, PinInSlot, GearPair, Distance>;
+
+struct Joint {
+  std::string name;
+  JointKind kind;
+  int row_offset = 0;  // first row of this joint in f, Eᵀ, Dᵀ
+  SourceLocation where;
+  [[nodiscard]] int rows() const;
+  [[nodiscard]] std::string type_name() const;
+  [[nodiscard]] std::vector<std::string> component_names() const;  // e.g. {"x", "y"}
+};
+
+// ---- Loads (design §9). Each gives a generalized force Q (eq. (8)). ---------------------------
+struct Gravity {
+  Vec2 g = Vec2(0.0, -9.81);
+};
+// Scalar function of a measure, by linear interpolation in a table (e.g. gas force vs stroke);
+// constant when the table is empty.
+struct Table {
+  int measure = -1;
+  std::vector<std::pair<double, double>> points;  // (measure value, factor), sorted
+};
+struct PointForce {  // force at a point: world or body-fixed direction, magnitude × table factor
+  PointRef at;
+  Vec2 force = Vec2::Zero();
+  bool body_fixed = false;
+  Table table;
+};
+struct Torque {
+  int body = kGround;
+  double torque = 0.0;
+  Table table;
+};
+struct SpringDamper {  // tension T = k (L − L0) + c L̇ between two points
+  PointRef pi, pj;
+  double stiffness = 0.0, free_length = 0.0, damping = 0.0;
+};
+struct RotarySpringDamper {  // moment T = k (φ_j − φ_i − θ0) + c (φ̇_j − φ̇_i), acting on j (−) and i (+)
+  int bi = kGround, bj = kGround;
+  double stiffness = 0.0, free_angle = 0.0, damping = 0.0;
+};
+using LoadKind = std::variant<Gravity, PointForce, Torque, SpringDamper, RotarySpringDamper>;
+struct Load {
+  std::string name;
+  LoadKind kind;
+  SourceLocation where;
+};
+
+// ---- Measures: scalar functions s(q) of position, with derivative order 0/1/2. ---------------
+struct JointCoordinate {  // revolute: φ_j − φ_i; prismatic: axisᵀ(r_Pj − r_Pi)
+  int joint = -1;
+};
+struct PointCoordinate {  // world x or y of a point
+  PointRef point;
+  int axis = 0;
+};
+struct PointDistance {
+  PointRef pi, pj;
+};
+struct BodyAngle {  // φ_j − φ_i (absolute body angle when bi is the ground)
+  int bi = kGround, bj = kGround;
+};
+using MeasureKind = std::variant<JointCoordinate, PointCoordinate, PointDistance, BodyAngle>;
+struct Measure {
+  std::string name;
+  MeasureKind kind;
+  int derivative = 0;  // 0 position, 1 velocity, 2 acceleration
+  std::string unit;    // SI unit of the reported value
+  SourceLocation where;
+};
+
+// ---- Drivers: a prescribed input (a joint coordinate), design §6. ---------------------------
+enum class Profile { constant_speed, harmonic, polynomial };
+struct Driver {
+  std::string name;
+  int joint = -1;
+  Profile profile = Profile::constant_speed;
+  double speed = 0.0;                 // rad/s or m/s (constant_speed)
+  double initial = 0.0;               // input value at t = 0 (rad or m)
+  double amplitude = 0.0, frequency = 0.0;  // harmonic: s0 + a sin(2π f t)
+  std::vector<double> coefficients;   // polynomial: s(t) = Σ c_k t^k
+  SourceLocation where;
+};
+
+// ---- Design positions (validated by `validate`). -------------------------------------------
+struct DesignTarget {
+  PointRef point;
+  Vec2 position = Vec2::Zero();
+  std::optional<double> angle;  // body angle target (motion generation)
+  double tolerance = 1e-3;
+};
+struct DesignPosition {
+  std::string name;
+  std::vector<std::pair<int, double>> inputs;  // (joint index, value in SI)
+  std::optional<DesignTarget> target;
+  SourceLocation where;
+};
+
+struct AnalysisDefaults {
+  int steps = 360;
+  std::string driver;
+};
+
+// The whole mechanism. Build with ModelBuilder (validates and assigns offsets), then treat as
+// immutable: every algorithm takes `const Model&`.
+struct Model {
+  std::string name;
+  std::string description;
+  std::string file;  // where it came from (for messages)
+  std::vector<Body> bodies;  // moving bodies only; the ground is implicit (kGround)
+  std::vector<Joint> joints;
+  std::vector<Load> loads;
+  std::vector<Measure> measures;
+  std::vector<Driver> drivers;
+  std::vector<DesignPosition> design_positions;
+  AnalysisDefaults analysis;
+  int nq = 0;  // number of coordinates
+  int n = 0;   // number of velocity parameters (free system DOF), eq. (25)
+  int nc = 0;  // number of constraint equations (rows of Eᵀ), eq. (22)
+
+  [[nodiscard]] std::string body_name(int b) const {
+    return b == kGround ? std::string("ground") : bodies[static_cast<size_t>(b)].name;
+  }
+  [[nodiscard]] int find_body(const std::string& name) const;   // kGround for "ground", -2 if none
+  [[nodiscard]] int find_joint(const std::string& name) const;  // -1 if none
+  [[nodiscard]] int find_measure(const std::string& name) const;
+  [[nodiscard]] VecX design_q() const;  // q of the design poses (not necessarily assembled)
+  // "joint 'D', y": the user's name for constraint row k.
+  [[nodiscard]] std::string constraint_row_name(int row) const;
+};
+
+// Assigns coordinate and row offsets and computes nq, n, nc; checks indices. Call after the
+// vectors of a Model are filled (the file reader does); throws std::invalid_argument on misuse.
+void finalize_model(Model& model);
+
+}  // namespace orthomech

@@ -1,0 +1,57 @@
+#pragma once
+// Charts for the dual form (design §4). A global basis F of admissible velocities does not exist
+// in general (paper §5, last paragraph), so F is built by coordinate partitioning in charts:
+//   - `rows`: r = rank(Eᵀ) independent constraint rows (the others are redundant),
+//   - `dependent`: r velocity components D whose block E_RDᵀ is best conditioned,
+//   - `independent`: the n_a = n − r others, I; the chart's coordinates are v = u_I.
+// Then F = P [I; −(E_RDᵀ)⁻¹ E_RIᵀ] (eq. (68) needs only Eᵀ F = 0 and rank F = n_a).
+// Both choices come from rank-revealing QR with column pivoting on Eᵀ scaled to the mass metric
+// (columns by 1/√M_kk, rows to unit length), so they do not depend on units.
+#include <Eigen/QR>
+#include <vector>
+
+#include "orthomech/model/model.hpp"
+
+namespace orthomech {
+
+struct ChartOptions {
+  // A constraint row is redundant when its pivot |R_kk| ≤ rank_tolerance · |R_11| in the scaled,
+  // column-pivoted QR of E (docs/theory.md, "Rank and redundancy").
+  double rank_tolerance = 1e-8;
+  // Switch charts when the current chart's quality (min |U_kk| / max |U_kk| of the LU of the
+  // scaled dependent block) falls below switch_below and the best chart is better by the factor
+  // hysteresis.
+  double switch_below = 0.05;
+  double hysteresis = 2.0;
+};
+
+struct Chart {
+  std::vector<int> rows;         // r independent constraint rows
+  std::vector<int> dependent;    // r dependent velocity components
+  std::vector<int> independent;  // n_a independent velocity components
+  Eigen::VectorXd row_scale;     // r: scaling of the rows at selection (fixed within the chart)
+  [[nodiscard]] int rank() const { return static_cast<int>(rows.size()); }
+};
+
+// Scaled rank-revealing factorisation of Eᵀ, preallocated (design §4).
+class ChartSelector {
+ public:
+  ChartSelector(int nc, int n);
+  // Chooses rows and the dependent/independent split at the current Eᵀ and the diagonal of A.
+  // Returns the rank. Allocation-free for a given (nc, n) after construction, except for the
+  // index vectors of `chart` (resized only if the rank changed).
+  int select(const MatX& Et, const VecX& A_diag, const ChartOptions& options, Chart& chart);
+  // |R_kk| / |R_11| of the last row selection (size nc, in pivot order), for reports.
+  [[nodiscard]] const VecX& row_pivots() const { return row_pivots_; }
+  [[nodiscard]] const std::vector<int>& row_order() const { return row_order_; }
+
+ private:
+  MatX scaled_E_;   // n × nc: (Eᵀ)ᵀ with rows scaled by √A_kk and columns normalised
+  MatX scaled_Et_rows_;  // r × n
+  Eigen::ColPivHouseholderQR<MatX> qr_rows_;
+  Eigen::ColPivHouseholderQR<MatX> qr_cols_;
+  VecX row_pivots_;
+  std::vector<int> row_order_;
+};
+
+}  // namespace orthomech

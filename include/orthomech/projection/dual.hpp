@@ -1,0 +1,26 @@
+#pragma once
+// Dual (F-based) form, the centre of the tool (paper §5–6; design §4).
+#include "orthomech/model/state.hpp"
+#include "orthomech/projection/workspace.hpp"
+
+namespace orthomech {
+
+// F in the current chart (switching charts when it degrades), H, ψ, α, β, Ḟ, Θ, θ
+// (eqs. (68)–(70), (83)–(84)). Needs compute_free_system and compute_constraints first.
+// Allocation-free while no chart switch happens.
+ProjectionStatus compute_dual(const Model& model, const State& state, Workspace& ws);
+
+// Everything in order: free system, constraints, dual.
+ProjectionStatus evaluate_dual(const Model& model, const State& state, Workspace& ws);
+
+// LU of the current chart's dependent block at ws.constraints.Et (selecting a chart first if
+// none); returns its quality. Used by the position corrector.
+double refactor_chart(Workspace& ws);
+// x = the solution of E_RDᵀ x_D = b_R with x_I = 0 (current chart, after refactor_chart).
+// Sizes: b nc, x n. Allocation-free.
+void solve_chart(Workspace& ws, const VecX& b, VecX& x);
+
+// Forces a fresh chart choice at the current Eᵀ (e.g. at the start of an analysis).
+void reset_chart(Workspace& ws);
+
+}  // namespace orthomech

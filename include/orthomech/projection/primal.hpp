@@ -1,0 +1,19 @@
+#pragma once
+// Primal (E-based) form, the cross-check (paper §3–4, §6; design §4).
+#include "orthomech/model/state.hpp"
+#include "orthomech/projection/workspace.hpp"
+
+namespace orthomech {
+
+// Free-system quantities: M, A (once, if constant), Ṁ, Q̂. Allocation-free.
+void compute_free_system(const Model& model, const State& state, Workspace& ws);
+
+// G, π, α, β, Ω, ω at the state (eqs. (42)–(44), (78)–(79)). Needs compute_free_system and
+// compute_constraints first. With redundant constraints G is singular: ws.primal.status says so
+// and the matrices are left untouched. Allocation-free.
+ProjectionStatus compute_primal(const Model& model, const State& state, Workspace& ws);
+
+// Everything in order: free system, constraints, primal.
+ProjectionStatus evaluate_primal(const Model& model, const State& state, Workspace& ws);
+
+}  // namespace orthomech

@@ -1,0 +1,101 @@
+#pragma once
+// Workspace (house style): every matrix the projections need, allocated once in the
+// constructor, grouped by stage, each field with its equation. Algorithms are free functions
+// compute_x(const Model&, const State&, Workspace&).
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+#include <vector>
+
+#include "orthomech/constraints/joints.hpp"
+#include "orthomech/model/model.hpp"
+#include "orthomech/projection/chart.hpp"
+
+namespace orthomech {
+
+// Stage 1: the free system at q (paper §2).
+struct FreeSystemWorkspace {
+  MatX M;       // n × n: mass matrix, eq. (4)
+  MatX A;       // n × n: A = M⁻¹, eq. (6)
+  VecX A_diag;  // n: diagonal of A (chart scaling)
+  MatX Mdot;    // n × n: Ṁ along u
+  VecX Q;       // n: applied generalized forces Q̂, eq. (17)
+  bool constant_mass = true;
+  bool mass_ready = false;  // M, A filled (once, when constant)
+  explicit FreeSystemWorkspace(const Model& model);
+};
+
+enum class ProjectionStatus {
+  ok,
+  singular_G,      // primal: G = EᵀAE singular (redundant constraints or a singular position)
+  singular_chart,  // dual: the dependent block is singular in every chart (a change point)
+  singular_H,      // dual: H not positive definite (cannot happen for M > 0; reported anyway)
+};
+[[nodiscard]] const char* to_string(ProjectionStatus s);
+
+// Stage 2a: primal (E-based) projections, eqs. (42)–(44), (78)–(79).
+struct PrimalWorkspace {
+  MatX AE;      // n × nc: A E
+  MatX G;       // nc × nc: fundamental matrix G = EᵀAE, eq. (42)
+  Eigen::LLT<MatX> G_llt;
+  MatX GinvEt;  // nc × n: G⁻¹ Eᵀ
+  MatX pi;      // n × n: π = M β = E G⁻¹ Eᵀ, eq. (43)
+  MatX alpha;   // n × n: α = I − A π, eq. (44)
+  MatX beta;    // n × n: β = A π, eq. (44)
+  MatX GinvDt;  // nc × n: G⁻¹ Dᵀ
+  MatX Omega;   // n × n: Ω = E G⁻¹ Dᵀ, eq. (78)
+  MatX omega;   // n × n: ω = π̇ = Ω α + αᵀ Ωᵀ, eq. (79)
+  double G_pivot_ratio = 0.0;  // min/max diagonal of the Cholesky factor, squared
+  ProjectionStatus status = ProjectionStatus::ok;
+  explicit PrimalWorkspace(const Model& model);
+};
+
+struct ChartEvent {
+  double t;            // time (or input value) at the switch
+  double quality_old;  // quality of the chart that was left
+  double quality_new;  // quality of the chart that was entered
+};
+
+// Stage 2b: dual (F-based) projections, eqs. (68)–(72), (83)–(85), in charts.
+struct DualWorkspace {
+  int na;  // admissible DOF n_a, eq. (25)
+  int r;   // rank of Eᵀ
+  Chart chart;
+  ChartSelector selector;
+  ChartOptions options;
+  bool chart_ready = false;
+  double quality = 0.0;             // current chart quality (see ChartOptions)
+  std::vector<ChartEvent> switches;  // every chart switch (reserved, see kMaxRecordedSwitches)
+  long switch_count = 0;
+  MatX Ert_D;   // r × r: scaled dependent block of the independent rows
+  Eigen::PartialPivLU<MatX> Ert_D_lu;
+  MatX rhs;     // r × n_a: scratch (right-hand sides of the dependent block)
+  MatX sol;     // r × n_a: scratch (solutions)
+  MatX F;       // n × n_a: basis of admissible velocities, Eᵀ F = 0
+  MatX MF;      // n × n_a: M F
+  MatX H;       // n_a × n_a: H = Fᵀ M F, eq. (68)
+  Eigen::LLT<MatX> H_llt;
+  MatX HinvFt;  // n_a × n: H⁻¹ Fᵀ
+  MatX psi;     // n × n: ψ = α A = F H⁻¹ Fᵀ, eq. (69)
+  MatX alpha;   // n × n: α = ψ M, eq. (70)
+  MatX beta;    // n × n: β = I − ψ M, eq. (70)
+  MatX DtF;     // nc × n_a: Dᵀ F
+  MatX Fdot;    // n × n_a: Ḟ from Eᵀ Ḟ = −Dᵀ F (design §4)
+  MatX Theta;   // n × n: Θ = Ḟ H⁻¹ Fᵀ, eq. (83)
+  MatX theta;   // n × n: θ = ψ̇ = β Θ + Θᵀ βᵀ, eq. (84)
+  MatX Fdot_scratch;  // n × max(1, n_a): scratch of solve_chart
+  VecX dq;            // n: scratch of the chart position corrector
+  ProjectionStatus status = ProjectionStatus::ok;
+  DualWorkspace(const Model& model, int rank);
+};
+
+struct Workspace {
+  FreeSystemWorkspace free;
+  ConstraintWorkspace constraints;
+  PrimalWorkspace primal;
+  DualWorkspace dual;
+  const Model* model;  // the Model it was sized for (API misuse check)
+  // rank: rank of Eᵀ on the branch (from compute_mobility); sizes F and H.
+  Workspace(const Model& model, int rank);
+};
+
+}  // namespace orthomech

@@ -1,0 +1,110 @@
+#include "orthomech/analysis/positions.hpp"
+
+#include <Eigen/Cholesky>
+
+#include "orthomech/constraints/joints.hpp"
+#include "orthomech/model/free_system.hpp"
+#include "orthomech/projection/dual.hpp"
+
+namespace orthomech {
+
+const char* to_string(SolveStatus s) {
+  switch (s) {
+    case SolveStatus::converged: return "converged";
+    case SolveStatus::not_converged: return "not converged";
+    case SolveStatus::singular: return "singular";
+  }
+  return "?";
+}
+
+SolveResult project_positions(const Model& model, VecX& q, const PositionOptions& options) {
+  SolveResult result;
+  VecX f(model.nc);
+  MatX Et(model.nc, model.n);
+  MatX A(model.n, model.n);
+  compute_inverse_mass_matrix(model, q, A);
+  const VecX A_diag = A.diagonal();
+  ChartSelector selector(model.nc, model.n);
+  Chart chart;
+  ChartOptions chart_options;
+  VecX du(model.n);
+  double previous = std::numeric_limits<double>::infinity();
+  int stalled = 0;
+  for (int it = 0;; ++it) {
+    compute_constraint_residual(model, q, f);
+    result.residual = f.size() ? f.cwiseAbs().maxCoeff() : 0.0;
+    result.iterations = it;
+    if (!std::isfinite(result.residual)) {
+      result.status = SolveStatus::not_converged;
+      result.message = "residual is not finite";
+      return result;
+    }
+    if (result.residual <= options.tolerance) {
+      result.status = SolveStatus::converged;
+      return result;
+    }
+    // Gauss–Newton stalls at the least-squares gap when the mechanism cannot close.
+    stalled = result.residual > 0.5 * previous ? stalled + 1 : 0;
+    if (it >= options.max_iterations || stalled >= 5) {
+      result.status = SolveStatus::not_converged;
+      result.message = "no convergence: remaining residual " + std::to_string(result.residual);
+      return result;
+    }
+    previous = result.residual;
+    compute_constraint_jacobian(model, q, Et);
+    const int r = selector.select(Et, A_diag, chart_options, chart);
+    if (r == 0) {
+      result.status = SolveStatus::singular;
+      result.message = "constraint Jacobian is zero";
+      return result;
+    }
+    MatX Er(r, model.n);
+    VecX fr(r);
+    for (int i = 0; i < r; ++i) {
+      Er.row(i) = Et.row(chart.rows[static_cast<size_t>(i)]);
+      fr(i) = f(chart.rows[static_cast<size_t>(i)]);
+    }
+    const MatX AEr = A * Er.transpose();
+    const MatX Gr = Er * AEr;  // eq. (42) on the independent rows
+    const Eigen::LDLT<MatX> ldlt(Gr);
+    du = -AEr * ldlt.solve(fr);
+    integrate_positions(model, q, du, 1.0);
+  }
+}
+
+SolveResult correct_positions_in_chart(const Model& model, VecX& q, Workspace& ws,
+                                       const PositionOptions& options) {
+  SolveResult result;
+  VecX& f = ws.constraints.f;
+  VecX& dq = ws.dual.dq;
+  if (!ws.free.mass_ready) {
+    compute_mass_matrix(model, q, ws.free.M);
+    compute_inverse_mass_matrix(model, q, ws.free.A);
+    ws.free.A_diag = ws.free.A.diagonal();
+    ws.free.mass_ready = true;
+  }
+  for (int it = 0;; ++it) {
+    compute_constraint_residual(model, q, f);
+    result.residual = f.size() ? f.cwiseAbs().maxCoeff() : 0.0;
+    result.iterations = it;
+    if (result.residual <= options.tolerance) {
+      result.status = SolveStatus::converged;
+      return result;
+    }
+    if (it >= options.max_iterations || !std::isfinite(result.residual)) {
+      result.status = SolveStatus::not_converged;
+      result.message = "chart corrector did not converge";
+      return result;
+    }
+    compute_constraint_jacobian(model, q, ws.constraints.Et);
+    if (!(refactor_chart(ws) > 0.0)) {
+      result.status = SolveStatus::singular;
+      result.message = "dependent block of the chart is singular";
+      return result;
+    }
+    solve_chart(ws, f, dq);             // E_RDᵀ Δq_D = f_R
+    integrate_positions(model, q, dq, -1.0);  // Newton step q_D ← q_D − Δq_D
+  }
+}
+
+}  // namespace orthomech

@@ -1,0 +1,186 @@
+#include "orthomech/constraints/joints.hpp"
+
+#include "orthomech/model/free_system.hpp"
+
+namespace orthomech {
+
+ConstraintWorkspace::ConstraintWorkspace(const Model& model)
+    : f(VecX::Zero(model.nc)),
+      Et(MatX::Zero(model.nc, model.n)),
+      Dt(MatX::Zero(model.nc, model.n)),
+      Dtu(VecX::Zero(model.nc)) {}
+
+namespace {
+
+// Adds ±1 to the angle column of a body (rows of angle constraints).
+template <typename Row>
+void add_angle(const Model& model, int body, double scale, Row&& row) {
+  if (body == kGround) return;
+  const Body& b = model.bodies[static_cast<size_t>(body)];
+  row(b.u_offset + 2) += scale;
+}
+
+// One joint: writes its rows of f (if f_rows), Eᵀ (if Et_rows) and Dᵀ (if Dt_rows).
+// Every formula is written for the convention f = (thing on i) − (thing on j).
+struct JointEvaluator {
+  const Model& model;
+  const VecX& q;
+  const VecX* u;  // null when only f or Eᵀ are wanted
+  int r;  // first row
+  VecX* f;
+  MatX* Et;
+  MatX* Dt;
+
+  template <typename Rows>
+  auto row(Rows* m, int k) {
+    return m->row(r + k);
+  }
+
+  // Revolute, eq. (20): f = r_Pi − r_Pj; Eᵀ = [J_Pi, −J_Pj]; Dᵀ = [J̇_Pi, −J̇_Pj].
+  void operator()(const Revolute& j) { point_coincidence(j.pi, j.pj); }
+
+  // Fixed: the revolute rows plus the angle row φ_j − φ_i − φ0.
+  void operator()(const Fixed& j) {
+    point_coincidence(j.pi, j.pj);
+    relative_angle(j.pi.body, j.pj.body, j.phi0, 2);
+  }
+
+  // Prismatic: the line row of the pin-in-slot plus the angle row.
+  void operator()(const Prismatic& j) {
+    point_on_line(j.pi, j.pj, j.axis_local, 0);
+    relative_angle(j.pi.body, j.pj.body, j.phi0, 1);
+  }
+
+  void operator()(const PinInSlot& j) { point_on_line(j.pi, j.pj, j.axis_local, 0); }
+
+  // Gear pair: f = (φ_j − φ_c) − k (φ_i − φ_c) − c0; Eᵀ constant, Dᵀ = 0.
+  void operator()(const GearPair& j) {
+    if (f) {
+      const double pc = body_angle(model, j.carrier, q);
+      (*f)(r) = (body_angle(model, j.bj, q) - pc) - j.ratio * (body_angle(model, j.bi, q) - pc) -
+                j.c0;
+    }
+    if (Et) {
+      auto e = row(Et, 0);
+      e.setZero();
+      add_angle(model, j.bj, 1.0, e);
+      add_angle(model, j.bi, -j.ratio, e);
+      add_angle(model, j.carrier, j.ratio - 1.0, e);
+    }
+    if (Dt) row(Dt, 0).setZero();
+  }
+
+  // Distance: f = (dᵀd − L²)/(2L), d = r_Pj − r_Pi; Eᵀ = dᵀ ∂d/∂u / L;
+  // Dᵀ = (ḋᵀ ∂d/∂u + dᵀ d/dt(∂d/∂u)) / L.
+  void operator()(const Distance& j) {
+    const PointKinematics ki = point_kinematics(model, j.pi, q, u);
+    const PointKinematics kj = point_kinematics(model, j.pj, q, u);
+    const Vec2 d = kj.r - ki.r;
+    const Vec2 dd = kj.v - ki.v;
+    const double L = j.length;
+    if (f) (*f)(r) = (d.squaredNorm() - L * L) / (2.0 * L);
+    if (Et) {
+      auto e = row(Et, 0);
+      e.setZero();
+      add_point_jacobian(model, j.pj, kj, d, 1.0 / L, e);
+      add_point_jacobian(model, j.pi, ki, d, -1.0 / L, e);
+    }
+    if (Dt) {
+      auto e = row(Dt, 0);
+      e.setZero();
+      add_point_jacobian(model, j.pj, kj, dd, 1.0 / L, e);
+      add_point_jacobian(model, j.pi, ki, dd, -1.0 / L, e);
+      add_point_jacobian_rate(model, j.pj, kj, d, 1.0 / L, e);
+      add_point_jacobian_rate(model, j.pi, ki, d, -1.0 / L, e);
+    }
+  }
+
+  void point_coincidence(const PointRef& pi, const PointRef& pj) {
+    const PointKinematics ki = point_kinematics(model, pi, q, u);
+    const PointKinematics kj = point_kinematics(model, pj, q, u);
+    if (f) (*f).segment<2>(r) = ki.r - kj.r;  // eq. (20)
+    for (int a = 0; a < 2; ++a) {
+      const Vec2 c = a == 0 ? Vec2::UnitX() : Vec2::UnitY();
+      if (Et) {
+        auto e = row(Et, a);
+        e.setZero();
+        add_point_jacobian(model, pi, ki, c, 1.0, e);   // eq. (23)
+        add_point_jacobian(model, pj, kj, c, -1.0, e);
+      }
+      if (Dt) {
+        auto e = row(Dt, a);
+        e.setZero();
+        add_point_jacobian_rate(model, pi, ki, c, 1.0, e);  // eq. (76)
+        add_point_jacobian_rate(model, pj, kj, c, -1.0, e);
+      }
+    }
+  }
+
+  void relative_angle(int bi, int bj, double phi0, int k) {
+    if (f) (*f)(r + k) = body_angle(model, bj, q) - body_angle(model, bi, q) - phi0;
+    if (Et) {
+      auto e = row(Et, k);
+      e.setZero();
+      add_angle(model, bj, 1.0, e);
+      add_angle(model, bi, -1.0, e);
+    }
+    if (Dt) row(Dt, k).setZero();
+  }
+
+  // Point Pj on the line through Pi along axis a (body i): f = nᵀ d, n = R_i perp(a),
+  // d = r_Pj − r_Pi. With ṅ = φ̇_i perp(n):
+  //   ∂f/∂u  = nᵀ ∂d/∂u + (perp(n)ᵀ d) e_φi                                   (L1)
+  //   d/dt   = ṅᵀ ∂d/∂u + nᵀ d/dt(∂d/∂u) + (−φ̇_i nᵀ d + perp(n)ᵀ ḋ) e_φi        (L2)
+  void point_on_line(const PointRef& pi, const PointRef& pj, const Vec2& axis, int k) {
+    const PointKinematics ki = point_kinematics(model, pi, q, u);
+    const PointKinematics kj = point_kinematics(model, pj, q, u);
+    const double phi_i = body_angle(model, pi.body, q);
+    const double w_i = (u ? body_angular_velocity(model, pi.body, *u) : 0.0);
+    const Vec2 n = rotation(phi_i) * perp(axis);
+    const Vec2 d = kj.r - ki.r;
+    const Vec2 dd = kj.v - ki.v;
+    if (f) (*f)(r + k) = n.dot(d);
+    const bool i_rotates = pi.body != kGround;
+    if (Et) {
+      auto e = row(Et, k);
+      e.setZero();
+      add_point_jacobian(model, pj, kj, n, 1.0, e);  // (L1)
+      add_point_jacobian(model, pi, ki, n, -1.0, e);
+      if (i_rotates) add_angle(model, pi.body, perp(n).dot(d), e);
+    }
+    if (Dt) {
+      auto e = row(Dt, k);
+      e.setZero();
+      const Vec2 ndot = w_i * perp(n);
+      add_point_jacobian(model, pj, kj, ndot, 1.0, e);  // (L2)
+      add_point_jacobian(model, pi, ki, ndot, -1.0, e);
+      add_point_jacobian_rate(model, pj, kj, n, 1.0, e);
+      add_point_jacobian_rate(model, pi, ki, n, -1.0, e);
+      if (i_rotates) add_angle(model, pi.body, -w_i * n.dot(d) + perp(n).dot(dd), e);
+    }
+  }
+};
+
+void evaluate(const Model& model, const VecX& q, const VecX* u, VecX* f, MatX* Et, MatX* Dt) {
+  for (const Joint& joint : model.joints) {
+    JointEvaluator ev{model, q, u, joint.row_offset, f, Et, Dt};
+    std::visit(ev, joint.kind);
+  }
+}
+
+}  // namespace
+
+void compute_constraint_residual(const Model& model, const VecX& q, VecX& f) {
+  evaluate(model, q, nullptr, &f, nullptr, nullptr);
+}
+
+void compute_constraint_jacobian(const Model& model, const VecX& q, MatX& Et) {
+  evaluate(model, q, nullptr, nullptr, &Et, nullptr);
+}
+
+void compute_constraints(const Model& model, const State& state, ConstraintWorkspace& ws) {
+  evaluate(model, state.q, &state.u, &ws.f, &ws.Et, &ws.Dt);
+  ws.Dtu.noalias() = ws.Dt * state.u;  // convective term Dᵀu, eq. (76)
+}
+
+}  // namespace orthomech

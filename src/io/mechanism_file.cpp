@@ -1,0 +1,723 @@
+#include "orthomech/io/mechanism_file.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <functional>
+#include <numbers>
+#include <set>
+#include <sstream>
+
+#include "orthomech/constraints/joints.hpp"
+#include "orthomech/model/free_system.hpp"
+#include "orthomech/model/measures.hpp"
+
+namespace orthomech {
+
+namespace {
+
+struct Units {
+  double length = 1.0, angle = 1.0, mass = 1.0, time = 1.0, force = 1.0;
+};
+
+// Reads one file; `file` names it in every message.
+class Reader {
+ public:
+  explicit Reader(std::string file) : file_(std::move(file)) {}
+
+  Model read(const YAML::Node& root);
+
+ private:
+  std::string file_;
+  Units units_;
+  Model model_;
+  std::vector<std::pair<std::string, Vec2>> ground_points_;
+
+  // ---- error helpers --------------------------------------------------------------------------
+  [[nodiscard]] SourceLocation loc(const YAML::Node& node) const {
+    const YAML::Mark m = node.Mark();
+    if (m.is_null()) return {file_, 0, 0};
+    return {file_, m.line + 1, m.column + 1};
+  }
+  [[noreturn]] void fail(const YAML::Node& node, const std::string& element,
+                         const std::string& message) const {
+    throw InputError(loc(node), element, message);
+  }
+
+  static std::string join(const std::vector<std::string>& keys) {
+    std::string s;
+    for (const auto& k : keys) s += (s.empty() ? "" : ", ") + k;
+    return s;
+  }
+
+  // A mapping whose keys are all in `allowed` (typos must not pass silently).
+  void expect_map(const YAML::Node& node, const std::string& element,
+                  const std::vector<std::string>& allowed) const {
+    if (!node.IsMap()) fail(node, element, "expected a mapping of keys to values");
+    std::set<std::string> seen;
+    for (const auto& kv : node) {
+      const std::string key = kv.first.Scalar();
+      if (!seen.insert(key).second) fail(kv.first, element, "key '" + key + "' appears twice");
+      if (std::find(allowed.begin(), allowed.end(), key) == allowed.end())
+        fail(kv.first, element, "unknown key '" + key + "' (allowed: " + join(allowed) + ")");
+    }
+  }
+  YAML::Node require(const YAML::Node& node, const std::string& key,
+                     const std::string& element) const {
+    const YAML::Node child = node[key];
+    if (!child) fail(node, element, "missing field '" + key + "'");
+    if (child.IsNull()) fail(child, element, "field '" + key + "' is empty");
+    return child;
+  }
+  double number(const YAML::Node& node, const std::string& element, const std::string& field,
+                double scale = 1.0) const {
+    if (!node.IsScalar()) fail(node, element, "field '" + field + "' must be a number");
+    double v = 0.0;
+    try {
+      v = node.as<double>();
+    } catch (const YAML::Exception&) {
+      fail(node, element, "field '" + field + "' must be a number, got '" + node.Scalar() + "'");
+    }
+    if (!std::isfinite(v))
+      fail(node, element, "field '" + field + "' must be finite, got '" + node.Scalar() + "'");
+    return v * scale;
+  }
+  double number_field(const YAML::Node& node, const std::string& key, const std::string& element,
+                      double scale = 1.0) const {
+    return number(require(node, key, element), element, key, scale);
+  }
+  double optional_number(const YAML::Node& node, const std::string& key,
+                         const std::string& element, double fallback, double scale = 1.0) const {
+    const YAML::Node child = node[key];
+    return child ? number(child, element, key, scale) : fallback;
+  }
+  std::string string_field(const YAML::Node& node, const std::string& key,
+                           const std::string& element) const {
+    const YAML::Node child = require(node, key, element);
+    if (!child.IsScalar()) fail(child, element, "field '" + key + "' must be a string");
+    return child.Scalar();
+  }
+  std::vector<double> numbers(const YAML::Node& node, const std::string& element,
+                              const std::string& field, size_t count, double scale = 1.0) const {
+    if (!node.IsSequence() || (count > 0 && node.size() != count))
+      fail(node, element,
+           "field '" + field + "' must be a list of " +
+               (count > 0 ? std::to_string(count) + " numbers" : std::string("numbers")));
+    std::vector<double> out;
+    for (const auto& item : node) out.push_back(number(item, element, field, scale));
+    return out;
+  }
+  Vec2 vec2(const YAML::Node& node, const std::string& element, const std::string& field,
+            double scale) const {
+    const auto v = numbers(node, element, field, 2, scale);
+    return Vec2(v[0], v[1]);
+  }
+  std::string name_of(const YAML::Node& item, const std::string& kind, size_t index,
+                      std::set<std::string>& seen) const {
+    const std::string anonymous = kind + "s[" + std::to_string(index) + "]";
+    if (!item.IsMap()) fail(item, anonymous, "expected a mapping with a 'name'");
+    const std::string name = string_field(item, "name", anonymous);
+    if (name.empty()) fail(item["name"], anonymous, "name is empty");
+    if (!seen.insert(name).second)
+      fail(item["name"], kind + " '" + name + "'", "duplicate name: '" + name + "' is defined twice");
+    return name;
+  }
+  const YAML::Node list(const YAML::Node& root, const std::string& key) const {
+    const YAML::Node node = root[key];
+    if (node && !node.IsNull() && !node.IsSequence())
+      fail(node, key, "expected a list (items starting with '- ')");
+    return node;
+  }
+
+  // ---- sections -------------------------------------------------------------------------------
+  void read_units(const YAML::Node& node);
+  void read_ground(const YAML::Node& node);
+  void read_bodies(const YAML::Node& node);
+  void read_joints(const YAML::Node& node);
+  void read_loads(const YAML::Node& node);
+  void read_measures(const YAML::Node& node);
+  void read_drivers(const YAML::Node& node);
+  void read_design_positions(const YAML::Node& node);
+  void read_analysis(const YAML::Node& node);
+
+  int body_ref(const YAML::Node& node, const std::string& element) const {
+    if (!node.IsScalar()) fail(node, element, "expected a body name");
+    const int b = model_.find_body(node.Scalar());
+    if (b == -2) fail(node, element, "body '" + node.Scalar() + "' is not defined");
+    return b;
+  }
+  int rigid_body_ref(const YAML::Node& node, const std::string& element) const {
+    const int b = body_ref(node, element);
+    if (b != kGround && model_.bodies[static_cast<size_t>(b)].kind == BodyKind::particle)
+      fail(node, element, "body '" + node.Scalar() + "' is a particle and has no angle");
+    return b;
+  }
+  // "body.point" → PointRef (s measured from the centre of mass).
+  PointRef point_ref(const YAML::Node& node, const std::string& element) const {
+    if (!node.IsScalar()) fail(node, element, "expected a point 'body.point'");
+    const std::string text = node.Scalar();
+    const auto dot = text.find('.');
+    if (dot == std::string::npos)
+      fail(node, element, "expected a point 'body.point', got '" + text + "'");
+    const std::string body = text.substr(0, dot), point = text.substr(dot + 1);
+    PointRef p;
+    p.label = text;
+    p.body = model_.find_body(body);
+    if (p.body == -2) fail(node, element, "body '" + body + "' is not defined");
+    const auto& points =
+        p.body == kGround ? ground_points_ : model_.bodies[static_cast<size_t>(p.body)].points;
+    const auto it = std::find_if(points.begin(), points.end(),
+                                 [&](const auto& e) { return e.first == point; });
+    Vec2 local = Vec2::Zero();
+    if (it != points.end()) {
+      local = it->second;
+    } else if (point != "origin") {
+      fail(node, element, "point '" + point + "' is not defined on body '" + body + "'");
+    }
+    p.s = p.body == kGround ? local : Vec2(local - model_.bodies[static_cast<size_t>(p.body)].com_local);
+    return p;
+  }
+  std::pair<PointRef, PointRef> connects(const YAML::Node& item, const std::string& element) const {
+    const YAML::Node c = require(item, "connects", element);
+    if (!c.IsSequence() || c.size() != 2)
+      fail(c, element, "field 'connects' must be a list of two points [body.point, body.point]");
+    PointRef a = point_ref(c[0], element), b = point_ref(c[1], element);
+    if (a.body == b.body)
+      fail(c, element, "connects body '" + model_.body_name(a.body) + "' to itself");
+    return {a, b};
+  }
+  Vec2 unit_axis(const YAML::Node& item, const std::string& element) const {
+    const YAML::Node node = item["axis"];
+    if (!node) return Vec2::UnitX();
+    const Vec2 a = vec2(node, element, "axis", 1.0);
+    if (a.norm() == 0.0) fail(node, element, "axis must not be zero");
+    return a.normalized();
+  }
+  double design_angle(int body) const {
+    return body == kGround ? 0.0 : model_.bodies[static_cast<size_t>(body)].design_pose.z();
+  }
+  double speed_value(const YAML::Node& node, const std::string& element, bool angular) const;
+  Table table(const YAML::Node& node, const std::string& element) const;
+};
+
+// ---- units -------------------------------------------------------------------------------------
+void Reader::read_units(const YAML::Node& node) {
+  if (!node) return;
+  expect_map(node, "units", {"length", "angle", "mass", "time", "force"});
+  auto pick = [&](const std::string& key, const std::vector<std::pair<std::string, double>>& table,
+                  double& out) {
+    const YAML::Node v = node[key];
+    if (!v) return;
+    if (!v.IsScalar()) fail(v, "units", "unit of " + key + " must be a name");
+    for (const auto& [name, factor] : table)
+      if (v.Scalar() == name) {
+        out = factor;
+        return;
+      }
+    std::vector<std::string> names;
+    for (const auto& e : table) names.push_back(e.first);
+    fail(v, "units", "unknown " + key + " unit '" + v.Scalar() + "' (allowed: " + join(names) + ")");
+  };
+  pick("length", {{"m", 1.0}, {"cm", 0.01}, {"mm", 0.001}, {"in", 0.0254}, {"ft", 0.3048}},
+       units_.length);
+  pick("angle", {{"rad", 1.0}, {"deg", std::numbers::pi / 180.0}}, units_.angle);
+  pick("mass", {{"kg", 1.0}, {"g", 0.001}, {"lb", 0.45359237}}, units_.mass);
+  pick("time", {{"s", 1.0}, {"ms", 0.001}}, units_.time);
+  pick("force", {{"N", 1.0}, {"kN", 1000.0}, {"lbf", 4.4482216152605}}, units_.force);
+}
+
+void Reader::read_ground(const YAML::Node& node) {
+  if (!node) return;
+  expect_map(node, "ground", {"points", "outline"});
+  if (const YAML::Node pts = node["points"]) {
+    if (!pts.IsMap()) fail(pts, "ground", "field 'points' must be a mapping name: [x, y]");
+    for (const auto& kv : pts) {
+      const std::string name = kv.first.Scalar();
+      if (name == "origin") fail(kv.first, "ground", "point name 'origin' is reserved");
+      ground_points_.emplace_back(name, vec2(kv.second, "ground", "points." + name, units_.length));
+    }
+  }
+}
+
+// ---- bodies ------------------------------------------------------------------------------------
+void Reader::read_bodies(const YAML::Node& root) {
+  const YAML::Node node = list(root, "bodies");
+  if (!node || node.IsNull() || node.size() == 0)
+    fail(node ? node : root, "bodies", "a mechanism needs at least one moving body");
+  std::set<std::string> seen;
+  size_t index = 0;
+  for (const auto& item : node) {
+    const std::string name = name_of(item, "body", index++, seen);
+    const std::string element = "body '" + name + "'";
+    if (name == "ground") fail(item["name"], element, "'ground' is reserved for the fixed frame");
+    if (name.find('.') != std::string::npos)
+      fail(item["name"], element, "a body name must not contain '.'");
+    Body b;
+    b.name = name;
+    b.where = loc(item);
+    const YAML::Node type = item["type"];
+    if (type) {
+      if (type.Scalar() == "particle") b.kind = BodyKind::particle;
+      else if (type.Scalar() != "rigid")
+        fail(type, element, "unknown body type '" + type.Scalar() + "' (allowed: rigid, particle)");
+    }
+    if (b.kind == BodyKind::rigid)
+      expect_map(item, element, {"name", "type", "mass", "inertia", "com", "pose", "points", "outline"});
+    else
+      expect_map(item, element, {"name", "type", "mass", "pose", "points", "outline"});
+    b.mass = number_field(item, "mass", element, units_.mass);
+    if (!(b.mass > 0.0)) fail(item["mass"], element, "mass must be positive, got " + item["mass"].Scalar());
+    if (b.kind == BodyKind::rigid) {
+      b.inertia = number_field(item, "inertia", element, units_.mass * units_.length * units_.length);
+      if (!(b.inertia > 0.0))
+        fail(item["inertia"], element, "inertia must be positive, got " + item["inertia"].Scalar());
+      if (item["com"]) b.com_local = vec2(item["com"], element, "com", units_.length);
+    }
+    const YAML::Node pose = require(item, "pose", element);
+    if (b.kind == BodyKind::rigid) {
+      const auto p = numbers(pose, element, "pose", 3);
+      b.design_pose = Vec3(p[0] * units_.length, p[1] * units_.length, p[2] * units_.angle);
+    } else {
+      const auto p = numbers(pose, element, "pose", 2, units_.length);
+      b.design_pose = Vec3(p[0], p[1], 0.0);
+    }
+    if (const YAML::Node pts = item["points"]) {
+      if (!pts.IsMap()) fail(pts, element, "field 'points' must be a mapping name: [x, y]");
+      for (const auto& kv : pts) {
+        const std::string pname = kv.first.Scalar();
+        if (pname == "origin") fail(kv.first, element, "point name 'origin' is reserved");
+        b.points.emplace_back(pname, vec2(kv.second, element, "points." + pname, units_.length));
+      }
+    }
+    if (const YAML::Node outline = item["outline"]) {
+      if (!outline.IsSequence()) fail(outline, element, "field 'outline' must be a list of [x, y]");
+      for (const auto& p : outline) b.outline.push_back(vec2(p, element, "outline", units_.length));
+    }
+    model_.bodies.push_back(std::move(b));
+  }
+}
+
+// ---- joints ------------------------------------------------------------------------------------
+void Reader::read_joints(const YAML::Node& root) {
+  const YAML::Node node = list(root, "joints");
+  if (!node || node.IsNull()) return;
+  std::set<std::string> seen;
+  size_t index = 0;
+  const VecX q0 = [&] {
+    Model tmp = model_;
+    finalize_model(tmp);
+    return tmp.design_q();
+  }();
+  for (const auto& item : node) {
+    const std::string name = name_of(item, "joint", index++, seen);
+    const std::string element = "joint '" + name + "'";
+    const std::string type = string_field(item, "type", element);
+    Joint j;
+    j.name = name;
+    j.where = loc(item);
+    auto no_particles = [&](const PointRef& a, const PointRef& b) {
+      for (const PointRef* p : {&a, &b})
+        if (p->body != kGround && model_.bodies[static_cast<size_t>(p->body)].kind == BodyKind::particle)
+          fail(item["connects"], element,
+               "body '" + model_.body_name(p->body) + "' is a particle and has no angle; a " +
+                   type + " joint needs rigid bodies");
+    };
+    if (type == "revolute") {
+      expect_map(item, element, {"name", "type", "connects"});
+      auto [a, b] = connects(item, element);
+      j.kind = Revolute{a, b};
+    } else if (type == "prismatic" || type == "fixed") {
+      if (type == "prismatic")
+        expect_map(item, element, {"name", "type", "connects", "axis", "angle"});
+      else
+        expect_map(item, element, {"name", "type", "connects", "angle"});
+      auto [a, b] = connects(item, element);
+      no_particles(a, b);
+      const double phi0 = optional_number(item, "angle", element,
+                                          design_angle(b.body) - design_angle(a.body), units_.angle);
+      if (type == "prismatic") j.kind = Prismatic{a, b, unit_axis(item, element), phi0};
+      else j.kind = Fixed{a, b, phi0};
+    } else if (type == "pin-in-slot") {
+      expect_map(item, element, {"name", "type", "connects", "axis"});
+      auto [a, b] = connects(item, element);
+      if (a.body != kGround && model_.bodies[static_cast<size_t>(a.body)].kind == BodyKind::particle)
+        fail(item["connects"], element, "the slot body must be rigid or the ground");
+      j.kind = PinInSlot{a, b, unit_axis(item, element)};
+    } else if (type == "gear") {
+      expect_map(item, element, {"name", "type", "bodies", "ratio", "carrier"});
+      const YAML::Node bodies = require(item, "bodies", element);
+      if (!bodies.IsSequence() || bodies.size() != 2)
+        fail(bodies, element, "field 'bodies' must be a list of two bodies");
+      GearPair g;
+      g.bi = rigid_body_ref(bodies[0], element);
+      g.bj = rigid_body_ref(bodies[1], element);
+      if (g.bi == g.bj) fail(bodies, element, "a gear pair needs two different bodies");
+      g.carrier = item["carrier"] ? rigid_body_ref(item["carrier"], element) : kGround;
+      g.ratio = number_field(item, "ratio", element);
+      if (g.ratio == 0.0) fail(item["ratio"], element, "ratio must not be zero");
+      const double pc = design_angle(g.carrier);
+      g.c0 = (design_angle(g.bj) - pc) - g.ratio * (design_angle(g.bi) - pc);
+      j.kind = g;
+    } else if (type == "distance") {
+      expect_map(item, element, {"name", "type", "connects", "length"});
+      auto [a, b] = connects(item, element);
+      Distance d{a, b, 0.0};
+      const VecX* none = nullptr;
+      Model tmp = model_;
+      finalize_model(tmp);
+      const double drawn = (point_kinematics(tmp, b, q0, none).r - point_kinematics(tmp, a, q0, none).r).norm();
+      d.length = optional_number(item, "length", element, drawn, units_.length);
+      if (!(d.length > 0.0)) fail(item["length"] ? item["length"] : item, element, "length must be positive");
+      j.kind = d;
+    } else {
+      fail(item["type"], element,
+           "unknown joint type '" + type +
+               "' (allowed: revolute, prismatic, fixed, pin-in-slot, gear, distance)");
+    }
+    model_.joints.push_back(std::move(j));
+  }
+}
+
+Table Reader::table(const YAML::Node& node, const std::string& element) const {
+  Table t;
+  if (!node) return t;
+  expect_map(node, element, {"measure", "points"});
+  const YAML::Node m = require(node, "measure", element);
+  t.measure = model_.find_measure(m.Scalar());
+  if (t.measure < 0) fail(m, element, "measure '" + m.Scalar() + "' is not defined");
+  const Measure& measure = model_.measures[static_cast<size_t>(t.measure)];
+  if (measure.derivative != 0) fail(m, element, "a table needs a position measure (derivative 0)");
+  const double scale = measure.unit == "rad" ? units_.angle : units_.length;
+  const YAML::Node pts = require(node, "points", element);
+  if (!pts.IsSequence() || pts.size() < 2) fail(pts, element, "table 'points' needs at least two [x, factor] pairs");
+  for (const auto& p : pts) {
+    const auto v = numbers(p, element, "points", 2);
+    t.points.emplace_back(v[0] * scale, v[1]);
+  }
+  for (size_t k = 1; k < t.points.size(); ++k)
+    if (!(t.points[k].first > t.points[k - 1].first))
+      fail(pts[k], element, "table points must be in increasing order of the measure");
+  return t;
+}
+
+// ---- loads -------------------------------------------------------------------------------------
+void Reader::read_loads(const YAML::Node& root) {
+  const YAML::Node node = list(root, "loads");
+  if (!node || node.IsNull()) return;
+  std::set<std::string> seen;
+  size_t index = 0;
+  const double force = units_.force, length = units_.length, angle = units_.angle;
+  for (const auto& item : node) {
+    const std::string name = name_of(item, "load", index++, seen);
+    const std::string element = "load '" + name + "'";
+    const std::string type = string_field(item, "type", element);
+    Load l;
+    l.name = name;
+    l.where = loc(item);
+    if (type == "gravity") {
+      expect_map(item, element, {"name", "type", "g"});
+      Gravity g;
+      if (item["g"]) g.g = vec2(item["g"], element, "g", length / (units_.time * units_.time));
+      l.kind = g;
+    } else if (type == "force") {
+      expect_map(item, element, {"name", "type", "point", "force", "frame", "table"});
+      PointForce f;
+      f.at = point_ref(require(item, "point", element), element);
+      f.force = vec2(require(item, "force", element), element, "force", force);
+      if (const YAML::Node fr = item["frame"]) {
+        if (fr.Scalar() == "body") f.body_fixed = true;
+        else if (fr.Scalar() != "world")
+          fail(fr, element, "frame must be 'world' or 'body', got '" + fr.Scalar() + "'");
+      }
+      f.table = table(item["table"], element);
+      l.kind = f;
+    } else if (type == "torque") {
+      expect_map(item, element, {"name", "type", "body", "torque", "table"});
+      Torque t;
+      t.body = rigid_body_ref(require(item, "body", element), element);
+      if (t.body == kGround) fail(item["body"], element, "a torque on the ground does nothing");
+      t.torque = number_field(item, "torque", element, force * length);
+      t.table = table(item["table"], element);
+      l.kind = t;
+    } else if (type == "spring-damper") {
+      expect_map(item, element, {"name", "type", "connects", "stiffness", "free_length", "damping"});
+      auto [a, b] = connects(item, element);
+      SpringDamper s{a, b, optional_number(item, "stiffness", element, 0.0, force / length),
+                     optional_number(item, "free_length", element, 0.0, length),
+                     optional_number(item, "damping", element, 0.0, force * units_.time / length)};
+      if (s.stiffness < 0.0 || s.damping < 0.0 || s.free_length < 0.0)
+        fail(item, element, "stiffness, free_length and damping must not be negative");
+      l.kind = s;
+    } else if (type == "rotary-spring-damper") {
+      expect_map(item, element, {"name", "type", "bodies", "stiffness", "free_angle", "damping"});
+      const YAML::Node bodies = require(item, "bodies", element);
+      if (!bodies.IsSequence() || bodies.size() != 2)
+        fail(bodies, element, "field 'bodies' must be a list of two bodies");
+      RotarySpringDamper r;
+      r.bi = rigid_body_ref(bodies[0], element);
+      r.bj = rigid_body_ref(bodies[1], element);
+      r.stiffness = optional_number(item, "stiffness", element, 0.0, force * length / angle);
+      r.free_angle = optional_number(item, "free_angle", element, 0.0, angle);
+      r.damping = optional_number(item, "damping", element, 0.0, force * length * units_.time / angle);
+      if (r.stiffness < 0.0 || r.damping < 0.0)
+        fail(item, element, "stiffness and damping must not be negative");
+      l.kind = r;
+    } else {
+      fail(item["type"], element,
+           "unknown load type '" + type +
+               "' (allowed: gravity, force, torque, spring-damper, rotary-spring-damper)");
+    }
+    model_.loads.push_back(std::move(l));
+  }
+}
+
+// ---- measures ----------------------------------------------------------------------------------
+void Reader::read_measures(const YAML::Node& root) {
+  const YAML::Node node = list(root, "measures");
+  if (!node || node.IsNull()) return;
+  std::set<std::string> seen;
+  size_t index = 0;
+  for (const auto& item : node) {
+    const std::string name = name_of(item, "measure", index++, seen);
+    const std::string element = "measure '" + name + "'";
+    const std::string type = string_field(item, "type", element);
+    Measure m;
+    m.name = name;
+    m.where = loc(item);
+    std::string unit = "m";
+    if (type == "joint") {
+      expect_map(item, element, {"name", "type", "joint", "derivative"});
+      const YAML::Node jn = require(item, "joint", element);
+      const int j = model_.find_joint(jn.Scalar());
+      if (j < 0) fail(jn, element, "joint '" + jn.Scalar() + "' is not defined");
+      const JointKind& kind = model_.joints[static_cast<size_t>(j)].kind;
+      if (std::holds_alternative<Revolute>(kind)) {
+        const auto& r = std::get<Revolute>(kind);
+        for (int b : {r.pi.body, r.pj.body})
+          if (b != kGround && model_.bodies[static_cast<size_t>(b)].kind == BodyKind::particle)
+            fail(jn, element, "joint '" + jn.Scalar() + "' connects a particle: it has no angle");
+        unit = "rad";
+      } else if (!std::holds_alternative<Prismatic>(kind)) {
+        fail(jn, element, "joint '" + jn.Scalar() + "' is neither revolute nor prismatic");
+      }
+      m.kind = JointCoordinate{j};
+    } else if (type == "point") {
+      expect_map(item, element, {"name", "type", "point", "component", "derivative"});
+      PointCoordinate p;
+      p.point = point_ref(require(item, "point", element), element);
+      const std::string c = string_field(item, "component", element);
+      if (c == "x") p.axis = 0;
+      else if (c == "y") p.axis = 1;
+      else fail(item["component"], element, "component must be 'x' or 'y', got '" + c + "'");
+      m.kind = p;
+    } else if (type == "distance") {
+      expect_map(item, element, {"name", "type", "points", "derivative"});
+      const YAML::Node pts = require(item, "points", element);
+      if (!pts.IsSequence() || pts.size() != 2) fail(pts, element, "field 'points' must be a list of two points");
+      m.kind = PointDistance{point_ref(pts[0], element), point_ref(pts[1], element)};
+    } else if (type == "angle") {
+      expect_map(item, element, {"name", "type", "body", "bodies", "derivative"});
+      BodyAngle a;
+      if (item["body"] && item["bodies"]) fail(item, element, "give either 'body' or 'bodies', not both");
+      if (item["body"]) {
+        a.bj = rigid_body_ref(item["body"], element);
+      } else {
+        const YAML::Node bodies = require(item, "bodies", element);
+        if (!bodies.IsSequence() || bodies.size() != 2)
+          fail(bodies, element, "field 'bodies' must be a list of two bodies");
+        a.bi = rigid_body_ref(bodies[0], element);
+        a.bj = rigid_body_ref(bodies[1], element);
+      }
+      m.kind = a;
+      unit = "rad";
+    } else {
+      fail(item["type"], element, "unknown measure type '" + type + "' (allowed: joint, point, distance, angle)");
+    }
+    if (const YAML::Node d = item["derivative"]) {
+      const double v = number(d, element, "derivative");
+      if (v != 0.0 && v != 1.0 && v != 2.0) fail(d, element, "derivative must be 0, 1 or 2");
+      m.derivative = static_cast<int>(v);
+    }
+    m.unit = unit + (m.derivative == 1 ? "/s" : m.derivative == 2 ? "/s^2" : "");
+    model_.measures.push_back(std::move(m));
+  }
+}
+
+double Reader::speed_value(const YAML::Node& node, const std::string& element, bool angular) const {
+  if (!node.IsScalar()) fail(node, element, "speed must be a number or a string like '300 rpm'");
+  const std::string text = node.Scalar();
+  std::istringstream in(text);
+  double v = 0.0;
+  in >> v;
+  if (in.fail() || !std::isfinite(v)) fail(node, element, "speed must be a number, got '" + text + "'");
+  std::string unit;
+  in >> unit;
+  if (unit.empty()) return v * (angular ? units_.angle : units_.length) / units_.time;
+  const std::vector<std::pair<std::string, double>> angular_units = {
+      {"rpm", 2.0 * std::numbers::pi / 60.0}, {"rad/s", 1.0}, {"deg/s", std::numbers::pi / 180.0}};
+  const std::vector<std::pair<std::string, double>> linear_units = {{"m/s", 1.0}, {"mm/s", 1e-3}};
+  for (const auto& [u, f] : angular ? angular_units : linear_units)
+    if (unit == u) return v * f;
+  fail(node, element, "unknown speed unit '" + unit + "' for a " + (angular ? "revolute" : "prismatic") + " joint");
+}
+
+// ---- drivers -----------------------------------------------------------------------------------
+void Reader::read_drivers(const YAML::Node& root) {
+  const YAML::Node node = list(root, "drivers");
+  if (!node || node.IsNull()) return;
+  std::set<std::string> seen;
+  size_t index = 0;
+  for (const auto& item : node) {
+    const std::string name = name_of(item, "driver", index++, seen);
+    const std::string element = "driver '" + name + "'";
+    expect_map(item, element, {"name", "joint", "profile", "speed", "initial", "amplitude", "frequency", "coefficients"});
+    Driver d;
+    d.name = name;
+    d.where = loc(item);
+    const YAML::Node jn = require(item, "joint", element);
+    d.joint = model_.find_joint(jn.Scalar());
+    if (d.joint < 0) fail(jn, element, "joint '" + jn.Scalar() + "' is not defined");
+    const JointKind& kind = model_.joints[static_cast<size_t>(d.joint)].kind;
+    const bool angular = std::holds_alternative<Revolute>(kind);
+    if (!angular && !std::holds_alternative<Prismatic>(kind))
+      fail(jn, element, "joint '" + jn.Scalar() + "' is neither revolute nor prismatic and cannot be driven");
+    const double unit = angular ? units_.angle : units_.length;
+    const std::string profile = item["profile"] ? item["profile"].Scalar() : "constant-speed";
+    d.initial = optional_number(item, "initial", element, 0.0, unit);
+    if (profile == "constant-speed") {
+      d.profile = Profile::constant_speed;
+      d.speed = speed_value(require(item, "speed", element), element, angular);
+    } else if (profile == "harmonic") {
+      d.profile = Profile::harmonic;
+      d.amplitude = number_field(item, "amplitude", element, unit);
+      d.frequency = number_field(item, "frequency", element, 1.0 / units_.time);
+    } else if (profile == "polynomial") {
+      d.profile = Profile::polynomial;
+      d.coefficients = numbers(require(item, "coefficients", element), element, "coefficients", 0);
+      for (size_t k = 0; k < d.coefficients.size(); ++k)
+        d.coefficients[k] *= unit / std::pow(units_.time, static_cast<double>(k));
+    } else {
+      fail(item["profile"], element, "unknown profile '" + profile + "' (allowed: constant-speed, harmonic, polynomial)");
+    }
+    model_.drivers.push_back(std::move(d));
+  }
+}
+
+void Reader::read_design_positions(const YAML::Node& root) {
+  const YAML::Node node = list(root, "design_positions");
+  if (!node || node.IsNull()) return;
+  std::set<std::string> seen;
+  size_t index = 0;
+  for (const auto& item : node) {
+    const std::string name = name_of(item, "design position", index++, seen);
+    const std::string element = "design position '" + name + "'";
+    expect_map(item, element, {"name", "inputs", "target"});
+    DesignPosition p;
+    p.name = name;
+    p.where = loc(item);
+    if (const YAML::Node inputs = item["inputs"]) {
+      if (!inputs.IsMap()) fail(inputs, element, "field 'inputs' must be a mapping joint: value");
+      for (const auto& kv : inputs) {
+        const int j = model_.find_joint(kv.first.Scalar());
+        if (j < 0) fail(kv.first, element, "joint '" + kv.first.Scalar() + "' is not defined");
+        const bool angular = std::holds_alternative<Revolute>(model_.joints[static_cast<size_t>(j)].kind);
+        if (!angular && !std::holds_alternative<Prismatic>(model_.joints[static_cast<size_t>(j)].kind))
+          fail(kv.first, element, "joint '" + kv.first.Scalar() + "' has no scalar input");
+        p.inputs.emplace_back(j, number(kv.second, element, "inputs." + kv.first.Scalar(),
+                                        angular ? units_.angle : units_.length));
+      }
+    }
+    if (const YAML::Node t = item["target"]) {
+      expect_map(t, element, {"point", "at", "angle", "tolerance"});
+      DesignTarget target;
+      target.point = point_ref(require(t, "point", element), element);
+      target.position = vec2(require(t, "at", element), element, "at", units_.length);
+      if (t["angle"]) target.angle = number(t["angle"], element, "angle", units_.angle);
+      target.tolerance = optional_number(t, "tolerance", element, 1e-3, units_.length);
+      if (!(target.tolerance > 0.0)) fail(t["tolerance"], element, "tolerance must be positive");
+      p.target = target;
+    }
+    model_.design_positions.push_back(std::move(p));
+  }
+}
+
+void Reader::read_analysis(const YAML::Node& node) {
+  if (!node) return;
+  expect_map(node, "analysis", {"driver", "steps"});
+  if (const YAML::Node d = node["driver"]) {
+    model_.analysis.driver = d.Scalar();
+    const bool found = std::any_of(model_.drivers.begin(), model_.drivers.end(),
+                                   [&](const Driver& dr) { return dr.name == d.Scalar(); });
+    if (!found) fail(d, "analysis", "driver '" + d.Scalar() + "' is not defined");
+  }
+  if (const YAML::Node s = node["steps"]) {
+    const double v = number(s, "analysis", "steps");
+    if (v < 2.0 || v != std::floor(v) || v > 1e7) fail(s, "analysis", "steps must be an integer ≥ 2");
+    model_.analysis.steps = static_cast<int>(v);
+  }
+}
+
+Model Reader::read(const YAML::Node& root) {
+  if (!root.IsMap()) fail(root, "file", "expected a mapping at the top level (orthomech: 1, bodies: ...)");
+  expect_map(root, "file",
+             {"orthomech", "name", "description", "units", "ground", "bodies", "joints", "loads",
+              "measures", "drivers", "design_positions", "analysis"});
+  const YAML::Node version = require(root, "orthomech", "file");
+  if (version.Scalar() != "1")
+    fail(version, "file", "unsupported format version '" + version.Scalar() + "' (this build reads 1)");
+  model_.file = file_;
+  if (root["name"]) model_.name = root["name"].Scalar();
+  if (model_.name.empty()) {
+    const auto slash = file_.find_last_of('/');
+    model_.name = file_.substr(slash == std::string::npos ? 0 : slash + 1);
+  }
+  if (root["description"]) model_.description = root["description"].Scalar();
+  read_units(root["units"]);
+  read_ground(root["ground"]);
+  read_bodies(root);
+  read_joints(root);
+  read_measures(root);
+  read_loads(root);
+  read_drivers(root);
+  read_design_positions(root);
+  read_analysis(root["analysis"]);
+  finalize_model(model_);
+  if (model_.nc > model_.n + 1000)
+    fail(root["joints"], "joints", "far more constraint equations than coordinates");
+  return std::move(model_);
+}
+
+Model parse_root(const std::function<YAML::Node()>& load, const std::string& origin) {
+  YAML::Node root;
+  try {
+    root = load();
+  } catch (const YAML::BadFile&) {
+    throw InputError({origin, 0, 0}, "file", "cannot open the file");
+  } catch (const YAML::ParserException& e) {
+    throw InputError({origin, e.mark.line + 1, e.mark.column + 1}, "YAML", e.msg);
+  }
+  try {
+    return Reader(origin).read(root);
+  } catch (const YAML::Exception& e) {  // anything yaml-cpp still throws: report, do not crash
+    throw InputError({origin, e.mark.is_null() ? 0 : e.mark.line + 1, e.mark.is_null() ? 0 : e.mark.column + 1},
+                     "YAML", e.msg);
+  }
+}
+
+}  // namespace
+
+Model load_mechanism(const std::string& path) {
+  {
+    std::ifstream probe(path);
+    if (!probe) throw InputError({path, 0, 0}, "file", "cannot open the file");
+  }
+  return parse_root([&] { return YAML::LoadFile(path); }, path);
+}
+
+Model parse_mechanism(const std::string& text, const std::string& origin) {
+  return parse_root([&] { return YAML::Load(text); }, origin);
+}
+
+}  // namespace orthomech

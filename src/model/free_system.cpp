@@ -1,0 +1,80 @@
+#include "orthomech/model/free_system.hpp"
+
+namespace orthomech {
+
+void compute_mass_matrix(const Model& model, const VecX& /*q*/, MatX& M) {
+  M.setZero();
+  for (const Body& b : model.bodies) {
+    const int o = b.u_offset;
+    M(o, o) = b.mass;  // eq. (4): T = ½ m |v|² + ½ J φ̇²
+    M(o + 1, o + 1) = b.mass;
+    if (b.kind == BodyKind::rigid) M(o + 2, o + 2) = b.inertia;
+  }
+}
+
+void compute_inverse_mass_matrix(const Model& model, const VecX& /*q*/, MatX& A) {
+  A.setZero();
+  for (const Body& b : model.bodies) {
+    const int o = b.u_offset;
+    A(o, o) = 1.0 / b.mass;  // eq. (6): block-diagonal inverse
+    A(o + 1, o + 1) = 1.0 / b.mass;
+    if (b.kind == BodyKind::rigid) A(o + 2, o + 2) = 1.0 / b.inertia;
+  }
+}
+
+void compute_mass_matrix_rate(const Model& /*model*/, const VecX& /*q*/, const VecX& /*u*/,
+                              MatX& Mdot) {
+  Mdot.setZero();  // absolute coordinates of planar bodies: M constant
+}
+
+bool mass_matrix_is_constant(const Model& /*model*/) { return true; }
+
+void integrate_positions(const Model& model, VecX& q, const VecX& du, double h) {
+  // Planar bodies: B̃ = I and nq == n, eq. (1).
+  for (const Body& b : model.bodies)
+    for (int k = 0; k < b.nq(); ++k) q(b.q_offset + k) += h * du(b.u_offset + k);
+}
+
+double kinetic_energy(const Model& model, const State& state) {
+  double T = 0.0;
+  for (const Body& b : model.bodies) {
+    const int o = b.u_offset;
+    T += 0.5 * b.mass * (state.u(o) * state.u(o) + state.u(o + 1) * state.u(o + 1));
+    if (b.kind == BodyKind::rigid) T += 0.5 * b.inertia * state.u(o + 2) * state.u(o + 2);
+  }
+  return T;
+}
+
+PointKinematics point_kinematics(const Model& model, const PointRef& p, const VecX& q,
+                                 const VecX* u) {
+  PointKinematics k;
+  if (p.body == kGround) {
+    k.r = p.s;
+    return k;
+  }
+  const Body& b = model.bodies[static_cast<size_t>(p.body)];
+  k.moving = true;
+  const Vec2 c(q(b.q_offset), q(b.q_offset + 1));
+  if (b.kind == BodyKind::rigid) {
+    k.rotates = true;
+    k.Rs = rotation(q(b.q_offset + 2)) * p.s;
+    if (u) k.phidot = (*u)(b.u_offset + 2);
+  }
+  k.r = c + k.Rs;
+  if (u) k.v = Vec2((*u)(b.u_offset), (*u)(b.u_offset + 1)) + k.phidot * perp(k.Rs);
+  return k;
+}
+
+double body_angle(const Model& model, int body, const VecX& q) {
+  if (body == kGround) return 0.0;
+  const Body& b = model.bodies[static_cast<size_t>(body)];
+  return b.kind == BodyKind::rigid ? q(b.q_offset + 2) : 0.0;
+}
+
+double body_angular_velocity(const Model& model, int body, const VecX& u) {
+  if (body == kGround) return 0.0;
+  const Body& b = model.bodies[static_cast<size_t>(body)];
+  return b.kind == BodyKind::rigid ? u(b.u_offset + 2) : 0.0;
+}
+
+}  // namespace orthomech

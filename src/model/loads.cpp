@@ -1,0 +1,127 @@
+#include "orthomech/model/loads.hpp"
+
+#include <algorithm>
+
+#include "orthomech/model/free_system.hpp"
+#include "orthomech/model/measures.hpp"
+
+namespace orthomech {
+
+double table_factor(const Model& model, const Table& table, const VecX& q) {
+  if (table.points.empty()) return 1.0;
+  const Measure& m = model.measures[static_cast<size_t>(table.measure)];
+  const double x = compute_scalar(model, m.kind, q, nullptr).value;
+  const auto& p = table.points;
+  if (x <= p.front().first) return p.front().second;
+  if (x >= p.back().first) return p.back().second;
+  const auto hi = std::upper_bound(p.begin(), p.end(), x,
+                                   [](double v, const auto& e) { return v < e.first; });
+  const auto lo = hi - 1;
+  const double w = (x - lo->first) / (hi->first - lo->first);
+  return lo->second + w * (hi->second - lo->second);
+}
+
+namespace {
+
+// Spring-damper kinematics: length L, rate L̇, unit vector e from Pi to Pj.
+struct Stretch {
+  double L, Ldot;
+  Vec2 e;
+  PointKinematics ki, kj;
+};
+Stretch stretch(const Model& model, const SpringDamper& s, const State& st) {
+  Stretch x;
+  x.ki = point_kinematics(model, s.pi, st.q, &st.u);
+  x.kj = point_kinematics(model, s.pj, st.q, &st.u);
+  const Vec2 d = x.kj.r - x.ki.r;
+  x.L = d.norm();
+  x.e = x.L > 0.0 ? Vec2(d / x.L) : Vec2::UnitX();
+  x.Ldot = x.e.dot(x.kj.v - x.ki.v);
+  return x;
+}
+
+void add_angle(const Model& model, int body, double value, VecX& Q) {
+  if (body == kGround) return;
+  Q(model.bodies[static_cast<size_t>(body)].u_offset + 2) += value;
+}
+
+}  // namespace
+
+void add_load(const Model& model, const Load& load, const State& st, VecX& Q) {
+  std::visit(
+      [&](const auto& l) {
+        using T = std::decay_t<decltype(l)>;
+        if constexpr (std::is_same_v<T, Gravity>) {
+          // Q = m g at the centre of mass: no moment.
+          for (const Body& b : model.bodies) {
+            Q(b.u_offset) += b.mass * l.g.x();
+            Q(b.u_offset + 1) += b.mass * l.g.y();
+          }
+        } else if constexpr (std::is_same_v<T, PointForce>) {
+          // Q = (∂r_P/∂u)ᵀ F (virtual work F·δr_P, eq. (8)).
+          const PointKinematics k = point_kinematics(model, l.at, st.q, nullptr);
+          Vec2 F = l.force * table_factor(model, l.table, st.q);
+          if (l.body_fixed && l.at.body != kGround)
+            F = rotation(body_angle(model, l.at.body, st.q)) * F;
+          add_point_jacobian(model, l.at, k, F, 1.0, Q);
+        } else if constexpr (std::is_same_v<T, Torque>) {
+          add_angle(model, l.body, l.torque * table_factor(model, l.table, st.q), Q);
+        } else if constexpr (std::is_same_v<T, SpringDamper>) {
+          // Tension T pulls Pi towards Pj and Pj towards Pi.
+          const Stretch x = stretch(model, l, st);
+          const double tension = l.stiffness * (x.L - l.free_length) + l.damping * x.Ldot;
+          add_point_jacobian(model, l.pi, x.ki, x.e, tension, Q);
+          add_point_jacobian(model, l.pj, x.kj, x.e, -tension, Q);
+        } else if constexpr (std::is_same_v<T, RotarySpringDamper>) {
+          const double th = body_angle(model, l.bj, st.q) - body_angle(model, l.bi, st.q);
+          const double w = body_angular_velocity(model, l.bj, st.u) -
+                           body_angular_velocity(model, l.bi, st.u);
+          const double moment = l.stiffness * (th - l.free_angle) + l.damping * w;
+          add_angle(model, l.bj, -moment, Q);
+          add_angle(model, l.bi, moment, Q);
+        }
+      },
+      load.kind);
+}
+
+void compute_applied_forces(const Model& model, const State& state, VecX& Q) {
+  Q.setZero();
+  for (const Load& load : model.loads) add_load(model, load, state, Q);
+}
+
+double potential_energy(const Model& model, const VecX& q) {
+  double V = 0.0;
+  const VecX* none = nullptr;
+  for (const Load& load : model.loads) {
+    if (const auto* g = std::get_if<Gravity>(&load.kind)) {
+      for (const Body& b : model.bodies)
+        V -= b.mass * (g->g.x() * q(b.q_offset) + g->g.y() * q(b.q_offset + 1));
+    } else if (const auto* s = std::get_if<SpringDamper>(&load.kind)) {
+      const Vec2 d = point_kinematics(model, s->pj, q, none).r -
+                     point_kinematics(model, s->pi, q, none).r;
+      const double dl = d.norm() - s->free_length;
+      V += 0.5 * s->stiffness * dl * dl;
+    } else if (const auto* r = std::get_if<RotarySpringDamper>(&load.kind)) {
+      const double th = body_angle(model, r->bj, q) - body_angle(model, r->bi, q) - r->free_angle;
+      V += 0.5 * r->stiffness * th * th;
+    }
+  }
+  return V;
+}
+
+double dissipated_power(const Model& model, const State& st) {
+  double P = 0.0;
+  for (const Load& load : model.loads) {
+    if (const auto* s = std::get_if<SpringDamper>(&load.kind)) {
+      const Stretch x = stretch(model, *s, st);
+      P += s->damping * x.Ldot * x.Ldot;
+    } else if (const auto* r = std::get_if<RotarySpringDamper>(&load.kind)) {
+      const double w = body_angular_velocity(model, r->bj, st.u) -
+                       body_angular_velocity(model, r->bi, st.u);
+      P += r->damping * w * w;
+    }
+  }
+  return P;
+}
+
+}  // namespace orthomech

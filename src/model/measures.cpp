@@ -1,0 +1,119 @@
+#include "orthomech/model/measures.hpp"
+
+#include <stdexcept>
+
+#include "orthomech/model/free_system.hpp"
+
+namespace orthomech {
+
+namespace {
+
+struct Evaluator {
+  const Model& model;
+  const VecX& q;
+  const VecX* u;
+  Eigen::Ref<VecX>* d;  // may be null
+
+  void add_angle(int body, double scale) const {
+    if (body == kGround || d == nullptr) return;
+    (*d)(model.bodies[static_cast<size_t>(body)].u_offset + 2) += scale;
+  }
+
+  ScalarKinematics angle_difference(int bi, int bj) const {
+    ScalarKinematics s;
+    s.value = body_angle(model, bj, q) - body_angle(model, bi, q);
+    if (u) s.rate = body_angular_velocity(model, bj, *u) - body_angular_velocity(model, bi, *u);
+    add_angle(bj, 1.0);
+    add_angle(bi, -1.0);
+    return s;
+  }
+
+  ScalarKinematics operator()(const BodyAngle& m) const { return angle_difference(m.bi, m.bj); }
+
+  ScalarKinematics operator()(const PointCoordinate& m) const {
+    const PointKinematics k = point_kinematics(model, m.point, q, u);
+    const Vec2 c = m.axis == 0 ? Vec2::UnitX() : Vec2::UnitY();
+    ScalarKinematics s;
+    s.value = c.dot(k.r);
+    s.rate = c.dot(k.v);
+    s.ddot_u = -k.phidot * k.phidot * c.dot(k.Rs);  // d/dt[I, perp(Rs)] u = −φ̇² Rs
+    if (d) add_point_jacobian(model, m.point, k, c, 1.0, *d);
+    return s;
+  }
+
+  // |r_Pj − r_Pi|: ṡ = eᵀ ḋ, s̈ = eᵀ d̈ + (|ḋ|² − (eᵀḋ)²)/s with e = d/s.
+  ScalarKinematics operator()(const PointDistance& m) const {
+    const PointKinematics ki = point_kinematics(model, m.pi, q, u);
+    const PointKinematics kj = point_kinematics(model, m.pj, q, u);
+    const Vec2 dv = kj.r - ki.r;
+    const Vec2 dd = kj.v - ki.v;
+    ScalarKinematics s;
+    s.value = dv.norm();
+    if (s.value == 0.0) throw std::domain_error("distance measure of coincident points");
+    const Vec2 e = dv / s.value;
+    s.rate = e.dot(dd);
+    s.ddot_u = (dd.squaredNorm() - s.rate * s.rate) / s.value -
+               kj.phidot * kj.phidot * e.dot(kj.Rs) + ki.phidot * ki.phidot * e.dot(ki.Rs);
+    if (d) {
+      add_point_jacobian(model, m.pj, kj, e, 1.0, *d);
+      add_point_jacobian(model, m.pi, ki, e, -1.0, *d);
+    }
+    return s;
+  }
+
+  ScalarKinematics operator()(const JointCoordinate& m) const {
+    const Joint& joint = model.joints[static_cast<size_t>(m.joint)];
+    if (const auto* r = std::get_if<Revolute>(&joint.kind))
+      return angle_difference(r->pi.body, r->pj.body);
+    if (const auto* p = std::get_if<Prismatic>(&joint.kind)) {
+      // s = aᵀ d with a = R_i axis, d = r_Pj − r_Pi. ȧ = φ̇_i perp(a).
+      const PointKinematics ki = point_kinematics(model, p->pi, q, u);
+      const PointKinematics kj = point_kinematics(model, p->pj, q, u);
+      const double phi_i = body_angle(model, p->pi.body, q);
+      const double w_i = u ? body_angular_velocity(model, p->pi.body, *u) : 0.0;
+      const Vec2 a = rotation(phi_i) * p->axis_local;
+      const Vec2 dv = kj.r - ki.r;
+      const Vec2 dd = kj.v - ki.v;
+      ScalarKinematics s;
+      s.value = a.dot(dv);
+      s.rate = a.dot(dd) + w_i * perp(a).dot(dv);
+      // ḋu = 2 ȧᵀḋ + aᵀ(−φ̇_j² R_j s_j + φ̇_i² R_i s_i) + äᵀ d (ä from φ̇_i only: −φ̇_i² a)
+      s.ddot_u = 2.0 * w_i * perp(a).dot(dd) - kj.phidot * kj.phidot * a.dot(kj.Rs) +
+                 ki.phidot * ki.phidot * a.dot(ki.Rs) - w_i * w_i * a.dot(dv);
+      if (d) {
+        add_point_jacobian(model, p->pj, kj, a, 1.0, *d);
+        add_point_jacobian(model, p->pi, ki, a, -1.0, *d);
+        add_angle(p->pi.body, perp(a).dot(dv));
+      }
+      return s;
+    }
+    throw std::invalid_argument("joint '" + joint.name + "' has no scalar coordinate");
+  }
+};
+
+}  // namespace
+
+ScalarKinematics compute_scalar(const Model& model, const MeasureKind& kind, const VecX& q,
+                                const VecX* u, Eigen::Ref<VecX> d) {
+  d.setZero();
+  Eigen::Ref<VecX>* dp = &d;
+  return std::visit(Evaluator{model, q, u, dp}, kind);
+}
+
+ScalarKinematics compute_scalar(const Model& model, const MeasureKind& kind, const VecX& q,
+                                const VecX* u) {
+  return std::visit(Evaluator{model, q, u, nullptr}, kind);
+}
+
+MeasureKind joint_input(const Model& /*model*/, int joint) { return JointCoordinate{joint}; }
+
+double evaluate_measure(const Model& model, const Measure& m, const VecX& q, const VecX* u,
+                        const VecX* udot) {
+  if (m.derivative == 0) return compute_scalar(model, m.kind, q, nullptr).value;
+  if (m.derivative == 1) return compute_scalar(model, m.kind, q, u).rate;
+  VecX d(model.n);
+  const ScalarKinematics s = compute_scalar(model, m.kind, q, u, d);
+  return d.dot(*udot) + s.ddot_u;
+}
+
+}  // namespace orthomech

@@ -1,0 +1,114 @@
+#include "orthomech/model/model.hpp"
+
+#include <stdexcept>
+
+namespace orthomech {
+
+int Joint::rows() const {
+  return std::visit(
+      [](const auto& j) -> int {
+        using T = std::decay_t<decltype(j)>;
+        if constexpr (std::is_same_v<T, Revolute> || std::is_same_v<T, Prismatic>) return 2;
+        if constexpr (std::is_same_v<T, Fixed>) return 3;
+        return 1;  // PinInSlot, GearPair, Distance
+      },
+      kind);
+}
+
+std::string Joint::type_name() const {
+  static const char* names[] = {"revolute", "prismatic", "fixed", "pin-in-slot", "gear", "distance"};
+  return names[kind.index()];
+}
+
+std::vector<std::string> Joint::component_names() const {
+  switch (kind.index()) {
+    case 0: return {"x", "y"};
+    case 1: return {"n", "angle"};
+    case 2: return {"x", "y", "angle"};
+    case 3: return {"n"};
+    case 4: return {"ratio"};
+    default: return {"length"};
+  }
+}
+
+int Model::find_body(const std::string& body) const {
+  if (body == "ground") return kGround;
+  for (size_t i = 0; i < bodies.size(); ++i)
+    if (bodies[i].name == body) return static_cast<int>(i);
+  return -2;
+}
+
+int Model::find_joint(const std::string& joint) const {
+  for (size_t i = 0; i < joints.size(); ++i)
+    if (joints[i].name == joint) return static_cast<int>(i);
+  return -1;
+}
+
+int Model::find_measure(const std::string& measure) const {
+  for (size_t i = 0; i < measures.size(); ++i)
+    if (measures[i].name == measure) return static_cast<int>(i);
+  return -1;
+}
+
+VecX Model::design_q() const {
+  VecX q(nq);
+  for (const Body& b : bodies) {
+    const double phi = b.design_pose.z();
+    const double c = std::cos(phi), s = std::sin(phi);
+    const Vec2 com(b.design_pose.x() + c * b.com_local.x() - s * b.com_local.y(),
+                   b.design_pose.y() + s * b.com_local.x() + c * b.com_local.y());
+    q(b.q_offset) = com.x();
+    q(b.q_offset + 1) = com.y();
+    if (b.kind == BodyKind::rigid) q(b.q_offset + 2) = phi;
+  }
+  return q;
+}
+
+std::string Model::constraint_row_name(int row) const {
+  for (const Joint& j : joints) {
+    if (row >= j.row_offset && row < j.row_offset + j.rows()) {
+      return "joint '" + j.name + "', " +
+             j.component_names()[static_cast<size_t>(row - j.row_offset)];
+    }
+  }
+  throw std::invalid_argument("constraint_row_name: row out of range");
+}
+
+void finalize_model(Model& model) {
+  int q_off = 0, u_off = 0;
+  for (Body& b : model.bodies) {
+    b.q_offset = q_off;
+    b.u_offset = u_off;
+    q_off += b.nq();
+    u_off += b.nu();
+  }
+  model.nq = q_off;
+  model.n = u_off;
+  int row = 0;
+  for (Joint& j : model.joints) {
+    j.row_offset = row;
+    row += j.rows();
+  }
+  model.nc = row;
+  const int nb = static_cast<int>(model.bodies.size());
+  auto check_body = [nb](int b) {
+    if (b < kGround || b >= nb) throw std::invalid_argument("finalize_model: bad body index");
+  };
+  for (const Joint& j : model.joints) {
+    std::visit(
+        [&](const auto& k) {
+          using T = std::decay_t<decltype(k)>;
+          if constexpr (std::is_same_v<T, GearPair>) {
+            check_body(k.bi);
+            check_body(k.bj);
+            check_body(k.carrier);
+          } else {
+            check_body(k.pi.body);
+            check_body(k.pj.body);
+          }
+        },
+        j.kind);
+  }
+}
+
+}  // namespace orthomech

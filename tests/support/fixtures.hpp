@@ -1,0 +1,22 @@
+#pragma once
+// Test fixtures: mechanisms loaded from mechanisms/, assembled, with a workspace.
+#include <string>
+
+#include "orthomech/model/model.hpp"
+#include "orthomech/model/state.hpp"
+
+namespace orthomech::test {
+
+// Absolute path of a file in the source tree.
+[[nodiscard]] std::string source_path(const std::string& relative);
+// Loads mechanisms/<name>.yaml.
+[[nodiscard]] Model load_bundled(const std::string& name);
+// The design position projected onto f(q) = 0 (asserts convergence).
+[[nodiscard]] VecX assembled_q(const Model& model);
+// An admissible velocity at q: α u0 for a seeded random u0 (projected with the primal/dual-free
+// least-squares null space of Eᵀ computed by SVD — independent of the chart machinery).
+[[nodiscard]] VecX admissible_velocity(const Model& model, const VecX& q, unsigned seed);
+// Rank of Eᵀ at q by SVD (independent oracle for the QR-based rank).
+[[nodiscard]] int svd_rank(const Model& model, const VecX& q, double rel_tol = 1e-8);
+
+}  // namespace orthomech::test
