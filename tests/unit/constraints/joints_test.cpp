@@ -1,0 +1,95 @@
+// Every joint's f, Eᵀ and Dᵀ against central finite differences (issue 2 §2, design §3).
+// For planar bodies B̃ = I, so Eᵀ = ∂f/∂q and Dᵀ = d/dt Eᵀ(q + t u) at t = 0.
+#include <gtest/gtest.h>
+
+#include "orthomech/constraints/joints.hpp"
+#include "orthomech/io/mechanism_file.hpp"
+#include "support/zoo.hpp"
+
+namespace orthomech {
+namespace {
+
+// Central differences with h = 1e-6 on O(1) functions: truncation ~h² ≈ 1e-12, rounding
+// ~eps/h ≈ 1e-10; 1e-7 leaves margin and still catches any wrong term (O(1) errors).
+constexpr double kFdStep = 1e-6;
+constexpr double kFdTol = 1e-7;
+
+State zoo_state(const Model& model, unsigned salt) {
+  State s(model);
+  s.q = model.design_q();
+  for (int k = 0; k < model.n; ++k)
+    s.u(k) = std::sin(1.3 * k + 0.7 * salt) * 2.0 + 0.1 * salt;  // deterministic, non-trivial
+  return s;
+}
+
+TEST(Joints, Eq23_EtEqualsCentralDifferenceOfF) {
+  const Model model = parse_mechanism(test::kZooYaml, "zoo");
+  ASSERT_EQ(model.nc, 2 + 2 + 3 + 1 + 1 + 1 + 2 + 2 + 1);
+  for (unsigned salt = 0; salt < 3; ++salt) {
+    const State s = zoo_state(model, salt);
+    ConstraintWorkspace ws(model);
+    compute_constraints(model, s, ws);
+    VecX fp(model.nc), fm(model.nc);
+    for (int k = 0; k < model.n; ++k) {
+      VecX qp = s.q, qm = s.q;
+      qp(k) += kFdStep;
+      qm(k) -= kFdStep;
+      compute_constraint_residual(model, qp, fp);
+      compute_constraint_residual(model, qm, fm);
+      const VecX fd = (fp - fm) / (2.0 * kFdStep);
+      for (int r = 0; r < model.nc; ++r)
+        EXPECT_NEAR(ws.Et(r, k), fd(r), kFdTol) << model.constraint_row_name(r) << ", column " << k;
+    }
+  }
+}
+
+TEST(Joints, Eq76_DtEqualsTimeDerivativeOfEt) {
+  const Model model = parse_mechanism(test::kZooYaml, "zoo");
+  for (unsigned salt = 0; salt < 3; ++salt) {
+    const State s = zoo_state(model, salt);
+    ConstraintWorkspace ws(model);
+    compute_constraints(model, s, ws);
+    MatX Ep(model.nc, model.n), Em(model.nc, model.n);
+    compute_constraint_jacobian(model, s.q + kFdStep * s.u, Ep);
+    compute_constraint_jacobian(model, s.q - kFdStep * s.u, Em);
+    const MatX fd = (Ep - Em) / (2.0 * kFdStep);
+    for (int r = 0; r < model.nc; ++r)
+      for (int k = 0; k < model.n; ++k)
+        EXPECT_NEAR(ws.Dt(r, k), fd(r, k), kFdTol * (1.0 + s.u.norm()))
+            << model.constraint_row_name(r) << ", column " << k;
+    // The convective term is Dᵀu, and equals d²f/dt² along the straight line q + t u.
+    VecX fp(model.nc), f0(model.nc), fm(model.nc);
+    const double h = 1e-4;  // second difference: truncation h² ~ 1e-8, rounding eps/h² ~ 1e-8
+    compute_constraint_residual(model, s.q + h * s.u, fp);
+    compute_constraint_residual(model, s.q, f0);
+    compute_constraint_residual(model, s.q - h * s.u, fm);
+    const VecX second = (fp - 2.0 * f0 + fm) / (h * h);
+    for (int r = 0; r < model.nc; ++r)
+      EXPECT_NEAR(ws.Dtu(r), second(r), 1e-5 * (1.0 + s.u.squaredNorm()))
+          << model.constraint_row_name(r);
+  }
+}
+
+TEST(Joints, Eq20_ResidualOfEachTypeMatchesItsGeometry) {
+  // Closed-form geometry at an assembled pose: a revolute pin on the ground point of a bar.
+  const Model m = parse_mechanism(R"(
+orthomech: 1
+ground: {points: {O: [1, 2]}}
+bodies:
+  - {name: bar, mass: 1, inertia: 1, pose: [1, 2, 0.3], points: {O: [0, 0], E: [2, 0]}}
+joints:
+  - {name: pin, type: revolute, connects: [ground.O, bar.O]}
+  - {name: rod, type: distance, connects: [ground.O, bar.E]}
+)", "inline");
+  VecX f(m.nc);
+  compute_constraint_residual(m, m.design_q(), f);
+  EXPECT_NEAR(f.norm(), 0.0, 1e-15);  // drawn length is taken from the design pose
+  VecX q = m.design_q();
+  q(0) += 0.1;  // move the bar right by 0.1: pin x residual = ground − bar = −0.1
+  compute_constraint_residual(m, q, f);
+  EXPECT_NEAR(f(0), -0.1, 1e-15);
+  EXPECT_NEAR(f(1), 0.0, 1e-15);
+}
+
+}  // namespace
+}  // namespace orthomech
