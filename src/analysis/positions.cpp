@@ -5,6 +5,7 @@
 #include "orthomech/constraints/joints.hpp"
 #include "orthomech/model/free_system.hpp"
 #include "orthomech/projection/dual.hpp"
+#include "orthomech/projection/primal.hpp"
 
 namespace orthomech {
 
@@ -78,10 +79,9 @@ SolveResult correct_positions_in_chart(const Model& model, VecX& q, Workspace& w
   VecX& f = ws.constraints.f;
   VecX& dq = ws.dual.dq;
   if (!ws.free.mass_ready) {
-    compute_mass_matrix(model, q, ws.free.M);
-    compute_inverse_mass_matrix(model, q, ws.free.A);
-    ws.free.A_diag = ws.free.A.diagonal();
-    ws.free.mass_ready = true;
+    State s(model);
+    s.q = q;
+    compute_free_system(model, s, ws);
   }
   for (int it = 0;; ++it) {
     compute_constraint_residual(model, q, f);

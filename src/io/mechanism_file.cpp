@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <numbers>
@@ -58,7 +59,7 @@ class Reader {
     if (!node.IsMap()) fail(node, element, "expected a mapping of keys to values");
     std::set<std::string> seen;
     for (const auto& kv : node) {
-      const std::string key = kv.first.Scalar();
+      const std::string key = scalar(kv.first, element, "a key");
       if (!seen.insert(key).second) fail(kv.first, element, "key '" + key + "' appears twice");
       if (std::find(allowed.begin(), allowed.end(), key) == allowed.end())
         fail(kv.first, element, "unknown key '" + key + "' (allowed: " + join(allowed) + ")");
@@ -80,7 +81,7 @@ class Reader {
     } catch (const YAML::Exception&) {
       fail(node, element, "field '" + field + "' must be a number, got '" + node.Scalar() + "'");
     }
-    if (!std::isfinite(v))
+    if (!std::isfinite(v) || !std::isfinite(v * scale))
       fail(node, element, "field '" + field + "' must be finite, got '" + node.Scalar() + "'");
     return v * scale;
   }
@@ -92,6 +93,11 @@ class Reader {
                          const std::string& element, double fallback, double scale = 1.0) const {
     const YAML::Node child = node[key];
     return child ? number(child, element, key, scale) : fallback;
+  }
+  std::string scalar(const YAML::Node& node, const std::string& element,
+                     const std::string& what) const {
+    if (!node.IsScalar()) fail(node, element, what + " must be a plain name or value, not a list or mapping");
+    return node.Scalar();
   }
   std::string string_field(const YAML::Node& node, const std::string& key,
                            const std::string& element) const {
@@ -116,7 +122,8 @@ class Reader {
   }
   std::string name_of(const YAML::Node& item, const std::string& kind, size_t index,
                       std::set<std::string>& seen) const {
-    const std::string anonymous = kind + "s[" + std::to_string(index) + "]";
+    const std::string plural = kind == "body" ? "bodies" : kind == "design position" ? "design_positions" : kind + "s";
+    const std::string anonymous = plural + "[" + std::to_string(index) + "]";
     if (!item.IsMap()) fail(item, anonymous, "expected a mapping with a 'name'");
     const std::string name = string_field(item, "name", anonymous);
     if (name.empty()) fail(item["name"], anonymous, "name is empty");
@@ -132,6 +139,21 @@ class Reader {
   }
 
   // ---- sections -------------------------------------------------------------------------------
+  // name: [x, y] mappings (points); names unique, 'origin' reserved.
+  std::vector<std::pair<std::string, Vec2>> points_map(const YAML::Node& pts,
+                                                       const std::string& element) const {
+    if (!pts.IsMap()) fail(pts, element, "field 'points' must be a mapping name: [x, y]");
+    std::vector<std::pair<std::string, Vec2>> out;
+    std::set<std::string> seen;
+    for (const auto& kv : pts) {
+      const std::string name = scalar(kv.first, element, "a point name");
+      if (name == "origin") fail(kv.first, element, "point name 'origin' is reserved");
+      if (name.find('.') != std::string::npos) fail(kv.first, element, "a point name must not contain '.'");
+      if (!seen.insert(name).second) fail(kv.first, element, "point '" + name + "' is defined twice");
+      out.emplace_back(name, vec2(kv.second, element, "points." + name, units_.length));
+    }
+    return out;
+  }
   void read_units(const YAML::Node& node);
   void read_ground(const YAML::Node& node);
   void read_bodies(const YAML::Node& node);
@@ -231,14 +253,7 @@ void Reader::read_units(const YAML::Node& node) {
 void Reader::read_ground(const YAML::Node& node) {
   if (!node) return;
   expect_map(node, "ground", {"points", "outline"});
-  if (const YAML::Node pts = node["points"]) {
-    if (!pts.IsMap()) fail(pts, "ground", "field 'points' must be a mapping name: [x, y]");
-    for (const auto& kv : pts) {
-      const std::string name = kv.first.Scalar();
-      if (name == "origin") fail(kv.first, "ground", "point name 'origin' is reserved");
-      ground_points_.emplace_back(name, vec2(kv.second, "ground", "points." + name, units_.length));
-    }
-  }
+  if (const YAML::Node pts = node["points"]) ground_points_ = points_map(pts, "ground");
 }
 
 // ---- bodies ------------------------------------------------------------------------------------
@@ -259,8 +274,9 @@ void Reader::read_bodies(const YAML::Node& root) {
     b.where = loc(item);
     const YAML::Node type = item["type"];
     if (type) {
-      if (type.Scalar() == "particle") b.kind = BodyKind::particle;
-      else if (type.Scalar() != "rigid")
+      const std::string t = scalar(type, element, "field 'type'");
+      if (t == "particle") b.kind = BodyKind::particle;
+      else if (t != "rigid")
         fail(type, element, "unknown body type '" + type.Scalar() + "' (allowed: rigid, particle)");
     }
     if (b.kind == BodyKind::rigid)
@@ -283,14 +299,7 @@ void Reader::read_bodies(const YAML::Node& root) {
       const auto p = numbers(pose, element, "pose", 2, units_.length);
       b.design_pose = Vec3(p[0], p[1], 0.0);
     }
-    if (const YAML::Node pts = item["points"]) {
-      if (!pts.IsMap()) fail(pts, element, "field 'points' must be a mapping name: [x, y]");
-      for (const auto& kv : pts) {
-        const std::string pname = kv.first.Scalar();
-        if (pname == "origin") fail(kv.first, element, "point name 'origin' is reserved");
-        b.points.emplace_back(pname, vec2(kv.second, element, "points." + pname, units_.length));
-      }
-    }
+    if (const YAML::Node pts = item["points"]) b.points = points_map(pts, element);
     if (const YAML::Node outline = item["outline"]) {
       if (!outline.IsSequence()) fail(outline, element, "field 'outline' must be a list of [x, y]");
       for (const auto& p : outline) b.outline.push_back(vec2(p, element, "outline", units_.length));
@@ -552,8 +561,9 @@ double Reader::speed_value(const YAML::Node& node, const std::string& element, b
   double v = 0.0;
   in >> v;
   if (in.fail() || !std::isfinite(v)) fail(node, element, "speed must be a number, got '" + text + "'");
-  std::string unit;
-  in >> unit;
+  std::string unit, extra;
+  in >> unit >> extra;
+  if (!extra.empty()) fail(node, element, "unexpected text '" + extra + "' after the speed");
   if (unit.empty()) return v * (angular ? units_.angle : units_.length) / units_.time;
   const std::vector<std::pair<std::string, double>> angular_units = {
       {"rpm", 2.0 * std::numbers::pi / 60.0}, {"rad/s", 1.0}, {"deg/s", std::numbers::pi / 180.0}};
@@ -619,7 +629,10 @@ void Reader::read_design_positions(const YAML::Node& root) {
     p.where = loc(item);
     if (const YAML::Node inputs = item["inputs"]) {
       if (!inputs.IsMap()) fail(inputs, element, "field 'inputs' must be a mapping joint: value");
+      std::set<std::string> seen_inputs;
       for (const auto& kv : inputs) {
+        if (!seen_inputs.insert(scalar(kv.first, element, "a joint name")).second)
+          fail(kv.first, element, "input '" + kv.first.Scalar() + "' is given twice");
         const int j = model_.find_joint(kv.first.Scalar());
         if (j < 0) fail(kv.first, element, "joint '" + kv.first.Scalar() + "' is not defined");
         const bool angular = std::holds_alternative<Revolute>(model_.joints[static_cast<size_t>(j)].kind);
@@ -647,7 +660,7 @@ void Reader::read_analysis(const YAML::Node& node) {
   if (!node) return;
   expect_map(node, "analysis", {"driver", "steps"});
   if (const YAML::Node d = node["driver"]) {
-    model_.analysis.driver = d.Scalar();
+    model_.analysis.driver = scalar(d, "analysis", "field 'driver'");
     const bool found = std::any_of(model_.drivers.begin(), model_.drivers.end(),
                                    [&](const Driver& dr) { return dr.name == d.Scalar(); });
     if (!found) fail(d, "analysis", "driver '" + d.Scalar() + "' is not defined");
@@ -689,13 +702,42 @@ Model Reader::read(const YAML::Node& root) {
   return std::move(model_);
 }
 
-Model parse_root(const std::function<YAML::Node()>& load, const std::string& origin) {
+// yaml-cpp reports an unclosed '[' or '{' where the input ends; point at the bracket instead.
+SourceLocation unclosed_bracket(const std::string& text, const std::string& origin) {
+  std::vector<std::pair<char, SourceLocation>> open;
+  int line = 1, column = 0;
+  bool comment = false;
+  char quote = 0;
+  for (const char ch : text) {
+    ++column;
+    if (ch == '\n') {
+      ++line;
+      column = 0;
+      comment = false;
+      continue;
+    }
+    if (comment) continue;
+    if (quote) {
+      if (ch == quote) quote = 0;
+      continue;
+    }
+    if (ch == '#') comment = true;
+    else if (ch == '"' || ch == '\'') quote = ch;
+    else if (ch == '[' || ch == '{') open.push_back({ch, {origin, line, column}});
+    else if ((ch == ']' || ch == '}') && !open.empty()) open.pop_back();
+  }
+  return open.empty() ? SourceLocation{origin, 0, 0} : open.back().second;
+}
+
+Model parse_text(const std::string& text, const std::string& origin) {
   YAML::Node root;
   try {
-    root = load();
-  } catch (const YAML::BadFile&) {
-    throw InputError({origin, 0, 0}, "file", "cannot open the file");
+    root = YAML::Load(text);
   } catch (const YAML::ParserException& e) {
+    if (e.msg.find("flow not found") != std::string::npos) {
+      const SourceLocation where = unclosed_bracket(text, origin);
+      if (where.line > 0) throw InputError(where, "YAML", "this bracket is never closed");
+    }
     throw InputError({origin, e.mark.line + 1, e.mark.column + 1}, "YAML", e.msg);
   }
   try {
@@ -709,15 +751,20 @@ Model parse_root(const std::function<YAML::Node()>& load, const std::string& ori
 }  // namespace
 
 Model load_mechanism(const std::string& path) {
-  {
-    std::ifstream probe(path);
-    if (!probe) throw InputError({path, 0, 0}, "file", "cannot open the file");
-  }
-  return parse_root([&] { return YAML::LoadFile(path); }, path);
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec))
+    throw InputError({path, 0, 0}, "file",
+                     std::filesystem::exists(path, ec) ? "cannot open the file: not a regular file"
+                                                       : "cannot open the file: no such file");
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (!in && !in.eof()) throw InputError({path, 0, 0}, "file", "cannot open the file: read error");
+  return parse_text(text.str(), path);
 }
 
 Model parse_mechanism(const std::string& text, const std::string& origin) {
-  return parse_root([&] { return YAML::Load(text); }, origin);
+  return parse_text(text, origin);
 }
 
 }  // namespace orthomech

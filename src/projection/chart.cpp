@@ -15,6 +15,14 @@ ChartSelector::ChartSelector(int nc, int n)
 int ChartSelector::select(const MatX& Et, const VecX& A_diag, const ChartOptions& options,
                           Chart& chart) {
   const Eigen::Index nc = Et.rows(), n = Et.cols();
+  if (nc == 0) {  // no constraints: every velocity component is independent
+    chart.rows.clear();
+    chart.dependent.clear();
+    chart.independent.resize(static_cast<size_t>(n));
+    for (Eigen::Index k = 0; k < n; ++k) chart.independent[static_cast<size_t>(k)] = static_cast<int>(k);
+    chart.row_scale.resize(0);
+    return 0;
+  }
   // 1. Rows: QR with column pivoting of E = (Eᵀ)ᵀ in the metric A (each constraint row scaled
   //    by 1/‖row‖_A so that units and joint sizes do not bias the choice).
   VecX& scale = chart.row_scale;

@@ -28,6 +28,9 @@ DualWorkspace::DualWorkspace(const Model& model, int rank)
       alpha(model.n, model.n),
       beta(model.n, model.n),
       DtF(model.nc, model.n - rank),
+      MFdot(model.n, model.n - rank),
+      betaFdot(model.n, model.n - rank),
+      small(model.n - rank, model.n - rank),
       Fdot(MatX::Zero(model.n, model.n - rank)),
       Theta(model.n, model.n),
       theta(model.n, model.n),
@@ -42,13 +45,13 @@ namespace {
 
 // LU of the scaled dependent block S_r E_RDᵀ S_d (S_d = diag √A_D) of a chart; returns its
 // quality min |U_kk| / max |U_kk| (0 if singular).
-double factor_chart(const MatX& Et, const VecX& A_diag, const Chart& c, DualWorkspace& d) {
+double factor_chart(const MatX& Et, const VecX& A_sqrt, const Chart& c, DualWorkspace& d) {
   const int r = c.rank();
-  for (int i = 0; i < r; ++i)
-    for (int k = 0; k < r; ++k) {
-      const int dk = c.dependent[static_cast<size_t>(k)];
-      d.Ert_D(i, k) = c.row_scale(i) * Et(c.rows[static_cast<size_t>(i)], dk) * std::sqrt(A_diag(dk));
-    }
+  for (int k = 0; k < r; ++k) {
+    const int dk = c.dependent[static_cast<size_t>(k)];
+    for (int i = 0; i < r; ++i)
+      d.Ert_D(i, k) = c.row_scale(i) * Et(c.rows[static_cast<size_t>(i)], dk) * A_sqrt(dk);
+  }
   if (r == 0) return 1.0;
   d.Ert_D_lu.compute(d.Ert_D);
   const auto U = d.Ert_D_lu.matrixLU().diagonal().cwiseAbs();
@@ -58,13 +61,14 @@ double factor_chart(const MatX& Et, const VecX& A_diag, const Chart& c, DualWork
 
 // X = −(E_RDᵀ)⁻¹ B_R for B = rhs rows (r × n_a), using the scaled LU:
 // (E_RDᵀ)⁻¹ = S_d (S_r E_RDᵀ S_d)⁻¹ S_r. Writes X into the dependent rows of `out`.
-void solve_dependent(const VecX& A_diag, const Chart& c, DualWorkspace& d, MatX& out) {
+void solve_dependent(const VecX& A_sqrt, const Chart& c, DualWorkspace& d, MatX& out) {
   const int r = c.rank();
+  if (r == 0) return;
   for (int i = 0; i < r; ++i) d.rhs.row(i) *= -c.row_scale(i);
   d.sol = d.Ert_D_lu.solve(d.rhs);
   for (int k = 0; k < r; ++k) {
     const int dk = c.dependent[static_cast<size_t>(k)];
-    out.row(dk) = std::sqrt(A_diag(dk)) * d.sol.row(k).head(out.cols());
+    out.row(dk) = A_sqrt(dk) * d.sol.row(k).head(out.cols());
   }
 }
 
@@ -74,21 +78,23 @@ ProjectionStatus compute_dual(const Model& /*model*/, const State& state, Worksp
   auto& d = ws.dual;
   const MatX& Et = ws.constraints.Et;
   const VecX& A_diag = ws.free.A_diag;
+  const VecX& A_sqrt = ws.free.A_sqrt;
   const MatX& M = ws.free.M;
+  const bool diagonal = ws.free.diagonal_mass;
 
   // 1. Chart: keep it while its dependent block is well conditioned; otherwise re-select with
   //    the rank-revealing QR and switch if the new one is better by the hysteresis factor.
   if (!d.chart_ready) {
     d.selector.select(Et, A_diag, d.options, d.chart);
     d.chart_ready = true;
-    d.quality = factor_chart(Et, A_diag, d.chart, d);
+    d.quality = factor_chart(Et, A_sqrt, d.chart, d);
   } else {
-    d.quality = factor_chart(Et, A_diag, d.chart, d);
+    d.quality = factor_chart(Et, A_sqrt, d.chart, d);
     if (d.quality < d.options.switch_below) {
       Chart candidate = d.chart;  // NOTE: allocates, but only when the chart degrades
       d.selector.select(Et, A_diag, d.options, candidate);
       const double old_quality = d.quality;
-      const double q_new = candidate.rank() == d.r ? factor_chart(Et, A_diag, candidate, d) : 0.0;
+      const double q_new = candidate.rank() == d.r ? factor_chart(Et, A_sqrt, candidate, d) : 0.0;
       if (q_new > d.options.hysteresis * old_quality) {
         d.chart = std::move(candidate);
         d.quality = q_new;
@@ -96,7 +102,7 @@ ProjectionStatus compute_dual(const Model& /*model*/, const State& state, Worksp
         if (d.switches.size() < kMaxRecordedSwitches)
           d.switches.push_back({state.t, old_quality, q_new});
       } else {
-        d.quality = factor_chart(Et, A_diag, d.chart, d);  // restore the LU of the chart kept
+        d.quality = factor_chart(Et, A_sqrt, d.chart, d);  // restore the LU of the chart kept
       }
     }
   }
@@ -113,10 +119,12 @@ ProjectionStatus compute_dual(const Model& /*model*/, const State& state, Worksp
     d.F(ik, k) = 1.0;
     for (int i = 0; i < d.r; ++i) d.rhs(i, k) = Et(c.rows[static_cast<size_t>(i)], ik);
   }
-  solve_dependent(A_diag, c, d, d.F);
+  solve_dependent(A_sqrt, c, d, d.F);
 
-  // 3. H = Fᵀ M F, eq. (68), and ψ = F H⁻¹ Fᵀ, eq. (69).
-  d.MF.noalias() = M * d.F;
+  // 3. H = Fᵀ M F, eq. (68), and ψ = F H⁻¹ Fᵀ, eq. (69). Every product below is O(n² n_a) or
+  //    less: ψ, α, Θ have rank n_a, and products with a diagonal M are scalings.
+  if (diagonal) d.MF = ws.free.M_diag.asDiagonal() * d.F;
+  else d.MF.noalias() = M * d.F;
   d.H.noalias() = d.F.transpose() * d.MF;  // eq. (68)
   d.H_llt.compute(d.H);
   if (d.H_llt.info() != Eigen::Success) {
@@ -128,20 +136,30 @@ ProjectionStatus compute_dual(const Model& /*model*/, const State& state, Worksp
   d.psi.noalias() = d.F * d.HinvFt;  // eq. (69): ψ = F H⁻¹ Fᵀ
 
   // 4. α = ψ M, β = I − ψ M, eq. (70).
-  d.alpha.noalias() = d.psi * M;  // eq. (70)
-  d.beta = -d.alpha;              // eq. (70)
+  if (diagonal) d.alpha = d.psi * ws.free.M_diag.asDiagonal();  // eq. (70)
+  else d.alpha.noalias() = d.psi * M;                            // eq. (70)
+  d.beta = -d.alpha;                                             // eq. (70)
   d.beta.diagonal().array() += 1.0;
 
   // 5. Ḟ: differentiating Eᵀ F = 0 gives Eᵀ Ḟ = −Dᵀ F; the independent rows of Ḟ are zero.
   d.DtF.noalias() = ws.constraints.Dt * d.F;
   for (int k = 0; k < d.na; ++k) d.Fdot.row(c.independent[static_cast<size_t>(k)]).setZero();
   for (int i = 0; i < d.r; ++i) d.rhs.row(i) = d.DtF.row(c.rows[static_cast<size_t>(i)]);
-  solve_dependent(A_diag, c, d, d.Fdot);
+  solve_dependent(A_sqrt, c, d, d.Fdot);
 
-  // 6. Θ = Ḟ H⁻¹ Fᵀ, eq. (83); θ = β Θ + Θᵀ βᵀ, eq. (84).
+  // 6. Θ = Ḟ H⁻¹ Fᵀ, eq. (83); θ = β Θ + Θᵀ βᵀ = (β Ḟ)(H⁻¹ Fᵀ) + transpose, eq. (84), with
+  //    β Ḟ = Ḟ − F (H⁻¹ Fᵀ)(M Ḟ).
   d.Theta.noalias() = d.Fdot * d.HinvFt;  // eq. (83)
-  d.theta.noalias() = d.beta * d.Theta;   // eq. (84)
-  d.theta.noalias() += d.Theta.transpose() * d.beta.transpose();
+  if (diagonal) d.MFdot = ws.free.M_diag.asDiagonal() * d.Fdot;
+  else d.MFdot.noalias() = M * d.Fdot;
+  d.small.noalias() = d.HinvFt * d.MFdot;
+  d.betaFdot = d.Fdot;
+  d.betaFdot.noalias() -= d.F * d.small;
+  d.theta.noalias() = d.betaFdot * d.HinvFt;  // eq. (84): β Θ
+  for (Eigen::Index j = 0; j < d.theta.cols(); ++j) {  // eq. (84): + Θᵀ βᵀ = (β Θ)ᵀ
+    for (Eigen::Index i = 0; i < j; ++i) d.theta(i, j) = d.theta(j, i) = d.theta(i, j) + d.theta(j, i);
+    d.theta(j, j) *= 2.0;
+  }
   d.status = ProjectionStatus::ok;
   return d.status;
 }
@@ -151,7 +169,7 @@ double refactor_chart(Workspace& ws) {
     ws.dual.selector.select(ws.constraints.Et, ws.free.A_diag, ws.dual.options, ws.dual.chart);
     ws.dual.chart_ready = true;
   }
-  ws.dual.quality = factor_chart(ws.constraints.Et, ws.free.A_diag, ws.dual.chart, ws.dual);
+  ws.dual.quality = factor_chart(ws.constraints.Et, ws.free.A_sqrt, ws.dual.chart, ws.dual);
   return ws.dual.quality;
 }
 
@@ -161,7 +179,7 @@ void solve_chart(Workspace& ws, const VecX& b, VecX& x) {
   x.setZero();
   for (int i = 0; i < d.r; ++i) x(i) = b(c.rows[static_cast<size_t>(i)]);  // scratch
   for (int i = 0; i < d.r; ++i) d.rhs(i, 0) = -x(i);
-  solve_dependent(ws.free.A_diag, c, d, d.Fdot_scratch);
+  solve_dependent(ws.free.A_sqrt, c, d, d.Fdot_scratch);
   x.setZero();
   for (int k = 0; k < d.r; ++k) {
     const int dk = c.dependent[static_cast<size_t>(k)];

@@ -21,6 +21,8 @@ FreeSystemWorkspace::FreeSystemWorkspace(const Model& model)
     : M(MatX::Zero(model.n, model.n)),
       A(MatX::Zero(model.n, model.n)),
       A_diag(VecX::Zero(model.n)),
+      A_sqrt(VecX::Zero(model.n)),
+      M_diag(VecX::Zero(model.n)),
       Mdot(MatX::Zero(model.n, model.n)),
       Q(VecX::Zero(model.n)),
       constant_mass(mass_matrix_is_constant(model)) {}
@@ -50,6 +52,9 @@ void compute_free_system(const Model& model, const State& state, Workspace& ws) 
     compute_mass_matrix(model, state.q, fs.M);          // eq. (4)
     compute_inverse_mass_matrix(model, state.q, fs.A);  // eq. (6)
     fs.A_diag = fs.A.diagonal();
+    fs.A_sqrt = fs.A_diag.cwiseSqrt();
+    fs.M_diag = fs.M.diagonal();
+    fs.diagonal_mass = (fs.M - MatX(fs.M_diag.asDiagonal())).cwiseAbs().maxCoeff() == 0.0;
     fs.mass_ready = true;
   }
   if (!fs.constant_mass) compute_mass_matrix_rate(model, state.q, state.u, fs.Mdot);

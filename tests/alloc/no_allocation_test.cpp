@@ -1,10 +1,9 @@
-// Proof that the projection hot paths allocate nothing after set-up (issue 2 §9): global
-// operator new is replaced by a counting one; the counter must not move across evaluations.
+// Proof that the projection hot paths allocate nothing after set-up (issue 2 §9): malloc and
+// friends are interposed by counting versions; the counter must not move across evaluations.
 #include <gtest/gtest.h>
 
 #include <atomic>
 #include <cstdlib>
-#include <new>
 
 #include "orthomech/analysis/mobility.hpp"
 #include "orthomech/analysis/positions.hpp"
@@ -16,24 +15,36 @@ namespace {
 std::atomic<long> g_allocations{0};
 }
 
-void* operator new(std::size_t size) {
+// Every heap allocation of the process goes through malloc/calloc/realloc (Eigen's
+// aligned_malloc uses std::malloc; libstdc++'s operator new calls malloc). This binary interposes
+// them, counts, and forwards to glibc's implementations.
+extern "C" {
+void* __libc_malloc(std::size_t);
+void* __libc_calloc(std::size_t, std::size_t);
+void* __libc_realloc(void*, std::size_t);
+void* __libc_memalign(std::size_t, std::size_t);
+void* malloc(std::size_t size) {
   ++g_allocations;
-  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
-  throw std::bad_alloc();
+  return __libc_malloc(size);
 }
-void* operator new[](std::size_t size) { return operator new(size); }
-void* operator new(std::size_t size, std::align_val_t al) {
+void* calloc(std::size_t n, std::size_t size) {
   ++g_allocations;
-  const std::size_t a = static_cast<std::size_t>(al);
-  if (void* p = std::aligned_alloc(a, (size + a - 1) / a * a)) return p;
-  throw std::bad_alloc();
+  return __libc_calloc(n, size);
 }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
-void operator delete(void* p, std::align_val_t) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+void* realloc(void* p, std::size_t size) {
+  ++g_allocations;
+  return __libc_realloc(p, size);
+}
+void* aligned_alloc(std::size_t alignment, std::size_t size) {
+  ++g_allocations;
+  return __libc_memalign(alignment, size);
+}
+int posix_memalign(void** out, std::size_t alignment, std::size_t size) {
+  ++g_allocations;
+  *out = __libc_memalign(alignment, size);
+  return *out ? 0 : 12;  // ENOMEM
+}
+}
 
 namespace orthomech {
 namespace {
@@ -52,6 +63,12 @@ TEST_P(NoAllocation, DualPrimalAndCorrectorAllocateNothingAfterSetUp) {
   ASSERT_EQ(evaluate_dual(model, s, ws), ProjectionStatus::ok);
   const bool primal_ok = evaluate_primal(model, s, ws) == ProjectionStatus::ok;
   VecX q_work = q;
+  {  // the counter sees Eigen's heap allocations (else this test could not fail)
+    const long c0 = g_allocations.load();
+    const VecX probe = VecX::Ones(64);
+    ASSERT_GT(g_allocations.load() - c0, 0);
+    ASSERT_EQ(probe.sum(), 64.0);
+  }
   const long before = g_allocations.load();
   for (int k = 0; k < 100; ++k) {
     s.q(0) = q(0) + 1e-9 * k;  // move a little: real work, same chart

@@ -17,6 +17,9 @@ struct FreeSystemWorkspace {
   MatX M;       // n × n: mass matrix, eq. (4)
   MatX A;       // n × n: A = M⁻¹, eq. (6)
   VecX A_diag;  // n: diagonal of A (chart scaling)
+  VecX A_sqrt;  // n: √A_kk (chart scaling)
+  VecX M_diag;  // n: diagonal of M
+  bool diagonal_mass = false;  // M diagonal (planar bodies): products with M become scalings
   MatX Mdot;    // n × n: Ṁ along u
   VecX Q;       // n: applied generalized forces Q̂, eq. (17)
   bool constant_mass = true;
@@ -79,6 +82,9 @@ struct DualWorkspace {
   MatX alpha;   // n × n: α = ψ M, eq. (70)
   MatX beta;    // n × n: β = I − ψ M, eq. (70)
   MatX DtF;     // nc × n_a: Dᵀ F
+  MatX MFdot;   // n × n_a: M Ḟ
+  MatX betaFdot;  // n × n_a: β Ḟ = Ḟ − F H⁻¹ Fᵀ M Ḟ
+  MatX small;   // n_a × n_a: scratch
   MatX Fdot;    // n × n_a: Ḟ from Eᵀ Ḟ = −Dᵀ F (design §4)
   MatX Theta;   // n × n: Θ = Ḟ H⁻¹ Fᵀ, eq. (83)
   MatX theta;   // n × n: θ = ψ̇ = β Θ + Θᵀ βᵀ, eq. (84)

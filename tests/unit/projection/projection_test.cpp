@@ -1,0 +1,289 @@
+// The paper's theorems as tests, on every bundled mechanism (issue 2 §3). Oracles: the
+// identities themselves (Theorems 1–4, 2′), the other formulation (primal α, β = dual α, β),
+// and central differences along admissible motion on the constraint manifold (ω = π̇, eq. (79);
+// θ = ψ̇, eq. (84); Ḟ, eq. (83)).
+#include <gtest/gtest.h>
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/SVD>
+#include <memory>
+
+#include "orthomech/analysis/mobility.hpp"
+#include "orthomech/analysis/positions.hpp"
+#include "orthomech/projection/dual.hpp"
+#include "orthomech/projection/primal.hpp"
+#include "support/fixtures.hpp"
+
+namespace orthomech {
+namespace {
+
+// Identities hold to rounding: entries of α, β are O(1)…O(100) (they mix m and rad), products
+// of a few n × n matrices lose ~n·eps·‖·‖²; 1e-9 relative is far above that and far below any
+// formula error.
+constexpr double kIdentityTol = 1e-9;
+// Central differences on the manifold: step 1e-6 s at |u| ~ 1; truncation ~1e-12, rounding of
+// the re-projection (1e-14) / h ~ 1e-8 relative.
+constexpr double kFdStep = 1e-6;
+constexpr double kFdTol = 1e-6;
+
+double rel(const MatX& a, const MatX& b) { return (a - b).norm() / (1.0 + b.norm()); }
+int numeric_rank(const MatX& m) {
+  Eigen::JacobiSVD<MatX> svd(m);
+  svd.setThreshold(1e-9);
+  return static_cast<int>(svd.rank());
+}
+
+struct Evaluated {
+  Model model;
+  VecX q;
+  Mobility mob;
+  State state;
+  std::unique_ptr<Workspace> ws;
+  bool primal_ok = false;
+  explicit Evaluated(const std::string& name, unsigned seed = 1)
+      : model(test::load_bundled(name)), q(test::assembled_q(model)), mob(compute_mobility(model, q)) {
+    state = State(model);
+    state.q = q;
+    state.u = test::admissible_velocity(model, q, seed);
+    ws = std::make_unique<Workspace>(model, mob.rank);
+    EXPECT_EQ(evaluate_dual(model, state, *ws), ProjectionStatus::ok);
+    primal_ok = evaluate_primal(model, state, *ws) == ProjectionStatus::ok;
+  }
+  const MatX& M() const { return ws->free.M; }
+  const MatX& A() const { return ws->free.A; }
+  const MatX& Et() const { return ws->constraints.Et; }
+};
+
+const char* const kAll[] = {"crank-rocker",  "double-rocker",      "slider-crank",
+                            "watt-six-bar",  "stephenson-six-bar", "quick-return",
+                            "n-four-bar-2",  "pendulum",           "andrews-squeezer",
+                            "triple-crank"};
+
+class Projection : public ::testing::TestWithParam<const char*> {};
+
+// ---- dual form: holds on every mechanism, redundant or not ------------------------------------
+TEST_P(Projection, Eq68_HSymmetricPositiveDefiniteAndEtFZero) {
+  const Evaluated e(GetParam());
+  const auto& d = e.ws->dual;
+  EXPECT_LT(rel(d.H, d.H.transpose()), kIdentityTol);
+  EXPECT_GT(Eigen::SelfAdjointEigenSolver<MatX>(d.H).eigenvalues().minCoeff(), 0.0);
+  EXPECT_LT((e.Et() * d.F).norm() / (1.0 + e.Et().norm() * d.F.norm()), kIdentityTol);
+  EXPECT_EQ(numeric_rank(d.F), e.mob.dof);
+}
+
+TEST_P(Projection, Eq70_Theorem2Prime_AlphaFromDualIsTheMassOrthogonalProjection) {
+  const Evaluated e(GetParam());
+  const auto& d = e.ws->dual;
+  const MatX I = MatX::Identity(e.model.n, e.model.n);
+  EXPECT_LT(rel(d.alpha * d.alpha, d.alpha), kIdentityTol);             // eq. (65), (28)
+  EXPECT_LT(rel(d.alpha * d.F, d.F), kIdentityTol);                     // eq. (66)
+  EXPECT_EQ(numeric_rank(d.alpha), e.mob.dof);                          // eq. (66)
+  EXPECT_LT(rel(d.alpha * e.A(), (d.alpha * e.A()).transpose()), kIdentityTol);  // eq. (67)
+  EXPECT_LT(rel(d.psi, d.alpha * e.A()), kIdentityTol);                 // eq. (69)
+  EXPECT_LT(rel(d.alpha + d.beta, I), kIdentityTol);                    // eq. (29)
+  EXPECT_LT((d.alpha * d.beta).norm() / (1.0 + d.alpha.norm() * d.beta.norm()), kIdentityTol);
+  EXPECT_LT((d.beta * d.alpha).norm() / (1.0 + d.alpha.norm() * d.beta.norm()), kIdentityTol);
+  EXPECT_LT((e.Et() * d.alpha).norm() / (1.0 + e.Et().norm() * d.alpha.norm()), kIdentityTol);  // eq. (30)
+  EXPECT_LT(rel(e.Et() * d.beta, e.Et()), kIdentityTol);                // eq. (30)
+  EXPECT_LT(rel(d.beta * d.beta, d.beta), kIdentityTol);                // eq. (28)
+  EXPECT_EQ(numeric_rank(d.beta), e.mob.rank);                          // eq. (39)
+}
+
+TEST_P(Projection, Eq35_Theorem1_MBetaSymmetricAndAlphaTMBetaZero) {
+  const Evaluated e(GetParam());
+  const auto& d = e.ws->dual;
+  const MatX Mb = e.M() * d.beta;
+  EXPECT_LT(rel(Mb, Mb.transpose()), kIdentityTol);                                    // eq. (35)
+  EXPECT_LT((d.alpha.transpose() * e.M() * d.beta).norm() / (1.0 + e.M().norm()), kIdentityTol);  // eq. (34)
+}
+
+TEST_P(Projection, Eq71_72_DualMassAndInfluenceMatricesAndTheorem4) {
+  const Evaluated e(GetParam());
+  const auto& d = e.ws->dual;
+  const MatX& M = e.M();
+  const MatX& A = e.A();
+  const MatX Maa = d.alpha.transpose() * M * d.alpha, Mbb = d.beta.transpose() * M * d.beta;  // eq. (49)
+  const MatX Aaa = d.alpha * A * d.alpha.transpose(), Abb = d.beta * A * d.beta.transpose();  // eq. (55)
+  EXPECT_LT(rel(Maa, M * d.psi * M), kIdentityTol);                    // eq. (71)
+  EXPECT_LT(rel(Mbb, M - M * d.psi * M), kIdentityTol);                // eq. (71)
+  EXPECT_LT((d.alpha.transpose() * M * d.beta).norm() / (1.0 + M.norm()), kIdentityTol);  // eq. (71)
+  EXPECT_LT(rel(Aaa, d.psi), kIdentityTol);                            // eq. (72)
+  EXPECT_LT(rel(Abb, A - d.psi), kIdentityTol);                        // eq. (72)
+  EXPECT_LT(rel(Aaa * Maa, d.alpha), kIdentityTol);                    // eq. (58)
+  EXPECT_LT(rel(Maa * Aaa, d.alpha.transpose()), kIdentityTol);        // eq. (58)
+  EXPECT_LT(rel(Abb * Mbb, d.beta), kIdentityTol);                     // eq. (59)
+  EXPECT_LT(rel(Mbb * Abb, d.beta.transpose()), kIdentityTol);         // eq. (59)
+}
+
+// ---- primal form: only where G is regular ------------------------------------------------------
+TEST_P(Projection, Eq42_44_PrimalProjectionsEqualDualOnes) {
+  const Evaluated e(GetParam());
+  if (e.mob.rank < e.model.nc) {
+    // Redundant constraints: G = EᵀAE is singular and the primal form must say so.
+    EXPECT_FALSE(e.primal_ok);
+    EXPECT_EQ(e.ws->primal.status, ProjectionStatus::singular_G);
+    return;  // the primal form rightly produces no numbers here
+  }
+  ASSERT_TRUE(e.primal_ok);
+  const auto& p = e.ws->primal;
+  const auto& d = e.ws->dual;
+  EXPECT_LT(rel(p.G, p.G.transpose()), kIdentityTol);                  // eq. (42)
+  EXPECT_GT(Eigen::SelfAdjointEigenSolver<MatX>(p.G).eigenvalues().minCoeff(), 0.0);
+  EXPECT_LT(rel(p.pi, e.M() * p.beta), kIdentityTol);                  // eq. (43)
+  EXPECT_LT(rel(p.pi * e.A() * p.pi, p.pi), kIdentityTol);             // eq. (60)
+  EXPECT_LT(rel(p.alpha, d.alpha), kIdentityTol) << "primal α ≠ dual α";
+  EXPECT_LT(rel(p.beta, d.beta), kIdentityTol) << "primal β ≠ dual β";
+  const MatX& M = e.M();
+  const MatX& A = e.A();
+  EXPECT_LT(rel(p.alpha.transpose() * M * p.alpha, M - p.pi), kIdentityTol);      // eq. (56)
+  EXPECT_LT(rel(p.beta.transpose() * M * p.beta, p.pi), kIdentityTol);            // eq. (56)
+  EXPECT_LT(rel(p.alpha * A * p.alpha.transpose(), A - A * p.pi * A), kIdentityTol);  // eq. (57)
+  EXPECT_LT(rel(p.beta * A * p.beta.transpose(), A * p.pi * A), kIdentityTol);     // eq. (57)
+  EXPECT_LT((p.Omega.transpose() * p.alpha).norm() / (1.0 + p.Omega.norm() * p.alpha.norm()),
+            kIdentityTol);  // eq. (103)
+}
+
+// ---- derivatives along admissible motion, by central differences on the manifold -------------
+// q(t): step along u, then re-project with the chart corrector (independent coordinates held),
+// so q(t) stays on f = 0 and q̇(0) = u.
+VecX on_manifold(const Model& model, const VecX& q, const VecX& u, double t, Workspace& chart_ws) {
+  VecX qt = q + t * u;
+  const SolveResult r = correct_positions_in_chart(model, qt, chart_ws, PositionOptions{1e-15, 50});
+  EXPECT_NE(r.status, SolveStatus::singular);
+  return qt;
+}
+
+TEST_P(Projection, Eq79_OmegaEqualsTimeDerivativeOfPi) {
+  Evaluated e(GetParam());
+  if (!e.primal_ok) GTEST_SKIP() << "redundant constraints: no primal form";
+  Workspace probe(e.model, e.mob.rank);
+  Workspace chart_ws(e.model, e.mob.rank);
+  (void)evaluate_dual(e.model, e.state, chart_ws);
+  State s = e.state;
+  s.q = on_manifold(e.model, e.q, e.state.u, kFdStep, chart_ws);
+  ASSERT_EQ(evaluate_primal(e.model, s, probe), ProjectionStatus::ok);
+  const MatX pi_plus = probe.primal.pi;
+  s.q = on_manifold(e.model, e.q, e.state.u, -kFdStep, chart_ws);
+  ASSERT_EQ(evaluate_primal(e.model, s, probe), ProjectionStatus::ok);
+  const MatX pi_dot = (pi_plus - probe.primal.pi) / (2.0 * kFdStep);
+  EXPECT_LT(rel(e.ws->primal.omega, pi_dot), kFdTol) << "ω ≠ π̇";
+}
+
+TEST_P(Projection, Eq83_84_ThetaAndFdotAgainstDifferences) {
+  Evaluated e(GetParam());
+  Workspace probe(e.model, e.mob.rank);
+  probe.dual.chart = e.ws->dual.chart;  // same chart: F(q(t)) is then one smooth function
+  probe.dual.chart_ready = true;
+  Workspace chart_ws(e.model, e.mob.rank);
+  (void)evaluate_dual(e.model, e.state, chart_ws);
+  State s = e.state;
+  s.q = on_manifold(e.model, e.q, e.state.u, kFdStep, chart_ws);
+  ASSERT_EQ(evaluate_dual(e.model, s, probe), ProjectionStatus::ok);
+  const MatX psi_plus = probe.dual.psi, F_plus = probe.dual.F;
+  s.q = on_manifold(e.model, e.q, e.state.u, -kFdStep, chart_ws);
+  ASSERT_EQ(evaluate_dual(e.model, s, probe), ProjectionStatus::ok);
+  ASSERT_EQ(probe.dual.switch_count, 0);
+  const MatX psi_dot = (psi_plus - probe.dual.psi) / (2.0 * kFdStep);
+  const MatX F_dot = (F_plus - probe.dual.F) / (2.0 * kFdStep);
+  EXPECT_LT(rel(e.ws->dual.Fdot, F_dot), kFdTol) << "Ḟ (from Eᵀ Ḟ = −Dᵀ F) ≠ difference of F";
+  EXPECT_LT(rel(e.ws->dual.theta, psi_dot), kFdTol) << "θ ≠ ψ̇ (eq. (84))";
+  // Eq. (83) by definition, and the identity Eᵀ Ḟ = −Dᵀ F it rests on.
+  const auto& d = e.ws->dual;
+  EXPECT_LT(rel(d.Theta, d.Fdot * d.H.llt().solve(d.F.transpose())), kIdentityTol);
+  EXPECT_LT(rel(e.Et() * d.Fdot, -e.ws->constraints.Dt * d.F), kIdentityTol);
+  if (e.primal_ok) {  // eq. (85) with constant A: α̇ = θM; the primal gives α̇ = −β̇ = −Aω (82)
+    EXPECT_LT(rel(d.theta * e.M(), -e.A() * e.ws->primal.omega), 1e-8);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Bundled, Projection, ::testing::ValuesIn(kAll),
+                         [](const auto& param_info) {
+                           std::string s = param_info.param;
+                           for (char& c : s) c = c == '-' ? '_' : c;
+                           return s;
+                         });
+
+// ---- charts ------------------------------------------------------------------------------------
+// A chart whose independent coordinate is the rocker angle fails at the rocker's limit positions;
+// sweeping the crank through a full turn must switch charts there, keep Eᵀ F = 0, and bring the
+// linkage back to where it started (same assembly mode).
+TEST(Charts, SwitchAtRockerLimitsAndCloseTheLoopAfterOneTurn) {
+  const Model model = test::load_bundled("crank-rocker");
+  const VecX q0 = test::assembled_q(model);
+  const Mobility mob = compute_mobility(model, q0);
+  ASSERT_EQ(mob.dof, 1);
+  Workspace ws(model, mob.rank);
+  State s(model);
+  s.q = q0;
+  ASSERT_EQ(evaluate_dual(model, s, ws), ProjectionStatus::ok);
+  // Force the rocker angle to be the independent coordinate.
+  const int crank = model.find_body("crank"), rocker = model.find_body("rocker");
+  ASSERT_GE(crank, 0);
+  ASSERT_GE(rocker, 0);
+  const int rocker_phi = model.bodies[static_cast<size_t>(rocker)].u_offset + 2;
+  const int crank_phi = model.bodies[static_cast<size_t>(crank)].u_offset + 2;
+  Chart& c = ws.dual.chart;
+  auto& dep = c.dependent;
+  const auto it = std::find(dep.begin(), dep.end(), rocker_phi);
+  ASSERT_NE(it, dep.end()) << "rocker angle already independent";
+  *it = c.independent[0];
+  c.independent[0] = rocker_phi;
+  std::sort(dep.begin(), dep.end());
+  const double start = s.q(crank_phi);
+  const int steps = 3600;
+  const double h = 2.0 * M_PI / steps;
+  for (int k = 0; k < steps; ++k) {
+    s.t = k * h;
+    ASSERT_EQ(evaluate_dual(model, s, ws), ProjectionStatus::ok) << "step " << k;
+    ASSERT_LT((ws.constraints.Et * ws.dual.F).norm(), 1e-9) << "step " << k;
+    // Unit crank speed: u = F v with (crank row of F) v = 1.
+    const double rate = ws.dual.F(crank_phi, 0);
+    ASSERT_GT(std::abs(rate), 1e-3) << "a crank-rocker has no dead point at its crank";
+    // Midpoint predictor, then the chart corrector.
+    const VecX u1 = ws.dual.F.col(0) / rate;
+    State mid = s;
+    mid.q += 0.5 * h * u1;
+    ASSERT_EQ(evaluate_dual(model, mid, ws), ProjectionStatus::ok);
+    s.q += h * ws.dual.F.col(0) / ws.dual.F(crank_phi, 0);
+    const SolveResult r = correct_positions_in_chart(model, s.q, ws);
+    ASSERT_EQ(r.status, SolveStatus::converged) << "step " << k << ": " << r.message;
+  }
+  EXPECT_GE(ws.dual.switch_count, 1) << "the rocker-angle chart must be left at a rocker limit";
+  EXPECT_EQ(ws.dual.switches.size(), static_cast<size_t>(ws.dual.switch_count));
+  EXPECT_NEAR(s.q(crank_phi) - start, 2.0 * M_PI, 1e-3);  // crank held by the predictor only
+  // Back to the start: every coordinate but the crank angle returns (same assembly mode).
+  VecX back = s.q;
+  back(crank_phi) -= 2.0 * M_PI;
+  EXPECT_LT((back - q0).cwiseAbs().maxCoeff(), 1e-3);
+}
+
+// ---- redundancy --------------------------------------------------------------------------------
+TEST(Redundancy, TripleCrankHasOneRedundantEquationAndSingularG) {
+  const Model model = test::load_bundled("triple-crank");
+  const VecX q = test::assembled_q(model);
+  const Mobility mob = compute_mobility(model, q);
+  EXPECT_EQ(mob.grubler, 0);
+  EXPECT_EQ(mob.dof, 1);
+  EXPECT_EQ(mob.rank, model.nc - 1);
+  EXPECT_EQ(mob.rank, test::svd_rank(model, q));  // QR rank = SVD rank (independent oracle)
+  ASSERT_EQ(mob.redundant.size(), 1u);
+  EXPECT_NE(mob.redundant[0].find("joint '"), std::string::npos);
+  // Away from the manifold's parallel configuration the redundancy disappears: rank is full.
+  VecX off = q;
+  off(2) += 0.05;  // turn the first crank alone
+  EXPECT_EQ(compute_mobility(model, off).rank, model.nc);
+}
+
+TEST(Mobility, RankAgreesWithSvdOnEveryBundledMechanism) {
+  for (const char* name : kAll) {
+    const Model model = test::load_bundled(name);
+    const VecX q = test::assembled_q(model);
+    const Mobility mob = compute_mobility(model, q);
+    EXPECT_EQ(mob.rank, test::svd_rank(model, q)) << name;
+    EXPECT_EQ(mob.dof, 1) << name;
+    EXPECT_EQ(mob.grubler, model.n - model.nc) << name;
+  }
+}
+
+}  // namespace
+}  // namespace orthomech
