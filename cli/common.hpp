@@ -10,10 +10,10 @@ namespace orthomech::cli {
 // Documented exit codes (docs/cli.md).
 enum ExitCode : int {
   kOk = 0,
-  kCheckFailed = 1,   // an analysis ran and a check failed
-  kBadInput = 2,      // bad mechanism file or command line
-  kNumerical = 3,     // numerical failure (cannot assemble, singular, no convergence)
-  kInternal = 4,      // a bug: please report
+  kCheckFailed = 1,  // an analysis ran and a check failed
+  kBadInput = 2,     // bad mechanism file or command line
+  kNumerical = 3,    // numerical failure (cannot assemble, singular, no convergence)
+  kInternal = 4,     // a bug: please report
 };
 
 struct GlobalOptions {

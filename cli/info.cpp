@@ -1,12 +1,13 @@
 // `orthomech info FILE [--json]`: structure and mobility of a mechanism (design §8).
 // The design position is first projected onto f(q) = 0 (mass-metric Gauss–Newton), because the
 // rank of E, and so the redundancy, is a property of the constraint manifold.
+#include <spdlog/spdlog.h>
+
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <sstream>
-#include <spdlog/spdlog.h>
 
 #include "commands.hpp"
 #include "common.hpp"
@@ -35,9 +36,10 @@ int run_info(const InfoOptions& opt) {
   const VecX q_design = q;
   const SolveResult assembly = project_positions(model, q);
   if (assembly.status != SolveStatus::converged) {
-    spdlog::warn("{}: the design position does not assemble ({}; residual {:.3g}); "
-                 "mobility is reported at the design position as given",
-                 model.file, to_string(assembly.status), assembly.residual);
+    spdlog::warn(
+        "{}: the design position does not assemble ({}; residual {:.3g}); "
+        "mobility is reported at the design position as given",
+        model.file, to_string(assembly.status), assembly.residual);
     q = q_design;
   }
   const double moved = (q - q_design).cwiseAbs().maxCoeff();
@@ -70,10 +72,12 @@ int run_info(const InfoOptions& opt) {
     j["bodies"] = bodies;
     nlohmann::json joints = nlohmann::json::array();
     for (const Joint& jt : model.joints)
-      joints.push_back({{"name", jt.name}, {"type", jt.type_name()}, {"equations", jt.component_names()}});
+      joints.push_back(
+          {{"name", jt.name}, {"type", jt.type_name()}, {"equations", jt.component_names()}});
     j["joints"] = joints;
     nlohmann::json measures = nlohmann::json::array();
-    for (const Measure& m : model.measures) measures.push_back({{"name", m.name}, {"unit", m.unit}});
+    for (const Measure& m : model.measures)
+      measures.push_back({{"name", m.name}, {"unit", m.unit}});
     j["measures"] = measures;
     out << j.dump(2) << '\n';
   } else {
@@ -81,8 +85,8 @@ int run_info(const InfoOptions& opt) {
     out << "bodies        " << model.bodies.size() << " moving + ground\n";
     out << "coordinates   nq = " << mob.nq << ", n = " << mob.n << "\n";
     out << "constraints   n_c = " << mob.nc << " in " << model.joints.size() << " joints\n";
-    out << "rank of E     " << mob.rank << "   (smallest kept pivot " << fmt_double(mob.smallest_pivot)
-        << ", tolerance " << fmt_double(mob.tolerance) << ")\n";
+    out << "rank of E     " << mob.rank << "   (smallest kept pivot "
+        << fmt_double(mob.smallest_pivot) << ", tolerance " << fmt_double(mob.tolerance) << ")\n";
     out << "DOF           " << mob.dof << "   (Grübler–Kutzbach count " << mob.grubler << ")\n";
     out << "redundant     ";
     if (mob.redundant.empty()) out << "none";
@@ -111,9 +115,10 @@ int run_info(const InfoOptions& opt) {
 
 void register_info(CLI::App& app, const GlobalOptions& globals, int& exit_code) {
   auto opt = std::make_shared<InfoOptions>();
-  CLI::App* cmd = app.add_subcommand(
-      "info", "bodies, joints, coordinates, constraints, rank of E, DOF, Grübler count, "
-              "redundant equations");
+  CLI::App* cmd =
+      app.add_subcommand("info",
+                         "bodies, joints, coordinates, constraints, rank of E, DOF, Grübler count, "
+                         "redundant equations");
   cmd->add_option("file", opt->file, "mechanism file (YAML)")->required();
   cmd->add_flag("--json", opt->json, "one JSON document on stdout");
   cmd->callback([opt, &globals, &exit_code] {

@@ -11,8 +11,7 @@
 
 int main(int argc, char** argv) {
   using namespace orthomech::cli;
-  CLI::App app{
-      "orthomech: analysis of planar linkages with the mass-orthogonal projection method"};
+  CLI::App app{"orthomech: analysis of planar linkages with the mass-orthogonal projection method"};
   app.set_version_flag("--version", std::string("orthomech ") + ORTHOMECH_VERSION);
   app.require_subcommand(1);
   GlobalOptions globals;

@@ -11,9 +11,12 @@ namespace orthomech {
 
 const char* to_string(SolveStatus s) {
   switch (s) {
-    case SolveStatus::converged: return "converged";
-    case SolveStatus::not_converged: return "not converged";
-    case SolveStatus::singular: return "singular";
+    case SolveStatus::converged:
+      return "converged";
+    case SolveStatus::not_converged:
+      return "not converged";
+    case SolveStatus::singular:
+      return "singular";
   }
   return "?";
 }
@@ -102,7 +105,7 @@ SolveResult correct_positions_in_chart(const Model& model, VecX& q, Workspace& w
       result.message = "dependent block of the chart is singular";
       return result;
     }
-    solve_chart(ws, f, dq);             // E_RDᵀ Δq_D = f_R
+    solve_chart(ws, f, dq);                   // E_RDᵀ Δq_D = f_R
     integrate_positions(model, q, dq, -1.0);  // Newton step q_D ← q_D − Δq_D
   }
 }

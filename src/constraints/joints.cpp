@@ -26,7 +26,7 @@ struct JointEvaluator {
   const Model& model;
   const VecX& q;
   const VecX* u;  // null when only f or Eᵀ are wanted
-  int r;  // first row
+  int r;          // first row
   VecX* f;
   MatX* Et;
   MatX* Dt;
@@ -57,8 +57,8 @@ struct JointEvaluator {
   void operator()(const GearPair& j) {
     if (f) {
       const double pc = body_angle(model, j.carrier, q);
-      (*f)(r) = (body_angle(model, j.bj, q) - pc) - j.ratio * (body_angle(model, j.bi, q) - pc) -
-                j.c0;
+      (*f)(r) =
+          (body_angle(model, j.bj, q) - pc) - j.ratio * (body_angle(model, j.bi, q) - pc) - j.c0;
     }
     if (Et) {
       auto e = row(Et, 0);
@@ -104,7 +104,7 @@ struct JointEvaluator {
       if (Et) {
         auto e = row(Et, a);
         e.setZero();
-        add_point_jacobian(model, pi, ki, c, 1.0, e);   // eq. (23)
+        add_point_jacobian(model, pi, ki, c, 1.0, e);  // eq. (23)
         add_point_jacobian(model, pj, kj, c, -1.0, e);
       }
       if (Dt) {

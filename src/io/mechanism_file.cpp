@@ -89,14 +89,15 @@ class Reader {
                       double scale = 1.0) const {
     return number(require(node, key, element), element, key, scale);
   }
-  double optional_number(const YAML::Node& node, const std::string& key,
-                         const std::string& element, double fallback, double scale = 1.0) const {
+  double optional_number(const YAML::Node& node, const std::string& key, const std::string& element,
+                         double fallback, double scale = 1.0) const {
     const YAML::Node child = node[key];
     return child ? number(child, element, key, scale) : fallback;
   }
   std::string scalar(const YAML::Node& node, const std::string& element,
                      const std::string& what) const {
-    if (!node.IsScalar()) fail(node, element, what + " must be a plain name or value, not a list or mapping");
+    if (!node.IsScalar())
+      fail(node, element, what + " must be a plain name or value, not a list or mapping");
     return node.Scalar();
   }
   std::string string_field(const YAML::Node& node, const std::string& key,
@@ -122,13 +123,16 @@ class Reader {
   }
   std::string name_of(const YAML::Node& item, const std::string& kind, size_t index,
                       std::set<std::string>& seen) const {
-    const std::string plural = kind == "body" ? "bodies" : kind == "design position" ? "design_positions" : kind + "s";
+    const std::string plural = kind == "body"              ? "bodies"
+                               : kind == "design position" ? "design_positions"
+                                                           : kind + "s";
     const std::string anonymous = plural + "[" + std::to_string(index) + "]";
     if (!item.IsMap()) fail(item, anonymous, "expected a mapping with a 'name'");
     const std::string name = string_field(item, "name", anonymous);
     if (name.empty()) fail(item["name"], anonymous, "name is empty");
     if (!seen.insert(name).second)
-      fail(item["name"], kind + " '" + name + "'", "duplicate name: '" + name + "' is defined twice");
+      fail(item["name"], kind + " '" + name + "'",
+           "duplicate name: '" + name + "' is defined twice");
     return name;
   }
   const YAML::Node list(const YAML::Node& root, const std::string& key) const {
@@ -148,8 +152,10 @@ class Reader {
     for (const auto& kv : pts) {
       const std::string name = scalar(kv.first, element, "a point name");
       if (name == "origin") fail(kv.first, element, "point name 'origin' is reserved");
-      if (name.find('.') != std::string::npos) fail(kv.first, element, "a point name must not contain '.'");
-      if (!seen.insert(name).second) fail(kv.first, element, "point '" + name + "' is defined twice");
+      if (name.find('.') != std::string::npos)
+        fail(kv.first, element, "a point name must not contain '.'");
+      if (!seen.insert(name).second)
+        fail(kv.first, element, "point '" + name + "' is defined twice");
       out.emplace_back(name, vec2(kv.second, element, "points." + name, units_.length));
     }
     return out;
@@ -190,15 +196,16 @@ class Reader {
     if (p.body == -2) fail(node, element, "body '" + body + "' is not defined");
     const auto& points =
         p.body == kGround ? ground_points_ : model_.bodies[static_cast<size_t>(p.body)].points;
-    const auto it = std::find_if(points.begin(), points.end(),
-                                 [&](const auto& e) { return e.first == point; });
+    const auto it =
+        std::find_if(points.begin(), points.end(), [&](const auto& e) { return e.first == point; });
     Vec2 local = Vec2::Zero();
     if (it != points.end()) {
       local = it->second;
     } else if (point != "origin") {
       fail(node, element, "point '" + point + "' is not defined on body '" + body + "'");
     }
-    p.s = p.body == kGround ? local : Vec2(local - model_.bodies[static_cast<size_t>(p.body)].com_local);
+    p.s = p.body == kGround ? local
+                            : Vec2(local - model_.bodies[static_cast<size_t>(p.body)].com_local);
     return p;
   }
   std::pair<PointRef, PointRef> connects(const YAML::Node& item, const std::string& element) const {
@@ -240,7 +247,8 @@ void Reader::read_units(const YAML::Node& node) {
       }
     std::vector<std::string> names;
     for (const auto& e : table) names.push_back(e.first);
-    fail(v, "units", "unknown " + key + " unit '" + v.Scalar() + "' (allowed: " + join(names) + ")");
+    fail(v, "units",
+         "unknown " + key + " unit '" + v.Scalar() + "' (allowed: " + join(names) + ")");
   };
   pick("length", {{"m", 1.0}, {"cm", 0.01}, {"mm", 0.001}, {"in", 0.0254}, {"ft", 0.3048}},
        units_.length);
@@ -275,18 +283,22 @@ void Reader::read_bodies(const YAML::Node& root) {
     const YAML::Node type = item["type"];
     if (type) {
       const std::string t = scalar(type, element, "field 'type'");
-      if (t == "particle") b.kind = BodyKind::particle;
+      if (t == "particle")
+        b.kind = BodyKind::particle;
       else if (t != "rigid")
         fail(type, element, "unknown body type '" + type.Scalar() + "' (allowed: rigid, particle)");
     }
     if (b.kind == BodyKind::rigid)
-      expect_map(item, element, {"name", "type", "mass", "inertia", "com", "pose", "points", "outline"});
+      expect_map(item, element,
+                 {"name", "type", "mass", "inertia", "com", "pose", "points", "outline"});
     else
       expect_map(item, element, {"name", "type", "mass", "pose", "points", "outline"});
     b.mass = number_field(item, "mass", element, units_.mass);
-    if (!(b.mass > 0.0)) fail(item["mass"], element, "mass must be positive, got " + item["mass"].Scalar());
+    if (!(b.mass > 0.0))
+      fail(item["mass"], element, "mass must be positive, got " + item["mass"].Scalar());
     if (b.kind == BodyKind::rigid) {
-      b.inertia = number_field(item, "inertia", element, units_.mass * units_.length * units_.length);
+      b.inertia =
+          number_field(item, "inertia", element, units_.mass * units_.length * units_.length);
       if (!(b.inertia > 0.0))
         fail(item["inertia"], element, "inertia must be positive, got " + item["inertia"].Scalar());
       if (item["com"]) b.com_local = vec2(item["com"], element, "com", units_.length);
@@ -328,7 +340,8 @@ void Reader::read_joints(const YAML::Node& root) {
     j.where = loc(item);
     auto no_particles = [&](const PointRef& a, const PointRef& b) {
       for (const PointRef* p : {&a, &b})
-        if (p->body != kGround && model_.bodies[static_cast<size_t>(p->body)].kind == BodyKind::particle)
+        if (p->body != kGround &&
+            model_.bodies[static_cast<size_t>(p->body)].kind == BodyKind::particle)
           fail(item["connects"], element,
                "body '" + model_.body_name(p->body) + "' is a particle and has no angle; a " +
                    type + " joint needs rigid bodies");
@@ -344,14 +357,17 @@ void Reader::read_joints(const YAML::Node& root) {
         expect_map(item, element, {"name", "type", "connects", "angle"});
       auto [a, b] = connects(item, element);
       no_particles(a, b);
-      const double phi0 = optional_number(item, "angle", element,
-                                          design_angle(b.body) - design_angle(a.body), units_.angle);
-      if (type == "prismatic") j.kind = Prismatic{a, b, unit_axis(item, element), phi0};
-      else j.kind = Fixed{a, b, phi0};
+      const double phi0 = optional_number(
+          item, "angle", element, design_angle(b.body) - design_angle(a.body), units_.angle);
+      if (type == "prismatic")
+        j.kind = Prismatic{a, b, unit_axis(item, element), phi0};
+      else
+        j.kind = Fixed{a, b, phi0};
     } else if (type == "pin-in-slot") {
       expect_map(item, element, {"name", "type", "connects", "axis"});
       auto [a, b] = connects(item, element);
-      if (a.body != kGround && model_.bodies[static_cast<size_t>(a.body)].kind == BodyKind::particle)
+      if (a.body != kGround &&
+          model_.bodies[static_cast<size_t>(a.body)].kind == BodyKind::particle)
         fail(item["connects"], element, "the slot body must be rigid or the ground");
       j.kind = PinInSlot{a, b, unit_axis(item, element)};
     } else if (type == "gear") {
@@ -376,9 +392,11 @@ void Reader::read_joints(const YAML::Node& root) {
       const VecX* none = nullptr;
       Model tmp = model_;
       finalize_model(tmp);
-      const double drawn = (point_kinematics(tmp, b, q0, none).r - point_kinematics(tmp, a, q0, none).r).norm();
+      const double drawn =
+          (point_kinematics(tmp, b, q0, none).r - point_kinematics(tmp, a, q0, none).r).norm();
       d.length = optional_number(item, "length", element, drawn, units_.length);
-      if (!(d.length > 0.0)) fail(item["length"] ? item["length"] : item, element, "length must be positive");
+      if (!(d.length > 0.0))
+        fail(item["length"] ? item["length"] : item, element, "length must be positive");
       j.kind = d;
     } else {
       fail(item["type"], element,
@@ -400,7 +418,8 @@ Table Reader::table(const YAML::Node& node, const std::string& element) const {
   if (measure.derivative != 0) fail(m, element, "a table needs a position measure (derivative 0)");
   const double scale = measure.unit == "rad" ? units_.angle : units_.length;
   const YAML::Node pts = require(node, "points", element);
-  if (!pts.IsSequence() || pts.size() < 2) fail(pts, element, "table 'points' needs at least two [x, factor] pairs");
+  if (!pts.IsSequence() || pts.size() < 2)
+    fail(pts, element, "table 'points' needs at least two [x, factor] pairs");
   for (const auto& p : pts) {
     const auto v = numbers(p, element, "points", 2);
     t.points.emplace_back(v[0] * scale, v[1]);
@@ -436,7 +455,8 @@ void Reader::read_loads(const YAML::Node& root) {
       f.at = point_ref(require(item, "point", element), element);
       f.force = vec2(require(item, "force", element), element, "force", force);
       if (const YAML::Node fr = item["frame"]) {
-        if (fr.Scalar() == "body") f.body_fixed = true;
+        if (fr.Scalar() == "body")
+          f.body_fixed = true;
         else if (fr.Scalar() != "world")
           fail(fr, element, "frame must be 'world' or 'body', got '" + fr.Scalar() + "'");
       }
@@ -451,7 +471,8 @@ void Reader::read_loads(const YAML::Node& root) {
       t.table = table(item["table"], element);
       l.kind = t;
     } else if (type == "spring-damper") {
-      expect_map(item, element, {"name", "type", "connects", "stiffness", "free_length", "damping"});
+      expect_map(item, element,
+                 {"name", "type", "connects", "stiffness", "free_length", "damping"});
       auto [a, b] = connects(item, element);
       SpringDamper s{a, b, optional_number(item, "stiffness", element, 0.0, force / length),
                      optional_number(item, "free_length", element, 0.0, length),
@@ -469,7 +490,8 @@ void Reader::read_loads(const YAML::Node& root) {
       r.bj = rigid_body_ref(bodies[1], element);
       r.stiffness = optional_number(item, "stiffness", element, 0.0, force * length / angle);
       r.free_angle = optional_number(item, "free_angle", element, 0.0, angle);
-      r.damping = optional_number(item, "damping", element, 0.0, force * length * units_.time / angle);
+      r.damping =
+          optional_number(item, "damping", element, 0.0, force * length * units_.time / angle);
       if (r.stiffness < 0.0 || r.damping < 0.0)
         fail(item, element, "stiffness and damping must not be negative");
       l.kind = r;
@@ -517,19 +539,24 @@ void Reader::read_measures(const YAML::Node& root) {
       PointCoordinate p;
       p.point = point_ref(require(item, "point", element), element);
       const std::string c = string_field(item, "component", element);
-      if (c == "x") p.axis = 0;
-      else if (c == "y") p.axis = 1;
-      else fail(item["component"], element, "component must be 'x' or 'y', got '" + c + "'");
+      if (c == "x")
+        p.axis = 0;
+      else if (c == "y")
+        p.axis = 1;
+      else
+        fail(item["component"], element, "component must be 'x' or 'y', got '" + c + "'");
       m.kind = p;
     } else if (type == "distance") {
       expect_map(item, element, {"name", "type", "points", "derivative"});
       const YAML::Node pts = require(item, "points", element);
-      if (!pts.IsSequence() || pts.size() != 2) fail(pts, element, "field 'points' must be a list of two points");
+      if (!pts.IsSequence() || pts.size() != 2)
+        fail(pts, element, "field 'points' must be a list of two points");
       m.kind = PointDistance{point_ref(pts[0], element), point_ref(pts[1], element)};
     } else if (type == "angle") {
       expect_map(item, element, {"name", "type", "body", "bodies", "derivative"});
       BodyAngle a;
-      if (item["body"] && item["bodies"]) fail(item, element, "give either 'body' or 'bodies', not both");
+      if (item["body"] && item["bodies"])
+        fail(item, element, "give either 'body' or 'bodies', not both");
       if (item["body"]) {
         a.bj = rigid_body_ref(item["body"], element);
       } else {
@@ -542,7 +569,8 @@ void Reader::read_measures(const YAML::Node& root) {
       m.kind = a;
       unit = "rad";
     } else {
-      fail(item["type"], element, "unknown measure type '" + type + "' (allowed: joint, point, distance, angle)");
+      fail(item["type"], element,
+           "unknown measure type '" + type + "' (allowed: joint, point, distance, angle)");
     }
     if (const YAML::Node d = item["derivative"]) {
       const double v = number(d, element, "derivative");
@@ -560,7 +588,8 @@ double Reader::speed_value(const YAML::Node& node, const std::string& element, b
   std::istringstream in(text);
   double v = 0.0;
   in >> v;
-  if (in.fail() || !std::isfinite(v)) fail(node, element, "speed must be a number, got '" + text + "'");
+  if (in.fail() || !std::isfinite(v))
+    fail(node, element, "speed must be a number, got '" + text + "'");
   std::string unit, extra;
   in >> unit >> extra;
   if (!extra.empty()) fail(node, element, "unexpected text '" + extra + "' after the speed");
@@ -570,7 +599,9 @@ double Reader::speed_value(const YAML::Node& node, const std::string& element, b
   const std::vector<std::pair<std::string, double>> linear_units = {{"m/s", 1.0}, {"mm/s", 1e-3}};
   for (const auto& [u, f] : angular ? angular_units : linear_units)
     if (unit == u) return v * f;
-  fail(node, element, "unknown speed unit '" + unit + "' for a " + (angular ? "revolute" : "prismatic") + " joint");
+  fail(
+      node, element,
+      "unknown speed unit '" + unit + "' for a " + (angular ? "revolute" : "prismatic") + " joint");
 }
 
 // ---- drivers -----------------------------------------------------------------------------------
@@ -582,7 +613,9 @@ void Reader::read_drivers(const YAML::Node& root) {
   for (const auto& item : node) {
     const std::string name = name_of(item, "driver", index++, seen);
     const std::string element = "driver '" + name + "'";
-    expect_map(item, element, {"name", "joint", "profile", "speed", "initial", "amplitude", "frequency", "coefficients"});
+    expect_map(
+        item, element,
+        {"name", "joint", "profile", "speed", "initial", "amplitude", "frequency", "coefficients"});
     Driver d;
     d.name = name;
     d.where = loc(item);
@@ -592,7 +625,8 @@ void Reader::read_drivers(const YAML::Node& root) {
     const JointKind& kind = model_.joints[static_cast<size_t>(d.joint)].kind;
     const bool angular = std::holds_alternative<Revolute>(kind);
     if (!angular && !std::holds_alternative<Prismatic>(kind))
-      fail(jn, element, "joint '" + jn.Scalar() + "' is neither revolute nor prismatic and cannot be driven");
+      fail(jn, element,
+           "joint '" + jn.Scalar() + "' is neither revolute nor prismatic and cannot be driven");
     const double unit = angular ? units_.angle : units_.length;
     const std::string profile = item["profile"] ? item["profile"].Scalar() : "constant-speed";
     d.initial = optional_number(item, "initial", element, 0.0, unit);
@@ -609,7 +643,8 @@ void Reader::read_drivers(const YAML::Node& root) {
       for (size_t k = 0; k < d.coefficients.size(); ++k)
         d.coefficients[k] *= unit / std::pow(units_.time, static_cast<double>(k));
     } else {
-      fail(item["profile"], element, "unknown profile '" + profile + "' (allowed: constant-speed, harmonic, polynomial)");
+      fail(item["profile"], element,
+           "unknown profile '" + profile + "' (allowed: constant-speed, harmonic, polynomial)");
     }
     model_.drivers.push_back(std::move(d));
   }
@@ -635,8 +670,10 @@ void Reader::read_design_positions(const YAML::Node& root) {
           fail(kv.first, element, "input '" + kv.first.Scalar() + "' is given twice");
         const int j = model_.find_joint(kv.first.Scalar());
         if (j < 0) fail(kv.first, element, "joint '" + kv.first.Scalar() + "' is not defined");
-        const bool angular = std::holds_alternative<Revolute>(model_.joints[static_cast<size_t>(j)].kind);
-        if (!angular && !std::holds_alternative<Prismatic>(model_.joints[static_cast<size_t>(j)].kind))
+        const bool angular =
+            std::holds_alternative<Revolute>(model_.joints[static_cast<size_t>(j)].kind);
+        if (!angular &&
+            !std::holds_alternative<Prismatic>(model_.joints[static_cast<size_t>(j)].kind))
           fail(kv.first, element, "joint '" + kv.first.Scalar() + "' has no scalar input");
         p.inputs.emplace_back(j, number(kv.second, element, "inputs." + kv.first.Scalar(),
                                         angular ? units_.angle : units_.length));
@@ -667,19 +704,22 @@ void Reader::read_analysis(const YAML::Node& node) {
   }
   if (const YAML::Node s = node["steps"]) {
     const double v = number(s, "analysis", "steps");
-    if (v < 2.0 || v != std::floor(v) || v > 1e7) fail(s, "analysis", "steps must be an integer ≥ 2");
+    if (v < 2.0 || v != std::floor(v) || v > 1e7)
+      fail(s, "analysis", "steps must be an integer ≥ 2");
     model_.analysis.steps = static_cast<int>(v);
   }
 }
 
 Model Reader::read(const YAML::Node& root) {
-  if (!root.IsMap()) fail(root, "file", "expected a mapping at the top level (orthomech: 1, bodies: ...)");
+  if (!root.IsMap())
+    fail(root, "file", "expected a mapping at the top level (orthomech: 1, bodies: ...)");
   expect_map(root, "file",
              {"orthomech", "name", "description", "units", "ground", "bodies", "joints", "loads",
               "measures", "drivers", "design_positions", "analysis"});
   const YAML::Node version = require(root, "orthomech", "file");
   if (version.Scalar() != "1")
-    fail(version, "file", "unsupported format version '" + version.Scalar() + "' (this build reads 1)");
+    fail(version, "file",
+         "unsupported format version '" + version.Scalar() + "' (this build reads 1)");
   model_.file = file_;
   if (root["name"]) model_.name = root["name"].Scalar();
   if (model_.name.empty()) {
@@ -721,10 +761,14 @@ SourceLocation unclosed_bracket(const std::string& text, const std::string& orig
       if (ch == quote) quote = 0;
       continue;
     }
-    if (ch == '#') comment = true;
-    else if (ch == '"' || ch == '\'') quote = ch;
-    else if (ch == '[' || ch == '{') open.push_back({ch, {origin, line, column}});
-    else if ((ch == ']' || ch == '}') && !open.empty()) open.pop_back();
+    if (ch == '#')
+      comment = true;
+    else if (ch == '"' || ch == '\'')
+      quote = ch;
+    else if (ch == '[' || ch == '{')
+      open.push_back({ch, {origin, line, column}});
+    else if ((ch == ']' || ch == '}') && !open.empty())
+      open.pop_back();
   }
   return open.empty() ? SourceLocation{origin, 0, 0} : open.back().second;
 }
@@ -743,8 +787,9 @@ Model parse_text(const std::string& text, const std::string& origin) {
   try {
     return Reader(origin).read(root);
   } catch (const YAML::Exception& e) {  // anything yaml-cpp still throws: report, do not crash
-    throw InputError({origin, e.mark.is_null() ? 0 : e.mark.line + 1, e.mark.is_null() ? 0 : e.mark.column + 1},
-                     "YAML", e.msg);
+    throw InputError(
+        {origin, e.mark.is_null() ? 0 : e.mark.line + 1, e.mark.is_null() ? 0 : e.mark.column + 1},
+        "YAML", e.msg);
   }
 }
 

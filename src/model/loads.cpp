@@ -14,8 +14,8 @@ double table_factor(const Model& model, const Table& table, const VecX& q) {
   const auto& p = table.points;
   if (x <= p.front().first) return p.front().second;
   if (x >= p.back().first) return p.back().second;
-  const auto hi = std::upper_bound(p.begin(), p.end(), x,
-                                   [](double v, const auto& e) { return v < e.first; });
+  const auto hi =
+      std::upper_bound(p.begin(), p.end(), x, [](double v, const auto& e) { return v < e.first; });
   const auto lo = hi - 1;
   const double w = (x - lo->first) / (hi->first - lo->first);
   return lo->second + w * (hi->second - lo->second);
@@ -74,8 +74,8 @@ void add_load(const Model& model, const Load& load, const State& st, VecX& Q) {
           add_point_jacobian(model, l.pj, x.kj, x.e, -tension, Q);
         } else if constexpr (std::is_same_v<T, RotarySpringDamper>) {
           const double th = body_angle(model, l.bj, st.q) - body_angle(model, l.bi, st.q);
-          const double w = body_angular_velocity(model, l.bj, st.u) -
-                           body_angular_velocity(model, l.bi, st.u);
+          const double w =
+              body_angular_velocity(model, l.bj, st.u) - body_angular_velocity(model, l.bi, st.u);
           const double moment = l.stiffness * (th - l.free_angle) + l.damping * w;
           add_angle(model, l.bj, -moment, Q);
           add_angle(model, l.bi, moment, Q);
@@ -97,8 +97,8 @@ double potential_energy(const Model& model, const VecX& q) {
       for (const Body& b : model.bodies)
         V -= b.mass * (g->g.x() * q(b.q_offset) + g->g.y() * q(b.q_offset + 1));
     } else if (const auto* s = std::get_if<SpringDamper>(&load.kind)) {
-      const Vec2 d = point_kinematics(model, s->pj, q, none).r -
-                     point_kinematics(model, s->pi, q, none).r;
+      const Vec2 d =
+          point_kinematics(model, s->pj, q, none).r - point_kinematics(model, s->pi, q, none).r;
       const double dl = d.norm() - s->free_length;
       V += 0.5 * s->stiffness * dl * dl;
     } else if (const auto* r = std::get_if<RotarySpringDamper>(&load.kind)) {
@@ -116,8 +116,8 @@ double dissipated_power(const Model& model, const State& st) {
       const Stretch x = stretch(model, *s, st);
       P += s->damping * x.Ldot * x.Ldot;
     } else if (const auto* r = std::get_if<RotarySpringDamper>(&load.kind)) {
-      const double w = body_angular_velocity(model, r->bj, st.u) -
-                       body_angular_velocity(model, r->bi, st.u);
+      const double w =
+          body_angular_velocity(model, r->bj, st.u) - body_angular_velocity(model, r->bi, st.u);
       P += r->damping * w * w;
     }
   }

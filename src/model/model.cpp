@@ -16,18 +16,25 @@ int Joint::rows() const {
 }
 
 std::string Joint::type_name() const {
-  static const char* names[] = {"revolute", "prismatic", "fixed", "pin-in-slot", "gear", "distance"};
+  static const char* names[] = {"revolute",    "prismatic", "fixed",
+                                "pin-in-slot", "gear",      "distance"};
   return names[kind.index()];
 }
 
 std::vector<std::string> Joint::component_names() const {
   switch (kind.index()) {
-    case 0: return {"x", "y"};
-    case 1: return {"n", "angle"};
-    case 2: return {"x", "y", "angle"};
-    case 3: return {"n"};
-    case 4: return {"ratio"};
-    default: return {"length"};
+    case 0:
+      return {"x", "y"};
+    case 1:
+      return {"n", "angle"};
+    case 2:
+      return {"x", "y", "angle"};
+    case 3:
+      return {"n"};
+    case 4:
+      return {"ratio"};
+    default:
+      return {"length"};
   }
 }
 

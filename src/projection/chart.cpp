@@ -19,7 +19,8 @@ int ChartSelector::select(const MatX& Et, const VecX& A_diag, const ChartOptions
     chart.rows.clear();
     chart.dependent.clear();
     chart.independent.resize(static_cast<size_t>(n));
-    for (Eigen::Index k = 0; k < n; ++k) chart.independent[static_cast<size_t>(k)] = static_cast<int>(k);
+    for (Eigen::Index k = 0; k < n; ++k)
+      chart.independent[static_cast<size_t>(k)] = static_cast<int>(k);
     chart.row_scale.resize(0);
     return 0;
   }
@@ -56,7 +57,8 @@ int ChartSelector::select(const MatX& Et, const VecX& A_diag, const ChartOptions
   auto rows_block = scaled_Et_rows_.topRows(rank);
   for (int k = 0; k < rank; ++k)
     rows_block.row(k) =
-        scale(k) * Et.row(chart.rows[static_cast<size_t>(k)]).cwiseProduct(A_diag.cwiseSqrt().transpose());
+        scale(k) *
+        Et.row(chart.rows[static_cast<size_t>(k)]).cwiseProduct(A_diag.cwiseSqrt().transpose());
   qr_cols_.compute(rows_block);
   const auto& cols = qr_cols_.colsPermutation().indices();
   chart.dependent.assign(cols.data(), cols.data() + rank);

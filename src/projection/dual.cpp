@@ -123,8 +123,10 @@ ProjectionStatus compute_dual(const Model& /*model*/, const State& state, Worksp
 
   // 3. H = Fᵀ M F, eq. (68), and ψ = F H⁻¹ Fᵀ, eq. (69). Every product below is O(n² n_a) or
   //    less: ψ, α, Θ have rank n_a, and products with a diagonal M are scalings.
-  if (diagonal) d.MF = ws.free.M_diag.asDiagonal() * d.F;
-  else d.MF.noalias() = M * d.F;
+  if (diagonal)
+    d.MF = ws.free.M_diag.asDiagonal() * d.F;
+  else
+    d.MF.noalias() = M * d.F;
   d.H.noalias() = d.F.transpose() * d.MF;  // eq. (68)
   d.H_llt.compute(d.H);
   if (d.H_llt.info() != Eigen::Success) {
@@ -136,9 +138,11 @@ ProjectionStatus compute_dual(const Model& /*model*/, const State& state, Worksp
   d.psi.noalias() = d.F * d.HinvFt;  // eq. (69): ψ = F H⁻¹ Fᵀ
 
   // 4. α = ψ M, β = I − ψ M, eq. (70).
-  if (diagonal) d.alpha = d.psi * ws.free.M_diag.asDiagonal();  // eq. (70)
-  else d.alpha.noalias() = d.psi * M;                            // eq. (70)
-  d.beta = -d.alpha;                                             // eq. (70)
+  if (diagonal)
+    d.alpha = d.psi * ws.free.M_diag.asDiagonal();  // eq. (70)
+  else
+    d.alpha.noalias() = d.psi * M;  // eq. (70)
+  d.beta = -d.alpha;                // eq. (70)
   d.beta.diagonal().array() += 1.0;
 
   // 5. Ḟ: differentiating Eᵀ F = 0 gives Eᵀ Ḟ = −Dᵀ F; the independent rows of Ḟ are zero.
@@ -150,14 +154,17 @@ ProjectionStatus compute_dual(const Model& /*model*/, const State& state, Worksp
   // 6. Θ = Ḟ H⁻¹ Fᵀ, eq. (83); θ = β Θ + Θᵀ βᵀ = (β Ḟ)(H⁻¹ Fᵀ) + transpose, eq. (84), with
   //    β Ḟ = Ḟ − F (H⁻¹ Fᵀ)(M Ḟ).
   d.Theta.noalias() = d.Fdot * d.HinvFt;  // eq. (83)
-  if (diagonal) d.MFdot = ws.free.M_diag.asDiagonal() * d.Fdot;
-  else d.MFdot.noalias() = M * d.Fdot;
+  if (diagonal)
+    d.MFdot = ws.free.M_diag.asDiagonal() * d.Fdot;
+  else
+    d.MFdot.noalias() = M * d.Fdot;
   d.small.noalias() = d.HinvFt * d.MFdot;
   d.betaFdot = d.Fdot;
   d.betaFdot.noalias() -= d.F * d.small;
-  d.theta.noalias() = d.betaFdot * d.HinvFt;  // eq. (84): β Θ
+  d.theta.noalias() = d.betaFdot * d.HinvFt;           // eq. (84): β Θ
   for (Eigen::Index j = 0; j < d.theta.cols(); ++j) {  // eq. (84): + Θᵀ βᵀ = (β Θ)ᵀ
-    for (Eigen::Index i = 0; i < j; ++i) d.theta(i, j) = d.theta(j, i) = d.theta(i, j) + d.theta(j, i);
+    for (Eigen::Index i = 0; i < j; ++i)
+      d.theta(i, j) = d.theta(j, i) = d.theta(i, j) + d.theta(j, i);
     d.theta(j, j) *= 2.0;
   }
   d.status = ProjectionStatus::ok;

@@ -9,10 +9,14 @@ namespace orthomech {
 
 const char* to_string(ProjectionStatus s) {
   switch (s) {
-    case ProjectionStatus::ok: return "ok";
-    case ProjectionStatus::singular_G: return "G is singular (redundant constraints or a singular position)";
-    case ProjectionStatus::singular_chart: return "no chart has a regular dependent block (change point)";
-    case ProjectionStatus::singular_H: return "H is not positive definite";
+    case ProjectionStatus::ok:
+      return "ok";
+    case ProjectionStatus::singular_G:
+      return "G is singular (redundant constraints or a singular position)";
+    case ProjectionStatus::singular_chart:
+      return "no chart has a regular dependent block (change point)";
+    case ProjectionStatus::singular_H:
+      return "H is not positive definite";
   }
   return "?";
 }
@@ -73,7 +77,8 @@ ProjectionStatus compute_primal(const Model& /*model*/, const State& /*state*/, 
   // singular G, so 1e-12 separates singular from merely ill-conditioned (docs/theory.md).
   constexpr double kSingularG = 1e-12;
   const auto Ld = p.G_llt.matrixLLT().diagonal();
-  p.G_pivot_ratio = Ld.size() > 0 ? (Ld.minCoeff() * Ld.minCoeff()) / (Ld.maxCoeff() * Ld.maxCoeff()) : 1.0;
+  p.G_pivot_ratio =
+      Ld.size() > 0 ? (Ld.minCoeff() * Ld.minCoeff()) / (Ld.maxCoeff() * Ld.maxCoeff()) : 1.0;
   if (p.G_llt.info() != Eigen::Success || !(p.G_pivot_ratio > kSingularG)) {
     p.status = ProjectionStatus::singular_G;
     return p.status;
@@ -87,7 +92,7 @@ ProjectionStatus compute_primal(const Model& /*model*/, const State& /*state*/, 
   p.GinvDt = ws.constraints.Dt;
   p.G_llt.solveInPlace(p.GinvDt);
   p.Omega.noalias() = Et.transpose() * p.GinvDt;  // eq. (78): Ω = E G⁻¹ Dᵀ
-  p.omega.noalias() = p.Omega * p.alpha;           // eq. (79): ω = Ω α + αᵀ Ωᵀ
+  p.omega.noalias() = p.Omega * p.alpha;          // eq. (79): ω = Ω α + αᵀ Ωᵀ
   p.omega.noalias() += p.alpha.transpose() * p.Omega.transpose();
   p.status = ProjectionStatus::ok;
   return p.status;

@@ -16,10 +16,10 @@ struct Mobility {
   int rank = 0;
   int dof = 0;      // n − rank
   int grubler = 0;  // n − n_c: the Grübler–Kutzbach count for these bodies and joints
-  std::vector<int> redundant_rows;      // constraint rows found dependent
-  std::vector<std::string> redundant;   // "joint 'D', y"
-  double smallest_pivot = 0.0;  // smallest kept |R_kk|/|R_11| (distance from a rank drop)
-  double largest_dropped = 0.0; // largest dropped |R_kk|/|R_11| (0 if none)
+  std::vector<int> redundant_rows;     // constraint rows found dependent
+  std::vector<std::string> redundant;  // "joint 'D', y"
+  double smallest_pivot = 0.0;         // smallest kept |R_kk|/|R_11| (distance from a rank drop)
+  double largest_dropped = 0.0;        // largest dropped |R_kk|/|R_11| (0 if none)
   double tolerance = 0.0;
 };
 

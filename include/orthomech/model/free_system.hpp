@@ -25,16 +25,16 @@ void integrate_positions(const Model& model, VecX& q, const VecX& du, double h);
 
 // ---- Point kinematics: r_P = r + R(φ) s. -------------------------------------------------------
 struct PointKinematics {
-  Vec2 r = Vec2::Zero();    // world position
-  Vec2 Rs = Vec2::Zero();   // R(φ) s (world vector from the centre of mass)
-  Vec2 v = Vec2::Zero();    // world velocity
-  double phidot = 0.0;      // angular velocity of the body (0 for particles and ground)
-  bool rotates = false;     // body has an angle coordinate
-  bool moving = false;      // not the ground
+  Vec2 r = Vec2::Zero();   // world position
+  Vec2 Rs = Vec2::Zero();  // R(φ) s (world vector from the centre of mass)
+  Vec2 v = Vec2::Zero();   // world velocity
+  double phidot = 0.0;     // angular velocity of the body (0 for particles and ground)
+  bool rotates = false;    // body has an angle coordinate
+  bool moving = false;     // not the ground
 };
 // u may be null: then only r and Rs are filled (velocities zero).
-[[nodiscard]] PointKinematics point_kinematics(const Model& model, const PointRef& p,
-                                               const VecX& q, const VecX* u);
+[[nodiscard]] PointKinematics point_kinematics(const Model& model, const PointRef& p, const VecX& q,
+                                               const VecX* u);
 [[nodiscard]] double body_angle(const Model& model, int body, const VecX& q);
 [[nodiscard]] double body_angular_velocity(const Model& model, int body, const VecX& u);
 [[nodiscard]] inline Vec2 perp(const Vec2& a) { return Vec2(-a.y(), a.x()); }  // rotate by +90°

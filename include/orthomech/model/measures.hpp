@@ -7,9 +7,9 @@
 namespace orthomech {
 
 struct ScalarKinematics {
-  double value = 0.0;  // s(q)
-  double rate = 0.0;   // ṡ = d u   (0 when u is null)
-  double ddot_u = 0.0; // ḋ u       (0 when u is null)
+  double value = 0.0;   // s(q)
+  double rate = 0.0;    // ṡ = d u   (0 when u is null)
+  double ddot_u = 0.0;  // ḋ u       (0 when u is null)
 };
 
 // s, ṡ and ḋu of the position measure underlying `kind`; if d is non-null it receives d (size n).

@@ -31,14 +31,14 @@ enum class BodyKind { rigid, particle };
 struct Body {
   std::string name;
   BodyKind kind = BodyKind::rigid;
-  double mass = 0.0;     // kg
-  double inertia = 0.0;  // kg·m² about the centre of mass (rigid only)
-  Vec2 com_local = Vec2::Zero();  // centre of mass in the body frame, m
+  double mass = 0.0;                // kg
+  double inertia = 0.0;             // kg·m² about the centre of mass (rigid only)
+  Vec2 com_local = Vec2::Zero();    // centre of mass in the body frame, m
   Vec3 design_pose = Vec3::Zero();  // body frame in world at the design position: x, y, angle
   std::vector<std::pair<std::string, Vec2>> points;  // named points, body frame, m
-  std::vector<Vec2> outline;  // drawing only, body frame
-  int q_offset = 0;  // first coordinate of this body in q
-  int u_offset = 0;  // first velocity parameter of this body in u
+  std::vector<Vec2> outline;                         // drawing only, body frame
+  int q_offset = 0;                                  // first coordinate of this body in q
+  int u_offset = 0;                                  // first velocity parameter of this body in u
   SourceLocation where;
   [[nodiscard]] int nq() const { return kind == BodyKind::rigid ? 3 : 2; }
   [[nodiscard]] int nu() const { return kind == BodyKind::rigid ? 3 : 2; }
@@ -117,7 +117,8 @@ struct SpringDamper {  // tension T = k (L − L0) + c L̇ between two points
   PointRef pi, pj;
   double stiffness = 0.0, free_length = 0.0, damping = 0.0;
 };
-struct RotarySpringDamper {  // moment T = k (φ_j − φ_i − θ0) + c (φ̇_j − φ̇_i), acting on j (−) and i (+)
+struct RotarySpringDamper {  // moment T = k (φ_j − φ_i − θ0) + c (φ̇_j − φ̇_i), acting on j (−) and i
+                             // (+)
   int bi = kGround, bj = kGround;
   double stiffness = 0.0, free_angle = 0.0, damping = 0.0;
 };
@@ -157,10 +158,10 @@ struct Driver {
   std::string name;
   int joint = -1;
   Profile profile = Profile::constant_speed;
-  double speed = 0.0;                 // rad/s or m/s (constant_speed)
-  double initial = 0.0;               // input value at t = 0 (rad or m)
+  double speed = 0.0;                       // rad/s or m/s (constant_speed)
+  double initial = 0.0;                     // input value at t = 0 (rad or m)
   double amplitude = 0.0, frequency = 0.0;  // harmonic: s0 + a sin(2π f t)
-  std::vector<double> coefficients;   // polynomial: s(t) = Σ c_k t^k
+  std::vector<double> coefficients;         // polynomial: s(t) = Σ c_k t^k
   SourceLocation where;
 };
 
@@ -188,7 +189,7 @@ struct AnalysisDefaults {
 struct Model {
   std::string name;
   std::string description;
-  std::string file;  // where it came from (for messages)
+  std::string file;          // where it came from (for messages)
   std::vector<Body> bodies;  // moving bodies only; the ground is implicit (kGround)
   std::vector<Joint> joints;
   std::vector<Load> loads;

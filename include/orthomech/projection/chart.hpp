@@ -46,7 +46,7 @@ class ChartSelector {
   [[nodiscard]] const std::vector<int>& row_order() const { return row_order_; }
 
  private:
-  MatX scaled_E_;   // n × nc: (Eᵀ)ᵀ with rows scaled by √A_kk and columns normalised
+  MatX scaled_E_;        // n × nc: (Eᵀ)ᵀ with rows scaled by √A_kk and columns normalised
   MatX scaled_Et_rows_;  // r × n
   Eigen::ColPivHouseholderQR<MatX> qr_rows_;
   Eigen::ColPivHouseholderQR<MatX> qr_cols_;

@@ -14,14 +14,14 @@ namespace orthomech {
 
 // Stage 1: the free system at q (paper §2).
 struct FreeSystemWorkspace {
-  MatX M;       // n × n: mass matrix, eq. (4)
-  MatX A;       // n × n: A = M⁻¹, eq. (6)
-  VecX A_diag;  // n: diagonal of A (chart scaling)
-  VecX A_sqrt;  // n: √A_kk (chart scaling)
-  VecX M_diag;  // n: diagonal of M
+  MatX M;                      // n × n: mass matrix, eq. (4)
+  MatX A;                      // n × n: A = M⁻¹, eq. (6)
+  VecX A_diag;                 // n: diagonal of A (chart scaling)
+  VecX A_sqrt;                 // n: √A_kk (chart scaling)
+  VecX M_diag;                 // n: diagonal of M
   bool diagonal_mass = false;  // M diagonal (planar bodies): products with M become scalings
-  MatX Mdot;    // n × n: Ṁ along u
-  VecX Q;       // n: applied generalized forces Q̂, eq. (17)
+  MatX Mdot;                   // n × n: Ṁ along u
+  VecX Q;                      // n: applied generalized forces Q̂, eq. (17)
   bool constant_mass = true;
   bool mass_ready = false;  // M, A filled (once, when constant)
   explicit FreeSystemWorkspace(const Model& model);
@@ -37,16 +37,16 @@ enum class ProjectionStatus {
 
 // Stage 2a: primal (E-based) projections, eqs. (42)–(44), (78)–(79).
 struct PrimalWorkspace {
-  MatX AE;      // n × nc: A E
-  MatX G;       // nc × nc: fundamental matrix G = EᵀAE, eq. (42)
+  MatX AE;  // n × nc: A E
+  MatX G;   // nc × nc: fundamental matrix G = EᵀAE, eq. (42)
   Eigen::LLT<MatX> G_llt;
-  MatX GinvEt;  // nc × n: G⁻¹ Eᵀ
-  MatX pi;      // n × n: π = M β = E G⁻¹ Eᵀ, eq. (43)
-  MatX alpha;   // n × n: α = I − A π, eq. (44)
-  MatX beta;    // n × n: β = A π, eq. (44)
-  MatX GinvDt;  // nc × n: G⁻¹ Dᵀ
-  MatX Omega;   // n × n: Ω = E G⁻¹ Dᵀ, eq. (78)
-  MatX omega;   // n × n: ω = π̇ = Ω α + αᵀ Ωᵀ, eq. (79)
+  MatX GinvEt;                 // nc × n: G⁻¹ Eᵀ
+  MatX pi;                     // n × n: π = M β = E G⁻¹ Eᵀ, eq. (43)
+  MatX alpha;                  // n × n: α = I − A π, eq. (44)
+  MatX beta;                   // n × n: β = A π, eq. (44)
+  MatX GinvDt;                 // nc × n: G⁻¹ Dᵀ
+  MatX Omega;                  // n × n: Ω = E G⁻¹ Dᵀ, eq. (78)
+  MatX omega;                  // n × n: ω = π̇ = Ω α + αᵀ Ωᵀ, eq. (79)
   double G_pivot_ratio = 0.0;  // min/max diagonal of the Cholesky factor, squared
   ProjectionStatus status = ProjectionStatus::ok;
   explicit PrimalWorkspace(const Model& model);
@@ -66,28 +66,28 @@ struct DualWorkspace {
   ChartSelector selector;
   ChartOptions options;
   bool chart_ready = false;
-  double quality = 0.0;             // current chart quality (see ChartOptions)
+  double quality = 0.0;              // current chart quality (see ChartOptions)
   std::vector<ChartEvent> switches;  // every chart switch (reserved, see kMaxRecordedSwitches)
   long switch_count = 0;
-  MatX Ert_D;   // r × r: scaled dependent block of the independent rows
+  MatX Ert_D;  // r × r: scaled dependent block of the independent rows
   Eigen::PartialPivLU<MatX> Ert_D_lu;
-  MatX rhs;     // r × n_a: scratch (right-hand sides of the dependent block)
-  MatX sol;     // r × n_a: scratch (solutions)
-  MatX F;       // n × n_a: basis of admissible velocities, Eᵀ F = 0
-  MatX MF;      // n × n_a: M F
-  MatX H;       // n_a × n_a: H = Fᵀ M F, eq. (68)
+  MatX rhs;  // r × n_a: scratch (right-hand sides of the dependent block)
+  MatX sol;  // r × n_a: scratch (solutions)
+  MatX F;    // n × n_a: basis of admissible velocities, Eᵀ F = 0
+  MatX MF;   // n × n_a: M F
+  MatX H;    // n_a × n_a: H = Fᵀ M F, eq. (68)
   Eigen::LLT<MatX> H_llt;
-  MatX HinvFt;  // n_a × n: H⁻¹ Fᵀ
-  MatX psi;     // n × n: ψ = α A = F H⁻¹ Fᵀ, eq. (69)
-  MatX alpha;   // n × n: α = ψ M, eq. (70)
-  MatX beta;    // n × n: β = I − ψ M, eq. (70)
-  MatX DtF;     // nc × n_a: Dᵀ F
-  MatX MFdot;   // n × n_a: M Ḟ
-  MatX betaFdot;  // n × n_a: β Ḟ = Ḟ − F H⁻¹ Fᵀ M Ḟ
-  MatX small;   // n_a × n_a: scratch
-  MatX Fdot;    // n × n_a: Ḟ from Eᵀ Ḟ = −Dᵀ F (design §4)
-  MatX Theta;   // n × n: Θ = Ḟ H⁻¹ Fᵀ, eq. (83)
-  MatX theta;   // n × n: θ = ψ̇ = β Θ + Θᵀ βᵀ, eq. (84)
+  MatX HinvFt;        // n_a × n: H⁻¹ Fᵀ
+  MatX psi;           // n × n: ψ = α A = F H⁻¹ Fᵀ, eq. (69)
+  MatX alpha;         // n × n: α = ψ M, eq. (70)
+  MatX beta;          // n × n: β = I − ψ M, eq. (70)
+  MatX DtF;           // nc × n_a: Dᵀ F
+  MatX MFdot;         // n × n_a: M Ḟ
+  MatX betaFdot;      // n × n_a: β Ḟ = Ḟ − F H⁻¹ Fᵀ M Ḟ
+  MatX small;         // n_a × n_a: scratch
+  MatX Fdot;          // n × n_a: Ḟ from Eᵀ Ḟ = −Dᵀ F (design §4)
+  MatX Theta;         // n × n: Θ = Ḟ H⁻¹ Fᵀ, eq. (83)
+  MatX theta;         // n × n: θ = ψ̇ = β Θ + Θᵀ βᵀ, eq. (84)
   MatX Fdot_scratch;  // n × max(1, n_a): scratch of solve_chart
   VecX dq;            // n: scratch of the chart position corrector
   ProjectionStatus status = ProjectionStatus::ok;

@@ -174,9 +174,7 @@ TEST(Cli, UnknownOptionIsBadInput) {
   EXPECT_EQ(run_cli({"info", file.path(), "--no-such-option"}).status, 2);
 }
 
-TEST(Cli, UnknownSubcommandIsBadInput) {
-  EXPECT_EQ(run_cli({"no-such-command"}).status, 2);
-}
+TEST(Cli, UnknownSubcommandIsBadInput) { EXPECT_EQ(run_cli({"no-such-command"}).status, 2); }
 
 TEST(Cli, InfoWithoutFileIsBadInput) {
   const CliResult r = run_cli({"info"});

@@ -1,8 +1,9 @@
 // Every joint's f, Eᵀ and Dᵀ against central finite differences (issue 2 §2, design §3).
 // For planar bodies B̃ = I, so Eᵀ = ∂f/∂q and Dᵀ = d/dt Eᵀ(q + t u) at t = 0.
+#include "orthomech/constraints/joints.hpp"
+
 #include <gtest/gtest.h>
 
-#include "orthomech/constraints/joints.hpp"
 #include "orthomech/io/mechanism_file.hpp"
 #include "support/zoo.hpp"
 
@@ -80,7 +81,8 @@ bodies:
 joints:
   - {name: pin, type: revolute, connects: [ground.O, bar.O]}
   - {name: rod, type: distance, connects: [ground.O, bar.E]}
-)", "inline");
+)",
+                                  "inline");
   VecX f(m.nc);
   compute_constraint_residual(m, m.design_q(), f);
   EXPECT_NEAR(f.norm(), 0.0, 1e-15);  // drawn length is taken from the design pose

@@ -64,7 +64,8 @@ struct Expectation {
   const fs::path path = invalid_dir() / name;
   std::ifstream in(path);
   std::string first;
-  if (!in || !std::getline(in, first)) return ::testing::AssertionFailure() << "cannot read " << path;
+  if (!in || !std::getline(in, first))
+    return ::testing::AssertionFailure() << "cannot read " << path;
   const std::string tag = "# expect: ";
   if (first.rfind(tag, 0) != 0)
     return ::testing::AssertionFailure() << name << ": first line must start with '" << tag << "'";
@@ -98,8 +99,9 @@ struct CliResult {
 // Runs the orthomech executable with `args`, stdout and stderr captured in temporary files.
 CliResult run_cli(const std::vector<std::string>& args) {
   static int counter = 0;
-  const fs::path base = fs::temp_directory_path() /
-                        ("orthomech_invalid_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
+  const fs::path base =
+      fs::temp_directory_path() /
+      ("orthomech_invalid_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
   const fs::path out_file = base.string() + ".out", err_file = base.string() + ".err";
   std::string cmd = shell_quote(ORTHOMECH_CLI);
   for (const auto& a : args) {
@@ -124,7 +126,8 @@ CliResult run_cli(const std::vector<std::string>& args) {
 
 TEST(InvalidFiles, DirectoryHoldsAtLeastThirtyFiles) {
   const auto files = invalid_files();
-  EXPECT_GE(files.size(), 30u) << "tests/data/invalid/ must not be (nearly) empty: " << invalid_dir();
+  EXPECT_GE(files.size(), 30u) << "tests/data/invalid/ must not be (nearly) empty: "
+                               << invalid_dir();
 }
 
 TEST(InvalidFiles, EveryFileHasAWellFormedExpectation) {
@@ -192,7 +195,6 @@ std::string test_name(const ::testing::TestParamInfo<std::string>& info) {
 INSTANTIATE_TEST_SUITE_P(Data, InvalidFile, ::testing::ValuesIn(invalid_files()), test_name);
 
 // Formerly known bugs, fixed: the place of the error is checked.
-
 
 // yaml-cpp reports an unclosed '[' at the end of the input (here 8:1, after the last line); the
 // message should point at the bracket that is never closed (7:11).

@@ -1,6 +1,6 @@
-#include <gtest/gtest.h>
-
 #include "orthomech/io/mechanism_file.hpp"
+
+#include <gtest/gtest.h>
 
 namespace orthomech {
 namespace {
@@ -13,7 +13,8 @@ joints:
   - {name: O, type: revolute, connects: [ground.O, bar.O]}
 ground:
   points: {O: [0, 0]}
-)", "inline");
+)",
+                                  "inline");
   EXPECT_EQ(m.n, 3);
   EXPECT_EQ(m.nc, 2);
 }

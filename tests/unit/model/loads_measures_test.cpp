@@ -71,21 +71,24 @@ TEST(Loads, Eq8_PointForceAndTorqueDoTheirVirtualWork) {
     // Virtual work of the load along each coordinate, by differences of the point (or angle).
     VecX W(model.n);
     if (const auto* f = std::get_if<PointForce>(&load.kind)) {
-      const Vec2 F_world = f->body_fixed ? Vec2(rotation(body_angle(model, f->at.body, s.q)) * f->force)
-                                         : f->force;
+      const Vec2 F_world =
+          f->body_fixed ? Vec2(rotation(body_angle(model, f->at.body, s.q)) * f->force) : f->force;
       const double factor = table_factor(model, f->table, s.q);
       const VecX* none = nullptr;
       for (int axis = 0; axis < 2; ++axis) {
         const VecX g = gradient(
             [&](const VecX& q) { return point_kinematics(model, f->at, q, none).r(axis); }, s.q);
-        if (axis == 0) W = factor * F_world.x() * g;
-        else W += factor * F_world.y() * g;
+        if (axis == 0)
+          W = factor * F_world.x() * g;
+        else
+          W += factor * F_world.y() * g;
       }
     } else {
       const auto& t = std::get<Torque>(load.kind);
       W = t.torque * gradient([&](const VecX& q) { return body_angle(model, t.body, q); }, s.q);
     }
-    for (int k = 0; k < model.n; ++k) EXPECT_NEAR(Q(k), W(k), kFdTol) << name << ", coordinate " << k;
+    for (int k = 0; k < model.n; ++k)
+      EXPECT_NEAR(Q(k), W(k), kFdTol) << name << ", coordinate " << k;
   }
 }
 
@@ -116,12 +119,16 @@ TEST(Loads, DampersOpposeTheRateOfTheirStretch) {
     if (const auto* sd = std::get_if<SpringDamper>(&l.kind)) {
       c = sd->damping;
       stretch = [&, sd](const VecX& q) {
-        return (point_kinematics(model, sd->pj, q, none).r - point_kinematics(model, sd->pi, q, none).r).norm();
+        return (point_kinematics(model, sd->pj, q, none).r -
+                point_kinematics(model, sd->pi, q, none).r)
+            .norm();
       };
     } else {
       const auto* rd = std::get_if<RotarySpringDamper>(&l.kind);
       c = rd->damping;
-      stretch = [&, rd](const VecX& q) { return body_angle(model, rd->bj, q) - body_angle(model, rd->bi, q); };
+      stretch = [&, rd](const VecX& q) {
+        return body_angle(model, rd->bj, q) - body_angle(model, rd->bi, q);
+      };
     }
     const VecX g = gradient(stretch, s.q);
     expected -= c * g.dot(s.u) * g;
@@ -138,13 +145,16 @@ TEST(Measures, JacobianRateAndConvectiveTermAgainstDifferences) {
   for (const Measure& m : model.measures) {
     VecX d(model.n);
     const ScalarKinematics k = compute_scalar(model, m.kind, s.q, &s.u, d);
-    const auto value = [&](const VecX& q) { return compute_scalar(model, m.kind, q, nullptr).value; };
+    const auto value = [&](const VecX& q) {
+      return compute_scalar(model, m.kind, q, nullptr).value;
+    };
     EXPECT_NEAR(k.value, value(s.q), 1e-15) << m.name;
     const VecX g = gradient(value, s.q);
     for (int c = 0; c < model.n; ++c) EXPECT_NEAR(d(c), g(c), 1e-8) << m.name << ", column " << c;
     EXPECT_NEAR(k.rate, d.dot(s.u), 1e-12) << m.name;
     const double h = 1e-4;  // second difference along q + t u (u̇ = 0 there, so s̈ = ḋu)
-    const double second = (value(s.q + h * s.u) - 2.0 * value(s.q) + value(s.q - h * s.u)) / (h * h);
+    const double second =
+        (value(s.q + h * s.u) - 2.0 * value(s.q) + value(s.q - h * s.u)) / (h * h);
     EXPECT_NEAR(k.ddot_u, second, 1e-5 * (1.0 + s.u.squaredNorm())) << m.name;
   }
 }

@@ -41,7 +41,9 @@ struct Evaluated {
   std::unique_ptr<Workspace> ws;
   bool primal_ok = false;
   explicit Evaluated(const std::string& name, unsigned seed = 1)
-      : model(test::load_bundled(name)), q(test::assembled_q(model)), mob(compute_mobility(model, q)) {
+      : model(test::load_bundled(name)),
+        q(test::assembled_q(model)),
+        mob(compute_mobility(model, q)) {
     state = State(model);
     state.q = q;
     state.u = test::admissible_velocity(model, q, seed);
@@ -54,10 +56,9 @@ struct Evaluated {
   const MatX& Et() const { return ws->constraints.Et; }
 };
 
-const char* const kAll[] = {"crank-rocker",  "double-rocker",      "slider-crank",
-                            "watt-six-bar",  "stephenson-six-bar", "quick-return",
-                            "n-four-bar-2",  "pendulum",           "andrews-squeezer",
-                            "triple-crank"};
+const char* const kAll[] = {"crank-rocker",       "double-rocker", "slider-crank", "watt-six-bar",
+                            "stephenson-six-bar", "quick-return",  "n-four-bar-2", "pendulum",
+                            "andrews-squeezer",   "triple-crank"};
 
 class Projection : public ::testing::TestWithParam<const char*> {};
 
@@ -75,26 +76,28 @@ TEST_P(Projection, Eq70_Theorem2Prime_AlphaFromDualIsTheMassOrthogonalProjection
   const Evaluated e(GetParam());
   const auto& d = e.ws->dual;
   const MatX I = MatX::Identity(e.model.n, e.model.n);
-  EXPECT_LT(rel(d.alpha * d.alpha, d.alpha), kIdentityTol);             // eq. (65), (28)
-  EXPECT_LT(rel(d.alpha * d.F, d.F), kIdentityTol);                     // eq. (66)
-  EXPECT_EQ(numeric_rank(d.alpha), e.mob.dof);                          // eq. (66)
+  EXPECT_LT(rel(d.alpha * d.alpha, d.alpha), kIdentityTol);                      // eq. (65), (28)
+  EXPECT_LT(rel(d.alpha * d.F, d.F), kIdentityTol);                              // eq. (66)
+  EXPECT_EQ(numeric_rank(d.alpha), e.mob.dof);                                   // eq. (66)
   EXPECT_LT(rel(d.alpha * e.A(), (d.alpha * e.A()).transpose()), kIdentityTol);  // eq. (67)
-  EXPECT_LT(rel(d.psi, d.alpha * e.A()), kIdentityTol);                 // eq. (69)
-  EXPECT_LT(rel(d.alpha + d.beta, I), kIdentityTol);                    // eq. (29)
+  EXPECT_LT(rel(d.psi, d.alpha * e.A()), kIdentityTol);                          // eq. (69)
+  EXPECT_LT(rel(d.alpha + d.beta, I), kIdentityTol);                             // eq. (29)
   EXPECT_LT((d.alpha * d.beta).norm() / (1.0 + d.alpha.norm() * d.beta.norm()), kIdentityTol);
   EXPECT_LT((d.beta * d.alpha).norm() / (1.0 + d.alpha.norm() * d.beta.norm()), kIdentityTol);
-  EXPECT_LT((e.Et() * d.alpha).norm() / (1.0 + e.Et().norm() * d.alpha.norm()), kIdentityTol);  // eq. (30)
-  EXPECT_LT(rel(e.Et() * d.beta, e.Et()), kIdentityTol);                // eq. (30)
-  EXPECT_LT(rel(d.beta * d.beta, d.beta), kIdentityTol);                // eq. (28)
-  EXPECT_EQ(numeric_rank(d.beta), e.mob.rank);                          // eq. (39)
+  EXPECT_LT((e.Et() * d.alpha).norm() / (1.0 + e.Et().norm() * d.alpha.norm()),
+            kIdentityTol);                                // eq. (30)
+  EXPECT_LT(rel(e.Et() * d.beta, e.Et()), kIdentityTol);  // eq. (30)
+  EXPECT_LT(rel(d.beta * d.beta, d.beta), kIdentityTol);  // eq. (28)
+  EXPECT_EQ(numeric_rank(d.beta), e.mob.rank);            // eq. (39)
 }
 
 TEST_P(Projection, Eq35_Theorem1_MBetaSymmetricAndAlphaTMBetaZero) {
   const Evaluated e(GetParam());
   const auto& d = e.ws->dual;
   const MatX Mb = e.M() * d.beta;
-  EXPECT_LT(rel(Mb, Mb.transpose()), kIdentityTol);                                    // eq. (35)
-  EXPECT_LT((d.alpha.transpose() * e.M() * d.beta).norm() / (1.0 + e.M().norm()), kIdentityTol);  // eq. (34)
+  EXPECT_LT(rel(Mb, Mb.transpose()), kIdentityTol);  // eq. (35)
+  EXPECT_LT((d.alpha.transpose() * e.M() * d.beta).norm() / (1.0 + e.M().norm()),
+            kIdentityTol);  // eq. (34)
 }
 
 TEST_P(Projection, Eq71_72_DualMassAndInfluenceMatricesAndTheorem4) {
@@ -102,17 +105,20 @@ TEST_P(Projection, Eq71_72_DualMassAndInfluenceMatricesAndTheorem4) {
   const auto& d = e.ws->dual;
   const MatX& M = e.M();
   const MatX& A = e.A();
-  const MatX Maa = d.alpha.transpose() * M * d.alpha, Mbb = d.beta.transpose() * M * d.beta;  // eq. (49)
-  const MatX Aaa = d.alpha * A * d.alpha.transpose(), Abb = d.beta * A * d.beta.transpose();  // eq. (55)
-  EXPECT_LT(rel(Maa, M * d.psi * M), kIdentityTol);                    // eq. (71)
-  EXPECT_LT(rel(Mbb, M - M * d.psi * M), kIdentityTol);                // eq. (71)
-  EXPECT_LT((d.alpha.transpose() * M * d.beta).norm() / (1.0 + M.norm()), kIdentityTol);  // eq. (71)
-  EXPECT_LT(rel(Aaa, d.psi), kIdentityTol);                            // eq. (72)
-  EXPECT_LT(rel(Abb, A - d.psi), kIdentityTol);                        // eq. (72)
-  EXPECT_LT(rel(Aaa * Maa, d.alpha), kIdentityTol);                    // eq. (58)
-  EXPECT_LT(rel(Maa * Aaa, d.alpha.transpose()), kIdentityTol);        // eq. (58)
-  EXPECT_LT(rel(Abb * Mbb, d.beta), kIdentityTol);                     // eq. (59)
-  EXPECT_LT(rel(Mbb * Abb, d.beta.transpose()), kIdentityTol);         // eq. (59)
+  const MatX Maa = d.alpha.transpose() * M * d.alpha,
+             Mbb = d.beta.transpose() * M * d.beta;  // eq. (49)
+  const MatX Aaa = d.alpha * A * d.alpha.transpose(),
+             Abb = d.beta * A * d.beta.transpose();      // eq. (55)
+  EXPECT_LT(rel(Maa, M * d.psi * M), kIdentityTol);      // eq. (71)
+  EXPECT_LT(rel(Mbb, M - M * d.psi * M), kIdentityTol);  // eq. (71)
+  EXPECT_LT((d.alpha.transpose() * M * d.beta).norm() / (1.0 + M.norm()),
+            kIdentityTol);                                       // eq. (71)
+  EXPECT_LT(rel(Aaa, d.psi), kIdentityTol);                      // eq. (72)
+  EXPECT_LT(rel(Abb, A - d.psi), kIdentityTol);                  // eq. (72)
+  EXPECT_LT(rel(Aaa * Maa, d.alpha), kIdentityTol);              // eq. (58)
+  EXPECT_LT(rel(Maa * Aaa, d.alpha.transpose()), kIdentityTol);  // eq. (58)
+  EXPECT_LT(rel(Abb * Mbb, d.beta), kIdentityTol);               // eq. (59)
+  EXPECT_LT(rel(Mbb * Abb, d.beta.transpose()), kIdentityTol);   // eq. (59)
 }
 
 // ---- primal form: only where G is regular ------------------------------------------------------
@@ -127,18 +133,18 @@ TEST_P(Projection, Eq42_44_PrimalProjectionsEqualDualOnes) {
   ASSERT_TRUE(e.primal_ok);
   const auto& p = e.ws->primal;
   const auto& d = e.ws->dual;
-  EXPECT_LT(rel(p.G, p.G.transpose()), kIdentityTol);                  // eq. (42)
+  EXPECT_LT(rel(p.G, p.G.transpose()), kIdentityTol);  // eq. (42)
   EXPECT_GT(Eigen::SelfAdjointEigenSolver<MatX>(p.G).eigenvalues().minCoeff(), 0.0);
-  EXPECT_LT(rel(p.pi, e.M() * p.beta), kIdentityTol);                  // eq. (43)
-  EXPECT_LT(rel(p.pi * e.A() * p.pi, p.pi), kIdentityTol);             // eq. (60)
+  EXPECT_LT(rel(p.pi, e.M() * p.beta), kIdentityTol);       // eq. (43)
+  EXPECT_LT(rel(p.pi * e.A() * p.pi, p.pi), kIdentityTol);  // eq. (60)
   EXPECT_LT(rel(p.alpha, d.alpha), kIdentityTol) << "primal α ≠ dual α";
   EXPECT_LT(rel(p.beta, d.beta), kIdentityTol) << "primal β ≠ dual β";
   const MatX& M = e.M();
   const MatX& A = e.A();
-  EXPECT_LT(rel(p.alpha.transpose() * M * p.alpha, M - p.pi), kIdentityTol);      // eq. (56)
-  EXPECT_LT(rel(p.beta.transpose() * M * p.beta, p.pi), kIdentityTol);            // eq. (56)
+  EXPECT_LT(rel(p.alpha.transpose() * M * p.alpha, M - p.pi), kIdentityTol);          // eq. (56)
+  EXPECT_LT(rel(p.beta.transpose() * M * p.beta, p.pi), kIdentityTol);                // eq. (56)
   EXPECT_LT(rel(p.alpha * A * p.alpha.transpose(), A - A * p.pi * A), kIdentityTol);  // eq. (57)
-  EXPECT_LT(rel(p.beta * A * p.beta.transpose(), A * p.pi * A), kIdentityTol);     // eq. (57)
+  EXPECT_LT(rel(p.beta * A * p.beta.transpose(), A * p.pi * A), kIdentityTol);        // eq. (57)
   EXPECT_LT((p.Omega.transpose() * p.alpha).norm() / (1.0 + p.Omega.norm() * p.alpha.norm()),
             kIdentityTol);  // eq. (103)
 }
