@@ -65,7 +65,16 @@ void solve_dependent(const VecX& A_sqrt, const Chart& c, DualWorkspace& d, MatX&
   const int r = c.rank();
   if (r == 0) return;
   for (int i = 0; i < r; ++i) d.rhs.row(i) *= -c.row_scale(i);
-  d.sol = d.Ert_D_lu.solve(d.rhs);
+  // Column by column (vector triangular solves are far cheaper than the blocked matrix path
+  // for the small blocks of linkages): sol = U⁻¹ L⁻¹ P rhs.
+  const auto& perm = d.Ert_D_lu.permutationP().indices();
+  const auto& LU = d.Ert_D_lu.matrixLU();
+  for (Eigen::Index k = 0; k < out.cols(); ++k) {
+    auto col = d.sol.col(k);
+    for (int i = 0; i < r; ++i) col(perm(i)) = d.rhs(i, k);
+    LU.triangularView<Eigen::UnitLower>().solveInPlace(col);
+    LU.triangularView<Eigen::Upper>().solveInPlace(col);
+  }
   for (int k = 0; k < r; ++k) {
     const int dk = c.dependent[static_cast<size_t>(k)];
     out.row(dk) = A_sqrt(dk) * d.sol.row(k).head(out.cols());
@@ -134,7 +143,10 @@ ProjectionStatus compute_dual(const Model& /*model*/, const State& state, Worksp
     return d.status;
   }
   d.HinvFt = d.F.transpose();
-  d.H_llt.solveInPlace(d.HinvFt);
+  for (Eigen::Index k = 0; k < d.HinvFt.cols(); ++k) {  // vector solves: cheap for small n_a
+    auto col = d.HinvFt.col(k);
+    d.H_llt.solveInPlace(col);
+  }
   d.psi.noalias() = d.F * d.HinvFt;  // eq. (69): ψ = F H⁻¹ Fᵀ
 
   // 4. α = ψ M, β = I − ψ M, eq. (70).
