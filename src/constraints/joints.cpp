@@ -21,7 +21,8 @@ void add_angle(const Model& model, int body, double scale, Row&& row) {
 }
 
 // One joint: writes its rows of f (if f_rows), Eᵀ (if Et_rows) and Dᵀ (if Dt_rows).
-// Every formula is written for the convention f = (thing on i) − (thing on j).
+// Revolute and fixed x/y rows are written (point on i) − (point on j); the slot-normal, angle,
+// gear and distance rows are written for j relative to i (docs/notation.md gives each row).
 struct JointEvaluator {
   const Model& model;
   const VecX& q;

@@ -1,0 +1,120 @@
+#pragma once
+// Kinetostatics of a driven mechanism over a cycle (design §6, issue 3).
+//
+// A driver prescribes one input s(q) (a joint coordinate) as a function of time. With d its
+// Jacobian row and F the dual-form basis of admissible velocities (n_a = 1):
+//   (dᵀF) v = ṡ                                   → v, u = F v                          (C1)
+//   (dᵀF) v̇ = s̈ − ḋu − dᵀḞ v                       → v̇, u̇ = F v̇ + Ḟ v                    (C2)
+//   (Fᵀd) τ = H v̇ + Fᵀ(M Ḟ v + Ṁ u − Q̂)            → τ, the drive force/torque           (C3)
+//   E λ = R = M u̇ + Ṁ u − Q̂ − d τ                  → λ, minimum-norm                     (C4)
+// (C3) is Fᵀ of the equation of motion M u̇ + Ṁu = Q̂ + dτ + Eλ (Fᵀ E = 0); (C4) is the rest. A
+// reaction component cᵀλ is unique iff c ⟂ null(E) (design §3); with redundant constraints
+// λ is the minimum-norm solution and the other components are reported as indeterminate.
+// dᵀF → 0 is a dead point of the driver: it is located (bisection on the input) and reported,
+// never divided by.
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+#include <string>
+#include <vector>
+
+#include "orthomech/model/model.hpp"
+#include "orthomech/model/state.hpp"
+#include "orthomech/projection/workspace.hpp"
+
+namespace orthomech {
+
+struct CycleOptions {
+  Driver driver;           // joint, profile (constant speed is used for the sweep), speed
+  bool full_cycle = true;  // sweep one full turn (revolute) from the start input
+  double start = 0.0;      // used when !full_cycle or use_start: input range [start, end] (SI)
+  double end = 0.0;
+  bool use_start = false;  // start at `start` instead of the design position's input
+  int steps = 360;
+  double dead_point_tolerance = 1e-10;  // input interval of the dead-point bisection (SI)
+};
+
+// One joint's reaction at one position, in the global frame and in the joint's frame.
+// Convention (docs/notation.md): forces and moments that the second body of the joint exerts on
+// the first.
+struct ReactionComponent {
+  std::string name;  // "A.Fx", "A.Ft", …
+  int joint = -1;
+  bool global = true;  // global frame (else the joint's frame = the first body's frame)
+  std::string unit;    // "N" or "N*m"
+};
+
+struct DrivenPoint {
+  double input = 0.0, time = 0.0;
+  double drive = 0.0;       // τ: drive torque (N·m) or force (N), from the driver onto the joint
+  double dTF = 0.0;         // dᵀF, normalised: |dᵀF| / (|d| |F|) → 0 at a dead point
+  VecX q, u, udot, lambda;  // λ: minimum-norm multipliers (rows of Eᵀ)
+  std::vector<double> reactions;  // per ReactionComponent
+  std::vector<double> measures;   // per Model::measures
+  double kinetic = 0.0, potential = 0.0, dissipated = 0.0;
+  // Next to a change point (E loses rank): evaluated just past it; its multipliers are not
+  // meaningful (they grow without bound as the rank drops) and outputs omit them.
+  bool singular = false;
+};
+
+struct DeadPoint {
+  double input = 0.0;
+  double time = 0.0;
+  std::string message;
+};
+
+enum class CycleStatus { completed, stopped_at_dead_point, failed };
+
+struct CycleResult {
+  CycleStatus status = CycleStatus::failed;
+  std::string message;
+  std::vector<ReactionComponent> components;
+  std::vector<bool> determinate;       // per component: unique although constraints are redundant?
+  std::vector<std::string> row_names;  // constraint rows
+  std::vector<bool> row_determinate;   // per constraint row
+  std::vector<DrivenPoint> points;
+  std::vector<DeadPoint> dead_points;
+  std::vector<DeadPoint> singular_positions;  // change points passed (rank drop of E)
+  long chart_switches = 0;
+  int rank = 0, dof = 0, redundant = 0;
+};
+
+// Reaction components of every joint (names, frames, units), in output order.
+[[nodiscard]] std::vector<ReactionComponent> reaction_components(const Model& model);
+// Their values at a position from the multipliers.
+void compute_reactions(const Model& model, const VecX& q, const VecX& lambda,
+                       std::vector<double>& out);
+
+// Preallocated buffers of the driven computation (sizes fixed by the Model and the rank).
+struct DrivenWorkspace {
+  VecX d;         // n: Jacobian row of the input, ṡ = d u
+  VecX Fdot_v;    // n: Ḟ v, from Eᵀ (Ḟ v) = −Dᵀ u
+  VecX R;         // n: constraint reaction E λ, (C4)
+  VecX lambda_p;  // nc: a particular solution of E λ = R
+  MatX Er;        // n × r: columns of E for the chart's independent rows
+  MatX ErtEr;     // r × r
+  Eigen::LLT<MatX> ErtEr_llt;
+  MatX B;    // r × k: (ErᵀEr)⁻¹ Erᵀ Ex
+  MatX N;    // nc × k: null space of E (redundancy directions); k = nc − r
+  MatX NtN;  // k × k
+  Eigen::LLT<MatX> NtN_llt;
+  VecX small;                   // k
+  VecX rhs_r;                   // r
+  std::vector<int> other_rows;  // the k redundant rows (complement of the chart's rows)
+  MatX J;  // n × n: [E_Rᵀ; dᵀ], Jacobian of the locked-input position problem
+  Eigen::PartialPivLU<MatX> J_lu;
+  VecX g, dq;  // n: residual and Newton step of the locked-input corrector
+  DrivenWorkspace(const Model& model, int rank);
+};
+
+// Velocities, accelerations, drive and multipliers at a position q on f(q) = 0 where the input
+// moves with rate sdot and acceleration sddot (C1)–(C4). Returns false at a dead point (dᵀF = 0).
+// Allocation-free after set-up.
+bool compute_driven(const Model& model, int driver_joint, double sdot, double sddot, State& state,
+                    Workspace& ws, DrivenWorkspace& dws, DrivenPoint& out);
+
+// The sweep. Never throws for numerical trouble: the status says what happened.
+[[nodiscard]] CycleResult run_cycle(const Model& model, const CycleOptions& options);
+
+[[nodiscard]] const char* to_string(CycleStatus s);
+
+}  // namespace orthomech

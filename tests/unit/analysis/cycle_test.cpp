@@ -1,0 +1,232 @@
+// Kinetostatics over a cycle (issue 3): drive and reactions against independent oracles.
+//  - power balance: drive power = d/dt(T + V) + dissipated power (energy, by differences in time);
+//  - Theorem 5, eq. (91), primal form: R = −βᵀ(Q̂ + dτ) − ω u equals the dual-form E λ;
+//  - a Lagrange-multiplier solve of the augmented system [M −E −d; Eᵀ 0 0; dᵀ 0 0];
+//  - closed-form kinetostatics of the in-line slider-crank in the quasi-static limit;
+//  - the dead point of the double-rocker against its closed form;
+//  - redundancy: which reaction components of the triple-crank are determinate.
+#include "orthomech/analysis/cycle.hpp"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/LU>
+#include <numbers>
+
+#include "orthomech/analysis/mobility.hpp"
+#include "orthomech/analysis/positions.hpp"
+#include "orthomech/constraints/joints.hpp"
+#include "orthomech/model/loads.hpp"
+#include "orthomech/model/measures.hpp"
+#include "orthomech/projection/dual.hpp"
+#include "orthomech/projection/primal.hpp"
+#include "support/fixtures.hpp"
+
+namespace orthomech {
+namespace {
+
+CycleOptions options_for(const Model& model, int steps, double speed = 0.0) {
+  CycleOptions o;
+  o.driver = model.drivers.at(0);
+  if (speed != 0.0) o.driver.speed = speed;
+  o.steps = steps;
+  return o;
+}
+
+PointRef point_on(const Model& m, const std::string& body, const std::string& point) {
+  const int b = m.find_body(body);
+  const Body& bd = m.bodies[static_cast<size_t>(b)];
+  for (const auto& [name, p] : bd.points)
+    if (name == point) return {b, p - bd.com_local, body + "." + point};
+  throw std::runtime_error("no point " + body + "." + point);
+}
+
+// Power balance: τ ṡ = d/dt (T + V) + P_dissipated, with d/dt by a five-point stencil in time
+// (error O(h⁴): h = 2π/3600/ω → ~1e-12 relative).
+TEST(Cycle, PowerBalanceAtEveryPosition) {
+  Model model = test::load_bundled("crank-rocker");
+  // Add a spring-damper (coupler point P to the ground pivot B0) and a rotary damper.
+  model.loads.push_back(
+      {"spring",
+       SpringDamper{point_on(model, "coupler", "P"),
+                    PointRef{kGround, Vec2(0.07, 0.0), "ground.B0"}, 200.0, 0.05, 1.5},
+       {}});
+  model.loads.push_back(
+      {"rdamp", RotarySpringDamper{kGround, model.find_body("rocker"), 0.3, 1.2, 0.02}, {}});
+  const CycleResult r = run_cycle(model, options_for(model, 3600));
+  ASSERT_EQ(r.status, CycleStatus::completed) << r.message;
+  const auto& p = r.points;
+  const size_t n = p.size();
+  const double h = p[1].time - p[0].time;
+  double peak = 0.0;
+  for (const auto& x : p) peak = std::max(peak, std::abs(x.drive * model.drivers[0].speed));
+  for (size_t k = 2; k + 2 < n; ++k) {
+    auto E = [&](size_t i) { return p[i].kinetic + p[i].potential; };
+    const double dEdt = (-E(k + 2) + 8.0 * E(k + 1) - 8.0 * E(k - 1) + E(k - 2)) / (12.0 * h);
+    const double drive_power = p[k].drive * model.drivers[0].speed;
+    EXPECT_NEAR(drive_power, dEdt + p[k].dissipated, 1e-6 * peak) << "position " << k;
+  }
+}
+
+// The primal form's Theorem 5 (eq. (91), constant M): R_β = −βᵀ Q̂_tot − ω u, with the drive
+// force d τ among the loads, against the dual-form E λ; and a Lagrange-multiplier solve.
+class CycleReactions : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(CycleReactions, Eq91_PrimalReactionsAndLagrangeMultipliersEqualDual) {
+  const Model model = test::load_bundled(GetParam());
+  ASSERT_FALSE(model.drivers.empty());
+  const int joint = model.drivers[0].joint;
+  const double sdot =
+      model.drivers[0].profile == Profile::constant_speed ? model.drivers[0].speed : 1.0;
+  State s(model);
+  s.q = test::assembled_q(model);
+  const Mobility mob = compute_mobility(model, s.q);
+  ASSERT_EQ(mob.rank, model.nc) << "non-redundant mechanisms only";
+  Workspace ws(model, mob.rank);
+  DrivenWorkspace w(model, mob.rank);
+  DrivenPoint p;
+  ASSERT_TRUE(compute_driven(model, joint, sdot, 0.0, s, ws, w, p));
+  // Dual: E λ.
+  const VecX Elambda = ws.constraints.Et.transpose() * p.lambda;
+  // Primal, eq. (91).
+  ASSERT_EQ(evaluate_primal(model, s, ws), ProjectionStatus::ok);
+  VecX d(model.n);
+  (void)compute_scalar(model, JointCoordinate{joint}, s.q, &s.u, d);
+  const VecX Qtot = ws.free.Q + p.drive * d;
+  const VecX R91 = -ws.primal.beta.transpose() * Qtot - ws.primal.omega * s.u;  // eq. (91)
+  EXPECT_LT((Elambda - R91).norm(), 1e-9 * (1.0 + R91.norm())) << "E λ ≠ eq. (91)";
+  // Lagrange multipliers: M u̇ − E λ − d τ = Q̂; Eᵀ u̇ = −Dᵀu; dᵀ u̇ = s̈ − ḋu.
+  const int n = model.n, nc = model.nc;
+  MatX K = MatX::Zero(n + nc + 1, n + nc + 1);
+  VecX b = VecX::Zero(n + nc + 1);
+  K.topLeftCorner(n, n) = ws.free.M;
+  K.block(0, n, n, nc) = -ws.constraints.Et.transpose();
+  K.block(0, n + nc, n, 1) = -d;
+  K.block(n, 0, nc, n) = ws.constraints.Et;
+  K.block(n + nc, 0, 1, n) = d.transpose();
+  b.head(n) = ws.free.Q;
+  b.segment(n, nc) = -ws.constraints.Dtu;
+  b(n + nc) = -compute_scalar(model, JointCoordinate{joint}, s.q, &s.u).ddot_u;
+  const VecX x = K.fullPivLu().solve(b);
+  EXPECT_LT((x.head(n) - p.udot).norm(), 1e-9 * (1.0 + p.udot.norm())) << "u̇";
+  EXPECT_LT((x.segment(nc ? n : n, nc) - p.lambda).norm(), 1e-9 * (1.0 + p.lambda.norm())) << "λ";
+  EXPECT_NEAR(x(n + nc), p.drive, 1e-9 * (1.0 + std::abs(p.drive))) << "τ";
+}
+
+INSTANTIATE_TEST_SUITE_P(Bundled, CycleReactions,
+                         ::testing::Values("crank-rocker", "slider-crank", "watt-six-bar",
+                                           "stephenson-six-bar", "quick-return",
+                                           "andrews-squeezer"),
+                         [](const auto& param_info) {
+                           std::string s = param_info.param;
+                           for (char& c : s) c = c == '-' ? '_' : c;
+                           return s;
+                         });
+
+// In-line slider-crank, quasi-static (ω → 0) and without gravity: virtual work gives
+// τ = −F_x dx/dθ with x = r cos θ + √(l² − r² sin² θ) [e.g. Norton, Design of Machinery, §13]
+// and F_x the gas force on the piston. Inertia terms scale with ω² and vanish.
+TEST(Cycle, SliderCrankQuasiStaticDriveMatchesClosedForm) {
+  Model model = test::load_bundled("slider-crank");
+  std::erase_if(model.loads, [](const Load& l) { return std::holds_alternative<Gravity>(l.kind); });
+  const CycleResult r = run_cycle(model, options_for(model, 72, 1e-4));
+  ASSERT_EQ(r.status, CycleStatus::completed) << r.message;
+  const double rr = 0.05, l = 0.2;
+  const auto& gas = std::get<PointForce>(model.loads.at(0).kind);
+  for (const auto& p : r.points) {
+    const double th = p.input;
+    const double root = std::sqrt(l * l - rr * rr * std::sin(th) * std::sin(th));
+    const double dxdth = -rr * std::sin(th) - rr * rr * std::sin(th) * std::cos(th) / root;
+    const double Fx = gas.force.x() * table_factor(model, gas.table, p.q);
+    EXPECT_NEAR(p.drive, -Fx * dxdth, 1e-6 * 2000.0 * rr) << "θ = " << th;
+  }
+}
+
+// Quasi-static limit: as the speed goes to 0 the drive tends to the static-equilibrium torque
+// −Q̂ᵀ(u/ṡ) (virtual work with gravity and the gas force), computed here from the loads alone.
+TEST(Cycle, QuasiStaticLimitEqualsStaticEquilibrium) {
+  const Model model = test::load_bundled("crank-rocker");
+  const CycleResult slow = run_cycle(model, options_for(model, 36, 1e-5));
+  ASSERT_EQ(slow.status, CycleStatus::completed);
+  for (const auto& p : slow.points) {
+    State s(model);
+    s.q = p.q;
+    VecX Q(model.n);
+    compute_applied_forces(model, s, Q);
+    const double static_drive = -Q.dot(p.u / 1e-5);  // τ ṡ + Qᵀu = 0, u/ṡ = dq/ds
+    EXPECT_NEAR(p.drive, static_drive, 1e-6 * (1.0 + std::abs(static_drive))) << p.input;
+  }
+}
+
+TEST(Cycle, DoubleRockerStopsAtItsDeadPointWithClosedFormAngle) {
+  const Model model = test::load_bundled("double-rocker");
+  CycleOptions o = options_for(model, 360);
+  o.driver.profile = Profile::constant_speed;
+  o.driver.speed = 1.0;
+  const CycleResult r = run_cycle(model, o);
+  ASSERT_EQ(r.status, CycleStatus::stopped_at_dead_point) << r.message;
+  ASSERT_EQ(r.dead_points.size(), 1u);
+  // Input a = 60, coupler b = 40, rocker c = 65, ground g = 100 (mm): coupler and rocker in line
+  // when |A − B0| = b + c: cos θ = (a² + g² − (b + c)²) / (2 a g).
+  const double a = 60, b = 40, c = 65, g = 100;
+  const double theta = std::acos((a * a + g * g - (b + c) * (b + c)) / (2 * a * g));
+  EXPECT_NEAR(r.dead_points[0].input, theta, 1e-6);
+  for (const auto& p : r.points) {
+    EXPECT_TRUE(std::isfinite(p.drive));
+    for (double v : p.reactions) EXPECT_TRUE(std::isfinite(v));
+  }
+}
+
+TEST(Cycle, TripleCrankSaysWhichReactionComponentsAreIndeterminate) {
+  const Model model = test::load_bundled("triple-crank");
+  const CycleResult r = run_cycle(model, options_for(model, 90));
+  ASSERT_EQ(r.status, CycleStatus::completed) << r.message;
+  EXPECT_EQ(r.redundant, 1);
+  int indeterminate = 0;
+  for (size_t i = 0; i < r.components.size(); ++i) {
+    if (!r.determinate[i]) ++indeterminate;
+    // The crank-frame components along each crank (axial) are the indeterminate ones; the
+    // transverse ones, which carry the torque, are unique.
+    const std::string& name = r.components[i].name;
+    if (name.rfind("A", 0) == 0 && name.find("Fy_local") != std::string::npos) {
+      EXPECT_TRUE(r.determinate[i]) << name;
+    }
+    if (name.rfind("A", 0) == 0 && name.find("Fx_local") != std::string::npos) {
+      EXPECT_FALSE(r.determinate[i]) << name;
+    }
+  }
+  EXPECT_GT(indeterminate, 0);
+  // The cranks pass the line of centres twice per turn (E loses rank there): both are passed.
+  ASSERT_EQ(r.singular_positions.size(), 2u);
+  EXPECT_NEAR(std::remainder(r.singular_positions[0].input, M_PI), 0.0, 1e-12);
+  EXPECT_NEAR(std::remainder(r.singular_positions[1].input, M_PI), 0.0, 1e-12);
+  // The drive is unique: power balance holds (gravity only: τ ṡ = d/dt (T + V)).
+  const auto& p = r.points;
+  const double h = p[1].time - p[0].time;
+  for (size_t k = 2; k + 2 < p.size(); ++k) {
+    // Positions next to a change point are flagged and their drive is not used.
+    bool near_singular = false;
+    for (size_t i = k - 2; i <= k + 2; ++i) near_singular = near_singular || p[i].singular;
+    if (near_singular) continue;
+    auto E = [&](size_t i) { return p[i].kinetic + p[i].potential; };
+    const double dEdt = (-E(k + 2) + 8.0 * E(k + 1) - 8.0 * E(k - 1) + E(k - 2)) / (12.0 * h);
+    // 90 steps of 4°: five-point stencil error ~ h⁴ E⁽⁵⁾ ≈ 1e-4 of the drive power.
+    EXPECT_NEAR(p[k].drive * model.drivers[0].speed, dEdt, 1e-3 * (1.0 + std::abs(dEdt))) << k;
+  }
+  // Closed form: parallel cranks translate the coupler on a circle; with gravity only,
+  // τ = g cos θ (r m_c/2 · 3 + r m_coupler) for the three cranks (com at mid-length) and the
+  // coupler; the mechanism file gives the masses.
+  double moment = 0.0;
+  for (const Body& b : model.bodies) moment += b.mass * (b.name == "coupler" ? 0.05 : 0.025);
+  int flagged = 0;
+  for (const auto& x : p) {
+    if (x.singular) {
+      ++flagged;
+      continue;
+    }
+    EXPECT_NEAR(x.drive, 9.81 * moment * std::cos(x.input), 1e-9) << x.input;
+  }
+  EXPECT_EQ(flagged, 2);
+}
+
+}  // namespace
+}  // namespace orthomech
