@@ -105,8 +105,6 @@ ScalarKinematics compute_scalar(const Model& model, const MeasureKind& kind, con
   return std::visit(Evaluator{model, q, u, nullptr}, kind);
 }
 
-MeasureKind joint_input(const Model& /*model*/, int joint) { return JointCoordinate{joint}; }
-
 double evaluate_measure(const Model& model, const Measure& m, const VecX& q, const VecX* u,
                         const VecX* udot) {
   if (m.derivative == 0) return compute_scalar(model, m.kind, q, nullptr).value;

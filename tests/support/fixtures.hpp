@@ -13,8 +13,8 @@ namespace orthomech::test {
 [[nodiscard]] Model load_bundled(const std::string& name);
 // The design position projected onto f(q) = 0 (asserts convergence).
 [[nodiscard]] VecX assembled_q(const Model& model);
-// An admissible velocity at q: α u0 for a seeded random u0 (projected with the primal/dual-free
-// least-squares null space of Eᵀ computed by SVD — independent of the chart machinery).
+// An admissible velocity at q: a seeded random combination of a basis of null(Eᵀ) computed by
+// SVD (independent of the chart machinery).
 [[nodiscard]] VecX admissible_velocity(const Model& model, const VecX& q, unsigned seed);
 // Rank of Eᵀ at q by SVD (independent oracle for the QR-based rank).
 [[nodiscard]] int svd_rank(const Model& model, const VecX& q, double rel_tol = 1e-8);

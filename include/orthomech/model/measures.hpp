@@ -17,8 +17,6 @@ ScalarKinematics compute_scalar(const Model& model, const MeasureKind& kind, con
                                 const VecX* u, Eigen::Ref<VecX> d);
 ScalarKinematics compute_scalar(const Model& model, const MeasureKind& kind, const VecX& q,
                                 const VecX* u);
-// The coordinate of a joint as an input: revolute φ_j − φ_i, prismatic axisᵀ(r_Pj − r_Pi).
-[[nodiscard]] MeasureKind joint_input(const Model& model, int joint);
 
 // Value of a measure (its derivative order applied). udot may be null for derivative < 2.
 [[nodiscard]] double evaluate_measure(const Model& model, const Measure& m, const VecX& q,

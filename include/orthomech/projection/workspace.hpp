@@ -58,7 +58,8 @@ struct ChartEvent {
   double quality_new;  // quality of the chart that was entered
 };
 
-// Stage 2b: dual (F-based) projections, eqs. (68)–(72), (83)–(85), in charts.
+// Stage 2b: dual (F-based) projections, eqs. (68)–(70), (83)–(84), in charts ((71)–(72) and
+// (85) follow from these and are checked in tests, not stored).
 struct DualWorkspace {
   int na;  // admissible DOF n_a, eq. (25)
   int r;   // rank of Eᵀ

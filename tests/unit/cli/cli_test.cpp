@@ -13,57 +13,21 @@
 #include <string>
 #include <vector>
 
+#include "support/cli_runner.hpp"
+
 namespace orthomech {
 namespace {
 
 namespace fs = std::filesystem;
 
-std::string read_text(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
-std::string shell_quote(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
-
 fs::path temp_base() {
   static int counter = 0;
   return fs::temp_directory_path() /
-         ("orthomech_cli_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
+         ("orthomech_cli_file_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
 }
 
-struct CliResult {
-  int status = -1;  // exit status, or -1 if the process did not exit normally (e.g. a crash)
-  std::string out, err;
-};
-
-// Runs the orthomech executable with `args`; stdout and stderr captured in temporary files.
-CliResult run_cli(const std::vector<std::string>& args) {
-  const fs::path base = temp_base();
-  const fs::path out_file = base.string() + ".out", err_file = base.string() + ".err";
-  std::string cmd = shell_quote(ORTHOMECH_CLI);
-  for (const auto& a : args) {
-    cmd += ' ';
-    cmd += shell_quote(a);
-  }
-  cmd += " >";
-  cmd += shell_quote(out_file.string());
-  cmd += " 2>";
-  cmd += shell_quote(err_file.string());
-  cmd += " </dev/null";
-  const int raw = std::system(cmd.c_str());
-  CliResult r;
-  r.status = (raw != -1 && WIFEXITED(raw)) ? WEXITSTATUS(raw) : -1;
-  r.out = read_text(out_file);
-  r.err = read_text(err_file);
-  std::error_code ec;
-  fs::remove(out_file, ec);
-  fs::remove(err_file, ec);
-  return r;
-}
+using test::CliResult;
+using test::run_cli;
 
 // A mechanism file in the temporary directory, removed at the end of the test.
 class TempMechanism {

@@ -20,6 +20,7 @@
 
 #include "orthomech/error.hpp"
 #include "orthomech/io/mechanism_file.hpp"
+#include "support/cli_runner.hpp"
 
 namespace orthomech {
 namespace {
@@ -37,11 +38,6 @@ std::vector<std::string> invalid_files() {
       names.push_back(entry.path().filename().string());
   std::sort(names.begin(), names.end());
   return names;
-}
-
-std::string read_text(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
 size_t count_occurrences(const std::string& haystack, const std::string& needle) {
@@ -85,44 +81,8 @@ struct Expectation {
   return ::testing::AssertionSuccess();
 }
 
-std::string shell_quote(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
-
-struct CliResult {
-  int status = -1;  // exit status, or -1 if the process did not exit normally
-  std::string out, err;
-};
-
-// Runs the orthomech executable with `args`, stdout and stderr captured in temporary files.
-CliResult run_cli(const std::vector<std::string>& args) {
-  static int counter = 0;
-  const fs::path base =
-      fs::temp_directory_path() /
-      ("orthomech_invalid_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
-  const fs::path out_file = base.string() + ".out", err_file = base.string() + ".err";
-  std::string cmd = shell_quote(ORTHOMECH_CLI);
-  for (const auto& a : args) {
-    cmd += ' ';
-    cmd += shell_quote(a);
-  }
-  cmd += " >";
-  cmd += shell_quote(out_file.string());
-  cmd += " 2>";
-  cmd += shell_quote(err_file.string());
-  cmd += " </dev/null";
-  const int raw = std::system(cmd.c_str());
-  CliResult r;
-  r.status = (raw != -1 && WIFEXITED(raw)) ? WEXITSTATUS(raw) : -1;
-  r.out = read_text(out_file);
-  r.err = read_text(err_file);
-  std::error_code ec;
-  fs::remove(out_file, ec);
-  fs::remove(err_file, ec);
-  return r;
-}
+using test::CliResult;
+using test::run_cli;
 
 TEST(InvalidFiles, DirectoryHoldsAtLeastThirtyFiles) {
   const auto files = invalid_files();

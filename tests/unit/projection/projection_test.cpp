@@ -274,6 +274,11 @@ TEST(Redundancy, TripleCrankHasOneRedundantEquationAndSingularG) {
   EXPECT_EQ(mob.rank, test::svd_rank(model, q));  // QR rank = SVD rank (independent oracle)
   ASSERT_EQ(mob.redundant.size(), 1u);
   EXPECT_NE(mob.redundant[0].find("joint '"), std::string::npos);
+  // The primal form cannot invert G = EᵀAE here and says so.
+  State s(model);
+  s.q = q;
+  Workspace ws(model, mob.rank);
+  EXPECT_EQ(evaluate_primal(model, s, ws), ProjectionStatus::singular_G);
   // Away from the manifold's parallel configuration the redundancy disappears: rank is full.
   VecX off = q;
   off(2) += 0.05;  // turn the first crank alone
