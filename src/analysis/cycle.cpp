@@ -334,6 +334,7 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
     return result;
   }
   result.points.push_back(point);
+  VecX trial(model.nq);  // predictor/corrector iterate, reused across positions
   for (int k = 1; k < steps; ++k) {
     const double target = s0 + k * ds;
     const DrivenPoint& prev = result.points.back();
@@ -343,8 +344,7 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
     const double first = (ds / sdot) * prev.u.cwiseAbs().maxCoeff();
     const double second = (0.5 * ds * ds / (sdot * sdot)) * prev.udot.cwiseAbs().maxCoeff();
     const double curvature = second <= first ? 1.0 : 0.0;
-    VecX trial =
-        prev.q + (ds / sdot) * prev.u + curvature * (0.5 * ds * ds / (sdot * sdot)) * prev.udot;
+    trial = prev.q + (ds / sdot) * prev.u + curvature * (0.5 * ds * ds / (sdot * sdot)) * prev.udot;
     // Corrections beyond twice the size of the tangent step would leave the branch.
     const double max_step = 2.0 * first + 1e-12;
     // Same branch: the velocity keeps its direction (a jump across a fold reverses it; the sign
