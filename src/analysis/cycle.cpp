@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <numbers>
 
@@ -171,42 +172,87 @@ void solve_multipliers(const Workspace& ws, DrivenWorkspace& w, VecX& lambda) {
 bool compute_driven(const Model& model, int driver_joint, double sdot, double sddot, State& state,
                     Workspace& ws, DrivenWorkspace& w, DrivenPoint& out) {
   const MeasureKind input = JointCoordinate{driver_joint};
-  // Positions: F, H in the current chart (u = 0 first: F depends on q only).
-  state.u.setZero();
-  if (evaluate_dual(model, state, ws) != ProjectionStatus::ok) return false;
-  const auto& F = ws.dual.F;
+  // Positions: the chart and F at q (F depends on q only). The chart's scaling A comes from the
+  // free system; with a constant mass matrix it is computed once.
+  if (!ws.free.mass_ready || !ws.free.constant_mass) {
+    state.u.setZero();
+    compute_free_system(model, state, ws);
+  }
+  compute_constraint_jacobian(model, state.q, ws.constraints.Et);
+  if (compute_basis(model, state, ws) != ProjectionStatus::ok) return false;
+  const auto F = ws.dual.F.col(0);
   (void)compute_scalar(model, input, state.q, nullptr, w.d);
-  const double dTF = w.d.dot(F.col(0));
-  const double scale = w.d.norm() * F.col(0).norm();
+  const double dTF = w.d.dot(F);
+  const double scale = w.d.norm() * F.norm();
   out.dTF = scale > 0.0 ? dTF / scale : 0.0;
   if (!(std::abs(out.dTF) > 1e-12)) return false;  // dead point: the driver cannot drive
+  out.tangent = F / dTF;                           // dq/ds along the branch
   // (C1) velocities.
   const double v = sdot / dTF;
-  state.u.noalias() = F.col(0) * v;
+  state.u.noalias() = F * v;
   // Rate terms at (q, u): Dᵀu, Q̂(q, u), Ṁ, ḋu.
-  compute_constraints(model, state, ws.constraints);
+  compute_constraint_rate(model, state, ws.constraints);
   compute_free_system(model, state, ws);
   const ScalarKinematics sk = compute_scalar(model, input, state.q, &state.u, w.d);
   solve_chart(ws, ws.constraints.Dtu, w.Fdot_v);  // x_D = (E_RDᵀ)⁻¹ (Dᵀu)_R
   w.Fdot_v = -w.Fdot_v;                           // Eᵀ (Ḟ v) = −Dᵀ u
   // (C2) accelerations.
   const double vdot = (sddot - sk.ddot_u - w.d.dot(w.Fdot_v)) / dTF;
-  out.udot = F.col(0) * vdot + w.Fdot_v;
+  out.udot = F * vdot + w.Fdot_v;
   // (C3) drive: Fᵀ(M u̇ + Ṁu − Q̂) = (Fᵀd) τ.
-  w.R.noalias() = ws.free.M * out.udot;
+  if (ws.free.diagonal_mass)
+    w.R = ws.free.M_diag.cwiseProduct(out.udot);
+  else
+    w.R.noalias() = ws.free.M * out.udot;
   if (!ws.free.constant_mass) w.R.noalias() += ws.free.Mdot * state.u;
   w.R -= ws.free.Q;
-  out.drive = F.col(0).dot(w.R) / dTF;
+  out.drive = F.dot(w.R) / dTF;
   // (C4) reactions: E λ = M u̇ + Ṁu − Q̂ − d τ.
   w.R -= out.drive * w.d;
   out.lambda.resize(model.nc);
   solve_multipliers(ws, w, out.lambda);
   out.q = state.q;
   out.u = state.u;
+  out.input_rate = sdot;
+  out.input_acceleration = sddot;
   return true;
 }
 
 namespace {
+
+// The driver's input as a function of time, s(t), ṡ(t), s̈(t). A constant-speed law can be
+// re-anchored (reversed at a dead point): s = s_ref + ω (t − t_ref).
+struct InputLaw {
+  Profile profile = Profile::constant_speed;
+  double s_ref = 0.0, t_ref = 0.0, omega = 0.0;  // constant speed
+  double initial = 0.0, amplitude = 0.0, frequency = 0.0;
+  const std::vector<double>* coefficients = nullptr;
+
+  void at(double t, double& s, double& sdot, double& sddot) const {
+    switch (profile) {
+      case Profile::constant_speed:
+        s = s_ref + omega * (t - t_ref), sdot = omega, sddot = 0.0;
+        return;
+      case Profile::harmonic: {
+        const double w = 2.0 * std::numbers::pi * frequency;
+        s = initial + amplitude * std::sin(w * t);
+        sdot = amplitude * w * std::cos(w * t);
+        sddot = -amplitude * w * w * std::sin(w * t);
+        return;
+      }
+      case Profile::polynomial: {
+        s = sdot = sddot = 0.0;
+        const auto& c = *coefficients;
+        for (size_t k = c.size(); k-- > 0;) {  // Horner for s, ṡ, s̈
+          sddot = sddot * t + 2.0 * sdot;
+          sdot = sdot * t + s;
+          s = s * t + c[k];
+        }
+        return;
+      }
+    }
+  }
+};
 
 struct Sweep {
   const Model& model;
@@ -214,29 +260,49 @@ struct Sweep {
   Workspace& ws;
   DrivenWorkspace& w;
 
-  // Newton with the input locked: [f_R(q); s(q) − target] = 0, Jacobian [E_Rᵀ; dᵀ]. A step
-  // longer than max_step (a jump towards another branch or another turn of an angle) fails.
-  bool locked_corrector(VecX& q, double target, double max_step) {
+  // Newton on [f_R(q); s(q) − target] = 0 with Jacobian [E_Rᵀ; dᵀ] (the input locked), or, when
+  // `row` is given, on [f_R(q); rowᵀ(q − q_ref) − target] (a linear lock, for the pseudo-arclength
+  // step across a dead point). A step longer than max_step (a jump towards another branch or
+  // another turn of an angle) fails.
+  bool corrector(VecX& q, double target, double max_step, const VecX* row = nullptr,
+                 const VecX* q_ref = nullptr) {
     const MeasureKind input = JointCoordinate{joint};
     const Chart& c = ws.dual.chart;
     const int r = c.rank();
+    // Chord Newton: the Jacobian is factored at the first iterate and kept while the residual
+    // falls at least tenfold per iteration (the predictor is close: usually one factorisation).
+    bool factored = false;
+    double previous = std::numeric_limits<double>::infinity();
     for (int it = 0; it < 30; ++it) {
       compute_constraint_residual(model, q, ws.constraints.f);
-      const double s = compute_scalar(model, input, q, nullptr, w.d).value;
+      const double s =
+          row ? row->dot(q - *q_ref) : compute_scalar(model, input, q, nullptr, w.d).value;
       double res = std::abs(s - target);
       for (int i = 0; i < r; ++i) {
         w.g(i) = ws.constraints.f(c.rows[static_cast<size_t>(i)]);
         res = std::max(res, std::abs(w.g(i)));
       }
       w.g(r) = s - target;
-      if (res < 1e-12) return true;
-      compute_constraint_jacobian(model, q, ws.constraints.Et);
-      for (int i = 0; i < r; ++i)
-        w.J.row(i) = ws.constraints.Et.row(c.rows[static_cast<size_t>(i)]);
-      w.J.row(r) = w.d.transpose();
-      w.J_lu.compute(w.J);
-      const auto U = w.J_lu.matrixLU().diagonal().cwiseAbs();
-      if (!(U.minCoeff() > 1e-13 * U.maxCoeff())) return false;
+      // The tolerance is a few ulps of the coordinates: next to a singular position a residual
+      // of 1e-12 still leaves q 1e-10 off the branch along the nearly singular direction.
+      // Converged on the chart's rows, the other (redundant) rows must hold too, or rows kept by
+      // a chart chosen next to a singular position have let q leave the mechanism.
+      if (res < 1e-14 * (1.0 + q.cwiseAbs().maxCoeff()))
+        return ws.constraints.f.cwiseAbs().maxCoeff() < 1e-10;
+      if (!factored || res > 0.1 * previous) {
+        compute_constraint_jacobian(model, q, ws.constraints.Et);
+        for (int i = 0; i < r; ++i)
+          w.J.row(i) = ws.constraints.Et.row(c.rows[static_cast<size_t>(i)]);
+        if (row)
+          w.J.row(r) = row->transpose();
+        else
+          w.J.row(r) = w.d.transpose();
+        w.J_lu.compute(w.J);
+        const auto U = w.J_lu.matrixLU().diagonal().cwiseAbs();
+        if (!(U.minCoeff() > 1e-13 * U.maxCoeff())) return false;
+        factored = true;
+      }
+      previous = res;
       w.dq = w.J_lu.solve(w.g);
       if (!(w.dq.cwiseAbs().maxCoeff() <= max_step)) return false;
       integrate_positions(model, q, w.dq, -1.0);
@@ -245,6 +311,28 @@ struct Sweep {
     return false;
   }
 };
+
+// Predicted q at input s from a converged point p: q + τ Δs + ½ q'' Δs², with q'' = d²q/ds² =
+// (u̇ − τ s̈)/ṡ². The curvature term is used only where it is smaller than the tangent step (next
+// to a singular position u̇ is unreliable) and where ṡ ≠ 0.
+void predict(const DrivenPoint& p, double s, VecX& q) {
+  const double ds = s - p.input;
+  q = p.q + ds * p.tangent;
+  if (!(std::abs(p.input_rate) > 0.0)) return;
+  const double first = std::abs(ds) * p.tangent.cwiseAbs().maxCoeff();
+  const double c = 0.5 * ds * ds / (p.input_rate * p.input_rate);
+  const double second = c * (p.udot - p.input_acceleration * p.tangent).cwiseAbs().maxCoeff();
+  if (second <= first) q += c * (p.udot - p.input_acceleration * p.tangent);
+}
+
+std::string input_text(double s, bool angular) {
+  char buf[64];
+  if (angular)
+    std::snprintf(buf, sizeof buf, "%.6f deg", s * 180.0 / std::numbers::pi);
+  else
+    std::snprintf(buf, sizeof buf, "%.6f mm", s * 1e3);
+  return buf;
+}
 
 }  // namespace
 
@@ -255,11 +343,39 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
     result.message = "no driver joint";
     return result;
   }
+  const std::string& joint_name = model.joints[static_cast<size_t>(joint)].name;
   const bool angular =
       std::holds_alternative<Revolute>(model.joints[static_cast<size_t>(joint)].kind);
-  const double speed = options.driver.speed;
-  if (!(std::abs(speed) > 0.0)) {
+  const Driver& driver = options.driver;
+  InputLaw law;
+  law.profile = driver.profile;
+  law.omega = driver.speed;
+  law.initial = driver.initial;
+  law.amplitude = driver.amplitude;
+  law.frequency = driver.frequency;
+  law.coefficients = &driver.coefficients;
+  const bool constant = driver.profile == Profile::constant_speed;
+  if (constant && !(std::abs(driver.speed) > 0.0)) {
     result.message = "the driver's speed must not be zero";
+    return result;
+  }
+  if (driver.profile == Profile::harmonic &&
+      !(driver.frequency > 0.0 && std::abs(driver.amplitude) > 0.0)) {
+    result.message = "a harmonic driver needs a non-zero amplitude and a positive frequency";
+    return result;
+  }
+  if (driver.profile == Profile::polynomial) {
+    result.message =
+        "a polynomial driver has no cycle to sweep; give a constant-speed or harmonic driver (or "
+        "--driver JOINT --speed ...)";
+    return result;
+  }
+  if (!constant && !options.full_cycle) {
+    result.message = "an input range needs a constant-speed driver";
+    return result;
+  }
+  if (constant && options.full_cycle && !angular) {
+    result.message = "a full cycle needs a revolute driver; give the input range (start/end)";
     return result;
   }
   // Start: the design position projected onto f(q) = 0.
@@ -286,34 +402,56 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
   const MeasureKind input = JointCoordinate{joint};
   (void)evaluate_dual(model, state, ws);
   double s0 = compute_scalar(model, input, state.q, nullptr).value;
-  if (options.use_start) {
-    if (!sweep.locked_corrector(state.q, options.start, std::numeric_limits<double>::infinity())) {
-      result.message = "cannot reach the start input " + std::to_string(options.start);
+  double start_target = s0;
+  if (!constant) {
+    double sd = 0.0, sdd = 0.0;
+    law.at(0.0, start_target, sd, sdd);
+  } else if (options.use_start) {
+    start_target = options.start;
+  }
+  if (start_target != s0) {
+    if (!sweep.corrector(state.q, start_target, std::numeric_limits<double>::infinity())) {
+      result.message = "cannot reach the start input " + input_text(start_target, angular) +
+                       " from the design position";
       return result;
     }
-    s0 = options.start;
+    s0 = start_target;
   }
+  // Period and time grid.
   const int steps = std::max(2, options.steps);
-  double span = options.full_cycle ? (angular ? 2.0 * std::numbers::pi : 0.0) : options.end - s0;
-  if (options.full_cycle && !angular) {
-    result.message = "a full cycle needs a revolute driver; give the input range (start/end)";
-    return result;
+  double period = 0.0;
+  if (constant && options.full_cycle) {
+    period = 2.0 * std::numbers::pi / std::abs(driver.speed);
+  } else if (constant) {
+    const double span = options.end - s0;
+    if (!(std::abs(span) > 0.0)) {
+      result.message = "the input range is empty";
+      return result;
+    }
+    law.omega = std::copysign(std::abs(driver.speed), span);
+    period = std::abs(span) / std::abs(driver.speed);
+  } else {
+    period = 1.0 / driver.frequency;
   }
-  if (speed < 0.0 && options.full_cycle) span = -span;
-  const double ds = options.full_cycle ? span / steps : span / (steps - 1);
-  const double sdot = options.full_cycle ? speed : std::copysign(std::abs(speed), span);
+  law.s_ref = s0;
+  const double dt = options.full_cycle ? period / steps : period / (steps - 1);
+  const int last_regular = options.full_cycle ? steps - 1 : steps - 1;
+  const double omega0 = law.omega;
+  const int max_positions = 8 * steps;  // bound on a reversing sweep that does not close
 
   result.components = reaction_components(model);
   result.row_names.reserve(static_cast<size_t>(model.nc));
   for (int r = 0; r < model.nc; ++r) result.row_names.push_back(model.constraint_row_name(r));
   result.points.reserve(static_cast<size_t>(steps));
 
-  auto evaluate_at = [&](const VecX& q, double s, DrivenPoint& p) {
+  auto evaluate_at = [&](const VecX& q, double t, DrivenPoint& p) {
+    double s = 0.0, sdot = 0.0, sddot = 0.0;
+    law.at(t, s, sdot, sddot);
     state.q = q;
-    state.t = (s - s0) / sdot;
-    if (!compute_driven(model, joint, sdot, 0.0, state, ws, w, p)) return false;
-    p.input = s;
-    p.time = state.t;
+    state.t = t;
+    if (!compute_driven(model, joint, sdot, sddot, state, ws, w, p)) return false;
+    p.input = compute_scalar(model, input, state.q, nullptr).value;
+    p.time = t;
     p.singular = false;
     compute_reactions(model, state.q, p.lambda, p.reactions);
     p.measures.clear();
@@ -324,49 +462,64 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
     p.dissipated = dissipated_power(model, state);
     return true;
   };
+  // A converged step keeps the branch when the tangent dq/ds keeps its direction (a jump across
+  // a fold reverses it).
+  auto same_branch = [](const DrivenPoint& a, const DrivenPoint& b) {
+    return a.tangent.dot(b.tangent) > 0.0;
+  };
 
-  VecX q = state.q;
-  DrivenPoint point;
-  if (!evaluate_at(q, s0, point)) {
+  DrivenPoint last;   // the last converged point (the anchor of the predictor)
+  DrivenPoint point;  // the point being computed
+  if (!evaluate_at(state.q, 0.0, last)) {
     result.status = CycleStatus::stopped_at_dead_point;
-    result.dead_points.push_back({s0, 0.0, "the start position is a dead point of the driver"});
+    result.dead_points.push_back(
+        {s0, 0.0, "the start position is a dead point of driver joint '" + joint_name + "'"});
     result.message = result.dead_points.back().message;
     return result;
   }
-  result.points.push_back(point);
+  result.points.push_back(last);
   VecX trial(model.nq);  // predictor/corrector iterate, reused across positions
-  for (int k = 1; k < steps; ++k) {
-    const double target = s0 + k * ds;
-    const DrivenPoint& prev = result.points.back();
-    // Predictor along the curve: q(s + Δs) ≈ q + (u/ṡ) Δs + ½ (u̇/ṡ²) Δs² (ṡ constant).
-    // The curvature term is used only where it is smaller than the tangent step (next to a
-    // singular position u̇ is unreliable).
-    const double first = (ds / sdot) * prev.u.cwiseAbs().maxCoeff();
-    const double second = (0.5 * ds * ds / (sdot * sdot)) * prev.udot.cwiseAbs().maxCoeff();
-    const double curvature = second <= first ? 1.0 : 0.0;
-    trial = prev.q + (ds / sdot) * prev.u + curvature * (0.5 * ds * ds / (sdot * sdot)) * prev.udot;
+  int reversals = 0;
+  const int report_every = std::max(1, steps / 100);
+  for (long k = 1;; ++k) {
+    if (reversals == 0 && k > last_regular) break;
+    if (static_cast<int>(result.points.size()) >= max_positions) {
+      result.message = "stopped after " + std::to_string(max_positions) +
+                       " positions: the reversing sweep did not return to its start";
+      break;
+    }
+    if (options.progress && k % report_every == 0)
+      options.progress(std::min(1.0, static_cast<double>(k) * dt / period));
+    const double t = static_cast<double>(k) * dt;
+    double target = 0.0, sd = 0.0, sdd = 0.0;
+    law.at(t, target, sd, sdd);
+    // After a reversal the cycle closes when the input passes its start again, moving in the
+    // original direction on the starting branch.
+    if (reversals > 0 && law.omega == omega0 && (last.input - s0) * omega0 < 0.0 &&
+        (target - s0) * omega0 >= 0.0) {
+      result.message = "the cycle closed after " + std::to_string(reversals) + " reversals";
+      break;
+    }
     // Corrections beyond twice the size of the tangent step would leave the branch.
-    const double max_step = 2.0 * first + 1e-12;
-    // Same branch: the velocity keeps its direction (a jump across a fold reverses it; the sign
-    // of dᵀF alone changes with the chart's orientation).
-    bool ok = sweep.locked_corrector(trial, target, max_step) &&
-              evaluate_at(trial, target, point) && point.u.dot(prev.u) > 0.0;
+    const double max_step =
+        2.0 * std::abs(target - last.input) * last.tangent.cwiseAbs().maxCoeff() + 1e-12;
+    predict(last, target, trial);
+    bool ok = sweep.corrector(trial, target, max_step) && evaluate_at(trial, t, point) &&
+              same_branch(point, last);
     if (!ok) {
       // A change point (E loses rank, e.g. a parallelogram in line) is singular only exactly
       // there: the input passes. Retry just beyond it from the same predictor; a fold (dead
       // point) stays impassable.
       for (const double shift : {1e-6, 1e-4}) {
-        const double shifted = target + shift * ds;
-        VecX t2 = prev.q + ((shifted - prev.input) / sdot) * prev.u +
-                  curvature *
-                      (0.5 * (shifted - prev.input) * (shifted - prev.input) / (sdot * sdot)) *
-                      prev.udot;
-        if (sweep.locked_corrector(t2, shifted, max_step) && evaluate_at(t2, shifted, point) &&
-            point.u.dot(prev.u) > 0.0) {
+        const double ts = t + shift * dt;
+        double shifted = 0.0;
+        law.at(ts, shifted, sd, sdd);
+        predict(last, shifted, trial);
+        if (sweep.corrector(trial, shifted, max_step) && evaluate_at(trial, ts, point) &&
+            same_branch(point, last)) {
           result.singular_positions.push_back(
-              {target, (target - s0) / sdot,
-               "singular position (E loses rank) at input " + std::to_string(target) +
-                   (angular ? " rad" : " m") +
+              {target, t,
+               "singular position (E loses rank) at input " + input_text(target, angular) +
                    ": passed, branch kept by continuity of the tangent"});
           point.singular = true;
           ok = true;
@@ -375,33 +528,94 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
       }
     }
     if (!ok) {
-      // Dead point between the last good input and the target: bisection on the input.
-      double lo = prev.input, hi = target;
-      VecX q_lo = prev.q;
-      while (std::abs(hi - lo) > options.dead_point_tolerance) {
+      // Dead point between the last good time and t: bisection in time.
+      double lo = last.time, hi = t;
+      DrivenPoint at_lo = last, probe;
+      while (hi - lo > 1e-15 * (1.0 + std::abs(hi))) {
         const double mid = 0.5 * (lo + hi);
-        VecX qm = q_lo + ((mid - lo) / sdot) * prev.u;
-        DrivenPoint probe;
-        if (sweep.locked_corrector(qm, mid, max_step) && evaluate_at(qm, mid, probe) &&
-            probe.u.dot(prev.u) > 0.0) {
+        double s_mid = 0.0;
+        law.at(mid, s_mid, sd, sdd);
+        if (std::abs(s_mid - at_lo.input) < options.dead_point_tolerance) break;
+        predict(at_lo, s_mid, trial);
+        const double step =
+            2.0 * std::abs(s_mid - at_lo.input) * at_lo.tangent.cwiseAbs().maxCoeff() + 1e-12;
+        if (sweep.corrector(trial, s_mid, step) && evaluate_at(trial, mid, probe) &&
+            same_branch(probe, at_lo)) {
           lo = mid;
-          q_lo = qm;
+          at_lo = probe;
         } else {
           hi = mid;
         }
       }
-      result.dead_points.push_back(
-          {lo, (lo - s0) / sdot,
-           "dead point of driver joint '" + model.joints[static_cast<size_t>(joint)].name +
-               "': the input cannot pass " + std::to_string(lo) + (angular ? " rad" : " m")});
-      result.status = CycleStatus::stopped_at_dead_point;
-      result.message = result.dead_points.back().message;
-      break;
+      const double s_dead = at_lo.input;
+      std::string msg = "dead point of driver joint '" + joint_name + "' at input " +
+                        input_text(s_dead, angular) +
+                        ": the driver cannot move the mechanism past it";
+      if (!(options.reverse_at_dead_point && constant)) {
+        result.dead_points.push_back({s_dead, at_lo.time, msg});
+        result.status = CycleStatus::stopped_at_dead_point;
+        result.message = msg;
+        break;
+      }
+      // Reverse: pass the fold along the curve (pseudo-arclength steps: predictor along the
+      // direction of motion n, corrector with nᵀ(q − q_pred) = 0) until the input has turned
+      // back, then drive the input the other way.
+      VecX dir = at_lo.tangent * at_lo.input_rate;  // direction of motion dq/dt
+      dir.normalize();
+      double h = std::max((last.q - at_lo.q).norm(), 1e-9);
+      VecX q_cur = at_lo.q, q_pred(model.nq);
+      bool passed = false;
+      for (int attempt = 0; attempt < 40 && !passed; ++attempt) {
+        q_pred = q_cur + h * dir;
+        trial = q_pred;
+        if (!sweep.corrector(trial, 0.0, 0.5 * h, &dir, &q_pred)) {
+          h *= 0.5;
+          continue;
+        }
+        // New direction of motion: F at the new point, oriented along the old direction.
+        state.q = trial;
+        compute_constraint_jacobian(model, state.q, ws.constraints.Et);
+        if (compute_basis(model, state, ws) != ProjectionStatus::ok) {
+          h *= 0.5;
+          continue;
+        }
+        VecX f = ws.dual.F.col(0).normalized();
+        if (f.dot(dir) < 0.0) f = -f;
+        const double s_new = compute_scalar(model, input, trial, nullptr).value;
+        q_cur = trial;
+        dir = f;
+        if ((s_new - s_dead) * law.omega < -options.dead_point_tolerance) passed = true;
+      }
+      if (!passed) {
+        msg += "; could not pass it to reverse";
+        result.dead_points.push_back({s_dead, at_lo.time, msg});
+        result.status = CycleStatus::stopped_at_dead_point;
+        result.message = msg;
+        break;
+      }
+      ++reversals;
+      result.dead_points.push_back({s_dead, at_lo.time, msg + "; the input reverses"});
+      law.s_ref = s_dead;
+      law.t_ref = at_lo.time;
+      law.omega = -law.omega;
+      // Re-anchor on the far side: its time on the reversed law, then resume on the time grid.
+      const double s_p = compute_scalar(model, input, q_cur, nullptr).value;
+      const double t_p = at_lo.time + (s_p - s_dead) / law.omega;
+      if (!evaluate_at(q_cur, t_p, last)) {
+        result.status = CycleStatus::failed;
+        result.message = msg + "; lost the branch after reversing";
+        return result;
+      }
+      k = static_cast<long>(std::floor(t_p / dt));  // the loop's ++k gives the next grid time
+      continue;
     }
     result.points.push_back(point);
+    std::swap(last, point);
   }
   if (result.status != CycleStatus::stopped_at_dead_point) result.status = CycleStatus::completed;
   result.chart_switches = ws.dual.switch_count;
+  result.reversals = reversals;
+  if (options.progress) options.progress(1.0);
 
   // Determinacy: component cᵀλ is unique iff Nᵀc = 0 (c from the linear map λ → components).
   const size_t nk = result.components.size();

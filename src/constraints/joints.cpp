@@ -179,6 +179,11 @@ void compute_constraint_jacobian(const Model& model, const VecX& q, MatX& Et) {
   evaluate(model, q, nullptr, nullptr, &Et, nullptr);
 }
 
+void compute_constraint_rate(const Model& model, const State& state, ConstraintWorkspace& ws) {
+  evaluate(model, state.q, &state.u, nullptr, nullptr, &ws.Dt);
+  ws.Dtu.noalias() = ws.Dt * state.u;  // convective term Dᵀu, eq. (76)
+}
+
 void compute_constraints(const Model& model, const State& state, ConstraintWorkspace& ws) {
   evaluate(model, state.q, &state.u, &ws.f, &ws.Et, &ws.Dt);
   ws.Dtu.noalias() = ws.Dt * state.u;  // convective term Dᵀu, eq. (76)

@@ -83,13 +83,11 @@ void solve_dependent(const VecX& A_sqrt, const Chart& c, DualWorkspace& d, MatX&
 
 }  // namespace
 
-ProjectionStatus compute_dual(const Model& /*model*/, const State& state, Workspace& ws) {
+ProjectionStatus compute_basis(const Model& /*model*/, const State& state, Workspace& ws) {
   auto& d = ws.dual;
   const MatX& Et = ws.constraints.Et;
   const VecX& A_diag = ws.free.A_diag;
   const VecX& A_sqrt = ws.free.A_sqrt;
-  const MatX& M = ws.free.M;
-  const bool diagonal = ws.free.diagonal_mass;
 
   // 1. Chart: keep it while its dependent block is well conditioned; otherwise re-select with
   //    the rank-revealing QR and switch if the new one is better by the hysteresis factor.
@@ -129,6 +127,17 @@ ProjectionStatus compute_dual(const Model& /*model*/, const State& state, Worksp
     for (int i = 0; i < d.r; ++i) d.rhs(i, k) = Et(c.rows[static_cast<size_t>(i)], ik);
   }
   solve_dependent(A_sqrt, c, d, d.F);
+  d.status = ProjectionStatus::ok;
+  return d.status;
+}
+
+ProjectionStatus compute_dual(const Model& model, const State& state, Workspace& ws) {
+  if (compute_basis(model, state, ws) != ProjectionStatus::ok) return ws.dual.status;
+  auto& d = ws.dual;
+  const Chart& c = d.chart;
+  const VecX& A_sqrt = ws.free.A_sqrt;
+  const MatX& M = ws.free.M;
+  const bool diagonal = ws.free.diagonal_mass;
 
   // 3. H = Fᵀ M F, eq. (68), and ψ = F H⁻¹ Fᵀ, eq. (69). Every product below is O(n² n_a) or
   //    less: ψ, α, Θ have rank n_a, and products with a diagonal M are scalings.

@@ -14,6 +14,7 @@
 // never divided by.
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -24,13 +25,21 @@
 namespace orthomech {
 
 struct CycleOptions {
-  Driver driver;           // joint, profile (constant speed is used for the sweep), speed
-  bool full_cycle = true;  // sweep one full turn (revolute) from the start input
+  // joint and law s(t): constant speed (a full turn of a revolute, or start → end), harmonic
+  // (one period 1/f); polynomial laws have no cycle and are refused.
+  Driver driver;
+  bool full_cycle = true;  // one full cycle (else the range start → end, constant speed)
   double start = 0.0;      // used when !full_cycle or use_start: input range [start, end] (SI)
   double end = 0.0;
   bool use_start = false;  // start at `start` instead of the design position's input
   int steps = 360;
   double dead_point_tolerance = 1e-10;  // input interval of the dead-point bisection (SI)
+  // At a dead point (a fold of the input) pass it along the configuration curve and drive the
+  // input back (constant-speed drivers): a rocker-driven double-rocker then sweeps its whole
+  // closed curve, both assembly branches, until it returns to its start.
+  bool reverse_at_dead_point = false;
+  // Called now and then with the fraction of the sweep done (0–1]; may be empty.
+  std::function<void(double)> progress;
 };
 
 // One joint's reaction at one position, in the global frame and in the joint's frame.
@@ -45,6 +54,8 @@ struct ReactionComponent {
 
 struct DrivenPoint {
   double input = 0.0, time = 0.0;
+  double input_rate = 0.0, input_acceleration = 0.0;  // ṡ, s̈ of the driver's law at `time`
+  VecX tangent;             // dq/ds = F / (dᵀF): the branch's direction per unit input
   double drive = 0.0;       // τ: drive torque (N·m) or force (N), from the driver onto the joint
   double dTF = 0.0;         // dᵀF, normalised: |dᵀF| / (|d| |F|) → 0 at a dead point
   VecX q, u, udot, lambda;  // λ: minimum-norm multipliers (rows of Eᵀ)
@@ -75,6 +86,7 @@ struct CycleResult {
   std::vector<DeadPoint> dead_points;
   std::vector<DeadPoint> singular_positions;  // change points passed (rank drop of E)
   long chart_switches = 0;
+  int reversals = 0;  // dead points passed by reversing the input (reverse_at_dead_point)
   int rank = 0, dof = 0, redundant = 0;
 };
 

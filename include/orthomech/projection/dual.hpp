@@ -9,6 +9,9 @@ namespace orthomech {
 // (eqs. (68)–(70), (83)–(84)). Needs compute_free_system and compute_constraints first.
 // Allocation-free while no chart switch happens.
 ProjectionStatus compute_dual(const Model& model, const State& state, Workspace& ws);
+// Only the first steps of compute_dual: the chart (switching when it degrades) and F. Needs
+// ws.constraints.Et at state.q and the free system's scaling A (ws.free.A_diag, A_sqrt).
+ProjectionStatus compute_basis(const Model& model, const State& state, Workspace& ws);
 
 // Everything in order: free system, constraints, dual.
 ProjectionStatus evaluate_dual(const Model& model, const State& state, Workspace& ws);
