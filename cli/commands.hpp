@@ -8,4 +8,6 @@ namespace orthomech::cli {
 struct GlobalOptions;
 // `orthomech info FILE [--json]`: mobility and structure (cli/info.cpp).
 void register_info(CLI::App& app, const GlobalOptions& globals, int& exit_code);
+// `orthomech cycle FILE [...]`: driven sweep, drive and joint reactions (cli/cycle.cpp).
+void register_cycle(CLI::App& app, const GlobalOptions& globals, int& exit_code);
 }  // namespace orthomech::cli

@@ -641,4 +641,76 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
   return result;
 }
 
+std::vector<ReactionMagnitude> reaction_magnitudes(const CycleResult& result) {
+  std::vector<ReactionMagnitude> out;
+  const auto& comps = result.components;
+  for (size_t i = 0; i < comps.size();) {
+    const int joint = comps[i].joint;
+    const std::string prefix = comps[i].name.substr(0, comps[i].name.rfind('.'));
+    ReactionMagnitude force{prefix + ".|F|", "N", joint, {}, true};
+    std::vector<ReactionMagnitude> others;
+    for (; i < comps.size() && comps[i].joint == joint; ++i) {
+      if (!comps[i].global) continue;
+      const std::string c = comps[i].name.substr(comps[i].name.rfind('.') + 1);
+      const bool det = result.determinate.empty() || result.determinate[i];
+      if (c == "Fx" || c == "Fy") {
+        force.components.push_back(static_cast<int>(i));
+        force.determinate = force.determinate && det;
+      } else {
+        others.push_back(
+            {prefix + ".|" + c + "|", comps[i].unit, joint, {static_cast<int>(i)}, det});
+      }
+    }
+    if (!force.components.empty()) out.push_back(std::move(force));
+    for (auto& o : others) out.push_back(std::move(o));
+  }
+  // A gear's reaction is its one (joint-frame) multiplier.
+  for (size_t i = 0; i < comps.size(); ++i)
+    if (!comps[i].global && comps[i].name.size() > 7 &&
+        comps[i].name.compare(comps[i].name.size() - 7, 7, ".lambda") == 0)
+      out.push_back({comps[i].name.substr(0, comps[i].name.size() - 7) + ".|lambda|",
+                     comps[i].unit,
+                     comps[i].joint,
+                     {static_cast<int>(i)},
+                     result.determinate.empty() || result.determinate[i]});
+  std::stable_sort(
+      out.begin(), out.end(),
+      [](const ReactionMagnitude& a, const ReactionMagnitude& b) { return a.joint < b.joint; });
+  return out;
+}
+
+double magnitude_at(const DrivenPoint& p, const ReactionMagnitude& m) {
+  double sum = 0.0;
+  for (const int c : m.components)
+    sum += p.reactions[static_cast<size_t>(c)] * p.reactions[static_cast<size_t>(c)];
+  return std::sqrt(sum);
+}
+
+std::vector<SeriesSummary> summarize_cycle(const CycleResult& result,
+                                           const std::vector<ReactionMagnitude>& magnitudes,
+                                           const std::string& drive_unit) {
+  std::vector<SeriesSummary> out;
+  auto summarize = [&](SeriesSummary s, auto value) {
+    double sum2 = 0.0;
+    for (const DrivenPoint& p : result.points) {
+      if (p.singular) continue;
+      const double v = value(p);
+      sum2 += v * v;
+      ++s.samples;
+      if (std::abs(v) > s.peak) {
+        s.peak = std::abs(v);
+        s.peak_input = p.input;
+        s.peak_time = p.time;
+      }
+    }
+    s.rms = s.samples > 0 ? std::sqrt(sum2 / s.samples) : 0.0;
+    out.push_back(std::move(s));
+  };
+  summarize(SeriesSummary{"drive", drive_unit, true}, [](const DrivenPoint& p) { return p.drive; });
+  for (const ReactionMagnitude& m : magnitudes)
+    summarize(SeriesSummary{m.name, m.unit, m.determinate},
+              [&](const DrivenPoint& p) { return magnitude_at(p, m); });
+  return out;
+}
+
 }  // namespace orthomech

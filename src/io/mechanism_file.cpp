@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "orthomech/constraints/joints.hpp"
+#include "orthomech/io/units.hpp"
 #include "orthomech/model/free_system.hpp"
 #include "orthomech/model/measures.hpp"
 
@@ -584,24 +585,12 @@ void Reader::read_measures(const YAML::Node& root) {
 
 double Reader::speed_value(const YAML::Node& node, const std::string& element, bool angular) const {
   if (!node.IsScalar()) fail(node, element, "speed must be a number or a string like '300 rpm'");
-  const std::string text = node.Scalar();
-  std::istringstream in(text);
-  double v = 0.0;
-  in >> v;
-  if (in.fail() || !std::isfinite(v))
-    fail(node, element, "speed must be a number, got '" + text + "'");
-  std::string unit, extra;
-  in >> unit >> extra;
-  if (!extra.empty()) fail(node, element, "unexpected text '" + extra + "' after the speed");
-  if (unit.empty()) return v * (angular ? units_.angle : units_.length) / units_.time;
-  const std::vector<std::pair<std::string, double>> angular_units = {
-      {"rpm", 2.0 * std::numbers::pi / 60.0}, {"rad/s", 1.0}, {"deg/s", std::numbers::pi / 180.0}};
-  const std::vector<std::pair<std::string, double>> linear_units = {{"m/s", 1.0}, {"mm/s", 1e-3}};
-  for (const auto& [u, f] : angular ? angular_units : linear_units)
-    if (unit == u) return v * f;
-  fail(
-      node, element,
-      "unknown speed unit '" + unit + "' for a " + (angular ? "revolute" : "prismatic") + " joint");
+  try {
+    return parse_speed(node.Scalar(), angular,
+                       (angular ? units_.angle : units_.length) / units_.time);
+  } catch (const std::invalid_argument& e) {
+    fail(node, element, e.what());
+  }
 }
 
 // ---- drivers -----------------------------------------------------------------------------------

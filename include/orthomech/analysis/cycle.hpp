@@ -129,4 +129,31 @@ bool compute_driven(const Model& model, int driver_joint, double sdot, double sd
 
 [[nodiscard]] const char* to_string(CycleStatus s);
 
+// ---- Summary (peaks and RMS) -----------------------------------------------------------------
+// The magnitude of one joint's force (|(Fx, Fy)| in the global frame), moment |M| or scalar
+// reaction (gear λ), built from the global reaction components. Indeterminate when any of its
+// components is (the value is then the minimum-norm choice, design §3).
+struct ReactionMagnitude {
+  std::string name;  // "A.|F|", "slide.|M|", "gear.|lambda|"
+  std::string unit;  // "N" or "N*m"
+  int joint = -1;
+  std::vector<int> components;  // indices into CycleResult::components
+  bool determinate = true;
+};
+[[nodiscard]] std::vector<ReactionMagnitude> reaction_magnitudes(const CycleResult& result);
+[[nodiscard]] double magnitude_at(const DrivenPoint& p, const ReactionMagnitude& m);
+
+// Peak |x| (with the input and time where it occurs) and RMS over the positions of the sweep;
+// positions flagged `singular` are left out (their multipliers are not meaningful).
+struct SeriesSummary {
+  std::string name, unit;
+  bool determinate = true;
+  double peak = 0.0, peak_input = 0.0, peak_time = 0.0, rms = 0.0;
+  int samples = 0;
+};
+// The drive first, then every reaction magnitude in joint order.
+[[nodiscard]] std::vector<SeriesSummary> summarize_cycle(
+    const CycleResult& result, const std::vector<ReactionMagnitude>& magnitudes,
+    const std::string& drive_unit);
+
 }  // namespace orthomech

@@ -1,0 +1,247 @@
+// `orthomech cycle` (docs/cli.md): exit codes, the JSON document (peaks against the positions it
+// lists, dead points against their closed form), the CSV (header units, one row per position,
+// empty reaction cells at singular positions, RMS recomputed from it), the gnuplot script and
+// plots, and command-line errors.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <numbers>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "support/cli_runner.hpp"
+
+namespace orthomech {
+namespace {
+
+namespace fs = std::filesystem;
+using test::CliResult;
+using test::run_cli;
+
+std::string bundled(const std::string& name) {
+  return std::string(ORTHOMECH_SOURCE_DIR) + "/mechanisms/" + name + ".yaml";
+}
+
+// A fresh output directory, removed at the end of the test.
+struct TempDir {
+  fs::path path;
+  TempDir() {
+    static int counter = 0;
+    path = fs::temp_directory_path() /
+           ("orthomech_cycle_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path, ec);
+  }
+};
+
+std::vector<std::string> split(const std::string& line) {
+  std::vector<std::string> out;
+  std::string cell;
+  std::istringstream in(line);
+  while (std::getline(in, cell, ',')) out.push_back(cell);
+  if (!line.empty() && line.back() == ',') out.emplace_back();
+  return out;
+}
+
+std::vector<std::vector<std::string>> read_csv(const fs::path& file) {
+  std::ifstream in(file);
+  std::vector<std::vector<std::string>> rows;
+  for (std::string line; std::getline(in, line);) rows.push_back(split(line));
+  return rows;
+}
+
+TEST(CycleCli, CrankRockerJsonPeaksMatchThePositions) {
+  const CliResult r = run_cli({"cycle", bundled("crank-rocker"), "--json", "--positions"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["status"], "completed");
+  EXPECT_EQ(j["positions"], 360);
+  EXPECT_EQ(j["driver"]["joint"], "A0");
+  EXPECT_NEAR(j["driver"]["speed"].get<double>(), 300.0 * 2.0 * std::numbers::pi / 60.0, 1e-12);
+  const auto& pts = j["points"];
+  ASSERT_EQ(pts.size(), 360u);
+  // Peak and RMS of the drive and of |A0| from the listed positions.
+  double peak = 0.0, sum2 = 0.0, at = 0.0, peak_a0 = 0.0;
+  for (const auto& p : pts) {
+    const double d = p["drive"].get<double>();
+    sum2 += d * d;
+    if (std::abs(d) > peak) peak = std::abs(d), at = p["input"].get<double>();
+    peak_a0 = std::max(peak_a0, std::hypot(p["reactions"]["A0.Fx"].get<double>(),
+                                           p["reactions"]["A0.Fy"].get<double>()));
+  }
+  const auto& peaks = j["peaks"];
+  EXPECT_DOUBLE_EQ(peaks["drive"]["peak"].get<double>(), peak);
+  EXPECT_DOUBLE_EQ(peaks["drive"]["input"].get<double>(), at);
+  EXPECT_NEAR(peaks["drive"]["rms"].get<double>(), std::sqrt(sum2 / 360.0), 1e-14);
+  EXPECT_EQ(peaks["drive"]["unit"], "N*m");
+  EXPECT_DOUBLE_EQ(peaks["A0.|F|"]["peak"].get<double>(), peak_a0);
+  for (const char* joint : {"A0", "A", "B", "B0"}) {
+    const std::string key = std::string(joint) + ".|F|";
+    ASSERT_TRUE(peaks.contains(key)) << key;
+    EXPECT_TRUE(peaks[key]["determinate"].get<bool>());
+    EXPECT_GT(peaks[key]["peak"].get<double>(), 0.0);
+  }
+  EXPECT_TRUE(j["dead_points"].empty());
+}
+
+TEST(CycleCli, TableIsTheDefault) {
+  const CliResult r = run_cli({"cycle", bundled("crank-rocker"), "--steps", "36"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("driver          joint 'A0' (revolute), constant speed 300 rpm"),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("36 positions"), std::string::npos);
+  EXPECT_NE(r.out.find("A0.|F|"), std::string::npos);
+  EXPECT_EQ(r.err, "");  // not a terminal: no progress
+}
+
+TEST(CycleCli, DoubleRockerStopsAtTheDeadPointWithExitOne) {
+  const CliResult r =
+      run_cli({"cycle", bundled("double-rocker"), "--speed", "10rpm", "--json", "--positions"});
+  ASSERT_EQ(r.status, 1) << r.err;
+  EXPECT_NE(r.err.find("dead point of driver joint 'A0'"), std::string::npos) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["status"], "stopped_at_dead_point");
+  ASSERT_EQ(j["dead_points"].size(), 1u);
+  const double a = 60, b = 40, c = 65, g = 100;
+  const double theta = std::acos((a * a + g * g - (b + c) * (b + c)) / (2 * a * g));
+  EXPECT_NEAR(j["dead_points"][0]["input"].get<double>(), theta, 1e-6);
+  // Never a NaN or an infinity (they would be null in JSON).
+  for (const auto& p : j["points"]) {
+    ASSERT_TRUE(p["drive"].is_number());
+    for (const auto& [name, v] : p["reactions"].items()) ASSERT_TRUE(v.is_number()) << name;
+  }
+  for (const auto& [name, v] : j["peaks"].items()) ASSERT_TRUE(v["peak"].is_number()) << name;
+}
+
+TEST(CycleCli, ReverseAtDeadPointCloses) {
+  const CliResult r = run_cli(
+      {"cycle", bundled("double-rocker"), "--speed", "10rpm", "--reverse-at-dead-point", "--json"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["reversals"], 2);
+  EXPECT_EQ(j["dead_points"].size(), 2u);
+}
+
+TEST(CycleCli, TripleCrankSaysWhichComponentsAreIndeterminate) {
+  TempDir dir;
+  const CliResult r = run_cli(
+      {"cycle", bundled("triple-crank"), "--steps", "90", "--json", "--out", dir.path.string()});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_TRUE(j["peaks"]["drive"]["determinate"].get<bool>());
+  EXPECT_FALSE(j["peaks"]["O1.|F|"]["determinate"].get<bool>());
+  for (const auto& c : j["components"]) {
+    const std::string name = c["name"];
+    if (name == "A1.Fy_local" || name == "A2.Fy_local" || name == "A3.Fy_local") {
+      EXPECT_TRUE(c["determinate"].get<bool>()) << name;
+    }
+    if (name == "A1.Fx_local") {
+      EXPECT_FALSE(c["determinate"].get<bool>()) << name;
+    }
+  }
+  EXPECT_EQ(j["singular_positions"].size(), 2u);
+  // CSV: the two singular positions have empty drive and reaction cells.
+  const auto rows = read_csv(dir.path / "cycle.csv");
+  ASSERT_EQ(rows.size(), 91u);
+  size_t drive_col = 0;
+  for (size_t c = 0; c < rows[0].size(); ++c)
+    if (rows[0][c] == "drive [N*m]") drive_col = c;
+  ASSERT_GT(drive_col, 0u);
+  int empty = 0;
+  for (size_t k = 1; k < rows.size(); ++k) {
+    ASSERT_EQ(rows[k].size(), rows[0].size()) << k;
+    if (rows[k][drive_col].empty()) {
+      ++empty;
+      for (size_t c = drive_col; c < rows[k].size(); ++c) EXPECT_EQ(rows[k][c], "");
+    }
+  }
+  EXPECT_EQ(empty, 2);
+}
+
+// --out: CSV with units in the header, one row per position, RMS of the drive from the CSV equal
+// to the JSON's; the gnuplot script is always written; plots when gnuplot is there.
+TEST(CycleCli, CsvAndPlots) {
+  TempDir dir;
+  const CliResult r =
+      run_cli({"cycle", bundled("slider-crank"), "--json", "--out", dir.path.string()});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  const auto rows = read_csv(dir.path / "cycle.csv");
+  ASSERT_EQ(rows.size(), 1u + j["positions"].get<size_t>());
+  const auto& head = rows[0];
+  EXPECT_EQ(head[0], "input [rad]");
+  EXPECT_EQ(head[1], "input [deg]");
+  EXPECT_EQ(head[2], "time [s]");
+  size_t drive_col = 0, slide_n = 0;
+  for (size_t c = 0; c < head.size(); ++c) {
+    if (head[c] == "drive [N*m]") drive_col = c;
+    if (head[c] == "slide.N [N]") slide_n = c;
+    EXPECT_NE(head[c].find(" ["), std::string::npos) << "no unit: " << head[c];
+  }
+  ASSERT_GT(drive_col, 0u);
+  ASSERT_GT(slide_n, 0u);
+  double sum2 = 0.0;
+  for (size_t k = 1; k < rows.size(); ++k) sum2 += std::pow(std::stod(rows[k][drive_col]), 2);
+  EXPECT_NEAR(std::sqrt(sum2 / static_cast<double>(rows.size() - 1)),
+              j["peaks"]["drive"]["rms"].get<double>(),
+              1e-8 * j["peaks"]["drive"]["rms"].get<double>());
+  EXPECT_TRUE(fs::exists(dir.path / "cycle.gp"));
+  if (std::system("command -v gnuplot >/dev/null 2>&1") == 0) {
+    for (const char* f : {"drive.svg", "drive.png", "reactions.svg", "reactions.png"})
+      EXPECT_GT(fs::file_size(dir.path / f), 1000u) << f;
+  }
+}
+
+TEST(CycleCli, WithoutGnuplotWritesTheScriptAndSaysSo) {
+  TempDir dir;
+  ::setenv("ORTHOMECH_GNUPLOT", "none", 1);
+  const CliResult r =
+      run_cli({"cycle", bundled("crank-rocker"), "--steps", "36", "--out", dir.path.string()});
+  ::unsetenv("ORTHOMECH_GNUPLOT");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("gnuplot not found"), std::string::npos) << r.err;
+  EXPECT_TRUE(fs::exists(dir.path / "cycle.csv"));
+  EXPECT_TRUE(fs::exists(dir.path / "cycle.gp"));
+  EXPECT_FALSE(fs::exists(dir.path / "drive.svg"));
+}
+
+TEST(CycleCli, DriverAndRangeFromTheCommandLine) {
+  // A range of the crank at another speed than the file's.
+  const CliResult r =
+      run_cli({"cycle", bundled("slider-crank"), "--from", "30deg", "--to", "120deg", "--steps",
+               "10", "--speed", "600rpm", "--json", "--positions"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  ASSERT_EQ(j["points"].size(), 10u);
+  EXPECT_NEAR(j["points"][0]["input"].get<double>(), std::numbers::pi / 6, 1e-12);
+  EXPECT_NEAR(j["points"][9]["input"].get<double>(), 2 * std::numbers::pi / 3, 1e-12);
+  EXPECT_NEAR(j["driver"]["speed"].get<double>(), 20 * std::numbers::pi, 1e-12);
+}
+
+TEST(CycleCli, BadOptionsAreCommandLineErrors) {
+  const CliResult a = run_cli({"cycle", bundled("crank-rocker"), "--driver", "Z"});
+  EXPECT_EQ(a.status, 2);
+  EXPECT_NE(a.err.find("joint 'Z' is not defined"), std::string::npos) << a.err;
+  EXPECT_NE(a.err.find("joints: A0, A, B, B0"), std::string::npos) << a.err;
+  EXPECT_EQ(a.out, "");
+  const CliResult b = run_cli({"cycle", bundled("crank-rocker"), "--speed", "300rpmm"});
+  EXPECT_EQ(b.status, 2);
+  EXPECT_NE(b.err.find("unknown speed unit 'rpmm'"), std::string::npos) << b.err;
+  const CliResult c = run_cli({"cycle", bundled("crank-rocker"), "--driver", "B"});
+  EXPECT_EQ(c.status, 2);
+  EXPECT_NE(c.err.find("give --speed"), std::string::npos) << c.err;
+  const CliResult d = run_cli({"cycle", bundled("crank-rocker"), "--steps", "1"});
+  EXPECT_EQ(d.status, 2);
+}
+
+}  // namespace
+}  // namespace orthomech
