@@ -9,6 +9,7 @@
 
 #include <CLI/CLI.hpp>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -116,8 +117,10 @@ Driver resolve_driver(const Model& model, const CycleCliOptions& opt) {
   return driver;
 }
 
+// The input for people: degrees or millimetres, rounded to 1e-6 (no "5e-14 deg").
 std::string input_text(double s, bool angular) {
-  return angular ? fmt(s * 180.0 / std::numbers::pi, 6) + " deg" : fmt(s * 1e3, 6) + " mm";
+  const double v = std::round((angular ? s * 180.0 / std::numbers::pi : s * 1e3) * 1e6) / 1e6;
+  return fmt(v == 0.0 ? 0.0 : v, 10) + (angular ? " deg" : " mm");
 }
 
 std::string speed_text(const Driver& d, bool angular) {
@@ -312,14 +315,21 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
           << "reactions there are omitted)\n";
     if (!files_note.empty()) out << "files           " << files_note << "\n";
     out << "\n";
+    // Angles at peaks in [0°, 360°) (the sweep line keeps the continuous input).
+    auto wrapped = [angular](double s) {
+      if (!angular) return s;
+      double w = std::fmod(s, 2.0 * std::numbers::pi);
+      if (w < 0.0) w += 2.0 * std::numbers::pi;
+      return w > 2.0 * std::numbers::pi - 1e-9 ? 0.0 : w;
+    };
     char line[200];
     std::snprintf(line, sizeof line, "%-20s %-5s %13s %16s %13s\n", "quantity", "unit", "peak",
                   "at input", "RMS");
     out << line;
     for (const SeriesSummary& s : summary) {
       std::snprintf(line, sizeof line, "%-20s %-5s %13.5g %16s %13.5g%s\n", s.name.c_str(),
-                    s.unit.c_str(), s.peak, input_text(s.peak_input, angular).c_str(), s.rms,
-                    s.determinate ? "" : "   indeterminate (minimum norm)");
+                    s.unit.c_str(), s.peak, input_text(wrapped(s.peak_input), angular).c_str(),
+                    s.rms, s.determinate ? "" : "   indeterminate (minimum norm)");
       out << line;
     }
     bool any = false;

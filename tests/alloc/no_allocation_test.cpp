@@ -5,6 +5,7 @@
 #include <atomic>
 #include <cstdlib>
 
+#include "orthomech/analysis/cycle.hpp"
 #include "orthomech/analysis/mobility.hpp"
 #include "orthomech/analysis/positions.hpp"
 #include "orthomech/projection/dual.hpp"
@@ -79,6 +80,27 @@ TEST_P(NoAllocation, DualPrimalAndCorrectorAllocateNothingAfterSetUp) {
   }
   EXPECT_EQ(g_allocations.load() - before, 0) << "heap allocations in the hot path";
   EXPECT_EQ(ws.dual.switch_count, 0);
+}
+
+// The driven computation of every cycle position, (C1)–(C4) with minimum-norm multipliers.
+TEST_P(NoAllocation, DrivenKinetostaticsAllocatesNothingAfterSetUp) {
+  const Model model = test::load_bundled(GetParam());
+  const VecX q = test::assembled_q(model);
+  const Mobility mob = compute_mobility(model, q);
+  Workspace ws(model, mob.rank);
+  DrivenWorkspace dws(model, mob.rank);
+  State s(model);
+  s.q = q;
+  DrivenPoint p;
+  const int joint = model.drivers.at(0).joint;
+  ASSERT_TRUE(compute_driven(model, joint, 10.0, 1.0, s, ws, dws, p));  // set-up
+  const long before = g_allocations.load();
+  for (int k = 0; k < 100; ++k) {
+    s.q = q;
+    s.q(0) += 1e-9 * k;
+    (void)compute_driven(model, joint, 10.0, 1.0, s, ws, dws, p);
+  }
+  EXPECT_EQ(g_allocations.load() - before, 0) << "heap allocations in compute_driven";
 }
 
 INSTANTIATE_TEST_SUITE_P(Bundled, NoAllocation,
