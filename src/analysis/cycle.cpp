@@ -33,11 +33,6 @@ DrivenWorkspace::DrivenWorkspace(const Model& model, int rank)
     : d(VecX::Zero(model.n)),
       Fdot_v(VecX::Zero(model.n)),
       R(VecX::Zero(model.n)),
-      lambda_p(VecX::Zero(model.nc)),
-      Er(model.n, rank),
-      ErtEr(rank, rank),
-      ErtEr_llt(rank),
-      B(rank, model.nc - rank),
       N(MatX::Zero(model.nc, model.nc - rank)),
       NtN(model.nc - rank, model.nc - rank),
       NtN_llt(model.nc - rank),
@@ -129,21 +124,19 @@ void compute_reactions(const Model& model, const VecX& q, const VecX& lambda,
 
 namespace {
 
-// Minimum-norm λ with E λ = R, and the null space N of E (redundancy directions) (C4).
-void solve_multipliers(const Workspace& ws, DrivenWorkspace& w, VecX& lambda) {
+// Minimum-norm λ with E λ = R and the null space N of E (redundancy directions) (C4). R is in
+// the range of E by (C3) (FᵀR = 0), so the chart's square block gives a particular solution λ_p
+// on the chart's rows R (zero on the others): E_{D,R} λ_R = R_D with the chart's LU.
+void solve_multipliers(Workspace& ws, DrivenWorkspace& w, VecX& lambda) {
   const Chart& c = ws.dual.chart;
   const MatX& Et = ws.constraints.Et;
   const int r = c.rank();
   const int k = static_cast<int>(w.other_rows.size());
-  for (int i = 0; i < r; ++i) w.Er.col(i) = Et.row(c.rows[static_cast<size_t>(i)]).transpose();
-  w.ErtEr.noalias() = w.Er.transpose() * w.Er;
-  w.ErtEr_llt.compute(w.ErtEr);
-  w.rhs_r.noalias() = w.Er.transpose() * w.R;
-  w.ErtEr_llt.solveInPlace(w.rhs_r);
+  solve_chart_transposed(ws, w.R, w.rhs_r);
   lambda.setZero();
   for (int i = 0; i < r; ++i) lambda(c.rows[static_cast<size_t>(i)]) = w.rhs_r(i);
   if (k == 0) return;
-  // Complement rows X, then N = [−(ErᵀEr)⁻¹ Erᵀ Ex; I] in row order.
+  // Complement rows X; column j of N: 1 on row x_j, −(E_{D,R})⁻¹ E_{D,x_j} on the chart's rows.
   int next = 0;
   for (int row = 0, ci = 0; row < Et.rows(); ++row) {
     if (ci < r && c.rows[static_cast<size_t>(ci)] == row) {
@@ -153,8 +146,8 @@ void solve_multipliers(const Workspace& ws, DrivenWorkspace& w, VecX& lambda) {
     w.other_rows[static_cast<size_t>(next++)] = row;
   }
   for (int j = 0; j < k; ++j) {
-    w.rhs_r.noalias() = w.Er.transpose() * Et.row(w.other_rows[static_cast<size_t>(j)]).transpose();
-    w.ErtEr_llt.solveInPlace(w.rhs_r);
+    w.g = Et.row(w.other_rows[static_cast<size_t>(j)]).transpose();
+    solve_chart_transposed(ws, w.g, w.rhs_r);
     w.N.col(j).setZero();
     for (int i = 0; i < r; ++i) w.N(c.rows[static_cast<size_t>(i)], j) = -w.rhs_r(i);
     w.N(w.other_rows[static_cast<size_t>(j)], j) = 1.0;

@@ -215,6 +215,25 @@ void solve_chart(Workspace& ws, const VecX& b, VecX& x) {
   }
 }
 
+void solve_chart_transposed(Workspace& ws, const VecX& b, Eigen::Ref<VecX> x) {
+  // (E_RDᵀ)ᵀ = S_d⁻¹ Sᵀ S_r⁻¹ with S = S_r E_RDᵀ S_d = Pᵀ L U, so Sᵀ (S_r⁻¹ x) = S_d b_D:
+  // Uᵀ w = S_d b_D, Lᵀ v = w, x_i = s_i v_perm(i).
+  auto& d = ws.dual;
+  const Chart& c = d.chart;
+  const int r = d.r;
+  if (r == 0) return;
+  auto w = d.sol.col(0);
+  for (int k = 0; k < r; ++k) {
+    const int dk = c.dependent[static_cast<size_t>(k)];
+    w(k) = ws.free.A_sqrt(dk) * b(dk);
+  }
+  const auto& LU = d.Ert_D_lu.matrixLU();
+  LU.triangularView<Eigen::Upper>().transpose().solveInPlace(w);
+  LU.triangularView<Eigen::UnitLower>().transpose().solveInPlace(w);
+  const auto& perm = d.Ert_D_lu.permutationP().indices();
+  for (int i = 0; i < r; ++i) x(i) = c.row_scale(i) * w(perm(i));
+}
+
 ProjectionStatus evaluate_dual(const Model& model, const State& state, Workspace& ws) {
   compute_free_system(model, state, ws);
   compute_constraints(model, state, ws.constraints);

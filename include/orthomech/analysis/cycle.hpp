@@ -98,16 +98,11 @@ void compute_reactions(const Model& model, const VecX& q, const VecX& lambda,
 
 // Preallocated buffers of the driven computation (sizes fixed by the Model and the rank).
 struct DrivenWorkspace {
-  VecX d;         // n: Jacobian row of the input, ṡ = d u
-  VecX Fdot_v;    // n: Ḟ v, from Eᵀ (Ḟ v) = −Dᵀ u
-  VecX R;         // n: constraint reaction E λ, (C4)
-  VecX lambda_p;  // nc: a particular solution of E λ = R
-  MatX Er;        // n × r: columns of E for the chart's independent rows
-  MatX ErtEr;     // r × r
-  Eigen::LLT<MatX> ErtEr_llt;
-  MatX B;    // r × k: (ErᵀEr)⁻¹ Erᵀ Ex
-  MatX N;    // nc × k: null space of E (redundancy directions); k = nc − r
-  MatX NtN;  // k × k
+  VecX d;       // n: Jacobian row of the input, ṡ = d u
+  VecX Fdot_v;  // n: Ḟ v, from Eᵀ (Ḟ v) = −Dᵀ u
+  VecX R;       // n: constraint reaction E λ, (C4)
+  MatX N;       // nc × k: null space of E (redundancy directions); k = nc − r
+  MatX NtN;     // k × k
   Eigen::LLT<MatX> NtN_llt;
   VecX small;                   // k
   VecX rhs_r;                   // r

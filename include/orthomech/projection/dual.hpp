@@ -23,6 +23,9 @@ double refactor_chart(Workspace& ws);
 // Sizes: b nc, x n. Allocation-free.
 void solve_chart(Workspace& ws, const VecX& b, VecX& x);
 
+// x (size r, chart row order) solving (E_RDᵀ)ᵀ x = b_D, the dependent components of b (size n):
+// E λ = b on the dependent coordinates with λ on the chart's rows. Allocation-free.
+void solve_chart_transposed(Workspace& ws, const VecX& b, Eigen::Ref<VecX> x);
 // Forces a fresh chart choice at the current Eᵀ (e.g. at the start of an analysis).
 void reset_chart(Workspace& ws);
 
