@@ -122,6 +122,28 @@ TEST(CycleCli, DoubleRockerStopsAtTheDeadPointWithExitOne) {
   for (const auto& [name, v] : j["peaks"].items()) ASSERT_TRUE(v["peak"].is_number()) << name;
 }
 
+// Nothing is lost when the sweep stops: the CSV holds every position before the dead point.
+TEST(CycleCli, DeadPointStopStillWritesTheFiles) {
+  TempDir dir;
+  ::setenv("ORTHOMECH_GNUPLOT", "none", 1);
+  const CliResult r = run_cli({"cycle", bundled("double-rocker"), "--speed", "10rpm", "--json",
+                               "--out", dir.path.string()});
+  ::unsetenv("ORTHOMECH_GNUPLOT");
+  ASSERT_EQ(r.status, 1) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  const auto rows = read_csv(dir.path / "cycle.csv");
+  EXPECT_EQ(rows.size(), 1u + j["positions"].get<size_t>());
+  EXPECT_GT(rows.size(), 50u);
+}
+
+TEST(CycleCli, UnwritableOutputIsACommandLineError) {
+  const CliResult r =
+      run_cli({"cycle", bundled("crank-rocker"), "--steps", "8", "--out", "/proc/orthomech"});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("/proc/orthomech"), std::string::npos) << r.err;
+  EXPECT_EQ(r.out, "");
+}
+
 TEST(CycleCli, ReverseAtDeadPointCloses) {
   const CliResult r = run_cli(
       {"cycle", bundled("double-rocker"), "--speed", "10rpm", "--reverse-at-dead-point", "--json"});
