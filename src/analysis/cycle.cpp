@@ -12,6 +12,7 @@
 #include "orthomech/model/free_system.hpp"
 #include "orthomech/model/loads.hpp"
 #include "orthomech/model/measures.hpp"
+#include "orthomech/numerics/small_lu.hpp"
 #include "orthomech/projection/dual.hpp"
 #include "orthomech/projection/primal.hpp"
 
@@ -40,7 +41,7 @@ DrivenWorkspace::DrivenWorkspace(const Model& model, int rank)
       rhs_r(rank),
       other_rows(static_cast<size_t>(model.nc - rank)),
       J(model.n, model.n),
-      J_lu(model.n),
+      J_piv(model.n),
       g(model.n),
       dq(model.n) {}
 
@@ -290,13 +291,12 @@ struct Sweep {
           w.J.row(r) = row->transpose();
         else
           w.J.row(r) = w.d.transpose();
-        w.J_lu.compute(w.J);
-        const auto U = w.J_lu.matrixLU().diagonal().cwiseAbs();
-        if (!(U.minCoeff() > 1e-13 * U.maxCoeff())) return false;
+        if (!(lu_factor(w.J, w.J_piv) > 1e-13)) return false;
         factored = true;
       }
       previous = res;
-      w.dq = w.J_lu.solve(w.g);
+      w.dq = w.g;
+      lu_solve(w.J, w.J_piv, w.dq);
       if (!(w.dq.cwiseAbs().maxCoeff() <= max_step)) return false;
       integrate_positions(model, q, w.dq, -1.0);
       if (!q.allFinite()) return false;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "orthomech/numerics/small_lu.hpp"
 #include "orthomech/projection/primal.hpp"
 
 namespace orthomech {
@@ -16,7 +17,7 @@ DualWorkspace::DualWorkspace(const Model& model, int rank)
       r(rank),
       selector(model.nc, model.n),
       Ert_D(rank, rank),
-      Ert_D_lu(rank),
+      Ert_D_piv(rank),
       rhs(rank, std::max(1, model.n - rank)),
       sol(rank, std::max(1, model.n - rank)),
       F(MatX::Zero(model.n, model.n - rank)),
@@ -53,10 +54,7 @@ double factor_chart(const MatX& Et, const VecX& A_sqrt, const Chart& c, DualWork
       d.Ert_D(i, k) = c.row_scale(i) * Et(c.rows[static_cast<size_t>(i)], dk) * A_sqrt(dk);
   }
   if (r == 0) return 1.0;
-  d.Ert_D_lu.compute(d.Ert_D);
-  const auto U = d.Ert_D_lu.matrixLU().diagonal().cwiseAbs();
-  const double mx = U.maxCoeff();
-  return mx > 0.0 ? U.minCoeff() / mx : 0.0;
+  return lu_factor(d.Ert_D, d.Ert_D_piv);  // in place: Ert_D holds the factors
 }
 
 // X = −(E_RDᵀ)⁻¹ B_R for B = rhs rows (r × n_a), using the scaled LU:
@@ -65,15 +63,11 @@ void solve_dependent(const VecX& A_sqrt, const Chart& c, DualWorkspace& d, MatX&
   const int r = c.rank();
   if (r == 0) return;
   for (int i = 0; i < r; ++i) d.rhs.row(i) *= -c.row_scale(i);
-  // Column by column (vector triangular solves are far cheaper than the blocked matrix path
-  // for the small blocks of linkages): sol = U⁻¹ L⁻¹ P rhs.
-  const auto& perm = d.Ert_D_lu.permutationP().indices();
-  const auto& LU = d.Ert_D_lu.matrixLU();
+  // Column by column (vector solves are far cheaper than blocked matrix paths for the small
+  // blocks of linkages): sol = (S_r E_RDᵀ S_d)⁻¹ rhs.
   for (Eigen::Index k = 0; k < out.cols(); ++k) {
-    auto col = d.sol.col(k);
-    for (int i = 0; i < r; ++i) col(perm(i)) = d.rhs(i, k);
-    LU.triangularView<Eigen::UnitLower>().solveInPlace(col);
-    LU.triangularView<Eigen::Upper>().solveInPlace(col);
+    d.sol.col(k).head(r) = d.rhs.col(k).head(r);
+    lu_solve(d.Ert_D, d.Ert_D_piv, d.sol.col(k).head(r));
   }
   for (int k = 0; k < r; ++k) {
     const int dk = c.dependent[static_cast<size_t>(k)];
@@ -216,8 +210,7 @@ void solve_chart(Workspace& ws, const VecX& b, VecX& x) {
 }
 
 void solve_chart_transposed(Workspace& ws, const VecX& b, Eigen::Ref<VecX> x) {
-  // (E_RDᵀ)ᵀ = S_d⁻¹ Sᵀ S_r⁻¹ with S = S_r E_RDᵀ S_d = Pᵀ L U, so Sᵀ (S_r⁻¹ x) = S_d b_D:
-  // Uᵀ w = S_d b_D, Lᵀ v = w, x_i = s_i v_perm(i).
+  // (E_RDᵀ)ᵀ = S_d⁻¹ Sᵀ S_r⁻¹ with S = S_r E_RDᵀ S_d, so Sᵀ (S_r⁻¹ x) = S_d b_D.
   auto& d = ws.dual;
   const Chart& c = d.chart;
   const int r = d.r;
@@ -227,11 +220,8 @@ void solve_chart_transposed(Workspace& ws, const VecX& b, Eigen::Ref<VecX> x) {
     const int dk = c.dependent[static_cast<size_t>(k)];
     w(k) = ws.free.A_sqrt(dk) * b(dk);
   }
-  const auto& LU = d.Ert_D_lu.matrixLU();
-  LU.triangularView<Eigen::Upper>().transpose().solveInPlace(w);
-  LU.triangularView<Eigen::UnitLower>().transpose().solveInPlace(w);
-  const auto& perm = d.Ert_D_lu.permutationP().indices();
-  for (int i = 0; i < r; ++i) x(i) = c.row_scale(i) * w(perm(i));
+  lu_solve_transposed(d.Ert_D, d.Ert_D_piv, w.head(r));
+  for (int i = 0; i < r; ++i) x(i) = c.row_scale(i) * w(i);
 }
 
 ProjectionStatus evaluate_dual(const Model& model, const State& state, Workspace& ws) {

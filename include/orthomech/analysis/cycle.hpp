@@ -107,8 +107,8 @@ struct DrivenWorkspace {
   VecX small;                   // k
   VecX rhs_r;                   // r
   std::vector<int> other_rows;  // the k redundant rows (complement of the chart's rows)
-  MatX J;  // n × n: [E_Rᵀ; dᵀ], Jacobian of the locked-input position problem
-  Eigen::PartialPivLU<MatX> J_lu;
+  MatX J;  // n × n: [E_Rᵀ; dᵀ], Jacobian of the locked-input position problem, then its LU
+  Eigen::VectorXi J_piv;  // n: row interchanges of that LU
   VecX g, dq;  // n: residual and Newton step of the locked-input corrector
   DrivenWorkspace(const Model& model, int rank);
 };

@@ -70,13 +70,13 @@ struct DualWorkspace {
   double quality = 0.0;              // current chart quality (see ChartOptions)
   std::vector<ChartEvent> switches;  // every chart switch (reserved, see kMaxRecordedSwitches)
   long switch_count = 0;
-  MatX Ert_D;  // r × r: scaled dependent block of the independent rows
-  Eigen::PartialPivLU<MatX> Ert_D_lu;
-  MatX rhs;  // r × n_a: scratch (right-hand sides of the dependent block)
-  MatX sol;  // r × n_a: scratch (solutions)
-  MatX F;    // n × n_a: basis of admissible velocities, Eᵀ F = 0
-  MatX MF;   // n × n_a: M F
-  MatX H;    // n_a × n_a: H = Fᵀ M F, eq. (68)
+  MatX Ert_D;  // r × r: scaled dependent block of the independent rows, then its LU (in place)
+  Eigen::VectorXi Ert_D_piv;  // r: row interchanges of that LU (numerics/small_lu.hpp)
+  MatX rhs;                   // r × n_a: scratch (right-hand sides of the dependent block)
+  MatX sol;                   // r × n_a: scratch (solutions)
+  MatX F;                     // n × n_a: basis of admissible velocities, Eᵀ F = 0
+  MatX MF;                    // n × n_a: M F
+  MatX H;                     // n_a × n_a: H = Fᵀ M F, eq. (68)
   Eigen::LLT<MatX> H_llt;
   MatX HinvFt;        // n_a × n: H⁻¹ Fᵀ
   MatX psi;           // n × n: ψ = α A = F H⁻¹ Fᵀ, eq. (69)
