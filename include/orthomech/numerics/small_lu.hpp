@@ -15,25 +15,29 @@ namespace orthomech {
 // min|U_kk| / max|U_kk|, 0 when a pivot is exactly zero (the factorisation stops there).
 template <class Matrix>
 double lu_factor(Matrix& A, Eigen::VectorXi& piv) {
-  const Eigen::Index n = A.rows();
+  const Eigen::Index n = A.rows(), ld = A.outerStride();
+  double* __restrict a = A.data();
   for (Eigen::Index k = 0; k < n; ++k) {
+    double* __restrict ck = a + k * ld;
     Eigen::Index p = k;
-    double big = std::abs(A(k, k));
+    double big = std::abs(ck[k]);
     for (Eigen::Index i = k + 1; i < n; ++i) {
-      if (std::abs(A(i, k)) > big) {
-        big = std::abs(A(i, k));
+      if (std::abs(ck[i]) > big) {
+        big = std::abs(ck[i]);
         p = i;
       }
     }
     piv(k) = static_cast<int>(p);
-    if (p != k) A.row(k).swap(A.row(p));
+    if (p != k)
+      for (Eigen::Index j = 0; j < n; ++j) std::swap(a[k + j * ld], a[p + j * ld]);
     if (big == 0.0) return 0.0;
-    const double inv = 1.0 / A(k, k);
-    for (Eigen::Index i = k + 1; i < n; ++i) A(i, k) *= inv;
-    for (Eigen::Index j = k + 1; j < n; ++j) {  // column by column: contiguous in Eigen's storage
-      const double a = A(k, j);
-      if (a == 0.0) continue;
-      for (Eigen::Index i = k + 1; i < n; ++i) A(i, j) -= A(i, k) * a;
+    const double inv = 1.0 / ck[k];
+    for (Eigen::Index i = k + 1; i < n; ++i) ck[i] *= inv;
+    for (Eigen::Index j = k + 1; j < n; ++j) {  // column by column: contiguous storage
+      double* __restrict cj = a + j * ld;
+      const double f = cj[k];
+      if (f == 0.0) continue;
+      for (Eigen::Index i = k + 1; i < n; ++i) cj[i] -= ck[i] * f;
     }
   }
   if (n == 0) return 1.0;
@@ -42,36 +46,47 @@ double lu_factor(Matrix& A, Eigen::VectorXi& piv) {
   return mx > 0.0 ? U.minCoeff() / mx : 0.0;
 }
 
-// b ← A⁻¹ b from the factors of lu_factor (P A = L U).
+// b ← A⁻¹ b from the factors of lu_factor (P A = L U). b: a vector with contiguous storage.
 template <class Matrix, class Vector>
 void lu_solve(const Matrix& LU, const Eigen::VectorXi& piv, Vector&& b) {
-  const Eigen::Index n = LU.rows();
+  const Eigen::Index n = LU.rows(), ld = LU.outerStride();
+  const double* __restrict a = LU.data();
+  double* __restrict x = b.data();
   for (Eigen::Index k = 0; k < n; ++k)
-    if (piv(k) != k) std::swap(b(k), b(piv(k)));
-  for (Eigen::Index k = 0; k < n; ++k)
-    for (Eigen::Index i = k + 1; i < n; ++i) b(i) -= LU(i, k) * b(k);
-  for (Eigen::Index k = n - 1; k >= 0; --k) {
-    b(k) /= LU(k, k);
-    for (Eigen::Index i = 0; i < k; ++i) b(i) -= LU(i, k) * b(k);
+    if (piv(k) != k) std::swap(x[k], x[piv(k)]);
+  for (Eigen::Index k = 0; k < n; ++k) {  // L y = P b, column by column
+    const double xk = x[k];
+    const double* col = a + k * ld;
+    for (Eigen::Index i = k + 1; i < n; ++i) x[i] -= col[i] * xk;
+  }
+  for (Eigen::Index k = n - 1; k >= 0; --k) {  // U x = y
+    const double* col = a + k * ld;
+    const double xk = x[k] / col[k];
+    x[k] = xk;
+    for (Eigen::Index i = 0; i < k; ++i) x[i] -= col[i] * xk;
   }
 }
 
 // b ← A⁻ᵀ b: Aᵀ = Uᵀ Lᵀ P, so Uᵀ z = b, Lᵀ y = z, b = Pᵀ y (interchanges in reverse order).
 template <class Matrix, class Vector>
 void lu_solve_transposed(const Matrix& LU, const Eigen::VectorXi& piv, Vector&& b) {
-  const Eigen::Index n = LU.rows();
-  for (Eigen::Index k = 0; k < n; ++k) {
-    double s = b(k);
-    for (Eigen::Index i = 0; i < k; ++i) s -= LU(i, k) * b(i);
-    b(k) = s / LU(k, k);
+  const Eigen::Index n = LU.rows(), ld = LU.outerStride();
+  const double* __restrict a = LU.data();
+  double* __restrict x = b.data();
+  for (Eigen::Index k = 0; k < n; ++k) {  // Uᵀ: column k of U is row k of Uᵀ
+    const double* col = a + k * ld;
+    double s = x[k];
+    for (Eigen::Index i = 0; i < k; ++i) s -= col[i] * x[i];
+    x[k] = s / col[k];
   }
   for (Eigen::Index k = n - 1; k >= 0; --k) {
-    double s = b(k);
-    for (Eigen::Index i = k + 1; i < n; ++i) s -= LU(i, k) * b(i);
-    b(k) = s;
+    const double* col = a + k * ld;
+    double s = x[k];
+    for (Eigen::Index i = k + 1; i < n; ++i) s -= col[i] * x[i];
+    x[k] = s;
   }
   for (Eigen::Index k = n - 1; k >= 0; --k)
-    if (piv(k) != k) std::swap(b(k), b(piv(k)));
+    if (piv(k) != k) std::swap(x[k], x[piv(k)]);
 }
 
 }  // namespace orthomech
