@@ -8,4 +8,6 @@ namespace orthomech::cli {
 struct GlobalOptions;
 // `orthomech info FILE [--json]`: mobility and structure (cli/info.cpp).
 void register_info(CLI::App& app, const GlobalOptions& globals, int& exit_code);
+// `orthomech assemble FILE`: Ipopt projection of the design position (cli/assemble.cpp).
+void register_assemble(CLI::App& app, const GlobalOptions& globals, int& exit_code);
 }  // namespace orthomech::cli
