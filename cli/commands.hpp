@@ -10,4 +10,6 @@ struct GlobalOptions;
 void register_info(CLI::App& app, const GlobalOptions& globals, int& exit_code);
 // `orthomech assemble FILE`: Ipopt projection of the design position (cli/assemble.cpp).
 void register_assemble(CLI::App& app, const GlobalOptions& globals, int& exit_code);
+// `orthomech validate FILE`: design positions report (cli/validate.cpp).
+void register_validate(CLI::App& app, const GlobalOptions& globals, int& exit_code);
 }  // namespace orthomech::cli
