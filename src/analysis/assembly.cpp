@@ -341,6 +341,17 @@ double joint_coordinate(const Model& model, int joint, const VecX& q) {
   return compute_scalar(model, JointCoordinate{joint}, q, nullptr).value;
 }
 
+MatX joint_coordinate_hessian(const Model& model, int joint, const VecX& q) {
+  AssemblyOptions o;
+  o.locks.push_back({joint, 0.0});
+  o.use_limits = false;
+  const std::vector<CoordinateRow> rows = coordinate_rows(model, q, o);
+  MatX H = MatX::Zero(model.nq, model.nq);
+  VecX u(model.n);
+  add_coordinate_hessian(model, rows.front(), q, 1.0, H, u);
+  return H;
+}
+
 std::vector<JointResidual> joint_residuals(const Model& model, const VecX& q) {
   VecX f(model.nc);
   compute_constraint_residual(model, q, f);

@@ -249,7 +249,7 @@ class Tracer {
   }
 
   // Dead points of the input: ds/dl changes sign; refined with NLopt as the extreme of s along
-  // the curve. Change points: σ_min of Eᵀ has a local minimum below 1e-3; refined with NLopt as
+  // the curve. Change points: σ_min of Eᵀ has a local minimum below 0.05; refined with NLopt as
   // the minimum of σ_min.
   void locate_singular_points(Circuit& c) {
     const auto& S = c.samples;
@@ -274,7 +274,7 @@ class Tracer {
       }
     }
     for (size_t i = 1; i + 1 < S.size(); ++i) {
-      if (!(S[i].sigma <= S[i - 1].sigma && S[i].sigma <= S[i + 1].sigma && S[i].sigma < 1e-3))
+      if (!(S[i].sigma <= S[i - 1].sigma && S[i].sigma <= S[i + 1].sigma && S[i].sigma < 0.05))
         continue;
       const double lo = S[i - 1].l - S[i].l, hi = S[i + 1].l - S[i].l;
       auto f = [&](const VecX& x) {

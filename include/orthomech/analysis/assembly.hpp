@@ -101,5 +101,9 @@ bool project_with_locks(const Model& model, VecX& q, const std::vector<JointLock
 
 // Joint coordinate s(q) of a revolute (φ_j − φ_i) or prismatic (slide) joint.
 [[nodiscard]] double joint_coordinate(const Model& model, int joint, const VecX& q);
+// Its Hessian ∇²s (nq × nq), exact (polarisation of the convective term ḋu = uᵀ∇²s u, see
+// docs/theory.md "Assembly"); zero for a revolute joint. Used in the Hessian of the Lagrangian
+// of locks and limits.
+[[nodiscard]] MatX joint_coordinate_hessian(const Model& model, int joint, const VecX& q);
 
 }  // namespace orthomech

@@ -232,6 +232,37 @@ TEST(Assembly, L2_ConvectiveTermIsTheHessianOfTheConstraints) {
   }
 }
 
+TEST(Assembly, L1_JointCoordinateHessianAgainstCentralDifferences) {
+  // ∇²s of every revolute and prismatic joint coordinate of the zoo (prismatic J2 between two
+  // moving bodies, J8 against the ground) against central differences of the gradient d(q).
+  const Model m = parse_mechanism(test::kZooYaml, "zoo");
+  const VecX q = m.design_q();
+  VecX dp(m.n), dm(m.n);
+  const double h = 1e-6;
+  int prismatic = 0;
+  for (int j = 0; j < static_cast<int>(m.joints.size()); ++j) {
+    const auto& kind = m.joints[static_cast<size_t>(j)].kind;
+    if (!std::holds_alternative<Revolute>(kind) && !std::holds_alternative<Prismatic>(kind))
+      continue;
+    prismatic += std::holds_alternative<Prismatic>(kind) ? 1 : 0;
+    const MatX H = joint_coordinate_hessian(m, j, q);
+    EXPECT_LE((H - H.transpose()).cwiseAbs().maxCoeff(), 1e-14);
+    for (int k = 0; k < m.nq; ++k) {
+      VecX qp = q, qm = q;
+      qp(k) += h;
+      qm(k) -= h;
+      dp.setZero();
+      dm.setZero();
+      compute_scalar(m, JointCoordinate{j}, qp, nullptr, dp);
+      compute_scalar(m, JointCoordinate{j}, qm, nullptr, dm);
+      const VecX fd = (dp - dm) / (2 * h);
+      EXPECT_LE((H.col(k) - fd).cwiseAbs().maxCoeff(), 1e-8)
+          << m.joints[static_cast<size_t>(j)].name << " column " << k;
+    }
+  }
+  EXPECT_EQ(prismatic, 2);
+}
+
 TEST(Assembly, InitialVelocities_MassOrthogonalProjection) {
   // u = α u₀ equals the SVD-based mass-metric projection onto null(Eᵀ):
   // u* = N (Nᵀ M N)⁻¹ Nᵀ M u₀; T(u₀) = T(u) + T(βu₀).

@@ -199,6 +199,50 @@ TEST(Validate, TransmissionIndexVanishesAtTheDeadPoint) {
   EXPECT_GT(s1.sigma_min, 1e-2);
 }
 
+// Parallelogram (crank 1, coupler 3 on a 3 m ground, follower 1): s + l = p + q, change points
+// where all links are collinear, at crank 0° and 180° (closed form).
+std::string parallelogram(const std::string& positions) {
+  return R"(orthomech: 1
+units: {length: m, angle: deg}
+ground:
+  points: {A0: [0, 0], B0: [3, 0]}
+bodies:
+  - {name: crank, mass: 1, inertia: 0.1, com: [0.5, 0], pose: [0, 0, 30], points: {A0: [0, 0], A: [1, 0]}}
+  - {name: coupler, mass: 1, inertia: 0.1, com: [1.5, 0], pose: [0.8660254037844387, 0.5, 0], points: {A: [0, 0], B: [3, 0]}}
+  - {name: rocker, mass: 1, inertia: 0.1, com: [0.5, 0], pose: [3, 0, 30], points: {B0: [0, 0], B: [1, 0]}}
+joints:
+  - {name: A0, type: revolute, connects: [ground.A0, crank.A0]}
+  - {name: A, type: revolute, connects: [crank.A, coupler.A]}
+  - {name: B, type: revolute, connects: [coupler.B, rocker.B]}
+  - {name: B0, type: revolute, connects: [rocker.B0, ground.B0]}
+design_positions:
+)" + positions;
+}
+
+TEST(Validate, ParallelogramChangePoints_DistanceAndBranchDefect) {
+  constexpr double kChangePointTol = 1e-7;  // σ_min is V-shaped there: NLopt locates it to ~1e-9
+  {
+    const ValidationReport r = validate_design_positions(parse_mechanism(
+        parallelogram("  - {name: p1, inputs: {A0: 30}}\n  - {name: p2, inputs: {A0: 120}}\n"),
+        "para"));
+    ASSERT_EQ(r.positions.size(), 2u);
+    EXPECT_TRUE(r.pass());
+    EXPECT_EQ(r.positions[0].four_bars.at(0).type, GrashofType::change_point);
+    ASSERT_TRUE(r.positions[0].singular_distance && r.positions[1].singular_distance);
+    EXPECT_NEAR(*r.positions[0].singular_distance, 30.0 * kPi / 180.0, kChangePointTol);
+    EXPECT_NEAR(*r.positions[1].singular_distance, 60.0 * kPi / 180.0, kChangePointTol);
+    EXPECT_EQ(r.positions[0].singular_kind, "change point");
+  }
+  {
+    const ValidationReport r = validate_design_positions(parse_mechanism(
+        parallelogram("  - {name: p1, inputs: {A0: 150}}\n  - {name: p2, inputs: {A0: 200}}\n"),
+        "para"));
+    EXPECT_TRUE(r.branch_defect);  // the change point at 180° lies between them
+    EXPECT_FALSE(r.circuit_defect);
+    EXPECT_FALSE(r.pass());
+  }
+}
+
 TEST(Validate, PositionThatCannotAssemble_Fails) {
   // Input 90° is beyond the double-rocker's dead point (77.6°).
   Model m = test::load_bundled("double-rocker");
