@@ -53,6 +53,9 @@ JointLock parse_lock(const Model& model, const std::string& text) {
   const std::string name = text.substr(0, eq);
   const int j = model.find_joint(name);
   if (j < 0) bad("--lock: joint '" + name + "' is not defined");
+  const auto& kind = model.joints[static_cast<size_t>(j)].kind;
+  if (!std::holds_alternative<Revolute>(kind) && !std::holds_alternative<Prismatic>(kind))
+    bad("--lock: joint '" + name + "' is neither revolute nor prismatic and has no coordinate");
   const std::string value = text.substr(eq + 1);
   size_t used = 0;
   double v = 0.0;
@@ -135,7 +138,12 @@ int run_assemble(const AssembleOptions& opt) {
     std::ifstream in(opt.file, std::ios::binary);
     std::ostringstream text;
     text << in.rdbuf();
-    write_file_atomically(write_to, replace_design_poses(text.str(), opt.file, model, res.q));
+    try {
+      write_file_atomically(write_to, replace_design_poses(text.str(), opt.file, model, res.q));
+    } catch (const std::runtime_error& e) {  // e.g. no such directory, no permission
+      spdlog::error("{}", e.what());
+      return kBadInput;
+    }
     written = write_to;
     spdlog::info("wrote {}", written);
   }

@@ -144,6 +144,15 @@ int run_validate(const ValidateCliOptions& opt) {
         for (const FourBarReport& f : p.four_bars)
           out << "  " << f.joints << "  " << to_string(f.type) << "\n";
       }
+    bool header = false;
+    for (const PositionReport& p : rep.positions)
+      if (!p.redundant.empty()) {
+        if (!header) out << "\n";
+        header = true;
+        out << "redundant equations at " << p.name << ":";
+        for (size_t k = 0; k < p.redundant.size(); ++k) out << (k ? "; " : " ") << p.redundant[k];
+        out << "\n";
+      }
     if (!rep.singular_points.empty()) {
       out << "\nsingular positions on the traced circuits\n";
       for (const std::string& s : rep.singular_points) out << "  " << s << "\n";

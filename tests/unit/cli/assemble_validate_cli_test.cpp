@@ -123,6 +123,10 @@ TEST(AssembleCli, BadLock_Exit2) {
   EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.err.find("joint 'nope' is not defined"), std::string::npos) << r.err;
   EXPECT_EQ(run_cli({"assemble", file, "--lock", "A0=3furlongs"}).status, 2);
+  // Unwritable output: exit 2 with the reason, nothing written.
+  const auto w = run_cli({"assemble", file, "--write", "/nonexistent-dir/out.yaml"});
+  EXPECT_EQ(w.status, 2);
+  EXPECT_NE(w.err.find("cannot write"), std::string::npos) << w.err;
 }
 
 TEST(ValidateCli, BundledCrankRocker_Exit0_JsonPass) {
