@@ -332,8 +332,10 @@ TEST(MechanismWriter, ReplacedPosesReadBackAndCommentsKept) {
     // Move every body (as if assembled elsewhere) and write.
     VecX q = m.design_q();
     for (Eigen::Index i = 0; i < q.size(); ++i) q(i) += 1e-3 * static_cast<double>(i % 5);
-    const std::string out = replace_design_poses(text.str(), path, m, q);
-    EXPECT_EQ(out.substr(0, 60), text.str().substr(0, 60));  // header comment kept
+    // A UTF-8 comment first: positions in the text are byte offsets.
+    const std::string original = "# Grübler — λ, µ\n" + text.str();
+    const std::string out = replace_design_poses(original, path, m, q);
+    EXPECT_EQ(out.substr(0, 80), original.substr(0, 80));  // header comment kept
     const Model back = parse_mechanism(out, "back");
     const VecX qb = back.design_q();
     EXPECT_LE((qb - q).cwiseAbs().maxCoeff(), 1e-14) << name;
