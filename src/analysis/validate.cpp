@@ -665,9 +665,15 @@ ValidationReport validate_design_positions(const Model& model, const ValidateOpt
     if (pr.singular.sigma_min < opt.min_sigma)
       pr.failures.push_back("singular: sigma_min of the constraint Jacobian " +
                             fmt(pr.singular.sigma_min) + " (a change point)");
-    if (pr.singular.eta && *pr.singular.eta < opt.min_sigma)
+    if (pr.dof > static_cast<int>(inputs.size())) {
+      // The inputs leave the mechanism free to move: η is 0 by construction, not a dead point.
+      pr.singular.eta.reset();
+      pr.failures.push_back("the inputs do not fix the position: DOF " + std::to_string(pr.dof) +
+                            ", " + std::to_string(inputs.size()) + " input(s)");
+    } else if (pr.singular.eta && *pr.singular.eta < opt.min_sigma) {
       pr.failures.push_back("dead point of the inputs: transmission index " +
                             fmt(*pr.singular.eta));
+    }
     for (const FourBarLoop& l : loops) {
       FourBarReport fb;
       for (int j = 0; j < 4; ++j)

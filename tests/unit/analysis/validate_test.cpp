@@ -243,6 +243,21 @@ TEST(Validate, ParallelogramChangePoints_DistanceAndBranchDefect) {
   }
 }
 
+TEST(Validate, PositionWithoutInputs_IsNotFixed) {
+  // DOF 1 and no input: the position is not determined; a failure that says so (not a dead point).
+  Model m = test::load_bundled("crank-rocker");
+  m.design_positions.clear();
+  DesignPosition p;
+  p.name = "loose";
+  m.design_positions.push_back(p);
+  const ValidationReport r = validate_design_positions(m);
+  ASSERT_EQ(r.positions.size(), 1u);
+  EXPECT_TRUE(r.positions[0].assembles);
+  EXPECT_FALSE(r.positions[0].singular.eta.has_value());
+  ASSERT_EQ(r.positions[0].failures.size(), 1u);
+  EXPECT_NE(r.positions[0].failures[0].find("do not fix"), std::string::npos);
+}
+
 TEST(Validate, PositionThatCannotAssemble_Fails) {
   // Input 90° is beyond the double-rocker's dead point (77.6°).
   Model m = test::load_bundled("double-rocker");
