@@ -200,7 +200,8 @@ int run_assemble(const AssembleOptions& opt) {
     out << j.dump(2) << '\n';
   } else {
     out << "mechanism   " << model.name << "  (" << model.file << ")\n";
-    out << "status      " << to_string(res.status) << ": " << res.message << "\n";
+    out << "status      " << to_string(res.status) << "\n";
+    out << "            " << res.message << "\n";
     if (!res.solver_status.empty())
       out << "solver      Ipopt " << res.solver_status << ", " << res.iterations << " iterations\n";
     out << "residual    " << fmt(res.residual, 3) << "   (max |f|, locks, limits; m or rad)\n";

@@ -539,6 +539,11 @@ AssemblyResult assemble(const Model& model, const VecX& q0, const AssemblyOption
         << "), although a least-squares pose closes every joint";
   } else {
     res.status = AssemblyStatus::cannot_close;
+    // Report the best least-squares pose, not Ipopt's last infeasible iterate.
+    res.q = res.q_least_squares;
+    res.residual = total_residual(model, res.q, coords, f, d);
+    res.bodies = body_moves(model, q0, res.q);
+    res.joints = joint_residuals(model, res.q);
     msg << "the mechanism cannot close";
     if (!options.locks.empty()) msg << " with the locked inputs";
     msg << ": at the best least-squares pose";

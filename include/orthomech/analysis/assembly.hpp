@@ -63,7 +63,8 @@ struct AssemblyResult {
   std::string solver_status;  // Ipopt's return status ("" when Ipopt was not needed)
   int iterations = 0;         // Ipopt iterations (+ Newton polish steps)
   double residual = 0.0;      // max |f_k| and lock violation at q (m, rad)
-  VecX q;                     // assembled position (the guess when status is unchanged)
+  VecX q;  // assembled position (the guess when unchanged; the best least-squares pose when
+           // cannot_close; the solver's last iterate otherwise). bodies/joints/residual are at q.
   double distance = 0.0;  // √((q − q₀)ᵀ W (q − q₀)), the mass-metric distance (√kg·m)
   std::vector<BodyMove> bodies;
   std::vector<JointResidual> joints;
