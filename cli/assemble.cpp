@@ -203,7 +203,8 @@ int run_assemble(const AssembleOptions& opt) {
     out << "status      " << to_string(res.status) << "\n";
     out << "            " << res.message << "\n";
     if (!res.solver_status.empty())
-      out << "solver      Ipopt " << res.solver_status << ", " << res.iterations << " iterations\n";
+      out << "solver      Ipopt " << res.solver_status << ", " << res.iterations
+          << " iterations (Ipopt + Newton polish)\n";
     out << "residual    " << fmt(res.residual, 3) << "   (max |f|, locks, limits; m or rad)\n";
     out << "distance    " << fmt(res.distance, 4) << "   (mass metric, sqrt(kg)*m)\n";
     for (const JointLock& l : options.locks)
