@@ -10,4 +10,8 @@ struct GlobalOptions;
 void register_info(CLI::App& app, const GlobalOptions& globals, int& exit_code);
 // `orthomech cycle FILE [...]`: driven sweep, drive and joint reactions (cli/cycle.cpp).
 void register_cycle(CLI::App& app, const GlobalOptions& globals, int& exit_code);
+// `orthomech assemble FILE`: Ipopt projection of the design position (cli/assemble.cpp).
+void register_assemble(CLI::App& app, const GlobalOptions& globals, int& exit_code);
+// `orthomech validate FILE`: design positions report (cli/validate.cpp).
+void register_validate(CLI::App& app, const GlobalOptions& globals, int& exit_code);
 }  // namespace orthomech::cli

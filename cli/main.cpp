@@ -20,6 +20,8 @@ int main(int argc, char** argv) {
   int exit_code = kOk;
   register_info(app, globals, exit_code);
   register_cycle(app, globals, exit_code);
+  register_assemble(app, globals, exit_code);
+  register_validate(app, globals, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

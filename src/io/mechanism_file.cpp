@@ -117,6 +117,15 @@ class Reader {
     for (const auto& item : node) out.push_back(number(item, element, field, scale));
     return out;
   }
+  // `limits: [min, max]` of a revolute or prismatic joint (min ≤ max), or nothing.
+  std::optional<Vec2> joint_limits(const YAML::Node& item, const std::string& element,
+                                   double scale) const {
+    const YAML::Node l = item["limits"];
+    if (!l) return std::nullopt;
+    const auto v = numbers(l, element, "limits", 2, scale);
+    if (!(v[0] <= v[1])) fail(l, element, "limits must be [min, max] with min ≤ max");
+    return Vec2(v[0], v[1]);
+  }
   Vec2 vec2(const YAML::Node& node, const std::string& element, const std::string& field,
             double scale) const {
     const auto v = numbers(node, element, field, 2, scale);
@@ -348,22 +357,25 @@ void Reader::read_joints(const YAML::Node& root) {
                    type + " joint needs rigid bodies");
     };
     if (type == "revolute") {
-      expect_map(item, element, {"name", "type", "connects"});
+      expect_map(item, element, {"name", "type", "connects", "limits"});
       auto [a, b] = connects(item, element);
       j.kind = Revolute{a, b};
+      j.limits = joint_limits(item, element, units_.angle);
     } else if (type == "prismatic" || type == "fixed") {
       if (type == "prismatic")
-        expect_map(item, element, {"name", "type", "connects", "axis", "angle"});
+        expect_map(item, element, {"name", "type", "connects", "axis", "angle", "limits"});
       else
         expect_map(item, element, {"name", "type", "connects", "angle"});
       auto [a, b] = connects(item, element);
       no_particles(a, b);
       const double phi0 = optional_number(
           item, "angle", element, design_angle(b.body) - design_angle(a.body), units_.angle);
-      if (type == "prismatic")
+      if (type == "prismatic") {
         j.kind = Prismatic{a, b, unit_axis(item, element), phi0};
-      else
+        j.limits = joint_limits(item, element, units_.length);
+      } else {
         j.kind = Fixed{a, b, phi0};
+      }
     } else if (type == "pin-in-slot") {
       expect_map(item, element, {"name", "type", "connects", "axis"});
       auto [a, b] = connects(item, element);

@@ -15,8 +15,11 @@ struct Evaluator {
   Eigen::Ref<VecX>* d;  // may be null
 
   void add_angle(int body, double scale) const {
+    // Particles have no angle (body_angle is 0 for them): nothing to add, and no column to write.
     if (body == kGround || d == nullptr) return;
-    (*d)(model.bodies[static_cast<size_t>(body)].u_offset + 2) += scale;
+    const Body& b = model.bodies[static_cast<size_t>(body)];
+    if (b.kind != BodyKind::rigid) return;
+    (*d)(b.u_offset + 2) += scale;
   }
 
   ScalarKinematics angle_difference(int bi, int bj) const {

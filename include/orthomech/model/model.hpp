@@ -86,6 +86,9 @@ struct Joint {
   std::string name;
   JointKind kind;
   int row_offset = 0;  // first row of this joint in f, Eᵀ, Dᵀ
+  // Range [min, max] of the joint coordinate (revolute: φ_j − φ_i, rad; prismatic: slide, m),
+  // from `limits:` in the file; bounds of `assemble` (analysis/assembly.hpp).
+  std::optional<Vec2> limits;
   SourceLocation where;
   [[nodiscard]] int rows() const;
   [[nodiscard]] std::string type_name() const;

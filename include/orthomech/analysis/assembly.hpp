@@ -1,0 +1,110 @@
+#pragma once
+// Initial conditions (design §5, issue 4): the user's design position is only a guess.
+//
+// Positions. `assemble` projects the guess q₀ onto the constraint manifold with Ipopt:
+//   min ½ (q − q₀)ᵀ W (q − q₀)   s.t.  f(q) = 0 (eq. (20)),  s_k(q) = value_k (locked inputs),
+//                                       min_j ≤ s_j(q) ≤ max_j (joint limits),             (A1)
+// with W = M the mass matrix (eq. (4)): the kinetic-energy metric, the paper's natural metric.
+// Exact first and second derivatives: ∂f/∂q = Eᵀ (B̃ = I for planar bodies, eq. (19)) and the
+// Hessian of the Lagrangian W + Σλ_i ∇²f_i, whose column k is W e_k + Dᵀ(q, e_k)ᵀ λ because
+// Dᵀ(q, u) = Σ_k ∂Eᵀ/∂q_k u_k (eq. (76)) — docs/theory.md, "Assembly". A guess that already
+// satisfies everything is returned bit-for-bit unchanged. When Ipopt finds no feasible point,
+// the best least-squares pose min ½‖f(q)‖² (locks and limits kept) names the joints that cannot
+// close and by how much.
+//
+// Velocities. u = α u₀ (eq. (44)), the admissible velocity closest to u₀ in the mass metric;
+// the kinetic energy removed is ½ (βu₀)ᵀ M (βu₀) = T(u₀) − T(u) (mass-orthogonality).
+//
+// Results are data (house style): never an exception for a numerical outcome.
+#include <string>
+#include <vector>
+
+#include "orthomech/model/model.hpp"
+
+namespace orthomech {
+
+struct JointLock {
+  int joint = -1;      // revolute or prismatic joint
+  double value = 0.0;  // joint coordinate, SI (revolute: matched modulo 2π nearest the guess)
+};
+
+struct AssemblyOptions {
+  std::vector<JointLock> locks;
+  bool use_limits = true;    // bounds from Joint::limits
+  double tolerance = 1e-12;  // max |f_k|, |s_k − value_k| of an assembled position (m, rad)
+  int max_iterations = 300;  // Ipopt iterations
+};
+
+enum class AssemblyStatus {
+  unchanged,      // the guess already satisfied f = 0, the locks and the limits
+  assembled,      // projected onto the manifold, residual ≤ tolerance
+  cannot_close,   // no feasible pose: see `gaps`
+  not_converged,  // the solver stopped without a feasible pose and the gap is within tolerance
+  failed,         // solver error (see message / solver_status)
+};
+[[nodiscard]] const char* to_string(AssemblyStatus s);
+
+struct BodyMove {
+  std::string body;
+  double translation = 0.0;  // |Δr| of the body frame origin, m
+  double rotation = 0.0;     // Δφ, rad (0 for particles)
+};
+
+struct JointResidual {
+  std::string joint;
+  double residual = 0.0;     // max |f_k| over the joint's rows (m or rad)
+  double gap = 0.0;          // Euclidean norm of the joint's length rows (m), 0 if none
+  std::vector<double> rows;  // f_k per component (Joint::component_names)
+};
+
+struct AssemblyResult {
+  AssemblyStatus status = AssemblyStatus::failed;
+  std::string message;
+  std::string solver_status;  // Ipopt's return status ("" when Ipopt was not needed)
+  int iterations = 0;         // Ipopt iterations (+ Newton polish steps)
+  double residual = 0.0;      // max |f_k| and lock violation at q (m, rad)
+  VecX q;  // assembled position (the guess when unchanged; the best least-squares pose when
+           // cannot_close; the solver's last iterate otherwise). bodies/joints/residual are at q.
+  double distance = 0.0;  // √((q − q₀)ᵀ W (q − q₀)), the mass-metric distance (√kg·m)
+  std::vector<BodyMove> bodies;
+  std::vector<JointResidual> joints;
+  // cannot_close: the best least-squares pose and the joints that stay open there (gap > tol),
+  // largest first; total_gap = Σ gap (m).
+  VecX q_least_squares;
+  std::vector<JointResidual> gaps;
+  double total_gap = 0.0;
+};
+
+// (A1). q0 has size model.nq. Never throws for numerical trouble; an exception raised inside a
+// solver callback (a bug) is rethrown after the solve.
+[[nodiscard]] AssemblyResult assemble(const Model& model, const VecX& q0,
+                                      const AssemblyOptions& options = {});
+
+// Per-joint residuals at q (names, max |f_k|, gap).
+[[nodiscard]] std::vector<JointResidual> joint_residuals(const Model& model, const VecX& q);
+
+struct VelocityProjection {
+  VecX u;                  // α u₀, eq. (44)
+  double kinetic_initial;  // T(u₀)
+  double kinetic;          // T(u)
+  double kinetic_removed;  // T(β u₀) = T(u₀) − T(u)
+  bool ok = true;          // false when G is singular and the pseudo-inverse was used
+};
+// Mass-orthogonal projection of a velocity guess: u = u₀ − A E G⁺ Eᵀ u₀ (eqs. (42)–(44); G⁺ the
+// pseudo-inverse so that redundant constraints are handled).
+[[nodiscard]] VelocityProjection project_velocities(const Model& model, const VecX& q,
+                                                    const VecX& u0);
+
+// Mass-metric Gauss–Newton with locked inputs (Eigen only, no Ipopt): the cheap projection used
+// by multi-start and continuation. Returns true when max residual ≤ tolerance.
+bool project_with_locks(const Model& model, VecX& q, const std::vector<JointLock>& locks,
+                        double tolerance = 1e-12, int max_iterations = 50);
+
+// Joint coordinate s(q) of a revolute (φ_j − φ_i) or prismatic (slide) joint.
+[[nodiscard]] double joint_coordinate(const Model& model, int joint, const VecX& q);
+// Its Hessian ∇²s (nq × nq), exact (polarisation of the convective term ḋu = uᵀ∇²s u, see
+// docs/theory.md "Assembly"); zero for a revolute joint. Used in the Hessian of the Lagrangian
+// of locks and limits.
+[[nodiscard]] MatX joint_coordinate_hessian(const Model& model, int joint, const VecX& q);
+
+}  // namespace orthomech

@@ -1,0 +1,120 @@
+#pragma once
+// Validation of design positions (design §1 job 3, issue 4). For every design position of the
+// file (input values, optionally a target point/angle with a tolerance):
+//   - assembly (analysis/assembly.hpp) and how far the design pose had to move;
+//   - the assembly modes at the inputs (multi-start mass-metric projections, clustered), which
+//     mode the position is on (with a target: the mode that meets it best);
+//   - target met; DOF, rank and redundant equations there;
+//   - singularity measures: σ_min of the constraint Jacobian and the transmission index η of the
+//     input-locked Jacobian (docs/theory.md "Validation"), and the distance in input to the
+//     nearest dead or change point on the position's circuit (arclength continuation of the
+//     circuit, extremes of the input refined with NLopt);
+//   - every planar four-bar loop (ground + 3 bodies in a ring of revolutes): Grashof type and
+//     transmission angle;
+//   - defects of the set: circuit (positions on different circuits), branch (a dead or change
+//     point between consecutive positions on a circuit), order (the input not monotone in the
+//     given order).
+// Results are data; nothing here throws for a numerical outcome.
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "orthomech/analysis/assembly.hpp"
+#include "orthomech/model/model.hpp"
+
+namespace orthomech {
+
+struct ValidateOptions {
+  int starts = 24;    // multi-start projections per position (assembly modes)
+  unsigned seed = 1;  // random starts are reproducible
+  double min_transmission = 30.0 * 0.017453292519943295;  // rad: |90° − μ| ≤ 90° − this passes
+  double min_sigma = 1e-6;  // σ_min and η below this: singular (fails)
+  double step = 0.05;       // trace step (scaled coordinates: rad, length / L)
+  int max_trace_steps = 20000;
+};
+
+enum class GrashofType {
+  crank_rocker,           // s + l < p + q, input (crank) shortest
+  rocker_crank,           // output shortest
+  double_crank,           // ground shortest (drag link)
+  grashof_double_rocker,  // coupler shortest
+  triple_rocker,          // s + l > p + q (non-Grashof)
+  change_point,           // s + l = p + q (folds: a change point exists)
+};
+[[nodiscard]] const char* to_string(GrashofType t);
+
+// A planar four-bar loop: ground —j[0]— crank —j[1]— coupler —j[2]— follower —j[3]— ground.
+// Oriented so that the input joint (if it is a ground pivot of the loop) is j[0].
+struct FourBarLoop {
+  int joints[4] = {-1, -1, -1, -1};
+  int bodies[3] = {-1, -1, -1};                                     // crank, coupler, follower
+  double ground = 0.0, crank = 0.0, coupler = 0.0, follower = 0.0;  // link lengths, m
+  GrashofType type = GrashofType::triple_rocker;
+};
+// Every four-bar loop of the mechanism (revolutes only, ground included).
+[[nodiscard]] std::vector<FourBarLoop> find_four_bar_loops(const Model& model, int input_joint);
+// Grashof type from the four lengths (s + l vs p + q, which link is shortest); `tol` relative.
+[[nodiscard]] GrashofType classify_grashof(double ground, double crank, double coupler,
+                                           double follower, double tol = 1e-9);
+// Transmission angle μ ∈ [0, π] at q: angle at the coupler–follower joint between the coupler
+// (toward the crank joint) and the follower (toward its ground pivot).
+[[nodiscard]] double transmission_angle(const Model& model, const FourBarLoop& loop, const VecX& q);
+
+struct SingularityMeasures {
+  double sigma_min = 0.0;  // σ_r/σ_1 of the scaled Eᵀ, r the generic rank (→ 0 at change points)
+  std::optional<double> eta;  // σ_n/σ_1 of the scaled input-locked Jacobian [Eᵀ; d] (→ 0 at
+                              // dead points and change points); none if not square or more
+};
+[[nodiscard]] SingularityMeasures singularity_measures(const Model& model, const VecX& q,
+                                                       const std::vector<int>& input_joints,
+                                                       int generic_rank);
+
+struct FourBarReport {
+  std::string joints;  // "A0-A-B-B0"
+  GrashofType type;
+  double transmission = 0.0;  // μ, rad
+  bool ok = true;             // min(μ, π − μ) ≥ min_transmission
+};
+
+struct PositionReport {
+  std::string name;
+  AssemblyStatus assembly = AssemblyStatus::failed;
+  std::string assembly_message;
+  bool assembles = false;
+  VecX q;
+  double distance = 0.0;                     // mass-metric distance from the design pose, √kg·m
+  double max_translation = 0.0;              // largest body move from the design pose, m
+  std::optional<double> target_error;        // |P − target|, m
+  std::optional<double> target_angle_error;  // |Δφ|, rad
+  bool target_met = true;
+  int dof = 0, rank = 0;
+  std::vector<std::string> redundant;
+  SingularityMeasures singular;
+  std::optional<double> singular_distance;  // |Δ input| to the nearest dead/change point, SI
+  std::string singular_kind;                // "dead point" / "change point"
+  std::optional<double> singular_input;     // input value there
+  std::vector<FourBarReport> four_bars;
+  int modes = 0;               // distinct assembly modes found at the inputs
+  int mode = -1;               // 1-based index of this position's mode (modes sorted by signature)
+  std::string mode_signature;  // e.g. "+" per four-bar loop, then the sign of det [Eᵀ; d]
+  int circuit = -1;            // 1-based, −1 when not traced (DOF ≠ 1 or no single input)
+  int branch = -1;             // 1-based within the circuit
+  std::vector<std::string> failures;  // checks that failed, in words
+  [[nodiscard]] bool pass() const { return failures.empty(); }
+};
+
+struct ValidationReport {
+  std::string input;  // input joint name ("" when positions have no common single input)
+  std::vector<PositionReport> positions;
+  int generic_rank = 0;
+  bool circuit_defect = false, branch_defect = false, order_defect = false;
+  std::vector<std::string> defects;          // in words
+  int circuits = 0;                          // circuits traced
+  std::vector<std::string> singular_points;  // every dead/change point found, in words
+  [[nodiscard]] bool pass() const;
+};
+
+[[nodiscard]] ValidationReport validate_design_positions(const Model& model,
+                                                         const ValidateOptions& options = {});
+
+}  // namespace orthomech

@@ -1,0 +1,23 @@
+#pragma once
+// Writing mechanism files (issue 4: `assemble --write`). The file is edited, not regenerated:
+// only the numbers of each body's `pose:` change, so comments, units, order and every other key
+// stay as the user wrote them. Poses are written in the file's declared units with 17
+// significant digits (reading them back gives the same doubles up to one rounding of the unit
+// conversion).
+#include <string>
+
+#include "orthomech/model/model.hpp"
+
+namespace orthomech {
+
+// The text of a mechanism file (`text`, parsed from `origin`) with every body pose replaced by
+// the pose in q. Throws InputError when the text is not the file the model was read from.
+[[nodiscard]] std::string replace_design_poses(const std::string& text, const std::string& origin,
+                                               const Model& model, const VecX& q);
+
+// Writes `text` to `path` atomically: a temporary file in the same directory, flushed, then
+// renamed over `path` (readers see the old or the new file, never a half-written one).
+// Throws std::runtime_error on failure (the temporary file is removed).
+void write_file_atomically(const std::string& path, const std::string& text);
+
+}  // namespace orthomech

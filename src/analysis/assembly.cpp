@@ -1,0 +1,565 @@
+#include "orthomech/analysis/assembly.hpp"
+
+#include <Eigen/QR>
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <sstream>
+#include <stdexcept>
+
+#include "../solvers/ipopt_nlp.hpp"
+#include "orthomech/analysis/mobility.hpp"
+#include "orthomech/constraints/joints.hpp"
+#include "orthomech/model/free_system.hpp"
+#include "orthomech/model/measures.hpp"
+#include "orthomech/model/state.hpp"
+
+namespace orthomech {
+
+namespace {
+
+constexpr double kTwoPi = 2.0 * std::numbers::pi;
+
+// A scalar row on a joint coordinate: a lock (lo = hi) or a limit (lo < hi).
+struct CoordinateRow {
+  int joint = -1;
+  double lo = 0.0, hi = 0.0;
+  bool lock = false;
+  bool linear = true;     // revolute: s = φ_j − φ_i is linear in q (zero Hessian)
+  std::vector<int> cols;  // coordinates s depends on (for its Hessian)
+};
+
+bool is_angular_row(const std::string& component) {
+  return component == "angle" || component == "ratio";
+}
+
+std::vector<int> body_columns(const Model& model, int body) {
+  std::vector<int> c;
+  if (body == kGround) return c;
+  const Body& b = model.bodies[static_cast<size_t>(body)];
+  for (int k = 0; k < b.nq(); ++k) c.push_back(b.q_offset + k);
+  return c;
+}
+
+// Rows for locks and limits. Revolute values are matched modulo 2π nearest the guess q0 (a lock
+// of 30° holds at 390° if the drawing has the crank there); limits are shifted by the same rule
+// applied to their midpoint.
+std::vector<CoordinateRow> coordinate_rows(const Model& model, const VecX& q0,
+                                           const AssemblyOptions& options) {
+  std::vector<CoordinateRow> rows;
+  auto make = [&](int joint, double lo, double hi, bool lock) {
+    const Joint& j = model.joints.at(static_cast<size_t>(joint));
+    CoordinateRow r;
+    r.joint = joint;
+    r.lock = lock;
+    if (const auto* rev = std::get_if<Revolute>(&j.kind)) {
+      const double s0 = joint_coordinate(model, joint, q0);
+      const double mid = 0.5 * (lo + hi);
+      const double shift = kTwoPi * std::round((s0 - mid) / kTwoPi);
+      r.lo = lo + shift;
+      r.hi = hi + shift;
+      r.linear = true;
+      (void)rev;
+    } else if (const auto* pri = std::get_if<Prismatic>(&j.kind)) {
+      r.lo = lo;
+      r.hi = hi;
+      r.linear = false;
+      r.cols = body_columns(model, pri->pi.body);
+      for (int c : body_columns(model, pri->pj.body)) r.cols.push_back(c);
+    } else {
+      throw std::invalid_argument("joint '" + j.name +
+                                  "' has no scalar coordinate to lock (revolute or prismatic)");
+    }
+    rows.push_back(r);
+  };
+  for (const JointLock& l : options.locks) make(l.joint, l.value, l.value, true);
+  if (options.use_limits)
+    for (size_t k = 0; k < model.joints.size(); ++k)
+      if (model.joints[k].limits)
+        make(static_cast<int>(k), model.joints[k].limits->x(), model.joints[k].limits->y(), false);
+  return rows;
+}
+
+// s(q) and, if d is non-null, its gradient.
+double eval_coordinate(const Model& model, const CoordinateRow& r, const VecX& q,
+                       Eigen::Ref<VecX> d) {
+  d.setZero();
+  return compute_scalar(model, JointCoordinate{r.joint}, q, nullptr, d).value;
+}
+
+// Adds w ∇²s to H (exact): for B̃ = I the convective term ḋu of measures is uᵀ∇²s u, so the
+// entries follow by polarisation over the few coordinates s depends on:
+// e_aᵀ∇²s e_b = ½ (Q(e_a + e_b) − Q(e_a) − Q(e_b)), Q(u) = uᵀ∇²s u.                       (L1)
+void add_coordinate_hessian(const Model& model, const CoordinateRow& r, const VecX& q, double w,
+                            MatX& H, VecX& u) {
+  if (r.linear || w == 0.0) return;
+  auto Q = [&](int a, int b) {
+    u.setZero();
+    u(a) += 1.0;
+    u(b) += 1.0;
+    return compute_scalar(model, JointCoordinate{r.joint}, q, &u).ddot_u;
+  };
+  std::vector<double> diag(r.cols.size());
+  for (size_t i = 0; i < r.cols.size(); ++i) diag[i] = 0.25 * Q(r.cols[i], r.cols[i]);  // u = 2e
+  for (size_t i = 0; i < r.cols.size(); ++i) {
+    H(r.cols[i], r.cols[i]) += w * diag[i];
+    for (size_t k = 0; k < i; ++k) {
+      const double v = 0.5 * (Q(r.cols[i], r.cols[k]) - diag[i] - diag[k]);
+      H(r.cols[i], r.cols[k]) += w * v;
+      H(r.cols[k], r.cols[i]) += w * v;
+    }
+  }
+}
+
+// Adds Σ λ_i ∇²f_i to H, exactly: column k is Dᵀ(q, e_k)ᵀ λ, because Dᵀ(q, u) = Ėᵀ =
+// Σ_k ∂Eᵀ/∂q_k u_k (eq. (76)) and Eᵀ = ∂f/∂q when B̃ = I (eq. (19)).                       (L2)
+void add_constraint_hessian(const Model& model, const VecX& q, const VecX& lambda_f,
+                            const std::vector<int>& rows, State& state, ConstraintWorkspace& cws,
+                            MatX& H) {
+  VecX lam = VecX::Zero(model.nc);
+  for (size_t i = 0; i < rows.size(); ++i) lam(rows[i]) = lambda_f(static_cast<Eigen::Index>(i));
+  if (lam.isZero(0.0)) return;
+  state.q = q;
+  for (int k = 0; k < model.n; ++k) {
+    state.u.setZero();
+    state.u(k) = 1.0;
+    compute_constraints(model, state, cws);
+    H.col(k).noalias() += cws.Dt.transpose() * lam;
+  }
+}
+
+// Max violation of f (all rows), locks and limits.
+double total_residual(const Model& model, const VecX& q, const std::vector<CoordinateRow>& rows,
+                      VecX& f, VecX& d) {
+  compute_constraint_residual(model, q, f);
+  double r = f.size() ? f.cwiseAbs().maxCoeff() : 0.0;
+  for (const CoordinateRow& c : rows) {
+    const double s = eval_coordinate(model, c, q, d);
+    r = std::max({r, c.lo - s, s - c.hi});
+  }
+  return std::isfinite(r) ? r : std::numeric_limits<double>::infinity();
+}
+
+std::vector<BodyMove> body_moves(const Model& model, const VecX& q0, const VecX& q) {
+  std::vector<BodyMove> out;
+  for (size_t b = 0; b < model.bodies.size(); ++b) {
+    const Body& body = model.bodies[b];
+    const PointRef origin{static_cast<int>(b), -body.com_local, body.name};
+    BodyMove m;
+    m.body = body.name;
+    m.translation = (point_kinematics(model, origin, q, nullptr).r -
+                     point_kinematics(model, origin, q0, nullptr).r)
+                        .norm();
+    if (body.kind == BodyKind::rigid) m.rotation = q(body.q_offset + 2) - q0(body.q_offset + 2);
+    out.push_back(m);
+  }
+  return out;
+}
+
+// The assembly NLP (A1) or the least-squares fallback (A2): min ½‖f(q)‖² subject to the
+// locks and limits only.
+struct Problem {
+  const Model& model;
+  VecX q0;
+  MatX W;                             // M / m_ref (same minimiser, objective scaled to O(Δq²))
+  std::vector<int> f_rows;            // rows of f kept as constraints (independent ones)
+  std::vector<CoordinateRow> coords;  // locks and limits
+  bool least_squares = false;         // (A2) instead of (A1)
+  // scratch
+  mutable VecX f, d, u;
+  mutable MatX Et;
+  mutable State state;
+  mutable ConstraintWorkspace cws;
+
+  Problem(const Model& m, const VecX& q0_)
+      : model(m), q0(q0_), f(m.nc), d(m.n), u(m.n), Et(m.nc, m.n), state(m), cws(m) {}
+
+  int n_constraints() const {
+    return (least_squares ? 0 : static_cast<int>(f_rows.size())) + static_cast<int>(coords.size());
+  }
+
+  solvers::DenseNlp nlp(const VecX& start) const {
+    solvers::DenseNlp p;
+    p.n = model.nq;
+    p.m = n_constraints();
+    p.x0 = start;
+    p.g_lower.resize(p.m);
+    p.g_upper.resize(p.m);
+    int i = 0;
+    if (!least_squares)
+      for (size_t k = 0; k < f_rows.size(); ++k, ++i) p.g_lower(i) = p.g_upper(i) = 0.0;
+    for (const CoordinateRow& c : coords) {
+      p.g_lower(i) = c.lo;
+      p.g_upper(i) = c.hi;
+      ++i;
+    }
+    p.objective = [this](const VecX& q) {
+      if (least_squares) {
+        compute_constraint_residual(model, q, f);
+        return 0.5 * f.squaredNorm();
+      }
+      const VecX dq = q - q0;
+      return 0.5 * dq.dot(W * dq);
+    };
+    p.gradient = [this](const VecX& q, VecX& g) {
+      if (least_squares) {
+        compute_constraint_residual(model, q, f);
+        compute_constraint_jacobian(model, q, Et);
+        g.noalias() = Et.transpose() * f;
+      } else {
+        g.noalias() = W * (q - q0);
+      }
+    };
+    p.constraints = [this](const VecX& q, VecX& g) {
+      int r = 0;
+      if (!least_squares) {
+        compute_constraint_residual(model, q, f);
+        for (int row : f_rows) g(r++) = f(row);
+      }
+      for (const CoordinateRow& c : coords) g(r++) = eval_coordinate(model, c, q, d);
+    };
+    p.jacobian = [this](const VecX& q, MatX& J) {
+      int r = 0;
+      if (!least_squares) {
+        compute_constraint_jacobian(model, q, Et);
+        for (int row : f_rows) J.row(r++) = Et.row(row);
+      }
+      for (const CoordinateRow& c : coords) {
+        eval_coordinate(model, c, q, d);
+        J.row(r++) = d.transpose();
+      }
+    };
+    p.hessian = [this](const VecX& q, double sigma, const VecX& lambda, MatX& H) {
+      hessian(q, sigma, lambda, H);
+    };
+    return p;
+  }
+
+  // σ∇²φ + Σλ∇²g, exact ((L1), (L2)).
+  void hessian(const VecX& q, double sigma, const VecX& lambda, MatX& H) const {
+    H.setZero();
+    int r = 0;
+    if (least_squares) {
+      // ∇²(½‖f‖²) = E Eᵀ + Σ f_i ∇²f_i
+      compute_constraint_residual(model, q, f);
+      compute_constraint_jacobian(model, q, Et);
+      H.noalias() = sigma * Et.transpose() * Et;
+      std::vector<int> all(static_cast<size_t>(model.nc));
+      for (int k = 0; k < model.nc; ++k) all[static_cast<size_t>(k)] = k;
+      add_constraint_hessian(model, q, sigma * f, all, state, cws, H);
+    } else {
+      H = sigma * W;
+      add_constraint_hessian(model, q, lambda.head(static_cast<Eigen::Index>(f_rows.size())),
+                             f_rows, state, cws, H);
+      r = static_cast<int>(f_rows.size());
+    }
+    for (const CoordinateRow& c : coords) add_coordinate_hessian(model, c, q, lambda(r++), H, u);
+  }
+};
+
+// Newton on the KKT conditions of (A1) with the active rows as equalities, from Ipopt's point:
+//   [H Cᵀ; C 0] [Δq; λ] = −[W(q − q₀); c]                                                   (L3)
+// (complete orthogonal decomposition: redundant rows are harmless). Ipopt stops at its
+// tolerance; two or three of these steps reach the rounding level (the Andrews test needs 1e-12).
+int polish(const Problem& p, VecX& q, double tolerance) {
+  const Model& model = p.model;
+  std::vector<int> active_coords;
+  for (size_t k = 0; k < p.coords.size(); ++k) {
+    const CoordinateRow& c = p.coords[k];
+    const double s = eval_coordinate(model, c, q, p.d);
+    const double band = std::max(1e-8, 1e3 * tolerance);
+    if (c.lock || s - c.lo < band || c.hi - s < band) active_coords.push_back(static_cast<int>(k));
+  }
+  const int nf = model.nc;
+  const int m = nf + static_cast<int>(active_coords.size());
+  const int n = model.nq;
+  MatX K(n + m, n + m), H(n, n);
+  VecX rhs(n + m), lambda = VecX::Zero(m);
+  VecX work(n), f(model.nc);
+  MatX Et(model.nc, model.n);
+  std::vector<int> all(static_cast<size_t>(nf));
+  for (int k = 0; k < nf; ++k) all[static_cast<size_t>(k)] = k;
+  int steps = 0;
+  double prev = total_residual(model, q, p.coords, f, work);
+  for (int it = 0; it < 4; ++it) {
+    // Hessian of the Lagrangian at (q, λ).
+    H = p.W;
+    add_constraint_hessian(model, q, lambda.head(nf), all, p.state, p.cws, H);
+    for (size_t k = 0; k < active_coords.size(); ++k)
+      add_coordinate_hessian(model, p.coords[static_cast<size_t>(active_coords[k])], q,
+                             lambda(nf + static_cast<Eigen::Index>(k)), H, p.u);
+    compute_constraint_residual(model, q, f);
+    compute_constraint_jacobian(model, q, Et);
+    K.setZero();
+    K.topLeftCorner(n, n) = H;
+    K.block(n, 0, nf, n) = Et;
+    rhs.head(n) = -p.W * (q - p.q0);
+    rhs.segment(n, nf) = -f;
+    for (size_t k = 0; k < active_coords.size(); ++k) {
+      const CoordinateRow& c = p.coords[static_cast<size_t>(active_coords[k])];
+      const double s = eval_coordinate(model, c, q, work);
+      const double target = c.lock ? c.lo : (s - c.lo < c.hi - s ? c.lo : c.hi);
+      const int row = n + nf + static_cast<int>(k);
+      K.row(row).head(n) = work.transpose();
+      rhs(row) = target - s;
+    }
+    K.topRightCorner(n, m) = K.bottomLeftCorner(m, n).transpose();
+    const Eigen::CompleteOrthogonalDecomposition<MatX> cod(K);
+    const VecX sol = cod.solve(rhs);
+    if (!sol.allFinite()) break;
+    VecX trial = q + sol.head(n);
+    const double r = total_residual(model, trial, p.coords, f, work);
+    if (!(r <= std::max(prev, tolerance))) break;
+    q = trial;
+    lambda = sol.tail(m);
+    ++steps;
+    if (sol.head(n).cwiseAbs().maxCoeff() < 1e-15 * (1.0 + q.cwiseAbs().maxCoeff())) break;
+    prev = r;
+  }
+  return steps;
+}
+
+}  // namespace
+
+const char* to_string(AssemblyStatus s) {
+  switch (s) {
+    case AssemblyStatus::unchanged:
+      return "unchanged";
+    case AssemblyStatus::assembled:
+      return "assembled";
+    case AssemblyStatus::cannot_close:
+      return "cannot close";
+    case AssemblyStatus::not_converged:
+      return "not converged";
+    case AssemblyStatus::failed:
+      return "failed";
+  }
+  return "?";
+}
+
+double joint_coordinate(const Model& model, int joint, const VecX& q) {
+  return compute_scalar(model, JointCoordinate{joint}, q, nullptr).value;
+}
+
+MatX joint_coordinate_hessian(const Model& model, int joint, const VecX& q) {
+  AssemblyOptions o;
+  o.locks.push_back({joint, 0.0});
+  o.use_limits = false;
+  const std::vector<CoordinateRow> rows = coordinate_rows(model, q, o);
+  MatX H = MatX::Zero(model.nq, model.nq);
+  VecX u(model.n);
+  add_coordinate_hessian(model, rows.front(), q, 1.0, H, u);
+  return H;
+}
+
+std::vector<JointResidual> joint_residuals(const Model& model, const VecX& q) {
+  VecX f(model.nc);
+  compute_constraint_residual(model, q, f);
+  std::vector<JointResidual> out;
+  for (const Joint& j : model.joints) {
+    JointResidual r;
+    r.joint = j.name;
+    const auto names = j.component_names();
+    double gap2 = 0.0;
+    for (int k = 0; k < j.rows(); ++k) {
+      const double v = f(j.row_offset + k);
+      r.rows.push_back(v);
+      r.residual = std::max(r.residual, std::abs(v));
+      if (!is_angular_row(names[static_cast<size_t>(k)])) gap2 += v * v;
+    }
+    r.gap = std::sqrt(gap2);
+    out.push_back(std::move(r));
+  }
+  return out;
+}
+
+bool project_with_locks(const Model& model, VecX& q, const std::vector<JointLock>& locks,
+                        double tolerance, int max_iterations) {
+  AssemblyOptions o;
+  o.locks = locks;
+  o.use_limits = false;
+  const std::vector<CoordinateRow> rows = coordinate_rows(model, q, o);
+  const int nl = static_cast<int>(rows.size());
+  MatX C(model.nc + nl, model.n), Et(model.nc, model.n);
+  VecX c(model.nc + nl), f(model.nc), d(model.n);
+  MatX A(model.n, model.n);
+  compute_inverse_mass_matrix(model, q, A);
+  auto residual = [&](const VecX& x) {
+    compute_constraint_residual(model, x, f);
+    c.head(model.nc) = f;
+    for (int k = 0; k < nl; ++k)
+      c(model.nc + k) = eval_coordinate(model, rows[static_cast<size_t>(k)], x, d) -
+                        rows[static_cast<size_t>(k)].lo;
+    const double r = c.size() ? c.cwiseAbs().maxCoeff() : 0.0;
+    return std::isfinite(r) ? r : std::numeric_limits<double>::infinity();
+  };
+  double r = residual(q);
+  for (int it = 0; it < max_iterations && r > tolerance; ++it) {
+    compute_constraint_jacobian(model, q, Et);
+    C.topRows(model.nc) = Et;
+    for (int k = 0; k < nl; ++k) {
+      eval_coordinate(model, rows[static_cast<size_t>(k)], q, d);
+      C.row(model.nc + k) = d.transpose();
+    }
+    // Mass-metric minimum-norm step: Δq = −A Cᵀ (C A Cᵀ)⁺ c.
+    const MatX ACt = A * C.transpose();
+    const MatX G = C * ACt;
+    const Eigen::CompleteOrthogonalDecomposition<MatX> cod(G);
+    const VecX dq = -ACt * cod.solve(c);
+    if (!dq.allFinite()) return false;
+    // Backtracking on the max residual keeps wild starts (multi-start) from diverging.
+    double step = 1.0;
+    VecX trial = q + dq;
+    double rt = residual(trial);
+    for (int k = 0; k < 8 && !(rt < r); ++k) {
+      step *= 0.5;
+      trial = q + step * dq;
+      rt = residual(trial);
+    }
+    if (!(rt < r)) return false;
+    q = trial;
+    r = rt;
+    residual(q);
+  }
+  return r <= tolerance;
+}
+
+VelocityProjection project_velocities(const Model& model, const VecX& q, const VecX& u0) {
+  VelocityProjection v;
+  MatX M(model.n, model.n), A(model.n, model.n), Et(model.nc, model.n);
+  compute_mass_matrix(model, q, M);
+  compute_inverse_mass_matrix(model, q, A);
+  compute_constraint_jacobian(model, q, Et);
+  const MatX AE = A * Et.transpose();
+  const MatX G = Et * AE;  // eq. (42)
+  const Eigen::CompleteOrthogonalDecomposition<MatX> cod(G);
+  v.ok = cod.rank() == G.rows();
+  const VecX beta_u0 = AE * cod.solve(Et * u0);  // β u₀ = A π u₀, eqs. (43)–(44)
+  v.u = u0 - beta_u0;                            // α u₀ = (I − A π) u₀, eq. (44)
+  v.kinetic_initial = 0.5 * u0.dot(M * u0);
+  v.kinetic = 0.5 * v.u.dot(M * v.u);
+  v.kinetic_removed = 0.5 * beta_u0.dot(M * beta_u0);
+  return v;
+}
+
+AssemblyResult assemble(const Model& model, const VecX& q0, const AssemblyOptions& options) {
+  if (q0.size() != model.nq) throw std::invalid_argument("assemble: q0 has the wrong size");
+  if (model.nq != model.n)
+    throw std::invalid_argument("assemble: only free systems with q̇ = u (planar bodies)");
+  AssemblyResult res;
+  const std::vector<CoordinateRow> coords = coordinate_rows(model, q0, options);
+  VecX f(model.nc), d(model.n);
+  const double tol = options.tolerance;
+
+  // 1. Already assembled: return the guess bit-for-bit.
+  const double r0 = total_residual(model, q0, coords, f, d);
+  if (r0 <= tol) {
+    res.status = AssemblyStatus::unchanged;
+    res.message = "the design position already satisfies every joint, lock and limit";
+    res.q = q0;
+    res.residual = r0;
+    res.bodies = body_moves(model, q0, q0);
+    res.joints = joint_residuals(model, q0);
+    return res;
+  }
+
+  Problem p(model, q0);
+  MatX M(model.n, model.n);
+  compute_mass_matrix(model, q0, M);
+  p.W = M / M.diagonal().maxCoeff();
+  p.coords = coords;
+
+  // 2. Independent rows of f (redundant ones would break Ipopt's constraint qualification) at
+  //    a cheap Gauss–Newton projection of the guess (the rank is generic on the manifold).
+  VecX q_start = q0;
+  std::vector<JointLock> locks = options.locks;
+  const bool gn = project_with_locks(model, q_start, locks, tol, 30);
+  if (!gn) q_start = q0;
+  {
+    const Mobility mob = compute_mobility(model, gn ? q_start : q0);
+    std::vector<bool> redundant(static_cast<size_t>(model.nc), false);
+    for (int r : mob.redundant_rows) redundant[static_cast<size_t>(r)] = true;
+    for (int r = 0; r < model.nc; ++r)
+      if (!redundant[static_cast<size_t>(r)]) p.f_rows.push_back(r);
+  }
+
+  // 3. Ipopt on (A1), then Newton polish (L3).
+  solvers::IpoptSettings settings;
+  settings.max_iter = options.max_iterations;
+  settings.constr_viol_tol = std::max(tol, 1e-14);
+  const solvers::IpoptOutcome out = solvers::solve_with_ipopt(p.nlp(q_start), settings);
+  if (out.error) std::rethrow_exception(out.error);  // a bug in a callback: after the solve
+  res.solver_status = out.status;
+  res.iterations = out.iterations;
+  VecX q = out.x.size() == model.nq && out.x.allFinite() ? out.x : q_start;
+  const bool ipopt_ok = out.kind == solvers::IpoptOutcomeKind::solved ||
+                        out.kind == solvers::IpoptOutcomeKind::acceptable ||
+                        out.kind == solvers::IpoptOutcomeKind::not_converged;
+  int polish_steps = 0;
+  if (ipopt_ok || total_residual(model, q, coords, f, d) < 1e-6) polish_steps = polish(p, q, tol);
+  res.iterations += polish_steps;
+  res.residual = total_residual(model, q, coords, f, d);
+  if (res.residual <= tol) {
+    res.status = AssemblyStatus::assembled;
+    res.q = q;
+    const VecX dq = q - q0;
+    res.distance = std::sqrt(std::max(0.0, dq.dot(M * dq)));
+    res.bodies = body_moves(model, q0, q);
+    res.joints = joint_residuals(model, q);
+    std::ostringstream msg;
+    msg << "projected onto the constraints: Ipopt " << out.status << " in " << out.iterations
+        << " iterations, then " << polish_steps << " Newton steps on the KKT system";
+    res.message = msg.str();
+    return res;
+  }
+
+  // 4. No feasible pose: the best least-squares pose (A2) says which joints cannot close.
+  res.q = q;
+  res.bodies = body_moves(model, q0, q);
+  res.joints = joint_residuals(model, q);
+  p.least_squares = true;
+  const solvers::IpoptOutcome ls = solvers::solve_with_ipopt(p.nlp(q_start), settings);
+  if (ls.error) std::rethrow_exception(ls.error);
+  res.q_least_squares = ls.x.size() == model.nq && ls.x.allFinite() ? ls.x : q;
+  const double gap_tol = std::max(1e3 * tol, 1e-9);
+  for (JointResidual& j : joint_residuals(model, res.q_least_squares))
+    if (j.residual > gap_tol) res.gaps.push_back(std::move(j));
+  std::sort(res.gaps.begin(), res.gaps.end(),
+            [](const JointResidual& a, const JointResidual& b) { return a.gap > b.gap; });
+  for (const JointResidual& j : res.gaps) res.total_gap += j.gap;
+  std::ostringstream msg;
+  msg.precision(4);
+  if (res.gaps.empty()) {
+    res.status = out.kind == solvers::IpoptOutcomeKind::failed ||
+                         out.kind == solvers::IpoptOutcomeKind::invalid_number ||
+                         out.kind == solvers::IpoptOutcomeKind::too_few_dof
+                     ? AssemblyStatus::failed
+                     : AssemblyStatus::not_converged;
+    msg << "no assembled position found (" << out.status << "; residual " << res.residual
+        << "), although a least-squares pose closes every joint";
+  } else {
+    res.status = AssemblyStatus::cannot_close;
+    // Report the best least-squares pose, not Ipopt's last infeasible iterate.
+    res.q = res.q_least_squares;
+    res.residual = total_residual(model, res.q, coords, f, d);
+    res.bodies = body_moves(model, q0, res.q);
+    res.joints = joint_residuals(model, res.q);
+    msg << "the mechanism cannot close";
+    if (!options.locks.empty()) msg << " with the locked inputs";
+    msg << ": at the best least-squares pose";
+    for (size_t k = 0; k < res.gaps.size(); ++k) {
+      msg << (k ? "," : "") << " joint '" << res.gaps[k].joint << "' ";
+      if (res.gaps[k].gap > 0.0)
+        msg << "gap " << res.gaps[k].gap * 1e3 << " mm";
+      else
+        msg << "residual " << res.gaps[k].residual << " rad";
+    }
+    msg << "; total gap " << res.total_gap * 1e3 << " mm (loop through";
+    for (size_t k = 0; k < res.gaps.size(); ++k) msg << (k ? ", " : " ") << res.gaps[k].joint;
+    msg << ")";
+  }
+  res.message = msg.str();
+  return res;
+}
+
+}  // namespace orthomech

@@ -1,0 +1,788 @@
+#include "orthomech/analysis/validate.hpp"
+
+#include <Eigen/LU>
+#include <Eigen/QR>
+#include <Eigen/SVD>
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <map>
+#include <numbers>
+#include <random>
+#include <set>
+#include <sstream>
+
+#include "../solvers/nlopt_minimize.hpp"
+#include "orthomech/analysis/mobility.hpp"
+#include "orthomech/constraints/joints.hpp"
+#include "orthomech/model/free_system.hpp"
+#include "orthomech/model/measures.hpp"
+
+namespace orthomech {
+
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+constexpr double kTwoPi = 2.0 * kPi;
+// Two positions are the same when every coordinate agrees to this (angles in rad, lengths
+// divided by the mechanism's length scale L): far above the 1e-12 projection tolerance, far
+// below any distinct assembly mode.
+constexpr double kSamePosition = 1e-6;
+
+double wrap(double a) { return a - kTwoPi * std::round(a / kTwoPi); }
+
+std::string fmt(double v, int precision = 4) {
+  std::ostringstream s;
+  s.precision(precision);
+  s << v;
+  return s.str();
+}
+
+bool is_revolute(const Model& model, int joint) {
+  return std::holds_alternative<Revolute>(model.joints[static_cast<size_t>(joint)].kind);
+}
+
+// The mechanism's length scale: the largest joint-point offset on a body or distance between
+// ground points (m).
+double length_scale(const Model& model) {
+  double L = 0.0;
+  std::vector<Vec2> ground;
+  auto visit = [&](const PointRef& p) {
+    if (p.body == kGround)
+      ground.push_back(p.s);
+    else
+      L = std::max(L, p.s.norm());
+  };
+  for (const Joint& j : model.joints)
+    std::visit(
+        [&](const auto& k) {
+          using K = std::decay_t<decltype(k)>;
+          if constexpr (!std::is_same_v<K, GearPair>) {
+            visit(k.pi);
+            visit(k.pj);
+          }
+        },
+        j.kind);
+  for (size_t a = 0; a < ground.size(); ++a)
+    for (size_t b = 0; b < a; ++b) L = std::max(L, (ground[a] - ground[b]).norm());
+  return std::max(L, 1e-6);
+}
+
+// Max over coordinates of |Δ| (angles wrapped, lengths / L).
+double scaled_distance(const Model& model, const VecX& a, const VecX& b, double L) {
+  double d = 0.0;
+  for (const Body& body : model.bodies) {
+    d = std::max(d, std::abs(a(body.q_offset) - b(body.q_offset)) / L);
+    d = std::max(d, std::abs(a(body.q_offset + 1) - b(body.q_offset + 1)) / L);
+    if (body.kind == BodyKind::rigid)
+      d = std::max(d, std::abs(wrap(a(body.q_offset + 2) - b(body.q_offset + 2))));
+  }
+  return d;
+}
+
+// Coordinates scaled to be comparable: lengths / L, angles as they are.
+VecX scale_vector(const Model& model, const VecX& v, double L) {
+  VecX s = v;
+  for (const Body& body : model.bodies) {
+    s(body.q_offset) /= L;
+    s(body.q_offset + 1) /= L;
+  }
+  return s;
+}
+
+Vec2 world(const Model& model, const PointRef& p, const VecX& q) {
+  return point_kinematics(model, p, q, nullptr).r;
+}
+
+const PointRef& side_on(const Revolute& r, int body) { return r.pi.body == body ? r.pi : r.pj; }
+
+// ---- circuits: arclength continuation of the 1-DOF configuration curve ----------------------
+
+struct Sample {
+  VecX q, t;       // position and unit tangent (scaled ∞-norm 1)
+  double s = 0.0;  // input value (unwrapped along the trace)
+  double l = 0.0;  // arclength parameter (scaled)
+  double dsdl = 0.0;
+  double sigma = 1.0;  // σ_min of Eᵀ (relative)
+};
+
+struct SingularPoint {
+  double l = 0.0, s = 0.0;
+  std::string kind;
+};
+
+struct Circuit {
+  std::vector<Sample> samples;
+  bool closed = false;
+  std::vector<SingularPoint> singular;
+  [[nodiscard]] int branch_at(double l) const {
+    const int n = static_cast<int>(singular.size());
+    if (n == 0) return 1;
+    int passed = 0;
+    for (const SingularPoint& p : singular)
+      if (p.l < l) ++passed;
+    return (closed ? passed % n : passed) + 1;
+  }
+};
+
+class Tracer {
+ public:
+  Tracer(const Model& model, int input, int generic_rank, const ValidateOptions& o)
+      : m_(model),
+        input_(input),
+        rank_(generic_rank),
+        opt_(o),
+        L_(length_scale(model)),
+        Et_(model.nc, model.n),
+        f_(model.nc),
+        d_(model.n) {}
+
+  double L() const { return L_; }
+
+  double input_value(const VecX& q) const { return joint_coordinate(m_, input_, q); }
+
+  // Unit tangent of the curve f(q) = 0 at q (last right singular vector of Eᵀ), oriented along
+  // `prev` (or so that the input increases).
+  VecX tangent(const VecX& q, const VecX* prev) {
+    compute_constraint_jacobian(m_, q, Et_);
+    Eigen::JacobiSVD<MatX> svd(Et_, Eigen::ComputeFullV);
+    VecX t = svd.matrixV().col(m_.n - 1);
+    const VecX ts = scale_vector(m_, t, L_);
+    t /= ts.cwiseAbs().maxCoeff();
+    if (prev) {
+      if (scale_vector(m_, t, L_).dot(scale_vector(m_, *prev, L_)) < 0.0) t = -t;
+    } else {
+      compute_scalar(m_, JointCoordinate{input_}, q, nullptr, d_);
+      if (d_.dot(t) < 0.0) t = -t;
+    }
+    return t;
+  }
+
+  double dsdl(const VecX& q, const VecX& t) {
+    compute_scalar(m_, JointCoordinate{input_}, q, nullptr, d_);
+    return d_.dot(t);
+  }
+
+  // σ_r / σ_1 of the scaled Eᵀ.
+  double sigma(const VecX& q) { return singularity_measures(m_, q, {}, rank_).sigma_min; }
+
+  // Newton on [f(q) = 0; tᵀ(q − q_pred) = 0] (minimum-norm steps).
+  bool correct(VecX& q, const VecX& q_pred, const VecX& t) {
+    MatX J(m_.nc + 1, m_.n);
+    VecX r(m_.nc + 1);
+    for (int it = 0; it < 12; ++it) {
+      compute_constraint_residual(m_, q, f_);
+      r.head(m_.nc) = f_;
+      r(m_.nc) = t.dot(q - q_pred);
+      const double res = r.cwiseAbs().maxCoeff();
+      if (!std::isfinite(res)) return false;
+      if (f_.cwiseAbs().maxCoeff() <= 1e-12 * std::max(1.0, L_) && std::abs(r(m_.nc)) < 1e-10)
+        return true;
+      compute_constraint_jacobian(m_, q, Et_);
+      J.topRows(m_.nc) = Et_;
+      J.row(m_.nc) = t.transpose();
+      const Eigen::CompleteOrthogonalDecomposition<MatX> cod(J);
+      const VecX dq = cod.solve(r);
+      if (!dq.allFinite()) return false;
+      q -= dq;
+    }
+    compute_constraint_residual(m_, q, f_);
+    return f_.cwiseAbs().maxCoeff() <= 1e-10 * std::max(1.0, L_);
+  }
+
+  // Point on the curve at parameter τ from sample `a` along its tangent.
+  bool at(const Sample& a, double tau, VecX& q) {
+    const VecX pred = a.q + tau * a.t;
+    q = pred;
+    return correct(q, pred, a.t);
+  }
+
+  Circuit trace(const VecX& q_start) {
+    Circuit c;
+    Sample s0;
+    s0.q = q_start;
+    s0.t = tangent(q_start, nullptr);
+    s0.s = input_value(q_start);
+    s0.dsdl = dsdl(q_start, s0.t);
+    s0.sigma = sigma(q_start);
+    c.samples.push_back(s0);
+    double h = opt_.step;
+    for (int step = 0; step < opt_.max_trace_steps; ++step) {
+      const Sample& a = c.samples.back();
+      VecX q;
+      if (!at(a, h, q)) {
+        h *= 0.5;
+        if (h < 1e-9) break;
+        continue;
+      }
+      const VecX t = tangent(q, &a.t);
+      const VecX ts = scale_vector(m_, t, L_), as = scale_vector(m_, a.t, L_);
+      if (ts.dot(as) < 0.95 * ts.norm() * as.norm() && h > 1e-6) {  // turned too much: smaller
+        h *= 0.5;
+        continue;
+      }
+      Sample b;
+      b.q = q;
+      b.t = t;
+      double ds = input_value(q) - input_value(a.q);
+      if (is_revolute(m_, input_)) ds = wrap(ds);
+      b.s = a.s + ds;
+      b.l = a.l + h;
+      b.dsdl = dsdl(q, t);
+      b.sigma = sigma(q);
+      c.samples.push_back(b);
+      if (c.samples.size() > 8 && scaled_distance(m_, q, q_start, L_) < 1.01 * h) {
+        // Back at the start: close the loop with the start itself.
+        Sample e = c.samples.front();
+        double dse = input_value(q_start) - input_value(q);
+        if (is_revolute(m_, input_)) dse = wrap(dse);
+        e.s = b.s + dse;
+        e.l = b.l + scaled_distance(m_, q, q_start, L_);
+        c.samples.push_back(e);
+        c.closed = true;
+        break;
+      }
+      h = std::min(opt_.step, 1.5 * h);
+    }
+    locate_singular_points(c);
+    return c;
+  }
+
+  // Dead points of the input: ds/dl changes sign; refined with NLopt as the extreme of s along
+  // the curve. Change points: σ_min of Eᵀ has a local minimum below 0.05; refined with NLopt as
+  // the minimum of σ_min.
+  void locate_singular_points(Circuit& c) {
+    const auto& S = c.samples;
+    for (size_t i = 0; i + 1 < S.size(); ++i) {
+      if (S[i].dsdl * S[i + 1].dsdl < 0.0) {
+        const double sign = S[i].dsdl > 0.0 ? 1.0 : -1.0;  // s increasing: find its maximum
+        const double h = S[i + 1].l - S[i].l;
+        auto f = [&](const VecX& x) {
+          VecX q;
+          if (!at(S[i], x(0), q)) return 1e3;
+          double ds = input_value(q) - input_value(S[i].q);
+          if (is_revolute(m_, input_)) ds = wrap(ds);
+          return -sign * ds;
+        };
+        solvers::NloptSettings ns;
+        ns.xtol_abs = 1e-12 * std::max(h, 1e-12);
+        const solvers::NloptOutcome out = solvers::minimize_bounded(
+            f, VecX::Constant(1, 0.5 * h), VecX::Constant(1, 0.0), VecX::Constant(1, h), ns);
+        if (out.error) std::rethrow_exception(out.error);
+        const double tau = out.x(0);
+        c.singular.push_back({S[i].l + tau, S[i].s - sign * out.value, "dead point"});
+      }
+    }
+    for (size_t i = 1; i + 1 < S.size(); ++i) {
+      if (!(S[i].sigma <= S[i - 1].sigma && S[i].sigma <= S[i + 1].sigma && S[i].sigma < 0.05))
+        continue;
+      const double lo = S[i - 1].l - S[i].l, hi = S[i + 1].l - S[i].l;
+      auto f = [&](const VecX& x) {
+        VecX q;
+        if (!at(S[i], x(0), q)) return 1e3;
+        return sigma(q);
+      };
+      solvers::NloptSettings ns;
+      ns.xtol_abs = 1e-13;
+      const solvers::NloptOutcome out = solvers::minimize_bounded(
+          f, VecX::Constant(1, 0.0), VecX::Constant(1, lo), VecX::Constant(1, hi), ns);
+      if (out.error) std::rethrow_exception(out.error);
+      if (out.value < opt_.min_sigma) {
+        VecX q;
+        if (at(S[i], out.x(0), q)) {
+          double ds = input_value(q) - input_value(S[i].q);
+          if (is_revolute(m_, input_)) ds = wrap(ds);
+          c.singular.push_back({S[i].l + out.x(0), S[i].s + ds, "change point"});
+        }
+      }
+    }
+    std::sort(c.singular.begin(), c.singular.end(),
+              [](const SingularPoint& a, const SingularPoint& b) { return a.l < b.l; });
+  }
+
+  // Arclength of q on the circuit, if it lies on it: at every crossing of the input value of q,
+  // project with the input locked from the neighbouring sample and compare.
+  std::optional<double> locate(const Circuit& c, const VecX& q) {
+    const double sq = input_value(q);
+    const bool rev = is_revolute(m_, input_);
+    const auto& S = c.samples;
+    for (size_t i = 0; i + 1 < S.size(); ++i) {
+      const double lo = std::min(S[i].s, S[i + 1].s), hi = std::max(S[i].s, S[i + 1].s);
+      double target = sq;
+      if (rev) target = sq + kTwoPi * std::ceil((lo - sq) / kTwoPi - 1e-12);
+      if (target < lo - 1e-12 || target > hi + 1e-12) continue;
+      const double frac = hi > lo ? (target - S[i].s) / (S[i + 1].s - S[i].s) : 0.0;
+      VecX x = S[i].q + frac * (S[i + 1].q - S[i].q);
+      if (!project_with_locks(m_, x, {{input_, target}}, 1e-12, 30)) continue;
+      if (scaled_distance(m_, x, q, L_) < kSamePosition)
+        return S[i].l + frac * (S[i + 1].l - S[i].l);
+    }
+    return std::nullopt;
+  }
+
+ private:
+  const Model& m_;
+  int input_;
+  int rank_;
+  ValidateOptions opt_;
+  double L_;
+  MatX Et_;
+  VecX f_, d_;
+};
+
+// Distinct solutions of f = 0 with the inputs locked: the given one plus multi-start
+// projections from random poses (body positions within ±L of the design, angles uniform).
+std::vector<VecX> assembly_modes(const Model& model, const std::vector<JointLock>& locks,
+                                 const VecX& q_ref, const VecX& q_design, double L,
+                                 const ValidateOptions& opt, std::mt19937& gen) {
+  std::vector<VecX> modes = {q_ref};
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int k = 0; k < opt.starts; ++k) {
+    VecX q = q_design;
+    for (const Body& b : model.bodies) {
+      q(b.q_offset) += L * u(gen);
+      q(b.q_offset + 1) += L * u(gen);
+      if (b.kind == BodyKind::rigid) q(b.q_offset + 2) = kPi * u(gen);
+    }
+    if (!project_with_locks(model, q, locks, 1e-12, 60)) continue;
+    bool known = false;
+    for (const VecX& m : modes) known = known || scaled_distance(model, m, q, L) < kSamePosition;
+    if (!known) modes.push_back(q);
+  }
+  return modes;
+}
+
+std::string mode_signature(const Model& model, const VecX& q, const std::vector<FourBarLoop>& loops,
+                           const std::vector<int>& inputs) {
+  std::string sig;
+  for (const FourBarLoop& l : loops) {
+    const auto& j1 = std::get<Revolute>(model.joints[static_cast<size_t>(l.joints[1])].kind);
+    const auto& j2 = std::get<Revolute>(model.joints[static_cast<size_t>(l.joints[2])].kind);
+    const auto& j3 = std::get<Revolute>(model.joints[static_cast<size_t>(l.joints[3])].kind);
+    const Vec2 A = world(model, side_on(j1, l.bodies[1]), q);
+    const Vec2 B = world(model, side_on(j2, l.bodies[1]), q);
+    const Vec2 B0 = world(model, side_on(j3, kGround), q);
+    const Vec2 u = A - B, v = B0 - B;
+    sig += (u.x() * v.y() - u.y() * v.x()) >= 0.0 ? '+' : '-';
+  }
+  MatX Et(model.nc, model.n);
+  compute_constraint_jacobian(model, q, Et);
+  if (model.nc + static_cast<int>(inputs.size()) == model.n) {
+    MatX J(model.n, model.n);
+    J.topRows(model.nc) = Et;
+    VecX d(model.n);
+    for (size_t k = 0; k < inputs.size(); ++k) {
+      compute_scalar(model, JointCoordinate{inputs[k]}, q, nullptr, d);
+      J.row(model.nc + static_cast<int>(k)) = d.transpose();
+    }
+    const double det = J.partialPivLu().determinant();
+    sig += det >= 0.0 ? "/+" : "/-";
+  }
+  return sig;
+}
+
+}  // namespace
+
+// ---- four-bar loops ------------------------------------------------------------------------
+
+const char* to_string(GrashofType t) {
+  switch (t) {
+    case GrashofType::crank_rocker:
+      return "crank-rocker";
+    case GrashofType::rocker_crank:
+      return "rocker-crank";
+    case GrashofType::double_crank:
+      return "double-crank";
+    case GrashofType::grashof_double_rocker:
+      return "Grashof double-rocker";
+    case GrashofType::triple_rocker:
+      return "triple-rocker (non-Grashof)";
+    case GrashofType::change_point:
+      return "change point (s + l = p + q)";
+  }
+  return "?";
+}
+
+GrashofType classify_grashof(double ground, double crank, double coupler, double follower,
+                             double tol) {
+  const double len[4] = {ground, crank, coupler, follower};
+  int shortest = 0;
+  double s = len[0], l = len[0], sum = 0.0;
+  for (int k = 0; k < 4; ++k) {
+    sum += len[k];
+    if (len[k] < s) {
+      s = len[k];
+      shortest = k;
+    }
+    l = std::max(l, len[k]);
+  }
+  const double pq = sum - s - l;
+  const double diff = (s + l) - pq;  // Grashof: s + l ≤ p + q [Grashof 1883]
+  if (std::abs(diff) <= tol * sum) return GrashofType::change_point;
+  if (diff > 0.0) return GrashofType::triple_rocker;
+  switch (shortest) {
+    case 0:
+      return GrashofType::double_crank;
+    case 1:
+      return GrashofType::crank_rocker;
+    case 2:
+      return GrashofType::grashof_double_rocker;
+    default:
+      return GrashofType::rocker_crank;
+  }
+}
+
+std::vector<FourBarLoop> find_four_bar_loops(const Model& model, int input_joint) {
+  struct Edge {
+    int joint, a, b;
+  };
+  std::vector<Edge> edges;
+  for (size_t j = 0; j < model.joints.size(); ++j)
+    if (const auto* r = std::get_if<Revolute>(&model.joints[j].kind))
+      edges.push_back({static_cast<int>(j), r->pi.body, r->pj.body});
+  auto other = [](const Edge& e, int body) { return e.a == body ? e.b : e.a; };
+  auto touches = [](const Edge& e, int body) { return e.a == body || e.b == body; };
+  std::vector<FourBarLoop> loops;
+  std::set<std::vector<int>> seen;
+  for (const Edge& g1 : edges) {
+    if (!touches(g1, kGround)) continue;
+    const int X = other(g1, kGround);
+    for (const Edge& e2 : edges) {
+      if (e2.joint == g1.joint || !touches(e2, X)) continue;
+      const int Y = other(e2, X);
+      if (Y == kGround || Y == X) continue;
+      for (const Edge& e3 : edges) {
+        if (e3.joint == e2.joint || e3.joint == g1.joint || !touches(e3, Y)) continue;
+        const int Z = other(e3, Y);
+        if (Z == kGround || Z == X || Z == Y) continue;
+        for (const Edge& g4 : edges) {
+          if (g4.joint == g1.joint || g4.joint == e2.joint || g4.joint == e3.joint) continue;
+          if (!touches(g4, Z) || other(g4, Z) != kGround) continue;
+          std::vector<int> key = {g1.joint, e2.joint, e3.joint, g4.joint};
+          std::sort(key.begin(), key.end());
+          if (!seen.insert(key).second) continue;
+          FourBarLoop l;
+          int J[4] = {g1.joint, e2.joint, e3.joint, g4.joint};
+          int Bd[3] = {X, Y, Z};
+          // The input pivot first; otherwise the lower joint index.
+          const bool flip = J[3] == input_joint || (J[0] != input_joint && J[3] < J[0]);
+          if (flip) {
+            std::swap(J[0], J[3]);
+            std::swap(J[1], J[2]);
+            std::swap(Bd[0], Bd[2]);
+          }
+          for (int k = 0; k < 4; ++k) l.joints[k] = J[k];
+          for (int k = 0; k < 3; ++k) l.bodies[k] = Bd[k];
+          auto rev = [&](int k) -> const Revolute& {
+            return std::get<Revolute>(model.joints[static_cast<size_t>(J[k])].kind);
+          };
+          l.ground = (side_on(rev(0), kGround).s - side_on(rev(3), kGround).s).norm();
+          l.crank = (side_on(rev(0), Bd[0]).s - side_on(rev(1), Bd[0]).s).norm();
+          l.coupler = (side_on(rev(1), Bd[1]).s - side_on(rev(2), Bd[1]).s).norm();
+          l.follower = (side_on(rev(2), Bd[2]).s - side_on(rev(3), Bd[2]).s).norm();
+          l.type = classify_grashof(l.ground, l.crank, l.coupler, l.follower);
+          loops.push_back(l);
+        }
+      }
+    }
+  }
+  return loops;
+}
+
+double transmission_angle(const Model& model, const FourBarLoop& l, const VecX& q) {
+  const auto& j1 = std::get<Revolute>(model.joints[static_cast<size_t>(l.joints[1])].kind);
+  const auto& j2 = std::get<Revolute>(model.joints[static_cast<size_t>(l.joints[2])].kind);
+  const auto& j3 = std::get<Revolute>(model.joints[static_cast<size_t>(l.joints[3])].kind);
+  const Vec2 A = world(model, side_on(j1, l.bodies[1]), q);  // crank–coupler joint
+  const Vec2 B = world(model, side_on(j2, l.bodies[1]), q);  // coupler–follower joint
+  const Vec2 B0 = world(model, side_on(j3, kGround), q);     // follower's ground pivot
+  const Vec2 u = A - B, v = B0 - B;
+  return std::atan2(std::abs(u.x() * v.y() - u.y() * v.x()), u.dot(v));
+}
+
+SingularityMeasures singularity_measures(const Model& model, const VecX& q,
+                                         const std::vector<int>& input_joints, int generic_rank) {
+  SingularityMeasures out;
+  const int ni = static_cast<int>(input_joints.size());
+  MatX J(model.nc + ni, model.n);
+  MatX Et(model.nc, model.n), A(model.n, model.n);
+  compute_constraint_jacobian(model, q, Et);
+  compute_inverse_mass_matrix(model, q, A);
+  J.topRows(model.nc) = Et;
+  VecX d(model.n);
+  for (int k = 0; k < ni; ++k) {
+    compute_scalar(model, JointCoordinate{input_joints[static_cast<size_t>(k)]}, q, nullptr, d);
+    J.row(model.nc + k) = d.transpose();
+  }
+  // Mass-metric column scaling (u = √A ũ) and unit rows: unit-free.
+  const VecX sqrtA = A.diagonal().cwiseSqrt();
+  J = J * sqrtA.asDiagonal();
+  for (Eigen::Index r = 0; r < J.rows(); ++r) {
+    const double n = J.row(r).norm();
+    if (n > 0.0) J.row(r) /= n;
+  }
+  {
+    const Eigen::JacobiSVD<MatX> svd(J.topRows(model.nc));
+    const VecX& s = svd.singularValues();
+    out.sigma_min = generic_rank > 0 && generic_rank <= s.size() && s(0) > 0.0
+                        ? s(generic_rank - 1) / s(0)
+                        : 0.0;
+  }
+  if (ni > 0 && J.rows() >= model.n) {
+    const Eigen::JacobiSVD<MatX> svd(J);
+    const VecX& s = svd.singularValues();
+    out.eta = s(0) > 0.0 ? s(model.n - 1) / s(0) : 0.0;
+  }
+  return out;
+}
+
+bool ValidationReport::pass() const {
+  if (circuit_defect || branch_defect || order_defect) return false;
+  return std::all_of(positions.begin(), positions.end(),
+                     [](const PositionReport& p) { return p.pass(); });
+}
+
+ValidationReport validate_design_positions(const Model& model, const ValidateOptions& opt) {
+  ValidationReport rep;
+  const double L = length_scale(model);
+  const VecX q_design = model.design_q();
+  std::mt19937 gen(opt.seed);
+
+  // The common input: the single joint every position locks (circuits, order, η need it).
+  int input = -1;
+  bool common = !model.design_positions.empty();
+  for (const DesignPosition& p : model.design_positions) {
+    if (p.inputs.size() != 1 || (input >= 0 && p.inputs[0].first != input)) common = false;
+    if (!p.inputs.empty() && input < 0) input = p.inputs[0].first;
+  }
+  if (!common) input = -1;
+  if (input >= 0) rep.input = model.joints[static_cast<size_t>(input)].name;
+  const std::vector<FourBarLoop> loops = find_four_bar_loops(model, input);
+
+  // Generic rank: at the assembled design pose and at every position (max).
+  {
+    VecX q = q_design;
+    const AssemblyResult a = assemble(model, q_design);
+    if (a.status == AssemblyStatus::assembled || a.status == AssemblyStatus::unchanged) q = a.q;
+    rep.generic_rank = compute_mobility(model, q).rank;
+  }
+
+  // Pass 1: assembly, modes, the position's mode, target, mobility.
+  for (const DesignPosition& dp : model.design_positions) {
+    PositionReport pr;
+    pr.name = dp.name;
+    AssemblyOptions ao;
+    std::vector<int> inputs;
+    for (const auto& [j, v] : dp.inputs) {
+      ao.locks.push_back({j, v});
+      inputs.push_back(j);
+    }
+    const AssemblyResult a = assemble(model, q_design, ao);
+    pr.assembly = a.status;
+    pr.assembly_message = a.message;
+    pr.assembles = a.status == AssemblyStatus::assembled || a.status == AssemblyStatus::unchanged;
+    if (!pr.assembles) {
+      pr.failures.push_back("does not assemble: " + a.message);
+      rep.positions.push_back(std::move(pr));
+      continue;
+    }
+    std::vector<VecX> modes = assembly_modes(model, ao.locks, a.q, q_design, L, opt, gen);
+    // With a target, the position is the mode that meets it best; else the projection of the
+    // design pose.
+    auto target_error = [&](const VecX& q) {
+      const DesignTarget& t = *dp.target;
+      double e = (world(model, t.point, q) - t.position).norm();
+      return e;
+    };
+    size_t chosen = 0;
+    if (dp.target)
+      for (size_t k = 1; k < modes.size(); ++k)
+        if (target_error(modes[k]) < target_error(modes[chosen]) - 1e-12) chosen = k;
+    pr.q = modes[chosen];
+    // Modes sorted by signature, then by coordinates.
+    std::vector<std::pair<std::string, size_t>> order;
+    for (size_t k = 0; k < modes.size(); ++k)
+      order.push_back({mode_signature(model, modes[k], loops, inputs), k});
+    std::sort(order.begin(), order.end(), [&](const auto& x, const auto& y) {
+      if (x.first != y.first) return x.first < y.first;
+      const VecX& a1 = modes[x.second];
+      const VecX& b1 = modes[y.second];
+      for (Eigen::Index i = 0; i < a1.size(); ++i)
+        if (std::abs(a1(i) - b1(i)) > 1e-9) return a1(i) < b1(i);
+      return false;
+    });
+    pr.modes = static_cast<int>(modes.size());
+    for (size_t k = 0; k < order.size(); ++k)
+      if (order[k].second == chosen) {
+        pr.mode = static_cast<int>(k) + 1;
+        pr.mode_signature = order[k].first;
+      }
+    MatX M(model.n, model.n);
+    compute_mass_matrix(model, q_design, M);
+    const VecX dq = pr.q - q_design;
+    pr.distance = std::sqrt(std::max(0.0, dq.dot(M * dq)));
+    for (size_t b = 0; b < model.bodies.size(); ++b) {
+      const Body& body = model.bodies[b];
+      const PointRef origin{static_cast<int>(b), -body.com_local, body.name};
+      pr.max_translation = std::max(
+          pr.max_translation, (world(model, origin, pr.q) - world(model, origin, q_design)).norm());
+    }
+    if (dp.target) {
+      const DesignTarget& t = *dp.target;
+      pr.target_error = target_error(pr.q);
+      pr.target_met = *pr.target_error <= t.tolerance;
+      if (!pr.target_met)
+        pr.failures.push_back("target missed by " + fmt(*pr.target_error * 1e3) +
+                              " mm (tolerance " + fmt(t.tolerance * 1e3) + " mm)");
+      if (t.angle) {
+        // Angle targets: the body angle of the target point's body, within
+        // tolerance / L (rad): the tolerance at the mechanism's size (docs/theory.md).
+        pr.target_angle_error = std::abs(wrap(body_angle(model, t.point.body, pr.q) - *t.angle));
+        const double tol_angle = t.tolerance / L;
+        if (*pr.target_angle_error > tol_angle) {
+          pr.target_met = false;
+          pr.failures.push_back("target angle missed by " +
+                                fmt(*pr.target_angle_error * 180.0 / kPi) + " deg (tolerance " +
+                                fmt(tol_angle * 180.0 / kPi) + " deg)");
+        }
+      }
+    }
+    const Mobility mob = compute_mobility(model, pr.q);
+    pr.dof = mob.dof;
+    pr.rank = mob.rank;
+    pr.redundant = mob.redundant;
+    rep.generic_rank = std::max(rep.generic_rank, mob.rank);
+    rep.positions.push_back(std::move(pr));
+  }
+
+  // Pass 2: singularity measures and four-bars.
+  for (size_t k = 0; k < rep.positions.size(); ++k) {
+    PositionReport& pr = rep.positions[k];
+    if (!pr.assembles) continue;
+    std::vector<int> inputs;
+    for (const auto& [j, v] : model.design_positions[k].inputs) inputs.push_back(j);
+    pr.singular = singularity_measures(model, pr.q, inputs, rep.generic_rank);
+    if (pr.singular.sigma_min < opt.min_sigma)
+      pr.failures.push_back("singular: sigma_min of the constraint Jacobian " +
+                            fmt(pr.singular.sigma_min) + " (a change point)");
+    if (pr.dof > static_cast<int>(inputs.size())) {
+      // The inputs leave the mechanism free to move: η is 0 by construction, not a dead point.
+      pr.singular.eta.reset();
+      pr.failures.push_back("the inputs do not fix the position: DOF " + std::to_string(pr.dof) +
+                            ", " + std::to_string(inputs.size()) + " input(s)");
+    } else if (pr.singular.eta && *pr.singular.eta < opt.min_sigma) {
+      pr.failures.push_back("dead point of the inputs: transmission index " +
+                            fmt(*pr.singular.eta));
+    }
+    for (const FourBarLoop& l : loops) {
+      FourBarReport fb;
+      for (int j = 0; j < 4; ++j)
+        fb.joints += (j ? "-" : "") + model.joints[static_cast<size_t>(l.joints[j])].name;
+      fb.type = l.type;
+      fb.transmission = transmission_angle(model, l, pr.q);
+      fb.ok = std::min(fb.transmission, kPi - fb.transmission) >= opt.min_transmission;
+      if (!fb.ok)
+        pr.failures.push_back("transmission angle " + fmt(fb.transmission * 180.0 / kPi) +
+                              " deg in loop " + fb.joints + " (needs " +
+                              fmt(opt.min_transmission * 180.0 / kPi) + "..." +
+                              fmt(180.0 - opt.min_transmission * 180.0 / kPi) + " deg)");
+      pr.four_bars.push_back(fb);
+    }
+  }
+
+  // Order defect: the input must move monotonically through the positions, in the given order
+  // (revolute steps taken the short way round, less than one turn in total).
+  if (input >= 0 && rep.positions.size() >= 2) {
+    const bool rev = is_revolute(model, input);
+    double total = 0.0;
+    int sign = 0;
+    for (size_t k = 1; k < model.design_positions.size(); ++k) {
+      double ds = model.design_positions[k].inputs[0].second -
+                  model.design_positions[k - 1].inputs[0].second;
+      if (rev) ds = wrap(ds);
+      total += ds;
+      const int sk = ds > 0.0 ? 1 : ds < 0.0 ? -1 : 0;
+      if (sign == 0 && k == 1) sign = sk;
+      if (sk == 0 || sk != sign) {
+        rep.order_defect = true;
+        const std::string msg = "order defect: input '" + rep.input + "' goes " +
+                                (sk == 0  ? "nowhere"
+                                 : sk > 0 ? "up"
+                                          : "down") +
+                                " from '" + model.design_positions[k - 1].name + "' to '" +
+                                model.design_positions[k].name + "' but " +
+                                (sign > 0 ? "up" : "down") + " before";
+        rep.defects.push_back(msg);
+        rep.positions[k].failures.push_back(msg);
+      }
+    }
+    if (rev && std::abs(total) >= kTwoPi) {
+      rep.order_defect = true;
+      rep.defects.push_back("order defect: the positions span more than one turn of the input");
+    }
+  }
+
+  // Circuits and branches (1-DOF mechanisms with one common input).
+  const bool traceable =
+      input >= 0 && std::all_of(rep.positions.begin(), rep.positions.end(),
+                                [](const auto& p) { return p.assembles && p.dof == 1; });
+  if (traceable && !rep.positions.empty()) {
+    Tracer tracer(model, input, rep.generic_rank, opt);
+    std::vector<Circuit> circuits;
+    std::vector<std::optional<double>> where(rep.positions.size());
+    for (size_t k = 0; k < rep.positions.size(); ++k) {
+      PositionReport& pr = rep.positions[k];
+      for (size_t c = 0; c < circuits.size() && pr.circuit < 0; ++c)
+        if (auto l = tracer.locate(circuits[c], pr.q)) {
+          pr.circuit = static_cast<int>(c) + 1;
+          where[k] = l;
+        }
+      if (pr.circuit < 0 && circuits.size() < 8) {
+        circuits.push_back(tracer.trace(pr.q));
+        pr.circuit = static_cast<int>(circuits.size());
+        where[k] = 0.0;
+        for (const SingularPoint& sp : circuits.back().singular)
+          rep.singular_points.push_back(sp.kind + " of input '" + rep.input + "' at " +
+                                        fmt(sp.s, 10) + " on circuit " +
+                                        std::to_string(pr.circuit));
+      }
+      if (pr.circuit < 0) continue;
+      const Circuit& c = circuits[static_cast<size_t>(pr.circuit - 1)];
+      pr.branch = c.branch_at(*where[k]);
+      const double sk = joint_coordinate(model, input, pr.q);
+      for (const SingularPoint& sp : c.singular) {
+        double d = sp.s - sk;
+        if (is_revolute(model, input)) d = wrap(d);
+        if (!pr.singular_distance || std::abs(d) < *pr.singular_distance) {
+          pr.singular_distance = std::abs(d);
+          pr.singular_kind = sp.kind;
+          pr.singular_input = sk + d;
+        }
+      }
+    }
+    rep.circuits = static_cast<int>(circuits.size());
+    for (size_t k = 1; k < rep.positions.size(); ++k) {
+      PositionReport& a = rep.positions[k - 1];
+      PositionReport& b = rep.positions[k];
+      if (b.circuit != rep.positions[0].circuit) {
+        rep.circuit_defect = true;
+        const std::string msg = "circuit defect: '" + b.name + "' is on circuit " +
+                                std::to_string(b.circuit) + ", '" + rep.positions[0].name +
+                                "' on circuit " + std::to_string(rep.positions[0].circuit) +
+                                " (the linkage must be taken apart to go from one to the other)";
+        rep.defects.push_back(msg);
+        b.failures.push_back(msg);
+      } else if (a.circuit == b.circuit && a.branch != b.branch) {
+        rep.branch_defect = true;
+        const std::string msg = "branch defect: a singular position lies between '" + a.name +
+                                "' (branch " + std::to_string(a.branch) + ") and '" + b.name +
+                                "' (branch " + std::to_string(b.branch) + ")";
+        rep.defects.push_back(msg);
+        b.failures.push_back(msg);
+      }
+    }
+  }
+  return rep;
+}
+
+}  // namespace orthomech

@@ -1,0 +1,151 @@
+#include "nlopt_minimize.hpp"
+
+#include <nlopt.h>
+
+#include <cmath>
+#include <vector>
+
+namespace orthomech::solvers {
+
+namespace {
+
+struct Context {
+  const std::function<double(const Eigen::VectorXd&)>* f;
+  nlopt_opt opt;
+  Eigen::VectorXd x;
+  int evaluations = 0;
+  std::exception_ptr error;
+  bool nan = false;
+};
+
+// C trampoline: nothing may propagate into NLopt's C frames.
+double trampoline(unsigned n, const double* x, double* grad, void* data) {
+  auto* ctx = static_cast<Context*>(data);
+  if (grad)
+    for (unsigned i = 0; i < n; ++i) grad[i] = 0.0;  // derivative-free methods only
+  try {
+    for (unsigned i = 0; i < n; ++i) ctx->x(i) = x[i];
+    ++ctx->evaluations;
+    const double v = (*ctx->f)(ctx->x);
+    if (std::isnan(v)) {
+      ctx->nan = true;
+      nlopt_force_stop(ctx->opt);
+      return HUGE_VAL;
+    }
+    return v;
+  } catch (...) {
+    ctx->error = std::current_exception();
+    nlopt_force_stop(ctx->opt);
+    return HUGE_VAL;
+  }
+}
+
+}  // namespace
+
+const char* to_string(NloptOutcomeKind k) {
+  switch (k) {
+    case NloptOutcomeKind::converged:
+      return "converged";
+    case NloptOutcomeKind::max_evaluations:
+      return "evaluation limit";
+    case NloptOutcomeKind::roundoff:
+      return "roundoff limited";
+    case NloptOutcomeKind::invalid:
+      return "invalid arguments";
+    case NloptOutcomeKind::failed:
+      return "failed";
+    case NloptOutcomeKind::callback_error:
+      return "callback error";
+  }
+  return "?";
+}
+
+NloptOutcome minimize_bounded(const std::function<double(const Eigen::VectorXd&)>& f,
+                              const Eigen::VectorXd& x0, const Eigen::VectorXd& lower,
+                              const Eigen::VectorXd& upper, const NloptSettings& settings) {
+  NloptOutcome out;
+  const auto n = static_cast<unsigned>(x0.size());
+  out.x = x0;
+  out.value = HUGE_VAL;
+  if (n == 0 || lower.size() != x0.size() || upper.size() != x0.size()) {
+    out.kind = NloptOutcomeKind::invalid;
+    out.message = "empty problem or bounds of the wrong size";
+    return out;
+  }
+  nlopt_opt opt = nlopt_create(n >= 2 ? NLOPT_LN_BOBYQA : NLOPT_LN_COBYLA, n);
+  if (!opt) {
+    out.kind = NloptOutcomeKind::failed;
+    out.message = "NLopt could not create the optimiser";
+    return out;
+  }
+  Context ctx{&f, opt, x0, 0, nullptr, false};
+  std::vector<double> x(x0.data(), x0.data() + n);
+  std::vector<double> lo(lower.data(), lower.data() + n), hi(upper.data(), upper.data() + n);
+  nlopt_result r = nlopt_set_lower_bounds(opt, lo.data());
+  if (r > 0) r = nlopt_set_upper_bounds(opt, hi.data());
+  if (r > 0) r = nlopt_set_min_objective(opt, trampoline, &ctx);
+  if (r > 0) r = nlopt_set_xtol_abs1(opt, settings.xtol_abs);
+  if (r > 0 && settings.ftol_abs > 0.0) r = nlopt_set_ftol_abs(opt, settings.ftol_abs);
+  if (r > 0) r = nlopt_set_maxeval(opt, settings.max_evaluations);
+  if (r > 0) {
+    // Initial step: a quarter of the box (COBYLA/BOBYQA otherwise guess from x0).
+    std::vector<double> dx(n);
+    for (unsigned i = 0; i < n; ++i) dx[i] = std::max(0.25 * (hi[i] - lo[i]), 1e-12);
+    r = nlopt_set_initial_step(opt, dx.data());
+  }
+  double value = HUGE_VAL;
+  if (r > 0) r = nlopt_optimize(opt, x.data(), &value);
+  nlopt_destroy(opt);
+  out.code = static_cast<int>(r);
+  out.evaluations = ctx.evaluations;
+  out.error = ctx.error;
+  if (std::isfinite(value)) {
+    for (unsigned i = 0; i < n; ++i) out.x(i) = x[i];
+    out.value = value;
+  }
+  if (ctx.error) {
+    out.kind = NloptOutcomeKind::callback_error;
+    try {
+      std::rethrow_exception(ctx.error);
+    } catch (const std::exception& e) {
+      out.message = std::string("the objective threw: ") + e.what();
+    } catch (...) {
+      out.message = "the objective threw a non-standard exception";
+    }
+    return out;
+  }
+  if (ctx.nan) {
+    out.kind = NloptOutcomeKind::callback_error;
+    out.message = "the objective returned NaN";
+    return out;
+  }
+  switch (r) {
+    case NLOPT_SUCCESS:
+    case NLOPT_STOPVAL_REACHED:
+    case NLOPT_FTOL_REACHED:
+    case NLOPT_XTOL_REACHED:
+      out.kind = NloptOutcomeKind::converged;
+      out.message = "converged";
+      break;
+    case NLOPT_MAXEVAL_REACHED:
+    case NLOPT_MAXTIME_REACHED:
+      out.kind = NloptOutcomeKind::max_evaluations;
+      out.message = "evaluation limit reached";
+      break;
+    case NLOPT_ROUNDOFF_LIMITED:
+      out.kind = NloptOutcomeKind::roundoff;
+      out.message = "roundoff limited";
+      break;
+    case NLOPT_INVALID_ARGS:
+      out.kind = NloptOutcomeKind::invalid;
+      out.message = "invalid arguments (bounds or start)";
+      break;
+    default:
+      out.kind = NloptOutcomeKind::failed;
+      out.message = "NLopt failed (code " + std::to_string(static_cast<int>(r)) + ")";
+      break;
+  }
+  return out;
+}
+
+}  // namespace orthomech::solvers

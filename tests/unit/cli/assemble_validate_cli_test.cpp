@@ -1,0 +1,161 @@
+// `orthomech assemble` and `orthomech validate` (docs/cli.md): exit codes, JSON keys, --write.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <numbers>
+#include <string>
+
+#include "support/cli_runner.hpp"
+#include "support/fixtures.hpp"
+
+namespace orthomech {
+namespace {
+
+namespace fs = std::filesystem;
+using test::run_cli;
+
+fs::path temp_path(const std::string& leaf) {
+  static int counter = 0;
+  return fs::temp_directory_path() / ("orthomech_asm_" + std::to_string(::getpid()) + "_" +
+                                      std::to_string(counter++) + "_" + leaf);
+}
+
+// A four-bar whose links are too short to close: 1 + 2 + 3 < 10 (gap 4 m = 4000 mm).
+const char* const kShortFourBar = R"(orthomech: 1
+name: short
+ground:
+  points: {A0: [0, 0], B0: [10, 0]}
+bodies:
+  - {name: crank, mass: 1, inertia: 0.1, pose: [0, 0, 0.5], points: {A0: [0, 0], A: [1, 0]}}
+  - {name: coupler, mass: 1, inertia: 0.1, pose: [1, 0, 0.2], points: {A: [0, 0], B: [2, 0]}}
+  - {name: rocker, mass: 1, inertia: 0.1, pose: [10, 0, 2.5], points: {B0: [0, 0], B: [3, 0]}}
+joints:
+  - {name: A0, type: revolute, connects: [ground.A0, crank.A0]}
+  - {name: A, type: revolute, connects: [crank.A, coupler.A]}
+  - {name: B, type: revolute, connects: [coupler.B, rocker.B]}
+  - {name: B0, type: revolute, connects: [rocker.B0, ground.B0]}
+)";
+
+// Crank-rocker of the CLI tests drawn slightly off (coupler 3° and rocker 2° off).
+const char* const kRoughFourBar = R"(orthomech: 1
+name: rough
+units: {length: m, angle: deg}
+ground:
+  points: {A0: [0, 0], B0: [10, 0]}
+bodies:
+  - {name: crank, mass: 1, inertia: 0.1, pose: [0, 0, 53.13010235415598], points: {A0: [0, 0], A: [5, 0]}}
+  - {name: coupler, mass: 2, inertia: 0.2, pose: [3, 4, -5], points: {A: [0, 0], B: [7.0710678118654755, 0]}}
+  - {name: rocker, mass: 1, inertia: 0.1, pose: [10, 0, 92], points: {B0: [0, 0], B: [3, 0]}}
+joints:
+  - {name: A0, type: revolute, connects: [ground.A0, crank.A0]}
+  - {name: A, type: revolute, connects: [crank.A, coupler.A]}
+  - {name: B, type: revolute, connects: [coupler.B, rocker.B]}
+  - {name: B0, type: revolute, connects: [rocker.B0, ground.B0]}
+measures:
+  - {name: crank_angle, type: joint, joint: A0}
+)";
+
+std::string write_temp(const std::string& text, const std::string& leaf) {
+  const fs::path p = temp_path(leaf);
+  std::ofstream(p) << text;
+  return p.string();
+}
+
+TEST(AssembleCli, Json_StatusAndMeasures_LockedCrank) {
+  const std::string file = write_temp(kRoughFourBar, "rough.yaml");
+  const auto r = run_cli({"assemble", file, "--json", "--lock", "A0=53.13010235415598deg"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["status"], "assembled");
+  EXPECT_NEAR(j["measures"]["crank_angle"].get<double>(),
+              53.13010235415598 * std::numbers::pi / 180, 1e-12);
+  EXPECT_LE(j["residual"].get<double>(), 1e-12);
+  EXPECT_EQ(j["bodies"].size(), 3u);
+  EXPECT_EQ(j["joints"].size(), 4u);
+  EXPECT_TRUE(j["velocities"].contains("kinetic_removed"));
+  fs::remove(file);
+}
+
+TEST(AssembleCli, CannotClose_Exit3_NamesJointsAndGap) {
+  const std::string file = write_temp(kShortFourBar, "short.yaml");
+  const auto r = run_cli({"assemble", file});
+  EXPECT_EQ(r.status, 3);
+  EXPECT_NE(r.err.find("cannot close"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("joint 'B0'"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("total gap 4000 mm"), std::string::npos) << r.err;
+  const auto rj = run_cli({"assemble", file, "--json"});
+  EXPECT_EQ(rj.status, 3);
+  const auto j = nlohmann::json::parse(rj.out);
+  EXPECT_EQ(j["status"], "cannot close");
+  EXPECT_NEAR(j["total_gap"].get<double>(), 4.0, 1e-6);
+  fs::remove(file);
+}
+
+TEST(AssembleCli, Write_SavesAssembledFile_InputUntouched_InPlace) {
+  const std::string file = write_temp(kRoughFourBar, "rough.yaml");
+  const std::string out = temp_path("out.yaml").string();
+  const auto r = run_cli({"assemble", file, "--write", out});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(test::read_text(file), kRoughFourBar);  // never overwritten without --in-place
+  // The written file is assembled: assembling it again changes nothing.
+  const auto again = run_cli({"assemble", out, "--json"});
+  ASSERT_EQ(again.status, 0) << again.err;
+  EXPECT_EQ(nlohmann::json::parse(again.out)["status"], "unchanged");
+  EXPECT_NE(test::read_text(out).find("units: {length: m, angle: deg}"), std::string::npos);
+  // --write onto the input is refused; --in-place does it.
+  EXPECT_EQ(run_cli({"assemble", file, "--write", file}).status, 2);
+  EXPECT_EQ(test::read_text(file), kRoughFourBar);
+  ASSERT_EQ(run_cli({"assemble", file, "--in-place"}).status, 0);
+  EXPECT_NE(test::read_text(file), kRoughFourBar);
+  EXPECT_EQ(nlohmann::json::parse(run_cli({"assemble", file, "--json"}).out)["status"],
+            "unchanged");
+  fs::remove(file);
+  fs::remove(out);
+}
+
+TEST(AssembleCli, BadLock_Exit2) {
+  const std::string file = test::source_path("mechanisms/crank-rocker.yaml");
+  const auto r = run_cli({"assemble", file, "--lock", "nope=3"});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("joint 'nope' is not defined"), std::string::npos) << r.err;
+  EXPECT_EQ(run_cli({"assemble", file, "--lock", "A0=3furlongs"}).status, 2);
+  // Unwritable output: exit 2 with the reason, nothing written.
+  const auto w = run_cli({"assemble", file, "--write", "/nonexistent-dir/out.yaml"});
+  EXPECT_EQ(w.status, 2);
+  EXPECT_NE(w.err.find("cannot write"), std::string::npos) << w.err;
+}
+
+TEST(ValidateCli, BundledCrankRocker_Exit0_JsonPass) {
+  const auto r = run_cli({"validate", test::source_path("mechanisms/crank-rocker.yaml"), "--json"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_TRUE(j["pass"].get<bool>());
+  EXPECT_EQ(j["positions"].size(), 3u);
+  EXPECT_EQ(j["positions"][0]["four_bars"][0]["grashof"], "crank-rocker");
+  EXPECT_EQ(j["positions"][0]["modes"], 2);
+  const auto table = run_cli({"validate", test::source_path("mechanisms/crank-rocker.yaml")});
+  EXPECT_EQ(table.status, 0);
+  EXPECT_NE(table.out.find("every position passes every check"), std::string::npos);
+}
+
+TEST(ValidateCli, Defects_Exit1) {
+  for (const char* f : {"crank-rocker-circuit-defect", "double-rocker-branch-defect",
+                        "crank-rocker-order-defect"}) {
+    const std::string file = test::source_path(std::string("tests/data/validate/") + f + ".yaml");
+    const auto r = run_cli({"validate", file, "--json"});
+    EXPECT_EQ(r.status, 1) << f << r.err;
+    const auto j = nlohmann::json::parse(r.out);
+    EXPECT_FALSE(j["pass"].get<bool>());
+    EXPECT_FALSE(j["defects"].empty());
+    const auto t = run_cli({"validate", file});
+    EXPECT_EQ(t.status, 1);
+    EXPECT_NE(t.out.find("defect"), std::string::npos) << t.out;
+  }
+}
+
+}  // namespace
+}  // namespace orthomech

@@ -1,0 +1,170 @@
+// The private Ipopt and NLopt adapters (src/solvers): every failure mode comes back as a status,
+// and an exception thrown by a callback never crosses the solver (it is stored and reported).
+// Oracles: closed-form minimisers of small problems.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "../../../src/solvers/ipopt_nlp.hpp"
+#include "../../../src/solvers/nlopt_minimize.hpp"
+
+namespace orthomech::solvers {
+namespace {
+
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+
+// min (x0 − 1)² + (x1 − 2)² subject to x0 + x1 = 1: closed form x = (0, 1).
+DenseNlp plane_problem() {
+  DenseNlp p;
+  p.n = 2;
+  p.m = 1;
+  p.x0 = VectorXd::Zero(2);
+  p.g_lower = VectorXd::Constant(1, 1.0);
+  p.g_upper = VectorXd::Constant(1, 1.0);
+  p.objective = [](const VectorXd& x) { return std::pow(x(0) - 1, 2) + std::pow(x(1) - 2, 2); };
+  p.gradient = [](const VectorXd& x, VectorXd& g) {
+    g(0) = 2 * (x(0) - 1);
+    g(1) = 2 * (x(1) - 2);
+  };
+  p.constraints = [](const VectorXd& x, VectorXd& g) { g(0) = x(0) + x(1); };
+  p.jacobian = [](const VectorXd&, MatrixXd& J) { J << 1, 1; };
+  p.hessian = [](const VectorXd&, double s, const VectorXd&, MatrixXd& H) {
+    H = 2 * s * MatrixXd::Identity(2, 2);
+  };
+  return p;
+}
+
+TEST(IpoptAdapter, Solved_ClosedForm) {
+  const IpoptOutcome r = solve_with_ipopt(plane_problem(), {});
+  EXPECT_EQ(r.kind, IpoptOutcomeKind::solved) << r.message;
+  EXPECT_NEAR(r.x(0), 0.0, 1e-9);
+  EXPECT_NEAR(r.x(1), 1.0, 1e-9);
+}
+
+TEST(IpoptAdapter, Infeasible_IsAStatus) {
+  DenseNlp p = plane_problem();
+  p.constraints = [](const VectorXd& x, VectorXd& g) { g(0) = x(0) * x(0) + x(1) * x(1); };
+  p.jacobian = [](const VectorXd& x, MatrixXd& J) { J << 2 * x(0), 2 * x(1); };
+  p.hessian = [](const VectorXd&, double s, const VectorXd& l, MatrixXd& H) {
+    H = (2 * s + 2 * l(0)) * MatrixXd::Identity(2, 2);
+  };
+  p.x0 = VectorXd::Constant(2, 0.5);
+  p.g_lower(0) = p.g_upper(0) = -1.0;  // x0² + x1² = −1 has no solution
+  const IpoptOutcome r = solve_with_ipopt(p, {});
+  EXPECT_EQ(r.kind, IpoptOutcomeKind::infeasible) << r.status;
+}
+
+TEST(IpoptAdapter, IterationLimit_IsAStatus) {
+  DenseNlp p = plane_problem();
+  p.objective = [](const VectorXd& x) {  // Rosenbrock, unconstrained
+    return 100 * std::pow(x(1) - x(0) * x(0), 2) + std::pow(1 - x(0), 2);
+  };
+  p.gradient = [](const VectorXd& x, VectorXd& g) {
+    g(0) = -400 * x(0) * (x(1) - x(0) * x(0)) - 2 * (1 - x(0));
+    g(1) = 200 * (x(1) - x(0) * x(0));
+  };
+  p.hessian = {};  // quasi-Newton
+  p.m = 0;
+  p.g_lower.resize(0);
+  p.g_upper.resize(0);
+  p.x0 << -1.2, 1.0;
+  IpoptSettings s;
+  s.max_iter = 2;
+  const IpoptOutcome r = solve_with_ipopt(p, s);
+  EXPECT_EQ(r.kind, IpoptOutcomeKind::not_converged) << r.status;
+  EXPECT_EQ(r.status, "Maximum_Iterations_Exceeded");
+}
+
+TEST(IpoptAdapter, NaNFromCallback_IsAStatus) {
+  DenseNlp p = plane_problem();
+  p.objective = [](const VectorXd&) { return std::numeric_limits<double>::quiet_NaN(); };
+  const IpoptOutcome r = solve_with_ipopt(p, {});
+  EXPECT_NE(r.kind, IpoptOutcomeKind::solved);
+  EXPECT_FALSE(r.error);
+}
+
+TEST(IpoptAdapter, ThrowingCallback_StoredNotPropagated) {
+  DenseNlp p = plane_problem();
+  int calls = 0;
+  p.jacobian = [&calls](const VectorXd&, MatrixXd& J) {
+    if (++calls > 1) throw std::runtime_error("boom in the Jacobian");
+    J << 1, 1;
+  };
+  IpoptOutcome r;
+  EXPECT_NO_THROW(r = solve_with_ipopt(p, {}));
+  EXPECT_EQ(r.kind, IpoptOutcomeKind::callback_error);
+  ASSERT_TRUE(r.error);
+  EXPECT_NE(r.message.find("boom in the Jacobian"), std::string::npos) << r.message;
+  EXPECT_THROW(std::rethrow_exception(r.error), std::runtime_error);
+}
+
+TEST(IpoptAdapter, TooFewDegreesOfFreedom_IsAStatus) {
+  DenseNlp p = plane_problem();  // two independent equalities and one more on two variables
+  p.m = 3;
+  p.g_lower = VectorXd::Constant(3, 1.0);
+  p.g_upper = p.g_lower;
+  p.constraints = [](const VectorXd& x, VectorXd& g) { g << x(0) + x(1), x(0), x(1); };
+  p.jacobian = [](const VectorXd&, MatrixXd& J) { J << 1, 1, 1, 0, 0, 1; };
+  const IpoptOutcome r = solve_with_ipopt(p, {});
+  EXPECT_EQ(r.kind, IpoptOutcomeKind::too_few_dof) << r.status;
+}
+
+TEST(NloptAdapter, Converged_ClosedForm) {
+  const auto f = [](const VectorXd& x) { return std::pow(x(0) - 0.3, 2) + 1.0; };
+  const NloptOutcome r = minimize_bounded(f, VectorXd::Constant(1, 0.9), VectorXd::Constant(1, 0.0),
+                                          VectorXd::Constant(1, 1.0));
+  EXPECT_EQ(r.kind, NloptOutcomeKind::converged) << r.message;
+  EXPECT_NEAR(r.x(0), 0.3, 1e-6);
+  EXPECT_NEAR(r.value, 1.0, 1e-12);
+}
+
+TEST(NloptAdapter, Bounded2D_ClosedForm) {
+  // Minimum of (x − 2)² + (y + 1)² on [0, 1]²: the corner (1, 0).
+  const auto f = [](const VectorXd& x) { return std::pow(x(0) - 2, 2) + std::pow(x(1) + 1, 2); };
+  const NloptOutcome r =
+      minimize_bounded(f, VectorXd::Constant(2, 0.5), VectorXd::Zero(2), VectorXd::Ones(2));
+  EXPECT_EQ(r.kind, NloptOutcomeKind::converged) << r.message;
+  EXPECT_NEAR(r.x(0), 1.0, 1e-8);
+  EXPECT_NEAR(r.x(1), 0.0, 1e-8);
+}
+
+TEST(NloptAdapter, ThrowingObjective_StoredNotPropagated) {
+  int calls = 0;
+  const auto f = [&calls](const VectorXd& x) {
+    if (++calls > 3) throw std::logic_error("boom in the objective");
+    return x(0) * x(0);
+  };
+  NloptOutcome r;
+  EXPECT_NO_THROW(r = minimize_bounded(f, VectorXd::Constant(1, 0.5), VectorXd::Constant(1, -1.0),
+                                       VectorXd::Constant(1, 1.0)));
+  EXPECT_EQ(r.kind, NloptOutcomeKind::callback_error);
+  ASSERT_TRUE(r.error);
+  EXPECT_NE(r.message.find("boom in the objective"), std::string::npos);
+}
+
+TEST(NloptAdapter, NaN_InvalidBounds_EvaluationLimit_AreStatuses) {
+  const auto nan = [](const VectorXd&) { return std::numeric_limits<double>::quiet_NaN(); };
+  EXPECT_EQ(minimize_bounded(nan, VectorXd::Constant(1, 0.5), VectorXd::Constant(1, 0.0),
+                             VectorXd::Constant(1, 1.0))
+                .kind,
+            NloptOutcomeKind::callback_error);
+  const auto sq = [](const VectorXd& x) { return x.squaredNorm(); };
+  EXPECT_EQ(minimize_bounded(sq, VectorXd::Constant(1, 0.5), VectorXd::Constant(1, 1.0),
+                             VectorXd::Constant(1, 0.0))
+                .kind,
+            NloptOutcomeKind::invalid);
+  NloptSettings s;
+  s.max_evaluations = 3;
+  s.xtol_abs = 0.0;
+  const auto wavy = [](const VectorXd& x) { return std::sin(20 * x(0)) + x(0) * x(0); };
+  EXPECT_EQ(minimize_bounded(wavy, VectorXd::Constant(1, 0.5), VectorXd::Constant(1, -1.0),
+                             VectorXd::Constant(1, 1.0), s)
+                .kind,
+            NloptOutcomeKind::max_evaluations);
+}
+
+}  // namespace
+}  // namespace orthomech::solvers
