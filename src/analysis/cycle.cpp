@@ -263,6 +263,10 @@ struct Sweep {
     const MeasureKind input = JointCoordinate{joint};
     const Chart& c = ws.dual.chart;
     const int r = c.rank();
+    const int nc = model.nc;
+    // With redundant rows, Gauss–Newton on all of them: next to a change point the chart's rows
+    // alone do not imply the others, and q could leave the mechanism by 1e-7 while f_R = 0.
+    const bool all_rows = nc > r;
     // Chord Newton: the Jacobian is factored at the first iterate and kept while the residual
     // falls at least tenfold per iteration (the predictor is close: usually one factorisation).
     bool factored = false;
@@ -271,31 +275,40 @@ struct Sweep {
       compute_constraint_residual(model, q, ws.constraints.f);
       const double s =
           row ? row->dot(q - *q_ref) : compute_scalar(model, input, q, nullptr, w.d).value;
-      double res = std::abs(s - target);
-      for (int i = 0; i < r; ++i) {
-        w.g(i) = ws.constraints.f(c.rows[static_cast<size_t>(i)]);
-        res = std::max(res, std::abs(w.g(i)));
-      }
-      w.g(r) = s - target;
+      double res = std::max(std::abs(s - target), ws.constraints.f.cwiseAbs().maxCoeff());
       // The tolerance is a few ulps of the coordinates: next to a singular position a residual
       // of 1e-12 still leaves q 1e-10 off the branch along the nearly singular direction.
-      // Converged on the chart's rows, the other (redundant) rows must hold too, or rows kept by
-      // a chart chosen next to a singular position have let q leave the mechanism.
-      if (res < 1e-14 * (1.0 + q.cwiseAbs().maxCoeff()))
-        return ws.constraints.f.cwiseAbs().maxCoeff() < 1e-10;
+      if (res < 1e-14 * (1.0 + q.cwiseAbs().maxCoeff())) return true;
       if (!factored || res > 0.1 * previous) {
         compute_constraint_jacobian(model, q, ws.constraints.Et);
-        for (int i = 0; i < r; ++i)
-          w.J.row(i) = ws.constraints.Et.row(c.rows[static_cast<size_t>(i)]);
-        if (row)
-          w.J.row(r) = row->transpose();
-        else
-          w.J.row(r) = w.d.transpose();
-        if (!(lu_factor(w.J, w.J_piv) > 1e-13)) return false;
+        if (all_rows) {  // normal equations of [Eᵀ; dᵀ]
+          w.J.noalias() = ws.constraints.Et.transpose() * ws.constraints.Et;
+          if (row)
+            w.J.noalias() += *row * row->transpose();
+          else
+            w.J.noalias() += w.d * w.d.transpose();
+        } else {
+          for (int i = 0; i < r; ++i)
+            w.J.row(i) = ws.constraints.Et.row(c.rows[static_cast<size_t>(i)]);
+          if (row)
+            w.J.row(r) = row->transpose();
+          else
+            w.J.row(r) = w.d.transpose();
+        }
+        if (!(lu_factor(w.J, w.J_piv) > (all_rows ? 1e-26 : 1e-13))) return false;
         factored = true;
       }
       previous = res;
-      w.dq = w.g;
+      if (all_rows) {
+        w.dq.noalias() = ws.constraints.Et.transpose() * ws.constraints.f;
+        if (row)
+          w.dq += (s - target) * *row;
+        else
+          w.dq += (s - target) * w.d;
+      } else {
+        for (int i = 0; i < r; ++i) w.dq(i) = ws.constraints.f(c.rows[static_cast<size_t>(i)]);
+        w.dq(r) = s - target;
+      }
       lu_solve(w.J, w.J_piv, w.dq);
       if (!(w.dq.cwiseAbs().maxCoeff() <= max_step)) return false;
       integrate_positions(model, q, w.dq, -1.0);
@@ -331,6 +344,10 @@ std::string input_text(double s, bool angular) {
 
 CycleResult run_cycle(const Model& model, const CycleOptions& options) {
   CycleResult result;
+  result.components = reaction_components(model);
+  result.determinate.assign(result.components.size(), true);
+  result.row_determinate.assign(static_cast<size_t>(model.nc), true);
+  for (int r = 0; r < model.nc; ++r) result.row_names.push_back(model.constraint_row_name(r));
   const int joint = options.driver.joint;
   if (joint < 0 || joint >= static_cast<int>(model.joints.size())) {
     result.message = "no driver joint";
@@ -428,14 +445,27 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
   }
   law.s_ref = s0;
   const double dt = options.full_cycle ? period / steps : period / (steps - 1);
-  const int last_regular = options.full_cycle ? steps - 1 : steps - 1;
+  const int last_index = steps;  // grid times k = 0 … steps − 1
   const double omega0 = law.omega;
   const int max_positions = 8 * steps;  // bound on a reversing sweep that does not close
 
-  result.components = reaction_components(model);
-  result.row_names.reserve(static_cast<size_t>(model.nc));
-  for (int r = 0; r < model.nc; ++r) result.row_names.push_back(model.constraint_row_name(r));
   result.points.reserve(static_cast<size_t>(steps));
+
+  // Scale of each coordinate for step-length control: lengths by the mechanism's size, angles by
+  // 1 rad. One internal step may move no coordinate by more than kMaxMove of its scale (5.7°, a
+  // tenth of the size); longer grid steps are split into sub-steps that are not output.
+  constexpr double kMaxMove = 0.1;
+  double size = 1e-3;
+  for (const Body& b : model.bodies) size = std::max(size, b.design_pose.head<2>().norm());
+  VecX scale = VecX::Constant(model.nq, size);
+  for (const Body& b : model.bodies)
+    if (b.kind == BodyKind::rigid) scale(b.q_offset + 2) = 1.0;
+  auto move_size = [&](const VecX& tangent, double ds) {
+    return (tangent.cwiseAbs().cwiseQuotient(scale)).maxCoeff() * std::abs(ds);
+  };
+  // Points next to a change point (E loses rank): every chart of E is ill-conditioned there and
+  // the multipliers, which grow without bound, are not meaningful.
+  constexpr double kSingularQuality = 1e-4;
 
   auto evaluate_at = [&](const VecX& q, double t, DrivenPoint& p) {
     double s = 0.0, sdot = 0.0, sddot = 0.0;
@@ -445,7 +475,20 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
     if (!compute_driven(model, joint, sdot, sddot, state, ws, w, p)) return false;
     p.input = compute_scalar(model, input, state.q, nullptr).value;
     p.time = t;
-    p.singular = false;
+    p.chart_quality = ws.dual.quality;
+    // Sign of det of the chart's block (LU: signs of U_kk and of the interchanges) and the chart
+    // it belongs to: a sign change within one chart is a change point passed between positions.
+    {
+      int sign = 1;
+      const MatX& LU = ws.dual.Ert_D;
+      for (Eigen::Index i = 0; i < LU.rows(); ++i) {
+        if (LU(i, i) < 0.0) sign = -sign;
+        if (ws.dual.Ert_D_piv(i) != i) sign = -sign;
+      }
+      p.chart_sign = sign;
+      p.chart_id = ws.dual.switch_count;
+    }
+    p.singular = ws.dual.quality < kSingularQuality;
     compute_reactions(model, state.q, p.lambda, p.reactions);
     p.measures.clear();
     for (const Measure& m : model.measures)
@@ -460,22 +503,75 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
   auto same_branch = [](const DrivenPoint& a, const DrivenPoint& b) {
     return a.tangent.dot(b.tangent) > 0.0;
   };
+  VecX trial(model.nq);  // predictor/corrector iterate, reused across positions
+  DrivenPoint anchor;    // the last converged point: the predictor starts from it
+  DrivenPoint good;      // the last regular one: its tangent is used next to a change point
+  DrivenPoint point, probe, sub;
+  // One continuation step from a converged point to time t: predictor, corrector with the input
+  // locked, evaluation; false if it does not converge on the same branch or is too long. From a
+  // point next to a change point (whose F is unreliable) the last regular tangent is used.
+  auto try_step = [&](const DrivenPoint& from, double t, DrivenPoint& out) {
+    double target = 0.0, sd = 0.0, sdd = 0.0;
+    law.at(t, target, sd, sdd);
+    const DrivenPoint& tangent_of = from.singular ? good : from;
+    const double ds = target - from.input;
+    if (move_size(tangent_of.tangent, ds) > kMaxMove) return false;
+    if (from.singular)
+      trial = from.q + ds * good.tangent;
+    else
+      predict(from, target, trial);
+    // Corrections beyond twice the size of the tangent step would leave the branch.
+    const double max_step = 2.0 * std::abs(ds) * tangent_of.tangent.cwiseAbs().maxCoeff() + 1e-12;
+    return sweep.corrector(trial, target, max_step) && evaluate_at(trial, t, out) &&
+           same_branch(out, tangent_of);
+  };
+  // Determinacy (design §3): component cᵀλ is unique iff Nᵀc = 0 for the null space N of E. The
+  // values of the components for λ = N_j are exactly (Nᵀc)_j; a component is determinate when
+  // they vanish at every regular position of the sweep.
+  std::vector<double> null_values;
+  auto update_determinacy = [&](const DrivenPoint& p) {
+    if (result.redundant == 0 || p.singular) return;
+    for (Eigen::Index j = 0; j < w.N.cols(); ++j) {
+      const double tol = 1e-8 * w.N.col(j).norm();
+      compute_reactions(model, p.q, w.N.col(j), null_values);
+      for (size_t i = 0; i < null_values.size(); ++i)
+        if (std::abs(null_values[i]) > tol) result.determinate[i] = false;
+      for (int r = 0; r < model.nc; ++r)
+        if (std::abs(w.N(r, j)) > tol) result.row_determinate[static_cast<size_t>(r)] = false;
+    }
+  };
 
-  DrivenPoint last;   // the last converged point (the anchor of the predictor)
-  DrivenPoint point;  // the point being computed
-  if (!evaluate_at(state.q, 0.0, last)) {
+  if (!evaluate_at(state.q, 0.0, anchor)) {
     result.status = CycleStatus::stopped_at_dead_point;
     result.dead_points.push_back(
         {s0, 0.0, "the start position is a dead point of driver joint '" + joint_name + "'"});
     result.message = result.dead_points.back().message;
     return result;
   }
-  result.points.push_back(last);
-  VecX trial(model.nq);  // predictor/corrector iterate, reused across positions
+  if (anchor.singular) {
+    result.message =
+        "the start position is a singular position (E loses rank there); start "
+        "the sweep elsewhere";
+    return result;
+  }
+  update_determinacy(anchor);
+  result.points.push_back(anchor);
+  good = anchor;
+  result.status = CycleStatus::completed;  // unless the loop below says otherwise
   int reversals = 0;
   const int report_every = std::max(1, steps / 100);
+  auto record_singular = [&](double s_at, double t_at) {
+    if (!result.singular_positions.empty() &&
+        std::abs(result.singular_positions.back().time - t_at) < 2.0 * dt)
+      return;
+    result.singular_positions.push_back({s_at, t_at,
+                                         "singular position (E loses rank) at input " +
+                                             input_text(s_at, angular) +
+                                             ": passed, branch kept by continuity of the tangent"});
+  };
+
   for (long k = 1;; ++k) {
-    if (reversals == 0 && k > last_regular) break;
+    if (reversals == 0 && k >= last_index) break;
     if (static_cast<int>(result.points.size()) >= max_positions) {
       result.message = "stopped after " + std::to_string(max_positions) +
                        " positions: the reversing sweep did not return to its start";
@@ -488,149 +584,159 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
     law.at(t, target, sd, sdd);
     // After a reversal the cycle closes when the input passes its start again, moving in the
     // original direction on the starting branch.
-    if (reversals > 0 && law.omega == omega0 && (last.input - s0) * omega0 < 0.0 &&
+    if (reversals > 0 && law.omega == omega0 && (anchor.input - s0) * omega0 < 0.0 &&
         (target - s0) * omega0 >= 0.0) {
       result.message = "the cycle closed after " + std::to_string(reversals) + " reversals";
       break;
     }
-    // Corrections beyond twice the size of the tangent step would leave the branch.
-    const double max_step =
-        2.0 * std::abs(target - last.input) * last.tangent.cwiseAbs().maxCoeff() + 1e-12;
-    predict(last, target, trial);
-    bool ok = sweep.corrector(trial, target, max_step) && evaluate_at(trial, t, point) &&
-              same_branch(point, last);
-    if (!ok) {
-      // A change point (E loses rank, e.g. a parallelogram in line) is singular only exactly
-      // there: the input passes. Retry just beyond it from the same predictor; a fold (dead
-      // point) stays impassable.
-      for (const double shift : {1e-6, 1e-4}) {
-        const double ts = t + shift * dt;
-        double shifted = 0.0;
-        law.at(ts, shifted, sd, sdd);
-        predict(last, shifted, trial);
-        if (sweep.corrector(trial, shifted, max_step) && evaluate_at(trial, ts, point) &&
-            same_branch(point, last)) {
-          result.singular_positions.push_back(
-              {target, t,
-               "singular position (E loses rank) at input " + input_text(target, angular) +
-                   ": passed, branch kept by continuity of the tangent"});
-          point.singular = true;
-          ok = true;
+    // Reach t from the anchor: the whole step, else sub-steps (halved on failure, doubled again
+    // on success; not output). Stuck means failing within 2h after `sub`.
+    sub = anchor;
+    double h = t - sub.time;
+    bool reached = false;
+    while (true) {
+      const double t_next = sub.time + h >= t - 1e-9 * dt ? t : sub.time + h;
+      if (try_step(sub, t_next, probe)) {
+        if (!sub.singular && !probe.singular && sub.chart_id == probe.chart_id &&
+            sub.chart_sign != probe.chart_sign) {  // |det| ∝ distance: interpolate
+          const double a = sub.chart_quality / (sub.chart_quality + probe.chart_quality);
+          record_singular(sub.input + a * (probe.input - sub.input),
+                          sub.time + a * (probe.time - sub.time));
+        }
+        if (probe.singular)
+          record_singular(probe.input, probe.time);
+        else
+          good = probe;
+        if (t_next == t) {
+          reached = true;
+          break;
+        }
+        std::swap(sub, probe);
+        h = std::min(2.0 * h, t - sub.time);
+        continue;
+      }
+      h *= 0.5;
+      if (h < 1e-7 * dt) break;
+    }
+    if (reached) {
+      if (!probe.singular) update_determinacy(probe);
+      result.points.push_back(probe);
+      std::swap(anchor, probe);
+      continue;
+    }
+    // Stuck just after `sub`. A change point (E loses rank; the driver still drives: dᵀF stays
+    // finite) is jumped over; a fold of the input (dᵀF → 0) is a dead point.
+    const double t_stuck = sub.time;
+    if (std::abs(sub.dTF) > 1e-2) {
+      bool passed = false, output = false;
+      for (const double jump : {1e-5, 1e-4, 1e-3, 1e-2, 0.1}) {
+        const double tj = t_stuck + jump * dt;
+        if (try_step(sub, tj, probe)) {
+          record_singular(sub.input, t_stuck);
+          if (!probe.singular) good = probe;
+          // Past the grid time: the grid position is the singular one; it is reported just
+          // past it, flagged (its multipliers are not meaningful there).
+          if (tj >= t) {
+            probe.singular = true;
+            result.points.push_back(probe);
+            output = true;
+          }
+          std::swap(anchor, probe);
+          passed = true;
           break;
         }
       }
+      if (passed) {
+        if (!output) --k;  // continue towards the same grid time from past the point
+        continue;
+      }
+      result.status = CycleStatus::failed;
+      result.message = "the continuation cannot proceed at input " +
+                       input_text(sub.input, angular) +
+                       " (neither a dead point nor a singular position of E); the positions "
+                       "before it are reported";
+      break;
     }
-    if (!ok) {
-      // Dead point between the last good time and t: bisection in time.
-      double lo = last.time, hi = t;
-      DrivenPoint at_lo = last, probe;
-      while (hi - lo > 1e-15 * (1.0 + std::abs(hi))) {
-        const double mid = 0.5 * (lo + hi);
-        double s_mid = 0.0;
-        law.at(mid, s_mid, sd, sdd);
-        if (std::abs(s_mid - at_lo.input) < options.dead_point_tolerance) break;
-        predict(at_lo, s_mid, trial);
-        const double step =
-            2.0 * std::abs(s_mid - at_lo.input) * at_lo.tangent.cwiseAbs().maxCoeff() + 1e-12;
-        if (sweep.corrector(trial, s_mid, step) && evaluate_at(trial, mid, probe) &&
-            same_branch(probe, at_lo)) {
-          lo = mid;
-          at_lo = probe;
-        } else {
-          hi = mid;
-        }
+    // Dead point: bisection in time between the last good time and the failing one.
+    DrivenPoint at_lo = sub;
+    double lo = sub.time, hi = std::min(sub.time + 2.0 * h + 1e-7 * dt, t);
+    while (hi - lo > 1e-15 * (1.0 + std::abs(hi))) {
+      const double mid = 0.5 * (lo + hi);
+      double s_mid = 0.0;
+      law.at(mid, s_mid, sd, sdd);
+      if (std::abs(s_mid - at_lo.input) < options.dead_point_tolerance) break;
+      if (try_step(at_lo, mid, probe)) {
+        lo = mid;
+        std::swap(at_lo, probe);
+      } else {
+        hi = mid;
       }
-      const double s_dead = at_lo.input;
-      std::string msg = "dead point of driver joint '" + joint_name + "' at input " +
-                        input_text(s_dead, angular) +
-                        ": the driver cannot move the mechanism past it";
-      if (!(options.reverse_at_dead_point && constant)) {
-        result.dead_points.push_back({s_dead, at_lo.time, msg});
-        result.status = CycleStatus::stopped_at_dead_point;
-        result.message = msg;
-        break;
-      }
-      // Reverse: pass the fold along the curve (pseudo-arclength steps: predictor along the
-      // direction of motion n, corrector with nᵀ(q − q_pred) = 0) until the input has turned
-      // back, then drive the input the other way.
-      VecX dir = at_lo.tangent * at_lo.input_rate;  // direction of motion dq/dt
-      dir.normalize();
-      double h = std::max((last.q - at_lo.q).norm(), 1e-9);
-      VecX q_cur = at_lo.q, q_pred(model.nq);
-      bool passed = false;
-      for (int attempt = 0; attempt < 40 && !passed; ++attempt) {
-        q_pred = q_cur + h * dir;
-        trial = q_pred;
-        if (!sweep.corrector(trial, 0.0, 0.5 * h, &dir, &q_pred)) {
-          h *= 0.5;
-          continue;
-        }
-        // New direction of motion: F at the new point, oriented along the old direction.
-        state.q = trial;
-        compute_constraint_jacobian(model, state.q, ws.constraints.Et);
-        if (compute_basis(model, state, ws) != ProjectionStatus::ok) {
-          h *= 0.5;
-          continue;
-        }
-        VecX f = ws.dual.F.col(0).normalized();
-        if (f.dot(dir) < 0.0) f = -f;
-        const double s_new = compute_scalar(model, input, trial, nullptr).value;
-        q_cur = trial;
-        dir = f;
-        if ((s_new - s_dead) * law.omega < -options.dead_point_tolerance) passed = true;
-      }
-      if (!passed) {
-        msg += "; could not pass it to reverse";
-        result.dead_points.push_back({s_dead, at_lo.time, msg});
-        result.status = CycleStatus::stopped_at_dead_point;
-        result.message = msg;
-        break;
-      }
-      ++reversals;
-      result.dead_points.push_back({s_dead, at_lo.time, msg + "; the input reverses"});
-      law.s_ref = s_dead;
-      law.t_ref = at_lo.time;
-      law.omega = -law.omega;
-      // Re-anchor on the far side: its time on the reversed law, then resume on the time grid.
-      const double s_p = compute_scalar(model, input, q_cur, nullptr).value;
-      const double t_p = at_lo.time + (s_p - s_dead) / law.omega;
-      if (!evaluate_at(q_cur, t_p, last)) {
-        result.status = CycleStatus::failed;
-        result.message = msg + "; lost the branch after reversing";
-        return result;
-      }
-      k = static_cast<long>(std::floor(t_p / dt));  // the loop's ++k gives the next grid time
-      continue;
     }
-    result.points.push_back(point);
-    std::swap(last, point);
+    const double s_dead = at_lo.input;
+    std::string msg = "dead point of driver joint '" + joint_name + "' at input " +
+                      input_text(s_dead, angular) +
+                      ": the driver cannot move the mechanism past it";
+    if (!(options.reverse_at_dead_point && constant)) {
+      result.dead_points.push_back({s_dead, at_lo.time, msg});
+      result.status = CycleStatus::stopped_at_dead_point;
+      result.message = msg;
+      break;
+    }
+    // Reverse: pass the fold along the curve (pseudo-arclength steps: predictor along the
+    // direction of motion n, corrector with nᵀ(q − q_pred) = 0) until the input has turned
+    // back, then drive the input the other way.
+    VecX dir = at_lo.tangent * at_lo.input_rate;  // direction of motion dq/dt
+    dir.normalize();
+    double arc = std::max((anchor.q - at_lo.q).norm(), 1e-9);
+    VecX q_cur = at_lo.q, q_pred(model.nq);
+    bool passed = false;
+    for (int attempt = 0; attempt < 40 && !passed; ++attempt) {
+      q_pred = q_cur + arc * dir;
+      trial = q_pred;
+      if (!sweep.corrector(trial, 0.0, 0.5 * arc, &dir, &q_pred)) {
+        arc *= 0.5;
+        continue;
+      }
+      // New direction of motion: F at the new point, oriented along the old direction.
+      state.q = trial;
+      compute_constraint_jacobian(model, state.q, ws.constraints.Et);
+      if (compute_basis(model, state, ws) != ProjectionStatus::ok) {
+        arc *= 0.5;
+        continue;
+      }
+      VecX f = ws.dual.F.col(0).normalized();
+      if (f.dot(dir) < 0.0) f = -f;
+      const double s_new = compute_scalar(model, input, trial, nullptr).value;
+      q_cur = trial;
+      dir = f;
+      if ((s_new - s_dead) * law.omega < -options.dead_point_tolerance) passed = true;
+    }
+    if (!passed) {
+      msg += "; could not pass it to reverse";
+      result.dead_points.push_back({s_dead, at_lo.time, msg});
+      result.status = CycleStatus::stopped_at_dead_point;
+      result.message = msg;
+      break;
+    }
+    ++reversals;
+    result.dead_points.push_back({s_dead, at_lo.time, msg + "; the input reverses"});
+    law.s_ref = s_dead;
+    law.t_ref = at_lo.time;
+    law.omega = -law.omega;
+    // Re-anchor on the far side: its time on the reversed law, then resume on the time grid.
+    const double s_p = compute_scalar(model, input, q_cur, nullptr).value;
+    const double t_p = at_lo.time + (s_p - s_dead) / law.omega;
+    if (!evaluate_at(q_cur, t_p, anchor)) {
+      result.status = CycleStatus::failed;
+      result.message = msg + "; lost the branch after reversing";
+      break;
+    }
+    if (!anchor.singular) good = anchor;
+    k = static_cast<long>(std::floor(t_p / dt));  // the loop's ++k gives the next grid time
   }
-  if (result.status != CycleStatus::stopped_at_dead_point) result.status = CycleStatus::completed;
   result.chart_switches = ws.dual.switch_count;
   result.reversals = reversals;
   if (options.progress) options.progress(1.0);
-
-  // Determinacy: component cᵀλ is unique iff Nᵀc = 0 (c from the linear map λ → components).
-  const size_t nk = result.components.size();
-  result.determinate.assign(nk, true);
-  result.row_determinate.assign(static_cast<size_t>(model.nc), true);
-  if (result.redundant > 0) {
-    const VecX& q_ref = result.points.back().q;
-    const MatX& N = w.N;  // from the last position; the redundancy pattern is constant on a branch
-    const double tol = 1e-8 * (1.0 + N.norm());
-    for (int r = 0; r < model.nc; ++r)
-      result.row_determinate[static_cast<size_t>(r)] = N.row(r).norm() < tol;
-    MatX C(static_cast<Eigen::Index>(nk), model.nc);
-    std::vector<double> values;
-    for (int r = 0; r < model.nc; ++r) {
-      compute_reactions(model, q_ref, VecX::Unit(model.nc, r), values);
-      for (size_t i = 0; i < nk; ++i) C(static_cast<Eigen::Index>(i), r) = values[i];
-    }
-    for (size_t i = 0; i < nk; ++i)
-      result.determinate[i] =
-          (N.transpose() * C.row(static_cast<Eigen::Index>(i)).transpose()).norm() <
-          tol * (1.0 + C.row(static_cast<Eigen::Index>(i)).norm());
-  }
   return result;
 }
 

@@ -55,10 +55,13 @@ struct ReactionComponent {
 struct DrivenPoint {
   double input = 0.0, time = 0.0;
   double input_rate = 0.0, input_acceleration = 0.0;  // ṡ, s̈ of the driver's law at `time`
-  VecX tangent;             // dq/ds = F / (dᵀF): the branch's direction per unit input
-  double drive = 0.0;       // τ: drive torque (N·m) or force (N), from the driver onto the joint
-  double dTF = 0.0;         // dᵀF, normalised: |dᵀF| / (|d| |F|) → 0 at a dead point
-  VecX q, u, udot, lambda;  // λ: minimum-norm multipliers (rows of Eᵀ)
+  VecX tangent;        // dq/ds = F / (dᵀF): the branch's direction per unit input
+  double drive = 0.0;  // τ: drive torque (N·m) or force (N), from the driver onto the joint
+  double chart_quality = 0.0;  // conditioning of the chart's block (→ 0 next to a change point)
+  int chart_sign = 1;          // sign of det of the chart's block
+  long chart_id = 0;           // the chart (count of switches so far)
+  double dTF = 0.0;            // dᵀF, normalised: |dᵀF| / (|d| |F|) → 0 at a dead point
+  VecX q, u, udot, lambda;     // λ: minimum-norm multipliers (rows of Eᵀ)
   std::vector<double> reactions;  // per ReactionComponent
   std::vector<double> measures;   // per Model::measures
   double kinetic = 0.0, potential = 0.0, dissipated = 0.0;
@@ -109,7 +112,7 @@ struct DrivenWorkspace {
   std::vector<int> other_rows;  // the k redundant rows (complement of the chart's rows)
   MatX J;  // n × n: [E_Rᵀ; dᵀ], Jacobian of the locked-input position problem, then its LU
   Eigen::VectorXi J_piv;  // n: row interchanges of that LU
-  VecX g, dq;  // n: residual and Newton step of the locked-input corrector
+  VecX g, dq;             // n: residual and Newton step of the locked-input corrector
   DrivenWorkspace(const Model& model, int rank);
 };
 
