@@ -4,10 +4,13 @@
 // sweep is run_cycle (analysis/cycle.hpp), the files are io/cycle_output.hpp.
 #include "orthomech/analysis/cycle.hpp"
 
+#include <fcntl.h>
 #include <spdlog/spdlog.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -133,6 +136,31 @@ std::string speed_text(const Driver& d, bool angular) {
                  : "constant speed " + fmt(d.speed) + " m/s";
 }
 
+// Runs `program arg` in `dir` (fork/exec: no shell, so any path works), stdout discarded,
+// stderr to `log`. Returns the exit status, 127 when the program cannot be run.
+int run_in_directory(const std::filesystem::path& dir, const std::string& program,
+                     const std::string& arg, const std::filesystem::path& log) {
+  const std::string dir_s = dir.string(), log_s = log.string();
+  std::fflush(nullptr);
+  const pid_t pid = fork();
+  if (pid < 0) return 127;
+  if (pid == 0) {  // child: only async-signal-safe calls until exec
+    if (chdir(dir_s.c_str()) != 0) _exit(127);
+    const int null_fd = open("/dev/null", O_WRONLY);
+    const int log_fd = open(log_s.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (null_fd >= 0) dup2(null_fd, STDOUT_FILENO);
+    if (log_fd >= 0) dup2(log_fd, STDERR_FILENO);
+    const int in_fd = open("/dev/null", O_RDONLY);
+    if (in_fd >= 0) dup2(in_fd, STDIN_FILENO);
+    execlp(program.c_str(), program.c_str(), arg.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0)
+    if (errno != EINTR) return 127;
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 126;
+}
+
 nlohmann::json positions_json(const Model& model, const CycleResult& r) {
   nlohmann::json pts = nlohmann::json::array();
   for (const DrivenPoint& p : r.points) {
@@ -140,9 +168,18 @@ nlohmann::json positions_json(const Model& model, const CycleResult& r) {
     j["input"] = p.input;
     j["time"] = p.time;
     j["singular"] = p.singular;
-    nlohmann::json m;
+    nlohmann::json m = nlohmann::json::object();
     for (size_t i = 0; i < model.measures.size(); ++i) m[model.measures[i].name] = p.measures[i];
     j["measures"] = m;
+    // Velocities and accelerations of every body's centre of mass (and angular ones).
+    nlohmann::json bodies = nlohmann::json::object();
+    for (const Body& b : model.bodies) {
+      const auto v = p.u.segment(b.u_offset, b.nu());
+      const auto a = p.udot.segment(b.u_offset, b.nu());
+      bodies[b.name] = {{"velocity", std::vector<double>(v.data(), v.data() + v.size())},
+                        {"acceleration", std::vector<double>(a.data(), a.data() + a.size())}};
+    }
+    j["bodies"] = bodies;
     if (!p.singular) {  // multipliers are not meaningful next to a change point
       j["drive"] = p.drive;
       nlohmann::json rc;
@@ -197,10 +234,13 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
   const std::vector<SeriesSummary> summary = summarize_cycle(r, magnitudes, drive_unit);
   const Joint& joint = model.joints[static_cast<size_t>(co.driver.joint)];
 
-  if (r.status == CycleStatus::failed) {
+  if (r.status == CycleStatus::invalid_request) throw CLI::ValidationError(model.file, r.message);
+  if (r.status == CycleStatus::failed && r.points.empty()) {
     spdlog::error("{}: the cycle cannot be computed: {}", model.file, r.message);
     return kNumerical;
   }
+  if (r.status == CycleStatus::failed)
+    spdlog::error("{}: the sweep stopped: {}", model.file, r.message);
   if (r.status == CycleStatus::stopped_at_dead_point) spdlog::warn("{}: {}", model.file, r.message);
   for (const DeadPoint& d : r.singular_positions) spdlog::info("{}", d.message);
 
@@ -222,23 +262,23 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
     // gnuplot: ORTHOMECH_GNUPLOT names the program ("none" disables it); default "gnuplot".
     const char* env = std::getenv("ORTHOMECH_GNUPLOT");
     const std::string gnuplot = env && *env ? env : "gnuplot";
-    const std::string quoted_dir = "'" + std::filesystem::absolute(dir).string() + "'";
     bool plotted = false;
-    if (gnuplot != "none" &&
-        std::system(("command -v '" + gnuplot + "' >/dev/null 2>&1").c_str()) == 0) {
-      const std::string cmd =
-          "cd " + quoted_dir + " && '" + gnuplot + "' cycle.gp >/dev/null 2>gnuplot.log";
-      plotted = std::system(cmd.c_str()) == 0;
-      if (!plotted)
+    if (gnuplot == "none") {
+      spdlog::warn("plots skipped (ORTHOMECH_GNUPLOT=none): wrote {}/cycle.csv and {}/cycle.gp",
+                   opt.out, opt.out);
+    } else {
+      const int status = run_in_directory(dir, gnuplot, "cycle.gp", dir / "gnuplot.log");
+      plotted = status == 0;
+      if (status == 127) {
+        spdlog::warn(
+            "gnuplot not found: wrote {}/cycle.csv and {}/cycle.gp; for the plots install "
+            "gnuplot-nox (apt-get install gnuplot-nox) and run 'gnuplot cycle.gp' in {}",
+            opt.out, opt.out, opt.out);
+      } else if (!plotted) {
         spdlog::warn("gnuplot failed on {}/cycle.gp (see {}/gnuplot.log); the CSV is written",
                      opt.out, opt.out);
-      else
-        std::filesystem::remove(dir / "gnuplot.log", ec);
-    } else {
-      spdlog::warn(
-          "gnuplot not found: wrote {}/cycle.csv and {}/cycle.gp; for the plots install "
-          "gnuplot-nox (apt-get install gnuplot-nox) and run 'gnuplot cycle.gp' in {}",
-          opt.out, opt.out, opt.out);
+      }
+      if (status == 0 || status == 127) std::filesystem::remove(dir / "gnuplot.log", ec);
     }
     files_note = opt.out + "/cycle.csv, " + opt.out + "/cycle.gp" +
                  (plotted ? ", drive.svg, drive.png, reactions.svg, reactions.png" : "");
@@ -249,7 +289,9 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
     nlohmann::json j;
     j["mechanism"] = model.name;
     j["file"] = model.file;
-    j["status"] = r.status == CycleStatus::completed ? "completed" : "stopped_at_dead_point";
+    j["status"] = r.status == CycleStatus::completed               ? "completed"
+                  : r.status == CycleStatus::stopped_at_dead_point ? "stopped_at_dead_point"
+                                                                   : "failed";
     j["message"] = r.message;
     j["driver"] = {{"joint", joint.name},
                    {"name", co.driver.name},
@@ -291,14 +333,18 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
     if (opt.positions) j["points"] = positions_json(model, r);
     out << j.dump(2) << '\n';
   } else {
-    const DrivenPoint& first = r.points.front();
-    const DrivenPoint& last = r.points.back();
+    static const DrivenPoint kNone;
+    const DrivenPoint& first = r.points.empty() ? kNone : r.points.front();
+    const DrivenPoint& last = r.points.empty() ? kNone : r.points.back();
     out << "mechanism       " << model.name << "  (" << model.file << ")\n";
     out << "driver          joint '" << joint.name << "' (" << joint.type_name() << "), "
         << speed_text(co.driver, angular) << "\n";
-    out << "sweep           " << r.points.size() << " positions, input "
-        << input_text(first.input, angular) << " -> " << input_text(last.input, angular)
-        << ", t = 0 -> " << fmt(last.time) << " s\n";
+    if (r.points.empty())
+      out << "sweep           no position computed\n";
+    else
+      out << "sweep           " << r.points.size() << " positions, input "
+          << input_text(first.input, angular) << " -> " << input_text(last.input, angular)
+          << ", t = 0 -> " << fmt(last.time) << " s\n";
     out << "status          " << to_string(r.status) << (r.message.empty() ? "" : ": ") << r.message
         << "\n";
     out << "mobility        DOF " << r.dof << ", rank of E " << r.rank << ", "
@@ -327,6 +373,7 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
                   "at input", "RMS");
     out << line;
     for (const SeriesSummary& s : summary) {
+      if (s.samples == 0) continue;
       std::snprintf(line, sizeof line, "%-20s %-5s %13.5g %16s %13.5g%s\n", s.name.c_str(),
                     s.unit.c_str(), s.peak, input_text(wrapped(s.peak_input), angular).c_str(),
                     s.rms, s.determinate ? "" : "   indeterminate (minimum norm)");
@@ -346,7 +393,9 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
            "second; \"_local\" and joint-frame components are in the first body's frame.\n";
   }
   std::cout << out.str();  // all at once
-  return r.status == CycleStatus::completed ? kOk : kCheckFailed;
+  return r.status == CycleStatus::completed               ? kOk
+         : r.status == CycleStatus::stopped_at_dead_point ? kCheckFailed
+                                                          : kNumerical;
 }
 
 }  // namespace
@@ -363,7 +412,7 @@ void register_cycle(CLI::App& app, const GlobalOptions& globals, int& exit_code)
   cmd->add_option("--speed", opt->speed,
                   "constant input speed, e.g. 300rpm, 31.4rad/s, 90deg/s, 0.5m/s (bare: SI)");
   cmd->add_option("--steps", opt->steps, "positions per cycle (default: the file's, else 360)")
-      ->check(CLI::Range(2, 10000000));
+      ->check(CLI::Range(2, 100000));
   cmd->add_option("--from", opt->from, "start input, e.g. 30deg, 20mm (bare: SI)");
   cmd->add_option("--to", opt->to, "end input: sweep the range instead of a full turn");
   cmd->add_flag("--reverse-at-dead-point", opt->reverse,

@@ -26,6 +26,8 @@ const char* to_string(CycleStatus s) {
       return "stopped at a dead point";
     case CycleStatus::failed:
       return "failed";
+    case CycleStatus::invalid_request:
+      return "invalid request";
   }
   return "?";
 }
@@ -95,7 +97,10 @@ void compute_reactions(const Model& model, const VecX& q, const VecX& lambda,
           using T = std::decay_t<decltype(k)>;
           if constexpr (std::is_same_v<T, Revolute> || std::is_same_v<T, Fixed>) {
             const Vec2 F(lambda(r), lambda(r + 1));
-            const Vec2 local = rotation(body_angle(model, k.pi.body, q)).transpose() * F;
+            // The joint's frame: its first body's, or its second's when the first is the
+            // ground (the moving link's axes, where the ground's would repeat Fx, Fy).
+            const int frame = k.pi.body != kGround ? k.pi.body : k.pj.body;
+            const Vec2 local = rotation(body_angle(model, frame, q)).transpose() * F;
             out.push_back(F.x());
             out.push_back(F.y());
             if constexpr (std::is_same_v<T, Fixed>) out.push_back(-lambda(r + 2));
@@ -366,26 +371,35 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
   law.coefficients = &driver.coefficients;
   const bool constant = driver.profile == Profile::constant_speed;
   if (constant && !(std::abs(driver.speed) > 0.0)) {
+    result.status = CycleStatus::invalid_request;
     result.message = "the driver's speed must not be zero";
     return result;
   }
   if (driver.profile == Profile::harmonic &&
       !(driver.frequency > 0.0 && std::abs(driver.amplitude) > 0.0)) {
+    result.status = CycleStatus::invalid_request;
     result.message = "a harmonic driver needs a non-zero amplitude and a positive frequency";
     return result;
   }
   if (driver.profile == Profile::polynomial) {
-    result.message =
-        "a polynomial driver has no cycle to sweep; give a constant-speed or harmonic driver (or "
-        "--driver JOINT --speed ...)";
+    result.status = CycleStatus::invalid_request;
+    result.message = "a polynomial driver has no cycle to sweep; give a constant speed (--speed)";
     return result;
   }
-  if (!constant && !options.full_cycle) {
-    result.message = "an input range needs a constant-speed driver";
+  if (!constant && (!options.full_cycle || options.use_start)) {
+    result.status = CycleStatus::invalid_request;
+    result.message =
+        "a start or an end input (--from, --to) needs a constant-speed driver: give --speed too";
+    return result;
+  }
+  if (options.reverse_at_dead_point && !constant) {
+    result.status = CycleStatus::invalid_request;
+    result.message = "reversing at a dead point needs a constant-speed driver: give --speed too";
     return result;
   }
   if (constant && options.full_cycle && !angular) {
-    result.message = "a full cycle needs a revolute driver; give the input range (start/end)";
+    result.status = CycleStatus::invalid_request;
+    result.message = "a prismatic driver has no full turn: give the end of the input range (--to)";
     return result;
   }
   // Start: the design position projected onto f(q) = 0.
@@ -435,7 +449,8 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
   } else if (constant) {
     const double span = options.end - s0;
     if (!(std::abs(span) > 0.0)) {
-      result.message = "the input range is empty";
+      result.status = CycleStatus::invalid_request;
+      result.message = "the input range is empty: the end (--to) equals the start";
       return result;
     }
     law.omega = std::copysign(std::abs(driver.speed), span);
@@ -447,7 +462,7 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
   const double dt = options.full_cycle ? period / steps : period / (steps - 1);
   const int last_index = steps;  // grid times k = 0 … steps − 1
   const double omega0 = law.omega;
-  const int max_positions = 8 * steps;  // bound on a reversing sweep that does not close
+  const int max_positions = 4 * steps;  // bound on a reversing sweep that does not close
 
   result.points.reserve(static_cast<size_t>(steps));
 
@@ -795,8 +810,7 @@ std::vector<SeriesSummary> summarize_cycle(const CycleResult& result,
       if (p.singular) continue;
       const double v = value(p);
       sum2 += v * v;
-      ++s.samples;
-      if (std::abs(v) > s.peak) {
+      if (s.samples++ == 0 || std::abs(v) > s.peak) {
         s.peak = std::abs(v);
         s.peak_input = p.input;
         s.peak_time = p.time;

@@ -14,7 +14,7 @@ namespace {
 
 std::string number(double v) {
   char buf[32];
-  std::snprintf(buf, sizeof buf, "%.10g", v);
+  std::snprintf(buf, sizeof buf, "%.12g", v);
   return buf;
 }
 
@@ -64,6 +64,18 @@ CycleColumns write_cycle_csv(const std::filesystem::path& file, const Model& mod
   out << (angular ? "input [rad],input [deg]" : "input [m],input [mm]") << ",time [s]";
   col = 3;
   for (const Measure& m : model.measures) out << ',' << field(m.name + " [" + m.unit + "]"), ++col;
+  // Velocity and acceleration of every body's centre of mass, and angular ones.
+  for (const Body& b : model.bodies) {
+    const bool rigid = b.kind == BodyKind::rigid;
+    for (const char* c : {"vx [m/s]", "vy [m/s]", "omega [rad/s]"}) {
+      if (!rigid && c[0] == 'o') continue;
+      out << ',' << field(b.name + "." + c), ++col;
+    }
+    for (const char* c : {"ax [m/s^2]", "ay [m/s^2]", "alpha [rad/s^2]"}) {
+      if (!rigid && c[0] == 'a' && c[1] == 'l') continue;
+      out << ',' << field(b.name + "." + c), ++col;
+    }
+  }
   out << ",drive [" << drive_unit << "]";
   cols.drive = ++col;
   for (const ReactionComponent& c : result.components)
@@ -77,6 +89,10 @@ CycleColumns write_cycle_csv(const std::filesystem::path& file, const Model& mod
   for (const DrivenPoint& p : result.points) {
     out << number(p.input) << ',' << number(p.input * display) << ',' << number(p.time);
     for (const double v : p.measures) out << ',' << number(v);
+    for (const Body& b : model.bodies) {
+      for (int i = 0; i < b.nu(); ++i) out << ',' << number(p.u(b.u_offset + i));
+      for (int i = 0; i < b.nu(); ++i) out << ',' << number(p.udot(b.u_offset + i));
+    }
     if (p.singular) {
       out << ',';
       for (size_t i = 0; i < result.components.size() + magnitudes.size(); ++i) out << ',';

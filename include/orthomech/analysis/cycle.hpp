@@ -76,7 +76,9 @@ struct DeadPoint {
   std::string message;
 };
 
-enum class CycleStatus { completed, stopped_at_dead_point, failed };
+// invalid_request: the options do not fit the driver or the mechanism (a range for a harmonic
+// law, a full turn of a prismatic joint, an empty range): a usage error, not a numerical one.
+enum class CycleStatus { completed, stopped_at_dead_point, failed, invalid_request };
 
 struct CycleResult {
   CycleStatus status = CycleStatus::failed;

@@ -297,6 +297,38 @@ TEST(Cycle, NFourBarPassesItsChangePoints) {
   }
 }
 
+// A prismatic driver: the slider-crank driven at its piston over a stroke range (the crank
+// follows): power balance F ṡ = d(T + V)/dt with F the drive force. The gas force, which has no
+// potential, is taken out of the model (its power is not in T + V).
+TEST(Cycle, PrismaticDriverPowerBalance) {
+  Model model = test::load_bundled("slider-crank");
+  std::erase_if(model.loads,
+                [](const Load& l) { return std::holds_alternative<PointForce>(l.kind); });
+  CycleOptions o;
+  o.driver.joint = model.find_joint("slide");
+  ASSERT_GE(o.driver.joint, 0);
+  o.driver.speed = 2.0;  // m/s
+  o.full_cycle = false;
+  o.use_start = true;
+  o.start = 0.235;  // m, piston positions between the dead centres (150 … 250 mm)
+  o.end = 0.175;
+  o.steps = 2001;
+  const CycleResult r = run_cycle(model, o);
+  ASSERT_EQ(r.status, CycleStatus::completed) << r.message;
+  ASSERT_EQ(r.points.size(), 2001u);
+  EXPECT_NEAR(r.points.front().input, 0.235, 1e-12);
+  EXPECT_NEAR(r.points.back().input, 0.175, 1e-12);
+  const auto& p = r.points;
+  const double h = p[1].time - p[0].time;
+  double peak = 0.0;
+  for (const auto& x : p) peak = std::max(peak, std::abs(x.drive * x.input_rate));
+  for (size_t k = 2; k + 2 < p.size(); ++k) {
+    auto E = [&](size_t i) { return p[i].kinetic + p[i].potential; };
+    const double dEdt = (-E(k + 2) + 8.0 * E(k + 1) - 8.0 * E(k - 1) + E(k - 2)) / (12.0 * h);
+    EXPECT_NEAR(p[k].drive * p[k].input_rate, dEdt + p[k].dissipated, 1e-6 * peak) << k;
+  }
+}
+
 // A harmonic driver s = a sin(2π f t): ṡ and s̈ vary and change sign. Power balance
 // τ ṡ = d/dt (T + V) at every position (five-point stencil on the uniform time grid), and the
 // input follows the law.

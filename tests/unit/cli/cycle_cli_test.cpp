@@ -225,7 +225,7 @@ TEST(CycleCli, CsvAndPlots) {
 
 TEST(CycleCli, WithoutGnuplotWritesTheScriptAndSaysSo) {
   TempDir dir;
-  ::setenv("ORTHOMECH_GNUPLOT", "none", 1);
+  ::setenv("ORTHOMECH_GNUPLOT", "/nonexistent/gnuplot", 1);
   const CliResult r =
       run_cli({"cycle", bundled("crank-rocker"), "--steps", "36", "--out", dir.path.string()});
   ::unsetenv("ORTHOMECH_GNUPLOT");
@@ -234,6 +234,86 @@ TEST(CycleCli, WithoutGnuplotWritesTheScriptAndSaysSo) {
   EXPECT_TRUE(fs::exists(dir.path / "cycle.csv"));
   EXPECT_TRUE(fs::exists(dir.path / "cycle.gp"));
   EXPECT_FALSE(fs::exists(dir.path / "drive.svg"));
+}
+
+// The start position is a dead point of the driver: said, exit 1, no crash, empty CSV body.
+TEST(CycleCli, StartAtADeadPoint) {
+  TempDir dir;
+  ::setenv("ORTHOMECH_GNUPLOT", "none", 1);
+  const std::string file =
+      std::string(ORTHOMECH_SOURCE_DIR) + "/tests/data/cycle/rocker-starts-at-dead-point.yaml";
+  const CliResult t = run_cli({"cycle", file});
+  const CliResult j = run_cli({"cycle", file, "--json", "--out", dir.path.string()});
+  ::unsetenv("ORTHOMECH_GNUPLOT");
+  EXPECT_EQ(t.status, 1) << t.err;
+  EXPECT_NE(t.out.find("no position computed"), std::string::npos) << t.out;
+  EXPECT_NE(t.err.find("the start position is a dead point of driver joint 'B0'"),
+            std::string::npos)
+      << t.err;
+  ASSERT_EQ(j.status, 1) << j.err;
+  const auto doc = nlohmann::json::parse(j.out);
+  EXPECT_EQ(doc["positions"], 0);
+  EXPECT_EQ(doc["dead_points"].size(), 1u);
+  EXPECT_EQ(read_csv(dir.path / "cycle.csv").size(), 1u);  // the header
+}
+
+// Requests that do not fit the driver are command-line errors (exit 2), naming the option.
+TEST(CycleCli, RequestsThatDoNotFitTheDriverAreExitTwo) {
+  const CliResult a =
+      run_cli({"cycle", bundled("slider-crank"), "--driver", "slide", "--speed", "1m/s"});
+  EXPECT_EQ(a.status, 2);
+  EXPECT_NE(a.err.find("--to"), std::string::npos) << a.err;
+  const CliResult b = run_cli({"cycle", bundled("double-rocker"), "--from", "30deg"});
+  EXPECT_EQ(b.status, 2);
+  EXPECT_NE(b.err.find("constant-speed"), std::string::npos) << b.err;
+  const CliResult c = run_cli({"cycle", bundled("double-rocker"), "--reverse-at-dead-point"});
+  EXPECT_EQ(c.status, 2);
+  const CliResult d = run_cli({"cycle", bundled("crank-rocker"), "--to", "60deg"});
+  EXPECT_EQ(d.status, 2);
+  EXPECT_NE(d.err.find("empty"), std::string::npos) << d.err;
+  for (const CliResult* r : {&a, &b, &c, &d}) EXPECT_EQ(r->out, "");
+}
+
+// An output directory whose name needs quoting in a shell; plots still made when gnuplot is
+// there.
+TEST(CycleCli, OutputDirectoryWithAQuote) {
+  TempDir dir;
+  const fs::path out = dir.path / "it's here";
+  const CliResult r =
+      run_cli({"cycle", bundled("crank-rocker"), "--steps", "36", "--out", out.string()});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(fs::exists(out / "cycle.csv"));
+  if (std::system("command -v gnuplot >/dev/null 2>&1") == 0) {
+    EXPECT_TRUE(fs::exists(out / "drive.svg")) << r.err;
+  }
+}
+
+// Body velocities in the CSV against the closed form: the crank's centre of mass (mid-crank,
+// 15 mm from A0) moves at ω × 15 mm, perpendicular to the crank.
+TEST(CycleCli, BodyVelocitiesInTheCsv) {
+  TempDir dir;
+  ::setenv("ORTHOMECH_GNUPLOT", "none", 1);
+  const CliResult r =
+      run_cli({"cycle", bundled("crank-rocker"), "--steps", "12", "--out", dir.path.string()});
+  ::unsetenv("ORTHOMECH_GNUPLOT");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto rows = read_csv(dir.path / "cycle.csv");
+  size_t vx = 0, vy = 0, om = 0, ax = 0;
+  for (size_t c = 0; c < rows[0].size(); ++c) {
+    if (rows[0][c] == "crank.vx [m/s]") vx = c;
+    if (rows[0][c] == "crank.vy [m/s]") vy = c;
+    if (rows[0][c] == "crank.omega [rad/s]") om = c;
+    if (rows[0][c] == "crank.ax [m/s^2]") ax = c;
+  }
+  ASSERT_TRUE(vx && vy && om && ax);
+  const double w = 300.0 * 2.0 * std::numbers::pi / 60.0;
+  for (size_t k = 1; k < rows.size(); ++k) {
+    const double th = std::stod(rows[k][0]);
+    EXPECT_NEAR(std::stod(rows[k][om]), w, 1e-9);
+    EXPECT_NEAR(std::stod(rows[k][vx]), -w * 0.015 * std::sin(th), 1e-9);
+    EXPECT_NEAR(std::stod(rows[k][vy]), w * 0.015 * std::cos(th), 1e-9);
+    EXPECT_NEAR(std::stod(rows[k][ax]), -w * w * 0.015 * std::cos(th), 1e-7);
+  }
 }
 
 TEST(CycleCli, DriverAndRangeFromTheCommandLine) {
