@@ -390,7 +390,8 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
     }
     if (any) out << "\n";
     out << "\nconvention: reactions are forces and moments on a joint's first body from its "
-           "second; \"_local\" and joint-frame components are in the first body's frame.\n";
+           "second; \"_local\" and joint-frame components are in the joint's frame (the first "
+           "body's, or the second's when the first is the ground).\n";
   }
   std::cout << out.str();  // all at once
   return r.status == CycleStatus::completed               ? kOk
