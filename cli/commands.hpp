@@ -8,4 +8,6 @@ namespace orthomech::cli {
 struct GlobalOptions;
 // `orthomech info FILE [--json]`: mobility and structure (cli/info.cpp).
 void register_info(CLI::App& app, const GlobalOptions& globals, int& exit_code);
+// `orthomech simulate FILE --t-end T`: forward dynamics (cli/simulate.cpp).
+void register_simulate(CLI::App& app, const GlobalOptions& globals, int& exit_code);
 }  // namespace orthomech::cli

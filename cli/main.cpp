@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
   app.add_flag("-v,--verbose", globals.verbose, "debug messages on stderr");
   int exit_code = kOk;
   register_info(app, globals, exit_code);
+  register_simulate(app, globals, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

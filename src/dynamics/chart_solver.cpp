@@ -1,0 +1,126 @@
+#include "chart_solver.hpp"
+
+#include <cmath>
+
+#include "orthomech/constraints/joints.hpp"
+#include "orthomech/model/free_system.hpp"
+
+namespace orthomech::detail {
+
+namespace {
+// Above this rank the dependent block is factorised as a sparse matrix (dense LU is cheaper
+// for the small blocks of ordinary linkages; measured in bench/simulate_bench.cpp).
+constexpr int kSparseAbove = 48;
+}  // namespace
+
+ChartSolver::ChartSolver(const Model& model, int rank)
+    : model_(model),
+      n_(model.n),
+      nc_(model.nc),
+      r_(rank),
+      sparse_(rank > kSparseAbove),
+      selector_(model.nc, model.n),
+      dep_pos_(static_cast<size_t>(model.n), -1),
+      ED_(rank, rank),
+      lu_(rank),
+      EDs_(rank, rank),
+      br_(rank),
+      xd_(rank) {
+  triplets_.reserve(static_cast<size_t>(8 * rank + 8));
+}
+
+void ChartSolver::set_chart(const Chart& c) {
+  chart_ = c;
+  std::fill(dep_pos_.begin(), dep_pos_.end(), -1);
+  for (size_t k = 0; k < chart_.dependent.size(); ++k)
+    dep_pos_[static_cast<size_t>(chart_.dependent[k])] = static_cast<int>(k);
+}
+
+bool ChartSolver::select(const MatX& Et, const VecX& A_diag) {
+  Chart c;
+  if (selector_.select(Et, A_diag, options_, c) != r_) return false;
+  set_chart(c);
+  return true;
+}
+
+bool ChartSolver::factor(const MatX& Et) {
+  if (r_ == 0) return true;
+  if (!sparse_) {
+    for (int i = 0; i < r_; ++i) {
+      const int row = chart_.rows[static_cast<size_t>(i)];
+      for (int k = 0; k < r_; ++k) ED_(i, k) = Et(row, chart_.dependent[static_cast<size_t>(k)]);
+    }
+    lu_.compute(ED_);
+    const auto U = lu_.matrixLU().diagonal().cwiseAbs();
+    return U.minCoeff() > 1e-14 * U.maxCoeff();
+  }
+  triplets_.clear();
+  for (int i = 0; i < r_; ++i) {
+    const int row = chart_.rows[static_cast<size_t>(i)];
+    for (int j = 0; j < n_; ++j) {
+      const int k = dep_pos_[static_cast<size_t>(j)];
+      if (k >= 0 && Et(row, j) != 0.0) triplets_.emplace_back(i, k, Et(row, j));
+    }
+  }
+  EDs_.setFromTriplets(triplets_.begin(), triplets_.end());
+  slu_.compute(EDs_);
+  return slu_.info() == Eigen::Success;
+}
+
+void ChartSolver::solve(const VecX& b, VecX& x) {
+  x.setZero();
+  if (r_ == 0) return;
+  for (int i = 0; i < r_; ++i) br_(i) = b(chart_.rows[static_cast<size_t>(i)]);
+  if (!sparse_)
+    xd_ = lu_.solve(br_);
+  else
+    xd_ = slu_.solve(br_);
+  for (int k = 0; k < r_; ++k) x(chart_.dependent[static_cast<size_t>(k)]) = xd_(k);
+}
+
+void ChartSolver::solve_transposed(const MatX& Et, const VecX& c, VecX& lambda) {
+  lambda.setZero();
+  if (r_ == 0) return;
+  VecX cd(r_);
+  for (int k = 0; k < r_; ++k) cd(k) = c(chart_.dependent[static_cast<size_t>(k)]);
+  VecX lr(r_);
+  if (!sparse_) {
+    lr = lu_.transpose().solve(cd);
+  } else {
+    const Eigen::SparseMatrix<double> EDt = EDs_.transpose();
+    Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>> lu(EDt);
+    lr = lu.solve(cd);
+  }
+  (void)Et;
+  for (int i = 0; i < r_; ++i) lambda(chart_.rows[static_cast<size_t>(i)]) = lr(i);
+}
+
+SolveResult ChartSolver::correct_positions(VecX& q, MatX& Et, VecX& f, VecX& dq, double tolerance) {
+  SolveResult result;
+  constexpr int kMaxIterations = 8;
+  for (int it = 0;; ++it) {
+    compute_constraint_residual(model_, q, f);
+    result.residual = f.size() ? f.cwiseAbs().maxCoeff() : 0.0;
+    result.iterations = it;
+    if (result.residual <= tolerance) {
+      result.status = SolveStatus::converged;
+      return result;
+    }
+    if (it >= kMaxIterations || !std::isfinite(result.residual)) {
+      result.status = SolveStatus::not_converged;
+      result.message = "the position corrector did not converge (residual " +
+                       std::to_string(result.residual) + ")";
+      return result;
+    }
+    compute_constraint_jacobian(model_, q, Et);
+    if (!factor(Et)) {
+      result.status = SolveStatus::singular;
+      result.message = "the chart's dependent block is singular";
+      return result;
+    }
+    solve(f, dq);                              // E_RDᵀ Δq_D = f_R
+    integrate_positions(model_, q, dq, -1.0);  // q_D ← q_D − Δq_D
+  }
+}
+
+}  // namespace orthomech::detail

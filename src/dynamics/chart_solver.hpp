@@ -1,0 +1,57 @@
+#pragma once
+// Private: the dependent block of a chart (design §4) factorised for the integrators, dense LU
+// for small mechanisms and sparse LU for large ones (Eᵀ of a linkage has ≤ 6 non-zeros per row,
+// so the sparse factorisation keeps the cost per step near-linear in the number of bodies).
+//
+// A chart (rows R, dependent components D, independent components I; projection/chart.hpp)
+// gives F = P [I; −(E_RDᵀ)⁻¹ E_RIᵀ]. This class solves E_RDᵀ x_D = b_R (x_I = 0) and the
+// transposed system E_RD λ_R = c_D, and corrects positions in the chart.
+#include <Eigen/LU>
+#include <Eigen/SparseCore>
+#include <Eigen/SparseLU>
+#include <string>
+#include <vector>
+
+#include "orthomech/analysis/positions.hpp"
+#include "orthomech/model/model.hpp"
+#include "orthomech/projection/chart.hpp"
+
+namespace orthomech::detail {
+
+class ChartSolver {
+ public:
+  ChartSolver(const Model& model, int rank);
+  // Chooses a chart at Eᵀ (rank-revealing QR; projection/chart.hpp). Returns false when the
+  // rank found differs from the branch's rank.
+  bool select(const MatX& Et, const VecX& A_diag);
+  // Factorises E_RDᵀ at Eᵀ. Returns false when it is singular.
+  bool factor(const MatX& Et);
+  // x (size n): x_D = (E_RDᵀ)⁻¹ b_R, x_I = 0 (b of size nc). Allocation-free (dense path).
+  void solve(const VecX& b, VecX& x);
+  // λ (size nc): λ_R = (E_RD)⁻¹ c_D, other rows 0 (c of size n). The unique λ of E λ = c when
+  // E has full column rank and c ∈ range(E).
+  void solve_transposed(const MatX& Et, const VecX& c, VecX& lambda);
+  // Newton in the chart on f(q) = 0: the independent coordinates stay fixed.
+  SolveResult correct_positions(VecX& q, MatX& Et, VecX& f, VecX& dq, double tolerance);
+  [[nodiscard]] const Chart& chart() const { return chart_; }
+  void set_chart(const Chart& c);
+  [[nodiscard]] int rank() const { return r_; }
+  [[nodiscard]] int na() const { return n_ - r_; }
+
+ private:
+  const Model& model_;
+  int n_, nc_, r_;
+  bool sparse_;
+  Chart chart_;
+  ChartSelector selector_;
+  ChartOptions options_;
+  std::vector<int> dep_pos_;  // n: position of a component in chart.dependent, or −1
+  MatX ED_;                   // r × r (dense path): E_RDᵀ
+  Eigen::PartialPivLU<MatX> lu_;
+  Eigen::SparseMatrix<double> EDs_;
+  Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>> slu_;
+  std::vector<Eigen::Triplet<double>> triplets_;
+  VecX br_, xd_;  // r
+};
+
+}  // namespace orthomech::detail
