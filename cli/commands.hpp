@@ -10,4 +10,6 @@ struct GlobalOptions;
 void register_info(CLI::App& app, const GlobalOptions& globals, int& exit_code);
 // `orthomech simulate FILE --t-end T`: forward dynamics (cli/simulate.cpp).
 void register_simulate(CLI::App& app, const GlobalOptions& globals, int& exit_code);
+// `orthomech crosscheck FILE [--samples N]`: dual vs primal (cli/crosscheck.cpp).
+void register_crosscheck(CLI::App& app, const GlobalOptions& globals, int& exit_code);
 }  // namespace orthomech::cli

@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
   int exit_code = kOk;
   register_info(app, globals, exit_code);
   register_simulate(app, globals, exit_code);
+  register_crosscheck(app, globals, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
