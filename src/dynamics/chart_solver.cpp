@@ -1,5 +1,7 @@
 #include "chart_solver.hpp"
 
+#include <Eigen/QR>
+#include <algorithm>
 #include <cmath>
 
 #include "orthomech/constraints/joints.hpp"
@@ -31,6 +33,7 @@ ChartSolver::ChartSolver(const Model& model, int rank)
 
 void ChartSolver::set_chart(const Chart& c) {
   chart_ = c;
+  analyzed_ = false;
   std::fill(dep_pos_.begin(), dep_pos_.end(), -1);
   for (size_t k = 0; k < chart_.dependent.size(); ++k)
     dep_pos_[static_cast<size_t>(chart_.dependent[k])] = static_cast<int>(k);
@@ -41,6 +44,21 @@ bool ChartSolver::select(const MatX& Et, const VecX& A_diag) {
   if (selector_.select(Et, A_diag, options_, c) != r_) return false;
   set_chart(c);
   return true;
+}
+
+void ChartSolver::select_from_tangent(const MatX& F, const VecX& M_sqrt) {
+  if (F.cols() == 0) return;
+  const MatX S = (M_sqrt.asDiagonal() * F).transpose();  // n_a × n
+  const Eigen::ColPivHouseholderQR<MatX> qr(S);
+  const auto& perm = qr.colsPermutation().indices();
+  Chart c = chart_;
+  std::vector<bool> independent(static_cast<size_t>(n_), false);
+  for (Eigen::Index k = 0; k < F.cols(); ++k) independent[static_cast<size_t>(perm(k))] = true;
+  c.independent.clear();
+  c.dependent.clear();
+  for (int k = 0; k < n_; ++k)
+    (independent[static_cast<size_t>(k)] ? c.independent : c.dependent).push_back(k);
+  set_chart(c);
 }
 
 bool ChartSolver::factor(const MatX& Et) {
@@ -63,7 +81,23 @@ bool ChartSolver::factor(const MatX& Et) {
     }
   }
   EDs_.setFromTriplets(triplets_.begin(), triplets_.end());
-  slu_.compute(EDs_);
+  // The ordering (COLAMD) is computed once per sparsity pattern; entries that vanish exactly at
+  // some positions (sin 0) change the pattern and trigger a new analysis.
+  const auto nnz = EDs_.nonZeros();
+  bool same = analyzed_ && nnz == static_cast<Eigen::Index>(pattern_inner_.size());
+  if (same) {
+    for (Eigen::Index k = 0; k < nnz && same; ++k)
+      same = EDs_.innerIndexPtr()[k] == pattern_inner_[static_cast<size_t>(k)];
+    for (Eigen::Index k = 0; k <= r_ && same; ++k)
+      same = EDs_.outerIndexPtr()[k] == pattern_outer_[static_cast<size_t>(k)];
+  }
+  if (!same) {
+    slu_.analyzePattern(EDs_);
+    pattern_inner_.assign(EDs_.innerIndexPtr(), EDs_.innerIndexPtr() + nnz);
+    pattern_outer_.assign(EDs_.outerIndexPtr(), EDs_.outerIndexPtr() + r_ + 1);
+    analyzed_ = true;
+  }
+  slu_.factorize(EDs_);
   return slu_.info() == Eigen::Success;
 }
 
@@ -95,8 +129,10 @@ void ChartSolver::solve_transposed(const MatX& Et, const VecX& c, VecX& lambda) 
   for (int i = 0; i < r_; ++i) lambda(chart_.rows[static_cast<size_t>(i)]) = lr(i);
 }
 
-SolveResult ChartSolver::correct_positions(VecX& q, MatX& Et, VecX& f, VecX& dq, double tolerance) {
+SolveResult ChartSolver::correct_positions(VecX& q, MatX& Et, VecX& f, VecX& dq, double tolerance,
+                                           double max_gain, bool* near_singular) {
   SolveResult result;
+  if (near_singular) *near_singular = false;
   constexpr int kMaxIterations = 8;
   for (int it = 0;; ++it) {
     compute_constraint_residual(model_, q, f);
@@ -118,7 +154,14 @@ SolveResult ChartSolver::correct_positions(VecX& q, MatX& Et, VecX& f, VecX& dq,
       result.message = "the chart's dependent block is singular";
       return result;
     }
-    solve(f, dq);                              // E_RDᵀ Δq_D = f_R
+    solve(f, dq);  // E_RDᵀ Δq_D = f_R
+    if (it == 0 && max_gain > 0.0 &&
+        dq.cwiseAbs().maxCoeff() > max_gain * std::max(result.residual, tolerance)) {
+      if (near_singular) *near_singular = true;
+      result.status = SolveStatus::converged;
+      result.message = "not corrected: next to a change point";
+      return result;
+    }
     integrate_positions(model_, q, dq, -1.0);  // q_D ← q_D − Δq_D
   }
 }

@@ -24,6 +24,12 @@ class ChartSolver {
   // Chooses a chart at Eᵀ (rank-revealing QR; projection/chart.hpp). Returns false when the
   // rank found differs from the branch's rank.
   bool select(const MatX& Et, const VecX& A_diag);
+  // Keeps the rows R and chooses the independent components I from a basis F of the admissible
+  // velocities: the n_a components where F, scaled to the mass metric (rows × √M_kk), is best
+  // conditioned (QR with column pivoting of (S F)ᵀ). For n_a = 1 this is the component that
+  // moves most, so every entry of the new F is ≤ 1 in the mass metric. Near a change point this
+  // keeps the branch by continuity of the tangent: F is the current branch tangent.
+  void select_from_tangent(const MatX& F, const VecX& M_sqrt);
   // Factorises E_RDᵀ at Eᵀ. Returns false when it is singular.
   bool factor(const MatX& Et);
   // x (size n): x_D = (E_RDᵀ)⁻¹ b_R, x_I = 0 (b of size nc). Allocation-free (dense path).
@@ -31,8 +37,12 @@ class ChartSolver {
   // λ (size nc): λ_R = (E_RD)⁻¹ c_D, other rows 0 (c of size n). The unique λ of E λ = c when
   // E has full column rank and c ∈ range(E).
   void solve_transposed(const MatX& Et, const VecX& c, VecX& lambda);
-  // Newton in the chart on f(q) = 0: the independent coordinates stay fixed.
-  SolveResult correct_positions(VecX& q, MatX& Et, VecX& f, VecX& dq, double tolerance);
+  // Newton in the chart on f(q) = 0: the independent coordinates stay fixed. With max_gain > 0,
+  // a first Newton step larger than max_gain · |f| (the dependent block is nearly singular: a
+  // change point is close, and Newton could jump to another branch) is not taken: q is left
+  // as it was, *near_singular is set and the result says converged.
+  SolveResult correct_positions(VecX& q, MatX& Et, VecX& f, VecX& dq, double tolerance,
+                                double max_gain = 0.0, bool* near_singular = nullptr);
   [[nodiscard]] const Chart& chart() const { return chart_; }
   void set_chart(const Chart& c);
   [[nodiscard]] int rank() const { return r_; }
@@ -51,6 +61,8 @@ class ChartSolver {
   Eigen::SparseMatrix<double> EDs_;
   Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>> slu_;
   std::vector<Eigen::Triplet<double>> triplets_;
+  bool analyzed_ = false;  // slu_ has the ordering of pattern_*
+  std::vector<int> pattern_inner_, pattern_outer_;
   VecX br_, xd_;  // r
 };
 

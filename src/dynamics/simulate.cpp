@@ -38,10 +38,15 @@ namespace {
 using detail::ChartSolver;
 
 // Chart monitor (dual form): re-select the chart when an entry of F in the mass metric exceeds
-// this (the dependent velocities then move 20 times faster, in energy terms, than the
-// independent ones: the dependent block is degrading). Hysteresis: a new chart is taken only if
-// it halves the largest entry; otherwise the limit doubles.
-constexpr double kSpreadLimit = 20.0;
+// this (a dependent velocity then moves 4 times faster, in energy terms, than the independent
+// ones). The new chart is chosen from the current F (ChartSolver::select_from_tangent), whose
+// entries are then ≤ 1 for n_a = 1: the hysteresis is the factor 4.
+constexpr double kSpreadLimit = 4.0;
+// Per-step position correction: a Newton step more than this many times the residual means the
+// chart's dependent block is nearly singular (a change point, IFToMM A02): the step is then
+// left uncorrected (its residual is the integrator's local error) rather than risk a jump to
+// another branch; counted in SimulateResult::uncorrected_steps.
+constexpr double kMaxCorrectionGain = 1e4;
 
 // Thrown inside a right-hand side when the equations cannot be evaluated (singular chart block
 // or singular G); caught in simulate() and returned as a status (never escapes the library).
@@ -156,6 +161,8 @@ class Dynamics {
     return m;
   }
 
+  VecX M_sqrt() const { return ws_.free.M_diag.cwiseSqrt(); }
+
   // H = Fᵀ M F (eq. (68)) and its Cholesky factor.
   void compute_H() {
     if (ws_.free.diagonal_mass)
@@ -170,6 +177,17 @@ class Dynamics {
   void evaluate_dual(double t, const Eigen::Ref<const VecX>& q, const Eigen::Ref<const VecX>& v) {
     state_.t = t;
     state_.q = q;
+    // 0. The stage's position projected onto f(q) = 0 with its independent coordinates fixed
+    //    (L4): the right-hand side is then the ODE on the constraint manifold in the chart
+    //    coordinates, smooth even next to a change point, where F off the manifold is very
+    //    sensitive to the stage's constraint error (IFToMM A02).
+    if (options_.project_stages) {
+      const SolveResult pr = cs_.correct_positions(state_.q, ws_.constraints.Et, ws_.constraints.f,
+                                                   dq_, options_.position_tolerance);
+      if (pr.status == SolveStatus::singular)
+        throw SingularEvaluation{"the chart's dependent block is singular at t = " +
+                                 std::to_string(t) + " (a change point: E loses rank)"};
+    }
     // 1. Eᵀ(q), the chart's dependent block, F.
     compute_constraint_jacobian(model_, state_.q, ws_.constraints.Et);
     if (!cs_.factor(ws_.constraints.Et))
@@ -357,6 +375,13 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
     return result;
   }
   dyn.compute_F();
+  dyn.cs_.select_from_tangent(dyn.F_, dyn.M_sqrt());  // independent components that move most
+  if (!dyn.cs_.factor(dyn.ws_.constraints.Et)) {
+    result.status = SimulateStatus::singular;
+    result.message = "the initial position is singular (E loses rank there)";
+    return result;
+  }
+  dyn.compute_F();
   dyn.compute_H();
   const VecX u0 = initial.u.size() == n ? initial.u : VecX::Zero(n);
   VecX v = project_velocity(dyn, u0);
@@ -395,9 +420,8 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
 
   double energy0 = 0.0;
   bool have_energy0 = false;
-  double spread_limit = kSpreadLimit;
   long evaluations = 0;
-  VecX f(model.nc), dq(n);
+  VecX f(model.nc), dq(n), u_step(VecX::Zero(n));
 
   detail::OdeProblem problem;
   problem.rhs = [&](const VecX& y, VecX& dy, double t) {
@@ -453,9 +477,22 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
         result.max_velocity_residual = std::max(result.max_velocity_residual, J);
       }
     }
+    // Dual: the step's velocity u = F(q) v before the correction (re-projected below).
+    if (!primal) {
+      compute_constraint_jacobian(model, q, dyn.ws_.constraints.Et);
+      if (dyn.cs_.factor(dyn.ws_.constraints.Et)) {
+        dyn.compute_F();
+        u_step.noalias() = dyn.F_ * y.segment(nq, na);
+      } else {
+        u_step.setZero();  // exactly singular: keep v as it is (below)
+      }
+    }
     // Position correction in the chart (Newton; independent coordinates fixed).
+    bool near_singular = false;
     SolveResult corr =
-        dyn.cs_.correct_positions(q, dyn.ws_.constraints.Et, f, dq, options.position_tolerance);
+        dyn.cs_.correct_positions(q, dyn.ws_.constraints.Et, f, dq, options.position_tolerance,
+                                  kMaxCorrectionGain, &near_singular);
+    if (near_singular) ++result.uncorrected_steps;
     if (corr.status == SolveStatus::singular) {  // try a fresh chart once
       compute_constraint_jacobian(model, q, dyn.ws_.constraints.Et);
       if (dyn.cs_.select(dyn.ws_.constraints.Et, dyn.ws_.free.A_diag))
@@ -482,35 +519,38 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
       dyn.state_.u.noalias() = dyn.F_ * vv;
       y.segment(nq, n) = dyn.ws_.free.M * dyn.state_.u;
       // A poor chart only slows the corrector: re-select it when it degrades.
-      if (dyn.chart_spread() > spread_limit &&
-          dyn.cs_.select(dyn.ws_.constraints.Et, dyn.ws_.free.A_diag))
-        (void)dyn.cs_.factor(dyn.ws_.constraints.Et);
+      if (dyn.chart_spread() > kSpreadLimit) {
+        const Chart old = dyn.cs_.chart();
+        dyn.cs_.select_from_tangent(dyn.F_, dyn.M_sqrt());
+        if (!dyn.cs_.factor(dyn.ws_.constraints.Et)) {
+          dyn.cs_.set_chart(old);
+          (void)dyn.cs_.factor(dyn.ws_.constraints.Et);
+        }
+      }
     } else {
       // Chart monitor: re-select when F's mass-scaled entries grow; switch if the new chart is
       // clearly better (hysteresis 2), re-expressing v from u = F v.
+      // v ← H⁻¹ Fᵀ M u_step: the admissible velocity at the corrected position closest to the
+      // step's velocity in the mass metric (eq. (70), u = α u_step), rather than keeping u_I.
+      if (u_step.squaredNorm() > 0.0) {
+        dyn.compute_H();
+        y.segment(nq, na) = project_velocity(dyn, u_step);
+      }
       const double spread = dyn.chart_spread();
-      if (spread > spread_limit) {
+      if (spread > kSpreadLimit) {
         const Chart old = dyn.cs_.chart();
         const VecX u = dyn.F_ * y.segment(nq, na);
-        bool switched = false;
-        if (dyn.cs_.select(dyn.ws_.constraints.Et, dyn.ws_.free.A_diag) &&
-            dyn.cs_.factor(dyn.ws_.constraints.Et)) {
+        dyn.cs_.select_from_tangent(dyn.F_, dyn.M_sqrt());
+        if (dyn.cs_.factor(dyn.ws_.constraints.Et)) {
           dyn.compute_F();
-          const double new_spread = dyn.chart_spread();
-          if (new_spread * 2.0 < spread) {
-            for (int k = 0; k < na; ++k)
-              y(nq + k) = u(dyn.cs_.chart().independent[static_cast<size_t>(k)]);
-            result.chart_switches.push_back(
-                {t, chart_name(model, old), chart_name(model, dyn.cs_.chart())});
-            spread_limit = std::max(kSpreadLimit, 2.0 * new_spread);
-            switched = true;
-          }
-        }
-        if (!switched) {
+          for (int k = 0; k < na; ++k)
+            y(nq + k) = u(dyn.cs_.chart().independent[static_cast<size_t>(k)]);
+          result.chart_switches.push_back(
+              {t, chart_name(model, old), chart_name(model, dyn.cs_.chart())});
+        } else {  // exactly at a change point: keep the chart
           dyn.cs_.set_chart(old);
           (void)dyn.cs_.factor(dyn.ws_.constraints.Et);
           dyn.compute_F();
-          spread_limit = 2.0 * spread;  // no better chart here: wait until it degrades further
         }
       }
       dyn.state_.u.noalias() = dyn.F_ * y.segment(nq, na);
@@ -555,6 +595,7 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
     result.status = SimulateStatus::singular;
     result.message = e.message;
     result.evaluations = evaluations;
+    if (!result.samples.empty()) result.final = result.samples.back();  // last good output
     return result;
   }
   result.evaluations = evaluations;

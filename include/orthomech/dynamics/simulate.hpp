@@ -50,6 +50,10 @@ struct SimulateOptions {
   bool record_samples = true;         // keep every output sample (else only the final one)
   bool reactions = true;              // compute λ and joint reactions at the samples
   double position_tolerance = 1e-12;  // max |f| after the per-step correction (m, rad)
+  // Dual form: evaluate every stage at its position projected onto f(q) = 0 in the chart
+  // (independent coordinates fixed). Needed to pass change points (IFToMM A02) at a sane step
+  // size; costs about one Newton iteration per evaluation.
+  bool project_stages = false;
   long max_steps = 100'000'000;
 };
 
@@ -89,7 +93,8 @@ struct SimulateResult {
   double max_velocity_residual = 0.0;    // max |Eᵀ u| (dual: after the step; primal: |J|)
   double max_invariant_J = 0.0;          // primal: max |J|, eq. (105), before projection
   long steps = 0;
-  long evaluations = 0;  // right-hand side evaluations
+  long uncorrected_steps = 0;  // steps left uncorrected next to a change point
+  long evaluations = 0;        // right-hand side evaluations
 };
 
 // Simulates from the design position (projected) with the velocity given by the options.
