@@ -49,6 +49,9 @@ class ChartSolver {
   [[nodiscard]] int na() const { return n_ - r_; }
 
  private:
+  bool dense_lu();
+  void dense_solve(const VecX& b, VecX& x) const;
+  void dense_solve_transposed(const VecX& c, VecX& x) const;
   const Model& model_;
   int n_, nc_, r_;
   bool sparse_;
@@ -57,7 +60,7 @@ class ChartSolver {
   ChartOptions options_;
   std::vector<int> dep_pos_;  // n: position of a component in chart.dependent, or −1
   MatX ED_;                   // r × r (dense path): E_RDᵀ
-  Eigen::PartialPivLU<MatX> lu_;
+  std::vector<int> perm_;     // r: row interchanges of the dense LU (in place in ED_)
   Eigen::SparseMatrix<double> EDs_;
   Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>> slu_;
   std::vector<Eigen::Triplet<double>> triplets_;
