@@ -422,6 +422,7 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
   bool have_energy0 = false;
   long evaluations = 0;
   VecX f(model.nc), dq(n), u_step(VecX::Zero(n));
+  double spread_limit = kSpreadLimit;  // chart monitor threshold (raised while no chart helps)
 
   detail::OdeProblem problem;
   problem.rhs = [&](const VecX& y, VecX& dy, double t) {
@@ -537,21 +538,32 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
         y.segment(nq, na) = project_velocity(dyn, u_step);
       }
       const double spread = dyn.chart_spread();
-      if (spread > kSpreadLimit) {
+      if (spread > spread_limit) {
         const Chart old = dyn.cs_.chart();
         const VecX u = dyn.F_ * y.segment(nq, na);
         dyn.cs_.select_from_tangent(dyn.F_, dyn.M_sqrt());
+        bool switched = false;
         if (dyn.cs_.factor(dyn.ws_.constraints.Et)) {
           dyn.compute_F();
-          for (int k = 0; k < na; ++k)
-            y(nq + k) = u(dyn.cs_.chart().independent[static_cast<size_t>(k)]);
-          result.chart_switches.push_back(
-              {t, chart_name(model, old), chart_name(model, dyn.cs_.chart())});
-        } else {  // exactly at a change point: keep the chart
+          // Take the new chart only if it is clearly better (hysteresis 2): next to a change
+          // point F is inaccurate in every chart and switching would not help.
+          if (dyn.chart_spread() < 0.5 * spread) {
+            for (int k = 0; k < na; ++k)
+              y(nq + k) = u(dyn.cs_.chart().independent[static_cast<size_t>(k)]);
+            result.chart_switches.push_back(
+                {t, chart_name(model, old), chart_name(model, dyn.cs_.chart())});
+            spread_limit = kSpreadLimit;
+            switched = true;
+          }
+        }
+        if (!switched) {  // keep the chart; try again only when it degrades further
           dyn.cs_.set_chart(old);
           (void)dyn.cs_.factor(dyn.ws_.constraints.Et);
           dyn.compute_F();
+          spread_limit = 2.0 * spread;
         }
+      } else if (spread < 0.5 * spread_limit) {
+        spread_limit = std::max(kSpreadLimit, 2.0 * spread);
       }
       dyn.state_.u.noalias() = dyn.F_ * y.segment(nq, na);
     }
