@@ -14,4 +14,8 @@ void register_cycle(CLI::App& app, const GlobalOptions& globals, int& exit_code)
 void register_assemble(CLI::App& app, const GlobalOptions& globals, int& exit_code);
 // `orthomech validate FILE`: design positions report (cli/validate.cpp).
 void register_validate(CLI::App& app, const GlobalOptions& globals, int& exit_code);
+// `orthomech simulate FILE --t-end T`: forward dynamics (cli/simulate.cpp).
+void register_simulate(CLI::App& app, const GlobalOptions& globals, int& exit_code);
+// `orthomech crosscheck FILE [--samples N]`: dual vs primal (cli/crosscheck.cpp).
+void register_crosscheck(CLI::App& app, const GlobalOptions& globals, int& exit_code);
 }  // namespace orthomech::cli

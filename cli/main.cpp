@@ -22,6 +22,8 @@ int main(int argc, char** argv) {
   register_cycle(app, globals, exit_code);
   register_assemble(app, globals, exit_code);
   register_validate(app, globals, exit_code);
+  register_simulate(app, globals, exit_code);
+  register_crosscheck(app, globals, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

@@ -162,11 +162,34 @@ struct JointEvaluator {
   }
 };
 
+// Knife edge (nonholonomic): nᵀ v_P = 0 with n = R(φ) perp(a) (a: blade direction, body frame).
+//   f = 0 (no geometric residual: design §3);
+//   Eᵀ = nᵀ ∂r_P/∂u;
+//   Dᵀ = ṅᵀ ∂r_P/∂u + nᵀ d/dt(∂r_P/∂u), ṅ = φ̇ perp(n)                                   (L3)
+void knife_edge(const Model& model, const KnifeEdge& k, const VecX& q, const VecX* u, VecX* f,
+                MatX* Et, MatX* Dt) {
+  const PointKinematics kp = point_kinematics(model, k.at, q, u);
+  const Vec2 n = rotation(body_angle(model, k.at.body, q)) * perp(k.axis_local);
+  if (f) (*f)(k.row_offset) = 0.0;
+  if (Et) {
+    auto e = Et->row(k.row_offset);
+    e.setZero();
+    add_point_jacobian(model, k.at, kp, n, 1.0, e);
+  }
+  if (Dt) {
+    auto e = Dt->row(k.row_offset);
+    e.setZero();
+    add_point_jacobian(model, k.at, kp, kp.phidot * perp(n), 1.0, e);  // (L3)
+    add_point_jacobian_rate(model, k.at, kp, n, 1.0, e);
+  }
+}
+
 void evaluate(const Model& model, const VecX& q, const VecX* u, VecX* f, MatX* Et, MatX* Dt) {
   for (const Joint& joint : model.joints) {
     JointEvaluator ev{model, q, u, joint.row_offset, f, Et, Dt};
     std::visit(ev, joint.kind);
   }
+  for (const KnifeEdge& k : model.knife_edges) knife_edge(model, k, q, u, f, Et, Dt);
 }
 
 }  // namespace

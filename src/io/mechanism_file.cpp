@@ -174,6 +174,7 @@ class Reader {
   void read_ground(const YAML::Node& node);
   void read_bodies(const YAML::Node& node);
   void read_joints(const YAML::Node& node);
+  void read_nonholonomic(const YAML::Node& node);
   void read_loads(const YAML::Node& node);
   void read_measures(const YAML::Node& node);
   void read_drivers(const YAML::Node& node);
@@ -417,6 +418,33 @@ void Reader::read_joints(const YAML::Node& root) {
                "' (allowed: revolute, prismatic, fixed, pin-in-slot, gear, distance)");
     }
     model_.joints.push_back(std::move(j));
+  }
+}
+
+// ---- nonholonomic constraints ------------------------------------------------------------------
+void Reader::read_nonholonomic(const YAML::Node& root) {
+  const YAML::Node node = list(root, "nonholonomic");
+  if (!node || node.IsNull()) return;
+  std::set<std::string> seen;
+  for (const Joint& j : model_.joints) seen.insert(j.name);  // one namespace with the joints
+  size_t index = 0;
+  for (const auto& item : node) {
+    const std::string name = name_of(item, "nonholonomic constraint", index++, seen);
+    const std::string element = "knife edge '" + name + "'";
+    const std::string type = string_field(item, "type", element);
+    if (type != "knife-edge")
+      fail(item["type"], element,
+           "unknown nonholonomic constraint type '" + type + "' (allowed: knife-edge)");
+    expect_map(item, element, {"name", "type", "point", "axis"});
+    KnifeEdge k;
+    k.name = name;
+    k.where = loc(item);
+    k.at = point_ref(require(item, "point", element), element);
+    if (k.at.body == kGround ||
+        model_.bodies[static_cast<size_t>(k.at.body)].kind != BodyKind::rigid)
+      fail(item["point"], element, "a knife edge needs a point on a rigid moving body");
+    k.axis_local = unit_axis(item, element);
+    model_.knife_edges.push_back(std::move(k));
   }
 }
 
@@ -716,7 +744,7 @@ Model Reader::read(const YAML::Node& root) {
     fail(root, "file", "expected a mapping at the top level (orthomech: 1, bodies: ...)");
   expect_map(root, "file",
              {"orthomech", "name", "description", "units", "ground", "bodies", "joints", "loads",
-              "measures", "drivers", "design_positions", "analysis"});
+              "measures", "drivers", "design_positions", "analysis", "nonholonomic"});
   const YAML::Node version = require(root, "orthomech", "file");
   if (version.Scalar() != "1")
     fail(version, "file",
@@ -732,6 +760,7 @@ Model Reader::read(const YAML::Node& root) {
   read_ground(root["ground"]);
   read_bodies(root);
   read_joints(root);
+  read_nonholonomic(root);
   read_measures(root);
   read_loads(root);
   read_drivers(root);

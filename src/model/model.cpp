@@ -78,6 +78,8 @@ std::string Model::constraint_row_name(int row) const {
              j.component_names()[static_cast<size_t>(row - j.row_offset)];
     }
   }
+  for (const KnifeEdge& k : knife_edges)
+    if (row == k.row_offset) return "knife edge '" + k.name + "', lateral";
   throw std::invalid_argument("constraint_row_name: row out of range");
 }
 
@@ -96,11 +98,18 @@ void finalize_model(Model& model) {
     j.row_offset = row;
     row += j.rows();
   }
+  for (KnifeEdge& k : model.knife_edges) k.row_offset = row++;
   model.nc = row;
   const int nb = static_cast<int>(model.bodies.size());
   auto check_body = [nb](int b) {
     if (b < kGround || b >= nb) throw std::invalid_argument("finalize_model: bad body index");
   };
+  for (const KnifeEdge& k : model.knife_edges) {
+    check_body(k.at.body);
+    if (k.at.body == kGround ||
+        model.bodies[static_cast<size_t>(k.at.body)].kind != BodyKind::rigid)
+      throw std::invalid_argument("finalize_model: a knife edge needs a rigid moving body");
+  }
   for (const Joint& j : model.joints) {
     std::visit(
         [&](const auto& k) {

@@ -95,6 +95,19 @@ struct Joint {
   [[nodiscard]] std::vector<std::string> component_names() const;  // e.g. {"x", "y"}
 };
 
+// ---- Nonholonomic constraints (design §3): Eᵀ rows only, no geometric residual. ------------
+// Knife edge (Chaplygin sled): the point `at` of a rigid body cannot move across the blade,
+// whose direction is axis_local in the body frame: nᵀ v_P = 0 with n = R(φ) perp(axis). One row;
+// f = 0 (positions are never corrected along it); λ is the lateral force of the ground on the
+// body at the point, along n.
+struct KnifeEdge {
+  std::string name;
+  PointRef at;
+  Vec2 axis_local = Vec2::UnitX();
+  int row_offset = 0;  // its row in Eᵀ (after every joint's rows)
+  SourceLocation where;
+};
+
 // ---- Loads (design §9). Each gives a generalized force Q (eq. (8)). ---------------------------
 struct Gravity {
   Vec2 g = Vec2(0.0, -9.81);
@@ -195,6 +208,7 @@ struct Model {
   std::string file;          // where it came from (for messages)
   std::vector<Body> bodies;  // moving bodies only; the ground is implicit (kGround)
   std::vector<Joint> joints;
+  std::vector<KnifeEdge> knife_edges;  // nonholonomic rows, after the joints' rows
   std::vector<Load> loads;
   std::vector<Measure> measures;
   std::vector<Driver> drivers;

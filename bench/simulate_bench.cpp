@@ -1,0 +1,211 @@
+// Benchmarks of forward dynamics (issue 5 §6). Each run is a whole `simulate` call (initial
+// projection, chart selection, integration, samples), so the numbers are per simulated run.
+// Counters: t_end = simulated seconds (wall time per simulated second = Time / t_end); err = error
+// against the reference (Andrews: the published state at t = 0.03 s, max relative error of the 7
+// angles; N-four-bar: B0 against the exact one-DOF reduction on the parallelogram branch,
+// integrated by RK4 here; crank-rocker: no published reference, so against the same simulation at
+// rtol = atol = 1e-13 with Fehlberg 7(8)). Run: build/bench/orthomech_bench
+// --benchmark_filter=Simulate
+#include <benchmark/benchmark.h>
+
+#include <array>
+#include <cmath>
+#include <sstream>
+#include <string>
+
+#include "orthomech/dynamics/simulate.hpp"
+#include "orthomech/io/mechanism_file.hpp"
+
+namespace {
+using namespace orthomech;
+
+Model bundled(const std::string& name) {
+  return load_mechanism(std::string(ORTHOMECH_SOURCE_DIR) + "/mechanisms/" + name + ".yaml");
+}
+
+// ---- Andrews' squeezer to t = 0.03 s at rtol 1e-10 -----------------------------------------
+constexpr std::array<double, 7> kAndrews = {
+    15.81077119629904,  -15.75637105984298, 0.04082224013073101, -0.5347301163226948,
+    0.5244099658805304, 0.5347301163226948, 1.048080741042263};
+
+void Andrews(benchmark::State& bs, DynamicsForm form, Integrator integrator) {
+  const Model model = bundled("andrews-squeezer");
+  SimulateOptions o;
+  o.form = form;
+  o.integrator = integrator;
+  o.t_end = 0.03;
+  o.rtol = 1e-10;
+  o.atol = 1e-12;
+  o.dt_out = 0.03;
+  SimulateResult r;
+  for (auto _ : bs) {
+    r = simulate(model, o);
+    benchmark::DoNotOptimize(r.final.q.data());
+  }
+  const char* names[] = {"beta", "Theta", "gamma", "Phi", "delta", "Omega", "epsilon"};
+  double err = 0.0;
+  for (size_t k = 0; k < 7; ++k)
+    err =
+        std::max(err, std::abs(r.final.measures[static_cast<size_t>(model.find_measure(names[k]))] -
+                               kAndrews[k]) /
+                          std::abs(kAndrews[k]));
+  bs.counters["err"] = err;
+  bs.counters["steps"] = static_cast<double>(r.steps);
+  bs.counters["evals"] = static_cast<double>(r.evaluations);
+  bs.counters["t_end"] = o.t_end;
+}
+BENCHMARK_CAPTURE(Andrews, dual_dopri5, DynamicsForm::dual, Integrator::dopri5)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(Andrews, primal_dopri5, DynamicsForm::primal, Integrator::dopri5)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(Andrews, dual_rkf78, DynamicsForm::dual, Integrator::rkf78)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(Andrews, primal_rkf78, DynamicsForm::primal, Integrator::rkf78)
+    ->Unit(benchmark::kMillisecond);
+
+// ---- IFToMM A02 N-four-bar ------------------------------------------------------------------
+// The mechanism file for any N (same layout as scripts/gen_mechanisms.py writes for 2 and 40).
+std::string four_bar_text(int N) {
+  std::ostringstream y;
+  y.precision(17);
+  y << "orthomech: 1\nname: n-four-bar-" << N << "\nunits: {length: m, angle: rad, mass: kg}\n";
+  y << "ground:\n  points: {";
+  for (int k = 0; k <= N; ++k) y << (k ? ", " : "") << "O" << k << ": [" << k << ", 0]";
+  y << "}\nbodies:\n";
+  for (int k = 0; k <= N; ++k)
+    y << "  - {name: link" << k << ", mass: 1, inertia: " << 1.0 / 12.0
+      << ", com: [0.5, 0], pose: [" << k << ", 0, " << M_PI / 2
+      << "], points: {O: [0, 0], B: [1, 0]}}\n";
+  for (int k = 0; k < N; ++k)
+    y << "  - {name: coupler" << k << ", mass: 1, inertia: " << 1.0 / 12.0
+      << ", com: [0.5, 0], pose: [" << k << ", 1, 0], points: {L: [0, 0], R: [1, 0]}}\n";
+  y << "joints:\n";
+  for (int k = 0; k <= N; ++k)
+    y << "  - {name: O" << k << ", type: revolute, connects: [ground.O" << k << ", link" << k
+      << ".O]}\n";
+  for (int k = 0; k < N; ++k) {
+    y << "  - {name: L" << k << ", type: revolute, connects: [coupler" << k << ".L, link" << k
+      << ".B]}\n";
+    y << "  - {name: R" << k << ", type: revolute, connects: [coupler" << k << ".R, link" << k + 1
+      << ".B]}\n";
+  }
+  y << "loads:\n  - {name: weight, type: gravity, g: [0, -9.81]}\n";
+  y << "measures:\n  - {name: B0_x, type: point, point: link0.B, component: x}\n";
+  y << "  - {name: B0_y, type: point, point: link0.B, component: y}\n";
+  return y.str();
+}
+
+// Exact reduction on the parallelogram branch (tests/unit/dynamics/iftomm_test.cpp): RK4.
+std::array<double, 2> four_bar_reference(int N, double t_end) {
+  const double I = (N + 1) / 3.0 + N, c = 9.81 * ((N + 1) / 2.0 + N);
+  auto acc = [&](double th) { return -c * std::cos(th) / I; };
+  double th = M_PI / 2.0, w = -1.0;
+  const int steps = static_cast<int>(std::ceil(t_end / 2e-5));
+  const double h = t_end / steps;
+  for (int i = 0; i < steps; ++i) {
+    const double k1t = w, k1w = acc(th);
+    const double k2t = w + 0.5 * h * k1w, k2w = acc(th + 0.5 * h * k1t);
+    const double k3t = w + 0.5 * h * k2w, k3w = acc(th + 0.5 * h * k2t);
+    const double k4t = w + h * k3w, k4w = acc(th + h * k3t);
+    th += h / 6.0 * (k1t + 2 * k2t + 2 * k3t + k4t);
+    w += h / 6.0 * (k1w + 2 * k2w + 2 * k3w + k4w);
+  }
+  return {std::cos(th), std::sin(th)};
+}
+
+void FourBar(benchmark::State& bs, int N, double t_end, DynamicsForm form) {
+  const Model model = parse_mechanism(four_bar_text(N), "n-four-bar-" + std::to_string(N));
+  SimulateOptions o;
+  o.form = form;
+  o.t_end = t_end;
+  o.rtol = 1e-8;
+  o.atol = 1e-12;
+  o.dt_out = t_end;
+  o.reactions = false;
+  o.initial_rates = {{model.find_measure("B0_x"), 1.0}};
+  SimulateResult r;
+  for (auto _ : bs) {
+    r = simulate(model, o);
+    benchmark::DoNotOptimize(r.final.q.data());
+  }
+  const auto ref = four_bar_reference(N, t_end);
+  if (r.status == SimulateStatus::completed) {
+    bs.counters["err"] = std::hypot(r.final.measures[0] - ref[0], r.final.measures[1] - ref[1]);
+  } else {
+    bs.SetLabel(std::string(to_string(r.status)) + " at t = " + std::to_string(r.final.t));
+  }
+  bs.counters["steps"] = static_cast<double>(r.steps);
+  bs.counters["evals"] = static_cast<double>(r.evaluations);
+  bs.counters["N"] = N;
+  bs.counters["t_end"] = t_end;
+}
+// N = 40 for 20 s through the change points (dual); the primal form stops at the first change
+// point (G singular), so it is timed over the regular interval [0, 0.6 s].
+BENCHMARK_CAPTURE(FourBar, N40_20s_dual, 40, 20.0, DynamicsForm::dual)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1);
+BENCHMARK_CAPTURE(FourBar, N40_0_6s_dual, 40, 0.6, DynamicsForm::dual)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(FourBar, N40_0_6s_primal, 40, 0.6, DynamicsForm::primal)
+    ->Unit(benchmark::kMillisecond);
+// Growth with N over the regular interval [0, 0.6 s] (before the first change point), dual.
+void FourBarScaling(benchmark::State& bs) {
+  FourBar(bs, static_cast<int>(bs.range(0)), 0.6, DynamicsForm::dual);
+}
+BENCHMARK(FourBarScaling)
+    ->Arg(2)
+    ->Arg(5)
+    ->Arg(10)
+    ->Arg(20)
+    ->Arg(50)
+    ->Arg(100)
+    ->Arg(200)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1);
+
+// Set-up only (dense: initial Gauss–Newton projection, rank-revealing QR of the mobility and
+// of the first chart), to separate it from the integration cost above.
+void FourBarSetup(benchmark::State& bs) {
+  FourBar(bs, static_cast<int>(bs.range(0)), 1e-9, DynamicsForm::dual);
+}
+BENCHMARK(FourBarSetup)
+    ->Arg(2)
+    ->Arg(5)
+    ->Arg(10)
+    ->Arg(20)
+    ->Arg(50)
+    ->Arg(100)
+    ->Arg(200)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1);
+
+// ---- Crank-rocker for 10 s -----------------------------------------------------------------
+void CrankRocker(benchmark::State& bs, DynamicsForm form) {
+  const Model model = bundled("crank-rocker");
+  SimulateOptions o;
+  o.form = form;
+  o.t_end = 10.0;
+  o.rtol = 1e-8;
+  o.atol = 1e-10;
+  o.dt_out = 10.0;
+  o.reactions = false;
+  o.initial_u = VecX::Zero(model.n);
+  SimulateOptions ref_o = o;
+  ref_o.rtol = ref_o.atol = 1e-13;
+  ref_o.integrator = Integrator::rkf78;
+  ref_o.form = DynamicsForm::dual;
+  const SimulateResult ref = simulate(model, ref_o);
+  SimulateResult r;
+  for (auto _ : bs) {
+    r = simulate(model, o);
+    benchmark::DoNotOptimize(r.final.q.data());
+  }
+  bs.counters["err"] = (r.final.q - ref.final.q).cwiseAbs().maxCoeff();
+  bs.counters["steps"] = static_cast<double>(r.steps);
+  bs.counters["t_end"] = o.t_end;
+  if (r.status != SimulateStatus::completed) bs.SetLabel(r.message);
+}
+BENCHMARK_CAPTURE(CrankRocker, dual_10s, DynamicsForm::dual)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(CrankRocker, primal_10s, DynamicsForm::primal)->Unit(benchmark::kMillisecond);
+
+}  // namespace

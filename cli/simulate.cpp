@@ -1,0 +1,202 @@
+// `orthomech simulate FILE --t-end T`: forward dynamics (issue 5; design §4–5, §8).
+// All the mathematics is in dynamics/simulate; this file parses options and formats results.
+#include "orthomech/dynamics/simulate.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <CLI/CLI.hpp>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "commands.hpp"
+#include "common.hpp"
+
+namespace orthomech::cli {
+
+namespace {
+
+struct SimulateCliOptions {
+  std::string file;
+  double t_end = 1.0;
+  double rtol = 1e-8, atol = 1e-10, dt_out = 0.0, max_step = 0.0;
+  std::string form = "dual";
+  std::string integrator = "dopri5";
+  std::vector<std::string> rates;  // NAME=VALUE
+  bool json = false;
+  std::string out_dir;
+};
+
+std::string g(double v, int precision = 10) {
+  std::ostringstream s;
+  s.precision(precision);
+  s << v;
+  return s.str();
+}
+
+// "B0_vx=1": the rate of a measure's position quantity (SI).
+InitialRate parse_rate(const Model& model, const std::string& text) {
+  const auto eq = text.find('=');
+  if (eq == std::string::npos)
+    throw CLI::ValidationError("--rate",
+                               "--rate '" + text + "': expected MEASURE=VALUE (SI units)");
+  const std::string name = text.substr(0, eq);
+  const int m = model.find_measure(name);
+  if (m < 0)
+    throw CLI::ValidationError("--rate",
+                               "--rate '" + text + "': measure '" + name + "' is not defined");
+  try {
+    return {m, std::stod(text.substr(eq + 1))};
+  } catch (const std::exception&) {
+    throw CLI::ValidationError(
+        "--rate", "--rate '" + text + "': '" + text.substr(eq + 1) + "' is not a number");
+  }
+}
+
+void write_csv(const std::filesystem::path& dir, const Model& model, const SimulateResult& res) {
+  std::filesystem::create_directories(dir);
+  std::ofstream out(dir / "simulate.csv");
+  out.precision(12);
+  out << "t";
+  for (const Measure& m : model.measures) out << "," << m.name;
+  for (const auto& c : res.components) out << "," << c.name;
+  out << ",kinetic,potential,work,energy,residual\n";
+  for (const SimulationSample& s : res.samples) {
+    out << s.t;
+    for (double v : s.measures) out << "," << v;
+    for (size_t k = 0; k < res.components.size(); ++k)
+      out << "," << (k < s.reactions.size() ? s.reactions[k] : 0.0);
+    out << "," << s.kinetic << "," << s.potential << "," << s.work << ","
+        << s.kinetic + s.potential - s.work << "," << s.residual << "\n";
+  }
+  std::ofstream sw(dir / "chart_switches.csv");
+  sw << "t,from,to\n";
+  for (const ChartSwitch& c : res.chart_switches)
+    sw << g(c.t, 12) << ",\"" << c.from << "\",\"" << c.to << "\"\n";
+}
+
+nlohmann::json sample_json(const Model& model, const SimulateResult& res,
+                           const SimulationSample& s) {
+  nlohmann::json j;
+  j["t"] = s.t;
+  nlohmann::json m = nlohmann::json::object();
+  for (size_t k = 0; k < model.measures.size(); ++k) m[model.measures[k].name] = s.measures[k];
+  j["measures"] = m;
+  nlohmann::json r = nlohmann::json::object();
+  for (size_t k = 0; k < s.reactions.size() && k < res.components.size(); ++k)
+    r[res.components[k].name] = s.reactions[k];
+  j["reactions"] = r;
+  j["kinetic"] = s.kinetic;
+  j["potential"] = s.potential;
+  j["work"] = s.work;
+  j["residual"] = s.residual;
+  return j;
+}
+
+int run_simulate(const SimulateCliOptions& opt) {
+  const Model model = load(opt.file);
+  SimulateOptions so;
+  so.t_end = opt.t_end;
+  so.rtol = opt.rtol;
+  so.atol = opt.atol;
+  so.dt_out = opt.dt_out;
+  so.max_step = opt.max_step;
+  so.form = opt.form == "primal" ? DynamicsForm::primal : DynamicsForm::dual;
+  so.integrator = opt.integrator == "rkf78" ? Integrator::rkf78 : Integrator::dopri5;
+  for (const std::string& r : opt.rates) so.initial_rates.push_back(parse_rate(model, r));
+  so.record_samples = true;
+  const SimulateResult res = simulate(model, so);
+  if (res.kinetic_removed > 0.0)
+    spdlog::info("initial velocity projection removed {:.6g} J of kinetic energy",
+                 res.kinetic_removed);
+  if (!opt.out_dir.empty()) write_csv(opt.out_dir, model, res);
+
+  std::ostringstream out;
+  const bool ok = res.status == SimulateStatus::completed;
+  const double rel_drift = res.energy_scale > 0 ? res.energy_max_drift / res.energy_scale : 0.0;
+  if (opt.json) {
+    nlohmann::json j;
+    j["mechanism"] = model.name;
+    j["status"] = to_string(res.status);
+    j["message"] = res.message;
+    j["form"] = so.form == DynamicsForm::dual ? "dual" : "primal";
+    j["integrator"] = so.integrator == Integrator::dopri5 ? "dopri5" : "rkf78";
+    j["rtol"] = so.rtol;
+    j["atol"] = so.atol;
+    j["final"] = sample_json(model, res, res.final);
+    j["energy"] = {{"initial", res.energy_initial},
+                   {"final", res.energy_final},
+                   {"max_drift", res.energy_max_drift},
+                   {"relative_drift", rel_drift}};
+    j["max_constraint_residual"] = res.max_constraint_residual;
+    j["max_velocity_residual"] = res.max_velocity_residual;
+    if (so.form == DynamicsForm::primal) j["max_invariant_J"] = res.max_invariant_J;
+    j["kinetic_energy_removed"] = res.kinetic_removed;
+    j["steps"] = res.steps;
+    j["evaluations"] = res.evaluations;
+    nlohmann::json sw = nlohmann::json::array();
+    for (const ChartSwitch& c : res.chart_switches)
+      sw.push_back({{"t", c.t}, {"from", c.from}, {"to", c.to}});
+    j["chart_switches"] = sw;
+    nlohmann::json samples = nlohmann::json::array();
+    for (const SimulationSample& s : res.samples) samples.push_back(sample_json(model, res, s));
+    j["samples"] = samples;
+    out << j.dump(2) << '\n';
+  } else {
+    out << "mechanism   " << model.name << "  (" << model.file << ")\n";
+    out << "form        " << opt.form << ", " << opt.integrator << ", rtol " << g(so.rtol, 3)
+        << ", atol " << g(so.atol, 3) << "\n";
+    out << "status      " << to_string(res.status) << (res.message.empty() ? "" : ": ")
+        << res.message << "\n";
+    out << "steps       " << res.steps << " (" << res.evaluations << " evaluations), "
+        << res.chart_switches.size() << " chart switches\n";
+    out << "energy      initial " << g(res.energy_initial) << " J, final " << g(res.energy_final)
+        << " J, max drift " << g(res.energy_max_drift, 3) << " J (relative " << g(rel_drift, 3)
+        << ")\n";
+    out << "residual    max |f| " << g(res.max_constraint_residual, 3);
+    if (so.form == DynamicsForm::primal) out << ", max |J| " << g(res.max_invariant_J, 3);
+    out << "\n\n";
+    out << "t";
+    for (const Measure& m : model.measures) out << "\t" << m.name;
+    out << "\tenergy\n";
+    for (const SimulationSample& s : res.samples) {
+      out << g(s.t, 6);
+      for (double v : s.measures) out << "\t" << g(v, 8);
+      out << "\t" << g(s.kinetic + s.potential - s.work, 8) << "\n";
+    }
+  }
+  std::cout << out.str();
+  if (!ok) spdlog::error("simulate: {}: {}", to_string(res.status), res.message);
+  return ok ? kOk : kNumerical;
+}
+
+}  // namespace
+
+void register_simulate(CLI::App& app, const GlobalOptions& globals, int& exit_code) {
+  auto opt = std::make_shared<SimulateCliOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "simulate", "forward dynamics: time histories of measures, reactions, energy, residuals");
+  cmd->add_option("file", opt->file, "mechanism file (YAML)")->required();
+  cmd->add_option("--t-end", opt->t_end, "end time (s)")->required()->check(CLI::PositiveNumber);
+  cmd->add_option("--rtol", opt->rtol, "relative tolerance")->check(CLI::PositiveNumber);
+  cmd->add_option("--atol", opt->atol, "absolute tolerance")->check(CLI::PositiveNumber);
+  cmd->add_option("--dt-out", opt->dt_out, "output interval (s; default t_end/100)")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--max-step", opt->max_step, "largest step (s)")->check(CLI::PositiveNumber);
+  cmd->add_option("--form", opt->form, "dual (default) or primal (Theorem 7)")
+      ->check(CLI::IsMember({"dual", "primal"}));
+  cmd->add_option("--integrator", opt->integrator, "dopri5 (default) or rkf78")
+      ->check(CLI::IsMember({"dopri5", "rkf78"}));
+  cmd->add_option("--rate", opt->rates,
+                  "initial rate MEASURE=VALUE (SI) of a measure's position quantity; repeatable");
+  cmd->add_flag("--json", opt->json, "one JSON document on stdout");
+  cmd->add_option("--out", opt->out_dir, "directory for simulate.csv and chart_switches.csv");
+  cmd->callback([opt, &globals, &exit_code] {
+    setup_logging(globals);
+    exit_code = run_simulate(*opt);
+  });
+}
+
+}  // namespace orthomech::cli

@@ -1,0 +1,106 @@
+#pragma once
+// Forward dynamics of the constrained system (issue 5; paper §7; design §4–5).
+//
+// Initial conditions: the design position is projected onto f(q) = 0 (mass-metric Gauss–Newton,
+// analysis/positions.hpp; it can switch to Ipopt's `assemble` once that exists), then the
+// velocity guess u₀ is made admissible by the mass-orthogonal projection u = α u₀ (closed form,
+// the closest admissible velocity in the kinetic-energy norm; the energy removed, ½ (βu₀)ᵀ M
+// (βu₀), is reported). Requested input rates (e.g. "B0_vx = 1 m/s") then fix the admissible
+// velocity by least squares in the chart coordinates.
+//
+// Dual form (default): ODE state (q, v) in the current chart, u = F v; H v̇ = Fᵀ (Q̂ − Ṁ u − M Ḟ v)
+// (eq. (68)). After every accepted step: Newton position correction in the chart (the
+// independent coordinates stay, the dependent ones move), then a chart check; on a switch v is
+// re-expressed in the new chart from u. Velocities are admissible by construction (u = F v).
+// Primal form: Theorem 7, ṗ = αᵀ Q̂ − Ω u + βᵀ Ṁ u, u = A p (eqs. (99)–(100)); after every
+// accepted step the invariant J = Eᵀ A p (eq. (105)) is recorded, then positions are corrected
+// and the momenta projected (p ← M α u).
+// Energy: T + V − W, with W the work of the non-conservative loads (torques, point forces,
+// dampers), integrated with the motion; it is constant for every model.
+#include <string>
+#include <vector>
+
+#include "orthomech/analysis/cycle.hpp"
+#include "orthomech/analysis/positions.hpp"
+#include "orthomech/model/model.hpp"
+#include "orthomech/model/state.hpp"
+
+namespace orthomech {
+
+enum class DynamicsForm { dual, primal };
+enum class Integrator { dopri5, rkf78 };  // Dormand–Prince 5(4) dense output; Fehlberg 7(8)
+
+// A prescribed initial rate: the rate of a measure's underlying position quantity (a joint
+// coordinate, a point coordinate, a distance, a body angle).
+struct InitialRate {
+  int measure = -1;
+  double rate = 0.0;  // SI: m/s or rad/s
+};
+
+struct SimulateOptions {
+  DynamicsForm form = DynamicsForm::dual;
+  Integrator integrator = Integrator::dopri5;
+  double t_end = 1.0;     // s
+  double rtol = 1e-8;     // relative tolerance of the step-size control
+  double atol = 1e-10;    // absolute tolerance (SI units of q, v or p)
+  double dt_out = 0.0;    // s; 0: t_end / 100
+  double max_step = 0.0;  // s; 0: unlimited
+  VecX initial_u;         // guess u₀ (size n) or empty (zero)
+  std::vector<InitialRate> initial_rates;
+  bool record_samples = true;         // keep every output sample (else only the final one)
+  bool reactions = true;              // compute λ and joint reactions at the samples
+  double position_tolerance = 1e-12;  // max |f| after the per-step correction (m, rad)
+  // Dual form: evaluate every stage at its position projected onto f(q) = 0 in the chart
+  // (independent coordinates fixed). Needed to pass change points (IFToMM A02) at a sane step
+  // size; costs about one Newton iteration per evaluation.
+  bool project_stages = false;
+  long max_steps = 100'000'000;
+};
+
+enum class SimulateStatus { completed, failed_assembly, failed_step, singular };
+[[nodiscard]] const char* to_string(SimulateStatus s);
+
+struct SimulationSample {
+  double t = 0.0;
+  VecX q, u, udot, lambda;
+  std::vector<double> measures;   // per Model::measures
+  std::vector<double> reactions;  // per reaction component (analysis/cycle.hpp)
+  double kinetic = 0.0, potential = 0.0;
+  double work = 0.0;               // work of the non-conservative loads since t = 0
+  double residual = 0.0;           // max |f(q)| (m, rad)
+  double velocity_residual = 0.0;  // max |Eᵀ u|
+};
+
+struct ChartSwitch {
+  double t = 0.0;
+  std::string from, to;  // independent velocity components, e.g. "link0.phi"
+};
+
+struct SimulateResult {
+  SimulateStatus status = SimulateStatus::failed_step;
+  std::string message;
+  DynamicsForm form = DynamicsForm::dual;
+  SolveResult assembly;          // initial position projection
+  double kinetic_removed = 0.0;  // by the velocity projection u = α u₀
+  std::vector<ReactionComponent> components;
+  std::vector<SimulationSample> samples;  // at t = 0, dt_out, 2 dt_out, …, t_end
+  SimulationSample final;
+  std::vector<ChartSwitch> chart_switches;
+  double energy_initial = 0.0, energy_final = 0.0;
+  double energy_max_drift = 0.0;         // max |E(t) − E(0)| over the accepted steps (J)
+  double energy_scale = 0.0;             // max (|T| + |V| + |W|) (J): for relative drifts
+  double max_constraint_residual = 0.0;  // max |f| over the accepted steps before correction
+  double max_velocity_residual = 0.0;    // max |Eᵀ u| (dual: after the step; primal: |J|)
+  double max_invariant_J = 0.0;          // primal: max |J|, eq. (105), before projection
+  long steps = 0;
+  long uncorrected_steps = 0;  // steps left uncorrected next to a change point
+  long evaluations = 0;        // right-hand side evaluations
+};
+
+// Simulates from the design position (projected) with the velocity given by the options.
+[[nodiscard]] SimulateResult simulate(const Model& model, const SimulateOptions& options);
+// Same from a given state (positions and velocities are still made consistent first).
+[[nodiscard]] SimulateResult simulate(const Model& model, const State& initial,
+                                      const SimulateOptions& options);
+
+}  // namespace orthomech

@@ -1,0 +1,218 @@
+#include "chart_solver.hpp"
+
+#include <Eigen/QR>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "orthomech/constraints/joints.hpp"
+#include "orthomech/model/free_system.hpp"
+
+namespace orthomech::detail {
+
+namespace {
+// Above this rank the dependent block is factorised as a sparse matrix (dense LU is cheaper
+// for the small blocks of ordinary linkages; measured in bench/simulate_bench.cpp).
+constexpr int kSparseAbove = 48;
+}  // namespace
+
+ChartSolver::ChartSolver(const Model& model, int rank)
+    : model_(model),
+      n_(model.n),
+      nc_(model.nc),
+      r_(rank),
+      sparse_(rank > kSparseAbove),
+      selector_(model.nc, model.n),
+      dep_pos_(static_cast<size_t>(model.n), -1),
+      ED_(rank, rank),
+      perm_(static_cast<size_t>(rank), 0),
+      EDs_(rank, rank),
+      br_(rank),
+      xd_(rank) {
+  triplets_.reserve(static_cast<size_t>(8 * rank + 8));
+}
+
+void ChartSolver::set_chart(const Chart& c) {
+  chart_ = c;
+  analyzed_ = false;
+  std::fill(dep_pos_.begin(), dep_pos_.end(), -1);
+  for (size_t k = 0; k < chart_.dependent.size(); ++k)
+    dep_pos_[static_cast<size_t>(chart_.dependent[k])] = static_cast<int>(k);
+}
+
+bool ChartSolver::select(const MatX& Et, const VecX& A_diag) {
+  Chart c;
+  if (selector_.select(Et, A_diag, options_, c) != r_) return false;
+  set_chart(c);
+  return true;
+}
+
+void ChartSolver::select_from_tangent(const MatX& F, const VecX& M_sqrt) {
+  if (F.cols() == 0) return;
+  const MatX S = (M_sqrt.asDiagonal() * F).transpose();  // n_a × n
+  const Eigen::ColPivHouseholderQR<MatX> qr(S);
+  const auto& perm = qr.colsPermutation().indices();
+  Chart c = chart_;
+  std::vector<bool> independent(static_cast<size_t>(n_), false);
+  for (Eigen::Index k = 0; k < F.cols(); ++k) independent[static_cast<size_t>(perm(k))] = true;
+  c.independent.clear();
+  c.dependent.clear();
+  for (int k = 0; k < n_; ++k)
+    (independent[static_cast<size_t>(k)] ? c.independent : c.dependent).push_back(k);
+  set_chart(c);
+}
+
+// Dense LU with partial pivoting, in place (unblocked: the blocks of linkages are small, and
+// Eigen's blocked path costs more than the factorisation itself at r ≈ 20; measured with
+// bench/simulate_bench.cpp). P ED = L U, L unit lower.
+bool ChartSolver::dense_lu() {
+  const int r = r_;
+  double umax = 0.0, umin = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < r; ++k) {
+    int p = k;
+    double best = std::abs(ED_(k, k));
+    for (int i = k + 1; i < r; ++i)
+      if (std::abs(ED_(i, k)) > best) best = std::abs(ED_(i, k)), p = i;
+    perm_[static_cast<size_t>(k)] = p;
+    if (p != k) ED_.row(k).swap(ED_.row(p));
+    umax = std::max(umax, best);
+    umin = std::min(umin, best);
+    if (best == 0.0) return false;
+    const double inv = 1.0 / ED_(k, k);
+    for (int i = k + 1; i < r; ++i) ED_(i, k) *= inv;
+    for (int j = k + 1; j < r; ++j) {
+      const double ukj = ED_(k, j);
+      if (ukj != 0.0)
+        for (int i = k + 1; i < r; ++i) ED_(i, j) -= ED_(i, k) * ukj;
+    }
+  }
+  return umin > 1e-14 * umax;
+}
+
+void ChartSolver::dense_solve(const VecX& b, VecX& x) const {
+  x = b;
+  for (int k = 0; k < r_; ++k) std::swap(x(k), x(perm_[static_cast<size_t>(k)]));
+  for (int j = 0; j < r_; ++j)  // L y = P b
+    for (int i = j + 1; i < r_; ++i) x(i) -= ED_(i, j) * x(j);
+  for (int j = r_ - 1; j >= 0; --j) {  // U x = y
+    x(j) /= ED_(j, j);
+    for (int i = 0; i < j; ++i) x(i) -= ED_(i, j) * x(j);
+  }
+}
+
+void ChartSolver::dense_solve_transposed(const VecX& c, VecX& x) const {
+  // (P ED)ᵀ = Uᵀ Lᵀ: Uᵀ z = c, Lᵀ w = z, x = Pᵀ w.
+  x = c;
+  for (int i = 0; i < r_; ++i) {
+    for (int k = 0; k < i; ++k) x(i) -= ED_(k, i) * x(k);
+    x(i) /= ED_(i, i);
+  }
+  for (int i = r_ - 1; i >= 0; --i)
+    for (int k = i + 1; k < r_; ++k) x(i) -= ED_(k, i) * x(k);
+  for (int k = r_ - 1; k >= 0; --k) std::swap(x(k), x(perm_[static_cast<size_t>(k)]));
+}
+
+bool ChartSolver::factor(const MatX& Et) {
+  if (r_ == 0) return true;
+  if (!sparse_) {
+    for (int i = 0; i < r_; ++i) {
+      const int row = chart_.rows[static_cast<size_t>(i)];
+      for (int k = 0; k < r_; ++k) ED_(i, k) = Et(row, chart_.dependent[static_cast<size_t>(k)]);
+    }
+    return dense_lu();
+  }
+  triplets_.clear();
+  for (int i = 0; i < r_; ++i) {
+    const int row = chart_.rows[static_cast<size_t>(i)];
+    for (int j = 0; j < n_; ++j) {
+      const int k = dep_pos_[static_cast<size_t>(j)];
+      if (k >= 0 && Et(row, j) != 0.0) triplets_.emplace_back(i, k, Et(row, j));
+    }
+  }
+  EDs_.setFromTriplets(triplets_.begin(), triplets_.end());
+  // The ordering (COLAMD) is computed once per sparsity pattern; entries that vanish exactly at
+  // some positions (sin 0) change the pattern and trigger a new analysis.
+  const auto nnz = EDs_.nonZeros();
+  bool same = analyzed_ && nnz == static_cast<Eigen::Index>(pattern_inner_.size());
+  if (same) {
+    for (Eigen::Index k = 0; k < nnz && same; ++k)
+      same = EDs_.innerIndexPtr()[k] == pattern_inner_[static_cast<size_t>(k)];
+    for (Eigen::Index k = 0; k <= r_ && same; ++k)
+      same = EDs_.outerIndexPtr()[k] == pattern_outer_[static_cast<size_t>(k)];
+  }
+  if (!same) {
+    slu_.analyzePattern(EDs_);
+    pattern_inner_.assign(EDs_.innerIndexPtr(), EDs_.innerIndexPtr() + nnz);
+    pattern_outer_.assign(EDs_.outerIndexPtr(), EDs_.outerIndexPtr() + r_ + 1);
+    analyzed_ = true;
+  }
+  slu_.factorize(EDs_);
+  return slu_.info() == Eigen::Success;
+}
+
+void ChartSolver::solve(const VecX& b, VecX& x) {
+  x.setZero();
+  if (r_ == 0) return;
+  for (int i = 0; i < r_; ++i) br_(i) = b(chart_.rows[static_cast<size_t>(i)]);
+  if (!sparse_)
+    dense_solve(br_, xd_);
+  else
+    xd_ = slu_.solve(br_);
+  for (int k = 0; k < r_; ++k) x(chart_.dependent[static_cast<size_t>(k)]) = xd_(k);
+}
+
+void ChartSolver::solve_transposed(const MatX& Et, const VecX& c, VecX& lambda) {
+  lambda.setZero();
+  if (r_ == 0) return;
+  VecX cd(r_);
+  for (int k = 0; k < r_; ++k) cd(k) = c(chart_.dependent[static_cast<size_t>(k)]);
+  VecX lr(r_);
+  if (!sparse_) {
+    dense_solve_transposed(cd, lr);
+  } else {
+    const Eigen::SparseMatrix<double> EDt = EDs_.transpose();
+    Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>> lu(EDt);
+    lr = lu.solve(cd);
+  }
+  (void)Et;
+  for (int i = 0; i < r_; ++i) lambda(chart_.rows[static_cast<size_t>(i)]) = lr(i);
+}
+
+SolveResult ChartSolver::correct_positions(VecX& q, MatX& Et, VecX& f, VecX& dq, double tolerance,
+                                           double max_gain, bool* near_singular) {
+  SolveResult result;
+  if (near_singular) *near_singular = false;
+  constexpr int kMaxIterations = 8;
+  for (int it = 0;; ++it) {
+    compute_constraint_residual(model_, q, f);
+    result.residual = f.size() ? f.cwiseAbs().maxCoeff() : 0.0;
+    result.iterations = it;
+    if (result.residual <= tolerance) {
+      result.status = SolveStatus::converged;
+      return result;
+    }
+    if (it >= kMaxIterations || !std::isfinite(result.residual)) {
+      result.status = SolveStatus::not_converged;
+      result.message = "the position corrector did not converge (residual " +
+                       std::to_string(result.residual) + ")";
+      return result;
+    }
+    compute_constraint_jacobian(model_, q, Et);
+    if (!factor(Et)) {
+      result.status = SolveStatus::singular;
+      result.message = "the chart's dependent block is singular";
+      return result;
+    }
+    solve(f, dq);  // E_RDᵀ Δq_D = f_R
+    if (it == 0 && max_gain > 0.0 &&
+        dq.cwiseAbs().maxCoeff() > max_gain * std::max(result.residual, tolerance)) {
+      if (near_singular) *near_singular = true;
+      result.status = SolveStatus::converged;
+      result.message = "not corrected: next to a change point";
+      return result;
+    }
+    integrate_positions(model_, q, dq, -1.0);  // q_D ← q_D − Δq_D
+  }
+}
+
+}  // namespace orthomech::detail

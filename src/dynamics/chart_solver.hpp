@@ -1,0 +1,72 @@
+#pragma once
+// Private: the dependent block of a chart (design §4) factorised for the integrators, dense LU
+// for small mechanisms and sparse LU for large ones (Eᵀ of a linkage has ≤ 6 non-zeros per row,
+// so the sparse factorisation keeps the cost per step near-linear in the number of bodies).
+//
+// A chart (rows R, dependent components D, independent components I; projection/chart.hpp)
+// gives F = P [I; −(E_RDᵀ)⁻¹ E_RIᵀ]. This class solves E_RDᵀ x_D = b_R (x_I = 0) and the
+// transposed system E_RD λ_R = c_D, and corrects positions in the chart.
+#include <Eigen/LU>
+#include <Eigen/SparseCore>
+#include <Eigen/SparseLU>
+#include <string>
+#include <vector>
+
+#include "orthomech/analysis/positions.hpp"
+#include "orthomech/model/model.hpp"
+#include "orthomech/projection/chart.hpp"
+
+namespace orthomech::detail {
+
+class ChartSolver {
+ public:
+  ChartSolver(const Model& model, int rank);
+  // Chooses a chart at Eᵀ (rank-revealing QR; projection/chart.hpp). Returns false when the
+  // rank found differs from the branch's rank.
+  bool select(const MatX& Et, const VecX& A_diag);
+  // Keeps the rows R and chooses the independent components I from a basis F of the admissible
+  // velocities: the n_a components where F, scaled to the mass metric (rows × √M_kk), is best
+  // conditioned (QR with column pivoting of (S F)ᵀ). For n_a = 1 this is the component that
+  // moves most, so every entry of the new F is ≤ 1 in the mass metric. Near a change point this
+  // keeps the branch by continuity of the tangent: F is the current branch tangent.
+  void select_from_tangent(const MatX& F, const VecX& M_sqrt);
+  // Factorises E_RDᵀ at Eᵀ. Returns false when it is singular.
+  bool factor(const MatX& Et);
+  // x (size n): x_D = (E_RDᵀ)⁻¹ b_R, x_I = 0 (b of size nc). Allocation-free (dense path).
+  void solve(const VecX& b, VecX& x);
+  // λ (size nc): λ_R = (E_RD)⁻¹ c_D, other rows 0 (c of size n). The unique λ of E λ = c when
+  // E has full column rank and c ∈ range(E).
+  void solve_transposed(const MatX& Et, const VecX& c, VecX& lambda);
+  // Newton in the chart on f(q) = 0: the independent coordinates stay fixed. With max_gain > 0,
+  // a first Newton step larger than max_gain · |f| (the dependent block is nearly singular: a
+  // change point is close, and Newton could jump to another branch) is not taken: q is left
+  // as it was, *near_singular is set and the result says converged.
+  SolveResult correct_positions(VecX& q, MatX& Et, VecX& f, VecX& dq, double tolerance,
+                                double max_gain = 0.0, bool* near_singular = nullptr);
+  [[nodiscard]] const Chart& chart() const { return chart_; }
+  void set_chart(const Chart& c);
+  [[nodiscard]] int rank() const { return r_; }
+  [[nodiscard]] int na() const { return n_ - r_; }
+
+ private:
+  bool dense_lu();
+  void dense_solve(const VecX& b, VecX& x) const;
+  void dense_solve_transposed(const VecX& c, VecX& x) const;
+  const Model& model_;
+  int n_, nc_, r_;
+  bool sparse_;
+  Chart chart_;
+  ChartSelector selector_;
+  ChartOptions options_;
+  std::vector<int> dep_pos_;  // n: position of a component in chart.dependent, or −1
+  MatX ED_;                   // r × r (dense path): E_RDᵀ
+  std::vector<int> perm_;     // r: row interchanges of the dense LU (in place in ED_)
+  Eigen::SparseMatrix<double> EDs_;
+  Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>> slu_;
+  std::vector<Eigen::Triplet<double>> triplets_;
+  bool analyzed_ = false;  // slu_ has the ordering of pattern_*
+  std::vector<int> pattern_inner_, pattern_outer_;
+  VecX br_, xd_;  // r
+};
+
+}  // namespace orthomech::detail

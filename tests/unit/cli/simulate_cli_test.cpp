@@ -1,0 +1,62 @@
+// `orthomech simulate` contract (docs/cli.md): exit codes, the documented JSON keys (final.t,
+// final.measures.<name>, energy, max_constraint_residual), CSV output.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "support/cli_runner.hpp"
+#include "support/fixtures.hpp"
+
+namespace orthomech {
+namespace {
+
+using test::run_cli;
+
+TEST(SimulateCli, AndrewsJsonHasTheDocumentedKeys) {
+  const auto r = run_cli({"simulate", test::source_path("mechanisms/andrews-squeezer.yaml"),
+                          "--t-end", "0.03", "--rtol", "1e-10", "--atol", "1e-12", "--json"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["status"], "completed");
+  EXPECT_NEAR(j["final"]["t"].get<double>(), 0.03, 1e-15);
+  // Published β(0.03) (references.md §1), relative 1e-8.
+  EXPECT_NEAR(j["final"]["measures"]["beta"].get<double>(), 15.81077119629904,
+              1e-8 * 15.81077119629904);
+  EXPECT_TRUE(j["energy"].contains("initial"));
+  EXPECT_TRUE(j["energy"].contains("final"));
+  EXPECT_LT(j["energy"]["max_drift"].get<double>(), 1e-8);
+  EXPECT_LT(j["max_constraint_residual"].get<double>(), 1e-9);
+  EXPECT_EQ(j["samples"].size(), 101u);  // t = 0, 0.0003, …, 0.03
+}
+
+TEST(SimulateCli, PrimalFormAndCsv) {
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("orthomech_sim_" + std::to_string(::getpid()));
+  const auto r = run_cli({"simulate", test::source_path("mechanisms/pendulum.yaml"), "--t-end", "1",
+                          "--dt-out", "0.5", "--form", "primal", "--out", dir.string()});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::string csv = test::read_text(dir / "simulate.csv");
+  EXPECT_NE(csv.find("t,P1_x,P1_y"), std::string::npos);
+  // Three rows (t = 0, 0.5, 1) after the header.
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 4);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(SimulateCli, BadRateIsBadInput) {
+  const auto r = run_cli({"simulate", test::source_path("mechanisms/pendulum.yaml"), "--t-end", "1",
+                          "--rate", "nosuch=1"});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("measure 'nosuch' is not defined"), std::string::npos) << r.err;
+}
+
+TEST(SimulateCli, MissingTEndIsBadInput) {
+  const auto r = run_cli({"simulate", test::source_path("mechanisms/pendulum.yaml")});
+  EXPECT_EQ(r.status, 2);
+}
+
+}  // namespace
+}  // namespace orthomech
