@@ -169,7 +169,7 @@ void solve_multipliers(Workspace& ws, DrivenWorkspace& w, VecX& lambda) {
 }  // namespace
 
 bool compute_driven(const Model& model, int driver_joint, double sdot, double sddot, State& state,
-                    Workspace& ws, DrivenWorkspace& w, DrivenPoint& out) {
+                    Workspace& ws, DrivenWorkspace& w, DrivenPoint& out, bool jacobian_current) {
   const MeasureKind input = JointCoordinate{driver_joint};
   // Positions: the chart and F at q (F depends on q only). The chart's scaling A comes from the
   // free system; with a constant mass matrix it is computed once.
@@ -177,7 +177,7 @@ bool compute_driven(const Model& model, int driver_joint, double sdot, double sd
     state.u.setZero();
     compute_free_system(model, state, ws);
   }
-  compute_constraint_jacobian(model, state.q, ws.constraints.Et);
+  if (!jacobian_current) compute_constraint_jacobian(model, state.q, ws.constraints.Et);
   if (compute_basis(model, state, ws) != ProjectionStatus::ok) return false;
   const auto F = ws.dual.F.col(0);
   (void)compute_scalar(model, input, state.q, nullptr, w.d);
@@ -258,6 +258,7 @@ struct Sweep {
   int joint;
   Workspace& ws;
   DrivenWorkspace& w;
+  bool jacobian_at_q = false;  // ws.constraints.Et holds Eᵀ at the q the corrector returned
 
   // Newton on [f_R(q); s(q) − target] = 0 with Jacobian [E_Rᵀ; dᵀ] (the input locked), or, when
   // `row` is given, on [f_R(q); rowᵀ(q − q_ref) − target] (a linear lock, for the pseudo-arclength
@@ -277,7 +278,9 @@ struct Sweep {
     bool factored = false;
     double previous = std::numeric_limits<double>::infinity();
     for (int it = 0; it < 30; ++it) {
-      compute_constraint_residual(model, q, ws.constraints.f);
+      // f and Eᵀ in one pass: Eᵀ at the converged q is then ready for compute_driven.
+      compute_constraint_residual_and_jacobian(model, q, ws.constraints.f, ws.constraints.Et);
+      jacobian_at_q = true;
       const double s =
           row ? row->dot(q - *q_ref) : compute_scalar(model, input, q, nullptr, w.d).value;
       double res = std::max(std::abs(s - target), ws.constraints.f.cwiseAbs().maxCoeff());
@@ -285,7 +288,6 @@ struct Sweep {
       // of 1e-12 still leaves q 1e-10 off the branch along the nearly singular direction.
       if (res < 1e-14 * (1.0 + q.cwiseAbs().maxCoeff())) return true;
       if (!factored || res > 0.1 * previous) {
-        compute_constraint_jacobian(model, q, ws.constraints.Et);
         if (all_rows) {  // normal equations of [Eᵀ; dᵀ]
           w.J.noalias() = ws.constraints.Et.transpose() * ws.constraints.Et;
           if (row)
@@ -317,6 +319,7 @@ struct Sweep {
       lu_solve(w.J, w.J_piv, w.dq);
       if (!(w.dq.cwiseAbs().maxCoeff() <= max_step)) return false;
       integrate_positions(model, q, w.dq, -1.0);
+      jacobian_at_q = false;
       if (!q.allFinite()) return false;
     }
     return false;
@@ -489,12 +492,12 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
   // the multipliers, which grow without bound, are not meaningful.
   constexpr double kSingularQuality = 1e-4;
 
-  auto evaluate_at = [&](const VecX& q, double t, DrivenPoint& p) {
+  auto evaluate_at = [&](const VecX& q, double t, DrivenPoint& p, bool jacobian_current = false) {
     double s = 0.0, sdot = 0.0, sddot = 0.0;
     law.at(t, s, sdot, sddot);
     state.q = q;
     state.t = t;
-    if (!compute_driven(model, joint, sdot, sddot, state, ws, w, p)) return false;
+    if (!compute_driven(model, joint, sdot, sddot, state, ws, w, p, jacobian_current)) return false;
     p.input = compute_scalar(model, input, state.q, nullptr).value;
     p.time = t;
     p.chart_quality = ws.dual.quality;
@@ -544,8 +547,8 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
       predict(from, target, trial);
     // Corrections beyond twice the size of the tangent step would leave the branch.
     const double max_step = 2.0 * std::abs(ds) * tangent_of.tangent.cwiseAbs().maxCoeff() + 1e-12;
-    return sweep.corrector(trial, target, max_step) && evaluate_at(trial, t, out) &&
-           same_branch(out, tangent_of);
+    return sweep.corrector(trial, target, max_step) &&
+           evaluate_at(trial, t, out, sweep.jacobian_at_q) && same_branch(out, tangent_of);
   };
   // Determinacy (design §3): component cᵀλ is unique iff Nᵀc = 0 for the null space N of E. The
   // values of the components for λ = N_j are exactly (Nᵀc)_j; a component is determinate when

@@ -202,6 +202,11 @@ void compute_constraint_jacobian(const Model& model, const VecX& q, MatX& Et) {
   evaluate(model, q, nullptr, nullptr, &Et, nullptr);
 }
 
+void compute_constraint_residual_and_jacobian(const Model& model, const VecX& q, VecX& f,
+                                              MatX& Et) {
+  evaluate(model, q, nullptr, &f, &Et, nullptr);
+}
+
 void compute_constraint_rate(const Model& model, const State& state, ConstraintWorkspace& ws) {
   evaluate(model, state.q, &state.u, nullptr, nullptr, &ws.Dt);
   ws.Dtu.noalias() = ws.Dt * state.u;  // convective term Dᵀu, eq. (76)

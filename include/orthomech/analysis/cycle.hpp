@@ -120,9 +120,11 @@ struct DrivenWorkspace {
 
 // Velocities, accelerations, drive and multipliers at a position q on f(q) = 0 where the input
 // moves with rate sdot and acceleration sddot (C1)–(C4). Returns false at a dead point (dᵀF = 0).
+// jacobian_current: ws.constraints.Et already holds Eᵀ(q) (the corrector's last evaluation).
 // Allocation-free after set-up.
 bool compute_driven(const Model& model, int driver_joint, double sdot, double sddot, State& state,
-                    Workspace& ws, DrivenWorkspace& dws, DrivenPoint& out);
+                    Workspace& ws, DrivenWorkspace& dws, DrivenPoint& out,
+                    bool jacobian_current = false);
 
 // The sweep. Never throws for numerical trouble: the status says what happened.
 [[nodiscard]] CycleResult run_cycle(const Model& model, const CycleOptions& options);

@@ -22,6 +22,8 @@ struct ConstraintWorkspace {
 void compute_constraint_residual(const Model& model, const VecX& q, VecX& f);
 // Eᵀ(q) only.
 void compute_constraint_jacobian(const Model& model, const VecX& q, MatX& Et);
+// f(q) and Eᵀ(q) in one pass (the point kinematics shared).
+void compute_constraint_residual_and_jacobian(const Model& model, const VecX& q, VecX& f, MatX& Et);
 // Dᵀ and Dᵀu only (when Eᵀ at the same q is already there).
 void compute_constraint_rate(const Model& model, const State& state, ConstraintWorkspace& ws);
 // f, Eᵀ, Dᵀ and Dᵀu at a state. Allocation-free.
