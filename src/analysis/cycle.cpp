@@ -79,6 +79,14 @@ std::vector<ReactionComponent> reaction_components(const Model& model) {
         break;
     }
   }
+  // Knife edges (nonholonomic rows after the joints'): the ground's lateral force on the body.
+  for (size_t e = 0; e < model.knife_edges.size(); ++e) {
+    const int ji = static_cast<int>(model.joints.size() + e);
+    const std::string& name = model.knife_edges[e].name;
+    out.push_back({name + ".Fx", ji, true, "N"});
+    out.push_back({name + ".Fy", ji, true, "N"});
+    out.push_back({name + ".N", ji, false, "N"});
+  }
   return out;
 }
 
@@ -125,6 +133,14 @@ void compute_reactions(const Model& model, const VecX& q, const VecX& lambda,
           }
         },
         joint.kind);
+  }
+  // Knife edge: λ is the lateral force of the ground on the body along n = R(φ) perp(axis).
+  for (const KnifeEdge& k : model.knife_edges) {
+    const Vec2 n = rotation(body_angle(model, k.at.body, q)) * perp(k.axis_local);
+    const double N = lambda(k.row_offset);
+    out.push_back(N * n.x());
+    out.push_back(N * n.y());
+    out.push_back(N);
   }
 }
 

@@ -46,8 +46,8 @@ struct CycleOptions {
 // Convention (docs/notation.md): forces and moments that the second body of the joint exerts on
 // the first.
 struct ReactionComponent {
-  std::string name;  // "A.Fx", "A.Ft", …
-  int joint = -1;
+  std::string name;    // "A.Fx", "A.Ft", …
+  int joint = -1;      // index in Model::joints; knife edge e has joints.size() + e
   bool global = true;  // global frame (else the joint's frame = the first body's frame)
   std::string unit;    // "N" or "N*m"
 };

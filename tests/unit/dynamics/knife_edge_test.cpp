@@ -108,6 +108,39 @@ TEST(KnifeEdge, ChaplyginSled_ClassicalMotionAndEnergy) {
   }
 }
 
+// The blade's reaction (named components blade.Fx, blade.Fy, blade.N) against the reduced
+// dynamics: the only force is N along the blade normal n, so N = m (lateral acceleration of the
+// centre of mass) = m (v ω + a ω̇), with ω̇ = −m a v ω / (J + m a²).
+TEST(KnifeEdge, ChaplyginSled_BladeReactionAgainstReducedDynamics) {
+  const Model model = parse_mechanism(kSled, "chaplygin-sled");
+  SimulateOptions o;
+  o.t_end = 1.0;
+  o.dt_out = 0.25;
+  o.rtol = 1e-11;
+  o.atol = 1e-12;
+  o.initial_u = Vec3(kV0, kW0 * kA, kW0);
+  const SimulateResult r = simulate(model, o);
+  ASSERT_EQ(r.status, SimulateStatus::completed) << r.message;
+  size_t fx = 99, fy = 99, nn = 99;
+  for (size_t k = 0; k < r.components.size(); ++k) {
+    if (r.components[k].name == "blade.Fx") fx = k;
+    if (r.components[k].name == "blade.Fy") fy = k;
+    if (r.components[k].name == "blade.N") nn = k;
+  }
+  ASSERT_LT(std::max({fx, fy, nn}), r.components.size());
+  ASSERT_GE(r.samples.size(), 5u);
+  for (const auto& s : r.samples) {
+    const auto ref = reduced(s.t);
+    const double v = ref[0], w = ref[1];
+    const double wdot = -kM * kA * v * w / (kJ + kM * kA * kA);
+    const double N = kM * (v * w + kA * wdot);
+    EXPECT_NEAR(s.reactions[nn], N, 1e-7) << s.t;
+    const Vec2 n = perp(Vec2(std::cos(ref[2]), std::sin(ref[2])));
+    EXPECT_NEAR(s.reactions[fx], N * n.x(), 1e-7) << s.t;
+    EXPECT_NEAR(s.reactions[fy], N * n.y(), 1e-7) << s.t;
+  }
+}
+
 TEST(KnifeEdge, ChaplyginSled_AlignsAndReachesTheLimitSpeed) {
   const Model model = parse_mechanism(kSled, "chaplygin-sled");
   SimulateOptions o;
