@@ -1,5 +1,7 @@
 #include "orthomech/constraints/joints.hpp"
 
+#include <array>
+
 #include "orthomech/model/free_system.hpp"
 
 namespace orthomech {
@@ -31,6 +33,7 @@ struct JointEvaluator {
   VecX* f;
   MatX* Et;
   MatX* Dt;
+  const Eigen::Matrix2d* rot;  // R(φ_b) per body at q, or null
 
   template <typename Rows>
   auto row(Rows* m, int k) {
@@ -74,8 +77,8 @@ struct JointEvaluator {
   // Distance: f = (dᵀd − L²)/(2L), d = r_Pj − r_Pi; Eᵀ = dᵀ ∂d/∂u / L;
   // Dᵀ = (ḋᵀ ∂d/∂u + dᵀ d/dt(∂d/∂u)) / L.
   void operator()(const Distance& j) {
-    const PointKinematics ki = point_kinematics(model, j.pi, q, u);
-    const PointKinematics kj = point_kinematics(model, j.pj, q, u);
+    const PointKinematics ki = point_kinematics(model, j.pi, q, u, rot);
+    const PointKinematics kj = point_kinematics(model, j.pj, q, u, rot);
     const Vec2 d = kj.r - ki.r;
     const Vec2 dd = kj.v - ki.v;
     const double L = j.length;
@@ -97,8 +100,8 @@ struct JointEvaluator {
   }
 
   void point_coincidence(const PointRef& pi, const PointRef& pj) {
-    const PointKinematics ki = point_kinematics(model, pi, q, u);
-    const PointKinematics kj = point_kinematics(model, pj, q, u);
+    const PointKinematics ki = point_kinematics(model, pi, q, u, rot);
+    const PointKinematics kj = point_kinematics(model, pj, q, u, rot);
     if (f) (*f).segment<2>(r) = ki.r - kj.r;  // eq. (20)
     for (int a = 0; a < 2; ++a) {
       const Vec2 c = a == 0 ? Vec2::UnitX() : Vec2::UnitY();
@@ -133,11 +136,11 @@ struct JointEvaluator {
   //   ∂f/∂u  = nᵀ ∂d/∂u + (perp(n)ᵀ d) e_φi                                   (L1)
   //   d/dt   = ṅᵀ ∂d/∂u + nᵀ d/dt(∂d/∂u) + (−φ̇_i nᵀ d + perp(n)ᵀ ḋ) e_φi        (L2)
   void point_on_line(const PointRef& pi, const PointRef& pj, const Vec2& axis, int k) {
-    const PointKinematics ki = point_kinematics(model, pi, q, u);
-    const PointKinematics kj = point_kinematics(model, pj, q, u);
+    const PointKinematics ki = point_kinematics(model, pi, q, u, rot);
+    const PointKinematics kj = point_kinematics(model, pj, q, u, rot);
     const double phi_i = body_angle(model, pi.body, q);
     const double w_i = (u ? body_angular_velocity(model, pi.body, *u) : 0.0);
-    const Vec2 n = rotation(phi_i) * perp(axis);
+    const Vec2 n = (rot && pi.body != kGround ? rot[pi.body] : rotation(phi_i)) * perp(axis);
     const Vec2 d = kj.r - ki.r;
     const Vec2 dd = kj.v - ki.v;
     if (f) (*f)(r + k) = n.dot(d);
@@ -185,8 +188,20 @@ void knife_edge(const Model& model, const KnifeEdge& k, const VecX& q, const Vec
 }
 
 void evaluate(const Model& model, const VecX& q, const VecX* u, VecX* f, MatX* Et, MatX* Dt) {
+  // Each body's rotation once (sin/cos dominate small evaluations); particles keep the identity.
+  constexpr size_t kTable = 64;
+  std::array<Eigen::Matrix2d, kTable> table;
+  const Eigen::Matrix2d* rot = nullptr;
+  if (model.bodies.size() <= kTable) {
+    for (size_t b = 0; b < model.bodies.size(); ++b) {
+      const Body& body = model.bodies[b];
+      table[b] = body.kind == BodyKind::rigid ? rotation(q(body.q_offset + 2))
+                                              : Eigen::Matrix2d::Identity();
+    }
+    rot = table.data();
+  }
   for (const Joint& joint : model.joints) {
-    JointEvaluator ev{model, q, u, joint.row_offset, f, Et, Dt};
+    JointEvaluator ev{model, q, u, joint.row_offset, f, Et, Dt, rot};
     std::visit(ev, joint.kind);
   }
   for (const KnifeEdge& k : model.knife_edges) knife_edge(model, k, q, u, f, Et, Dt);

@@ -46,7 +46,7 @@ double kinetic_energy(const Model& model, const State& state) {
 }
 
 PointKinematics point_kinematics(const Model& model, const PointRef& p, const VecX& q,
-                                 const VecX* u) {
+                                 const VecX* u, const Eigen::Matrix2d* rotations) {
   PointKinematics k;
   if (p.body == kGround) {
     k.r = p.s;
@@ -57,7 +57,7 @@ PointKinematics point_kinematics(const Model& model, const PointRef& p, const Ve
   const Vec2 c(q(b.q_offset), q(b.q_offset + 1));
   if (b.kind == BodyKind::rigid) {
     k.rotates = true;
-    k.Rs = rotation(q(b.q_offset + 2)) * p.s;
+    k.Rs = (rotations ? rotations[p.body] : rotation(q(b.q_offset + 2))) * p.s;
     if (u) k.phidot = (*u)(b.u_offset + 2);
   }
   k.r = c + k.Rs;

@@ -32,9 +32,11 @@ struct PointKinematics {
   bool rotates = false;    // body has an angle coordinate
   bool moving = false;     // not the ground
 };
-// u may be null: then only r and Rs are filled (velocities zero).
+// u may be null: then only r and Rs are filled (velocities zero). `rotations`, if given, holds
+// R(φ_b) of every body b at this q (computed once per evaluation instead of once per point).
 [[nodiscard]] PointKinematics point_kinematics(const Model& model, const PointRef& p, const VecX& q,
-                                               const VecX* u);
+                                               const VecX* u,
+                                               const Eigen::Matrix2d* rotations = nullptr);
 [[nodiscard]] double body_angle(const Model& model, int body, const VecX& q);
 [[nodiscard]] double body_angular_velocity(const Model& model, int body, const VecX& u);
 [[nodiscard]] inline Vec2 perp(const Vec2& a) { return Vec2(-a.y(), a.x()); }  // rotate by +90°
