@@ -10,6 +10,7 @@
 #include "orthomech/analysis/assembly.hpp"
 #include "orthomech/analysis/validate.hpp"
 #include "orthomech/io/mechanism_file.hpp"
+#include "support/andrews_reference.hpp"
 
 namespace {
 using namespace orthomech;
@@ -21,14 +22,10 @@ Model bundled(const std::string& name) {
 // Andrews with every pose angle rounded to 0.1 rad and every position to 1 mm (as the test).
 void BM_AssembleAndrewsFromRoughAngles(benchmark::State& bs) {
   Model m = bundled("andrews-squeezer");
-  for (Body& b : m.bodies) {
-    b.design_pose.x() = std::round(b.design_pose.x() * 1e3) / 1e3;
-    b.design_pose.y() = std::round(b.design_pose.y() * 1e3) / 1e3;
-    b.design_pose.z() = std::round(b.design_pose.z() * 10.0) / 10.0;
-  }
+  test::andrews::round_design_poses(m);
   const VecX q0 = m.design_q();
   AssemblyOptions o;
-  o.locks.push_back({m.find_joint("O"), -0.0617138900142764496358948458001});
+  o.locks.push_back({m.find_joint("O"), test::andrews::kAnglesT0[0]});
   int iterations = 0;
   for (auto _ : bs) {
     const AssemblyResult r = assemble(m, q0, o);

@@ -120,16 +120,10 @@ Driver resolve_driver(const Model& model, const CycleCliOptions& opt) {
   return driver;
 }
 
-// The input for people: degrees or millimetres, rounded to 1e-6 (no "5e-14 deg").
-std::string input_text(double s, bool angular) {
-  const double v = std::round((angular ? s * 180.0 / std::numbers::pi : s * 1e3) * 1e6) / 1e6;
-  return fmt(v == 0.0 ? 0.0 : v, 10) + (angular ? " deg" : " mm");
-}
-
 std::string speed_text(const Driver& d, bool angular) {
   if (d.profile == Profile::harmonic)
-    return "harmonic, amplitude " + input_text(d.amplitude, angular) + " about " +
-           input_text(d.initial, angular) + ", " + fmt(d.frequency) + " Hz";
+    return "harmonic, amplitude " + format_input(d.amplitude, angular) + " about " +
+           format_input(d.initial, angular) + ", " + fmt(d.frequency) + " Hz";
   if (d.profile == Profile::polynomial) return "polynomial";
   return angular ? "constant speed " + fmt(d.speed * 60.0 / (2.0 * std::numbers::pi)) + " rpm (" +
                        fmt(d.speed) + " rad/s)"
@@ -343,7 +337,7 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
       out << "sweep           no position computed\n";
     else
       out << "sweep           " << r.points.size() << " positions, input "
-          << input_text(first.input, angular) << " -> " << input_text(last.input, angular)
+          << format_input(first.input, angular) << " -> " << format_input(last.input, angular)
           << ", t = 0 -> " << fmt(last.time) << " s\n";
     out << "status          " << to_string(r.status) << (r.message.empty() ? "" : ": ") << r.message
         << "\n";
@@ -357,7 +351,7 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
       out << "  t = " << fmt(d.time, 6) << " s: " << d.message << "\n";
     out << "singular        " << (r.singular_positions.empty() ? "none" : "") << "\n";
     for (const DeadPoint& d : r.singular_positions)
-      out << "  at input " << input_text(d.input, angular) << ": passed (E loses rank; the "
+      out << "  at input " << format_input(d.input, angular) << ": passed (E loses rank; the "
           << "reactions there are omitted)\n";
     if (!files_note.empty()) out << "files           " << files_note << "\n";
     out << "\n";
@@ -375,7 +369,7 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
     for (const SeriesSummary& s : summary) {
       if (s.samples == 0) continue;
       std::snprintf(line, sizeof line, "%-20s %-5s %13.5g %16s %13.5g%s\n", s.name.c_str(),
-                    s.unit.c_str(), s.peak, input_text(wrapped(s.peak_input), angular).c_str(),
+                    s.unit.c_str(), s.peak, format_input(wrapped(s.peak_input), angular).c_str(),
                     s.rms, s.determinate ? "" : "   indeterminate (minimum norm)");
       out << line;
     }

@@ -2,13 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <limits>
 #include <numbers>
 
 #include "orthomech/analysis/mobility.hpp"
 #include "orthomech/analysis/positions.hpp"
 #include "orthomech/constraints/joints.hpp"
+#include "orthomech/io/units.hpp"
 #include "orthomech/model/free_system.hpp"
 #include "orthomech/model/loads.hpp"
 #include "orthomech/model/measures.hpp"
@@ -94,7 +94,7 @@ std::vector<ReactionComponent> reaction_components(const Model& model) {
 // of λ are the generalized forces E λ: for rows written "first − second" (revolute, fixed x/y) λ is
 // that force itself; for rows written "second − first" (slot normal, relative angle, rod) the
 // force on the first body is −λ along the row's direction.
-void compute_reactions(const Model& model, const VecX& q, const VecX& lambda,
+void compute_reactions(const Model& model, const VecX& q, const Eigen::Ref<const VecX>& lambda,
                        std::vector<double>& out) {
   out.clear();
   const VecX* none = nullptr;
@@ -355,15 +355,6 @@ void predict(const DrivenPoint& p, double s, VecX& q) {
   if (second <= first) q += c * (p.udot - p.input_acceleration * p.tangent);
 }
 
-std::string input_text(double s, bool angular) {
-  char buf[64];
-  if (angular)
-    std::snprintf(buf, sizeof buf, "%.6f deg", s * 180.0 / std::numbers::pi);
-  else
-    std::snprintf(buf, sizeof buf, "%.6f mm", s * 1e3);
-  return buf;
-}
-
 }  // namespace
 
 CycleResult run_cycle(const Model& model, const CycleOptions& options) {
@@ -461,7 +452,7 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
   }
   if (start_target != s0) {
     if (!sweep.corrector(state.q, start_target, std::numeric_limits<double>::infinity())) {
-      result.message = "cannot reach the start input " + input_text(start_target, angular) +
+      result.message = "cannot reach the start input " + format_input(start_target, angular) +
                        " from the design position";
       return result;
     }
@@ -607,7 +598,7 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
       return;
     result.singular_positions.push_back({s_at, t_at,
                                          "singular position (E loses rank) at input " +
-                                             input_text(s_at, angular) +
+                                             format_input(s_at, angular) +
                                              ": passed, branch kept by continuity of the tangent"});
   };
 
@@ -693,7 +684,7 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
       }
       result.status = CycleStatus::failed;
       result.message = "the continuation cannot proceed at input " +
-                       input_text(sub.input, angular) +
+                       format_input(sub.input, angular) +
                        " (neither a dead point nor a singular position of E); the positions "
                        "before it are reported";
       break;
@@ -715,7 +706,7 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
     }
     const double s_dead = at_lo.input;
     std::string msg = "dead point of driver joint '" + joint_name + "' at input " +
-                      input_text(s_dead, angular) +
+                      format_input(s_dead, angular) +
                       ": the driver cannot move the mechanism past it";
     if (!(options.reverse_at_dead_point && constant)) {
       result.dead_points.push_back({s_dead, at_lo.time, msg});

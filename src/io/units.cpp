@@ -1,6 +1,7 @@
 #include "orthomech/io/units.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 #include <sstream>
 #include <stdexcept>
@@ -49,6 +50,14 @@ double parse_position(const std::string& text, bool angular, double bare_factor)
   static const UnitTable linear_units = {{"m", 1.0}, {"mm", 1e-3}};
   return parse_with_units(text, angular ? angular_units : linear_units, bare_factor, "input",
                           angular ? "revolute" : "prismatic");
+}
+
+std::string format_input(double value, bool angular) {
+  double v = std::round((angular ? value * 180.0 / std::numbers::pi : value * 1e3) * 1e6) / 1e6;
+  if (v == 0.0) v = 0.0;  // no "-0"
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.10g %s", v, angular ? "deg" : "mm");
+  return buf;
 }
 
 }  // namespace orthomech

@@ -8,6 +8,7 @@
 #include <cmath>
 
 #include "orthomech/dynamics/general.hpp"
+#include "support/andrews_reference.hpp"
 
 namespace orthomech::test {
 
@@ -163,12 +164,6 @@ inline GeneralSystem andrews_relative() {
 }
 
 // Published consistent initial values (β, Θ, γ, Φ, δ, Ω, ε) at t = 0.
-inline VecX andrews_q0() {
-  VecX q(7);
-  q << -0.0617138900142764496358948458001, 0.0, 0.455279819163070380255912382449,
-      0.222668390165885884674473185609, 0.487364979543842550225598953530,
-      -0.222668390165885884674473185609, 1.23054744454982119249735015568;
-  return q;
-}
+inline VecX andrews_q0() { return Eigen::Map<const VecX>(andrews::kAnglesT0.data(), 7); }
 
 }  // namespace orthomech::test

@@ -97,8 +97,9 @@ struct CycleResult {
 
 // Reaction components of every joint (names, frames, units), in output order.
 [[nodiscard]] std::vector<ReactionComponent> reaction_components(const Model& model);
-// Their values at a position from the multipliers.
-void compute_reactions(const Model& model, const VecX& q, const VecX& lambda,
+// Their values at a position from the multipliers (any vector expression of size n_c, e.g. a
+// column of the null space N, without a copy).
+void compute_reactions(const Model& model, const VecX& q, const Eigen::Ref<const VecX>& lambda,
                        std::vector<double>& out);
 
 // Preallocated buffers of the driven computation (sizes fixed by the Model and the rank).

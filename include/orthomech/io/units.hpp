@@ -14,4 +14,8 @@ namespace orthomech {
 // number is multiplied by `bare_factor`. Throws std::invalid_argument.
 [[nodiscard]] double parse_position(const std::string& text, bool angular, double bare_factor);
 
+// An input position for people: degrees (angular) or millimetres, rounded to 1e-6 of the unit
+// ("77.608916 deg", never "5e-14 deg").
+[[nodiscard]] std::string format_input(double value, bool angular);
+
 }  // namespace orthomech

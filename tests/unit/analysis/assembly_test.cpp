@@ -22,6 +22,7 @@
 #include "orthomech/io/mechanism_writer.hpp"
 #include "orthomech/model/free_system.hpp"
 #include "orthomech/model/measures.hpp"
+#include "support/andrews_reference.hpp"
 #include "support/fixtures.hpp"
 #include "support/zoo.hpp"
 
@@ -39,29 +40,21 @@ double measure(const Model& m, const std::string& name, const VecX& q) {
   return evaluate_measure(m, m.measures.at(static_cast<size_t>(k)), q, nullptr, nullptr);
 }
 
-// Published consistent values at t = 0 (references.md §1).
-const std::vector<std::pair<std::string, double>> kAndrewsT0 = {
-    {"beta", -0.0617138900142764496358948458001}, {"Theta", 0.0},
-    {"gamma", 0.455279819163070380255912382449},  {"Phi", 0.222668390165885884674473185609},
-    {"delta", 0.487364979543842550225598953530},  {"Omega", -0.222668390165885884674473185609},
-    {"epsilon", 1.23054744454982119249735015568}};
-
 TEST(Assembly, Andrews_RoughAnglesWithBetaLocked_ReproducePublishedT0) {
   Model m = test::load_bundled("andrews-squeezer");
   // Rough design poses: angles rounded to 0.1 rad, positions to 1 mm.
-  for (Body& b : m.bodies) {
-    b.design_pose.x() = std::round(b.design_pose.x() * 1e3) / 1e3;
-    b.design_pose.y() = std::round(b.design_pose.y() * 1e3) / 1e3;
-    b.design_pose.z() = std::round(b.design_pose.z() * 10.0) / 10.0;
-  }
+  test::andrews::round_design_poses(m);
   const VecX q0 = m.design_q();
   AssemblyOptions o;
-  o.locks.push_back({m.find_joint("O"), kAndrewsT0[0].second});
+  // Published consistent values at t = 0 (references.md §1).
+  const auto& published = test::andrews::kAnglesT0;
+  o.locks.push_back({m.find_joint("O"), published[0]});
   const AssemblyResult r = assemble(m, q0, o);
   ASSERT_EQ(r.status, AssemblyStatus::assembled) << r.message;
   EXPECT_LE(r.residual, 1e-12);
-  for (const auto& [name, value] : kAndrewsT0)
-    EXPECT_NEAR(measure(m, name, r.q), value, kAndrewsTol) << name;
+  for (size_t k = 0; k < published.size(); ++k)
+    EXPECT_NEAR(measure(m, test::andrews::kNames[k], r.q), published[k], kAndrewsTol)
+        << test::andrews::kNames[k];
   EXPECT_GT(r.distance, 0.0);
   ASSERT_EQ(r.bodies.size(), m.bodies.size());
   ASSERT_EQ(r.joints.size(), m.joints.size());

@@ -10,27 +10,20 @@
 
 #include "orthomech/dynamics/simulate.hpp"
 #include "orthomech/model/free_system.hpp"
+#include "support/andrews_reference.hpp"
 #include "support/fixtures.hpp"
 
 namespace orthomech {
 namespace {
 
-// Published tolerances (references.md §1): positions relative 1e-8, velocities 1e-5 (relative),
-// multipliers 1e-4 (relative).
-constexpr double kAngleTol = 1e-8;
-constexpr double kRateTol = 1e-5;
-constexpr double kLambdaTol = 1e-4;
-
-// Reference at t = 0.03 s (PSIDE, rtol = atol = 1e-14), as published.
-constexpr std::array<double, 7> kAngles = {
-    15.81077119629904,  -15.75637105984298, 0.04082224013073101, -0.5347301163226948,
-    0.5244099658805304, 0.5347301163226948, 1.048080741042263};
-constexpr std::array<double, 7> kRates = {1139.920302151208, -1424.379294994111, 11.03291221937134,
-                                          19.29337464421385, 0.5735699284790808, -19.29337464421385,
-                                          0.3231791658026955};
-constexpr std::array<double, 6> kLambda = {199.1753333731910, -29.75531228015052,
-                                           23.06654119098399, 31.45271365475927,
-                                           22.64249232082739, 11.61740700019673};
+// The published reference (references.md §1), shared with the benchmarks.
+using test::andrews::kAngleTol;
+using test::andrews::kLambdaTol;
+using test::andrews::kRateTol;
+constexpr const auto& kAngles = test::andrews::kAnglesT003;
+constexpr const auto& kRates = test::andrews::kRatesT003;
+constexpr const auto& kLambda = test::andrews::kLambdaT003;
+constexpr const auto& names = test::andrews::kNames;
 
 // The published angles from the bodies: β = φ1, Θ = φ2 − φ1, γ = φ3, Φ = φ4 − φ5, δ = φ5,
 // Ω = φ6 − φ7, ε = φ7 (the measures of the file do the same for positions).
@@ -55,7 +48,6 @@ std::array<double, 6> published_lambda(const Model& m, const VecX& lambda) {
 void expect_reference(const Model& model, const SimulateResult& res) {
   ASSERT_EQ(res.status, SimulateStatus::completed) << res.message;
   EXPECT_NEAR(res.final.t, 0.03, 1e-15);
-  const char* names[] = {"beta", "Theta", "gamma", "Phi", "delta", "Omega", "epsilon"};
   for (size_t k = 0; k < 7; ++k) {
     const double got = res.final.measures[static_cast<size_t>(model.find_measure(names[k]))];
     EXPECT_NEAR(got, kAngles[k], kAngleTol * std::abs(kAngles[k])) << names[k];

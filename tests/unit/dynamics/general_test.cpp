@@ -10,20 +10,16 @@
 #include <cmath>
 #include <random>
 
+#include "support/andrews_reference.hpp"
 #include "support/andrews_relative.hpp"
 
 namespace orthomech {
 namespace {
 
-constexpr std::array<double, 7> kQ = {15.81077119629904,   -15.75637105984298, 0.04082224013073101,
-                                      -0.5347301163226948, 0.5244099658805304, 0.5347301163226948,
-                                      1.048080741042263};
-constexpr std::array<double, 7> kU = {1139.920302151208, -1424.379294994111, 11.03291221937134,
-                                      19.29337464421385, 0.5735699284790808, -19.29337464421385,
-                                      0.3231791658026955};
-constexpr std::array<double, 6> kLambda = {199.1753333731910, -29.75531228015052,
-                                           23.06654119098399, 31.45271365475927,
-                                           22.64249232082739, 11.61740700019673};
+// The published reference at t = 0.03 s (references.md §1).
+constexpr const auto& kQ = test::andrews::kAnglesT003;
+constexpr const auto& kU = test::andrews::kRatesT003;
+constexpr const auto& kLambda = test::andrews::kLambdaT003;
 
 // An admissible moving state: the state of the motion at t = 0.01 s (every Ṁ entry is then
 // non-zero: Θ, Φ, Ω and their rates are).
