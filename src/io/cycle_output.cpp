@@ -65,16 +65,12 @@ CycleColumns write_cycle_csv(const std::filesystem::path& file, const Model& mod
   col = 3;
   for (const Measure& m : model.measures) out << ',' << field(m.name + " [" + m.unit + "]"), ++col;
   // Velocity and acceleration of every body's centre of mass, and angular ones.
+  // The columns follow u and u̇ of the body: (vx, vy[, ω]) then (ax, ay[, α]).
+  static const char* const kVelocity[] = {"vx [m/s]", "vy [m/s]", "omega [rad/s]"};
+  static const char* const kAcceleration[] = {"ax [m/s^2]", "ay [m/s^2]", "alpha [rad/s^2]"};
   for (const Body& b : model.bodies) {
-    const bool rigid = b.kind == BodyKind::rigid;
-    for (const char* c : {"vx [m/s]", "vy [m/s]", "omega [rad/s]"}) {
-      if (!rigid && c[0] == 'o') continue;
-      out << ',' << field(b.name + "." + c), ++col;
-    }
-    for (const char* c : {"ax [m/s^2]", "ay [m/s^2]", "alpha [rad/s^2]"}) {
-      if (!rigid && c[0] == 'a' && c[1] == 'l') continue;
-      out << ',' << field(b.name + "." + c), ++col;
-    }
+    for (int i = 0; i < b.nu(); ++i) out << ',' << field(b.name + "." + kVelocity[i]), ++col;
+    for (int i = 0; i < b.nu(); ++i) out << ',' << field(b.name + "." + kAcceleration[i]), ++col;
   }
   out << ",drive [" << drive_unit << "]";
   cols.drive = ++col;

@@ -113,9 +113,12 @@ struct DrivenWorkspace {
   VecX small;                   // k
   VecX rhs_r;                   // r
   std::vector<int> other_rows;  // the k redundant rows (complement of the chart's rows)
-  MatX J;  // n × n: [E_Rᵀ; dᵀ], Jacobian of the locked-input position problem, then its LU
+  // n × n: [E_Rᵀ; dᵀ], Jacobian of the locked-input position problem (with redundant rows the
+  // normal matrix EEᵀ + ddᵀ of all rows instead), then its LU in place.
+  MatX J;
   Eigen::VectorXi J_piv;  // n: row interchanges of that LU
-  VecX g, dq;             // n: residual and Newton step of the locked-input corrector
+  VecX g;                 // n: scratch (a row of Eᵀ, for the null space N)
+  VecX dq;                // n: right-hand side, then Newton step, of the corrector
   DrivenWorkspace(const Model& model, int rank);
 };
 

@@ -6,7 +6,9 @@
 // interchanges are stored LAPACK-style: at step k rows k and piv(k) were swapped.
 // Header-only; allocation-free.
 #include <Eigen/Core>
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <utility>
 
 namespace orthomech {
@@ -17,6 +19,7 @@ template <class Matrix>
 double lu_factor(Matrix& A, Eigen::VectorXi& piv) {
   const Eigen::Index n = A.rows(), ld = A.outerStride();
   double* __restrict a = A.data();
+  double u_min = std::numeric_limits<double>::infinity(), u_max = 0.0;  // of |U_kk|
   for (Eigen::Index k = 0; k < n; ++k) {
     double* __restrict ck = a + k * ld;
     Eigen::Index p = k;
@@ -31,7 +34,12 @@ double lu_factor(Matrix& A, Eigen::VectorXi& piv) {
     if (p != k)
       for (Eigen::Index j = 0; j < n; ++j) std::swap(a[k + j * ld], a[p + j * ld]);
     if (big == 0.0) return 0.0;
+    u_min = std::min(u_min, big);
+    u_max = std::max(u_max, big);
+    // The diagonal keeps 1/U_kk: the solves multiply instead of dividing (a division costs as
+    // much as a whole row of multiply-adds here).
     const double inv = 1.0 / ck[k];
+    ck[k] = inv;
     for (Eigen::Index i = k + 1; i < n; ++i) ck[i] *= inv;
     for (Eigen::Index j = k + 1; j < n; ++j) {  // column by column: contiguous storage
       double* __restrict cj = a + j * ld;
@@ -40,14 +48,7 @@ double lu_factor(Matrix& A, Eigen::VectorXi& piv) {
       for (Eigen::Index i = k + 1; i < n; ++i) cj[i] -= ck[i] * f;
     }
   }
-  if (n == 0) return 1.0;
-  const auto U = A.diagonal().cwiseAbs();
-  const double mx = U.maxCoeff();
-  const double quality = mx > 0.0 ? U.minCoeff() / mx : 0.0;
-  // The diagonal keeps 1/U_kk: the solves multiply instead of dividing (a division costs as
-  // much as a whole row of multiply-adds here).
-  for (Eigen::Index k = 0; k < n; ++k) A(k, k) = 1.0 / A(k, k);
-  return quality;
+  return n == 0 ? 1.0 : u_min / u_max;
 }
 
 // b ← A⁻¹ b from the factors of lu_factor (P A = L U). b: a vector with contiguous storage.
