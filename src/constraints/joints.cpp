@@ -3,6 +3,7 @@
 #include <array>
 
 #include "orthomech/model/free_system.hpp"
+#include "orthomech/model/general_system.hpp"
 
 namespace orthomech {
 
@@ -188,6 +189,12 @@ void knife_edge(const Model& model, const KnifeEdge& k, const VecX& q, const Vec
 }
 
 void evaluate(const Model& model, const VecX& q, const VecX* u, VecX* f, MatX* Et, MatX* Dt) {
+  if (model.general) {  // a free system given by functions (model/general_system.hpp)
+    if (f) model.general->residual(q, *f);
+    if (Et) model.general->jacobian(q, *Et);
+    if (Dt) model.general->jacobian_rate(q, *u, *Dt);
+    return;
+  }
   // Each body's rotation once (sin/cos dominate small evaluations); particles keep the identity.
   constexpr size_t kTable = 64;
   std::array<Eigen::Matrix2d, kTable> table;

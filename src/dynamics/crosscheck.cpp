@@ -155,11 +155,10 @@ CrosscheckResult run_crosscheck(const Model& model, const CrosscheckOptions& opt
             residual(p.Omega.transpose() * p.alpha, p.Omega.cwiseAbs().maxCoeff() * aS), s.t);
     rec.add("J = E^T A p = 0 (eq. (105))", "identity",
             residual(dp.J, Et.cwiseAbs().maxCoeff() * uS), s.t);
-    if (wd.free.constant_mass) {
-      // α̇ = −β̇: θ M (eq. (85)) = −A ω (eq. (82)) when Ṁ = 0.
-      rec.add("theta M = -A omega (eqs. (82), (85))", "dual-vs-primal",
-              relative(d.theta * M, -(A * p.omega), 1e-300), s.t);
-    }
+    // α̇ = −β̇ from eq. (85) and from eq. (82): θ M = −A ω, also when Ṁ ≠ 0 (their Ṁ terms,
+    // −Ȧ_αβ M and A Ṁ_αβ, are both A αᵀ Ṁ β since ψ = A αᵀ).
+    rec.add("theta M = -A omega (eqs. (82), (85))", "dual-vs-primal",
+            relative(d.theta * M, -(A * p.omega), 1e-300), s.t);
     rec.add("alpha + beta = I (eq. (29))", "identity", residual(p.alpha + p.beta - I, 1.0), s.t);
   }
   (void)I;

@@ -13,6 +13,7 @@
 #include "orthomech/constraints/joints.hpp"
 #include "orthomech/dynamics/equations.hpp"
 #include "orthomech/model/free_system.hpp"
+#include "orthomech/model/general_system.hpp"
 #include "orthomech/model/loads.hpp"
 #include "orthomech/model/measures.hpp"
 #include "orthomech/projection/primal.hpp"
@@ -56,6 +57,7 @@ struct SingularEvaluation {
 
 // "K1.phi": the user's name of a velocity component.
 std::string velocity_name(const Model& model, int k) {
+  if (model.general) return model.general->coordinates[static_cast<size_t>(k)];
   for (const Body& b : model.bodies) {
     if (k >= b.u_offset && k < b.u_offset + b.nu()) {
       static const char* const kNames[] = {"x", "y", "phi"};
@@ -118,9 +120,19 @@ class Dynamics {
 
   // Free system at state_ (M once if constant; Q̂; Ṁ).
   void free_system() { compute_free_system(model_, state_, ws_); }
+  // M, A at q when M depends on q (before products with M or A at a corrected position).
+  void mass_at(const VecX& q) {
+    if (ws_.free.constant_mass) return;
+    state_.q = q;
+    free_system();
+  }
 
   // Power of the non-conservative loads at state_: Q_ncᵀ u − dissipated power.
   double nonconservative_power() {
+    // General system (general_system.hpp): Q̂ = Q + ∂T/∂q and ∂T/∂q · u = ½ uᵀṀu, so the
+    // power of the applied forces is Q̂ᵀu − ½ uᵀṀu (dT/dt = uᵀṗ − ½ uᵀṀu, uᵀR = 0).
+    if (model_.general)
+      return ws_.free.Q.dot(state_.u) - 0.5 * state_.u.dot(ws_.free.Mdot * state_.u);
     if (nonconservative_.empty() && !has_dampers()) return 0.0;
     Qnc_.setZero();
     for (const Load* l : nonconservative_) add_load(model_, *l, state_, Qnc_);
@@ -463,6 +475,7 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
     auto qy = y.head(nq);
     // Residual left by the step (before correction).
     q = qy;
+    dyn.mass_at(q);
     compute_constraint_residual(model, q, f);
     if (f.size())
       result.max_constraint_residual =
@@ -511,6 +524,7 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
       return false;
     }
     dyn.compute_F();
+    dyn.mass_at(q);
     dyn.state_.q = q;
     if (primal) {
       // Momenta: p ← M α u, the mass-orthogonal projection (eq. (44): α = I − A π).

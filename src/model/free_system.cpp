@@ -1,8 +1,16 @@
 #include "orthomech/model/free_system.hpp"
 
+#include <Eigen/Cholesky>
+
+#include "orthomech/model/general_system.hpp"
+
 namespace orthomech {
 
-void compute_mass_matrix(const Model& model, const VecX& /*q*/, MatX& M) {
+void compute_mass_matrix(const Model& model, const VecX& q, MatX& M) {
+  if (model.general) {
+    model.general->mass(q, M);  // eq. (4): M(q)
+    return;
+  }
   M.setZero();
   for (const Body& b : model.bodies) {
     const int o = b.u_offset;
@@ -12,7 +20,13 @@ void compute_mass_matrix(const Model& model, const VecX& /*q*/, MatX& M) {
   }
 }
 
-void compute_inverse_mass_matrix(const Model& model, const VecX& /*q*/, MatX& A) {
+void compute_inverse_mass_matrix(const Model& model, const VecX& q, MatX& A) {
+  if (model.general) {
+    MatX M(model.n, model.n);
+    model.general->mass(q, M);
+    A = M.llt().solve(MatX::Identity(model.n, model.n));  // eq. (6)
+    return;
+  }
   A.setZero();
   for (const Body& b : model.bodies) {
     const int o = b.u_offset;
@@ -22,20 +36,32 @@ void compute_inverse_mass_matrix(const Model& model, const VecX& /*q*/, MatX& A)
   }
 }
 
-void compute_mass_matrix_rate(const Model& /*model*/, const VecX& /*q*/, const VecX& /*u*/,
-                              MatX& Mdot) {
+void compute_mass_matrix_rate(const Model& model, const VecX& q, const VecX& u, MatX& Mdot) {
+  if (model.general) {
+    model.general->mass_rate(q, u, Mdot);
+    return;
+  }
   Mdot.setZero();  // absolute coordinates of planar bodies: M constant
 }
 
-bool mass_matrix_is_constant(const Model& /*model*/) { return true; }
+bool mass_matrix_is_constant(const Model& model) { return !model.general; }
 
 void integrate_positions(const Model& model, VecX& q, const VecX& du, double h) {
+  if (model.general) {
+    q += h * du;  // q̇ = u
+    return;
+  }
   // Planar bodies: B̃ = I and nq == n, eq. (1).
   for (const Body& b : model.bodies)
     for (int k = 0; k < b.nq(); ++k) q(b.q_offset + k) += h * du(b.u_offset + k);
 }
 
 double kinetic_energy(const Model& model, const State& state) {
+  if (model.general) {
+    MatX M(model.n, model.n);
+    model.general->mass(state.q, M);
+    return 0.5 * state.u.dot(M * state.u);  // eq. (4)
+  }
   double T = 0.0;
   for (const Body& b : model.bodies) {
     const int o = b.u_offset;

@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "orthomech/model/free_system.hpp"
+#include "orthomech/model/general_system.hpp"
 #include "orthomech/model/measures.hpp"
 
 namespace orthomech {
@@ -85,6 +86,10 @@ void add_load(const Model& model, const Load& load, const State& st, VecX& Q) {
 }
 
 void compute_applied_forces(const Model& model, const State& state, VecX& Q) {
+  if (model.general) {
+    model.general->forces(state.q, state.u, state.t, Q);  // eq. (17)
+    return;
+  }
   Q.setZero();
   for (const Load& load : model.loads) add_load(model, load, state, Q);
 }

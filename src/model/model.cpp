@@ -2,6 +2,8 @@
 
 #include <stdexcept>
 
+#include "orthomech/model/general_system.hpp"
+
 namespace orthomech {
 
 int Joint::rows() const {
@@ -58,6 +60,7 @@ int Model::find_measure(const std::string& measure) const {
 }
 
 VecX Model::design_q() const {
+  if (general) return general->q0;
   VecX q(nq);
   for (const Body& b : bodies) {
     const double phi = b.design_pose.z();
@@ -72,6 +75,10 @@ VecX Model::design_q() const {
 }
 
 std::string Model::constraint_row_name(int row) const {
+  if (general) {
+    if (row < 0 || row >= nc) throw std::invalid_argument("constraint_row_name: row out of range");
+    return "constraint '" + general->rows[static_cast<size_t>(row)] + "'";
+  }
   for (const Joint& j : joints) {
     if (row >= j.row_offset && row < j.row_offset + j.rows()) {
       return "joint '" + j.name + "', " +
@@ -84,6 +91,15 @@ std::string Model::constraint_row_name(int row) const {
 }
 
 void finalize_model(Model& model) {
+  if (model.general) {
+    if (!model.bodies.empty() || !model.joints.empty() || !model.knife_edges.empty() ||
+        !model.loads.empty() || !model.measures.empty() || !model.drivers.empty())
+      throw std::invalid_argument(
+          "finalize_model: a general system has no bodies, joints, loads, measures or drivers");
+    model.nq = model.n = model.general->n;
+    model.nc = model.general->nc;
+    return;
+  }
   int q_off = 0, u_off = 0;
   for (Body& b : model.bodies) {
     b.q_offset = q_off;
@@ -125,6 +141,34 @@ void finalize_model(Model& model) {
         },
         j.kind);
   }
+}
+
+Model make_general_model(std::string name, GeneralSystem system) {
+  const auto need = [](bool ok, const char* what) {
+    if (!ok) throw std::invalid_argument(std::string("make_general_model: ") + what);
+  };
+  need(system.n > 0 && system.nc >= 0, "n must be positive and nc non-negative");
+  need(system.mass && system.mass_rate && system.forces && system.residual && system.jacobian &&
+           system.jacobian_rate,
+       "every function (mass, mass_rate, forces, residual, jacobian, jacobian_rate) is needed");
+  need(system.q0.size() == system.n, "q0 must have n entries");
+  // Default names q1…, g1… (appended: GCC 12 warns falsely on "q" + std::string).
+  const auto numbered = [](char prefix, int k) {
+    std::string label(1, prefix);
+    label += std::to_string(k + 1);
+    return label;
+  };
+  if (system.coordinates.empty())
+    for (int k = 0; k < system.n; ++k) system.coordinates.push_back(numbered('q', k));
+  if (system.rows.empty())
+    for (int k = 0; k < system.nc; ++k) system.rows.push_back(numbered('g', k));
+  need(static_cast<int>(system.coordinates.size()) == system.n, "n coordinate names");
+  need(static_cast<int>(system.rows.size()) == system.nc, "nc row names");
+  Model model;
+  model.name = std::move(name);
+  model.general = std::make_shared<const GeneralSystem>(std::move(system));
+  finalize_model(model);
+  return model;
 }
 
 }  // namespace orthomech

@@ -1,13 +1,14 @@
 #pragma once
 // Andrews' squeezing mechanism in the test set's relative coordinates (Test Set for IVP Solvers,
 // Univ. Bari, Mazzia & Magherini, problem `andrews`; /work/shared/references.md §1), as a
-// GeneralSystem with configuration-dependent M(q): q = (β, Θ, γ, Φ, δ, Ω, ε).
+// GeneralSystem (model/general_system.hpp) with configuration-dependent M(q):
+// q = (β, Θ, γ, Φ, δ, Ω, ε).
 // The test set writes M q̈ = f − Gᵀλ with f including −Ṁq̇ + ∂T/∂q; our ṗ = Q̂ + Eλ needs
 // Q̂ = ∂T/∂q + Q = f + Ṁ q̇ (L1), and our λ is minus the published one (E = Gᵀ).
 #include <array>
 #include <cmath>
 
-#include "orthomech/dynamics/general.hpp"
+#include "orthomech/model/general_system.hpp"
 #include "support/andrews_reference.hpp"
 
 namespace orthomech::test {
@@ -118,7 +119,7 @@ inline void testset_f(const VecX& q, const VecX& v, VecX& f) {
 
 }  // namespace andrews
 
-inline GeneralSystem andrews_relative() {
+inline GeneralSystem andrews_relative_system() {
   using namespace andrews;
   GeneralSystem s;
   s.n = 7;
@@ -150,17 +151,25 @@ inline GeneralSystem andrews_relative() {
         for (int k = 0; k < 7; ++k) Et(i, k) += dd * t.w[static_cast<size_t>(k)];
       }
   };
-  s.convective = [](const VecX& q, const VecX& v, VecX& Dtu) {
-    Dtu.resize(6);
-    for (int i = 0; i < 6; ++i) {
-      Dtu(i) = 0.0;
+  // Dᵀ = Ėᵀ: d/dt of −c sin(a) w (cosine term) is −c cos(a) (wᵀv) w, of c cos(a) w (sine
+  // term) −c sin(a) (wᵀv) w.
+  s.jacobian_rate = [](const VecX& q, const VecX& v, MatX& Dt) {
+    Dt.setZero(6, 7);
+    for (int i = 0; i < 6; ++i)
       for (const Term& t : constraint_terms()[static_cast<size_t>(i)]) {
         const double a = dot7(t.w, q), wv = dot7(t.w, v);
-        Dtu(i) += -t.c * (t.cosine ? std::cos(a) : std::sin(a)) * wv * wv;  // d²/dt² of c·trig
+        const double dd = -t.c * (t.cosine ? std::cos(a) : std::sin(a)) * wv;
+        for (int k = 0; k < 7; ++k) Dt(i, k) += dd * t.w[static_cast<size_t>(k)];
       }
-    }
   };
+  s.q0 = Eigen::Map<const VecX>(kAnglesT0.data(), 7);
+  s.coordinates = {"beta", "Theta", "gamma", "Phi", "delta", "Omega", "epsilon"};
   return s;
+}
+
+// The Model that runs it through the engine (simulate, crosscheck, projections).
+inline Model andrews_relative() {
+  return make_general_model("andrews-relative", andrews_relative_system());
 }
 
 // Published consistent initial values (β, Θ, γ, Φ, δ, Ω, ε) at t = 0.

@@ -7,9 +7,11 @@
 //   - planar rigid body: q = (x, y, φ) of the centre of mass and the body-frame angle, u = q̇,
 //     M = diag(m, m, J_c);
 //   - planar particle:   q = (x, y), u = q̇, M = diag(m, m).
-// Interfaces never assume nq == n or a constant M (spatial bodies and M(q) systems come next);
+// Interfaces never assume nq == n or a constant M (a Model can also hold a general system with
+// M(q), model/general_system.hpp; spatial bodies come next);
 // see model/free_system.hpp.
 #include <Eigen/Core>
+#include <memory>
 #include <optional>
 #include <string>
 #include <variant>
@@ -195,6 +197,8 @@ struct DesignPosition {
   SourceLocation where;
 };
 
+struct GeneralSystem;  // model/general_system.hpp
+
 struct AnalysisDefaults {
   int steps = 360;
   std::string driver;
@@ -214,6 +218,9 @@ struct Model {
   std::vector<Driver> drivers;
   std::vector<DesignPosition> design_positions;
   AnalysisDefaults analysis;
+  // Set by make_general_model (model/general_system.hpp): a free system given by functions,
+  // with M(q), instead of bodies, joints and loads (which are then empty).
+  std::shared_ptr<const GeneralSystem> general;
   int nq = 0;  // number of coordinates
   int n = 0;   // number of velocity parameters (free system DOF), eq. (25)
   int nc = 0;  // number of constraint equations (rows of Eᵀ), eq. (22)
