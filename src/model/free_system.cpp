@@ -65,6 +65,14 @@ PointKinematics point_kinematics(const Model& model, const PointRef& p, const Ve
   return k;
 }
 
+void body_rotations(const Model& model, const VecX& q, Eigen::Matrix2d* rotations) {
+  for (size_t b = 0; b < model.bodies.size(); ++b) {
+    const Body& body = model.bodies[b];
+    rotations[b] =
+        body.kind == BodyKind::rigid ? rotation(q(body.q_offset + 2)) : Eigen::Matrix2d::Identity();
+  }
+}
+
 double body_angle(const Model& model, int body, const VecX& q) {
   if (body == kGround) return 0.0;
   const Body& b = model.bodies[static_cast<size_t>(body)];

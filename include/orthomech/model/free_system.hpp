@@ -37,6 +37,10 @@ struct PointKinematics {
 [[nodiscard]] PointKinematics point_kinematics(const Model& model, const PointRef& p, const VecX& q,
                                                const VecX* u,
                                                const Eigen::Matrix2d* rotations = nullptr);
+// R(φ_b) of every body b at q into rotations[0 … bodies.size()) (the identity for particles): the
+// table the `rotations` arguments of point_kinematics, evaluate_measure, compute_reactions,
+// compute_constraint_rate take.
+void body_rotations(const Model& model, const VecX& q, Eigen::Matrix2d* rotations);
 [[nodiscard]] double body_angle(const Model& model, int body, const VecX& q);
 [[nodiscard]] double body_angular_velocity(const Model& model, int body, const VecX& u);
 [[nodiscard]] inline Vec2 perp(const Vec2& a) { return Vec2(-a.y(), a.x()); }  // rotate by +90°

@@ -4,7 +4,11 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
+#include <vector>
+
 #include "orthomech/io/mechanism_file.hpp"
+#include "orthomech/model/free_system.hpp"
 #include "support/zoo.hpp"
 
 namespace orthomech {
@@ -68,6 +72,30 @@ TEST(Joints, Eq76_DtEqualsTimeDerivativeOfEt) {
     for (int r = 0; r < model.nc; ++r)
       EXPECT_NEAR(ws.Dtu(r), second(r), 1e-5 * (1.0 + s.u.squaredNorm()))
           << model.constraint_row_name(r);
+  }
+}
+
+// compute_constraint_rate forms Dᵀu row by row without Dᵀ: the same values as Dᵀ·u from
+// compute_constraints (whose Dᵀ the test above checks against differences), with or without a
+// caller's rotation table, and Dᵀ is left as it was.
+TEST(Joints, Eq76_ConstraintRateGivesDtuWithoutFormingDt) {
+  const Model model = parse_mechanism(test::kZooYaml, "zoo");
+  for (unsigned salt = 0; salt < 3; ++salt) {
+    const State s = zoo_state(model, salt);
+    ConstraintWorkspace full(model);
+    compute_constraints(model, s, full);
+    const VecX oracle = full.Dt * s.u;
+    std::vector<Eigen::Matrix2d> rotations(model.bodies.size());
+    body_rotations(model, s.q, rotations.data());
+    for (const bool with_table : {false, true}) {
+      ConstraintWorkspace ws(model);
+      ws.Dt.setConstant(std::numeric_limits<double>::quiet_NaN());
+      compute_constraint_rate(model, s, ws, with_table ? rotations.data() : nullptr);
+      for (int r = 0; r < model.nc; ++r)
+        EXPECT_NEAR(ws.Dtu(r), oracle(r), 1e-12 * (1.0 + s.u.squaredNorm()))
+            << model.constraint_row_name(r) << (with_table ? " (rotation table)" : "");
+      EXPECT_TRUE(ws.Dt.array().isNaN().all()) << "Dᵀ must not be formed";
+    }
   }
 }
 
