@@ -268,8 +268,10 @@ bool compute_driven(const Model& model, int driver_joint, double sdot, double sd
     state.u.setZero();
     compute_free_system(model, state, ws);
   }
-  if (!jacobian_current) compute_constraint_jacobian(model, state.q, ws.constraints.Et);
-  body_rotations(model, state.q, w.rotations.data());
+  if (!jacobian_current) {
+    compute_constraint_jacobian(model, state.q, ws.constraints.Et);
+    body_rotations(model, state.q, w.rotations.data());
+  }
   if (compute_basis(model, state, ws) != ProjectionStatus::ok) return false;
   const auto F = ws.dual.F.col(0);
   (void)compute_scalar(model, input, state.q, nullptr, w.d);
@@ -370,8 +372,10 @@ struct Sweep {
     bool factored = false;
     double previous = std::numeric_limits<double>::infinity();
     for (int it = 0; it < 30; ++it) {
-      // f and Eᵀ in one pass: Eᵀ at the converged q is then ready for compute_driven.
-      compute_constraint_residual_and_jacobian(model, q, ws.constraints.f, ws.constraints.Et);
+      // f and Eᵀ in one pass: Eᵀ (and the rotation table) at the converged q are then ready for
+      // compute_driven.
+      compute_constraint_residual_and_jacobian(model, q, ws.constraints.f, ws.constraints.Et,
+                                               w.rotations.data());
       jacobian_at_q = true;
       const double s =
           row ? row->dot(q - *q_ref) : compute_scalar(model, input, q, nullptr, w.d).value;

@@ -120,14 +120,25 @@ struct JointEvaluator {
     const PointKinematics ki = point_kinematics(model, pi, q, u, rot);
     const PointKinematics kj = point_kinematics(model, pj, q, u, rot);
     if (f) (*f).segment<2>(r) = ki.r - kj.r;  // eq. (20)
+    if (Et) {  // eq. (23): add_point_jacobian with c = x̂, ŷ written out: [I, perp(R s)] per point
+      auto ex = row(Et, 0), ey = row(Et, 1);
+      ex.setZero();
+      ey.setZero();
+      auto add = [&](const PointRef& p, const PointKinematics& k, double scale) {
+        if (p.body == kGround) return;
+        const int o = model.bodies[static_cast<size_t>(p.body)].u_offset;
+        ex(o) += scale;
+        ey(o + 1) += scale;
+        if (k.rotates) {
+          ex(o + 2) += -scale * k.Rs.y();
+          ey(o + 2) += scale * k.Rs.x();
+        }
+      };
+      add(pi, ki, 1.0);
+      add(pj, kj, -1.0);
+    }
     for (int a = 0; a < 2; ++a) {
       const Vec2 c = a == 0 ? Vec2::UnitX() : Vec2::UnitY();
-      if (Et) {
-        auto e = row(Et, a);
-        e.setZero();
-        add_point_jacobian(model, pi, ki, c, 1.0, e);  // eq. (23)
-        add_point_jacobian(model, pj, kj, c, -1.0, e);
-      }
       if (rate())
         rate_row(a, [&](auto& e) {
           add_point_jacobian_rate(model, pi, ki, c, 1.0, e);  // eq. (76)
@@ -239,9 +250,10 @@ void compute_constraint_jacobian(const Model& model, const VecX& q, MatX& Et) {
   evaluate(model, q, nullptr, nullptr, &Et, nullptr);
 }
 
-void compute_constraint_residual_and_jacobian(const Model& model, const VecX& q, VecX& f,
-                                              MatX& Et) {
-  evaluate(model, q, nullptr, &f, &Et, nullptr);
+void compute_constraint_residual_and_jacobian(const Model& model, const VecX& q, VecX& f, MatX& Et,
+                                              Eigen::Matrix2d* rotations) {
+  if (rotations) body_rotations(model, q, rotations);
+  evaluate(model, q, nullptr, &f, &Et, nullptr, nullptr, rotations);
 }
 
 void compute_constraint_rate(const Model& model, const State& state, ConstraintWorkspace& ws,

@@ -198,14 +198,16 @@ struct DrivenWorkspace {
   Eigen::VectorXi J_piv;  // n: row interchanges of that LU
   VecX g;                 // n: scratch (a row of Eᵀ, for the null space N)
   VecX dq;                // n: right-hand side, then Newton step, of the corrector
-  // R(φ_b) of every body at the q of the last compute_driven (body_rotations).
+  // R(φ_b) of every body at the q of the last compute_driven (body_rotations); the corrector
+  // fills it with Eᵀ.
   std::vector<Eigen::Matrix2d> rotations;
   DrivenWorkspace(const Model& model, int rank);
 };
 
 // Velocities, accelerations, drive and multipliers at a position q on f(q) = 0 where the input
 // moves with rate sdot and acceleration sddot (C1)–(C4). Returns false at a dead point (dᵀF = 0).
-// jacobian_current: ws.constraints.Et already holds Eᵀ(q) (the corrector's last evaluation).
+// jacobian_current: ws.constraints.Et already holds Eᵀ(q) and dws.rotations R(φ_b) at q (the
+// corrector's last evaluation).
 // Allocation-free after set-up.
 bool compute_driven(const Model& model, int driver_joint, double sdot, double sddot, State& state,
                     Workspace& ws, DrivenWorkspace& dws, DrivenPoint& out,

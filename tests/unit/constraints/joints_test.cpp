@@ -99,6 +99,23 @@ TEST(Joints, Eq76_ConstraintRateGivesDtuWithoutFormingDt) {
   }
 }
 
+// f and Eᵀ in one pass, handing out the rotation table: the same f and Eᵀ as the separate calls
+// (Eᵀ checked above against differences) and the table of body_rotations.
+TEST(Joints, ResidualAndJacobianHandOutTheRotationTable) {
+  const Model model = parse_mechanism(test::kZooYaml, "zoo");
+  const State s = zoo_state(model, 1);
+  VecX f(model.nc), f_ref(model.nc);
+  MatX Et(model.nc, model.n), Et_ref(model.nc, model.n);
+  std::vector<Eigen::Matrix2d> rotations(model.bodies.size()), expected(model.bodies.size());
+  compute_constraint_residual_and_jacobian(model, s.q, f, Et, rotations.data());
+  compute_constraint_residual(model, s.q, f_ref);
+  compute_constraint_jacobian(model, s.q, Et_ref);
+  body_rotations(model, s.q, expected.data());
+  EXPECT_EQ((f - f_ref).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ((Et - Et_ref).cwiseAbs().maxCoeff(), 0.0);
+  for (size_t b = 0; b < rotations.size(); ++b) EXPECT_EQ(rotations[b], expected[b]) << b;
+}
+
 TEST(Joints, Eq20_ResidualOfEachTypeMatchesItsGeometry) {
   // Closed-form geometry at an assembled pose: a revolute pin on the ground point of a bar.
   const Model m = parse_mechanism(R"(
