@@ -614,12 +614,10 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
   };
   // A converged step keeps the branch when the tangent dq/ds keeps its direction (a jump across
   // a fold reverses it).
-  auto same_branch = [](const DrivenPoint& a, const DrivenPoint& b) {
-    return a.tangent.dot(b.tangent) > 0.0;
-  };
+  auto same_branch = [](const VecX& a, const VecX& b) { return a.dot(b) > 0.0; };
   VecX trial(model.nq);  // predictor/corrector iterate, reused across positions
   DrivenPoint anchor;    // the last converged point: the predictor starts from it
-  DrivenPoint good;      // the last regular one: its tangent is used next to a change point
+  VecX good_tangent;     // of the last regular point: used next to a change point
   DrivenPoint point, probe, sub;
   // One continuation step from a converged point to time t: predictor, corrector with the input
   // locked, evaluation; false if it does not converge on the same branch or is too long. From a
@@ -627,17 +625,17 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
   auto try_step = [&](const DrivenPoint& from, double t, DrivenPoint& out) {
     double target = 0.0, sd = 0.0, sdd = 0.0;
     law.at(t, target, sd, sdd);
-    const DrivenPoint& tangent_of = from.singular ? good : from;
+    const VecX& tangent = from.singular ? good_tangent : from.tangent;
     const double ds = target - from.input;
-    if (move_size(tangent_of.tangent, ds) > kMaxMove) return false;
+    if (move_size(tangent, ds) > kMaxMove) return false;
     if (from.singular)
-      trial = from.q + ds * good.tangent;
+      trial = from.q + ds * good_tangent;
     else
       predict(from, target, trial);
     // Corrections beyond twice the size of the tangent step would leave the branch.
-    const double max_step = 2.0 * std::abs(ds) * tangent_of.tangent.cwiseAbs().maxCoeff() + 1e-12;
+    const double max_step = 2.0 * std::abs(ds) * tangent.cwiseAbs().maxCoeff() + 1e-12;
     return sweep.corrector(trial, target, max_step) &&
-           evaluate_at(trial, t, out, sweep.jacobian_at_q) && same_branch(out, tangent_of);
+           evaluate_at(trial, t, out, sweep.jacobian_at_q) && same_branch(out.tangent, tangent);
   };
   // Determinacy (design §3): component cᵀλ is unique iff Nᵀc = 0 for the null space N of E. The
   // values of the components for λ = N_j are exactly (Nᵀc)_j; a component is determinate when
@@ -670,7 +668,7 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
   }
   update_determinacy(anchor);
   result.points.push_back(anchor);
-  good = anchor;
+  good_tangent = anchor.tangent;
   result.status = CycleStatus::completed;  // unless the loop below says otherwise
   int reversals = 0;
   const int report_every = std::max(1, steps / 100);
@@ -704,28 +702,29 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
       break;
     }
     // Reach t from the anchor: the whole step, else sub-steps (halved on failure, doubled again
-    // on success; not output). Stuck means failing within 2h after `sub`.
-    sub = anchor;
-    double h = t - sub.time;
+    // on success; not output) from `sub`. Stuck means failing within 2h after `from`.
+    const DrivenPoint* from = &anchor;  // the anchor itself until a sub-step is taken (no copy)
+    double h = t - from->time;
     bool reached = false;
     while (true) {
-      const double t_next = sub.time + h >= t - 1e-9 * dt ? t : sub.time + h;
-      if (try_step(sub, t_next, probe)) {
-        if (!sub.singular && !probe.singular && sub.chart_id == probe.chart_id &&
-            sub.chart_sign != probe.chart_sign) {  // |det| ∝ distance: interpolate
-          const double a = sub.chart_quality / (sub.chart_quality + probe.chart_quality);
-          record_singular(sub.input + a * (probe.input - sub.input),
-                          sub.time + a * (probe.time - sub.time));
+      const double t_next = from->time + h >= t - 1e-9 * dt ? t : from->time + h;
+      if (try_step(*from, t_next, probe)) {
+        if (!from->singular && !probe.singular && from->chart_id == probe.chart_id &&
+            from->chart_sign != probe.chart_sign) {  // |det| ∝ distance: interpolate
+          const double a = from->chart_quality / (from->chart_quality + probe.chart_quality);
+          record_singular(from->input + a * (probe.input - from->input),
+                          from->time + a * (probe.time - from->time));
         }
         if (probe.singular)
           record_singular(probe.input, probe.time);
         else
-          good = probe;
+          good_tangent = probe.tangent;
         if (t_next == t) {
           reached = true;
           break;
         }
         std::swap(sub, probe);
+        from = &sub;
         h = std::min(2.0 * h, t - sub.time);
         continue;
       }
@@ -738,6 +737,7 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
       std::swap(anchor, probe);
       continue;
     }
+    if (from != &sub) sub = anchor;  // stuck at the anchor: what follows works on `sub`
     // Stuck just after `sub`. A change point (E loses rank; the driver still drives: dᵀF stays
     // finite) is jumped over; a fold of the input (dᵀF → 0) is a dead point.
     const double t_stuck = sub.time;
@@ -747,7 +747,7 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
         const double tj = t_stuck + jump * dt;
         if (try_step(sub, tj, probe)) {
           record_singular(sub.input, t_stuck);
-          if (!probe.singular) good = probe;
+          if (!probe.singular) good_tangent = probe.tangent;
           // Past the grid time: the grid position is the singular one; it is reported just
           // past it, flagged (its multipliers are not meaningful there).
           if (tj >= t) {
@@ -845,7 +845,7 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
       result.message = msg + "; lost the branch after reversing";
       break;
     }
-    if (!anchor.singular) good = anchor;
+    if (!anchor.singular) good_tangent = anchor.tangent;
     k = static_cast<long>(std::floor(t_p / dt));  // the loop's ++k gives the next grid time
   }
   result.chart_switches = ws.dual.switch_count;
