@@ -28,7 +28,7 @@ void cycle(benchmark::State& bs, const std::string& name, bool keep_heap) {
   for (auto _ : bs) {
     const CycleResult r = run_cycle(model, o);
     if (r.status != CycleStatus::completed) bs.SkipWithError(r.message.c_str());
-    benchmark::DoNotOptimize(r.points.data());
+    benchmark::DoNotOptimize(r.points.size());
   }
   bs.SetItemsProcessed(bs.iterations() * o.steps);
   bs.counters["us_per_position"] =

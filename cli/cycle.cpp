@@ -157,7 +157,7 @@ int run_in_directory(const std::filesystem::path& dir, const std::string& progra
 
 nlohmann::json positions_json(const Model& model, const CycleResult& r) {
   nlohmann::json pts = nlohmann::json::array();
-  for (const DrivenPoint& p : r.points) {
+  for (const DrivenPointView& p : r.points) {
     nlohmann::json j;
     j["input"] = p.input;
     j["time"] = p.time;
@@ -327,9 +327,6 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
     if (opt.positions) j["points"] = positions_json(model, r);
     out << j.dump(2) << '\n';
   } else {
-    static const DrivenPoint kNone;
-    const DrivenPoint& first = r.points.empty() ? kNone : r.points.front();
-    const DrivenPoint& last = r.points.empty() ? kNone : r.points.back();
     out << "mechanism       " << model.name << "  (" << model.file << ")\n";
     out << "driver          joint '" << joint.name << "' (" << joint.type_name() << "), "
         << speed_text(co.driver, angular) << "\n";
@@ -337,8 +334,9 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
       out << "sweep           no position computed\n";
     else
       out << "sweep           " << r.points.size() << " positions, input "
-          << format_input(first.input, angular) << " -> " << format_input(last.input, angular)
-          << ", t = 0 -> " << fmt(last.time) << " s\n";
+          << format_input(r.points.front().input, angular) << " -> "
+          << format_input(r.points.back().input, angular) << ", t = 0 -> "
+          << fmt(r.points.back().time) << " s\n";
     out << "status          " << to_string(r.status) << (r.message.empty() ? "" : ": ") << r.message
         << "\n";
     out << "mobility        DOF " << r.dof << ", rank of E " << r.rank << ", "

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <stdexcept>
 
 #include "orthomech/analysis/mobility.hpp"
 #include "orthomech/analysis/positions.hpp"
@@ -45,7 +46,78 @@ DrivenWorkspace::DrivenWorkspace(const Model& model, int rank)
       J(model.n, model.n),
       J_piv(model.n),
       g(model.n),
-      dq(model.n) {}
+      dq(model.n),
+      rotations(model.bodies.size()) {}
+
+// ---- stored positions -----------------------------------------------------------------------
+DrivenPointView DrivenPoints::operator[](std::size_t k) const {
+  const Scalars& s = scalars_[k];
+  const double* v = values_.data() + k * stride_;
+  const double* tangent = v;
+  const double* q = tangent + n_tangent_;
+  const double* u = q + n_q_;
+  const double* udot = u + n_u_;
+  const double* lambda = udot + n_u_;
+  const double* reactions = lambda + n_lambda_;
+  const double* measures = reactions + n_reactions_;
+  return DrivenPointView{s.input,
+                         s.time,
+                         s.input_rate,
+                         s.input_acceleration,
+                         Eigen::Map<const VecX>(tangent, n_tangent_),
+                         s.drive,
+                         s.chart_quality,
+                         s.chart_sign,
+                         s.chart_id,
+                         s.dTF,
+                         Eigen::Map<const VecX>(q, n_q_),
+                         Eigen::Map<const VecX>(u, n_u_),
+                         Eigen::Map<const VecX>(udot, n_u_),
+                         Eigen::Map<const VecX>(lambda, n_lambda_),
+                         std::span<const double>(reactions, n_reactions_),
+                         std::span<const double>(measures, n_measures_),
+                         s.kinetic,
+                         s.potential,
+                         s.dissipated,
+                         s.singular};
+}
+
+void DrivenPoints::reserve(std::size_t count) {
+  scalars_.reserve(count);
+  if (stride_ > 0) values_.reserve(count * stride_);
+}
+
+void DrivenPoints::push_back(const DrivenPoint& p) {
+  if (scalars_.empty() && values_.empty()) {  // the first position fixes the sizes
+    n_tangent_ = p.tangent.size(), n_q_ = p.q.size(), n_u_ = p.u.size();
+    n_lambda_ = p.lambda.size(), n_reactions_ = p.reactions.size();
+    n_measures_ = p.measures.size();
+    stride_ = static_cast<std::size_t>(n_tangent_ + n_q_ + 2 * n_u_ + n_lambda_) + n_reactions_ +
+              n_measures_;
+    values_.reserve(std::max<std::size_t>(1, scalars_.capacity()) * stride_);
+  }
+  if (p.tangent.size() != n_tangent_ || p.q.size() != n_q_ || p.u.size() != n_u_ ||
+      p.udot.size() != n_u_ || p.lambda.size() != n_lambda_ || p.reactions.size() != n_reactions_ ||
+      p.measures.size() != n_measures_)
+    throw std::logic_error("DrivenPoints: a position with other vector sizes");
+  scalars_.push_back({p.input, p.time, p.input_rate, p.input_acceleration, p.drive, p.chart_quality,
+                      p.dTF, p.kinetic, p.potential, p.dissipated, p.chart_id, p.chart_sign,
+                      p.singular});
+  const std::size_t at = values_.size();
+  values_.resize(at + stride_);  // within the reserved block (amortised growth beyond it)
+  double* v = values_.data() + at;
+  auto put = [&v](const double* from, std::size_t count) {
+    std::copy(from, from + count, v);
+    v += count;
+  };
+  put(p.tangent.data(), static_cast<std::size_t>(n_tangent_));
+  put(p.q.data(), static_cast<std::size_t>(n_q_));
+  put(p.u.data(), static_cast<std::size_t>(n_u_));
+  put(p.udot.data(), static_cast<std::size_t>(n_u_));
+  put(p.lambda.data(), static_cast<std::size_t>(n_lambda_));
+  put(p.reactions.data(), n_reactions_);
+  put(p.measures.data(), n_measures_);
+}
 
 // ---- reaction components -------------------------------------------------------------------
 std::vector<ReactionComponent> reaction_components(const Model& model) {
@@ -95,9 +167,12 @@ std::vector<ReactionComponent> reaction_components(const Model& model) {
 // that force itself; for rows written "second − first" (slot normal, relative angle, rod) the
 // force on the first body is −λ along the row's direction.
 void compute_reactions(const Model& model, const VecX& q, const Eigen::Ref<const VecX>& lambda,
-                       std::vector<double>& out) {
+                       std::vector<double>& out, const Eigen::Matrix2d* rotations) {
   out.clear();
   const VecX* none = nullptr;
+  auto rot = [&](int body) -> Eigen::Matrix2d {
+    return rotations && body != kGround ? rotations[body] : rotation(body_angle(model, body, q));
+  };
   for (const Joint& joint : model.joints) {
     const int r = joint.row_offset;
     std::visit(
@@ -108,14 +183,14 @@ void compute_reactions(const Model& model, const VecX& q, const Eigen::Ref<const
             // The joint's frame: its first body's, or its second's when the first is the
             // ground (the moving link's axes, where the ground's would repeat Fx, Fy).
             const int frame = k.pi.body != kGround ? k.pi.body : k.pj.body;
-            const Vec2 local = rotation(body_angle(model, frame, q)).transpose() * F;
+            const Vec2 local = rot(frame).transpose() * F;
             out.push_back(F.x());
             out.push_back(F.y());
             if constexpr (std::is_same_v<T, Fixed>) out.push_back(-lambda(r + 2));
             out.push_back(local.x());
             out.push_back(local.y());
           } else if constexpr (std::is_same_v<T, Prismatic> || std::is_same_v<T, PinInSlot>) {
-            const Vec2 n = rotation(body_angle(model, k.pi.body, q)) * perp(k.axis_local);
+            const Vec2 n = rot(k.pi.body) * perp(k.axis_local);
             const double normal = -lambda(r);
             out.push_back(normal * n.x());
             out.push_back(normal * n.y());
@@ -124,8 +199,8 @@ void compute_reactions(const Model& model, const VecX& q, const Eigen::Ref<const
           } else if constexpr (std::is_same_v<T, GearPair>) {
             out.push_back(lambda(r));
           } else {  // Distance: force on the first body = −λ d / L; tension along e = d/|d|
-            const Vec2 d =
-                point_kinematics(model, k.pj, q, none).r - point_kinematics(model, k.pi, q, none).r;
+            const Vec2 d = point_kinematics(model, k.pj, q, none, rotations).r -
+                           point_kinematics(model, k.pi, q, none, rotations).r;
             const Vec2 F = -lambda(r) * d / k.length;
             out.push_back(F.x());
             out.push_back(F.y());
@@ -193,7 +268,10 @@ bool compute_driven(const Model& model, int driver_joint, double sdot, double sd
     state.u.setZero();
     compute_free_system(model, state, ws);
   }
-  if (!jacobian_current) compute_constraint_jacobian(model, state.q, ws.constraints.Et);
+  if (!jacobian_current) {
+    compute_constraint_jacobian(model, state.q, ws.constraints.Et);
+    body_rotations(model, state.q, w.rotations.data());
+  }
   if (compute_basis(model, state, ws) != ProjectionStatus::ok) return false;
   const auto F = ws.dual.F.col(0);
   (void)compute_scalar(model, input, state.q, nullptr, w.d);
@@ -206,7 +284,7 @@ bool compute_driven(const Model& model, int driver_joint, double sdot, double sd
   const double v = sdot / dTF;
   state.u.noalias() = F * v;
   // Rate terms at (q, u): Dᵀu, Q̂(q, u), Ṁ, ḋu.
-  compute_constraint_rate(model, state, ws.constraints);
+  compute_constraint_rate(model, state, ws.constraints, w.rotations.data());
   compute_free_system(model, state, ws);
   const ScalarKinematics sk = compute_scalar(model, input, state.q, &state.u, w.d);
   solve_chart(ws, ws.constraints.Dtu, w.Fdot_v);  // x_D = (E_RDᵀ)⁻¹ (Dᵀu)_R
@@ -294,8 +372,10 @@ struct Sweep {
     bool factored = false;
     double previous = std::numeric_limits<double>::infinity();
     for (int it = 0; it < 30; ++it) {
-      // f and Eᵀ in one pass: Eᵀ at the converged q is then ready for compute_driven.
-      compute_constraint_residual_and_jacobian(model, q, ws.constraints.f, ws.constraints.Et);
+      // f and Eᵀ in one pass: Eᵀ (and the rotation table) at the converged q are then ready for
+      // compute_driven.
+      compute_constraint_residual_and_jacobian(model, q, ws.constraints.f, ws.constraints.Et,
+                                               w.rotations.data());
       jacobian_at_q = true;
       const double s =
           row ? row->dot(q - *q_ref) : compute_scalar(model, input, q, nullptr, w.d).value;
@@ -521,10 +601,12 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
       p.chart_id = ws.dual.switch_count;
     }
     p.singular = ws.dual.quality < kSingularQuality;
-    compute_reactions(model, state.q, p.lambda, p.reactions);
+    // The rotation table compute_driven filled at this q: no sin/cos in reactions and measures.
+    const Eigen::Matrix2d* rotations = w.rotations.data();
+    compute_reactions(model, state.q, p.lambda, p.reactions, rotations);
     p.measures.clear();
     for (const Measure& m : model.measures)
-      p.measures.push_back(evaluate_measure(model, m, state.q, &state.u, &p.udot));
+      p.measures.push_back(evaluate_measure(model, m, state.q, &state.u, &p.udot, rotations));
     p.kinetic = kinetic_energy(model, state);
     p.potential = potential_energy(model, state.q);
     p.dissipated = dissipated_power(model, state);
@@ -532,12 +614,10 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
   };
   // A converged step keeps the branch when the tangent dq/ds keeps its direction (a jump across
   // a fold reverses it).
-  auto same_branch = [](const DrivenPoint& a, const DrivenPoint& b) {
-    return a.tangent.dot(b.tangent) > 0.0;
-  };
+  auto same_branch = [](const VecX& a, const VecX& b) { return a.dot(b) > 0.0; };
   VecX trial(model.nq);  // predictor/corrector iterate, reused across positions
   DrivenPoint anchor;    // the last converged point: the predictor starts from it
-  DrivenPoint good;      // the last regular one: its tangent is used next to a change point
+  VecX good_tangent;     // of the last regular point: used next to a change point
   DrivenPoint point, probe, sub;
   // One continuation step from a converged point to time t: predictor, corrector with the input
   // locked, evaluation; false if it does not converge on the same branch or is too long. From a
@@ -545,17 +625,17 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
   auto try_step = [&](const DrivenPoint& from, double t, DrivenPoint& out) {
     double target = 0.0, sd = 0.0, sdd = 0.0;
     law.at(t, target, sd, sdd);
-    const DrivenPoint& tangent_of = from.singular ? good : from;
+    const VecX& tangent = from.singular ? good_tangent : from.tangent;
     const double ds = target - from.input;
-    if (move_size(tangent_of.tangent, ds) > kMaxMove) return false;
+    if (move_size(tangent, ds) > kMaxMove) return false;
     if (from.singular)
-      trial = from.q + ds * good.tangent;
+      trial = from.q + ds * good_tangent;
     else
       predict(from, target, trial);
     // Corrections beyond twice the size of the tangent step would leave the branch.
-    const double max_step = 2.0 * std::abs(ds) * tangent_of.tangent.cwiseAbs().maxCoeff() + 1e-12;
+    const double max_step = 2.0 * std::abs(ds) * tangent.cwiseAbs().maxCoeff() + 1e-12;
     return sweep.corrector(trial, target, max_step) &&
-           evaluate_at(trial, t, out, sweep.jacobian_at_q) && same_branch(out, tangent_of);
+           evaluate_at(trial, t, out, sweep.jacobian_at_q) && same_branch(out.tangent, tangent);
   };
   // Determinacy (design §3): component cᵀλ is unique iff Nᵀc = 0 for the null space N of E. The
   // values of the components for λ = N_j are exactly (Nᵀc)_j; a component is determinate when
@@ -565,7 +645,7 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
     if (result.redundant == 0 || p.singular) return;
     for (Eigen::Index j = 0; j < w.N.cols(); ++j) {
       const double tol = 1e-8 * w.N.col(j).norm();
-      compute_reactions(model, p.q, w.N.col(j), null_values);
+      compute_reactions(model, p.q, w.N.col(j), null_values, w.rotations.data());
       for (size_t i = 0; i < null_values.size(); ++i)
         if (std::abs(null_values[i]) > tol) result.determinate[i] = false;
       for (int r = 0; r < model.nc; ++r)
@@ -588,7 +668,7 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
   }
   update_determinacy(anchor);
   result.points.push_back(anchor);
-  good = anchor;
+  good_tangent = anchor.tangent;
   result.status = CycleStatus::completed;  // unless the loop below says otherwise
   int reversals = 0;
   const int report_every = std::max(1, steps / 100);
@@ -622,28 +702,29 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
       break;
     }
     // Reach t from the anchor: the whole step, else sub-steps (halved on failure, doubled again
-    // on success; not output). Stuck means failing within 2h after `sub`.
-    sub = anchor;
-    double h = t - sub.time;
+    // on success; not output) from `sub`. Stuck means failing within 2h after `from`.
+    const DrivenPoint* from = &anchor;  // the anchor itself until a sub-step is taken (no copy)
+    double h = t - from->time;
     bool reached = false;
     while (true) {
-      const double t_next = sub.time + h >= t - 1e-9 * dt ? t : sub.time + h;
-      if (try_step(sub, t_next, probe)) {
-        if (!sub.singular && !probe.singular && sub.chart_id == probe.chart_id &&
-            sub.chart_sign != probe.chart_sign) {  // |det| ∝ distance: interpolate
-          const double a = sub.chart_quality / (sub.chart_quality + probe.chart_quality);
-          record_singular(sub.input + a * (probe.input - sub.input),
-                          sub.time + a * (probe.time - sub.time));
+      const double t_next = from->time + h >= t - 1e-9 * dt ? t : from->time + h;
+      if (try_step(*from, t_next, probe)) {
+        if (!from->singular && !probe.singular && from->chart_id == probe.chart_id &&
+            from->chart_sign != probe.chart_sign) {  // |det| ∝ distance: interpolate
+          const double a = from->chart_quality / (from->chart_quality + probe.chart_quality);
+          record_singular(from->input + a * (probe.input - from->input),
+                          from->time + a * (probe.time - from->time));
         }
         if (probe.singular)
           record_singular(probe.input, probe.time);
         else
-          good = probe;
+          good_tangent = probe.tangent;
         if (t_next == t) {
           reached = true;
           break;
         }
         std::swap(sub, probe);
+        from = &sub;
         h = std::min(2.0 * h, t - sub.time);
         continue;
       }
@@ -656,6 +737,7 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
       std::swap(anchor, probe);
       continue;
     }
+    if (from != &sub) sub = anchor;  // stuck at the anchor: what follows works on `sub`
     // Stuck just after `sub`. A change point (E loses rank; the driver still drives: dᵀF stays
     // finite) is jumped over; a fold of the input (dᵀF → 0) is a dead point.
     const double t_stuck = sub.time;
@@ -665,7 +747,7 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
         const double tj = t_stuck + jump * dt;
         if (try_step(sub, tj, probe)) {
           record_singular(sub.input, t_stuck);
-          if (!probe.singular) good = probe;
+          if (!probe.singular) good_tangent = probe.tangent;
           // Past the grid time: the grid position is the singular one; it is reported just
           // past it, flagged (its multipliers are not meaningful there).
           if (tj >= t) {
@@ -763,7 +845,7 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
       result.message = msg + "; lost the branch after reversing";
       break;
     }
-    if (!anchor.singular) good = anchor;
+    if (!anchor.singular) good_tangent = anchor.tangent;
     k = static_cast<long>(std::floor(t_p / dt));  // the loop's ++k gives the next grid time
   }
   result.chart_switches = ws.dual.switch_count;
@@ -810,7 +892,7 @@ std::vector<ReactionMagnitude> reaction_magnitudes(const CycleResult& result) {
   return out;
 }
 
-double magnitude_at(const DrivenPoint& p, const ReactionMagnitude& m) {
+double magnitude_at(const DrivenPointView& p, const ReactionMagnitude& m) {
   double sum = 0.0;
   for (const int c : m.components)
     sum += p.reactions[static_cast<size_t>(c)] * p.reactions[static_cast<size_t>(c)];
@@ -823,7 +905,7 @@ std::vector<SeriesSummary> summarize_cycle(const CycleResult& result,
   std::vector<SeriesSummary> out;
   auto summarize = [&](SeriesSummary s, auto value) {
     double sum2 = 0.0;
-    for (const DrivenPoint& p : result.points) {
+    for (const DrivenPointView& p : result.points) {
       if (p.singular) continue;
       const double v = value(p);
       sum2 += v * v;
@@ -836,10 +918,11 @@ std::vector<SeriesSummary> summarize_cycle(const CycleResult& result,
     s.rms = s.samples > 0 ? std::sqrt(sum2 / s.samples) : 0.0;
     out.push_back(std::move(s));
   };
-  summarize(SeriesSummary{"drive", drive_unit, true}, [](const DrivenPoint& p) { return p.drive; });
+  summarize(SeriesSummary{"drive", drive_unit, true},
+            [](const DrivenPointView& p) { return p.drive; });
   for (const ReactionMagnitude& m : magnitudes)
     summarize(SeriesSummary{m.name, m.unit, m.determinate},
-              [&](const DrivenPoint& p) { return magnitude_at(p, m); });
+              [&](const DrivenPointView& p) { return magnitude_at(p, m); });
   return out;
 }
 

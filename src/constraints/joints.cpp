@@ -2,6 +2,7 @@
 
 #include <array>
 
+#include "../model/dot_row.hpp"
 #include "orthomech/model/free_system.hpp"
 #include "orthomech/model/general_system.hpp"
 
@@ -23,7 +24,7 @@ void add_angle(const Model& model, int body, double scale, Row&& row) {
   row(b.u_offset + 2) += scale;
 }
 
-// One joint: writes its rows of f (if f_rows), Eᵀ (if Et_rows) and Dᵀ (if Dt_rows).
+// One joint: writes its rows of f (if f), Eᵀ (if Et), Dᵀ (if Dt) and Dᵀu (if Dtu).
 // Revolute and fixed x/y rows are written (point on i) − (point on j); the slot-normal, angle,
 // gear and distance rows are written for j relative to i (docs/notation.md gives each row).
 struct JointEvaluator {
@@ -34,11 +35,28 @@ struct JointEvaluator {
   VecX* f;
   MatX* Et;
   MatX* Dt;
+  VecX* Dtu;                   // Dᵀu row by row, without Dt (needs u)
   const Eigen::Matrix2d* rot;  // R(φ_b) per body at q, or null
 
   template <typename Rows>
   auto row(Rows* m, int k) {
     return m->row(r + k);
+  }
+
+  [[nodiscard]] bool rate() const { return Dt || Dtu; }
+  // Row k of Dᵀ from `fill(row)` (accumulating writes): into Dt and/or its product with u.
+  template <typename Fill>
+  void rate_row(int k, Fill&& fill) {
+    if (Dt) {
+      auto e = row(Dt, k);
+      e.setZero();
+      fill(e);
+    }
+    if (Dtu) {
+      DotRow e{*u};
+      fill(e);
+      (*Dtu)(r + k) = e.sum;  // eq. (76)
+    }
   }
 
   // Revolute, eq. (20): f = r_Pi − r_Pj; Eᵀ = [J_Pi, −J_Pj]; Dᵀ = [J̇_Pi, −J̇_Pj].
@@ -72,7 +90,7 @@ struct JointEvaluator {
       add_angle(model, j.bi, -j.ratio, e);
       add_angle(model, j.carrier, j.ratio - 1.0, e);
     }
-    if (Dt) row(Dt, 0).setZero();
+    if (rate()) rate_row(0, [](auto&) {});
   }
 
   // Distance: f = (dᵀd − L²)/(2L), d = r_Pj − r_Pi; Eᵀ = dᵀ ∂d/∂u / L;
@@ -90,34 +108,43 @@ struct JointEvaluator {
       add_point_jacobian(model, j.pj, kj, d, 1.0 / L, e);
       add_point_jacobian(model, j.pi, ki, d, -1.0 / L, e);
     }
-    if (Dt) {
-      auto e = row(Dt, 0);
-      e.setZero();
-      add_point_jacobian(model, j.pj, kj, dd, 1.0 / L, e);
-      add_point_jacobian(model, j.pi, ki, dd, -1.0 / L, e);
-      add_point_jacobian_rate(model, j.pj, kj, d, 1.0 / L, e);
-      add_point_jacobian_rate(model, j.pi, ki, d, -1.0 / L, e);
-    }
+    if (rate())
+      rate_row(0, [&](auto& e) {
+        add_point_jacobian(model, j.pj, kj, dd, 1.0 / L, e);
+        add_point_jacobian(model, j.pi, ki, dd, -1.0 / L, e);
+        add_point_jacobian_rate(model, j.pj, kj, d, 1.0 / L, e);
+        add_point_jacobian_rate(model, j.pi, ki, d, -1.0 / L, e);
+      });
   }
 
   void point_coincidence(const PointRef& pi, const PointRef& pj) {
     const PointKinematics ki = point_kinematics(model, pi, q, u, rot);
     const PointKinematics kj = point_kinematics(model, pj, q, u, rot);
     if (f) (*f).segment<2>(r) = ki.r - kj.r;  // eq. (20)
+    if (Et) {  // eq. (23): add_point_jacobian with c = x̂, ŷ written out: [I, perp(R s)] per point
+      auto ex = row(Et, 0), ey = row(Et, 1);
+      ex.setZero();
+      ey.setZero();
+      auto add = [&](const PointRef& p, const PointKinematics& k, double scale) {
+        if (p.body == kGround) return;
+        const int o = model.bodies[static_cast<size_t>(p.body)].u_offset;
+        ex(o) += scale;
+        ey(o + 1) += scale;
+        if (k.rotates) {
+          ex(o + 2) += -scale * k.Rs.y();
+          ey(o + 2) += scale * k.Rs.x();
+        }
+      };
+      add(pi, ki, 1.0);
+      add(pj, kj, -1.0);
+    }
     for (int a = 0; a < 2; ++a) {
       const Vec2 c = a == 0 ? Vec2::UnitX() : Vec2::UnitY();
-      if (Et) {
-        auto e = row(Et, a);
-        e.setZero();
-        add_point_jacobian(model, pi, ki, c, 1.0, e);  // eq. (23)
-        add_point_jacobian(model, pj, kj, c, -1.0, e);
-      }
-      if (Dt) {
-        auto e = row(Dt, a);
-        e.setZero();
-        add_point_jacobian_rate(model, pi, ki, c, 1.0, e);  // eq. (76)
-        add_point_jacobian_rate(model, pj, kj, c, -1.0, e);
-      }
+      if (rate())
+        rate_row(a, [&](auto& e) {
+          add_point_jacobian_rate(model, pi, ki, c, 1.0, e);  // eq. (76)
+          add_point_jacobian_rate(model, pj, kj, c, -1.0, e);
+        });
     }
   }
 
@@ -129,7 +156,7 @@ struct JointEvaluator {
       add_angle(model, bj, 1.0, e);
       add_angle(model, bi, -1.0, e);
     }
-    if (Dt) row(Dt, k).setZero();
+    if (rate()) rate_row(k, [](auto&) {});
   }
 
   // Point Pj on the line through Pi along axis a (body i): f = nᵀ d, n = R_i perp(a),
@@ -153,16 +180,15 @@ struct JointEvaluator {
       add_point_jacobian(model, pi, ki, n, -1.0, e);
       if (i_rotates) add_angle(model, pi.body, perp(n).dot(d), e);
     }
-    if (Dt) {
-      auto e = row(Dt, k);
-      e.setZero();
-      const Vec2 ndot = w_i * perp(n);
-      add_point_jacobian(model, pj, kj, ndot, 1.0, e);  // (L2)
-      add_point_jacobian(model, pi, ki, ndot, -1.0, e);
-      add_point_jacobian_rate(model, pj, kj, n, 1.0, e);
-      add_point_jacobian_rate(model, pi, ki, n, -1.0, e);
-      if (i_rotates) add_angle(model, pi.body, -w_i * n.dot(d) + perp(n).dot(dd), e);
-    }
+    if (rate())
+      rate_row(k, [&](auto& e) {
+        const Vec2 ndot = w_i * perp(n);
+        add_point_jacobian(model, pj, kj, ndot, 1.0, e);  // (L2)
+        add_point_jacobian(model, pi, ki, ndot, -1.0, e);
+        add_point_jacobian_rate(model, pj, kj, n, 1.0, e);
+        add_point_jacobian_rate(model, pi, ki, n, -1.0, e);
+        if (i_rotates) add_angle(model, pi.body, -w_i * n.dot(d) + perp(n).dot(dd), e);
+      });
   }
 };
 
@@ -171,7 +197,7 @@ struct JointEvaluator {
 //   Eᵀ = nᵀ ∂r_P/∂u;
 //   Dᵀ = ṅᵀ ∂r_P/∂u + nᵀ d/dt(∂r_P/∂u), ṅ = φ̇ perp(n)                                   (L3)
 void knife_edge(const Model& model, const KnifeEdge& k, const VecX& q, const VecX* u, VecX* f,
-                MatX* Et, MatX* Dt) {
+                MatX* Et, MatX* Dt, VecX* Dtu) {
   const PointKinematics kp = point_kinematics(model, k.at, q, u);
   const Vec2 n = rotation(body_angle(model, k.at.body, q)) * perp(k.axis_local);
   if (f) (*f)(k.row_offset) = 0.0;
@@ -180,38 +206,50 @@ void knife_edge(const Model& model, const KnifeEdge& k, const VecX& q, const Vec
     e.setZero();
     add_point_jacobian(model, k.at, kp, n, 1.0, e);
   }
+  auto fill = [&](auto& e) {
+    add_point_jacobian(model, k.at, kp, kp.phidot * perp(n), 1.0, e);  // (L3)
+    add_point_jacobian_rate(model, k.at, kp, n, 1.0, e);
+  };
   if (Dt) {
     auto e = Dt->row(k.row_offset);
     e.setZero();
-    add_point_jacobian(model, k.at, kp, kp.phidot * perp(n), 1.0, e);  // (L3)
-    add_point_jacobian_rate(model, k.at, kp, n, 1.0, e);
+    fill(e);
+  }
+  if (Dtu) {
+    DotRow e{*u};
+    fill(e);
+    (*Dtu)(k.row_offset) = e.sum;
   }
 }
 
-void evaluate(const Model& model, const VecX& q, const VecX* u, VecX* f, MatX* Et, MatX* Dt) {
+// Dtu: Dᵀu row by row (needs u), without forming Dᵀ.
+// rotations: the caller's table of R(φ_b) at q, if any.
+void evaluate(const Model& model, const VecX& q, const VecX* u, VecX* f, MatX* Et, MatX* Dt,
+              VecX* Dtu = nullptr, const Eigen::Matrix2d* rotations = nullptr) {
   if (model.general) {  // a free system given by functions (model/general_system.hpp)
     if (f) model.general->residual(q, *f);
     if (Et) model.general->jacobian(q, *Et);
     if (Dt) model.general->jacobian_rate(q, *u, *Dt);
+    if (Dtu) {
+      MatX D(model.nc, model.n);
+      model.general->jacobian_rate(q, *u, D);
+      *Dtu = D * *u;  // eq. (76)
+    }
     return;
   }
   // Each body's rotation once (sin/cos dominate small evaluations); particles keep the identity.
   constexpr size_t kTable = 64;
   std::array<Eigen::Matrix2d, kTable> table;
-  const Eigen::Matrix2d* rot = nullptr;
-  if (model.bodies.size() <= kTable) {
-    for (size_t b = 0; b < model.bodies.size(); ++b) {
-      const Body& body = model.bodies[b];
-      table[b] = body.kind == BodyKind::rigid ? rotation(q(body.q_offset + 2))
-                                              : Eigen::Matrix2d::Identity();
-    }
+  const Eigen::Matrix2d* rot = rotations;
+  if (!rot && model.bodies.size() <= kTable) {
+    body_rotations(model, q, table.data());
     rot = table.data();
   }
   for (const Joint& joint : model.joints) {
-    JointEvaluator ev{model, q, u, joint.row_offset, f, Et, Dt, rot};
+    JointEvaluator ev{model, q, u, joint.row_offset, f, Et, Dt, Dtu, rot};
     std::visit(ev, joint.kind);
   }
-  for (const KnifeEdge& k : model.knife_edges) knife_edge(model, k, q, u, f, Et, Dt);
+  for (const KnifeEdge& k : model.knife_edges) knife_edge(model, k, q, u, f, Et, Dt, Dtu);
 }
 
 }  // namespace
@@ -224,14 +262,16 @@ void compute_constraint_jacobian(const Model& model, const VecX& q, MatX& Et) {
   evaluate(model, q, nullptr, nullptr, &Et, nullptr);
 }
 
-void compute_constraint_residual_and_jacobian(const Model& model, const VecX& q, VecX& f,
-                                              MatX& Et) {
-  evaluate(model, q, nullptr, &f, &Et, nullptr);
+void compute_constraint_residual_and_jacobian(const Model& model, const VecX& q, VecX& f, MatX& Et,
+                                              Eigen::Matrix2d* rotations) {
+  if (rotations) body_rotations(model, q, rotations);
+  evaluate(model, q, nullptr, &f, &Et, nullptr, nullptr, rotations);
 }
 
-void compute_constraint_rate(const Model& model, const State& state, ConstraintWorkspace& ws) {
-  evaluate(model, state.q, &state.u, nullptr, nullptr, &ws.Dt);
-  ws.Dtu.noalias() = ws.Dt * state.u;  // convective term Dᵀu, eq. (76)
+void compute_constraint_rate(const Model& model, const State& state, ConstraintWorkspace& ws,
+                             const Eigen::Matrix2d* rotations) {
+  // The convective term Dᵀu, eq. (76), row by row: Dᵀ itself is not formed (ws.Dt untouched).
+  evaluate(model, state.q, &state.u, nullptr, nullptr, nullptr, &ws.Dtu, rotations);
 }
 
 void compute_constraints(const Model& model, const State& state, ConstraintWorkspace& ws) {

@@ -82,7 +82,7 @@ CycleColumns write_cycle_csv(const std::filesystem::path& file, const Model& mod
   }
   out << '\n';
   const double display = angular ? 180.0 / std::numbers::pi : 1e3;
-  for (const DrivenPoint& p : result.points) {
+  for (const DrivenPointView& p : result.points) {
     out << number(p.input) << ',' << number(p.input * display) << ',' << number(p.time);
     for (const double v : p.measures) out << ',' << number(v);
     for (const Body& b : model.bodies) {

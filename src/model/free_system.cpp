@@ -71,24 +71,12 @@ double kinetic_energy(const Model& model, const State& state) {
   return T;
 }
 
-PointKinematics point_kinematics(const Model& model, const PointRef& p, const VecX& q,
-                                 const VecX* u, const Eigen::Matrix2d* rotations) {
-  PointKinematics k;
-  if (p.body == kGround) {
-    k.r = p.s;
-    return k;
+void body_rotations(const Model& model, const VecX& q, Eigen::Matrix2d* rotations) {
+  for (size_t b = 0; b < model.bodies.size(); ++b) {
+    const Body& body = model.bodies[b];
+    rotations[b] =
+        body.kind == BodyKind::rigid ? rotation(q(body.q_offset + 2)) : Eigen::Matrix2d::Identity();
   }
-  const Body& b = model.bodies[static_cast<size_t>(p.body)];
-  k.moving = true;
-  const Vec2 c(q(b.q_offset), q(b.q_offset + 1));
-  if (b.kind == BodyKind::rigid) {
-    k.rotates = true;
-    k.Rs = (rotations ? rotations[p.body] : rotation(q(b.q_offset + 2))) * p.s;
-    if (u) k.phidot = (*u)(b.u_offset + 2);
-  }
-  k.r = c + k.Rs;
-  if (u) k.v = Vec2((*u)(b.u_offset), (*u)(b.u_offset + 1)) + k.phidot * perp(k.Rs);
-  return k;
 }
 
 double body_angle(const Model& model, int body, const VecX& q) {

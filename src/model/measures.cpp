@@ -2,17 +2,28 @@
 
 #include <stdexcept>
 
+#include "dot_row.hpp"
 #include "orthomech/model/free_system.hpp"
 
 namespace orthomech {
 
 namespace {
 
+// Sink: where the row d goes (Eigen::Ref<VecX>, or DotRow for its product with a vector).
+template <class Sink>
 struct Evaluator {
   const Model& model;
   const VecX& q;
   const VecX* u;
-  Eigen::Ref<VecX>* d;  // may be null
+  Sink* d;                           // may be null
+  const Eigen::Matrix2d* rotations;  // R(φ_b) per body at q, or null
+
+  [[nodiscard]] PointKinematics point(const PointRef& p) const {
+    return point_kinematics(model, p, q, u, rotations);
+  }
+  [[nodiscard]] Eigen::Matrix2d rotation_of(int body) const {
+    return rotations && body != kGround ? rotations[body] : rotation(body_angle(model, body, q));
+  }
 
   void add_angle(int body, double scale) const {
     // Particles have no angle (body_angle is 0 for them): nothing to add, and no column to write.
@@ -34,7 +45,7 @@ struct Evaluator {
   ScalarKinematics operator()(const BodyAngle& m) const { return angle_difference(m.bi, m.bj); }
 
   ScalarKinematics operator()(const PointCoordinate& m) const {
-    const PointKinematics k = point_kinematics(model, m.point, q, u);
+    const PointKinematics k = point(m.point);
     const Vec2 c = m.axis == 0 ? Vec2::UnitX() : Vec2::UnitY();
     ScalarKinematics s;
     s.value = c.dot(k.r);
@@ -46,8 +57,8 @@ struct Evaluator {
 
   // |r_Pj − r_Pi|: ṡ = eᵀ ḋ, s̈ = eᵀ d̈ + (|ḋ|² − (eᵀḋ)²)/s with e = d/s.
   ScalarKinematics operator()(const PointDistance& m) const {
-    const PointKinematics ki = point_kinematics(model, m.pi, q, u);
-    const PointKinematics kj = point_kinematics(model, m.pj, q, u);
+    const PointKinematics ki = point(m.pi);
+    const PointKinematics kj = point(m.pj);
     const Vec2 dv = kj.r - ki.r;
     const Vec2 dd = kj.v - ki.v;
     ScalarKinematics s;
@@ -70,11 +81,10 @@ struct Evaluator {
       return angle_difference(r->pi.body, r->pj.body);
     if (const auto* p = std::get_if<Prismatic>(&joint.kind)) {
       // s = aᵀ d with a = R_i axis, d = r_Pj − r_Pi. ȧ = φ̇_i perp(a).
-      const PointKinematics ki = point_kinematics(model, p->pi, q, u);
-      const PointKinematics kj = point_kinematics(model, p->pj, q, u);
-      const double phi_i = body_angle(model, p->pi.body, q);
+      const PointKinematics ki = point(p->pi);
+      const PointKinematics kj = point(p->pj);
       const double w_i = u ? body_angular_velocity(model, p->pi.body, *u) : 0.0;
-      const Vec2 a = rotation(phi_i) * p->axis_local;
+      const Vec2 a = rotation_of(p->pi.body) * p->axis_local;
       const Vec2 dv = kj.r - ki.r;
       const Vec2 dd = kj.v - ki.v;
       ScalarKinematics s;
@@ -100,21 +110,24 @@ ScalarKinematics compute_scalar(const Model& model, const MeasureKind& kind, con
                                 const VecX* u, Eigen::Ref<VecX> d) {
   d.setZero();
   Eigen::Ref<VecX>* dp = &d;
-  return std::visit(Evaluator{model, q, u, dp}, kind);
+  return std::visit(Evaluator<Eigen::Ref<VecX>>{model, q, u, dp, nullptr}, kind);
 }
 
 ScalarKinematics compute_scalar(const Model& model, const MeasureKind& kind, const VecX& q,
                                 const VecX* u) {
-  return std::visit(Evaluator{model, q, u, nullptr}, kind);
+  return std::visit(Evaluator<Eigen::Ref<VecX>>{model, q, u, nullptr, nullptr}, kind);
 }
 
 double evaluate_measure(const Model& model, const Measure& m, const VecX& q, const VecX* u,
-                        const VecX* udot) {
-  if (m.derivative == 0) return compute_scalar(model, m.kind, q, nullptr).value;
-  if (m.derivative == 1) return compute_scalar(model, m.kind, q, u).rate;
-  VecX d(model.n);
-  const ScalarKinematics s = compute_scalar(model, m.kind, q, u, d);
-  return d.dot(*udot) + s.ddot_u;
+                        const VecX* udot, const Eigen::Matrix2d* rotations) {
+  using Plain = Evaluator<Eigen::Ref<VecX>>;
+  if (m.derivative == 0)
+    return std::visit(Plain{model, q, nullptr, nullptr, rotations}, m.kind).value;
+  if (m.derivative == 1) return std::visit(Plain{model, q, u, nullptr, rotations}, m.kind).rate;
+  // s̈ = d u̇ + ḋu, with d u̇ accumulated as d is written (no row buffer).
+  DotRow d_udot{*udot};
+  const ScalarKinematics s = std::visit(Evaluator<DotRow>{model, q, u, &d_udot, rotations}, m.kind);
+  return d_udot.sum + s.ddot_u;
 }
 
 }  // namespace orthomech

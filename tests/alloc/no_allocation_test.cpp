@@ -3,12 +3,16 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <cmath>
 #include <cstdlib>
 #include <vector>
 
 #include "orthomech/analysis/cycle.hpp"
 #include "orthomech/analysis/mobility.hpp"
 #include "orthomech/analysis/positions.hpp"
+#include "orthomech/constraints/joints.hpp"
+#include "orthomech/model/free_system.hpp"
+#include "orthomech/model/measures.hpp"
 #include "orthomech/projection/dual.hpp"
 #include "orthomech/projection/primal.hpp"
 #include "support/fixtures.hpp"
@@ -97,18 +101,32 @@ TEST_P(NoAllocation, DrivenKinetostaticsAllocatesNothingAfterSetUp) {
   ASSERT_TRUE(compute_driven(model, joint, 10.0, 1.0, s, ws, dws, p));  // set-up
   std::vector<double> values;
   compute_reactions(model, q, p.lambda, values);
+  double measure_sum = 0.0;
+  std::vector<Measure> accelerations = model.measures;  // every measure at order 2 too
+  for (Measure& m : accelerations) m.derivative = 2;
   const long before = g_allocations.load();
   for (int k = 0; k < 100; ++k) {
     s.q = q;
     s.q(0) += 1e-9 * k;
     (void)compute_driven(model, joint, 10.0, 1.0, s, ws, dws, p);
     compute_reactions(model, q, p.lambda, values);
+    // What the sweep stores per position: reactions and measures from compute_driven's rotation
+    // table (acceleration measures included), and the rate term on its own.
+    compute_reactions(model, s.q, p.lambda, values, dws.rotations.data());
+    for (const Measure& m : model.measures)
+      measure_sum += evaluate_measure(model, m, s.q, &s.u, &p.udot, dws.rotations.data());
+    for (const Measure& m : accelerations)
+      measure_sum += evaluate_measure(model, m, s.q, &s.u, &p.udot);
+    compute_constraint_rate(model, s, ws.constraints, dws.rotations.data());
+    body_rotations(model, s.q, dws.rotations.data());
     // The determinacy test of the sweep: reactions of a null-space column, without a copy.
     for (Eigen::Index j = 0; j < dws.N.cols(); ++j)
       compute_reactions(model, q, dws.N.col(j), values);
   }
   EXPECT_EQ(g_allocations.load() - before, 0)
-      << "heap allocations in compute_driven or compute_reactions";
+      << "heap allocations in compute_driven, compute_reactions, evaluate_measure or "
+         "compute_constraint_rate";
+  EXPECT_TRUE(std::isfinite(measure_sum));
 }
 
 INSTANTIATE_TEST_SUITE_P(Bundled, NoAllocation,

@@ -14,7 +14,10 @@
 // never divided by.
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
+#include <cstddef>
 #include <functional>
+#include <iterator>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -52,6 +55,8 @@ struct ReactionComponent {
   std::string unit;    // "N" or "N*m"
 };
 
+// One position of the sweep, with its own storage: what compute_driven fills (and the sweep's
+// working points). The stored positions of a CycleResult are read as DrivenPointView.
 struct DrivenPoint {
   double input = 0.0, time = 0.0;
   double input_rate = 0.0, input_acceleration = 0.0;  // ṡ, s̈ of the driver's law at `time`
@@ -68,6 +73,79 @@ struct DrivenPoint {
   // Next to a change point (E loses rank): evaluated just past it; its multipliers are not
   // meaningful (they grow without bound as the rank drops) and outputs omit them.
   bool singular = false;
+};
+
+// A stored position of CycleResult::points, read-only: the same fields as DrivenPoint, the vectors
+// as Eigen maps and spans into the result's storage (valid while the CycleResult lives and is not
+// changed).
+struct DrivenPointView {
+  double input = 0.0, time = 0.0;
+  double input_rate = 0.0, input_acceleration = 0.0;
+  Eigen::Map<const VecX> tangent;
+  double drive = 0.0;
+  double chart_quality = 0.0;
+  int chart_sign = 1;
+  long chart_id = 0;
+  double dTF = 0.0;
+  Eigen::Map<const VecX> q, u, udot, lambda;
+  std::span<const double> reactions;
+  std::span<const double> measures;
+  double kinetic = 0.0, potential = 0.0, dissipated = 0.0;
+  bool singular = false;
+};
+
+// The positions of a sweep, stored compactly: the scalars of each position in one array and all
+// its vectors (q, u, u̇, λ, tangent, reactions, measures) side by side in one contiguous block,
+// reserved up front for the expected number of positions, instead of seven small heap blocks per
+// position. Reads like a vector of positions: size(), operator[], front(), back(), range-for, each
+// giving a DrivenPointView.
+class DrivenPoints {
+ public:
+  [[nodiscard]] std::size_t size() const { return scalars_.size(); }
+  [[nodiscard]] bool empty() const { return scalars_.empty(); }
+  [[nodiscard]] DrivenPointView operator[](std::size_t k) const;
+  [[nodiscard]] DrivenPointView front() const { return (*this)[0]; }
+  [[nodiscard]] DrivenPointView back() const { return (*this)[size() - 1]; }
+  // Room for `count` positions (the vectors' block once the first position gives their sizes).
+  void reserve(std::size_t count);
+  // Appends a copy of p. Every position of one sweep has the same vector sizes (else throws
+  // std::logic_error).
+  void push_back(const DrivenPoint& p);
+
+  class const_iterator {
+   public:
+    using iterator_category = std::forward_iterator_tag;
+    using value_type = DrivenPointView;
+    using difference_type = std::ptrdiff_t;
+    using pointer = void;
+    using reference = DrivenPointView;
+    const_iterator() = default;
+    const_iterator(const DrivenPoints* points, std::size_t k) : points_(points), k_(k) {}
+    DrivenPointView operator*() const { return (*points_)[k_]; }
+    const_iterator& operator++() { return ++k_, *this; }
+    const_iterator operator++(int) { return {points_, k_++}; }
+    bool operator==(const const_iterator& o) const { return k_ == o.k_; }
+
+   private:
+    const DrivenPoints* points_ = nullptr;
+    std::size_t k_ = 0;
+  };
+  [[nodiscard]] const_iterator begin() const { return {this, 0}; }
+  [[nodiscard]] const_iterator end() const { return {this, size()}; }
+
+ private:
+  struct Scalars {
+    double input, time, input_rate, input_acceleration, drive, chart_quality, dTF, kinetic,
+        potential, dissipated;
+    long chart_id;
+    int chart_sign;
+    bool singular;
+  };
+  std::vector<Scalars> scalars_;
+  std::vector<double> values_;  // per position: tangent, q, u, udot, lambda, reactions, measures
+  // Sizes of those vectors (fixed by the first position) and their sum, the stride of values_.
+  Eigen::Index n_tangent_ = 0, n_q_ = 0, n_u_ = 0, n_lambda_ = 0;
+  std::size_t n_reactions_ = 0, n_measures_ = 0, stride_ = 0;
 };
 
 struct DeadPoint {
@@ -87,7 +165,7 @@ struct CycleResult {
   std::vector<bool> determinate;       // per component: unique although constraints are redundant?
   std::vector<std::string> row_names;  // constraint rows
   std::vector<bool> row_determinate;   // per constraint row
-  std::vector<DrivenPoint> points;
+  DrivenPoints points;
   std::vector<DeadPoint> dead_points;
   std::vector<DeadPoint> singular_positions;  // change points passed (rank drop of E)
   long chart_switches = 0;
@@ -98,9 +176,10 @@ struct CycleResult {
 // Reaction components of every joint (names, frames, units), in output order.
 [[nodiscard]] std::vector<ReactionComponent> reaction_components(const Model& model);
 // Their values at a position from the multipliers (any vector expression of size n_c, e.g. a
-// column of the null space N, without a copy).
+// column of the null space N, without a copy). `rotations`, if given: R(φ_b) of every body at q
+// (body_rotations, e.g. DrivenWorkspace::rotations after compute_driven).
 void compute_reactions(const Model& model, const VecX& q, const Eigen::Ref<const VecX>& lambda,
-                       std::vector<double>& out);
+                       std::vector<double>& out, const Eigen::Matrix2d* rotations = nullptr);
 
 // Preallocated buffers of the driven computation (sizes fixed by the Model and the rank).
 struct DrivenWorkspace {
@@ -119,12 +198,16 @@ struct DrivenWorkspace {
   Eigen::VectorXi J_piv;  // n: row interchanges of that LU
   VecX g;                 // n: scratch (a row of Eᵀ, for the null space N)
   VecX dq;                // n: right-hand side, then Newton step, of the corrector
+  // R(φ_b) of every body at the q of the last compute_driven (body_rotations); the corrector
+  // fills it with Eᵀ.
+  std::vector<Eigen::Matrix2d> rotations;
   DrivenWorkspace(const Model& model, int rank);
 };
 
 // Velocities, accelerations, drive and multipliers at a position q on f(q) = 0 where the input
 // moves with rate sdot and acceleration sddot (C1)–(C4). Returns false at a dead point (dᵀF = 0).
-// jacobian_current: ws.constraints.Et already holds Eᵀ(q) (the corrector's last evaluation).
+// jacobian_current: ws.constraints.Et already holds Eᵀ(q) and dws.rotations R(φ_b) at q (the
+// corrector's last evaluation).
 // Allocation-free after set-up.
 bool compute_driven(const Model& model, int driver_joint, double sdot, double sddot, State& state,
                     Workspace& ws, DrivenWorkspace& dws, DrivenPoint& out,
@@ -147,7 +230,7 @@ struct ReactionMagnitude {
   bool determinate = true;
 };
 [[nodiscard]] std::vector<ReactionMagnitude> reaction_magnitudes(const CycleResult& result);
-[[nodiscard]] double magnitude_at(const DrivenPoint& p, const ReactionMagnitude& m);
+[[nodiscard]] double magnitude_at(const DrivenPointView& p, const ReactionMagnitude& m);
 
 // Peak |x| (with the input and time where it occurs) and RMS over the positions of the sweep;
 // positions flagged `singular` are left out (their multipliers are not meaningful).

@@ -22,10 +22,15 @@ struct ConstraintWorkspace {
 void compute_constraint_residual(const Model& model, const VecX& q, VecX& f);
 // Eᵀ(q) only.
 void compute_constraint_jacobian(const Model& model, const VecX& q, MatX& Et);
-// f(q) and Eᵀ(q) in one pass (the point kinematics shared).
-void compute_constraint_residual_and_jacobian(const Model& model, const VecX& q, VecX& f, MatX& Et);
-// Dᵀ and Dᵀu only (when Eᵀ at the same q is already there).
-void compute_constraint_rate(const Model& model, const State& state, ConstraintWorkspace& ws);
+// f(q) and Eᵀ(q) in one pass (the point kinematics shared). `rotations`, if given, receives
+// R(φ_b) of every body at q (body_rotations), for the caller's later use at the same q.
+void compute_constraint_residual_and_jacobian(const Model& model, const VecX& q, VecX& f, MatX& Et,
+                                              Eigen::Matrix2d* rotations = nullptr);
+// Dᵀu only (when Eᵀ at the same q is already there), each row's product with u formed directly:
+// ws.Dt is neither formed nor changed. `rotations`, if given: R(φ_b) of every body at state.q
+// (body_rotations). Allocation-free.
+void compute_constraint_rate(const Model& model, const State& state, ConstraintWorkspace& ws,
+                             const Eigen::Matrix2d* rotations = nullptr);
 // f, Eᵀ, Dᵀ and Dᵀu at a state. Allocation-free.
 void compute_constraints(const Model& model, const State& state, ConstraintWorkspace& ws);
 

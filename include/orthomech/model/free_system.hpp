@@ -34,9 +34,14 @@ struct PointKinematics {
 };
 // u may be null: then only r and Rs are filled (velocities zero). `rotations`, if given, holds
 // R(φ_b) of every body b at this q (computed once per evaluation instead of once per point).
-[[nodiscard]] PointKinematics point_kinematics(const Model& model, const PointRef& p, const VecX& q,
-                                               const VecX* u,
-                                               const Eigen::Matrix2d* rotations = nullptr);
+// (Defined below, inline: it is called for every point of every joint row and measure.)
+[[nodiscard]] inline PointKinematics point_kinematics(const Model& model, const PointRef& p,
+                                                      const VecX& q, const VecX* u,
+                                                      const Eigen::Matrix2d* rotations = nullptr);
+// R(φ_b) of every body b at q into rotations[0 … bodies.size()) (the identity for particles): the
+// table the `rotations` arguments of point_kinematics, evaluate_measure, compute_reactions,
+// compute_constraint_rate take.
+void body_rotations(const Model& model, const VecX& q, Eigen::Matrix2d* rotations);
 [[nodiscard]] double body_angle(const Model& model, int body, const VecX& q);
 [[nodiscard]] double body_angular_velocity(const Model& model, int body, const VecX& u);
 [[nodiscard]] inline Vec2 perp(const Vec2& a) { return Vec2(-a.y(), a.x()); }  // rotate by +90°
@@ -45,6 +50,26 @@ struct PointKinematics {
   const double c = std::cos(phi), s = std::sin(phi);
   R << c, -s, s, c;
   return R;
+}
+
+inline PointKinematics point_kinematics(const Model& model, const PointRef& p, const VecX& q,
+                                        const VecX* u, const Eigen::Matrix2d* rotations) {
+  PointKinematics k;
+  if (p.body == kGround) {
+    k.r = p.s;
+    return k;
+  }
+  const Body& b = model.bodies[static_cast<size_t>(p.body)];
+  k.moving = true;
+  const Vec2 c(q(b.q_offset), q(b.q_offset + 1));
+  if (b.kind == BodyKind::rigid) {
+    k.rotates = true;
+    k.Rs = (rotations ? rotations[p.body] : rotation(q(b.q_offset + 2))) * p.s;
+    if (u) k.phidot = (*u)(b.u_offset + 2);
+  }
+  k.r = c + k.Rs;
+  if (u) k.v = Vec2((*u)(b.u_offset), (*u)(b.u_offset + 1)) + k.phidot * perp(k.Rs);
+  return k;
 }
 
 // Adds w₁·(∂r_P/∂u)ᵀ… : writes the 1 × n row c ᵀ ∂r_P/∂u (the Jacobian of cᵀ r_P w.r.t. u) scaled

@@ -19,7 +19,10 @@ ScalarKinematics compute_scalar(const Model& model, const MeasureKind& kind, con
                                 const VecX* u);
 
 // Value of a measure (its derivative order applied). udot may be null for derivative < 2.
+// `rotations`, if given, holds R(φ_b) of every body at q (body_rotations): no sin/cos then.
+// Allocation-free.
 [[nodiscard]] double evaluate_measure(const Model& model, const Measure& m, const VecX& q,
-                                      const VecX* u, const VecX* udot);
+                                      const VecX* u, const VecX* udot,
+                                      const Eigen::Matrix2d* rotations = nullptr);
 
 }  // namespace orthomech

@@ -13,11 +13,14 @@
 #include <Eigen/LU>
 #include <map>
 #include <numbers>
+#include <stdexcept>
+#include <vector>
 
 #include "orthomech/analysis/mobility.hpp"
 #include "orthomech/analysis/positions.hpp"
 #include "orthomech/constraints/joints.hpp"
 #include "orthomech/io/mechanism_file.hpp"
+#include "orthomech/model/free_system.hpp"
 #include "orthomech/model/loads.hpp"
 #include "orthomech/model/measures.hpp"
 #include "orthomech/projection/dual.hpp"
@@ -47,7 +50,7 @@ PointRef point_on(const Model& m, const std::string& body, const std::string& po
 // (k − 2 … k + 2) lies on the uniform time grid and passes `usable` (d/dt by the stencil: error
 // O(h⁴)); to `tolerance` × the peak drive power. Returns how many positions were checked.
 template <class Usable>
-int expect_power_balance(const std::vector<DrivenPoint>& p, double tolerance, Usable usable) {
+int expect_power_balance(const DrivenPoints& p, double tolerance, Usable usable) {
   if (p.size() < 5) return 0;
   const double h = p[1].time - p[0].time;
   double peak = 0.0;
@@ -69,7 +72,7 @@ int expect_power_balance(const std::vector<DrivenPoint>& p, double tolerance, Us
   }
   return checked;
 }
-const auto kAll = [](const DrivenPoint&) { return true; };
+const auto kAll = [](const DrivenPointView&) { return true; };
 
 // Power balance: τ ṡ = d/dt (T + V) + P_dissipated, with d/dt by a five-point stencil in time
 // (error O(h⁴): h = 2π/3600/ω → ~1e-12 relative).
@@ -296,7 +299,7 @@ TEST(Cycle, NFourBarPassesItsChangePoints) {
     for (const auto& sp : r.singular_positions)
       EXPECT_NEAR(std::remainder(sp.input, std::numbers::pi), 0.0, 2e-4) << steps;
     const int checked = expect_power_balance(
-        r.points, 1e-6, [](const DrivenPoint& x) { return x.chart_quality >= 0.05; });
+        r.points, 1e-6, [](const DrivenPointView& x) { return x.chart_quality >= 0.05; });
     EXPECT_GT(checked, steps / 2);
   }
 }
@@ -378,7 +381,7 @@ TEST(Cycle, ReverseAtDeadPointSweepsTheClosedCurve) {
   // Power balance at points whose stencil does not straddle or approach a fold (next to a fold
   // u = F ṡ/(dᵀF) grows without bound and the stencil's h⁴ error with it).
   EXPECT_GT(expect_power_balance(r.points, 1e-6,
-                                 [](const DrivenPoint& x) { return std::abs(x.dTF) >= 0.2; }),
+                                 [](const DrivenPointView& x) { return std::abs(x.dTF) >= 0.2; }),
             500);
 }
 
@@ -416,6 +419,79 @@ TEST(Cycle, IndependentOfBodyAndJointOrder) {
       }
     }
   }
+}
+
+// The compact storage of the positions reads back what the sweep computed: every field of a
+// stored position against a fresh compute_driven at its q (same law values) with the reactions,
+// measures and energies evaluated the plain way (sin/cos per call, no rotation table).
+TEST(Cycle, StoredPositionsEqualAFreshEvaluationAtTheirPosition) {
+  const Model model = test::load_bundled("crank-rocker");
+  CycleOptions o;
+  o.driver = model.drivers.at(0);
+  o.steps = 36;
+  const CycleResult r = run_cycle(model, o);
+  ASSERT_EQ(r.status, CycleStatus::completed) << r.message;
+  ASSERT_EQ(r.points.size(), 36u);
+  size_t visited = 0;
+  for (const DrivenPointView& v : r.points) {  // range-for gives the positions in order
+    const DrivenPointView at = r.points[visited++];
+    EXPECT_EQ(v.time, at.time);
+    EXPECT_EQ(v.q.data(), at.q.data());
+  }
+  EXPECT_EQ(visited, r.points.size());
+  for (const size_t k : {size_t{0}, size_t{1}, size_t{17}, size_t{35}}) {
+    const DrivenPointView v = r.points[k];
+    State s(model);
+    s.q = v.q;
+    s.t = v.time;
+    Workspace ws(model, r.rank);
+    DrivenWorkspace w(model, r.rank);
+    DrivenPoint p;
+    ASSERT_TRUE(
+        compute_driven(model, o.driver.joint, v.input_rate, v.input_acceleration, s, ws, w, p));
+    const double tol = 1e-12;
+    auto near = [&](const auto& a, const auto& b, const char* what) {
+      ASSERT_EQ(a.size(), b.size()) << what;
+      for (Eigen::Index i = 0; i < static_cast<Eigen::Index>(a.size()); ++i)
+        EXPECT_NEAR(a[static_cast<size_t>(i)], b[static_cast<size_t>(i)],
+                    tol * (1.0 + std::abs(b[static_cast<size_t>(i)])))
+            << what << "[" << i << "] at position " << k;
+    };
+    const VecX q = v.q, u = v.u, udot = v.udot, lambda = v.lambda, tangent = v.tangent;
+    near(q, p.q, "q");
+    near(u, p.u, "u");
+    near(udot, p.udot, "udot");
+    near(lambda, p.lambda, "lambda");
+    near(tangent, p.tangent, "tangent");
+    EXPECT_NEAR(v.drive, p.drive, tol * (1.0 + std::abs(p.drive)));
+    EXPECT_NEAR(std::abs(v.dTF), std::abs(p.dTF), tol);  // its sign is the chart's (F's)
+    EXPECT_NEAR(v.input, compute_scalar(model, JointCoordinate{o.driver.joint}, s.q, nullptr).value,
+                tol);
+    EXPECT_FALSE(v.singular);
+    std::vector<double> reactions;
+    compute_reactions(model, s.q, p.lambda, reactions);
+    const std::vector<double> stored_reactions(v.reactions.begin(), v.reactions.end());
+    near(stored_reactions, reactions, "reactions");
+    std::vector<double> measures;
+    for (const Measure& m : model.measures)
+      measures.push_back(evaluate_measure(model, m, s.q, &s.u, &p.udot));
+    const std::vector<double> stored_measures(v.measures.begin(), v.measures.end());
+    near(stored_measures, measures, "measures");
+    EXPECT_NEAR(v.kinetic, kinetic_energy(model, s), tol);
+    EXPECT_NEAR(v.potential, potential_energy(model, s.q), tol);
+  }
+  // One sweep, one set of vector sizes.
+  DrivenPoints points;
+  DrivenPoint a;
+  a.q = VecX::Ones(3), a.u = VecX::Ones(3), a.udot = VecX::Ones(3), a.tangent = VecX::Ones(3);
+  a.lambda = VecX::Ones(2), a.reactions = {1.0, 2.0}, a.measures = {3.0};
+  points.push_back(a);
+  DrivenPoint b = a;
+  b.measures.push_back(4.0);
+  EXPECT_THROW(points.push_back(b), std::logic_error);
+  EXPECT_EQ(points.size(), 1u);
+  EXPECT_EQ(points.back().measures.size(), 1u);
+  EXPECT_EQ(points.back().reactions[1], 2.0);
 }
 
 // Peaks and RMS against a direct computation from the positions; singular positions left out;

@@ -4,7 +4,11 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
+#include <vector>
+
 #include "orthomech/io/mechanism_file.hpp"
+#include "orthomech/model/free_system.hpp"
 #include "support/zoo.hpp"
 
 namespace orthomech {
@@ -69,6 +73,47 @@ TEST(Joints, Eq76_DtEqualsTimeDerivativeOfEt) {
       EXPECT_NEAR(ws.Dtu(r), second(r), 1e-5 * (1.0 + s.u.squaredNorm()))
           << model.constraint_row_name(r);
   }
+}
+
+// compute_constraint_rate forms Dᵀu row by row without Dᵀ: the same values as Dᵀ·u from
+// compute_constraints (whose Dᵀ the test above checks against differences), with or without a
+// caller's rotation table, and Dᵀ is left as it was.
+TEST(Joints, Eq76_ConstraintRateGivesDtuWithoutFormingDt) {
+  const Model model = parse_mechanism(test::kZooYaml, "zoo");
+  for (unsigned salt = 0; salt < 3; ++salt) {
+    const State s = zoo_state(model, salt);
+    ConstraintWorkspace full(model);
+    compute_constraints(model, s, full);
+    const VecX oracle = full.Dt * s.u;
+    std::vector<Eigen::Matrix2d> rotations(model.bodies.size());
+    body_rotations(model, s.q, rotations.data());
+    for (const bool with_table : {false, true}) {
+      ConstraintWorkspace ws(model);
+      ws.Dt.setConstant(std::numeric_limits<double>::quiet_NaN());
+      compute_constraint_rate(model, s, ws, with_table ? rotations.data() : nullptr);
+      for (int r = 0; r < model.nc; ++r)
+        EXPECT_NEAR(ws.Dtu(r), oracle(r), 1e-12 * (1.0 + s.u.squaredNorm()))
+            << model.constraint_row_name(r) << (with_table ? " (rotation table)" : "");
+      EXPECT_TRUE(ws.Dt.array().isNaN().all()) << "Dᵀ must not be formed";
+    }
+  }
+}
+
+// f and Eᵀ in one pass, handing out the rotation table: the same f and Eᵀ as the separate calls
+// (Eᵀ checked above against differences) and the table of body_rotations.
+TEST(Joints, ResidualAndJacobianHandOutTheRotationTable) {
+  const Model model = parse_mechanism(test::kZooYaml, "zoo");
+  const State s = zoo_state(model, 1);
+  VecX f(model.nc), f_ref(model.nc);
+  MatX Et(model.nc, model.n), Et_ref(model.nc, model.n);
+  std::vector<Eigen::Matrix2d> rotations(model.bodies.size()), expected(model.bodies.size());
+  compute_constraint_residual_and_jacobian(model, s.q, f, Et, rotations.data());
+  compute_constraint_residual(model, s.q, f_ref);
+  compute_constraint_jacobian(model, s.q, Et_ref);
+  body_rotations(model, s.q, expected.data());
+  EXPECT_EQ((f - f_ref).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ((Et - Et_ref).cwiseAbs().maxCoeff(), 0.0);
+  for (size_t b = 0; b < rotations.size(); ++b) EXPECT_EQ(rotations[b], expected[b]) << b;
 }
 
 TEST(Joints, Eq20_ResidualOfEachTypeMatchesItsGeometry) {

@@ -5,6 +5,8 @@
 //  - measures: d = ∂s/∂q, ṡ = d u, and ḋu = d²s/dt² along q + t u.
 #include <gtest/gtest.h>
 
+#include <vector>
+
 #include "orthomech/io/mechanism_file.hpp"
 #include "orthomech/model/free_system.hpp"
 #include "orthomech/model/loads.hpp"
@@ -156,6 +158,37 @@ TEST(Measures, JacobianRateAndConvectiveTermAgainstDifferences) {
     const double second =
         (value(s.q + h * s.u) - 2.0 * value(s.q) + value(s.q - h * s.u)) / (h * h);
     EXPECT_NEAR(k.ddot_u, second, 1e-5 * (1.0 + s.u.squaredNorm())) << m.name;
+  }
+}
+
+// evaluate_measure at every derivative order against compute_scalar (checked above against
+// differences): s, ṡ = d u and s̈ = d u̇ + ḋu, with and without a rotation table (body_rotations
+// against rotation(φ) of each body's angle).
+TEST(Measures, EvaluateMeasureAtEveryOrderWithAndWithoutRotationTable) {
+  const Model model = parse_mechanism(test::kZooYaml, "zoo");
+  const State s = zoo_state(model);
+  VecX udot(model.n);
+  for (int k = 0; k < model.n; ++k) udot(k) = 0.7 * std::sin(1.1 * k + 0.2);
+  std::vector<Eigen::Matrix2d> rotations(model.bodies.size());
+  body_rotations(model, s.q, rotations.data());
+  for (size_t b = 0; b < model.bodies.size(); ++b)
+    EXPECT_LT((rotations[b] - rotation(body_angle(model, static_cast<int>(b), s.q)))
+                  .cwiseAbs()
+                  .maxCoeff(),
+              1e-15);
+  for (Measure m : model.measures) {
+    VecX d(model.n);
+    const ScalarKinematics k = compute_scalar(model, m.kind, s.q, &s.u, d);
+    const double expected[3] = {k.value, d.dot(s.u), d.dot(udot) + k.ddot_u};
+    for (int order = 0; order < 3; ++order) {
+      m.derivative = order;
+      const double tol = 1e-13 * (1.0 + std::abs(expected[order]));
+      EXPECT_NEAR(evaluate_measure(model, m, s.q, &s.u, &udot), expected[order], tol)
+          << m.name << " derivative " << order;
+      EXPECT_NEAR(evaluate_measure(model, m, s.q, &s.u, &udot, rotations.data()), expected[order],
+                  tol)
+          << m.name << " derivative " << order << " (rotation table)";
+    }
   }
 }
 
