@@ -85,6 +85,9 @@ TEST(GeneralSystem, AndrewsRelative_JacobianRateAgainstCentralDifferences) {
   const MatX fd = (Ep - Em) / (2 * h);
   EXPECT_LT((fd - c.Dt).cwiseAbs().maxCoeff(), 1e-6 * c.Dt.cwiseAbs().maxCoeff());
   EXPECT_LT((fd * s.u - c.Dtu).cwiseAbs().maxCoeff(), 1e-6 * c.Dtu.cwiseAbs().maxCoeff());
+  ConstraintWorkspace rate_only(m);  // the row-by-row entry point gives the same Dᵀu
+  compute_constraint_rate(m, s, rate_only);
+  EXPECT_LT((rate_only.Dtu - c.Dtu).cwiseAbs().maxCoeff(), 1e-14 * c.Dtu.cwiseAbs().maxCoeff());
   EXPECT_LT((c.Et * s.u).cwiseAbs().maxCoeff(),
             1e-9 * c.Et.cwiseAbs().maxCoeff() * s.u.cwiseAbs().maxCoeff());  // admissible
 }
