@@ -49,9 +49,6 @@ class ChartSolver {
   [[nodiscard]] int na() const { return n_ - r_; }
 
  private:
-  bool dense_lu();
-  void dense_solve(const VecX& b, VecX& x) const;
-  void dense_solve_transposed(const VecX& c, VecX& x) const;
   const Model& model_;
   int n_, nc_, r_;
   bool sparse_;
@@ -59,8 +56,8 @@ class ChartSolver {
   ChartSelector selector_;
   ChartOptions options_;
   std::vector<int> dep_pos_;  // n: position of a component in chart.dependent, or −1
-  MatX ED_;                   // r × r (dense path): E_RDᵀ
-  std::vector<int> perm_;     // r: row interchanges of the dense LU (in place in ED_)
+  MatX ED_;                   // r × r (dense path): E_RDᵀ, then its LU factors (small_lu.hpp)
+  Eigen::VectorXi piv_;       // r: row interchanges of the dense LU
   Eigen::SparseMatrix<double> EDs_;
   Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>> slu_;
   std::vector<Eigen::Triplet<double>> triplets_;
