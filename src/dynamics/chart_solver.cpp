@@ -135,28 +135,30 @@ void ChartSolver::solve_transposed(const MatX& Et, const VecX& c, VecX& lambda) 
 }
 
 SolveResult ChartSolver::correct_positions(VecX& q, MatX& Et, VecX& f, VecX& dq, double tolerance,
-                                           double max_gain, bool* near_singular) {
+                                           double max_gain, bool* near_singular, bool prepared) {
   SolveResult result;
   if (near_singular) *near_singular = false;
   constexpr int kMaxIterations = 8;
   for (int it = 0;; ++it) {
-    compute_constraint_residual(model_, q, f);
+    // f and Eᵀ together (their point kinematics shared): Eᵀ is needed either for the Newton step
+    // or, once converged, by the caller at the corrected q.
+    const bool reuse = prepared && it == 0;  // f, Eᵀ and the factors at q are the caller's
+    if (!reuse) compute_constraint_residual_and_jacobian(model_, q, f, Et);
     result.residual = f.size() ? f.cwiseAbs().maxCoeff() : 0.0;
     result.iterations = it;
-    if (result.residual <= tolerance) {
-      result.status = SolveStatus::converged;
-      return result;
-    }
-    if (it >= kMaxIterations || !std::isfinite(result.residual)) {
+    if (!std::isfinite(result.residual) || (it >= kMaxIterations && result.residual > tolerance)) {
       result.status = SolveStatus::not_converged;
       result.message = "the position corrector did not converge (residual " +
                        std::to_string(result.residual) + ")";
       return result;
     }
-    compute_constraint_jacobian(model_, q, Et);
-    if (!factor(Et)) {
+    if (!reuse && !factor(Et)) {
       result.status = SolveStatus::singular;
       result.message = "the chart's dependent block is singular";
+      return result;
+    }
+    if (result.residual <= tolerance) {
+      result.status = SolveStatus::converged;
       return result;
     }
     solve(f, dq);  // E_RDᵀ Δq_D = f_R

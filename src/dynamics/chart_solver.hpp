@@ -41,8 +41,13 @@ class ChartSolver {
   // a first Newton step larger than max_gain · |f| (the dependent block is nearly singular: a
   // change point is close, and Newton could jump to another branch) is not taken: q is left
   // as it was, *near_singular is set and the result says converged.
+  // On a converged return Et = Eᵀ(q) at the returned q and the dependent block is factorised
+  // there (F is one compute away: no second evaluation at the same q). With prepared = true
+  // the caller has already computed f = f(q), Et = Eᵀ(q) and factorised it at the given q:
+  // the first iteration uses them.
   SolveResult correct_positions(VecX& q, MatX& Et, VecX& f, VecX& dq, double tolerance,
-                                double max_gain = 0.0, bool* near_singular = nullptr);
+                                double max_gain = 0.0, bool* near_singular = nullptr,
+                                bool prepared = false);
   [[nodiscard]] const Chart& chart() const { return chart_; }
   void set_chart(const Chart& c);
   [[nodiscard]] int rank() const { return r_; }
