@@ -7,6 +7,7 @@
 
 #include "orthomech/constraints/joints.hpp"
 #include "orthomech/model/free_system.hpp"
+#include "orthomech/numerics/small_lu.hpp"
 
 namespace orthomech::detail {
 
@@ -25,7 +26,7 @@ ChartSolver::ChartSolver(const Model& model, int rank)
       selector_(model.nc, model.n),
       dep_pos_(static_cast<size_t>(model.n), -1),
       ED_(rank, rank),
-      perm_(static_cast<size_t>(rank), 0),
+      piv_(Eigen::VectorXi::Zero(rank)),
       EDs_(rank, rank),
       br_(rank),
       xd_(rank) {
@@ -62,56 +63,6 @@ void ChartSolver::select_from_tangent(const MatX& F, const VecX& M_sqrt) {
   set_chart(c);
 }
 
-// Dense LU with partial pivoting, in place (unblocked: the blocks of linkages are small, and
-// Eigen's blocked path costs more than the factorisation itself at r ≈ 20; measured with
-// bench/simulate_bench.cpp). P ED = L U, L unit lower.
-bool ChartSolver::dense_lu() {
-  const int r = r_;
-  double umax = 0.0, umin = std::numeric_limits<double>::infinity();
-  for (int k = 0; k < r; ++k) {
-    int p = k;
-    double best = std::abs(ED_(k, k));
-    for (int i = k + 1; i < r; ++i)
-      if (std::abs(ED_(i, k)) > best) best = std::abs(ED_(i, k)), p = i;
-    perm_[static_cast<size_t>(k)] = p;
-    if (p != k) ED_.row(k).swap(ED_.row(p));
-    umax = std::max(umax, best);
-    umin = std::min(umin, best);
-    if (best == 0.0) return false;
-    const double inv = 1.0 / ED_(k, k);
-    for (int i = k + 1; i < r; ++i) ED_(i, k) *= inv;
-    for (int j = k + 1; j < r; ++j) {
-      const double ukj = ED_(k, j);
-      if (ukj != 0.0)
-        for (int i = k + 1; i < r; ++i) ED_(i, j) -= ED_(i, k) * ukj;
-    }
-  }
-  return umin > 1e-14 * umax;
-}
-
-void ChartSolver::dense_solve(const VecX& b, VecX& x) const {
-  x = b;
-  for (int k = 0; k < r_; ++k) std::swap(x(k), x(perm_[static_cast<size_t>(k)]));
-  for (int j = 0; j < r_; ++j)  // L y = P b
-    for (int i = j + 1; i < r_; ++i) x(i) -= ED_(i, j) * x(j);
-  for (int j = r_ - 1; j >= 0; --j) {  // U x = y
-    x(j) /= ED_(j, j);
-    for (int i = 0; i < j; ++i) x(i) -= ED_(i, j) * x(j);
-  }
-}
-
-void ChartSolver::dense_solve_transposed(const VecX& c, VecX& x) const {
-  // (P ED)ᵀ = Uᵀ Lᵀ: Uᵀ z = c, Lᵀ w = z, x = Pᵀ w.
-  x = c;
-  for (int i = 0; i < r_; ++i) {
-    for (int k = 0; k < i; ++k) x(i) -= ED_(k, i) * x(k);
-    x(i) /= ED_(i, i);
-  }
-  for (int i = r_ - 1; i >= 0; --i)
-    for (int k = i + 1; k < r_; ++k) x(i) -= ED_(k, i) * x(k);
-  for (int k = r_ - 1; k >= 0; --k) std::swap(x(k), x(perm_[static_cast<size_t>(k)]));
-}
-
 bool ChartSolver::factor(const MatX& Et) {
   if (r_ == 0) return true;
   if (!sparse_) {
@@ -119,7 +70,9 @@ bool ChartSolver::factor(const MatX& Et) {
       const int row = chart_.rows[static_cast<size_t>(i)];
       for (int k = 0; k < r_; ++k) ED_(i, k) = Et(row, chart_.dependent[static_cast<size_t>(k)]);
     }
-    return dense_lu();
+    // Unblocked in-place LU (numerics/small_lu.hpp; Eigen's blocked path costs more than the
+    // factorisation itself at r ≈ 20, measured with bench/simulate_bench.cpp).
+    return lu_factor(ED_, piv_) > 1e-14;
   }
   triplets_.clear();
   for (int i = 0; i < r_; ++i) {
@@ -154,11 +107,13 @@ void ChartSolver::solve(const VecX& b, VecX& x) {
   x.setZero();
   if (r_ == 0) return;
   for (int i = 0; i < r_; ++i) br_(i) = b(chart_.rows[static_cast<size_t>(i)]);
-  if (!sparse_)
-    dense_solve(br_, xd_);
-  else
+  if (sparse_) {
     xd_ = slu_.solve(br_);
-  for (int k = 0; k < r_; ++k) x(chart_.dependent[static_cast<size_t>(k)]) = xd_(k);
+    br_ = xd_;
+  } else {
+    lu_solve(ED_, piv_, br_);  // in place
+  }
+  for (int k = 0; k < r_; ++k) x(chart_.dependent[static_cast<size_t>(k)]) = br_(k);
 }
 
 void ChartSolver::solve_transposed(const MatX& Et, const VecX& c, VecX& lambda) {
@@ -168,7 +123,8 @@ void ChartSolver::solve_transposed(const MatX& Et, const VecX& c, VecX& lambda) 
   for (int k = 0; k < r_; ++k) cd(k) = c(chart_.dependent[static_cast<size_t>(k)]);
   VecX lr(r_);
   if (!sparse_) {
-    dense_solve_transposed(cd, lr);
+    lr = cd;
+    lu_solve_transposed(ED_, piv_, lr);
   } else {
     const Eigen::SparseMatrix<double> EDt = EDs_.transpose();
     Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>> lu(EDt);
@@ -179,28 +135,30 @@ void ChartSolver::solve_transposed(const MatX& Et, const VecX& c, VecX& lambda) 
 }
 
 SolveResult ChartSolver::correct_positions(VecX& q, MatX& Et, VecX& f, VecX& dq, double tolerance,
-                                           double max_gain, bool* near_singular) {
+                                           double max_gain, bool* near_singular, bool prepared) {
   SolveResult result;
   if (near_singular) *near_singular = false;
   constexpr int kMaxIterations = 8;
   for (int it = 0;; ++it) {
-    compute_constraint_residual(model_, q, f);
+    // f and Eᵀ together (their point kinematics shared): Eᵀ is needed either for the Newton step
+    // or, once converged, by the caller at the corrected q.
+    const bool reuse = prepared && it == 0;  // f, Eᵀ and the factors at q are the caller's
+    if (!reuse) compute_constraint_residual_and_jacobian(model_, q, f, Et);
     result.residual = f.size() ? f.cwiseAbs().maxCoeff() : 0.0;
     result.iterations = it;
-    if (result.residual <= tolerance) {
-      result.status = SolveStatus::converged;
-      return result;
-    }
-    if (it >= kMaxIterations || !std::isfinite(result.residual)) {
+    if (!std::isfinite(result.residual) || (it >= kMaxIterations && result.residual > tolerance)) {
       result.status = SolveStatus::not_converged;
       result.message = "the position corrector did not converge (residual " +
                        std::to_string(result.residual) + ")";
       return result;
     }
-    compute_constraint_jacobian(model_, q, Et);
-    if (!factor(Et)) {
+    if (!reuse && !factor(Et)) {
       result.status = SolveStatus::singular;
       result.message = "the chart's dependent block is singular";
+      return result;
+    }
+    if (result.residual <= tolerance) {
+      result.status = SolveStatus::converged;
       return result;
     }
     solve(f, dq);  // E_RDᵀ Δq_D = f_R

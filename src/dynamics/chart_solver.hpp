@@ -41,17 +41,19 @@ class ChartSolver {
   // a first Newton step larger than max_gain · |f| (the dependent block is nearly singular: a
   // change point is close, and Newton could jump to another branch) is not taken: q is left
   // as it was, *near_singular is set and the result says converged.
+  // On a converged return Et = Eᵀ(q) at the returned q and the dependent block is factorised
+  // there (F is one compute away: no second evaluation at the same q). With prepared = true
+  // the caller has already computed f = f(q), Et = Eᵀ(q) and factorised it at the given q:
+  // the first iteration uses them.
   SolveResult correct_positions(VecX& q, MatX& Et, VecX& f, VecX& dq, double tolerance,
-                                double max_gain = 0.0, bool* near_singular = nullptr);
+                                double max_gain = 0.0, bool* near_singular = nullptr,
+                                bool prepared = false);
   [[nodiscard]] const Chart& chart() const { return chart_; }
   void set_chart(const Chart& c);
   [[nodiscard]] int rank() const { return r_; }
   [[nodiscard]] int na() const { return n_ - r_; }
 
  private:
-  bool dense_lu();
-  void dense_solve(const VecX& b, VecX& x) const;
-  void dense_solve_transposed(const VecX& c, VecX& x) const;
   const Model& model_;
   int n_, nc_, r_;
   bool sparse_;
@@ -59,8 +61,8 @@ class ChartSolver {
   ChartSelector selector_;
   ChartOptions options_;
   std::vector<int> dep_pos_;  // n: position of a component in chart.dependent, or −1
-  MatX ED_;                   // r × r (dense path): E_RDᵀ
-  std::vector<int> perm_;     // r: row interchanges of the dense LU (in place in ED_)
+  MatX ED_;                   // r × r (dense path): E_RDᵀ, then its LU factors (small_lu.hpp)
+  Eigen::VectorXi piv_;       // r: row interchanges of the dense LU
   Eigen::SparseMatrix<double> EDs_;
   Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>> slu_;
   std::vector<Eigen::Triplet<double>> triplets_;

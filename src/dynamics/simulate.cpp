@@ -110,7 +110,8 @@ class Dynamics {
         AEt_(model.n, model.nc),
         G_(model.nc, model.nc),
         G_llt_(model.nc),
-        dq_(VecX::Zero(model.n)) {
+        dq_(VecX::Zero(model.n)),
+        chart_q_(VecX::Zero(model.nq)) {
     for (const Load& l : model.loads)
       if (std::holds_alternative<PointForce>(l.kind) || std::holds_alternative<Torque>(l.kind))
         nonconservative_.push_back(&l);
@@ -194,21 +195,31 @@ class Dynamics {
     //    coordinates, smooth even next to a change point, where F off the manifold is very
     //    sensitive to the stage's constraint error (IFToMM A02).
     if (options_.project_stages) {
+      // Leaves Eᵀ at the projected q factorised in the chart.
       const SolveResult pr = cs_.correct_positions(state_.q, ws_.constraints.Et, ws_.constraints.f,
                                                    dq_, options_.position_tolerance);
-      if (pr.status == SolveStatus::singular)
+      if (pr.status != SolveStatus::converged) {  // factorise at the q it stopped at
+        compute_constraint_jacobian(model_, state_.q, ws_.constraints.Et);
+        if (pr.status == SolveStatus::singular || !cs_.factor(ws_.constraints.Et))
+          throw SingularEvaluation{"the chart's dependent block is singular at t = " +
+                                   std::to_string(t) + " (a change point: E loses rank)"};
+      }
+      compute_F();
+      chart_ready_ = false;
+    } else if (!(chart_ready_ && state_.q == chart_q_)) {
+      // 1. Eᵀ(q), the chart's dependent block, F, unless they are already those at q (the
+      //    stepper restarts at the accepted state, where the acceptance has just computed them).
+      compute_constraint_jacobian(model_, state_.q, ws_.constraints.Et);
+      if (!cs_.factor(ws_.constraints.Et))
         throw SingularEvaluation{"the chart's dependent block is singular at t = " +
                                  std::to_string(t) + " (a change point: E loses rank)"};
+      compute_F();
+      chart_q_ = state_.q;
+      chart_ready_ = true;
     }
-    // 1. Eᵀ(q), the chart's dependent block, F.
-    compute_constraint_jacobian(model_, state_.q, ws_.constraints.Et);
-    if (!cs_.factor(ws_.constraints.Et))
-      throw SingularEvaluation{"the chart's dependent block is singular at t = " +
-                               std::to_string(t) + " (a change point: E loses rank)"};
-    compute_F();
     // 2. u = F v; then Dᵀ u and Ḟ v (design §4: Eᵀ Ḟ v = −Dᵀ u, independent rows of Ḟ zero).
     state_.u.noalias() = F_ * v;
-    compute_constraints(model_, state_, ws_.constraints);
+    compute_constraint_rate(model_, state_, ws_.constraints);  // Dᵀ u (Eᵀ is there)
     b_ = -ws_.constraints.Dtu;
     cs_.solve(b_, Fdv_);
     // 3. Free system, H (eq. (68)) and v̇.
@@ -333,6 +344,11 @@ class Dynamics {
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> Gs_ldlt_;
   bool sparse_G_ = false;
   VecX dq_;
+  // Eᵀ (ws_.constraints.Et), the chart's factors and F_ are those at chart_q_ in the current
+  // chart: an evaluation at chart_q_ need not compute them again. Whoever changes one of them
+  // (the step's acceptance, the stage projection) clears it or sets it anew.
+  bool chart_ready_ = false;
+  VecX chart_q_;
   std::vector<const Load*> nonconservative_;
 };
 
@@ -473,10 +489,12 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
   std::string stop_message;
   problem.accept = [&](double t, VecX& y) {
     auto qy = y.head(nq);
-    // Residual left by the step (before correction).
+    MatX& Et = dyn.ws_.constraints.Et;
+    dyn.chart_ready_ = false;  // Eᵀ, the chart's factors and F change below
+    // Residual left by the step (before correction), with Eᵀ at the same q.
     q = qy;
     dyn.mass_at(q);
-    compute_constraint_residual(model, q, f);
+    compute_constraint_residual_and_jacobian(model, q, f, Et);
     if (f.size())
       result.max_constraint_residual =
           std::max(result.max_constraint_residual, f.cwiseAbs().maxCoeff());
@@ -484,45 +502,39 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
       // Invariant J = Eᵀ A p, eq. (105), before the projection.
       dyn.state_.q = q;
       dyn.state_.u.noalias() = dyn.ws_.free.A * y.segment(nq, n);
-      compute_constraint_jacobian(model, q, dyn.ws_.constraints.Et);
       if (model.nc) {
-        const double J = (dyn.ws_.constraints.Et * dyn.state_.u).cwiseAbs().maxCoeff();
+        const double J = (Et * dyn.state_.u).cwiseAbs().maxCoeff();
         result.max_invariant_J = std::max(result.max_invariant_J, J);
         result.max_velocity_residual = std::max(result.max_velocity_residual, J);
       }
     }
-    // Dual: the step's velocity u = F(q) v before the correction (re-projected below).
+    // The chart's block at the step's q: the corrector's first Newton step uses it, and (dual)
+    // the step's velocity u = F(q) v before the correction (re-projected below).
+    const bool factored = dyn.cs_.factor(Et);
     if (!primal) {
-      compute_constraint_jacobian(model, q, dyn.ws_.constraints.Et);
-      if (dyn.cs_.factor(dyn.ws_.constraints.Et)) {
+      if (factored) {
         dyn.compute_F();
         u_step.noalias() = dyn.F_ * y.segment(nq, na);
       } else {
         u_step.setZero();  // exactly singular: keep v as it is (below)
       }
     }
-    // Position correction in the chart (Newton; independent coordinates fixed).
+    // Position correction in the chart (Newton; independent coordinates fixed). It leaves Eᵀ
+    // at the corrected q factorised in the chart.
     bool near_singular = false;
-    SolveResult corr =
-        dyn.cs_.correct_positions(q, dyn.ws_.constraints.Et, f, dq, options.position_tolerance,
-                                  kMaxCorrectionGain, &near_singular);
+    SolveResult corr = dyn.cs_.correct_positions(q, Et, f, dq, options.position_tolerance,
+                                                 kMaxCorrectionGain, &near_singular, factored);
     if (near_singular) ++result.uncorrected_steps;
     if (corr.status == SolveStatus::singular) {  // try a fresh chart once
-      compute_constraint_jacobian(model, q, dyn.ws_.constraints.Et);
-      if (dyn.cs_.select(dyn.ws_.constraints.Et, dyn.ws_.free.A_diag))
-        corr =
-            dyn.cs_.correct_positions(q, dyn.ws_.constraints.Et, f, dq, options.position_tolerance);
+      compute_constraint_jacobian(model, q, Et);
+      if (dyn.cs_.select(Et, dyn.ws_.free.A_diag))
+        corr = dyn.cs_.correct_positions(q, Et, f, dq, options.position_tolerance);
     }
     if (corr.status != SolveStatus::converged) {
       stop_message = "position correction failed at t = " + std::to_string(t) + ": " + corr.message;
       return false;
     }
     qy = q;
-    compute_constraint_jacobian(model, q, dyn.ws_.constraints.Et);
-    if (!dyn.cs_.factor(dyn.ws_.constraints.Et)) {
-      stop_message = "singular chart at t = " + std::to_string(t);
-      return false;
-    }
     dyn.compute_F();
     dyn.mass_at(q);
     dyn.state_.q = q;
@@ -580,6 +592,8 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
         spread_limit = std::max(kSpreadLimit, 2.0 * spread);
       }
       dyn.state_.u.noalias() = dyn.F_ * y.segment(nq, na);
+      dyn.chart_q_ = q;  // Eᵀ, the factors and F are those at the corrected q
+      dyn.chart_ready_ = true;
     }
     // Energy balance T + V − W at the corrected state.
     const double T = kinetic_energy(model, dyn.state_);
