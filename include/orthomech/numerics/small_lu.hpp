@@ -61,6 +61,7 @@ void lu_solve(const Matrix& LU, const Eigen::VectorXi& piv, Vector&& b) {
     if (piv(k) != k) std::swap(x[k], x[piv(k)]);
   for (Eigen::Index k = 0; k < n; ++k) {  // L y = P b, column by column
     const double xk = x[k];
+    if (xk == 0.0) continue;  // right-hand sides are often columns of Eᵀ: mostly zeros
     const double* col = a + k * ld;
     for (Eigen::Index i = k + 1; i < n; ++i) x[i] -= col[i] * xk;
   }

@@ -31,7 +31,24 @@ TEST(SimulateCli, AndrewsJsonHasTheDocumentedKeys) {
   EXPECT_TRUE(j["energy"].contains("final"));
   EXPECT_LT(j["energy"]["max_drift"].get<double>(), 1e-8);
   EXPECT_LT(j["max_constraint_residual"].get<double>(), 1e-9);
-  EXPECT_EQ(j["samples"].size(), 101u);  // t = 0, 0.0003, …, 0.03
+  // Time histories as columns: t = 0, 0.0003, …, 0.03, and every measure, reaction component
+  // and energy over the same times; the last entry is the final state.
+  const auto& s = j["samples"];
+  ASSERT_EQ(s["t"].size(), 101u);
+  EXPECT_NEAR(s["t"][100].get<double>(), 0.03, 1e-15);
+  EXPECT_NEAR(s["t"][1].get<double>(), 0.0003, 1e-15);
+  for (const char* key : {"kinetic", "potential", "work", "residual"})
+    EXPECT_EQ(s[key].size(), 101u);
+  ASSERT_EQ(s["measures"].size(), j["final"]["measures"].size());
+  for (const auto& [name, column] : s["measures"].items()) {
+    ASSERT_EQ(column.size(), 101u) << name;
+    EXPECT_NEAR(column[100].get<double>(), j["final"]["measures"][name].get<double>(),
+                1e-9 * (1.0 + std::abs(j["final"]["measures"][name].get<double>())))
+        << name;
+  }
+  ASSERT_EQ(s["reactions"].size(), j["final"]["reactions"].size());
+  for (const auto& [name, column] : s["reactions"].items()) EXPECT_EQ(column.size(), 101u) << name;
+  EXPECT_NEAR(s["measures"]["beta"][0].get<double>(), test::andrews::kAnglesT0[0], 1e-9);
 }
 
 TEST(SimulateCli, PrimalFormAndCsv) {
