@@ -6,6 +6,7 @@
 #include <boost/numeric/odeint/external/eigen/eigen.hpp>  // mandatory for Eigen states
 #include <cmath>
 #include <exception>
+#include <limits>
 
 namespace orthomech::detail {
 
@@ -32,6 +33,9 @@ void hermite(double t0, const VecX& x0, const VecX& f0, double t1, const VecX& x
   const double h01 = s * s * (3 - 2 * s), h11 = s * s * (s - 1);
   x = h00 * x0 + h10 * h * f0 + h01 * x1 + h11 * h * f1;
 }
+
+// Smallest step, in units of the spacing of doubles at t (both steppers).
+constexpr double kMinStepUlps = 64.0;
 
 double first_step(const OdeOptions& o) {
   const double span = o.t_end - o.t0;
@@ -67,6 +71,16 @@ OdeStats run_dopri5(const OdeProblem& p, VecX& x, const OdeOptions& o) {
     }
     const auto [t_old, t_new] = dense.do_step(system);
     ++stats.steps;
+    // A step size down at the rounding level of t (e.g. at a change point, where the right-hand
+    // side is not smooth) cannot advance: stop with a message instead of stepping for ever.
+    if (dense.current_time_step() <
+        kMinStepUlps * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(t_new))) {
+      stats.message = "step size underflow at t = " + std::to_string(t_new) + " s (step " +
+                      std::to_string(dense.current_time_step()) + " s)";
+      x = dense.current_state();
+      stats.t = t_new;
+      return stats;
+    }
     // Outputs strictly inside the step: dense output of Dormand–Prince (order 4).
     while (clock.pending() && clock.next() < t_new - clock.slack()) {
       dense.calc_state(clock.next(), xo);
@@ -117,7 +131,8 @@ OdeStats run_rkf78(const OdeProblem& p, VecX& x, const OdeOptions& o) {
     const double t_old = t;
     dt = clamp_step(dt, t, o);
     if (controlled.try_step(system, x, t, dt) == odeint::fail) {
-      if (++failures > 500 || dt < 1e-15 * std::max(1.0, std::abs(t))) {
+      if (++failures > 500 ||
+          dt < kMinStepUlps * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(t))) {
         stats.message = "step size underflow at t = " + std::to_string(t);
         stats.t = t;
         return stats;

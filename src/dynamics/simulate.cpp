@@ -656,6 +656,11 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
   if (!stats.completed) {
     result.status = SimulateStatus::failed_step;
     result.message = !stop_message.empty() ? stop_message : stats.message;
+    if (stop_message.empty() && result.uncorrected_steps > 0)
+      result.message +=
+          "; steps were left uncorrected next to a change point (E nearly loses rank there), "
+          "where a tight rtol can stall the step-size control: a looser one (e.g. 1e-8) passes "
+          "it";
     return result;
   }
   result.status = SimulateStatus::completed;
