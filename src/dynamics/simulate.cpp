@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <vector>
 
 #include "chart_solver.hpp"
 #include "integrator.hpp"
@@ -111,7 +112,8 @@ class Dynamics {
         G_(model.nc, model.nc),
         G_llt_(model.nc),
         dq_(VecX::Zero(model.n)),
-        chart_q_(VecX::Zero(model.nq)) {
+        chart_q_(VecX::Zero(model.nq)),
+        rotations_(std::max<size_t>(1, model.bodies.size())) {
     for (const Load& l : model.loads)
       if (std::holds_alternative<PointForce>(l.kind) || std::holds_alternative<Torque>(l.kind))
         nonconservative_.push_back(&l);
@@ -206,20 +208,25 @@ class Dynamics {
       }
       compute_F();
       chart_ready_ = false;
+      body_rotations(model_, state_.q, rotations_.data());
     } else if (!(chart_ready_ && state_.q == chart_q_)) {
       // 1. Eᵀ(q), the chart's dependent block, F, unless they are already those at q (the
       //    stepper restarts at the accepted state, where the acceptance has just computed them).
-      compute_constraint_jacobian(model_, state_.q, ws_.constraints.Et);
+      //    The bodies' rotations at q come along for the constraint rate below.
+      compute_constraint_residual_and_jacobian(model_, state_.q, ws_.constraints.f,
+                                               ws_.constraints.Et, rotations_.data());
       if (!cs_.factor(ws_.constraints.Et))
         throw SingularEvaluation{"the chart's dependent block is singular at t = " +
                                  std::to_string(t) + " (a change point: E loses rank)"};
       compute_F();
       chart_q_ = state_.q;
       chart_ready_ = true;
+    } else {
+      body_rotations(model_, state_.q, rotations_.data());
     }
     // 2. u = F v; then Dᵀ u and Ḟ v (design §4: Eᵀ Ḟ v = −Dᵀ u, independent rows of Ḟ zero).
     state_.u.noalias() = F_ * v;
-    compute_constraint_rate(model_, state_, ws_.constraints);  // Dᵀ u (Eᵀ is there)
+    compute_constraint_rate(model_, state_, ws_.constraints, rotations_.data());  // Dᵀ u
     b_ = -ws_.constraints.Dtu;
     cs_.solve(b_, Fdv_);
     // 3. Free system, H (eq. (68)) and v̇.
@@ -349,6 +356,7 @@ class Dynamics {
   // (the step's acceptance, the stage projection) clears it or sets it anew.
   bool chart_ready_ = false;
   VecX chart_q_;
+  std::vector<Eigen::Matrix2d> rotations_;  // R(φ_b) of every body at state_.q (evaluate_dual)
   std::vector<const Load*> nonconservative_;
 };
 
