@@ -17,13 +17,7 @@ using namespace orthomech;
 
 void AndrewsRelative(benchmark::State& bs, DynamicsForm form, Integrator integrator) {
   const Model model = test::andrews_relative();
-  SimulateOptions o;
-  o.form = form;
-  o.integrator = integrator;
-  o.t_end = 0.03;
-  o.rtol = 1e-10;
-  o.atol = 1e-12;
-  o.dt_out = 0.03;
+  const SimulateOptions o = test::andrews::reference_run(form, integrator);
   SimulateResult r;
   for (auto _ : bs) {
     r = simulate(model, o);

@@ -34,8 +34,10 @@ void hermite(double t0, const VecX& x0, const VecX& f0, double t1, const VecX& x
   x = h00 * x0 + h10 * h * f0 + h01 * x1 + h11 * h * f1;
 }
 
-// Smallest step, in units of the spacing of doubles at t (both steppers).
-constexpr double kMinStepUlps = 64.0;
+// A step below 64 spacings of doubles at t cannot advance t (both steppers stop there).
+bool step_underflow(double dt, double t) {
+  return dt < 64.0 * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(t));
+}
 
 double first_step(const OdeOptions& o) {
   const double span = o.t_end - o.t0;
@@ -73,8 +75,7 @@ OdeStats run_dopri5(const OdeProblem& p, VecX& x, const OdeOptions& o) {
     ++stats.steps;
     // A step size down at the rounding level of t (e.g. at a change point, where the right-hand
     // side is not smooth) cannot advance: stop with a message instead of stepping for ever.
-    if (dense.current_time_step() <
-        kMinStepUlps * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(t_new))) {
+    if (step_underflow(dense.current_time_step(), t_new)) {
       stats.message = "step size underflow at t = " + std::to_string(t_new) + " s (step " +
                       std::to_string(dense.current_time_step()) + " s)";
       x = dense.current_state();
@@ -131,8 +132,7 @@ OdeStats run_rkf78(const OdeProblem& p, VecX& x, const OdeOptions& o) {
     const double t_old = t;
     dt = clamp_step(dt, t, o);
     if (controlled.try_step(system, x, t, dt) == odeint::fail) {
-      if (++failures > 500 ||
-          dt < kMinStepUlps * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(t))) {
+      if (++failures > 500 || step_underflow(dt, t)) {
         stats.message = "step size underflow at t = " + std::to_string(t);
         stats.t = t;
         return stats;

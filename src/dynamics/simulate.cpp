@@ -113,7 +113,7 @@ class Dynamics {
         G_llt_(model.nc),
         dq_(VecX::Zero(model.n)),
         chart_q_(VecX::Zero(model.nq)),
-        rotations_(std::max<size_t>(1, model.bodies.size())) {
+        rotations_(model.bodies.size()) {
     for (const Load& l : model.loads)
       if (std::holds_alternative<PointForce>(l.kind) || std::holds_alternative<Torque>(l.kind))
         nonconservative_.push_back(&l);

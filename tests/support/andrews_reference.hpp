@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 
+#include "orthomech/dynamics/simulate.hpp"
 #include "orthomech/model/model.hpp"
 
 namespace orthomech::test::andrews {
@@ -36,6 +37,19 @@ inline constexpr std::array<double, 6> kLambdaT003 = {199.1753333731910, -29.755
 inline constexpr double kAngleTol = 1e-8;
 inline constexpr double kRateTol = 1e-5;
 inline constexpr double kLambdaTol = 1e-4;
+
+// The test set's run: t = 0 … 0.03 s at rtol 1e-10, atol 1e-12, one output at the end.
+inline SimulateOptions reference_run(DynamicsForm form,
+                                     Integrator integrator = Integrator::dopri5) {
+  SimulateOptions o;
+  o.form = form;
+  o.integrator = integrator;
+  o.t_end = 0.03;
+  o.rtol = 1e-10;
+  o.atol = 1e-12;
+  o.dt_out = 0.03;
+  return o;
+}
 
 // "Rough angles": every design pose of the file rounded, angles to 0.1 rad and positions to 1 mm
 // (the starting guess of the assembly test and benchmark).

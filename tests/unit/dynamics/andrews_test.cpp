@@ -63,26 +63,15 @@ void expect_reference(const Model& model, const SimulateResult& res) {
   EXPECT_LT(res.max_constraint_residual, 1e-9);
 }
 
-SimulateOptions andrews_options(DynamicsForm form, Integrator integrator = Integrator::dopri5) {
-  SimulateOptions o;
-  o.form = form;
-  o.integrator = integrator;
-  o.t_end = 0.03;
-  o.rtol = 1e-10;
-  o.atol = 1e-12;
-  o.dt_out = 0.03;
-  return o;
-}
-
 TEST(AndrewsReference, Dual_Dopri5_StateAt3ms) {
   const Model model = test::load_bundled("andrews-squeezer");
-  const SimulateResult res = simulate(model, andrews_options(DynamicsForm::dual));
+  const SimulateResult res = simulate(model, test::andrews::reference_run(DynamicsForm::dual));
   expect_reference(model, res);
 }
 
 TEST(AndrewsReference, Primal_Eq99_Dopri5_StateAt3ms) {
   const Model model = test::load_bundled("andrews-squeezer");
-  const SimulateResult res = simulate(model, andrews_options(DynamicsForm::primal));
+  const SimulateResult res = simulate(model, test::andrews::reference_run(DynamicsForm::primal));
   expect_reference(model, res);
   EXPECT_LT(res.max_invariant_J, 1e-6);  // eq. (105): J stays ~0 between projections
 }
@@ -90,7 +79,7 @@ TEST(AndrewsReference, Primal_Eq99_Dopri5_StateAt3ms) {
 TEST(AndrewsReference, Dual_Fehlberg78_StateAt3ms) {
   const Model model = test::load_bundled("andrews-squeezer");
   const SimulateResult res =
-      simulate(model, andrews_options(DynamicsForm::dual, Integrator::rkf78));
+      simulate(model, test::andrews::reference_run(DynamicsForm::dual, Integrator::rkf78));
   expect_reference(model, res);
 }
 
@@ -98,7 +87,7 @@ TEST(AndrewsReference, Dual_Fehlberg78_StateAt3ms) {
 TEST(AndrewsReference, InitialAccelerationsAndMultipliers) {
   const Model model = test::load_bundled("andrews-squeezer");
   for (DynamicsForm form : {DynamicsForm::dual, DynamicsForm::primal}) {
-    SimulateOptions o = andrews_options(form);
+    SimulateOptions o = test::andrews::reference_run(form);
     o.t_end = 1e-6;
     o.dt_out = 1e-6;
     const SimulateResult res = simulate(model, o);

@@ -170,11 +170,7 @@ class AndrewsRelative : public ::testing::TestWithParam<DynamicsForm> {};
 // relative), and the energy balance T − W (all of Q̂ is counted as work for a general system).
 TEST_P(AndrewsRelative, StateAt3ms) {
   const Model m = test::andrews_relative();
-  SimulateOptions o;
-  o.form = GetParam();
-  o.t_end = 0.03;
-  o.rtol = 1e-10;
-  o.atol = 1e-12;
+  SimulateOptions o = test::andrews::reference_run(GetParam());
   o.record_samples = false;
   const SimulateResult r = simulate(m, o);
   ASSERT_EQ(r.status, SimulateStatus::completed) << r.message;

@@ -10,9 +10,9 @@ namespace orthomech::detail {
 namespace {
 
 // ẋ = 1/(1 − t)²: x = 1/(1 − t) − 1 has a pole at t = 1, so no step can pass it. Dormand–
-// Prince only: Fehlberg 7(8)'s error estimate uses four of its 13 stages (k₀, k₁₀, k₁₁, k₁₂, weights
-// ±41/840) and accepted a step straddling the pole here (x = 32 at t = 2), so the pole
-// does not make its step size collapse; its guard (the same bound) acts on rejected steps.
+// Prince only: Fehlberg 7(8)'s error estimate uses four of its 13 stages (k₀, k₁₀, k₁₁, k₁₂,
+// weights ±41/840) and accepted a step straddling the pole here (x = 32 at t = 2), so the pole does
+// not make its step size collapse; its guard (the same bound) acts on rejected steps.
 OdeProblem pole() {
   OdeProblem p;
   p.rhs = [](const VecX&, VecX& dx, double t) {
