@@ -172,6 +172,17 @@ int run_simulate(const SimulateCliOptions& opt) {
     for (const ChartSwitch& c : res.chart_switches)
       sw.push_back({{"t", c.t}, {"from", c.from}, {"to", c.to}});
     j["chart_switches"] = sw;
+    nlohmann::json cp = nlohmann::json::array();
+    for (const ChangePointPassage& c : res.passages)
+      cp.push_back({{"t", c.t},
+                    {"from", c.t_from},
+                    {"to", c.t_to},
+                    {"quality_from", c.sigma_from},
+                    {"quality_to", c.sigma_to},
+                    {"velocity_jump", c.velocity_jump},
+                    {"tangent_cosine", c.tangent_cosine}});
+    j["change_points_passed"] = res.passages.size();
+    j["change_points"] = cp;
     j["samples"] = series_json(model, res);
     out << j.dump(2) << '\n';
   } else {
@@ -181,7 +192,8 @@ int run_simulate(const SimulateCliOptions& opt) {
     out << "status      " << to_string(res.status) << (res.message.empty() ? "" : ": ")
         << res.message << "\n";
     out << "steps       " << res.steps << " (" << res.evaluations << " evaluations), "
-        << res.chart_switches.size() << " chart switches\n";
+        << res.chart_switches.size() << " chart switches, " << res.passages.size()
+        << " change points passed\n";
     out << "energy      initial " << g(res.energy_initial) << " J, final " << g(res.energy_final)
         << " J, max drift " << g(res.energy_max_drift, 3) << " J (relative " << g(rel_drift, 3)
         << ")\n";
