@@ -242,13 +242,16 @@ TEST_P(PrimalAtChangePoint, StopsAtTheFirstChangePoint_FinalAtTheStopTime) {
   EXPECT_LT(r.final.t, t1);
   EXPECT_GT(r.final.t, t1 - 0.05);
   EXPECT_GT(r.final.t, r.samples.back().t);  // the stop time, not the last output time
-  // The message names the change point's time (estimated to 1e-3 s: σ̂ is linear near it).
+  // The message names the change point's time: extrapolated from σ̂ ≈ 1e-3, which on N = 40 is
+  // ~0.08 rad from the point, where σ̂ is not yet linear in t: to 1e-2 s (measured ≤ 6.3e-3 over
+  // rtol 1e-6 … 1e-12, both integrators).
   const auto at = r.message.find("t ≈ ");
   ASSERT_NE(at, std::string::npos) << r.message;
-  EXPECT_NEAR(std::stod(r.message.substr(at + std::string("t ≈ ").size())), t1, 1e-3) << r.message;
+  EXPECT_NEAR(std::stod(r.message.substr(at + std::string("t ≈ ").size())), t1, 1e-2) << r.message;
 }
 INSTANTIATE_TEST_SUITE_P(N40, PrimalAtChangePoint,
-                         testing::ValuesIn(matrix(40, 20.0, {1e-6, 1e-12}, kBoth)), case_name);
+                         testing::ValuesIn(matrix(40, 20.0, {1e-6, 1e-8, 1e-10, 1e-12}, kBoth)),
+                         case_name);
 
 // A passage forced onto a wrong branch is refused (exit 3 in the CLI: never `completed`). The
 // hook replaces the predicted landing by the state on the branch through the change point on
@@ -268,6 +271,7 @@ TEST(ChangePoints, PassageForcedOntoAnotherBranch_IsRefused) {
     u.segment(b.u_offset, 3).setZero();
   };
   const SimulateResult r = simulate(model, o);
+  RecordProperty("message", r.message);
   EXPECT_NE(r.status, SimulateStatus::completed);
   EXPECT_NE(r.message.find("cannot pass the change point at t ≈ "), std::string::npos) << r.message;
   EXPECT_TRUE(r.passages.empty());
@@ -284,6 +288,7 @@ TEST(ChangePoints, PassageThatReversesTheMotion_IsRefused) {
   o.initial_rates = {{model.find_measure("B0_x"), 1.0}};
   o.passage_hook = [](double, VecX&, VecX& u) { u = -u; };
   const SimulateResult r = simulate(model, o);
+  RecordProperty("message", r.message);
   EXPECT_NE(r.status, SimulateStatus::completed);
   EXPECT_NE(r.message.find("leaving the motion's branch"), std::string::npos) << r.message;
 }
