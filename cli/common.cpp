@@ -3,6 +3,8 @@
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
+#include <CLI/CLI.hpp>
+
 #include "orthomech/io/mechanism_file.hpp"
 
 namespace orthomech::cli {
@@ -18,7 +20,43 @@ void setup_logging(const GlobalOptions& options) {
 
 Model load(const std::string& path) {
   spdlog::debug("reading {}", path);
-  return load_mechanism(path);
+  Model model = load_mechanism(path);
+  for (const std::string& w : model.warnings) spdlog::warn("{}", w);
+  return model;
+}
+
+void add_units_option(CLI::App* cmd, std::string& choice) {
+  cmd->add_option("--units", choice,
+                  "units of every output: 'file' (the file's declared units, default) or 'si'")
+      ->check(CLI::IsMember({"file", "si"}));
+}
+
+UnitSystem resolve_units(const Model& model, const std::string& choice) {
+  try {
+    return output_units(model, choice);
+  } catch (const std::invalid_argument& e) {
+    throw CLI::ValidationError("--units", e.what());
+  }
+}
+
+nlohmann::json units_json(const UnitSystem& u) {
+  nlohmann::json j;
+  const std::pair<const char*, Quantity> kinds[] = {
+      {"length", Quantity::length},
+      {"angle", Quantity::angle},
+      {"mass", Quantity::mass},
+      {"time", Quantity::time},
+      {"force", Quantity::force},
+      {"moment", Quantity::moment},
+      {"energy", Quantity::moment},
+      {"power", Quantity::power},
+      {"velocity", Quantity::velocity},
+      {"angular_velocity", Quantity::angular_velocity},
+      {"acceleration", Quantity::acceleration},
+      {"angular_acceleration", Quantity::angular_acceleration},
+      {"inertia", Quantity::inertia}};
+  for (const auto& [name, q] : kinds) j[name] = output_unit(q, u).name;
+  return j;
 }
 
 }  // namespace orthomech::cli

@@ -1,9 +1,15 @@
 #pragma once
 // Shared by the subcommands: exit codes, loading with error reporting, logging set-up.
 // No math here (house style: cli/ holds no math).
+#include <nlohmann/json.hpp>
 #include <string>
 
+#include "orthomech/io/units.hpp"
 #include "orthomech/model/model.hpp"
+
+namespace CLI {
+class App;
+}
 
 namespace orthomech::cli {
 
@@ -22,7 +28,18 @@ struct GlobalOptions {
 };
 
 void setup_logging(const GlobalOptions& options);
-// Loads a mechanism; on failure throws InputError (main maps it to exit code 2).
+// Loads a mechanism; on failure throws InputError (main maps it to exit code 2). The file's
+// warnings (Model::warnings) go to the log.
 [[nodiscard]] Model load(const std::string& path);
+
+// `--units file|si` of a subcommand (docs/cli.md "Units"): outputs in the file's declared units
+// (default) or in SI.
+void add_units_option(CLI::App* cmd, std::string& choice);
+// The chosen output units of a loaded model.
+[[nodiscard]] UnitSystem resolve_units(const Model& model, const std::string& choice);
+// The `units` object of every JSON document: the unit name of each kind of quantity.
+[[nodiscard]] nlohmann::json units_json(const UnitSystem& units);
+// Help text of an option whose bare numbers are in the file's units.
+inline constexpr const char* kBareInFileUnits = "a bare number is in the file's declared units";
 
 }  // namespace orthomech::cli

@@ -899,30 +899,54 @@ double magnitude_at(const DrivenPointView& p, const ReactionMagnitude& m) {
   return std::sqrt(sum);
 }
 
+namespace {
+
+// Max, min, peak |x| and RMS of value(p) over the non-singular positions.
+template <class Value>
+SeriesSummary summarize_series(const CycleResult& result, std::string name, std::string unit,
+                               bool determinate, Value value) {
+  SeriesSummary s;
+  s.name = std::move(name);
+  s.unit = std::move(unit);
+  s.determinate = determinate;
+  double sum2 = 0.0;
+  for (const DrivenPointView& p : result.points) {
+    if (p.singular) continue;
+    const double v = value(p);
+    sum2 += v * v;
+    const bool first = s.samples++ == 0;
+    if (first || std::abs(v) > s.peak) {
+      s.peak = std::abs(v);
+      s.peak_input = p.input;
+      s.peak_time = p.time;
+    }
+    if (first || v > s.max.value) s.max = {v, p.input, p.time};
+    if (first || v < s.min.value) s.min = {v, p.input, p.time};
+  }
+  s.rms = s.samples > 0 ? std::sqrt(sum2 / s.samples) : 0.0;
+  return s;
+}
+
+}  // namespace
+
 std::vector<SeriesSummary> summarize_cycle(const CycleResult& result,
                                            const std::vector<ReactionMagnitude>& magnitudes,
                                            const std::string& drive_unit) {
   std::vector<SeriesSummary> out;
-  auto summarize = [&](SeriesSummary s, auto value) {
-    double sum2 = 0.0;
-    for (const DrivenPointView& p : result.points) {
-      if (p.singular) continue;
-      const double v = value(p);
-      sum2 += v * v;
-      if (s.samples++ == 0 || std::abs(v) > s.peak) {
-        s.peak = std::abs(v);
-        s.peak_input = p.input;
-        s.peak_time = p.time;
-      }
-    }
-    s.rms = s.samples > 0 ? std::sqrt(sum2 / s.samples) : 0.0;
-    out.push_back(std::move(s));
-  };
-  summarize(SeriesSummary{"drive", drive_unit, true},
-            [](const DrivenPointView& p) { return p.drive; });
+  out.push_back(summarize_series(result, "drive", drive_unit, true,
+                                 [](const DrivenPointView& p) { return p.drive; }));
   for (const ReactionMagnitude& m : magnitudes)
-    summarize(SeriesSummary{m.name, m.unit, m.determinate},
-              [&](const DrivenPointView& p) { return magnitude_at(p, m); });
+    out.push_back(summarize_series(result, m.name, m.unit, m.determinate,
+                                   [&](const DrivenPointView& p) { return magnitude_at(p, m); }));
+  return out;
+}
+
+std::vector<SeriesSummary> summarize_components(const CycleResult& result) {
+  std::vector<SeriesSummary> out;
+  for (size_t i = 0; i < result.components.size(); ++i)
+    out.push_back(summarize_series(result, result.components[i].name, result.components[i].unit,
+                                   result.determinate.empty() || result.determinate[i],
+                                   [i](const DrivenPointView& p) { return p.reactions[i]; }));
   return out;
 }
 

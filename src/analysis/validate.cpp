@@ -500,6 +500,68 @@ double transmission_angle(const Model& model, const FourBarLoop& l, const VecX& 
   return std::atan2(std::abs(u.x() * v.y() - u.y() * v.x()), u.dot(v));
 }
 
+std::vector<SliderCrankLoop> find_slider_crank_loops(const Model& model) {
+  // The joint graph with bodies as nodes: revolutes and prismatics as edges.
+  struct Edge {
+    int joint, a, b;
+    bool prismatic;
+  };
+  std::vector<Edge> edges;
+  for (size_t j = 0; j < model.joints.size(); ++j) {
+    if (const auto* r = std::get_if<Revolute>(&model.joints[j].kind))
+      edges.push_back({static_cast<int>(j), r->pi.body, r->pj.body, false});
+    else if (const auto* p = std::get_if<Prismatic>(&model.joints[j].kind))
+      edges.push_back({static_cast<int>(j), p->pi.body, p->pj.body, true});
+  }
+  auto other = [](const Edge& e, int body) { return e.a == body ? e.b : e.a; };
+  auto touches = [](const Edge& e, int body) { return e.a == body || e.b == body; };
+  auto pin = [&](int joint) -> const Revolute& {
+    return std::get<Revolute>(model.joints[static_cast<size_t>(joint)].kind);
+  };
+  std::vector<SliderCrankLoop> loops;
+  for (const Edge& g1 : edges) {  // ground —rev— crank
+    if (g1.prismatic || !touches(g1, kGround)) continue;
+    const int X = other(g1, kGround);
+    for (const Edge& e2 : edges) {  // crank —rev— rod
+      if (e2.prismatic || e2.joint == g1.joint || !touches(e2, X)) continue;
+      const int Y = other(e2, X);
+      if (Y == kGround || Y == X) continue;
+      for (const Edge& e3 : edges) {  // rod —rev— slider
+        if (e3.prismatic || e3.joint == e2.joint || e3.joint == g1.joint || !touches(e3, Y))
+          continue;
+        const int Z = other(e3, Y);
+        if (Z == kGround || Z == X || Z == Y) continue;
+        for (const Edge& g4 : edges) {  // slider —prismatic— ground
+          if (!g4.prismatic || !touches(g4, Z) || other(g4, Z) != kGround) continue;
+          SliderCrankLoop l;
+          const int J[4] = {g1.joint, e2.joint, e3.joint, g4.joint};
+          const int Bd[3] = {X, Y, Z};
+          std::copy(J, J + 4, l.joints);
+          std::copy(Bd, Bd + 3, l.bodies);
+          l.crank = (side_on(pin(J[0]), X).s - side_on(pin(J[1]), X).s).norm();
+          l.rod = (side_on(pin(J[1]), Y).s - side_on(pin(J[2]), Y).s).norm();
+          loops.push_back(l);
+        }
+      }
+    }
+  }
+  return loops;
+}
+
+double pressure_angle(const Model& model, const SliderCrankLoop& l, const VecX& q) {
+  const auto& j1 = std::get<Revolute>(model.joints[static_cast<size_t>(l.joints[1])].kind);
+  const auto& j2 = std::get<Revolute>(model.joints[static_cast<size_t>(l.joints[2])].kind);
+  const auto& slide = std::get<Prismatic>(model.joints[static_cast<size_t>(l.joints[3])].kind);
+  const Vec2 A = world(model, side_on(j1, l.bodies[1]), q);  // crank pin
+  const Vec2 B = world(model, side_on(j2, l.bodies[1]), q);  // wrist pin
+  // The slide axis in the world: axis_local turns with body i of the prismatic joint.
+  const Vec2 axis = slide.pi.body == kGround
+                        ? slide.axis_local
+                        : Vec2(rotation(body_angle(model, slide.pi.body, q)) * slide.axis_local);
+  const Vec2 u = B - A;
+  return std::atan2(std::abs(u.x() * axis.y() - u.y() * axis.x()), std::abs(u.dot(axis)));
+}
+
 SingularityMeasures singularity_measures(const Model& model, const VecX& q,
                                          const std::vector<int>& input_joints, int generic_rank) {
   SingularityMeasures out;
@@ -558,6 +620,7 @@ ValidationReport validate_design_positions(const Model& model, const ValidateOpt
   if (!common) input = -1;
   if (input >= 0) rep.input = model.joints[static_cast<size_t>(input)].name;
   const std::vector<FourBarLoop> loops = find_four_bar_loops(model, input);
+  const std::vector<SliderCrankLoop> slider_cranks = find_slider_crank_loops(model);
 
   // Generic rank: at the assembled design pose and at every position (max).
   {
@@ -687,6 +750,18 @@ ValidationReport validate_design_positions(const Model& model, const ValidateOpt
                               fmt(opt.min_transmission * 180.0 / kPi) + "..." +
                               fmt(180.0 - opt.min_transmission * 180.0 / kPi) + " deg)");
       pr.four_bars.push_back(fb);
+    }
+    for (const SliderCrankLoop& l : slider_cranks) {
+      SliderCrankReport sc;
+      for (int j = 0; j < 4; ++j)
+        sc.joints += (j ? "-" : "") + model.joints[static_cast<size_t>(l.joints[j])].name;
+      sc.pressure = pressure_angle(model, l, pr.q);
+      sc.ok = sc.pressure <= kPi / 2.0 - opt.min_transmission;
+      if (!sc.ok)
+        pr.failures.push_back("pressure angle " + fmt(sc.pressure * 180.0 / kPi) +
+                              " deg in slider-crank loop " + sc.joints + " (needs at most " +
+                              fmt(90.0 - opt.min_transmission * 180.0 / kPi) + " deg)");
+      pr.slider_cranks.push_back(sc);
     }
   }
 

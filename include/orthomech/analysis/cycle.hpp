@@ -232,17 +232,25 @@ struct ReactionMagnitude {
 [[nodiscard]] std::vector<ReactionMagnitude> reaction_magnitudes(const CycleResult& result);
 [[nodiscard]] double magnitude_at(const DrivenPointView& p, const ReactionMagnitude& m);
 
-// Peak |x| (with the input and time where it occurs) and RMS over the positions of the sweep;
-// positions flagged `singular` are left out (their multipliers are not meaningful).
+// One extreme of a series: its value and the input and time where it occurs.
+struct SeriesExtreme {
+  double value = 0.0, input = 0.0, time = 0.0;
+};
+// Signed maximum and minimum, peak |x| (with the input and time where each occurs) and RMS over
+// the positions of the sweep; positions flagged `singular` are left out (their multipliers are
+// not meaningful). A tie keeps the first position in sweep order.
 struct SeriesSummary {
   std::string name, unit;
   bool determinate = true;
   double peak = 0.0, peak_input = 0.0, peak_time = 0.0, rms = 0.0;
+  SeriesExtreme max, min;  // signed (for a magnitude: max = peak)
   int samples = 0;
 };
 // The drive first, then every reaction magnitude in joint order.
 [[nodiscard]] std::vector<SeriesSummary> summarize_cycle(
     const CycleResult& result, const std::vector<ReactionMagnitude>& magnitudes,
     const std::string& drive_unit);
+// Every reaction component (CycleResult::components order), signed.
+[[nodiscard]] std::vector<SeriesSummary> summarize_components(const CycleResult& result);
 
 }  // namespace orthomech

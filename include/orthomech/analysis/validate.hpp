@@ -60,6 +60,20 @@ struct FourBarLoop {
 // (toward the crank joint) and the follower (toward its ground pivot).
 [[nodiscard]] double transmission_angle(const Model& model, const FourBarLoop& loop, const VecX& q);
 
+// A slider-crank loop: ground —j[0] revolute— crank —j[1] revolute— rod —j[2] revolute— slider
+// —j[3] prismatic— ground. Its pressure angle is the angle between the rod (the line of the force
+// it carries, a two-force member) and the slide axis.
+struct SliderCrankLoop {
+  int joints[4] = {-1, -1, -1, -1};
+  int bodies[3] = {-1, -1, -1};   // crank, rod, slider
+  double crank = 0.0, rod = 0.0;  // link lengths, m
+};
+// Every slider-crank loop of the mechanism.
+[[nodiscard]] std::vector<SliderCrankLoop> find_slider_crank_loops(const Model& model);
+// Pressure angle ∈ [0, π/2] at q: the acute angle between the rod (crank pin → wrist pin) and the
+// slide axis. For an offset slider-crank, sin α = |r sin θ − e| / l.
+[[nodiscard]] double pressure_angle(const Model& model, const SliderCrankLoop& loop, const VecX& q);
+
 struct SingularityMeasures {
   double sigma_min = 0.0;  // σ_r/σ_1 of the scaled Eᵀ, r the generic rank (→ 0 at change points)
   std::optional<double> eta;  // σ_n/σ_1 of the scaled input-locked Jacobian [Eᵀ; d] (→ 0 at
@@ -74,6 +88,11 @@ struct FourBarReport {
   GrashofType type;
   double transmission = 0.0;  // μ, rad
   bool ok = true;             // min(μ, π − μ) ≥ min_transmission
+};
+struct SliderCrankReport {
+  std::string joints;     // "O-A-B-slide"
+  double pressure = 0.0;  // α, rad
+  bool ok = true;         // α ≤ π/2 − min_transmission
 };
 
 struct PositionReport {
@@ -94,6 +113,7 @@ struct PositionReport {
   std::string singular_kind;                // "dead point" / "change point"
   std::optional<double> singular_input;     // input value there
   std::vector<FourBarReport> four_bars;
+  std::vector<SliderCrankReport> slider_cranks;
   int modes = 0;               // distinct assembly modes found at the inputs
   int mode = -1;               // 1-based index of this position's mode (modes sorted by signature)
   std::string mode_signature;  // e.g. "+" per four-bar loop, then the sign of det [Eᵀ; d]
