@@ -13,8 +13,10 @@
 #include <sstream>
 
 #include "../solvers/nlopt_minimize.hpp"
+#include "orthomech/analysis/cycle_metrics.hpp"
 #include "orthomech/analysis/mobility.hpp"
 #include "orthomech/constraints/joints.hpp"
+#include "orthomech/io/units.hpp"
 #include "orthomech/model/free_system.hpp"
 #include "orthomech/model/measures.hpp"
 
@@ -562,6 +564,20 @@ double pressure_angle(const Model& model, const SliderCrankLoop& l, const VecX& 
   return std::atan2(std::abs(u.x() * axis.y() - u.y() * axis.x()), std::abs(u.dot(axis)));
 }
 
+std::vector<LimitBlock> find_limit_blocks(const Model& model, const VecX& q_guess,
+                                          const AssemblyOptions& options) {
+  std::vector<LimitBlock> out;
+  if (!options.use_limits) return out;
+  AssemblyOptions free = options;
+  free.use_limits = false;
+  const AssemblyResult a = assemble(model, q_guess, free);
+  if (a.status != AssemblyStatus::assembled && a.status != AssemblyStatus::unchanged) return out;
+  for (size_t j = 0; j < model.joints.size(); ++j)
+    if (outside_limits(model, static_cast<int>(j), a.q))
+      out.push_back({static_cast<int>(j), limit_coordinate(model, static_cast<int>(j), a.q)});
+  return out;
+}
+
 SingularityMeasures singularity_measures(const Model& model, const VecX& q,
                                          const std::vector<int>& input_joints, int generic_rank) {
   SingularityMeasures out;
@@ -645,6 +661,14 @@ ValidationReport validate_design_positions(const Model& model, const ValidateOpt
     pr.assembly_message = a.message;
     pr.assembles = a.status == AssemblyStatus::assembled || a.status == AssemblyStatus::unchanged;
     if (!pr.assembles) {
+      pr.limit_blocks = find_limit_blocks(model, q_design, ao);
+      for (const LimitBlock& b : pr.limit_blocks) {
+        const Joint& jt = model.joints[static_cast<size_t>(b.joint)];
+        const bool rev = std::holds_alternative<Revolute>(jt.kind);
+        pr.failures.push_back("joint '" + jt.name + "' would need " + format_input(b.needed, rev) +
+                              ", outside its limits [" + format_input(jt.limits->x(), rev) + ", " +
+                              format_input(jt.limits->y(), rev) + "]");
+      }
       pr.failures.push_back("does not assemble: " + a.message);
       rep.positions.push_back(std::move(pr));
       continue;

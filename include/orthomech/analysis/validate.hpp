@@ -95,6 +95,13 @@ struct SliderCrankReport {
   bool ok = true;         // α ≤ π/2 − min_transmission
 };
 
+// A joint limit that keeps a position from closing: without the limits it assembles with the
+// joint at `needed` (rad or m), outside [limits.x(), limits.y()].
+struct LimitBlock {
+  int joint = -1;
+  double needed = 0.0;
+};
+
 struct PositionReport {
   std::string name;
   AssemblyStatus assembly = AssemblyStatus::failed;
@@ -119,7 +126,8 @@ struct PositionReport {
   std::string mode_signature;  // e.g. "+" per four-bar loop, then the sign of det [Eᵀ; d]
   int circuit = -1;            // 1-based, −1 when not traced (DOF ≠ 1 or no single input)
   int branch = -1;             // 1-based within the circuit
-  std::vector<std::string> failures;  // checks that failed, in words
+  std::vector<LimitBlock> limit_blocks;  // when it does not assemble because of joint limits
+  std::vector<std::string> failures;     // checks that failed, in words
   [[nodiscard]] bool pass() const { return failures.empty(); }
 };
 
@@ -133,6 +141,12 @@ struct ValidationReport {
   std::vector<std::string> singular_points;  // every dead/change point found, in words
   [[nodiscard]] bool pass() const;
 };
+
+// Which joint limits keep `options` from assembling: assembles again without the limits and
+// returns the joints whose coordinate then lies outside them (empty when it does not assemble
+// either, or every limit is kept).
+[[nodiscard]] std::vector<LimitBlock> find_limit_blocks(const Model& model, const VecX& q_guess,
+                                                        const AssemblyOptions& options);
 
 [[nodiscard]] ValidationReport validate_design_positions(const Model& model,
                                                          const ValidateOptions& options = {});

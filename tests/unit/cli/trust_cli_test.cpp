@@ -301,6 +301,151 @@ TEST(Trust, CycleCsvHeadersInTheFileUnits) {
   }
 }
 
+TEST(Trust, InfoValidateAssembleSimulateCrosscheckOutputsInTheFileUnits) {
+  const std::string mm = bundled("crank-rocker"), si = units_data("crank-rocker-si");
+  // info: masses and inertias, measures' units.
+  {
+    const json a = run_json({"info", mm, "--json"}), b = run_json({"info", si, "--json"});
+    const json c = run_json({"info", mm, "--json", "--units", "si"});
+    EXPECT_EQ(a["units"]["inertia"], "kg*mm^2");
+    EXPECT_EQ(c["units"], b["units"]);
+    for (size_t k = 0; k < 3; ++k) {
+      expect_rel(a["bodies"][k]["inertia"].get<double>() * 1e-6,
+                 b["bodies"][k]["inertia"].get<double>(), kUnitsRel, "inertia");
+      expect_rel(c["bodies"][k]["inertia"].get<double>(), b["bodies"][k]["inertia"].get<double>(),
+                 kUnitsRel, "inertia --units si");
+    }
+    EXPECT_EQ(a["measures"][4]["unit"], "mm");
+    EXPECT_EQ(b["measures"][4]["unit"], "m");
+  }
+  // validate: distances in mm, angles in deg. The multi-start and continuation run in scaled
+  // coordinates: the two files give the same positions to the solvers' tolerances.
+  constexpr double kSolverRel = 1e-6;
+  {
+    const json a = run_json({"validate", mm, "--json"}), b = run_json({"validate", si, "--json"});
+    ASSERT_EQ(a["positions"].size(), b["positions"].size());
+    for (size_t k = 0; k < a["positions"].size(); ++k) {
+      const json &p = a["positions"][k], &q = b["positions"][k];
+      EXPECT_EQ(p["pass"], q["pass"]);
+      expect_rel(p["four_bars"][0]["transmission_angle"].get<double>() * kDeg,
+                 q["four_bars"][0]["transmission_angle"].get<double>(), kSolverRel, "mu");
+      EXPECT_NEAR(p["target_error"].get<double>() * 1e-3, q["target_error"].get<double>(), 1e-9);
+      EXPECT_EQ(p["singular_distance"].is_null(), q["singular_distance"].is_null());
+      expect_rel(p["max_translation"].get<double>() * 1e-3, q["max_translation"].get<double>(),
+                 kSolverRel, "moved");
+    }
+  }
+  // assemble: the lock is read in the file's units (bare 90 = 90° in the deg file).
+  {
+    const json a = run_json({"assemble", mm, "--lock", "A0=90", "--json"});
+    const json b = run_json({"assemble", si, "--lock", "A0=1.5707963267948966", "--json"});
+    EXPECT_NEAR(a["locks"][0]["value"].get<double>(), 90.0, 1e-9);
+    EXPECT_EQ(a["locks"][0]["unit"], "deg");
+    for (const char* m : {"P_x", "P_y"})
+      expect_rel(a["measures"][m].get<double>() * 1e-3, b["measures"][m].get<double>(), kUnitsRel,
+                 m);
+    expect_rel(a["measures"]["rocker_angle"].get<double>() * kDeg,
+               b["measures"]["rocker_angle"].get<double>(), kUnitsRel, "rocker");
+    expect_rel(a["bodies"][1]["translation"].get<double>() * 1e-3,
+               b["bodies"][1]["translation"].get<double>(), kSolverRel, "moved");
+  }
+  // simulate: the same motion; measures, energies and times in the file's units.
+  {
+    const std::vector<std::string> common = {"--t-end", "0.05",  "--rtol", "1e-10",
+                                             "--atol",  "1e-12", "--json"};
+    std::vector<std::string> ca = {"simulate", mm}, cb = {"simulate", si};
+    ca.insert(ca.end(), common.begin(), common.end());
+    cb.insert(cb.end(), common.begin(), common.end());
+    const json a = run_json(ca), b = run_json(cb);
+    expect_rel(a["final"]["measures"]["P_x"].get<double>() * 1e-3,
+               b["final"]["measures"]["P_x"].get<double>(), kSolverRel, "P_x");
+    expect_rel(a["final"]["measures"]["rocker_angle"].get<double>() * kDeg,
+               b["final"]["measures"]["rocker_angle"].get<double>(), kSolverRel, "rocker");
+    expect_rel(a["energy"]["initial"].get<double>() * 1e-3, b["energy"]["initial"].get<double>(),
+               kUnitsRel, "energy");
+    EXPECT_EQ(a["units"]["energy"], "N*mm");
+  }
+  // crosscheck: the units object and --units si.
+  {
+    const json a = run_json({"crosscheck", mm, "--samples", "2", "--json", "--units", "si"});
+    EXPECT_EQ(a["units"]["length"], "m");
+  }
+}
+
+TEST(Trust, SimulatePositionsAndCsvUnits) {
+  // A pendulum (particle P1 on a 1 m rod): the named point P1.P... the particle's pose is its
+  // position; it must equal the measures P1_x, P1_y at every output time.
+  TempDir dir;
+  const json j = run_json({"simulate", bundled("pendulum"), "--t-end", "0.5", "--json",
+                           "--positions", "--out", dir.path.string()});
+  const json& pos = j["samples"]["positions"];
+  const json& m = j["samples"]["measures"];
+  ASSERT_EQ(pos["P1.x"].size(), m["P1_x"].size());
+  for (size_t k = 0; k < m["P1_x"].size(); ++k) {
+    EXPECT_NEAR(pos["P1.x"][k].get<double>(), m["P1_x"][k].get<double>(), 1e-12);
+    EXPECT_NEAR(pos["P1.y"][k].get<double>(), m["P1_y"][k].get<double>(), 1e-12);
+  }
+  const auto rows = read_csv(dir.path / "simulate.csv");
+  EXPECT_EQ(rows[0][0], "t [s]");
+  column(rows[0], "P1.x [m]");
+  column(rows[0], "energy [N*m]");
+}
+
+TEST(Trust, ValidateAndAssembleNameTheLimitThatKeepsItOpen) {
+  // Rocker limits [60°, 130°]: at crank 270° the mechanism closes only with the rocker outside
+  // them. The value the tool says the rocker would need must be one of the two closed-form
+  // rocker angles there: with d = B0 − A (A the crank pin), ψ = arg d ± acos((b² − |d|² − c²) /
+  // (2 c |d|)).
+  TempDir dir;
+  const std::string limited =
+      variant(dir, bundled("crank-rocker"), "limited.yaml",
+              "{name: B0, type: revolute, connects: [ground.B0, rocker.B0]}",
+              "{name: B0, type: revolute, connects: [ground.B0, rocker.B0], limits: [60, 130]}");
+  const double a = 30, b = 80, c = 60, g = 70, th = 270 * kDeg;
+  const double dx = g - a * std::cos(th), dy = -a * std::sin(th), D = std::hypot(dx, dy);
+  const double base = std::atan2(dy, dx), half = std::acos((b * b - D * D - c * c) / (2 * c * D));
+  auto matches = [&](double deg) {
+    for (const double psi : {base + half, base - half}) {
+      const double diff = std::remainder(deg * kDeg - psi, 2 * std::numbers::pi);
+      if (std::abs(diff) < 1e-6) return true;
+    }
+    return false;
+  };
+  const CliResult r = run_cli({"assemble", limited, "--lock", "A0=270", "--json"});
+  EXPECT_EQ(r.status, 3);
+  const json j = json::parse(r.out);
+  ASSERT_EQ(j["limit_blocks"].size(), 1u);
+  EXPECT_EQ(j["limit_blocks"][0]["joint"], "B0");
+  const double needed = j["limit_blocks"][0]["needed"].get<double>();
+  EXPECT_TRUE(matches(needed)) << needed;
+  EXPECT_TRUE(needed < 60 || needed > 130) << needed;
+  EXPECT_NE(r.err.find("joint 'B0' would need"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("outside its limits [60 deg, 130 deg]"), std::string::npos) << r.err;
+  // validate: position p3 (crank 270°) fails, naming the limit.
+  const CliResult v = run_cli({"validate", limited, "--json"});
+  EXPECT_EQ(v.status, 1);
+  const json vj = json::parse(v.out);
+  const json& p3 = vj["positions"][2];
+  ASSERT_EQ(p3["limit_blocks"].size(), 1u);
+  EXPECT_TRUE(matches(p3["limit_blocks"][0]["needed"].get<double>()));
+  EXPECT_NE(p3["failures"][0].get<std::string>().find("joint 'B0' would need"), std::string::npos);
+}
+
+TEST(Trust, ValidateGivesSliderCrankLoopsTheirPressureAngle) {
+  // Slider-crank r = 50, l = 200 mm in line: sin α = r sin θ / l. A design position at crank 90°
+  // has α = asin(1/4).
+  TempDir dir;
+  const std::string file =
+      variant(dir, bundled("slider-crank"), "p.yaml", "analysis: {driver: motor, steps: 360}",
+              "design_positions:\n  - {name: p1, inputs: {O: 90}}\n"
+              "analysis: {driver: motor, steps: 360}");
+  const json j = run_json({"validate", file, "--json"});
+  ASSERT_EQ(j["positions"].size(), 1u);
+  ASSERT_EQ(j["positions"][0]["slider_cranks"].size(), 1u);
+  EXPECT_NEAR(j["positions"][0]["slider_cranks"][0]["pressure_angle"].get<double>(),
+              std::asin(0.25) / kDeg, 1e-9);
+}
+
 // ---- item 3: signed extremes -----------------------------------------------------------------
 
 TEST(Trust, SignedMaxAndMinOfTheDriveAndEveryComponent) {
