@@ -79,6 +79,7 @@ int run_validate(const ValidateCliOptions& opt) {
     j["pass"] = rep.pass();
     j["input"] = rep.input;
     j["generic_rank"] = rep.generic_rank;
+    j["loop_basis"] = loop_basis_size(model);
     j["circuits"] = rep.circuits;
     j["circuit_defect"] = rep.circuit_defect;
     j["branch_defect"] = rep.branch_defect;
@@ -172,7 +173,9 @@ int run_validate(const ValidateCliOptions& opt) {
     for (const PositionReport& p : rep.positions)
       if (!p.four_bars.empty() && !any_loop) {
         any_loop = true;
-        out << "\nfour-bar loops\n";
+        out << "\nfour-bar loops (every 4-cycle of the pin graph; a loop basis of the joint "
+               "graph has "
+            << loop_basis_size(model) << " loops)\n";
         for (const FourBarReport& f : p.four_bars)
           out << "  " << f.joints << "  " << to_string(f.type) << "\n";
       }

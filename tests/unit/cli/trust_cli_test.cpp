@@ -23,6 +23,8 @@
 #include <numbers>
 #include <sstream>
 #include <string>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 #include "support/cli_runner.hpp"
@@ -444,6 +446,79 @@ TEST(Trust, ValidateGivesSliderCrankLoopsTheirPressureAngle) {
   ASSERT_EQ(j["positions"][0]["slider_cranks"].size(), 1u);
   EXPECT_NEAR(j["positions"][0]["slider_cranks"][0]["pressure_angle"].get<double>(),
               std::asin(0.25) / kDeg, 1e-9);
+}
+
+// ---- item 7: every four-bar loop of a Jansen leg ---------------------------------------------
+
+// Jansen's construction at crank angle t (the oracle, written here from the lengths): the pins
+// M, J, K, E, F as circle intersections, as documented in tests/data/loops/gen_jansen.py.
+struct JansenPins {
+  double Mx, My, Jx, Jy, Kx, Ky, Ex, Ey, Fx, Fy, Zx = -38, Zy = -7.8;
+};
+JansenPins jansen_pins(double t) {
+  auto meet = [](double px, double py, double rp, double qx, double qy, double rq, auto better) {
+    const double dx = qx - px, dy = qy - py, D = std::hypot(dx, dy);
+    const double x = (rp * rp - rq * rq + D * D) / (2 * D), y = std::sqrt(rp * rp - x * x);
+    const double ux = dx / D, uy = dy / D;
+    const double ax = px + x * ux - y * uy, ay = py + x * uy + y * ux;
+    const double bx = px + x * ux + y * uy, by = py + x * uy - y * ux;
+    return better(ax, ay, bx, by) ? std::pair{ax, ay} : std::pair{bx, by};
+  };
+  auto upper = [](double, double ay, double, double by) { return ay > by; };
+  auto lower = [](double, double ay, double, double by) { return ay < by; };
+  auto left = [](double ax, double, double bx, double) { return ax < bx; };
+  JansenPins p;
+  p.Mx = 15 * std::cos(t), p.My = 15 * std::sin(t);
+  std::tie(p.Jx, p.Jy) = meet(p.Zx, p.Zy, 41.5, p.Mx, p.My, 50, upper);
+  std::tie(p.Kx, p.Ky) = meet(p.Zx, p.Zy, 39.3, p.Mx, p.My, 61.9, lower);
+  std::tie(p.Ex, p.Ey) = meet(p.Zx, p.Zy, 40.1, p.Jx, p.Jy, 55.8, left);
+  std::tie(p.Fx, p.Fy) = meet(p.Ex, p.Ey, 39.4, p.Kx, p.Ky, 36.7, left);
+  return p;
+}
+
+TEST(Trust, ValidateFindsEveryFourBarLoopOfAJansenLeg) {
+  // Pins O, M, J, Z, K, E, F; four-bar loops O-M-J-Z, O-M-K-Z, M-J-Z-K and the knee Z-E-F-K
+  // (no ground link); loop basis 10 − 8 + 1 = 3.
+  const std::string file = std::string(ORTHOMECH_SOURCE_DIR) + "/tests/data/loops/jansen.yaml";
+  const json j = run_json({"validate", file, "--json"});
+  EXPECT_EQ(j["loop_basis"], 3);
+  const json& loops = j["positions"][0]["four_bars"];
+  ASSERT_EQ(loops.size(), 4u);
+  std::vector<std::string> names;
+  for (const auto& l : loops) names.push_back(l["joints"]);
+  const auto knee = std::find(names.begin(), names.end(), "Zb-Kf-F-E");
+  ASSERT_NE(knee, names.end()) << names[0] << " " << names[1] << " " << names[2] << " " << names[3];
+  // The knee's transmission angle at the design pose (crank 0°): at F (the coupler–follower pin),
+  // between F→K (the foot) and F→E (link f).
+  const JansenPins p = jansen_pins(0.0);
+  const double ux = p.Kx - p.Fx, uy = p.Ky - p.Fy, vx = p.Ex - p.Fx, vy = p.Ey - p.Fy;
+  const double mu = std::atan2(std::abs(ux * vy - uy * vx), ux * vx + uy * vy) / kDeg;
+  EXPECT_NEAR(loops[static_cast<size_t>(knee - names.begin())]["transmission_angle"].get<double>(),
+              mu, 1e-9);
+  // And the ground loop O-Mk-Kk-Zc: at K between K→M and K→Z.
+  const auto k2 = std::find(names.begin(), names.end(), "O-Mk-Kk-Zc");
+  ASSERT_NE(k2, names.end());
+  const double ax = p.Mx - p.Kx, ay = p.My - p.Ky, bx = p.Zx - p.Kx, by = p.Zy - p.Ky;
+  EXPECT_NEAR(loops[static_cast<size_t>(k2 - names.begin())]["transmission_angle"].get<double>(),
+              std::atan2(std::abs(ax * by - ay * bx), ax * bx + ay * by) / kDeg, 1e-9);
+  // cycle reports the same four loops over the turn.
+  const json c = run_json({"cycle", file, "--json", "--steps", "36"});
+  EXPECT_EQ(c["loops"].size(), 4u);
+}
+
+TEST(Trust, WattSixBarSecondLoopTransmissionAngle) {
+  // mechanisms/README.md (computed by scripts/gen_mechanisms.py): over a crank revolution the
+  // transmission angle at D of the Watt II's second loop runs 51.61°…88.29° (2 decimals; the
+  // 1° grid of the sweep is within 0.005° of the extremes there).
+  const json j = run_json({"cycle", bundled("watt-six-bar"), "--json"});
+  bool found = false;
+  for (const auto& l : j["loops"])
+    if (l["loop"] == "B0-C-D-D0") {
+      found = true;
+      EXPECT_NEAR(l["min"]["value"].get<double>(), 51.61, 0.006);
+      EXPECT_NEAR(l["max"]["value"].get<double>(), 88.29, 0.006);
+    }
+  EXPECT_TRUE(found);
 }
 
 // ---- item 3: signed extremes -----------------------------------------------------------------
