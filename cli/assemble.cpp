@@ -313,8 +313,10 @@ void register_assemble(CLI::App& app, const GlobalOptions& globals, int& exit_co
   cmd->add_option("--tolerance", opt->tolerance, "max residual of an assembled position (m, rad)")
       ->check(CLI::PositiveNumber);
   add_units_option(cmd, opt->units);
-  cmd->callback([opt, &globals, &exit_code] {
-    setup_logging(globals);
+  auto log = std::make_shared<LogFlags>();
+  add_log_flags(cmd, *log);
+  cmd->callback([opt, log, &globals, &exit_code] {
+    setup_logging(globals, *log);
     exit_code = run_assemble(*opt);
   });
 }

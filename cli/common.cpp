@@ -18,6 +18,19 @@ void setup_logging(const GlobalOptions& options) {
   spdlog::set_default_logger(logger);
 }
 
+void add_log_flags(CLI::App* cmd, LogFlags& flags) {
+  cmd->add_flag("-q,--quiet", flags.quiet, "only errors on stderr (also before the command)");
+  cmd->add_flag("-v,--verbose", flags.verbose,
+                "debug messages on stderr (also before the command)");
+}
+
+void setup_logging(const GlobalOptions& options, const LogFlags& flags) {
+  GlobalOptions merged = options;
+  merged.quiet = merged.quiet || flags.quiet;
+  merged.verbose = merged.verbose || flags.verbose;
+  setup_logging(merged);
+}
+
 Model load(const std::string& path) {
   spdlog::debug("reading {}", path);
   Model model = load_mechanism(path);

@@ -28,6 +28,14 @@ struct GlobalOptions {
 };
 
 void setup_logging(const GlobalOptions& options);
+// `-q`/`--quiet` and `-v`/`--verbose` after the command too: a subcommand's own flags, merged
+// with the global ones (either place works).
+struct LogFlags {
+  bool quiet = false, verbose = false;
+};
+void add_log_flags(CLI::App* cmd, LogFlags& flags);
+// setup_logging with the global options and the subcommand's flags merged.
+void setup_logging(const GlobalOptions& options, const LogFlags& flags);
 // Loads a mechanism; on failure throws InputError (main maps it to exit code 2). The file's
 // warnings (Model::warnings) go to the log.
 [[nodiscard]] Model load(const std::string& path);

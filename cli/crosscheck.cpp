@@ -96,8 +96,10 @@ void register_crosscheck(CLI::App& app, const GlobalOptions& globals, int& exit_
   cmd->add_option("--seed", opt->seed, "seed of the initial velocity guess (default 1)");
   cmd->add_flag("--json", opt->json, "one JSON document on stdout");
   add_units_option(cmd, opt->units);
-  cmd->callback([opt, &globals, &exit_code] {
-    setup_logging(globals);
+  auto log = std::make_shared<LogFlags>();
+  add_log_flags(cmd, *log);
+  cmd->callback([opt, log, &globals, &exit_code] {
+    setup_logging(globals, *log);
     exit_code = run_crosscheck_cmd(*opt);
   });
 }

@@ -40,7 +40,7 @@ struct CycleCliOptions {
   bool json = false;
   bool positions = false;
   std::string out;
-  bool quiet = false;
+  bool quiet = false, verbose = false;
   bool reverse = false;
   std::string units = "file";
   double speed_fluctuation = 0.0;  // C_s for the flywheel inertia (0: not asked)
@@ -303,6 +303,10 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
     spdlog::error("{}: the sweep stopped: {}", model.file, r.message);
   if (r.status == CycleStatus::stopped_at_dead_point) spdlog::warn("{}: {}", model.file, r.message);
   for (const DeadPoint& d : r.singular_positions) spdlog::info("{}", d.message);
+  spdlog::info(
+      "{} chart switches: the dual form changed its independent velocities {} times along the "
+      "sweep (bookkeeping of the method; the results do not depend on it)",
+      model.file, r.chart_switches);
   if (opt.speed_fluctuation > 0.0 && !metrics.power.flywheel_inertia)
     spdlog::warn(
         "--speed-fluctuation: no flywheel inertia (it needs a revolute driver and a drive)");
@@ -504,7 +508,6 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
         << (r.redundant ? std::to_string(r.redundant) + " redundant equation(s)"
                         : std::string("no redundant equations"))
         << "\n";
-    out << "chart switches  " << r.chart_switches << "\n";
     out << "dead points     " << (r.dead_points.empty() ? "none" : "") << "\n";
     for (const DeadPoint& d : r.dead_points)
       out << "  t = " << fmt(time_u.from_si(d.time), 6) << " " << time_u.name << ": " << d.message
@@ -636,10 +639,12 @@ void register_cycle(CLI::App& app, const GlobalOptions& globals, int& exit_code)
       ->check(CLI::PositiveNumber);
   add_units_option(cmd, opt->units);
   cmd->add_option("--out", opt->out, "directory for cycle.csv, cycle.gp and the plots");
-  cmd->add_flag("--quiet", opt->quiet, "no progress and only errors on stderr");
+  cmd->add_flag("-q,--quiet", opt->quiet, "no progress and only errors on stderr");
+  cmd->add_flag("-v,--verbose", opt->verbose, "debug messages on stderr (also before the command)");
   cmd->callback([opt, &globals, &exit_code] {
     GlobalOptions g = globals;
     g.quiet = g.quiet || opt->quiet;
+    g.verbose = g.verbose || opt->verbose;
     setup_logging(g);
     exit_code = run_cycle_command(*opt, g);
   });

@@ -144,8 +144,10 @@ void register_info(CLI::App& app, const GlobalOptions& globals, int& exit_code) 
   cmd->add_option("file", opt->file, "mechanism file (YAML)")->required();
   cmd->add_flag("--json", opt->json, "one JSON document on stdout");
   add_units_option(cmd, opt->units);
-  cmd->callback([opt, &globals, &exit_code] {
-    setup_logging(globals);
+  auto log = std::make_shared<LogFlags>();
+  add_log_flags(cmd, *log);
+  cmd->callback([opt, log, &globals, &exit_code] {
+    setup_logging(globals, *log);
     exit_code = run_info(*opt);
   });
 }

@@ -293,8 +293,10 @@ void register_simulate(CLI::App& app, const GlobalOptions& globals, int& exit_co
                 "with --json: every body's pose and named point at every output time");
   cmd->add_option("--out", opt->out_dir, "directory for simulate.csv and chart_switches.csv");
   add_units_option(cmd, opt->units);
-  cmd->callback([opt, &globals, &exit_code] {
-    setup_logging(globals);
+  auto log = std::make_shared<LogFlags>();
+  add_log_flags(cmd, *log);
+  cmd->callback([opt, log, &globals, &exit_code] {
+    setup_logging(globals, *log);
     exit_code = run_simulate(*opt);
   });
 }

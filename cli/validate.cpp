@@ -223,8 +223,10 @@ void register_validate(CLI::App& app, const GlobalOptions& globals, int& exit_co
       ->check(CLI::Range(0, 100000));
   cmd->add_option("--seed", opt->seed, "seed of the multi-start (default 1)");
   add_units_option(cmd, opt->units);
-  cmd->callback([opt, &globals, &exit_code] {
-    setup_logging(globals);
+  auto log = std::make_shared<LogFlags>();
+  add_log_flags(cmd, *log);
+  cmd->callback([opt, log, &globals, &exit_code] {
+    setup_logging(globals, *log);
     exit_code = run_validate(*opt);
   });
 }

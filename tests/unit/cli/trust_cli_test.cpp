@@ -521,6 +521,24 @@ TEST(Trust, WattSixBarSecondLoopTransmissionAngle) {
   EXPECT_TRUE(found);
 }
 
+TEST(Trust, QuietAndVerboseAfterTheCommand) {
+  // The gravity slip warns; -q after the command silences it, as before the command.
+  TempDir dir;
+  const std::string slip =
+      variant(dir, bundled("crank-rocker"), "slip.yaml", "g: [0, -9810]", "g: [0, -9.81]");
+  EXPECT_NE(run_cli({"info", slip}).err.find("warning"), std::string::npos);
+  const CliResult after = run_cli({"info", slip, "-q"});
+  EXPECT_EQ(after.status, 0);
+  EXPECT_EQ(after.err, "");
+  const CliResult before = run_cli({"-q", "info", slip});
+  EXPECT_EQ(before.err, "");
+  // -v after the command: the chart switches of a cycle are logged (not in the table).
+  const CliResult v = run_cli({"cycle", bundled("crank-rocker"), "--steps", "36", "-v"});
+  EXPECT_EQ(v.status, 0);
+  EXPECT_NE(v.err.find("chart switches"), std::string::npos) << v.err;
+  EXPECT_EQ(v.out.find("chart switches"), std::string::npos);
+}
+
 // ---- item 3: signed extremes -----------------------------------------------------------------
 
 TEST(Trust, SignedMaxAndMinOfTheDriveAndEveryComponent) {
