@@ -944,8 +944,8 @@ ValidationReport validate_design_positions(const Model& model, const ValidateOpt
         where[k] = 0.0;
         for (const SingularPoint& sp : circuits.back().singular)
           rep.singular_points.push_back(sp.kind + " of input '" + rep.input + "' at " +
-                                        fmt(sp.s, 10) + " on circuit " +
-                                        std::to_string(pr.circuit));
+                                        format_input(sp.s, is_revolute(model, input)) +
+                                        " on circuit " + std::to_string(pr.circuit));
       }
       if (pr.circuit < 0) continue;
       const Circuit& c = circuits[static_cast<size_t>(pr.circuit - 1)];

@@ -539,6 +539,38 @@ TEST(Trust, QuietAndVerboseAfterTheCommand) {
   EXPECT_EQ(v.out.find("chart switches"), std::string::npos);
 }
 
+// ---- item 8: plots ----------------------------------------------------------------------------
+
+TEST(Trust, GnuplotScriptSeparatesForcesAndMomentsAndMarksDeadPoints) {
+  ::setenv("ORTHOMECH_GNUPLOT", "none", 1);
+  TempDir a, b, c;
+  // Slider-crank: slide.|M| is a moment, on the right axis; the input axis over the sweep from
+  // its start (the design crank 45°, 360 steps of 1°); the speed in the title.
+  ASSERT_EQ(run_cli({"cycle", bundled("slider-crank"), "--out", a.path.string()}).status, 0);
+  const std::string gp = test::read_text(a.path / "cycle.gp");
+  EXPECT_NE(gp.find("axes x1y2"), std::string::npos);
+  EXPECT_NE(gp.find("set y2label 'moment [N*mm]'"), std::string::npos);
+  EXPECT_NE(gp.find("set ylabel 'force [N]'"), std::string::npos);
+  EXPECT_NE(gp.find("set xrange [45:404]"), std::string::npos) << gp;
+  EXPECT_NE(gp.find("3000 rpm"), std::string::npos);
+  // Double-rocker passing both dead points: two dashed marks.
+  ASSERT_EQ(run_cli({"cycle", bundled("double-rocker"), "--speed", "10rpm",
+                     "--reverse-at-dead-point", "--out", b.path.string()})
+                .status,
+            0);
+  const std::string gb = test::read_text(b.path / "cycle.gp");
+  EXPECT_NE(gb.find("set arrow 2 from first"), std::string::npos) << gb;
+  EXPECT_EQ(gb.find("set arrow 3 "), std::string::npos);
+  // Andrews' squeezer: ten pin-force series; the ninth repeats a colour with another dash.
+  ASSERT_EQ(
+      run_cli({"cycle", bundled("andrews-squeezer"), "--steps", "12", "--out", c.path.string()})
+          .status,
+      0);
+  const std::string gc = test::read_text(c.path / "cycle.gp");
+  EXPECT_NE(gc.find("lc 1 dt 2"), std::string::npos) << gc;
+  ::unsetenv("ORTHOMECH_GNUPLOT");
+}
+
 // ---- item 3: signed extremes -----------------------------------------------------------------
 
 TEST(Trust, SignedMaxAndMinOfTheDriveAndEveryComponent) {
