@@ -47,7 +47,5 @@ void add_units_option(CLI::App* cmd, std::string& choice);
 [[nodiscard]] UnitSystem resolve_units(const Model& model, const std::string& choice);
 // The `units` object of every JSON document: the unit name of each kind of quantity.
 [[nodiscard]] nlohmann::json units_json(const UnitSystem& units);
-// Help text of an option whose bare numbers are in the file's units.
-inline constexpr const char* kBareInFileUnits = "a bare number is in the file's declared units";
 
 }  // namespace orthomech::cli

@@ -93,7 +93,9 @@ CycleMetrics compute_cycle_metrics(const Model& model, const CycleResult& r,
   const size_t n = r.points.size();
   if (n == 0) return out;
   // A full cycle: positions at t_k = k T / N, k = 0 … N − 1 (no repeated end), so T = N Δt.
-  const bool cyclic = opt.full_cycle && n >= 3 && r.reversals == 0;
+  // (Not when the sweep stopped early, at a dead point or a failure, or reversed.)
+  const bool cyclic =
+      opt.full_cycle && n >= 3 && r.reversals == 0 && r.status == CycleStatus::completed;
   const double dt = n >= 2 ? r.points[1].time - r.points[0].time : 0.0;
   const double period = cyclic ? static_cast<double>(n) * dt : r.points.back().time;
 

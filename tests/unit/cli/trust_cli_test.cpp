@@ -684,6 +684,14 @@ TEST(Trust, EnergyFluctuationAgainstTheEnergies) {
   EXPECT_NEAR(j["flywheel"]["inertia"].get<double>(), dE / (0.02 * w * w), 1e-12);
 }
 
+TEST(Trust, NoTimeRatioWhenTheSweepStopsEarly) {
+  // The double-rocker driven from its rocker stops at the dead point (exit 1): its ranges are
+  // over the part swept, and no time ratio is claimed for a cycle that was not completed.
+  const json j = run_json({"cycle", bundled("double-rocker"), "--speed", "10rpm", "--json"}, 1);
+  ASSERT_FALSE(j["strokes"].empty());
+  for (const auto& s : j["strokes"]) EXPECT_FALSE(s.contains("time_ratio")) << s["name"];
+}
+
 // ---- item 5: positions out -------------------------------------------------------------------
 
 TEST(Trust, BodyPosesAndNamedPointsInTheCsvAndJson) {
