@@ -99,15 +99,15 @@ void parse_velocity(const Model& model, const std::string& text, VecX& u0) {
 int run_assemble(const AssembleOptions& opt) {
   const Model model = load(opt.file);
   const UnitSystem U = resolve_units(model, opt.units);
-  const OutputUnit length_u = output_unit(Quantity::length, U);
-  const OutputUnit angle_u = output_unit(Quantity::angle, U);
-  const OutputUnit energy_u = output_unit(Quantity::moment, U);
+  const OutputUnit length_u = output_unit(Dimension::length, U);
+  const OutputUnit angle_u = output_unit(Dimension::angle, U);
+  const OutputUnit energy_u = output_unit(Dimension::moment, U);
   auto joint_unit = [&](int joint) {
     return std::holds_alternative<Revolute>(model.joints[static_cast<size_t>(joint)].kind)
                ? angle_u
                : length_u;
   };
-  auto measure_unit = [&](const Measure& m) { return output_unit(quantity_of(m.unit), U); };
+  auto measure_unit = [&](const Measure& m) { return output_unit(dimension_of(m.unit), U); };
   AssemblyOptions options;
   options.tolerance = opt.tolerance;
   options.use_limits = !opt.no_limits;

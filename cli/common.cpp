@@ -54,20 +54,20 @@ UnitSystem resolve_units(const Model& model, const std::string& choice) {
 
 nlohmann::json units_json(const UnitSystem& u) {
   nlohmann::json j;
-  const std::pair<const char*, Quantity> kinds[] = {
-      {"length", Quantity::length},
-      {"angle", Quantity::angle},
-      {"mass", Quantity::mass},
-      {"time", Quantity::time},
-      {"force", Quantity::force},
-      {"moment", Quantity::moment},
-      {"energy", Quantity::moment},
-      {"power", Quantity::power},
-      {"velocity", Quantity::velocity},
-      {"angular_velocity", Quantity::angular_velocity},
-      {"acceleration", Quantity::acceleration},
-      {"angular_acceleration", Quantity::angular_acceleration},
-      {"inertia", Quantity::inertia}};
+  const std::pair<const char*, Dimension> kinds[] = {
+      {"length", Dimension::length},
+      {"angle", Dimension::angle},
+      {"mass", Dimension::mass},
+      {"time", Dimension::time},
+      {"force", Dimension::force},
+      {"moment", Dimension::moment},
+      {"energy", Dimension::moment},
+      {"power", Dimension::power},
+      {"velocity", Dimension::velocity},
+      {"angular_velocity", Dimension::angular_velocity},
+      {"acceleration", Dimension::acceleration},
+      {"angular_acceleration", Dimension::angular_acceleration},
+      {"inertia", Dimension::inertia}};
   for (const auto& [name, q] : kinds) j[name] = output_unit(q, u).name;
   return j;
 }

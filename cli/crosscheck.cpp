@@ -29,7 +29,7 @@ struct CrosscheckCliOptions {
 int run_crosscheck_cmd(const CrosscheckCliOptions& opt) {
   const Model model = load(opt.file);
   const UnitSystem U = resolve_units(model, opt.units);
-  const OutputUnit time_u = output_unit(Quantity::time, U);
+  const OutputUnit time_u = output_unit(Dimension::time, U);
   CrosscheckOptions co;
   co.samples = opt.samples;
   co.t_end = opt.t_end * unit_system(model.units).time_si;  // bare: the file's time unit

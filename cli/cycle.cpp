@@ -132,7 +132,7 @@ std::string speed_text(const Driver& d, bool angular, const UnitSystem& u) {
     return "harmonic, amplitude " + format_input(d.amplitude, angular, u) + " about " +
            format_input(d.initial, angular, u) + ", " + fmt(d.frequency) + " Hz";
   if (d.profile == Profile::polynomial) return "polynomial";
-  const OutputUnit v = output_unit(angular ? Quantity::angular_velocity : Quantity::velocity, u);
+  const OutputUnit v = output_unit(angular ? Dimension::angular_velocity : Dimension::velocity, u);
   return angular ? "constant speed " + fmt(d.speed * 60.0 / (2.0 * std::numbers::pi)) + " rpm (" +
                        fmt(v.from_si(d.speed)) + " " + v.name + ")"
                  : "constant speed " + fmt(v.from_si(d.speed)) + " " + v.name;
@@ -167,21 +167,22 @@ int run_in_directory(const std::filesystem::path& dir, const std::string& progra
 // accelerations of the bodies, drive, reactions and energies, in the output units.
 nlohmann::json positions_json(const Model& model, const CycleResult& r, bool angular,
                               const UnitSystem& u) {
-  const OutputUnit input_u = output_unit(angular ? Quantity::angle : Quantity::length, u);
-  const OutputUnit time_u = output_unit(Quantity::time, u);
-  const OutputUnit drive_u = output_unit(angular ? Quantity::moment : Quantity::force, u);
-  const OutputUnit energy_u = output_unit(Quantity::moment, u);
-  const OutputUnit length_u = output_unit(Quantity::length, u);
-  const OutputUnit angle_u = output_unit(Quantity::angle, u);
-  const OutputUnit vel[] = {output_unit(Quantity::velocity, u), output_unit(Quantity::velocity, u),
-                            output_unit(Quantity::angular_velocity, u)};
-  const OutputUnit acc[] = {output_unit(Quantity::acceleration, u),
-                            output_unit(Quantity::acceleration, u),
-                            output_unit(Quantity::angular_acceleration, u)};
+  const OutputUnit input_u = output_unit(angular ? Dimension::angle : Dimension::length, u);
+  const OutputUnit time_u = output_unit(Dimension::time, u);
+  const OutputUnit drive_u = output_unit(angular ? Dimension::moment : Dimension::force, u);
+  const OutputUnit energy_u = output_unit(Dimension::moment, u);
+  const OutputUnit length_u = output_unit(Dimension::length, u);
+  const OutputUnit angle_u = output_unit(Dimension::angle, u);
+  const OutputUnit vel[] = {output_unit(Dimension::velocity, u),
+                            output_unit(Dimension::velocity, u),
+                            output_unit(Dimension::angular_velocity, u)};
+  const OutputUnit acc[] = {output_unit(Dimension::acceleration, u),
+                            output_unit(Dimension::acceleration, u),
+                            output_unit(Dimension::angular_acceleration, u)};
   std::vector<OutputUnit> measure_u, component_u;
-  for (const Measure& m : model.measures) measure_u.push_back(output_unit(quantity_of(m.unit), u));
+  for (const Measure& m : model.measures) measure_u.push_back(output_unit(dimension_of(m.unit), u));
   for (const ReactionComponent& c : r.components)
-    component_u.push_back(output_unit(quantity_of(c.unit), u));
+    component_u.push_back(output_unit(dimension_of(c.unit), u));
   std::vector<double> pose;
   nlohmann::json pts = nlohmann::json::array();
   for (const DrivenPointView& p : r.points) {
@@ -312,15 +313,15 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
         "--speed-fluctuation: no flywheel inertia (it needs a revolute driver and a drive)");
 
   // Units of the outputs.
-  const OutputUnit input_u = output_unit(angular ? Quantity::angle : Quantity::length, U);
-  const OutputUnit time_u = output_unit(Quantity::time, U);
-  const OutputUnit power_u = output_unit(Quantity::power, U);
-  const OutputUnit energy_u = output_unit(Quantity::moment, U);
-  const OutputUnit inertia_u = output_unit(Quantity::inertia, U);
-  const OutputUnit angle_u = output_unit(Quantity::angle, U);
+  const OutputUnit input_u = output_unit(angular ? Dimension::angle : Dimension::length, U);
+  const OutputUnit time_u = output_unit(Dimension::time, U);
+  const OutputUnit power_u = output_unit(Dimension::power, U);
+  const OutputUnit energy_u = output_unit(Dimension::moment, U);
+  const OutputUnit inertia_u = output_unit(Dimension::inertia, U);
+  const OutputUnit angle_u = output_unit(Dimension::angle, U);
   const OutputUnit speed_u =
-      output_unit(angular ? Quantity::angular_velocity : Quantity::velocity, U);
-  auto unit_of = [&](const std::string& si) { return output_unit(quantity_of(si), U); };
+      output_unit(angular ? Dimension::angular_velocity : Dimension::velocity, U);
+  auto unit_of = [&](const std::string& si) { return output_unit(dimension_of(si), U); };
   // Angles at extremes in [0°, 360°) (the sweep line keeps the continuous input).
   auto wrapped = [angular](double s) {
     if (!angular) return s;
@@ -480,7 +481,7 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
     for (const LimitExcursion& l : metrics.limits) {
       const Joint& lj = model.joints[static_cast<size_t>(l.joint)];
       const OutputUnit u = output_unit(
-          std::holds_alternative<Revolute>(lj.kind) ? Quantity::angle : Quantity::length, U);
+          std::holds_alternative<Revolute>(lj.kind) ? Dimension::angle : Dimension::length, U);
       limits.push_back({{"joint", lj.name},
                         {"limits", {u.from_si(lj.limits->x()), u.from_si(lj.limits->y())}},
                         {"first", extreme(l.first, u)},

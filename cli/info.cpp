@@ -49,10 +49,10 @@ int run_info(const InfoOptions& opt) {
   const Mobility mob = compute_mobility(model, q);
   // How far the projection moved the bodies, in the output units: translation and rotation.
   const UnitSystem U = resolve_units(model, opt.units);
-  const OutputUnit length_u = output_unit(Quantity::length, U);
-  const OutputUnit angle_u = output_unit(Quantity::angle, U);
-  const OutputUnit mass_u = output_unit(Quantity::mass, U);
-  const OutputUnit inertia_u = output_unit(Quantity::inertia, U);
+  const OutputUnit length_u = output_unit(Dimension::length, U);
+  const OutputUnit angle_u = output_unit(Dimension::angle, U);
+  const OutputUnit mass_u = output_unit(Dimension::mass, U);
+  const OutputUnit inertia_u = output_unit(Dimension::inertia, U);
   double moved_length = 0.0, moved_angle = 0.0;
   for (const Body& b : model.bodies) {
     moved_length =
@@ -96,7 +96,7 @@ int run_info(const InfoOptions& opt) {
     j["joints"] = joints;
     nlohmann::json measures = nlohmann::json::array();
     for (const Measure& m : model.measures)
-      measures.push_back({{"name", m.name}, {"unit", output_unit(quantity_of(m.unit), U).name}});
+      measures.push_back({{"name", m.name}, {"unit", output_unit(dimension_of(m.unit), U).name}});
     j["measures"] = measures;
     out << j.dump(2) << '\n';
   } else {
@@ -126,7 +126,7 @@ int run_info(const InfoOptions& opt) {
     if (!model.measures.empty()) {
       out << "measures\n";
       for (const Measure& m : model.measures)
-        out << "  " << m.name << " [" << output_unit(quantity_of(m.unit), U).name << "]\n";
+        out << "  " << m.name << " [" << output_unit(dimension_of(m.unit), U).name << "]\n";
     }
   }
   std::cout << out.str();  // all at once: no partial output on failure

@@ -42,14 +42,15 @@ struct SimulateUnits {
   std::vector<PositionColumn> position_columns;
   SimulateUnits(const Model& model, const SimulateResult& res, const UnitSystem& u)
       : system(u),
-        time(output_unit(Quantity::time, u)),
-        energy(output_unit(Quantity::moment, u)),
-        length(output_unit(Quantity::length, u)),
+        time(output_unit(Dimension::time, u)),
+        energy(output_unit(Dimension::moment, u)),
+        length(output_unit(Dimension::length, u)),
         position_columns(orthomech::position_columns(model)) {
-    for (const Measure& m : model.measures) measures.push_back(output_unit(quantity_of(m.unit), u));
-    for (const auto& c : res.components) components.push_back(output_unit(quantity_of(c.unit), u));
+    for (const Measure& m : model.measures)
+      measures.push_back(output_unit(dimension_of(m.unit), u));
+    for (const auto& c : res.components) components.push_back(output_unit(dimension_of(c.unit), u));
     for (const PositionColumn& c : position_columns)
-      positions.push_back(output_unit(c.quantity, u));
+      positions.push_back(output_unit(c.dimension, u));
   }
 };
 
@@ -245,7 +246,7 @@ int run_simulate(const SimulateCliOptions& opt) {
         << g(U.energy.from_si(res.energy_final)) << eu << ", max drift "
         << g(U.energy.from_si(res.energy_max_drift), 3) << eu << " (relative " << g(rel_drift, 3)
         << ")\n";
-    out << "residual    max |f| " << g(res.max_constraint_residual, 3);
+    out << "residual    max |f| " << g(res.max_constraint_residual, 3) << " (m or rad)";
     if (so.form == DynamicsForm::primal) out << ", max |J| " << g(res.max_invariant_J, 3);
     out << "\n\n";
     out << "t [" << U.time.name << "]";

@@ -61,8 +61,8 @@ int run_validate(const ValidateCliOptions& opt) {
       !rep.input.empty() &&
       std::holds_alternative<Revolute>(
           model.joints[static_cast<size_t>(model.find_joint(rep.input))].kind);
-  const OutputUnit length_u = output_unit(Quantity::length, U);
-  const OutputUnit angle_u = output_unit(Quantity::angle, U);
+  const OutputUnit length_u = output_unit(Dimension::length, U);
+  const OutputUnit angle_u = output_unit(Dimension::angle, U);
   const OutputUnit in_u = input_angular ? angle_u : length_u;
   const double in_scale = 1.0 / in_u.si;
   const std::string in_unit = "[" + in_u.name + "]";

@@ -61,14 +61,14 @@ void write_file_atomically(const std::filesystem::path& file, const std::string&
 std::vector<PositionColumn> position_columns(const Model& model) {
   std::vector<PositionColumn> cols;
   for (const Body& b : model.bodies) {
-    cols.push_back({b.name + ".x", Quantity::length});
-    cols.push_back({b.name + ".y", Quantity::length});
-    if (b.kind == BodyKind::rigid) cols.push_back({b.name + ".angle", Quantity::angle});
+    cols.push_back({b.name + ".x", Dimension::length});
+    cols.push_back({b.name + ".y", Dimension::length});
+    if (b.kind == BodyKind::rigid) cols.push_back({b.name + ".angle", Dimension::angle});
   }
   for (const Body& b : model.bodies)
     for (const auto& [name, local] : b.points) {
-      cols.push_back({b.name + "." + name + ".x", Quantity::length});
-      cols.push_back({b.name + "." + name + ".y", Quantity::length});
+      cols.push_back({b.name + "." + name + ".x", Dimension::length});
+      cols.push_back({b.name + "." + name + ".y", Dimension::length});
     }
   return cols;
 }
@@ -113,32 +113,32 @@ CycleColumns write_cycle_csv(const std::filesystem::path& file, const Model& mod
     out << (col ? "," : "") << field(name + " [" + unit.name + "]");
     return ++col;
   };
-  const OutputUnit input_unit = output_unit(angular ? Quantity::angle : Quantity::length, units);
-  const OutputUnit time_unit = output_unit(Quantity::time, units);
-  const OutputUnit drive_unit = output_unit(angular ? Quantity::moment : Quantity::force, units);
+  const OutputUnit input_unit = output_unit(angular ? Dimension::angle : Dimension::length, units);
+  const OutputUnit time_unit = output_unit(Dimension::time, units);
+  const OutputUnit drive_unit = output_unit(angular ? Dimension::moment : Dimension::force, units);
   cols.input_display = head("input", input_unit);
   head("time", time_unit);
   std::vector<OutputUnit> measure_units;
   for (const Measure& m : model.measures) {
-    measure_units.push_back(output_unit(quantity_of(m.unit), units));
+    measure_units.push_back(output_unit(dimension_of(m.unit), units));
     head(m.name, measure_units.back());
   }
   const std::vector<PositionColumn> positions = position_columns(model);
   std::vector<OutputUnit> position_units;
   for (const PositionColumn& c : positions) {
-    position_units.push_back(output_unit(c.quantity, units));
+    position_units.push_back(output_unit(c.dimension, units));
     head(c.name, position_units.back());
   }
   // Velocity and acceleration of every body's centre of mass, and angular ones.
   // The columns follow u and u̇ of the body: (vx, vy[, ω]) then (ax, ay[, α]).
   static const char* const kVelocity[] = {"vx", "vy", "omega"};
   static const char* const kAcceleration[] = {"ax", "ay", "alpha"};
-  const OutputUnit v_unit[] = {output_unit(Quantity::velocity, units),
-                               output_unit(Quantity::velocity, units),
-                               output_unit(Quantity::angular_velocity, units)};
-  const OutputUnit a_unit[] = {output_unit(Quantity::acceleration, units),
-                               output_unit(Quantity::acceleration, units),
-                               output_unit(Quantity::angular_acceleration, units)};
+  const OutputUnit v_unit[] = {output_unit(Dimension::velocity, units),
+                               output_unit(Dimension::velocity, units),
+                               output_unit(Dimension::angular_velocity, units)};
+  const OutputUnit a_unit[] = {output_unit(Dimension::acceleration, units),
+                               output_unit(Dimension::acceleration, units),
+                               output_unit(Dimension::angular_acceleration, units)};
   for (const Body& b : model.bodies) {
     for (int i = 0; i < b.nu(); ++i) head(b.name + "." + kVelocity[i], v_unit[i]);
     for (int i = 0; i < b.nu(); ++i) head(b.name + "." + kAcceleration[i], a_unit[i]);
@@ -146,16 +146,16 @@ CycleColumns write_cycle_csv(const std::filesystem::path& file, const Model& mod
   cols.drive = head("drive", drive_unit);
   std::vector<OutputUnit> component_units;
   for (const ReactionComponent& c : result.components) {
-    component_units.push_back(output_unit(quantity_of(c.unit), units));
+    component_units.push_back(output_unit(dimension_of(c.unit), units));
     head(c.name, component_units.back());
   }
   std::vector<OutputUnit> magnitude_units;
   for (const ReactionMagnitude& m : magnitudes) {
-    const Quantity qm = quantity_of(m.unit);
+    const Dimension qm = dimension_of(m.unit);
     magnitude_units.push_back(output_unit(qm, units));
     const int c = head(m.name, magnitude_units.back());
     cols.magnitudes.push_back(c);
-    (qm == Quantity::force ? cols.forces : cols.moments).push_back(c);
+    (qm == Dimension::force ? cols.forces : cols.moments).push_back(c);
   }
   out << ",limits\n";
   std::vector<double> pose;
@@ -197,7 +197,7 @@ void write_cycle_gnuplot(const std::filesystem::path& script, const std::string&
                          const CycleColumns& columns, bool angular, const UnitSystem& units,
                          const std::string& speed_text) {
   std::ostringstream gp;
-  const OutputUnit input_unit = output_unit(angular ? Quantity::angle : Quantity::length, units);
+  const OutputUnit input_unit = output_unit(angular ? Dimension::angle : Dimension::length, units);
   const std::string x =
       std::string(angular ? "input angle" : "input displacement") + " [" + input_unit.name + "]";
   gp << "# orthomech cycle: drive and joint reactions of " << model.name
@@ -234,14 +234,14 @@ void write_cycle_gnuplot(const std::filesystem::path& script, const std::string&
     gp << "set terminal pngcairo size 1000,560\nset output " << gp_string(stem + ".png") << '\n'
        << plot << "\nset output\n";
   };
-  const OutputUnit drive_unit = output_unit(angular ? Quantity::moment : Quantity::force, units);
+  const OutputUnit drive_unit = output_unit(angular ? Dimension::moment : Dimension::force, units);
   const std::string title_tail = speed_text.empty() ? "" : " (" + speed_text + ")";
   plot_both("drive", model.name + ": drive" + title_tail, "drive [" + drive_unit.name + "]", "",
             "plot " + gp_string(csv_name) + " using " + std::to_string(columns.input_display) +
                 ":" + std::to_string(columns.drive) + " with lines" + style(0) + " title 'drive'");
   // Forces on the left axis, moments on the right.
-  const std::string force_unit = output_unit(Quantity::force, units).name;
-  const std::string moment_unit = output_unit(Quantity::moment, units).name;
+  const std::string force_unit = output_unit(Dimension::force, units).name;
+  const std::string moment_unit = output_unit(Dimension::moment, units).name;
   std::string plot;
   for (size_t i = 0; i < magnitudes.size(); ++i) {
     const bool moment = std::find(columns.moments.begin(), columns.moments.end(),

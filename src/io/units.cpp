@@ -95,64 +95,64 @@ UnitSystem output_units(const Model& model, const std::string& choice) {
   throw std::invalid_argument("--units must be 'file' or 'si', got '" + choice + "'");
 }
 
-OutputUnit output_unit(Quantity q, const UnitSystem& u) {
+OutputUnit output_unit(Dimension q, const UnitSystem& u) {
   const std::string &L = u.length, &A = u.angle, &T = u.time, &F = u.force;
   switch (q) {
-    case Quantity::none:
+    case Dimension::none:
       return {"1", 1.0};
-    case Quantity::length:
+    case Dimension::length:
       return {L, u.length_si};
-    case Quantity::angle:
+    case Dimension::angle:
       return {A, u.angle_si};
-    case Quantity::mass:
+    case Dimension::mass:
       return {u.mass, u.mass_si};
-    case Quantity::time:
+    case Dimension::time:
       return {T, u.time_si};
-    case Quantity::force:
+    case Dimension::force:
       return {F, u.force_si};
-    case Quantity::moment:
+    case Dimension::moment:
       return {F + "*" + L, u.force_si * u.length_si};
-    case Quantity::velocity:
+    case Dimension::velocity:
       return {L + "/" + T, u.length_si / u.time_si};
-    case Quantity::angular_velocity:
+    case Dimension::angular_velocity:
       return {A + "/" + T, u.angle_si / u.time_si};
-    case Quantity::acceleration:
+    case Dimension::acceleration:
       return {L + "/" + T + "^2", u.length_si / (u.time_si * u.time_si)};
-    case Quantity::angular_acceleration:
+    case Dimension::angular_acceleration:
       return {A + "/" + T + "^2", u.angle_si / (u.time_si * u.time_si)};
-    case Quantity::power:
+    case Dimension::power:
       return {F + "*" + L + "/" + T, u.force_si * u.length_si / u.time_si};
-    case Quantity::inertia:
+    case Dimension::inertia:
       return {u.mass + "*" + L + "^2", u.mass_si * u.length_si * u.length_si};
-    case Quantity::frequency:
+    case Dimension::frequency:
       return {"1/" + T, 1.0 / u.time_si};
   }
   return {"1", 1.0};
 }
 
-Quantity quantity_of(const std::string& s) {
-  static const std::vector<std::pair<std::string, Quantity>> names = {
-      {"m", Quantity::length},
-      {"rad", Quantity::angle},
-      {"kg", Quantity::mass},
-      {"s", Quantity::time},
-      {"N", Quantity::force},
-      {"N*m", Quantity::moment},
-      {"J", Quantity::moment},
-      {"m/s", Quantity::velocity},
-      {"rad/s", Quantity::angular_velocity},
-      {"m/s^2", Quantity::acceleration},
-      {"rad/s^2", Quantity::angular_acceleration},
-      {"W", Quantity::power},
-      {"kg*m^2", Quantity::inertia},
-      {"Hz", Quantity::frequency}};
+Dimension dimension_of(const std::string& s) {
+  static const std::vector<std::pair<std::string, Dimension>> names = {
+      {"m", Dimension::length},
+      {"rad", Dimension::angle},
+      {"kg", Dimension::mass},
+      {"s", Dimension::time},
+      {"N", Dimension::force},
+      {"N*m", Dimension::moment},
+      {"J", Dimension::moment},
+      {"m/s", Dimension::velocity},
+      {"rad/s", Dimension::angular_velocity},
+      {"m/s^2", Dimension::acceleration},
+      {"rad/s^2", Dimension::angular_acceleration},
+      {"W", Dimension::power},
+      {"kg*m^2", Dimension::inertia},
+      {"Hz", Dimension::frequency}};
   for (const auto& [n, q] : names)
     if (n == s) return q;
-  return Quantity::none;
+  return Dimension::none;
 }
 
 std::string format_input(double value, bool angular, const UnitSystem& units) {
-  const OutputUnit unit = output_unit(angular ? Quantity::angle : Quantity::length, units);
+  const OutputUnit unit = output_unit(angular ? Dimension::angle : Dimension::length, units);
   double v = std::round(unit.from_si(value) * 1e6) / 1e6;
   if (v == 0.0) v = 0.0;  // no "-0"
   char buf[48];

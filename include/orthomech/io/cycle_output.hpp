@@ -17,7 +17,7 @@ namespace orthomech {
 // "coupler.P.y"), in this order.
 struct PositionColumn {
   std::string name;  // "crank.x", "crank.angle", "coupler.P.y"
-  Quantity quantity = Quantity::length;
+  Dimension dimension = Dimension::length;
 };
 [[nodiscard]] std::vector<PositionColumn> position_columns(const Model& model);
 // Their values at q (SI), in position_columns order; out is resized.

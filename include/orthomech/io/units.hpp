@@ -24,7 +24,7 @@ struct UnitSystem {
 // "file" (the model's declared units) or "si". Throws std::invalid_argument otherwise.
 [[nodiscard]] UnitSystem output_units(const Model& model, const std::string& choice);
 
-enum class Quantity {
+enum class Dimension {
   none,  // dimensionless: written as is
   length,
   angle,
@@ -46,10 +46,10 @@ struct OutputUnit {
   double si = 1.0;
   [[nodiscard]] double from_si(double v) const { return v / si; }
 };
-[[nodiscard]] OutputUnit output_unit(Quantity q, const UnitSystem& units);
-// The quantity of an SI unit name as the library writes them ("m", "m/s", "m/s^2", "rad", "rad/s",
-// "rad/s^2", "N", "N*m", "J", "W", "kg", "kg*m^2", "s"); Quantity::none for anything else.
-[[nodiscard]] Quantity quantity_of(const std::string& si_unit);
+[[nodiscard]] OutputUnit output_unit(Dimension q, const UnitSystem& units);
+// The dimension of an SI unit name as the library writes them ("m", "m/s", "m/s^2", "rad", "rad/s",
+// "rad/s^2", "N", "N*m", "J", "W", "kg", "kg*m^2", "s"); Dimension::none for anything else.
+[[nodiscard]] Dimension dimension_of(const std::string& si_unit);
 // A value and its unit for people, in `units`: "90 deg", "12.5 mm" (input rounded to 1e-6 of the
 // unit, never "-0").
 [[nodiscard]] std::string format_input(double value, bool angular, const UnitSystem& units);
