@@ -207,6 +207,45 @@ CycleMetrics compute_cycle_metrics(const Model& model, const CycleResult& r,
     for (size_t k = 0; k < n; ++k) y[k] = r.points[k].measures[i];
     out.strokes.push_back(stroke(r, m.name, m.unit, y, cyclic, period));
   }
+  // Named points that no joint uses (tracer points: a coupler point, a foot) and no measure
+  // reports: the range of their x and y.
+  auto used_by_joint = [&](int body, const Vec2& local) {
+    for (const Joint& j : model.joints) {
+      const PointRef* refs[2] = {nullptr, nullptr};
+      std::visit(
+          [&](const auto& k) {
+            if constexpr (requires { k.pi; }) refs[0] = &k.pi, refs[1] = &k.pj;
+          },
+          j.kind);
+      for (const PointRef* ref : refs)
+        if (ref && ref->body == body) {
+          const Body& b = model.bodies[static_cast<size_t>(body)];
+          if ((ref->s + b.com_local - local).norm() < 1e-12) return true;
+        }
+    }
+    return false;
+  };
+  for (size_t b = 0; b < model.bodies.size(); ++b) {
+    const Body& body = model.bodies[b];
+    for (const auto& [name, local] : body.points) {
+      if (used_by_joint(static_cast<int>(b), local)) continue;
+      for (int axis = 0; axis < 2; ++axis) {
+        bool measured = false;
+        for (const Measure& m : model.measures)
+          if (const auto* pc = std::get_if<PointCoordinate>(&m.kind))
+            measured = measured || (m.derivative == 0 && pc->axis == axis &&
+                                    pc->point.body == static_cast<int>(b) &&
+                                    (pc->point.s + body.com_local - local).norm() < 1e-12);
+        if (measured) continue;
+        const PointRef ref{static_cast<int>(b), local - body.com_local, ""};
+        for (size_t k = 0; k < n; ++k)
+          y[k] =
+              compute_scalar(model, PointCoordinate{ref, axis}, VecX(r.points[k].q), nullptr).value;
+        out.strokes.push_back(
+            stroke(r, body.name + "." + name + (axis == 0 ? ".x" : ".y"), "m", y, cyclic, period));
+      }
+    }
+  }
 
   // ---- joints outside their limits ---------------------------------------------------------
   for (size_t j = 0; j < model.joints.size(); ++j) {

@@ -8,9 +8,11 @@
 //     flywheel inertia I = ΔE / (C_s ω̄²) for a coefficient of speed fluctuation C_s
 //     [Shigley, Mechanical Engineering Design, §16-12]: a flywheel of that inertia on the input
 //     keeps (ω_max − ω_min)/ω̄ ≤ C_s;
-//   - every prismatic joint and every position measure: extreme values (with where; refined by a
-//     parabola through the extreme sample and its neighbours), range (the stroke) and, over a
-//     full cycle, the time ratio forward/return (time from min to max over time from max to min).
+//   - every prismatic joint, every position measure and the x and y of every named point that no
+//     joint uses and no measure reports (a tracer point: coupler point, foot): extreme values (with
+//     where; refined by a parabola through the extreme sample and its neighbours), range (the
+//     stroke) and, over a full cycle, the time ratio forward/return (time from min to max over time
+//     from max to min).
 // Positions flagged `singular` are left out (their drive is not meaningful).
 #include <optional>
 #include <string>

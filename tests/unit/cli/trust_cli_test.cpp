@@ -684,6 +684,38 @@ TEST(Trust, EnergyFluctuationAgainstTheEnergies) {
   EXPECT_NEAR(j["flywheel"]["inertia"].get<double>(), dE / (0.02 * w * w), 1e-12);
 }
 
+TEST(Trust, TracerPointRangesWithoutAMeasure) {
+  // The crank-rocker without its P_x/P_y measures: the coupler point P (used by no joint) gets
+  // its x and y ranges all the same, equal to those of the measures in the original file.
+  TempDir dir;
+  std::string text = test::read_text(bundled("crank-rocker"));
+  for (const char* m : {"  - {name: P_x, type: point, point: coupler.P, component: x}\n",
+                        "  - {name: P_y, type: point, point: coupler.P, component: y}\n"}) {
+    const size_t at = text.find(m);
+    ASSERT_NE(at, std::string::npos);
+    text.erase(at, std::string(m).size());
+  }
+  const fs::path file = dir.path / "no-p.yaml";
+  std::ofstream(file) << text;
+  const json a = run_json({"cycle", file.string(), "--json"});
+  const json b = run_json({"cycle", bundled("crank-rocker"), "--json"});
+  auto find = [](const json& j, const std::string& name) {
+    for (const auto& s : j["strokes"])
+      if (s["name"] == name) return s;
+    return json();
+  };
+  for (const auto& [tracer, measure] :
+       {std::pair{"coupler.P.x", "P_x"}, std::pair{"coupler.P.y", "P_y"}}) {
+    const json s = find(a, tracer), m = find(b, measure);
+    ASSERT_FALSE(s.is_null()) << tracer;
+    ASSERT_FALSE(m.is_null()) << measure;
+    EXPECT_NEAR(s["range"].get<double>(), m["range"].get<double>(), 1e-9) << tracer;
+    EXPECT_NEAR(s["max"]["value"].get<double>(), m["max"]["value"].get<double>(), 1e-9);
+    EXPECT_TRUE(find(b, tracer).is_null()) << "a measured point is not reported twice";
+  }
+  EXPECT_TRUE(find(a, "coupler.A.x").is_null()) << "joint points are not tracers";
+}
+
 TEST(Trust, NoTimeRatioWhenTheSweepStopsEarly) {
   // The double-rocker driven from its rocker stops at the dead point (exit 1): its ranges are
   // over the part swept, and no time ratio is claimed for a cycle that was not completed.
