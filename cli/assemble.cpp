@@ -143,8 +143,11 @@ int run_assemble(const AssembleOptions& opt) {
     std::ifstream in(opt.file, std::ios::binary);
     std::ostringstream text;
     text << in.rdbuf();
+    // The edited text is checked to re-read as the assembled mechanism before anything is
+    // written; a file that cannot be edited so is an InputError (exit 2, printed once by main).
+    const std::string edited = replace_design_poses(text.str(), opt.file, model, res.q);
     try {
-      write_file_atomically(write_to, replace_design_poses(text.str(), opt.file, model, res.q));
+      write_file_atomically(write_to, edited);
     } catch (const std::runtime_error& e) {  // e.g. no such directory, no permission
       spdlog::error("{}", e.what());
       return kBadInput;
