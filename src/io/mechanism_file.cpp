@@ -911,7 +911,7 @@ Model parse_text(const std::string& text, const std::string& origin) {
     return Reader(origin).read(root);
   } catch (const YAML::Exception& e) {  // anything yaml-cpp still throws: report, do not crash
     throw InputError(
-        {origin, e.mark.is_null() ? 0 : e.mark.line + 1, e.mark.is_null() ? 0 : e.mark.column + 1},
+        {origin, e.mark.is_null() ? 1 : e.mark.line + 1, e.mark.is_null() ? 1 : e.mark.column + 1},
         "YAML", e.msg);
   }
 }
