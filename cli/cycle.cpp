@@ -23,6 +23,7 @@
 
 #include "commands.hpp"
 #include "common.hpp"
+#include "orthomech/error.hpp"
 #include "orthomech/io/cycle_output.hpp"
 #include "orthomech/io/units.hpp"
 
@@ -228,7 +229,12 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
   const std::vector<SeriesSummary> summary = summarize_cycle(r, magnitudes, drive_unit);
   const Joint& joint = model.joints[static_cast<size_t>(co.driver.joint)];
 
-  if (r.status == CycleStatus::invalid_request) throw CLI::ValidationError(model.file, r.message);
+  if (r.status == CycleStatus::invalid_request) {
+    // A driver taken from the file as written: the problem is the file's, at the driver's line.
+    if (opt.speed.empty() && opt.from.empty() && opt.to.empty() && co.driver.where.line > 0)
+      throw InputError(co.driver.where, "driver '" + co.driver.name + "'", r.message);
+    throw CLI::ValidationError(model.file, r.message);
+  }
   if (r.status == CycleStatus::failed && r.points.empty()) {
     spdlog::error("{}: the cycle cannot be computed: {}", model.file, r.message);
     return kNumerical;
@@ -405,7 +411,7 @@ void register_cycle(CLI::App& app, const GlobalOptions& globals, int& exit_code)
   cmd->add_option("--speed", opt->speed,
                   "constant input speed, e.g. 300rpm, 31.4rad/s, 90deg/s, 0.5m/s (bare: SI)");
   cmd->add_option("--steps", opt->steps, "positions per cycle (default: the file's, else 360)")
-      ->check(CLI::Range(2, 100000));
+      ->check(CLI::Range(2, kMaxCycleSteps));
   cmd->add_option("--from", opt->from, "start input, e.g. 30deg, 20mm (bare: SI)");
   cmd->add_option("--to", opt->to, "end input: sweep the range instead of a full turn");
   cmd->add_flag("--reverse-at-dead-point", opt->reverse,

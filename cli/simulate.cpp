@@ -15,6 +15,7 @@
 
 #include "commands.hpp"
 #include "common.hpp"
+#include "orthomech/io/units.hpp"
 
 namespace orthomech::cli {
 
@@ -49,16 +50,14 @@ InitialRate parse_rate(const Model& model, const std::string& text) {
   if (m < 0)
     throw CLI::ValidationError("--rate",
                                "--rate '" + text + "': measure '" + name + "' is not defined");
-  try {
-    return {m, std::stod(text.substr(eq + 1))};
-  } catch (const std::exception&) {
-    throw CLI::ValidationError(
-        "--rate", "--rate '" + text + "': '" + text.substr(eq + 1) + "' is not a number");
-  }
+  return {m, parse_number(text.substr(eq + 1), "--rate " + name)};
 }
 
 void write_csv(const std::filesystem::path& dir, const Model& model, const SimulateResult& res) {
-  std::filesystem::create_directories(dir);
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec)
+    throw CLI::ValidationError("--out", "cannot create " + dir.string() + ": " + ec.message());
   std::ofstream out(dir / "simulate.csv");
   out.precision(12);
   out << "t";
@@ -77,6 +76,9 @@ void write_csv(const std::filesystem::path& dir, const Model& model, const Simul
   sw << "t,from,to\n";
   for (const ChartSwitch& c : res.chart_switches)
     sw << g(c.t, 12) << ",\"" << c.from << "\",\"" << c.to << "\"\n";
+  out.close();
+  sw.close();
+  if (!out || !sw) throw CLI::ValidationError("--out", "cannot write the files in " + dir.string());
 }
 
 // The time histories, one array per quantity over the output times (columns, as plotting tools
@@ -209,12 +211,16 @@ void register_simulate(CLI::App& app, const GlobalOptions& globals, int& exit_co
   CLI::App* cmd = app.add_subcommand(
       "simulate", "forward dynamics: time histories of measures, reactions, energy, residuals");
   cmd->add_option("file", opt->file, "mechanism file (YAML)")->required();
-  cmd->add_option("--t-end", opt->t_end, "end time (s)")->required()->check(CLI::PositiveNumber);
-  cmd->add_option("--rtol", opt->rtol, "relative tolerance")->check(CLI::PositiveNumber);
-  cmd->add_option("--atol", opt->atol, "absolute tolerance")->check(CLI::PositiveNumber);
-  cmd->add_option("--dt-out", opt->dt_out, "output interval (s; default t_end/100)")
-      ->check(CLI::PositiveNumber);
-  cmd->add_option("--max-step", opt->max_step, "largest step (s)")->check(CLI::PositiveNumber);
+  cmd->add_option("--t-end", opt->t_end, "end time (s)")
+      ->required()
+      ->check(finite_range(0.0, kMaxGeneral, true));
+  cmd->add_option("--rtol", opt->rtol, "relative tolerance")->check(finite_range(1e-14, 1.0));
+  cmd->add_option("--atol", opt->atol, "absolute tolerance")->check(finite_range(0.0, 1e6, true));
+  cmd->add_option("--dt-out", opt->dt_out,
+                  "output interval (s; default t_end/100; at most 1e6 output samples)")
+      ->check(finite_range(0.0, kMaxGeneral, true));
+  cmd->add_option("--max-step", opt->max_step, "largest step (s)")
+      ->check(finite_range(0.0, kMaxGeneral, true));
   cmd->add_option("--form", opt->form, "dual (default) or primal (Theorem 7)")
       ->check(CLI::IsMember({"dual", "primal"}));
   cmd->add_option("--integrator", opt->integrator, "dopri5 (default) or rkf78")
@@ -224,6 +230,10 @@ void register_simulate(CLI::App& app, const GlobalOptions& globals, int& exit_co
   cmd->add_flag("--json", opt->json, "one JSON document on stdout");
   cmd->add_option("--out", opt->out_dir, "directory for simulate.csv and chart_switches.csv");
   cmd->callback([opt, &globals, &exit_code] {
+    if (opt->dt_out > 0.0 && opt->t_end / opt->dt_out + 1.0 > kMaxOutputSamples)
+      throw CLI::ValidationError("--dt-out",
+                                 "--t-end / --dt-out gives more than 1e6 output "
+                                 "samples; give a larger --dt-out");
     setup_logging(globals);
     exit_code = run_simulate(*opt);
   });

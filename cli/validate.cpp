@@ -179,7 +179,7 @@ void register_validate(CLI::App& app, const GlobalOptions& globals, int& exit_co
   cmd->add_option("--min-transmission", opt->min_transmission_deg,
                   "smallest acceptable transmission angle deviation from a straight line, deg "
                   "(default 30)")
-      ->check(CLI::Range(0.0, 90.0));
+      ->check(finite_range(0.0, 90.0));
   cmd->add_option("--starts", opt->starts, "multi-start projections per position (default 24)")
       ->check(CLI::Range(0, 100000));
   cmd->add_option("--seed", opt->seed, "seed of the multi-start (default 1)");
