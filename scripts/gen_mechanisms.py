@@ -854,8 +854,8 @@ Joints: O{{k}} = [ground.O{{k}}, link{{k}}.O]; L{{k}} = [coupler{{k}}.L, link{{k
 
 Benchmark initial condition: this position, with the top of the first link B0 = (0, 1) moving
   at x' = 1 m/s: every link turns at -1 rad/s (clockwise), every coupler translates at 1 m/s
-  along +x. The file format has no initial-velocity field yet: the test (or a future simulate
-  option) must supply it. Simulate 10 s (N = 2) or 20 s (N = 40).
+  along +x: `initial: {{rates: {{B0_x: 1}}}}` below, so that `orthomech simulate` reproduces the
+  benchmark with no option (`--rate` replaces it). Simulate 10 s (N = 2) or 20 s (N = 40).
   Initial kinetic energy T0 = (N + 1)/6 + N/2 = {T0!r} J; potential energy (zero at y = 0)
   V0 = 9.81 ((N + 1)/2 + N) = {V0!r} J.
 
@@ -899,6 +899,8 @@ Facts tests rely on:
         "  - {name: B0_y, type: point, point: link0.B, component: y}",
         "  - {name: B0_vx, type: point, point: link0.B, component: x, derivative: 1}",
         "  - {name: B0_vy, type: point, point: link0.B, component: y, derivative: 1}",
+        "initial:",
+        "  rates: {B0_x: 1}   # the benchmark's initial velocity: B0 moves at x' = 1 m/s",
     ]
     write(f"n-four-bar-{N}.yaml", lines)
     return dict(T0=T0, V0=V0)

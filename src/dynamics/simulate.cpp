@@ -410,6 +410,12 @@ SimulateResult simulate(const Model& model, const SimulateOptions& options) {
   State s(model);
   s.q = model.design_q();
   if (options.initial_u.size() == model.n) s.u = options.initial_u;
+  if (options.initial_rates.empty() && options.use_file_rates && !model.initial.rates.empty()) {
+    SimulateOptions with_file_rates = options;  // the file's initial rates (Model::initial)
+    for (const InitialRateSpec& r : model.initial.rates)
+      with_file_rates.initial_rates.push_back({r.measure, r.rate});
+    return simulate(model, s, with_file_rates);
+  }
   return simulate(model, s, options);
 }
 

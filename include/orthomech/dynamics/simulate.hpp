@@ -56,7 +56,10 @@ struct SimulateOptions {
   double dt_out = 0.0;    // s; 0: t_end / 100
   double max_step = 0.0;  // s; 0: unlimited
   VecX initial_u;         // guess u₀ (size n) or empty (zero)
+  // Prescribed initial rates. When empty, those of the mechanism file (Model::initial.rates)
+  // are used unless use_file_rates is false; when given, they replace the file's (all of them).
   std::vector<InitialRate> initial_rates;
+  bool use_file_rates = true;
   bool record_samples = true;         // keep every output sample (else only the final one)
   bool reactions = true;              // compute λ and joint reactions at the samples
   double position_tolerance = 1e-12;  // max |f| after the per-step correction (m, rad)
