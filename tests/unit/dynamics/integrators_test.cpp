@@ -82,5 +82,131 @@ TEST(IntegratorOutputs, LinearOscillator_EveryOutputAtFullAccuracy) {
   }
 }
 
+// ---- IFToMM A01 pendulum against its exact solution, every integrator and both forms ------
+// sin(θ/2) = k sn(K − √(g/L) t, k²), k = sin 45°, θ from the downward vertical; released at
+// (−1, 0), so the mass is at (−sin θ, −cos θ) (tests/unit/dynamics/iftomm_test.cpp has the same
+// oracle checked against the published samples).
+Vec2 pendulum_exact(double t) {
+  const double k = std::sin(M_PI / 4.0);
+  const double K = boost::math::ellint_1(k);
+  const double theta = 2.0 * std::asin(k * boost::math::jacobi_sn(k, K - std::sqrt(9.81) * t));
+  return {-std::sin(theta), -std::cos(theta)};
+}
+
+// 20 s (8.4 periods) at rtol = atol = 1e-10: a local error of ~1e-10 per step over 50 (Bulirsch–
+// Stoer) to 12 000 (Rosenbrock) steps, and a phase error that grows faster than linearly with
+// time (energy errors change the period): every output within 1e-6 m. Measured: 2e-10 … 1e-8
+// for dopri5, rkf78, rosenbrock4 and Bulirsch–Stoer primal; 4e-7 for Bulirsch–Stoer dual, whose
+// error control is the loosest of the four at equal rtol (docs/benchmarks.md).
+constexpr double kPendulumBound = 1e-6;
+
+TEST(IntegratorPendulum, A01ExactSolution_EveryIntegratorBothForms) {
+  const Model model = test::load_bundled("pendulum");
+  const size_t ix = static_cast<size_t>(model.find_measure("P1_x"));
+  const size_t iy = static_cast<size_t>(model.find_measure("P1_y"));
+  for (const DynamicsForm form : {DynamicsForm::dual, DynamicsForm::primal})
+    for (const Integrator i : kAll) {
+      SimulateOptions o;
+      o.form = form;
+      o.integrator = i;
+      o.t_end = 20.0;
+      o.rtol = o.atol = 1e-10;
+      o.dt_out = 0.1;
+      o.reactions = false;
+      const SimulateResult r = simulate(model, o);
+      ASSERT_EQ(r.status, SimulateStatus::completed) << to_string(i) << ": " << r.message;
+      ASSERT_EQ(r.samples.size(), 201u);
+      double worst = 0.0;
+      for (const SimulationSample& s : r.samples) {
+        const Vec2 exact = pendulum_exact(s.t);
+        worst = std::max(worst, std::hypot(s.measures[ix] - exact.x(), s.measures[iy] - exact.y()));
+      }
+      EXPECT_LT(worst, kPendulumBound)
+          << to_string(i) << (form == DynamicsForm::dual ? " dual" : " primal");
+    }
+}
+
+// ---- The stiff spring-damper pair (mechanisms/stiff-spring-damper.yaml) ---------------------
+// Its equations are linear (the file's comment): z = (y1, y2, ẏ1, ẏ2), ż = A z + b, so
+// z(t) = z* + exp(A t) (z0 − z*) with z* = −A⁻¹ b; exp(A t) = V exp(Λ t) V⁻¹ from the
+// eigen-decomposition of A (four distinct eigenvalues: −15980, −20.0, and a pair near ±10i).
+struct StiffPair {
+  Eigen::Matrix4d A;
+  Eigen::Vector4d z_star, z0;
+  Eigen::Matrix4cd V, V_inv;
+  Eigen::Vector4cd lambda;
+
+  StiffPair() {
+    const double m = 5.0, k1 = 1000.0, l1 = 0.5, k = 8e5, c = 4e4, l0 = 0.5, g = 9.81;
+    A.setZero();
+    A(0, 2) = A(1, 3) = 1.0;
+    A(2, 0) = (-k1 - k) / m, A(2, 1) = k / m, A(2, 2) = -c / m, A(2, 3) = c / m;
+    A(3, 0) = k / m, A(3, 1) = -k / m, A(3, 2) = c / m, A(3, 3) = -c / m;
+    const Eigen::Vector4d b(0.0, 0.0, (-k1 * l1 + k * l0) / m - g, -k * l0 / m - g);
+    z_star = -A.partialPivLu().solve(b);
+    z0 << -1.0, -1.51, 0.0, 0.0;  // released from rest at the design position
+    const Eigen::EigenSolver<Eigen::Matrix4d> es(A);
+    V = es.eigenvectors();
+    V_inv = V.inverse();
+    lambda = es.eigenvalues();
+  }
+  [[nodiscard]] Eigen::Vector4d at(double t) const {
+    const Eigen::Vector4cd e = (lambda * t).array().exp().matrix();
+    const Eigen::Vector4cd d =
+        V * e.asDiagonal() * V_inv * (z0 - z_star).cast<std::complex<double>>();
+    return z_star + d.real();
+  }
+};
+
+// rtol 1e-6, atol 1e-9 over 2 s (3 periods of the soft mode, amplitude ~0.4 m): every output
+// within 2e-5 m of the closed form (a few hundred steps at ~1e-6 relative each, measured below
+// 1e-5 for both integrators).
+constexpr double kStiffBound = 2e-5;
+
+SimulateResult run_stiff(Integrator integrator) {
+  SimulateOptions o;
+  o.integrator = integrator;
+  o.t_end = 2.0;
+  o.rtol = 1e-6;
+  o.atol = 1e-9;
+  o.dt_out = 0.05;
+  o.reactions = false;
+  return simulate(test::load_bundled("stiff-spring-damper"), o);
+}
+
+double stiff_error(const Model& model, const SimulateResult& r) {
+  const StiffPair pair;
+  const size_t i1 = static_cast<size_t>(model.find_measure("sleeve_y"));
+  const size_t i2 = static_cast<size_t>(model.find_measure("bob_y"));
+  double worst = 0.0;
+  for (const SimulationSample& s : r.samples) {
+    const Eigen::Vector4d z = pair.at(s.t);
+    worst = std::max({worst, std::abs(s.measures[i1] - z(0)), std::abs(s.measures[i2] - z(1))});
+  }
+  return worst;
+}
+
+TEST(IntegratorStiff, SpringDamperPair_ClosedForm_RosenbrockTakesFarFewerSteps) {
+  const Model model = test::load_bundled("stiff-spring-damper");
+  // The oracle itself: at t = 0 the design position at rest; z* is the static equilibrium
+  // (soft spring carries both weights, stiff spring one).
+  const StiffPair pair;
+  EXPECT_NEAR((pair.at(0.0) - pair.z0).norm(), 0.0, 1e-12);
+  EXPECT_NEAR(-pair.z_star(0) - 0.5, 2 * 5.0 * 9.81 / 1000.0, 1e-12);
+  EXPECT_NEAR(pair.z_star(0) - pair.z_star(1) - 0.5, 5.0 * 9.81 / 8e5, 1e-12);
+
+  const SimulateResult stiff = run_stiff(Integrator::rosenbrock4);
+  ASSERT_EQ(stiff.status, SimulateStatus::completed) << stiff.message;
+  EXPECT_LT(stiff_error(model, stiff), kStiffBound);
+  const SimulateResult explicit_rk = run_stiff(Integrator::dopri5);
+  ASSERT_EQ(explicit_rk.status, SimulateStatus::completed) << explicit_rk.message;
+  EXPECT_LT(stiff_error(model, explicit_rk), kStiffBound);
+  // Dormand–Prince is held by stability: |h λ| ≤ ~3.3 with λ = −15980 1/s, so at least
+  // 2 s · 15980 / 3.3 ≈ 9700 steps whatever the tolerance; Rosenbrock (L-stable) by accuracy.
+  EXPECT_GT(explicit_rk.steps, 9000);
+  EXPECT_LT(10 * stiff.steps, explicit_rk.steps)
+      << "rosenbrock4 " << stiff.steps << " steps, dopri5 " << explicit_rk.steps;
+}
+
 }  // namespace
 }  // namespace orthomech
