@@ -183,8 +183,10 @@ int run_simulate(const SimulateCliOptions& opt) {
         << ", atol " << g(so.atol, 3) << "\n";
     out << "status      " << to_string(res.status) << (res.message.empty() ? "" : ": ")
         << res.message << "\n";
-    out << "steps       " << res.steps << " (" << res.evaluations << " evaluations), "
-        << res.chart_switches.size() << " chart switches\n";
+    out << "steps       " << res.steps << " (" << res.evaluations << " evaluations";
+    if (res.rejected_steps > 0) out << ", " << res.rejected_steps << " rejected";
+    if (res.jacobians > 0) out << ", " << res.jacobians << " Jacobians";
+    out << "), " << res.chart_switches.size() << " chart switches\n";
     out << "energy      initial " << g(res.energy_initial) << " J, final " << g(res.energy_final)
         << " J, max drift " << g(res.energy_max_drift, 3) << " J (relative " << g(rel_drift, 3)
         << ")\n";
