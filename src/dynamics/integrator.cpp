@@ -226,6 +226,7 @@ class Rosenbrock4 {
         xs_(n),
         xnew_(n),
         err_(n),
+        b_(n),
         g1_(n),
         g2_(n),
         g3_(n),
@@ -273,29 +274,40 @@ class Rosenbrock4 {
     W_ = -J_;
     W_.diagonal().array() += 1.0 / (C::gamma * h);
     lu_.compute(W_);
-    g1_ = lu_.solve(f0_ + h * C::d1 * ft_);
+    // Each right-hand side is formed in b_ first: solving an expression would allocate.
+    b_ = f0_ + h * C::d1 * ft_;
+    g1_ = lu_.solve(b_);
     xs_ = x + C::a21 * g1_;
     p_.rhs(xs_, fs_, t + C::c2 * h);
-    g2_ = lu_.solve(fs_ + h * C::d2 * ft_ + C::c21 * g1_ / h);
+    b_ = fs_ + h * C::d2 * ft_ + C::c21 / h * g1_;
+    g2_ = lu_.solve(b_);
     xs_ = x + C::a31 * g1_ + C::a32 * g2_;
     p_.rhs(xs_, fs_, t + C::c3 * h);
-    g3_ = lu_.solve(fs_ + h * C::d3 * ft_ + (C::c31 * g1_ + C::c32 * g2_) / h);
+    b_ = fs_ + h * C::d3 * ft_ + (C::c31 / h) * g1_ + (C::c32 / h) * g2_;
+    g3_ = lu_.solve(b_);
     xs_ = x + C::a41 * g1_ + C::a42 * g2_ + C::a43 * g3_;
     p_.rhs(xs_, fs_, t + C::c4 * h);
-    g4_ = lu_.solve(fs_ + h * C::d4 * ft_ + (C::c41 * g1_ + C::c42 * g2_ + C::c43 * g3_) / h);
+    b_ = fs_ + h * C::d4 * ft_ + (C::c41 / h) * g1_ + (C::c42 / h) * g2_ + (C::c43 / h) * g3_;
+    g4_ = lu_.solve(b_);
     xs_ = x + C::a51 * g1_ + C::a52 * g2_ + C::a53 * g3_ + C::a54 * g4_;
     p_.rhs(xs_, fs_, t + h);
-    g5_ = lu_.solve(fs_ + (C::c51 * g1_ + C::c52 * g2_ + C::c53 * g3_ + C::c54 * g4_) / h);
+    b_ = fs_ + (C::c51 / h) * g1_ + (C::c52 / h) * g2_ + (C::c53 / h) * g3_ + (C::c54 / h) * g4_;
+    g5_ = lu_.solve(b_);
     xs_ += g5_;
     p_.rhs(xs_, fs_, t + h);
-    err_ = lu_.solve(
-        fs_ + (C::c61 * g1_ + C::c62 * g2_ + C::c63 * g3_ + C::c64 * g4_ + C::c65 * g5_) / h);
+    b_ = fs_ + (C::c61 / h) * g1_ + (C::c62 / h) * g2_ + (C::c63 / h) * g3_ + (C::c64 / h) * g4_ +
+         (C::c65 / h) * g5_;
+    err_ = lu_.solve(b_);
     xnew_ = xs_ + err_;
   }
   // RMS of err_ scaled by atol + rtol·max(|x|, |x_new|) (odeint's rosenbrock4_controller).
   double error_norm(const VecX& x) const {
-    const VecX sk = (atol_ + rtol_ * x.cwiseAbs().cwiseMax(xnew_.cwiseAbs()).array()).matrix();
-    return std::sqrt(err_.cwiseQuotient(sk).squaredNorm() / static_cast<double>(x.size()));
+    double sum = 0.0;
+    for (Eigen::Index i = 0; i < x.size(); ++i) {
+      const double sk = atol_ + rtol_ * std::max(std::abs(x(i)), std::abs(xnew_(i)));
+      sum += (err_(i) / sk) * (err_(i) / sk);
+    }
+    return std::sqrt(sum / static_cast<double>(x.size()));
   }
 
   const OdeProblem& p_;
@@ -304,7 +316,7 @@ class Rosenbrock4 {
   FiniteDifferenceJacobian fd_;
   MatX J_, W_;
   Eigen::PartialPivLU<MatX> lu_;
-  VecX f0_, ft_, fs_, xs_, xnew_, err_, g1_, g2_, g3_, g4_, g5_;
+  VecX f0_, ft_, fs_, xs_, xnew_, err_, b_, g1_, g2_, g3_, g4_, g5_;
   bool first_step_ = true, last_rejected_ = false;
   double dt_old_ = 0.0, err_old_ = 1.0;
 };
