@@ -138,7 +138,8 @@ int run_simulate(const SimulateCliOptions& opt) {
   so.dt_out = opt.dt_out;
   so.max_step = opt.max_step;
   so.form = opt.form == "primal" ? DynamicsForm::primal : DynamicsForm::dual;
-  so.integrator = opt.integrator == "rkf78" ? Integrator::rkf78 : Integrator::dopri5;
+  if (!parse_integrator(opt.integrator, so.integrator))  // CLI::IsMember checked the name
+    throw std::logic_error("simulate: integrator '" + opt.integrator + "' has no stepper");
   for (const std::string& r : opt.rates) so.initial_rates.push_back(parse_rate(model, r));
   so.record_samples = true;
   const SimulateResult res = simulate(model, so);
@@ -156,7 +157,7 @@ int run_simulate(const SimulateCliOptions& opt) {
     j["status"] = to_string(res.status);
     j["message"] = res.message;
     j["form"] = so.form == DynamicsForm::dual ? "dual" : "primal";
-    j["integrator"] = so.integrator == Integrator::dopri5 ? "dopri5" : "rkf78";
+    j["integrator"] = to_string(so.integrator);
     j["rtol"] = so.rtol;
     j["atol"] = so.atol;
     j["final"] = sample_json(model, res, res.final);
@@ -170,6 +171,8 @@ int run_simulate(const SimulateCliOptions& opt) {
     j["kinetic_energy_removed"] = res.kinetic_removed;
     j["steps"] = res.steps;
     j["evaluations"] = res.evaluations;
+    j["rejected_steps"] = res.rejected_steps;
+    j["jacobians"] = res.jacobians;
     nlohmann::json sw = nlohmann::json::array();
     for (const ChartSwitch& c : res.chart_switches)
       sw.push_back({{"t", c.t}, {"from", c.from}, {"to", c.to}});
@@ -182,8 +185,10 @@ int run_simulate(const SimulateCliOptions& opt) {
         << ", atol " << g(so.atol, 3) << "\n";
     out << "status      " << to_string(res.status) << (res.message.empty() ? "" : ": ")
         << res.message << "\n";
-    out << "steps       " << res.steps << " (" << res.evaluations << " evaluations), "
-        << res.chart_switches.size() << " chart switches\n";
+    out << "steps       " << res.steps << " (" << res.evaluations << " evaluations";
+    if (res.rejected_steps > 0) out << ", " << res.rejected_steps << " rejected";
+    if (res.jacobians > 0) out << ", " << res.jacobians << " Jacobians";
+    out << "), " << res.chart_switches.size() << " chart switches\n";
     out << "energy      initial " << g(res.energy_initial) << " J, final " << g(res.energy_final)
         << " J, max drift " << g(res.energy_max_drift, 3) << " J (relative " << g(rel_drift, 3)
         << ")\n";
@@ -223,8 +228,10 @@ void register_simulate(CLI::App& app, const GlobalOptions& globals, int& exit_co
       ->check(finite_range(0.0, kMaxGeneral, true));
   cmd->add_option("--form", opt->form, "dual (default) or primal (Theorem 7)")
       ->check(CLI::IsMember({"dual", "primal"}));
-  cmd->add_option("--integrator", opt->integrator, "dopri5 (default) or rkf78")
-      ->check(CLI::IsMember({"dopri5", "rkf78"}));
+  cmd->add_option("--integrator", opt->integrator,
+                  "dopri5 (default), rkf78, bulirsch-stoer (long runs, tight tolerances) or "
+                  "rosenbrock4 (stiff)")
+      ->check(CLI::IsMember({"dopri5", "rkf78", "bulirsch-stoer", "rosenbrock4"}));
   cmd->add_option("--rate", opt->rates,
                   "initial rate MEASURE=VALUE (SI) of a measure's position quantity; repeatable");
   cmd->add_flag("--json", opt->json, "one JSON document on stdout");

@@ -63,6 +63,7 @@ CrosscheckResult run_crosscheck(const Model& model, const CrosscheckOptions& opt
   so.atol = 1e-11;
   so.dt_out = options.t_end / std::max(1, options.samples - 1);
   so.reactions = false;
+  so.use_file_rates = false;  // the seeded guess below, not the file's initial rates
   std::mt19937 rng(options.seed);
   std::uniform_real_distribution<double> uni(-1.0, 1.0);
   so.initial_u = VecX(n);

@@ -216,6 +216,7 @@ class Reader {
   void read_drivers(const YAML::Node& node);
   void read_design_positions(const YAML::Node& node);
   void read_analysis(const YAML::Node& node);
+  void read_initial(const YAML::Node& node);
 
   int body_ref(const YAML::Node& node, const std::string& element) const {
     if (!node.IsScalar()) fail(node, element, "expected a body name");
@@ -816,6 +817,54 @@ void Reader::read_analysis(const YAML::Node& node) {
   }
 }
 
+// ---- initial velocities ------------------------------------------------------------------------
+// initial: {rates: {MEASURE: RATE, …}}: the rate of each named measure's position quantity at
+// t = 0, in the file's length or angle unit per time unit, or a string with its unit ('1 m/s',
+// '30 rpm'). A velocity measure (derivative: 1) names the same quantity as its position measure
+// (its value at t = 0 is the rate); an acceleration measure has no rate to give.
+void Reader::read_initial(const YAML::Node& node) {
+  if (!node) return;
+  expect_map(node, "initial", {"rates"});
+  const YAML::Node rates = require(node, "rates", "initial");
+  if (!rates.IsMap()) fail(rates, "initial", "field 'rates' must be a mapping measure: rate");
+  std::set<std::string> seen;
+  for (const auto& kv : rates) {
+    const std::string name = scalar(kv.first, "initial", "a measure name");
+    if (!seen.insert(name).second)
+      fail(kv.first, "initial", "the rate of measure '" + name + "' is given twice");
+    const int m = model_.find_measure(name);
+    if (m < 0) fail(kv.first, "initial", "measure '" + name + "' is not defined");
+    const Measure& measure = model_.measures[static_cast<size_t>(m)];
+    if (measure.derivative == 2)
+      fail(kv.first, "initial",
+           "measure '" + name + "' is an acceleration: give the rate of a position measure");
+    const bool angular = measure.unit.rfind("rad", 0) == 0;
+    const std::string what = "the rate of measure '" + name + "'";
+    if (!kv.second.IsScalar() || kv.second.Scalar().empty())
+      fail(kv.second, "initial", what + " must be a number or a string like '1 m/s'");
+    InitialRateSpec spec;
+    spec.measure = m;
+    try {
+      spec.rate = parse_speed(kv.second.Scalar(), angular,
+                              (angular ? units_.angle : units_.length) / units_.time);
+    } catch (const std::invalid_argument& e) {
+      // parse_speed speaks of a joint's speed; here it is a measure's rate.
+      std::string message = e.what();
+      const std::pair<std::string, std::string> rewrites[] = {
+          {"speed must", "it must"},
+          {"unknown speed unit", "unknown unit"},
+          {" for a revolute joint", " for the rate of an angle"},
+          {" for a prismatic joint", " for the rate of a length"}};
+      for (const auto& [from, to] : rewrites)
+        if (const auto at = message.find(from); at != std::string::npos)
+          message.replace(at, from.size(), to);
+      fail(kv.second, "initial", what + ": " + message);
+    }
+    spec.where = loc(kv.first);
+    model_.initial.rates.push_back(spec);
+  }
+}
+
 Model Reader::read(const YAML::Node& root) {
   if (!root.IsDefined() || root.IsNull())
     throw InputError({file_, 1, 1}, "file",
@@ -825,7 +874,7 @@ Model Reader::read(const YAML::Node& root) {
     fail(root, "file", "expected a mapping at the top level (orthomech: 1, bodies: ...)");
   expect_map(root, "file",
              {"orthomech", "name", "description", "units", "ground", "bodies", "joints", "loads",
-              "measures", "drivers", "design_positions", "analysis", "nonholonomic"});
+              "measures", "drivers", "design_positions", "analysis", "nonholonomic", "initial"});
   const YAML::Node version = require(root, "orthomech", "file");
   if (version.IsScalar() && version.Tag() != "?")
     fail(version, "file",
@@ -859,6 +908,7 @@ Model Reader::read(const YAML::Node& root) {
   read_drivers(root);
   read_design_positions(root);
   read_analysis(root["analysis"]);
+  read_initial(root["initial"]);
   finalize_model(model_);
   if (model_.nc > model_.n + 1000)
     fail(root["joints"], "joints", "far more constraint equations than coordinates");

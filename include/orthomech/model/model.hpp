@@ -197,6 +197,19 @@ struct DesignPosition {
   SourceLocation where;
 };
 
+// ---- Initial velocities (file section `initial`; used by simulate). -----------------------
+// The rate at t = 0 of a measure's position quantity (a joint coordinate, a point coordinate, a
+// distance, a body angle), SI (m/s or rad/s). simulate makes the velocity admissible and fits
+// these rates by least squares in the chart coordinates (dynamics/simulate.hpp).
+struct InitialRateSpec {
+  int measure = -1;  // index into Model::measures
+  double rate = 0.0;
+  SourceLocation where;
+};
+struct InitialConditions {
+  std::vector<InitialRateSpec> rates;
+};
+
 struct GeneralSystem;  // model/general_system.hpp
 
 struct AnalysisDefaults {
@@ -218,6 +231,7 @@ struct Model {
   std::vector<Driver> drivers;
   std::vector<DesignPosition> design_positions;
   AnalysisDefaults analysis;
+  InitialConditions initial;  // initial velocities of simulate (may be empty: at rest)
   // Set by make_general_model (model/general_system.hpp): a free system given by functions,
   // with M(q), instead of bodies, joints and loads (which are then empty).
   std::shared_ptr<const GeneralSystem> general;
