@@ -237,6 +237,7 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
   }
   if (r.status == CycleStatus::failed)
     spdlog::error("{}: the sweep stopped: {}", model.file, r.message);
+  for (const std::string& w : r.warnings) spdlog::warn("{}: {}", model.file, w);
   if (r.status == CycleStatus::stopped_at_dead_point) spdlog::warn("{}: {}", model.file, r.message);
   for (const DeadPoint& d : r.singular_positions) spdlog::info("{}", d.message);
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <map>
 #include <numbers>
@@ -518,14 +519,49 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
     result.message = "a prismatic driver has no full turn: give the end of the input range (--to)";
     return result;
   }
-  // Start: the design position projected onto f(q) = 0.
+  // Start: the design position projected onto f(q) = 0 with the driven joint held at its drawn
+  // value (as `assemble --lock`); only where it cannot be held (a dead point of the driver, or
+  // the joints close only with the driver moved) is it projected freely. Bodies moved by more
+  // than the tolerances are listed and warned about.
   State state(model);
-  state.q = model.design_q();
-  const SolveResult assembly = project_positions(model, state.q);
+  const VecX drawn = model.design_q();
+  state.q = drawn;
+  PositionOptions hold;
+  hold.locked_joint = joint;
+  hold.locked_value = compute_scalar(model, JointCoordinate{joint}, drawn, nullptr).value;
+  SolveResult assembly = project_positions(model, state.q, hold);
+  if (assembly.status != SolveStatus::converged) {
+    state.q = drawn;
+    assembly = project_positions(model, state.q);
+    if (assembly.status == SolveStatus::converged)
+      result.warnings.push_back(
+          "the design position closes only with driver joint '" + joint_name +
+          "' moved from its drawn " + format_input(hold.locked_value, angular) + " to " +
+          format_input(compute_scalar(model, JointCoordinate{joint}, state.q, nullptr).value,
+                       angular));
+  }
   if (assembly.status != SolveStatus::converged) {
     result.message = "the design position does not assemble (residual " +
                      std::to_string(assembly.residual) + ")";
     return result;
+  }
+  {
+    double size = 1e-3;
+    for (const Body& b : model.bodies) size = std::max(size, b.design_pose.head<2>().norm());
+    for (const Body& b : model.bodies) {
+      const double distance =
+          (state.q.segment<2>(b.q_offset) - drawn.segment<2>(b.q_offset)).norm();
+      const double angle = b.kind == BodyKind::rigid
+                               ? std::abs(state.q(b.q_offset + 2) - drawn(b.q_offset + 2))
+                               : 0.0;
+      if (distance <= kStartMoveTolerance * size && angle <= kStartTurnTolerance) continue;
+      result.start_moves.push_back({b.name, distance, angle});
+      char text[160];
+      std::snprintf(text, sizeof text, "%.6g mm and %.6g deg", distance * 1e3,
+                    angle * 180.0 / std::numbers::pi);
+      result.warnings.push_back("the design position does not close as drawn: body '" + b.name +
+                                "' moved by " + text + " to close the joints");
+    }
   }
   const Mobility mob = compute_mobility(model, state.q);
   result.rank = mob.rank;
@@ -549,12 +585,40 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
   } else if (options.use_start) {
     start_target = options.start;
   }
+  // A start elsewhere is reached by continuation along the design position's branch (the same
+  // circuit, every angle unwrapped continuously): a range sweep from the design input to it, so
+  // that the cycle from X equals the full cycle at X. For a full turn that is the input the full
+  // cycle has there, X' = s₀ + σ ((σ(X − s₀)) mod 2π) with σ the direction of the drive (so X' may
+  // differ from X by whole turns).
+  if (constant && options.use_start && options.full_cycle && angular) {
+    const double sigma = driver.speed > 0.0 ? 1.0 : -1.0;
+    double ahead = std::fmod(sigma * (start_target - s0), 2.0 * std::numbers::pi);
+    if (ahead < 0.0) ahead += 2.0 * std::numbers::pi;
+    if (ahead < 1e-12 || 2.0 * std::numbers::pi - ahead < 1e-12) ahead = 0.0;
+    start_target = s0 + sigma * ahead;
+  }
   if (start_target != s0) {
-    if (!sweep.corrector(state.q, start_target, std::numeric_limits<double>::infinity())) {
+    CycleOptions reach;
+    reach.driver = driver;
+    reach.driver.profile = Profile::constant_speed;
+    reach.driver.speed = constant ? std::abs(driver.speed) : 1.0;
+    reach.full_cycle = false;
+    reach.end = start_target;
+    // Positions every 2° (or 1/180 of the range for a prismatic joint): each is converged, and
+    // longer steps are split by the sweep itself.
+    const double per_step = angular ? 2.0 * std::numbers::pi / 180.0 : 0.0;
+    const double span = std::abs(start_target - s0);
+    reach.steps = per_step > 0.0
+                      ? std::clamp(static_cast<int>(std::ceil(span / per_step)) + 1, 2, 100000)
+                      : 181;
+    reach.bridge_change_points = false;  // only its last position (a converged one) is used
+    const CycleResult path = run_cycle(model, reach);
+    if (path.status != CycleStatus::completed || path.points.empty()) {
       result.message = "cannot reach the start input " + format_input(start_target, angular) +
-                       " from the design position";
+                       " from the design position along its branch: " + path.message;
       return result;
     }
+    state.q = path.points.back().q;
     s0 = start_target;
   }
   // Period and time grid.
@@ -879,7 +943,7 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
   // accurate. With the nodes outside the gap on both sides its Lebesgue constant is 2.7 and its
   // error ~ (4ρ)⁸ f⁽⁸⁾/8!. (L1)
   result.diverging.assign(result.components.size(), false);
-  if (reversals == 0) {
+  if (reversals == 0 && options.bridge_change_points) {
     // Reaches time t on the branch from a regular position: whole step, else sub-steps (halved on
     // failure, doubled again on success).
     DrivenPoint cur, nxt;
@@ -1008,21 +1072,33 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
       for (size_t i = 0; i < candidates.size(); ++i)  // one change point only
         if (i != j && std::abs(candidates[i].time - ts) < 6.0 * rho) return false;
       // The nodes: by continuation from the stored position on each side nearest to them (any
-      // not next to the change point will do: the corrector makes each node exact).
+      // not next to the change point will do: the corrector makes each node exact). A side with
+      // no stored position (a sweep that ends or starts next to the change point) is reached
+      // from the other side's inner node, across the change point (the step the sweep itself
+      // takes there: predictor along the tangent, bounded corrector, same branch).
       double x[kNodes];
+      long from[2] = {-1, -1};
       for (const int side : {-1, 1}) {
-        long from = -1;
         double best = std::numeric_limits<double>::infinity();
         for (size_t k = 0; k < np; ++k) {
           const DrivenPointView p = result.points[k];
           const double d = (p.time - ts) * side;
           const double off = std::max({0.0, rho - d, d - 4.0 * rho});
           if (d > 0.0 && off < best && p.chart_quality >= 1e-3 && !p.singular)
-            best = off, from = static_cast<long>(k);
+            best = off, from[side > 0] = static_cast<long>(k);
         }
-        if (from < 0) return false;
-        const DrivenPointView p = result.points[static_cast<size_t>(from)];
-        if (!evaluate_at(VecX(p.q), p.time, base)) return false;
+      }
+      if (from[0] < 0 && from[1] < 0) return false;
+      const int first_side = from[0] >= 0 ? -1 : 1;
+      DrivenPoint first_inner;  // the first side's inner node
+      for (const int side : {first_side, -first_side}) {
+        const long f = from[side > 0];
+        if (f >= 0) {
+          const DrivenPointView p = result.points[static_cast<size_t>(f)];
+          if (!evaluate_at(VecX(p.q), p.time, base)) return false;
+        } else {
+          base = first_inner;
+        }
         for (int a = 0; a < 4; ++a) {
           const int i = side < 0 ? 3 - a : 4 + a;  // nodes in increasing time
           x[i] = ts + side * kNodeDistance[a] * rho;
@@ -1031,6 +1107,7 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
           // away from a change point. A node's accuracy is checked by the error estimate below.)
           if (!advance(base, x[i], node) || node.chart_quality < 0.1 * kBridgeQuality) return false;
           pack(node, node_values[static_cast<size_t>(i)]);
+          if (a == 0 && side == first_side) first_inner = node;
         }
       }
       // Error estimate per value: the two inner nodes against the degree-6 interpolant through

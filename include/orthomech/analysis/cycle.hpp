@@ -43,7 +43,21 @@ struct CycleOptions {
   bool reverse_at_dead_point = false;
   // Called now and then with the fraction of the sweep done (0–1]; may be empty.
   std::function<void(double)> progress;
+  // Take the positions next to change points from the branch (CycleResult::bridges).
+  bool bridge_change_points = true;
 };
+
+// How far the initial projection moved a body from its drawn pose (with the driven joint held at
+// its drawn value). Listed, and warned about, when above kStartMoveTolerance × the mechanism's
+// size (the largest distance of a drawn body pose from the origin, at least 1 mm) or
+// kStartTurnTolerance rad: a rounded pose moves less, a wrong length or a sketch more.
+struct StartMove {
+  std::string body;
+  double distance = 0.0;  // of its centre of mass (m)
+  double angle = 0.0;     // |Δφ| (rad)
+};
+inline constexpr double kStartMoveTolerance = 1e-4;
+inline constexpr double kStartTurnTolerance = 1e-4;
 
 // One joint's reaction at one position, in the global frame and in the joint's frame.
 // Convention (docs/notation.md): forces and moments that the second body of the joint exerts on
@@ -212,6 +226,10 @@ struct CycleResult {
   std::vector<DeadPoint> dead_points;
   std::vector<DeadPoint> singular_positions;  // change points passed (rank drop of E)
   std::vector<ChangePointBridge> bridges;     // change points whose neighbourhood was bridged
+  // Bodies the initial projection moved by more than the tolerances (StartMove), and a warning
+  // per body, with lengths in mm and angles in degrees.
+  std::vector<StartMove> start_moves;
+  std::vector<std::string> warnings;
   // Per reaction component: grows without bound towards a change point (diverging at one of the
   // bridges): its peak over the cycle depends on how close the grid comes to the change point.
   std::vector<bool> diverging;
