@@ -214,7 +214,18 @@ void compute_reactions(const Model& model, const VecX& q, const Eigen::Ref<const
             const double normal = -lambda(r);
             out.push_back(normal * n.x());
             out.push_back(normal * n.y());
-            if constexpr (std::is_same_v<T, Prismatic>) out.push_back(-lambda(r + 1));
+            if constexpr (std::is_same_v<T, Prismatic>) {
+              // Moment about the joint's point pi on the first body (issue 10 item 8). The
+              // normal row nᵀ(r_Pj − r_Pi) gives the first body the force N n acting at P_j
+              // (its rotation entry is −λ(nᵀR'_i s_i + eᵀΔ), the moment of −λn applied at
+              // P_i + Δ, Δ = r_Pj − r_Pi, e = R_i a) (M1); the angle row φ_j − φ_i the couple −λ_φ
+              // (M2). About P_i: M = −λ_φ + Δ × (N n) = −λ_φ + N eᵀΔ, since Δ × n = eᵀΔ for
+              // n = J e (M3).
+              const Vec2 e = rot(k.pi.body) * k.axis_local;
+              const Vec2 delta = point_kinematics(model, k.pj, q, none, rotations).r -
+                                 point_kinematics(model, k.pi, q, none, rotations).r;
+              out.push_back(-lambda(r + 1) + normal * e.dot(delta));  // (M3)
+            }
             out.push_back(normal);
           } else if constexpr (std::is_same_v<T, GearPair>) {
             out.push_back(lambda(r));
