@@ -186,5 +186,44 @@ TEST(CycleChangePoints, TripleCrankDivergingComponentsAreFlagged) {
     }
 }
 
+// IFToMM A02 N-four-bar (N + 1 unit links of mass 1 on a line, N unit couplers of mass 1), driven
+// at its first link: all links stay parallel at angle θ and the couplers translate at height
+// sin θ, so T is constant at constant speed and (L3)
+//   τ = dV/dθ = g cos θ [(N + 1)/2 + N].
+// Its change points (every link in line, 0° and 180°) are bridged (at 360 steps and more); the
+// drive is on the closed form everywhere and its RMS is K/√2. N = 40: the chart quality of the 80 ×
+// 80 block stays low over a wide neighbourhood, where the direct solve is good to ~1e-9 of the peak
+// only.
+TEST(CycleChangePoints, NFourBarDriveOnItsClosedForm) {
+  for (const int N : {2, 40}) {
+    const Model model = test::load_bundled("n-four-bar-" + std::to_string(N));
+    const double K = 9.81 * ((N + 1) / 2.0 + N);
+    // 2e-9 of the peak drive (measured: 1.7e-9 at N = 40 next to its change point, 1.6e-11 at N
+    // = 2).
+    const double tolerance = 2e-9 * K;
+    for (const int steps : {90, 360, 1000}) {
+      if (N == 40 && steps != 360) continue;  // keep the suite fast (0.5 s)
+      CycleOptions o;
+      o.driver.joint = model.find_joint("O0");
+      o.driver.speed = 2.0 * kPi;
+      o.steps = steps;
+      const CycleResult r = run_cycle(model, o);
+      ASSERT_EQ(r.status, CycleStatus::completed) << N << ": " << r.message;
+      // At 90 steps (4°) the grid comes no closer than 2° to the change points, where the
+      // direct solve is accurate and the sweep does not list them: nothing to bridge.
+      if (steps >= 360) {
+        EXPECT_EQ(r.bridges.size(), 2u) << N << " " << steps;
+      }
+      for (const DrivenPointView& p : r.points) {
+        ASSERT_TRUE(drive_reported(p));
+        EXPECT_NEAR(p.drive, K * std::cos(p.input), tolerance)
+            << N << " " << steps << " " << p.input;
+      }
+      const auto summary = summarize_cycle(r, reaction_magnitudes(r), "N*m");
+      EXPECT_NEAR(summary[0].rms, K / std::sqrt(2.0), 1e-9 * K) << N << " " << steps;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace orthomech
