@@ -608,6 +608,7 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
     if (ahead < 1e-12 || 2.0 * std::numbers::pi - ahead < 1e-12) ahead = 0.0;
     start_target = s0 + sigma * ahead;
   }
+  VecX start_tangent;  // set when the start was reached along the branch
   if (start_target != s0) {
     CycleOptions reach;
     reach.driver = driver;
@@ -630,6 +631,10 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
       return result;
     }
     state.q = path.points.back().q;
+    // The branch's tangent where the path arrived (its last regular position): the first step
+    // from a start on a change point predicts with it.
+    for (const DrivenPointView& p : path.points)
+      if (!p.singular && p.chart_quality >= 1e-3) start_tangent = p.tangent;
     s0 = start_target;
   }
   // Period and time grid.
@@ -754,7 +759,7 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
     result.message = result.dead_points.back().message;
     return result;
   }
-  if (anchor.singular) {
+  if (anchor.singular && start_tangent.size() == 0) {
     result.message =
         "the start position is a singular position (E loses rank there); start "
         "the sweep elsewhere";
@@ -763,6 +768,13 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
   update_determinacy(anchor);
   result.points.push_back(anchor);
   good_tangent = anchor.tangent;
+  if (anchor.singular) {  // a start on a change point, reached along the branch: its tangent
+    good_tangent = start_tangent;
+    result.singular_positions.push_back(
+        {s0, 0.0,
+         "singular position (E loses rank) at input " + format_input(s0, angular) +
+             ": the start; passed, branch kept by continuity of the tangent"});
+  }
   result.status = CycleStatus::completed;  // unless the loop below says otherwise
   int reversals = 0;
   const int report_every = std::max(1, steps / 100);
