@@ -1092,6 +1092,14 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
              result.points[static_cast<size_t>(k)].chart_quality < kBridgeQuality;
              k += step)
           rho = std::max(rho, 1.05 * std::abs(result.points[static_cast<size_t>(k)].time - ts));
+      // Only where a stored position needs it: one in the gap whose quality is below
+      // kBridgeQuality (a coarse grid that passes the change point far from every position, or a
+      // chart that degenerated between two positions, has none: its values are accurate as
+      // they are, and nothing is flagged).
+      bool needed = false;
+      for (const DrivenPointView& p : result.points)
+        needed = needed || (std::abs(p.time - ts) < rho && p.chart_quality < kBridgeQuality);
+      if (!needed) return true;                       // nothing to do: not an attempt that failed
       for (size_t i = 0; i < candidates.size(); ++i)  // one change point only
         if (i != j && std::abs(candidates[i].time - ts) < 6.0 * rho) return false;
       // The nodes: by continuation from the stored position on each side nearest to them (any
