@@ -717,7 +717,7 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
   VecX trial(model.nq);  // predictor/corrector iterate, reused across positions
   DrivenPoint anchor;    // the last converged point: the predictor starts from it
   VecX good_tangent;     // of the last regular point: used next to a change point
-  DrivenPoint point, probe, sub;
+  DrivenPoint point, probe, sub, check;
   // One continuation step from a converged point to time t: predictor, corrector with the input
   // locked, evaluation; false if it does not converge on the same branch or is too long. From a
   // point next to a change point (whose F is unreliable) the last regular tangent is used.
@@ -818,8 +818,16 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
         if (!from->singular && !probe.singular && from->chart_id == probe.chart_id &&
             from->chart_sign != probe.chart_sign) {  // |det| ∝ distance: interpolate
           const double a = from->chart_quality / (from->chart_quality + probe.chart_quality);
-          record_singular(from->input + a * (probe.input - from->input),
-                          from->time + a * (probe.time - from->time));
+          const double t_a = from->time + a * (probe.time - from->time);
+          // A change point only if E loses rank there: the best chart's quality at t_a is far
+          // below both neighbours' (a chart whose own block degenerated between two positions
+          // of a coarse grid, with E regular, is not one). The check re-selects the chart, so
+          // the next interval is not compared across it.
+          const bool confirmed =
+              !try_step(*from, t_a, check) ||
+              check.chart_quality < 0.1 * std::min(from->chart_quality, probe.chart_quality);
+          if (confirmed) record_singular(from->input + a * (probe.input - from->input), t_a);
+          probe.chart_id = -1 - probe.chart_id;  // no sign comparison across the check
         }
         if (probe.singular)
           record_singular(probe.input, probe.time);
