@@ -827,7 +827,11 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
               !try_step(*from, t_a, check) ||
               check.chart_quality < 0.1 * std::min(from->chart_quality, probe.chart_quality);
           if (confirmed) record_singular(from->input + a * (probe.input - from->input), t_a);
-          probe.chart_id = -1 - probe.chart_id;  // no sign comparison across the check
+          // The workspace back at the probe (its null space N feeds the determinacy update).
+          trial = probe.q;
+          const long id = probe.chart_id;
+          (void)evaluate_at(trial, probe.time, probe);  // succeeded there a moment ago
+          probe.chart_id = -1 - id;                     // no sign comparison across the check
         }
         if (probe.singular)
           record_singular(probe.input, probe.time);
