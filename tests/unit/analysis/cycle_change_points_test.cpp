@@ -186,6 +186,23 @@ TEST(CycleChangePoints, TripleCrankDivergingComponentsAreFlagged) {
     }
 }
 
+// No change point where there is none: the Grashof crank-rocker (30/80/60 on 70 mm: a + g ≠ b + c
+// and every other sum differs, so its links are never all in line and E never loses rank) and
+// the quick-return and six-bars, at a coarse 37-step grid where the chart's own block can
+// degenerate between two positions (each listed a change point before it was checked).
+TEST(CycleChangePoints, NoChangePointWhereERegular) {
+  for (const char* name : {"crank-rocker", "quick-return", "stephenson-six-bar", "watt-six-bar"}) {
+    const Model model = test::load_bundled(name);
+    CycleOptions o;
+    o.driver = model.drivers.at(0);
+    o.steps = 37;
+    const CycleResult r = run_cycle(model, o);
+    ASSERT_EQ(r.status, CycleStatus::completed) << name << ": " << r.message;
+    EXPECT_TRUE(r.singular_positions.empty()) << name << " at " << r.singular_positions[0].input;
+    EXPECT_TRUE(r.bridges.empty()) << name;
+  }
+}
+
 // IFToMM A02 N-four-bar (N + 1 unit links of mass 1 on a line, N unit couplers of mass 1), driven
 // at its first link: all links stay parallel at angle θ and the couplers translate at height
 // sin θ, so T is constant at constant speed and (L3)
