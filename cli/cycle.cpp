@@ -163,6 +163,7 @@ nlohmann::json positions_json(const Model& model, const CycleResult& r) {
     j["input"] = p.input;
     j["time"] = p.time;
     j["singular"] = p.singular;
+    j["bridged"] = p.bridge >= 0;
     nlohmann::json m = nlohmann::json::object();
     for (size_t i = 0; i < model.measures.size(); ++i) m[model.measures[i].name] = p.measures[i];
     j["measures"] = m;
@@ -175,10 +176,11 @@ nlohmann::json positions_json(const Model& model, const CycleResult& r) {
                         {"acceleration", std::vector<double>(a.data(), a.data() + a.size())}};
     }
     j["bodies"] = bodies;
-    if (!p.singular) {  // multipliers are not meaningful next to a change point
+    if (drive_reported(p)) {  // not at a change point that could not be bridged
       j["drive"] = p.drive;
-      nlohmann::json rc;
-      for (size_t i = 0; i < r.components.size(); ++i) rc[r.components[i].name] = p.reactions[i];
+      nlohmann::json rc = nlohmann::json::object();
+      for (size_t i = 0; i < r.components.size(); ++i)
+        if (component_reported(r, p, i)) rc[r.components[i].name] = p.reactions[i];
       j["reactions"] = rc;
     }
     j["kinetic_energy"] = p.kinetic;
@@ -241,6 +243,7 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
   }
   if (r.status == CycleStatus::failed)
     spdlog::error("{}: the sweep stopped: {}", model.file, r.message);
+  for (const std::string& w : r.warnings) spdlog::warn("{}: {}", model.file, w);
   if (r.status == CycleStatus::stopped_at_dead_point) spdlog::warn("{}: {}", model.file, r.message);
   for (const DeadPoint& d : r.singular_positions) spdlog::info("{}", d.message);
 
@@ -317,10 +320,24 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
     };
     j["dead_points"] = events(r.dead_points);
     j["singular_positions"] = events(r.singular_positions);
+    nlohmann::json bridges = nlohmann::json::array();
+    for (const ChangePointBridge& b : r.bridges) {
+      nlohmann::json div = nlohmann::json::array();
+      for (size_t i = 0; i < r.components.size(); ++i)
+        if (b.diverging[i]) div.push_back(r.components[i].name);
+      bridges.push_back({{"input", b.input},
+                         {"time", b.time},
+                         {"time_from", b.time_from},
+                         {"time_to", b.time_to},
+                         {"drive_error", b.drive_error},
+                         {"diverging", div}});
+    }
+    j["bridges"] = bridges;
     nlohmann::json peaks;
     for (const SeriesSummary& s : summary)
-      peaks[s.name] = {{"peak", s.peak}, {"input", s.peak_input}, {"time", s.peak_time},
-                       {"rms", s.rms},   {"unit", s.unit},        {"determinate", s.determinate}};
+      peaks[s.name] = {
+          {"peak", s.peak}, {"input", s.peak_input},        {"time", s.peak_time},   {"rms", s.rms},
+          {"unit", s.unit}, {"determinate", s.determinate}, {"diverges", s.diverges}};
     j["peaks"] = peaks;
     nlohmann::json comps = nlohmann::json::array();
     for (size_t i = 0; i < r.components.size(); ++i)
@@ -328,7 +345,8 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
                        {"joint", model.joints[static_cast<size_t>(r.components[i].joint)].name},
                        {"frame", r.components[i].global ? "global" : "joint"},
                        {"unit", r.components[i].unit},
-                       {"determinate", r.determinate[i]}});
+                       {"determinate", r.determinate[i]},
+                       {"diverging", r.diverging.empty() ? false : bool(r.diverging[i])}});
     j["components"] = comps;
     if (opt.positions) j["points"] = positions_json(model, r);
     out << j.dump(2) << '\n';
@@ -355,8 +373,15 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
       out << "  t = " << fmt(d.time, 6) << " s: " << d.message << "\n";
     out << "singular        " << (r.singular_positions.empty() ? "none" : "") << "\n";
     for (const DeadPoint& d : r.singular_positions)
-      out << "  at input " << format_input(d.input, angular) << ": passed (E loses rank; the "
-          << "reactions there are omitted)\n";
+      out << "  at input " << format_input(d.input, angular) << ": passed (E loses rank)\n";
+    for (const ChangePointBridge& b : r.bridges) {
+      int diverging = 0;
+      for (const bool x : b.diverging) diverging += x ? 1 : 0;
+      out << "  bridged at " << format_input(b.input, angular) << ": values within "
+          << format_input(std::abs(b.time_to - b.time) * std::abs(co.driver.speed), angular)
+          << " from the branch (drive error estimate " << fmt(b.drive_error, 2) << " " << drive_unit
+          << "; " << diverging << " diverging component(s) not reported there)\n";
+    }
     if (!files_note.empty()) out << "files           " << files_note << "\n";
     out << "\n";
     // Angles at peaks in [0°, 360°) (the sweep line keeps the continuous input).
@@ -374,7 +399,10 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
       if (s.samples == 0) continue;
       std::snprintf(line, sizeof line, "%-20s %-5s %13.5g %16s %13.5g%s\n", s.name.c_str(),
                     s.unit.c_str(), s.peak, format_input(wrapped(s.peak_input), angular).c_str(),
-                    s.rms, s.determinate ? "" : "   indeterminate (minimum norm)");
+                    s.rms,
+                    s.determinate ? ""
+                    : s.diverges  ? "   indeterminate (minimum norm), diverges at a change point"
+                                  : "   indeterminate (minimum norm)");
       out << line;
     }
     bool any = false;

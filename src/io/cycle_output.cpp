@@ -89,13 +89,17 @@ CycleColumns write_cycle_csv(const std::filesystem::path& file, const Model& mod
       for (int i = 0; i < b.nu(); ++i) out << ',' << number(p.u(b.u_offset + i));
       for (int i = 0; i < b.nu(); ++i) out << ',' << number(p.udot(b.u_offset + i));
     }
-    if (p.singular) {
+    // Empty cells where a value is not reported (an unbridged change point; a component that
+    // diverges towards the change point a bridged position is next to).
+    out << ',';
+    if (drive_reported(p)) out << number(p.drive);
+    for (size_t i = 0; i < p.reactions.size(); ++i) {
       out << ',';
-      for (size_t i = 0; i < result.components.size() + magnitudes.size(); ++i) out << ',';
-    } else {
-      out << ',' << number(p.drive);
-      for (const double v : p.reactions) out << ',' << number(v);
-      for (const ReactionMagnitude& m : magnitudes) out << ',' << number(magnitude_at(p, m));
+      if (component_reported(result, p, i)) out << number(p.reactions[i]);
+    }
+    for (const ReactionMagnitude& m : magnitudes) {
+      out << ',';
+      if (magnitude_reported(result, p, m)) out << number(magnitude_at(p, m));
     }
     out << '\n';
   }

@@ -17,8 +17,9 @@ struct CycleColumns {
 };
 
 // One row per position: input (SI and display unit), time, every measure, the drive, every
-// reaction component, every reaction magnitude; units in the header ("drive [N*m]"). At positions
-// flagged `singular` the drive and reaction cells are empty (not meaningful there). Written
+// reaction component, every reaction magnitude; units in the header ("drive [N*m]"). Cells that
+// are not reported are empty (drive_reported, component_reported: an unbridged singular position,
+// a component diverging next to a bridged change point). Written
 // atomically (temporary file, then rename). Throws std::runtime_error naming the file on failure.
 CycleColumns write_cycle_csv(const std::filesystem::path& file, const Model& model,
                              const CycleResult& result,
