@@ -18,6 +18,7 @@
 #include "orthomech/analysis/assembly.hpp"
 #include "orthomech/analysis/validate.hpp"
 #include "orthomech/io/mechanism_writer.hpp"
+#include "orthomech/io/units.hpp"
 #include "orthomech/model/measures.hpp"
 
 namespace orthomech::cli {
@@ -85,11 +86,13 @@ void parse_velocity(const Model& model, const std::string& text, VecX& u0) {
   std::stringstream ss(text.substr(eq + 1));
   std::string item;
   while (std::getline(ss, item, ',')) {
-    try {
-      v.push_back(std::stod(item));
-    } catch (const std::exception&) {
+    char* end = nullptr;
+    const double x = std::strtod(item.c_str(), &end);
+    if (item.empty() || item.size() > kMaxNumberLength || end != item.c_str() + item.size())
       bad("--velocity " + name + ": '" + item + "' is not a number");
-    }
+    const std::string problem = range_problem(x, Quantity::general);
+    if (!problem.empty()) bad("--velocity " + name + ": '" + item + "': the value " + problem);
+    v.push_back(x);
   }
   if (static_cast<int>(v.size()) != body.nu())
     bad("--velocity " + name + ": expected " + std::to_string(body.nu()) + " numbers");
@@ -148,8 +151,11 @@ int run_assemble(const AssembleOptions& opt) {
     std::ifstream in(opt.file, std::ios::binary);
     std::ostringstream text;
     text << in.rdbuf();
+    // The edited text is checked to re-read as the assembled mechanism before anything is
+    // written; a file that cannot be edited so is an InputError (exit 2, printed once by main).
+    const std::string edited = replace_design_poses(text.str(), opt.file, model, res.q);
     try {
-      write_file_atomically(write_to, replace_design_poses(text.str(), opt.file, model, res.q));
+      write_file_atomically(write_to, edited);
     } catch (const std::runtime_error& e) {  // e.g. no such directory, no permission
       spdlog::error("{}", e.what());
       return kBadInput;
@@ -311,7 +317,7 @@ void register_assemble(CLI::App& app, const GlobalOptions& globals, int& exit_co
                   "save a mechanism file whose design position is the assembled one");
   cmd->add_flag("--in-place", opt->in_place, "overwrite the input file with the assembled one");
   cmd->add_option("--tolerance", opt->tolerance, "max residual of an assembled position (m, rad)")
-      ->check(CLI::PositiveNumber);
+      ->check(finite_range(0.0, 1.0, true));
   add_units_option(cmd, opt->units);
   auto log = std::make_shared<LogFlags>();
   add_log_flags(cmd, *log);

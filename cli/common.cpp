@@ -4,8 +4,12 @@
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
 
 #include "orthomech/io/mechanism_file.hpp"
+#include "orthomech/io/units.hpp"
 
 namespace orthomech::cli {
 
@@ -29,6 +33,38 @@ void setup_logging(const GlobalOptions& options, const LogFlags& flags) {
   merged.quiet = merged.quiet || flags.quiet;
   merged.verbose = merged.verbose || flags.verbose;
   setup_logging(merged);
+}
+
+CLI::Validator finite_range(double lo, double hi, bool lo_open) {
+  char description[80];
+  std::snprintf(description, sizeof description, "NUMBER in %s%g, %g]", lo_open ? "(" : "[", lo,
+                hi);
+  return CLI::Validator(
+      [lo, hi, lo_open](std::string& text) -> std::string {
+        char* end = nullptr;
+        const double v = std::strtod(text.c_str(), &end);
+        if (text.empty() || end != text.c_str() + text.size())
+          return "'" + text + "' is not a number";
+        if (!std::isfinite(v)) return "'" + text + "' is not finite";
+        if (v > hi || v < lo || (lo_open && v == lo)) {
+          char buf[120];
+          std::snprintf(buf, sizeof buf, "%s must be in %s%g, %g]", text.c_str(),
+                        lo_open ? "(" : "[", lo, hi);
+          return buf;
+        }
+        return "";
+      },
+      description);
+}
+
+double parse_number(const std::string& text, const std::string& option) {
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  if (text.empty() || text.size() > kMaxNumberLength || end != text.c_str() + text.size())
+    throw CLI::ValidationError(option, "'" + text + "' is not a number");
+  const std::string problem = range_problem(v, Quantity::general);
+  if (!problem.empty()) throw CLI::ValidationError(option, "'" + text + "': the value " + problem);
+  return v;
 }
 
 Model load(const std::string& path) {

@@ -1,6 +1,7 @@
 #pragma once
 // Shared by the subcommands: exit codes, loading with error reporting, logging set-up.
 // No math here (house style: cli/ holds no math).
+#include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -36,6 +37,13 @@ struct LogFlags {
 void add_log_flags(CLI::App* cmd, LogFlags& flags);
 // setup_logging with the global options and the subcommand's flags merged.
 void setup_logging(const GlobalOptions& options, const LogFlags& flags);
+// A number option that must be finite and lie in [lo, hi] (or (lo, hi] with `lo_open`): NaN and
+// inf are refused (CLI::Range and CLI::PositiveNumber let them through). Exit 2 naming the option.
+[[nodiscard]] CLI::Validator finite_range(double lo, double hi, bool lo_open = false);
+// A command-line number with no unit (e.g. "--rate x=1.5", "--velocity b=0,1"): the whole text
+// is a number, finite and within the limits of Quantity::general. Throws CLI::ValidationError
+// naming `option` otherwise.
+[[nodiscard]] double parse_number(const std::string& text, const std::string& option);
 // Loads a mechanism; on failure throws InputError (main maps it to exit code 2). The file's
 // warnings (Model::warnings) go to the log.
 [[nodiscard]] Model load(const std::string& path);

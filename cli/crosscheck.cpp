@@ -75,7 +75,10 @@ int run_crosscheck_cmd(const CrosscheckCliOptions& opt) {
         << (res.pass ? "PASS" : "FAIL") << (res.message.empty() ? "" : ": ") << res.message << "\n";
   }
   std::cout << out.str();
-  if (res.samples == 0) return kNumerical;
+  if (res.samples == 0) {
+    spdlog::error("{}: {}", model.file, res.message);
+    return kNumerical;
+  }
   return res.pass ? kOk : kCheckFailed;
 }
 
@@ -90,9 +93,9 @@ void register_crosscheck(CLI::App& app, const GlobalOptions& globals, int& exit_
       ->check(CLI::Range(1, 100000));
   cmd->add_option("--t-end", opt->t_end,
                   "length of the motion, in the file's time unit (default 0.2)")
-      ->check(CLI::PositiveNumber);
+      ->check(finite_range(0.0, 1e6, true));
   cmd->add_option("--tolerance", opt->tolerance, "largest relative difference (default 1e-8)")
-      ->check(CLI::PositiveNumber);
+      ->check(finite_range(0.0, 1.0, true));
   cmd->add_option("--seed", opt->seed, "seed of the initial velocity guess (default 1)");
   cmd->add_flag("--json", opt->json, "one JSON document on stdout");
   add_units_option(cmd, opt->units);

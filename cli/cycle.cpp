@@ -24,6 +24,7 @@
 #include "commands.hpp"
 #include "common.hpp"
 #include "orthomech/analysis/cycle_metrics.hpp"
+#include "orthomech/error.hpp"
 #include "orthomech/io/cycle_output.hpp"
 #include "orthomech/io/units.hpp"
 
@@ -190,6 +191,7 @@ nlohmann::json positions_json(const Model& model, const CycleResult& r, bool ang
     j["input"] = input_u.from_si(p.input);
     j["time"] = time_u.from_si(p.time);
     j["singular"] = p.singular;
+    j["bridged"] = p.bridge >= 0;
     nlohmann::json m = nlohmann::json::object();
     for (size_t i = 0; i < model.measures.size(); ++i)
       m[model.measures[i].name] = measure_u[i].from_si(p.measures[i]);
@@ -222,11 +224,12 @@ nlohmann::json positions_json(const Model& model, const CycleResult& r, bool ang
       bodies[b.name] = {{"velocity", v}, {"acceleration", a}};
     }
     j["bodies"] = bodies;
-    if (!p.singular) {  // multipliers are not meaningful next to a change point
+    if (drive_reported(p)) {  // not at a change point that could not be bridged
       j["drive"] = drive_u.from_si(p.drive);
-      nlohmann::json rc;
+      nlohmann::json rc = nlohmann::json::object();
       for (size_t i = 0; i < r.components.size(); ++i)
-        rc[r.components[i].name] = component_u[i].from_si(p.reactions[i]);
+        if (component_reported(r, p, i))
+          rc[r.components[i].name] = component_u[i].from_si(p.reactions[i]);
       j["reactions"] = rc;
     }
     nlohmann::json outside = nlohmann::json::array();
@@ -295,13 +298,19 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
   if (opt.speed_fluctuation > 0.0) mo.speed_fluctuation = opt.speed_fluctuation;
   const CycleMetrics metrics = compute_cycle_metrics(model, r, mo);
 
-  if (r.status == CycleStatus::invalid_request) throw CLI::ValidationError(model.file, r.message);
+  if (r.status == CycleStatus::invalid_request) {
+    // A driver taken from the file as written: the problem is the file's, at the driver's line.
+    if (opt.speed.empty() && opt.from.empty() && opt.to.empty() && co.driver.where.line > 0)
+      throw InputError(co.driver.where, "driver '" + co.driver.name + "'", r.message);
+    throw CLI::ValidationError(model.file, r.message);
+  }
   if (r.status == CycleStatus::failed && r.points.empty()) {
     spdlog::error("{}: the cycle cannot be computed: {}", model.file, r.message);
     return kNumerical;
   }
   if (r.status == CycleStatus::failed)
     spdlog::error("{}: the sweep stopped: {}", model.file, r.message);
+  for (const std::string& w : r.warnings) spdlog::warn("{}: {}", model.file, w);
   if (r.status == CycleStatus::stopped_at_dead_point) spdlog::warn("{}: {}", model.file, r.message);
   for (const DeadPoint& d : r.singular_positions) spdlog::info("{}", d.message);
   spdlog::info(
@@ -412,6 +421,20 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
     };
     j["dead_points"] = events(r.dead_points);
     j["singular_positions"] = events(r.singular_positions);
+    const OutputUnit drive_out = unit_of(drive_unit_si);
+    nlohmann::json bridges = nlohmann::json::array();
+    for (const ChangePointBridge& b : r.bridges) {
+      nlohmann::json div = nlohmann::json::array();
+      for (size_t i = 0; i < r.components.size(); ++i)
+        if (b.diverging[i]) div.push_back(r.components[i].name);
+      bridges.push_back({{"input", input_u.from_si(b.input)},
+                         {"time", time_u.from_si(b.time)},
+                         {"time_from", time_u.from_si(b.time_from)},
+                         {"time_to", time_u.from_si(b.time_to)},
+                         {"drive_error", drive_out.from_si(b.drive_error)},
+                         {"diverging", div}});
+    }
+    j["bridges"] = bridges;
     // peaks: the drive, every reaction magnitude and every reaction component.
     nlohmann::json peaks;
     for (const auto* list : {&summary, &component_summary})
@@ -424,7 +447,8 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
                          {"max", extreme(s.max, u)},
                          {"min", extreme(s.min, u)},
                          {"unit", u.name},
-                         {"determinate", s.determinate}};
+                         {"determinate", s.determinate},
+                         {"diverges", s.diverges}};
       }
     j["peaks"] = peaks;
     nlohmann::json comps = nlohmann::json::array();
@@ -433,7 +457,8 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
                        {"joint", model.joints[static_cast<size_t>(r.components[i].joint)].name},
                        {"frame", r.components[i].global ? "global" : "joint"},
                        {"unit", unit_of(r.components[i].unit).name},
-                       {"determinate", r.determinate[i]}});
+                       {"determinate", r.determinate[i]},
+                       {"diverging", r.diverging.empty() ? false : bool(r.diverging[i])}});
     j["components"] = comps;
     // Design metrics.
     nlohmann::json loops = nlohmann::json::array();
@@ -515,8 +540,16 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
           << "\n";
     out << "singular        " << (r.singular_positions.empty() ? "none" : "") << "\n";
     for (const DeadPoint& d : r.singular_positions)
-      out << "  at input " << format_input(d.input, angular, U) << ": passed (E loses rank; the "
-          << "reactions there are omitted)\n";
+      out << "  at input " << format_input(d.input, angular, U) << ": passed (E loses rank)\n";
+    for (const ChangePointBridge& b : r.bridges) {
+      int diverging = 0;
+      for (const bool x : b.diverging) diverging += x ? 1 : 0;
+      const OutputUnit du = unit_of(drive_unit_si);
+      out << "  bridged at " << format_input(b.input, angular, U) << ": values within "
+          << format_input(std::abs(b.time_to - b.time) * std::abs(co.driver.speed), angular, U)
+          << " from the branch (drive error estimate " << fmt(du.from_si(b.drive_error), 2) << " "
+          << du.name << "; " << diverging << " diverging component(s) not reported there)\n";
+    }
     out << "limits          " << (metrics.limits.empty() ? "kept" : "") << "\n";
     for (const LimitExcursion& l : metrics.limits) {
       const Joint& lj = model.joints[static_cast<size_t>(l.joint)];
@@ -548,7 +581,9 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
                     s.name.c_str(), uw, u.name.c_str(), u.from_si(s.max.value),
                     format_input(wrapped(s.max.input), angular, U).c_str(), u.from_si(s.min.value),
                     format_input(wrapped(s.min.input), angular, U).c_str(), u.from_si(s.rms),
-                    s.determinate ? "" : "   indeterminate (minimum norm)");
+                    s.determinate ? ""
+                    : s.diverges  ? "   indeterminate (minimum norm), diverges at a change point"
+                                  : "   indeterminate (minimum norm)");
       out << line;
     }
     // Design metrics.
@@ -622,7 +657,7 @@ void register_cycle(CLI::App& app, const GlobalOptions& globals, int& exit_code)
                   "constant input speed, e.g. 300rpm, 31.4rad/s, 90deg/s, 0.5m/s; a bare number is "
                   "in the file's angle (or length) unit per time unit");
   cmd->add_option("--steps", opt->steps, "positions per cycle (default: the file's, else 360)")
-      ->check(CLI::Range(2, 100000));
+      ->check(CLI::Range(2, kMaxCycleSteps));
   cmd->add_option("--from", opt->from,
                   "start input, e.g. 30deg, 20mm; a bare number is in the file's declared units");
   cmd->add_option("--to", opt->to,

@@ -16,6 +16,7 @@
 #include "commands.hpp"
 #include "common.hpp"
 #include "orthomech/io/cycle_output.hpp"
+#include "orthomech/io/units.hpp"
 
 namespace orthomech::cli {
 
@@ -76,19 +77,17 @@ InitialRate parse_rate(const Model& model, const std::string& text) {
   const UnitSystem file = unit_system(model.units);
   const bool angle = model.measures[static_cast<size_t>(m)].unit.rfind("rad", 0) == 0;
   const double scale = (angle ? file.angle_si : file.length_si) / file.time_si;
-  try {
-    return {m, std::stod(text.substr(eq + 1)) * scale};
-  } catch (const std::exception&) {
-    throw CLI::ValidationError(
-        "--rate", "--rate '" + text + "': '" + text.substr(eq + 1) + "' is not a number");
-  }
+  return {m, parse_number(text.substr(eq + 1), "--rate " + name) * scale};
 }
 
 // simulate.csv: every column with its unit in the header (the output units), every body's pose
 // and named point; chart_switches.csv.
 void write_csv(const std::filesystem::path& dir, const Model& model, const SimulateResult& res,
                const SimulateUnits& U) {
-  std::filesystem::create_directories(dir);
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec)
+    throw CLI::ValidationError("--out", "cannot create " + dir.string() + ": " + ec.message());
   std::ofstream out(dir / "simulate.csv");
   out.precision(12);
   out << "t [" << U.time.name << "]";
@@ -118,6 +117,9 @@ void write_csv(const std::filesystem::path& dir, const Model& model, const Simul
   sw << "t [" << U.time.name << "],from,to\n";
   for (const ChartSwitch& c : res.chart_switches)
     sw << g(U.time.from_si(c.t), 12) << ",\"" << c.from << "\",\"" << c.to << "\"\n";
+  out.close();
+  sw.close();
+  if (!out || !sw) throw CLI::ValidationError("--out", "cannot write the files in " + dir.string());
 }
 
 // The time histories, one array per quantity over the output times (columns, as plotting tools
@@ -193,7 +195,8 @@ int run_simulate(const SimulateCliOptions& opt) {
   so.dt_out = opt.dt_out * file_time;
   so.max_step = opt.max_step * file_time;
   so.form = opt.form == "primal" ? DynamicsForm::primal : DynamicsForm::dual;
-  so.integrator = opt.integrator == "rkf78" ? Integrator::rkf78 : Integrator::dopri5;
+  if (!parse_integrator(opt.integrator, so.integrator))  // CLI::IsMember checked the name
+    throw std::logic_error("simulate: integrator '" + opt.integrator + "' has no stepper");
   for (const std::string& r : opt.rates) so.initial_rates.push_back(parse_rate(model, r));
   so.record_samples = true;
   const SimulateResult res = simulate(model, so);
@@ -213,7 +216,7 @@ int run_simulate(const SimulateCliOptions& opt) {
     j["status"] = to_string(res.status);
     j["message"] = res.message;
     j["form"] = so.form == DynamicsForm::dual ? "dual" : "primal";
-    j["integrator"] = so.integrator == Integrator::dopri5 ? "dopri5" : "rkf78";
+    j["integrator"] = to_string(so.integrator);
     j["rtol"] = so.rtol;
     j["atol"] = so.atol;
     j["final"] = sample_json(model, res, res.final, U);
@@ -227,6 +230,8 @@ int run_simulate(const SimulateCliOptions& opt) {
     j["kinetic_energy_removed"] = U.energy.from_si(res.kinetic_removed);
     j["steps"] = res.steps;
     j["evaluations"] = res.evaluations;
+    j["rejected_steps"] = res.rejected_steps;
+    j["jacobians"] = res.jacobians;
     nlohmann::json sw = nlohmann::json::array();
     for (const ChartSwitch& c : res.chart_switches)
       sw.push_back({{"t", U.time.from_si(c.t)}, {"from", c.from}, {"to", c.to}});
@@ -239,8 +244,10 @@ int run_simulate(const SimulateCliOptions& opt) {
         << ", atol " << g(so.atol, 3) << "\n";
     out << "status      " << to_string(res.status) << (res.message.empty() ? "" : ": ")
         << res.message << "\n";
-    out << "steps       " << res.steps << " (" << res.evaluations << " evaluations), "
-        << res.chart_switches.size() << " chart switches\n";
+    out << "steps       " << res.steps << " (" << res.evaluations << " evaluations";
+    if (res.rejected_steps > 0) out << ", " << res.rejected_steps << " rejected";
+    if (res.jacobians > 0) out << ", " << res.jacobians << " Jacobians";
+    out << "), " << res.chart_switches.size() << " chart switches\n";
     const std::string eu = " " + U.energy.name;
     out << "energy      initial " << g(U.energy.from_si(res.energy_initial)) << eu << ", final "
         << g(U.energy.from_si(res.energy_final)) << eu << ", max drift "
@@ -274,18 +281,21 @@ void register_simulate(CLI::App& app, const GlobalOptions& globals, int& exit_co
   cmd->add_option("file", opt->file, "mechanism file (YAML)")->required();
   cmd->add_option("--t-end", opt->t_end, "end time, in the file's time unit")
       ->required()
-      ->check(CLI::PositiveNumber);
-  cmd->add_option("--rtol", opt->rtol, "relative tolerance")->check(CLI::PositiveNumber);
-  cmd->add_option("--atol", opt->atol, "absolute tolerance")->check(CLI::PositiveNumber);
+      ->check(finite_range(0.0, kMaxGeneral, true));
+  cmd->add_option("--rtol", opt->rtol, "relative tolerance")->check(finite_range(1e-15, 1.0));
+  cmd->add_option("--atol", opt->atol, "absolute tolerance")->check(finite_range(0.0, 1e6, true));
   cmd->add_option("--dt-out", opt->dt_out,
-                  "output interval (the file's time unit; default t_end/100)")
-      ->check(CLI::PositiveNumber);
+                  "output interval (the file's time unit; default t_end/100; at most 1e6 output "
+                  "samples)")
+      ->check(finite_range(0.0, kMaxGeneral, true));
   cmd->add_option("--max-step", opt->max_step, "largest step (the file's time unit)")
-      ->check(CLI::PositiveNumber);
+      ->check(finite_range(0.0, kMaxGeneral, true));
   cmd->add_option("--form", opt->form, "dual (default) or primal (Theorem 7)")
       ->check(CLI::IsMember({"dual", "primal"}));
-  cmd->add_option("--integrator", opt->integrator, "dopri5 (default) or rkf78")
-      ->check(CLI::IsMember({"dopri5", "rkf78"}));
+  cmd->add_option("--integrator", opt->integrator,
+                  "dopri5 (default), rkf78, bulirsch-stoer (long runs, tight tolerances) or "
+                  "rosenbrock4 (stiff)")
+      ->check(CLI::IsMember({"dopri5", "rkf78", "bulirsch-stoer", "rosenbrock4"}));
   cmd->add_option("--rate", opt->rates,
                   "initial rate MEASURE=VALUE of a measure's position quantity, in the file's "
                   "declared units (length or angle per time unit); repeatable");
@@ -297,6 +307,10 @@ void register_simulate(CLI::App& app, const GlobalOptions& globals, int& exit_co
   auto log = std::make_shared<LogFlags>();
   add_log_flags(cmd, *log);
   cmd->callback([opt, log, &globals, &exit_code] {
+    if (opt->dt_out > 0.0 && opt->t_end / opt->dt_out + 1.0 > kMaxOutputSamples)
+      throw CLI::ValidationError("--dt-out",
+                                 "--t-end / --dt-out gives more than 1e6 output "
+                                 "samples; give a larger --dt-out");
     setup_logging(globals, *log);
     exit_code = run_simulate(*opt);
   });

@@ -11,11 +11,12 @@ namespace orthomech {
 
 namespace {
 
-// The positions that carry a drive (not next to a change point), in sweep order.
+// The positions that carry a drive (drive_reported: bridged values next to a change point
+// count), in sweep order.
 std::vector<size_t> regular_positions(const CycleResult& r) {
   std::vector<size_t> k;
   for (size_t i = 0; i < r.points.size(); ++i)
-    if (!r.points[i].singular) k.push_back(i);
+    if (drive_reported(r.points[i])) k.push_back(i);
   return k;
 }
 

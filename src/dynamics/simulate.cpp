@@ -35,7 +35,45 @@ const char* to_string(SimulateStatus s) {
   return "?";
 }
 
+const char* to_string(Integrator i) {
+  switch (i) {
+    case Integrator::dopri5:
+      return "dopri5";
+    case Integrator::rkf78:
+      return "rkf78";
+    case Integrator::bulirsch_stoer:
+      return "bulirsch-stoer";
+    case Integrator::rosenbrock4:
+      return "rosenbrock4";
+  }
+  return "?";
+}
+
+bool parse_integrator(const std::string& name, Integrator& out) {
+  for (const Integrator i :
+       {Integrator::dopri5, Integrator::rkf78, Integrator::bulirsch_stoer, Integrator::rosenbrock4})
+    if (name == to_string(i)) {
+      out = i;
+      return true;
+    }
+  return false;
+}
+
 namespace {
+
+detail::OdeStepper ode_stepper(Integrator i) {
+  switch (i) {
+    case Integrator::dopri5:
+      return detail::OdeStepper::dopri5;
+    case Integrator::rkf78:
+      return detail::OdeStepper::rkf78;
+    case Integrator::bulirsch_stoer:
+      return detail::OdeStepper::bulirsch_stoer;
+    case Integrator::rosenbrock4:
+      return detail::OdeStepper::rosenbrock4;
+  }
+  return detail::OdeStepper::dopri5;
+}
 
 using detail::ChartSolver;
 
@@ -372,6 +410,12 @@ SimulateResult simulate(const Model& model, const SimulateOptions& options) {
   State s(model);
   s.q = model.design_q();
   if (options.initial_u.size() == model.n) s.u = options.initial_u;
+  if (options.initial_rates.empty() && options.use_file_rates && !model.initial.rates.empty()) {
+    SimulateOptions with_file_rates = options;  // the file's initial rates (Model::initial)
+    for (const InitialRateSpec& r : model.initial.rates)
+      with_file_rates.initial_rates.push_back({r.measure, r.rate});
+    return simulate(model, s, with_file_rates);
+  }
   return simulate(model, s, options);
 }
 
@@ -626,8 +670,7 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
   }
 
   detail::OdeOptions oo;
-  oo.stepper = options.integrator == Integrator::dopri5 ? detail::OdeStepper::dopri5
-                                                        : detail::OdeStepper::rkf78;
+  oo.stepper = ode_stepper(options.integrator);
   oo.rtol = options.rtol;
   oo.atol = options.atol;
   oo.t0 = initial.t;
@@ -647,6 +690,8 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
     return result;
   }
   result.evaluations = evaluations;
+  result.rejected_steps = stats.rejected;
+  result.jacobians = stats.jacobians;
   // Final sample at the corrected final state.
   try {
     sample_at(stats.t, x, result.final);

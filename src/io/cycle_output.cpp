@@ -171,15 +171,19 @@ CycleColumns write_cycle_csv(const std::filesystem::path& file, const Model& mod
       for (int i = 0; i < b.nu(); ++i)
         out << ',' << number(a_unit[i].from_si(p.udot(b.u_offset + i)));
     }
-    if (p.singular) {
+    // Empty cells where a value is not reported (an unbridged change point; a component that
+    // diverges towards the change point a bridged position is next to).
+    out << ',';
+    if (drive_reported(p)) out << number(drive_unit.from_si(p.drive));
+    for (size_t i = 0; i < p.reactions.size(); ++i) {
       out << ',';
-      for (size_t i = 0; i < result.components.size() + magnitudes.size(); ++i) out << ',';
-    } else {
-      out << ',' << number(drive_unit.from_si(p.drive));
-      for (size_t i = 0; i < p.reactions.size(); ++i)
-        out << ',' << number(component_units[i].from_si(p.reactions[i]));
-      for (size_t i = 0; i < magnitudes.size(); ++i)
-        out << ',' << number(magnitude_units[i].from_si(magnitude_at(p, magnitudes[i])));
+      if (component_reported(result, p, i))
+        out << number(component_units[i].from_si(p.reactions[i]));
+    }
+    for (size_t i = 0; i < magnitudes.size(); ++i) {
+      out << ',';
+      if (magnitude_reported(result, p, magnitudes[i]))
+        out << number(magnitude_units[i].from_si(magnitude_at(p, magnitudes[i])));
     }
     std::string outside;
     for (size_t j = 0; j < model.joints.size(); ++j)

@@ -33,8 +33,9 @@ struct CycleColumns {
 // One row per position, every quantity in `units` (units in the header: "drive [N*mm]"):
 // input, time, every measure, every body's pose and named point, every body's velocity and
 // acceleration, the drive, every reaction component, every reaction magnitude, and `limits`
-// (the joints outside their limits there, space-separated; empty inside). At positions flagged
-// `singular` the drive and reaction cells are empty (not meaningful there). Written atomically
+// (the joints outside their limits there, space-separated; empty inside). Cells that are not
+// reported are empty (drive_reported, component_reported: an unbridged singular position, a
+// component diverging next to a bridged change point). Written atomically
 // (temporary file, then rename). Throws std::runtime_error naming the file on failure.
 CycleColumns write_cycle_csv(const std::filesystem::path& file, const Model& model,
                              const CycleResult& result,

@@ -207,6 +207,19 @@ struct DesignPosition {
   SourceLocation where;
 };
 
+// ---- Initial velocities (file section `initial`; used by simulate). -----------------------
+// The rate at t = 0 of a measure's position quantity (a joint coordinate, a point coordinate, a
+// distance, a body angle), SI (m/s or rad/s). simulate makes the velocity admissible and fits
+// these rates by least squares in the chart coordinates (dynamics/simulate.hpp).
+struct InitialRateSpec {
+  int measure = -1;  // index into Model::measures
+  double rate = 0.0;
+  SourceLocation where;
+};
+struct InitialConditions {
+  std::vector<InitialRateSpec> rates;
+};
+
 struct GeneralSystem;  // model/general_system.hpp
 
 // The units a file declares (`units:`), by name (docs/file-format.md); every value in the Model is
@@ -236,6 +249,7 @@ struct Model {
   AnalysisDefaults analysis;
   DeclaredUnits units;                // as declared by the file (SI when built in code)
   std::vector<std::string> warnings;  // "file:line:col: warning: element: message", from loading
+  InitialConditions initial;  // initial velocities of simulate (may be empty: at rest)
   // Set by make_general_model (model/general_system.hpp): a free system given by functions,
   // with M(q), instead of bodies, joints and loads (which are then empty).
   std::shared_ptr<const GeneralSystem> general;
