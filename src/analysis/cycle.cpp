@@ -1297,35 +1297,68 @@ double magnitude_at(const DrivenPointView& p, const ReactionMagnitude& m) {
   return std::sqrt(sum);
 }
 
+namespace {
+
+// Max, min, peak |x| and RMS of value(p) over the positions where reported(p).
+// A fresh summary of one series (name, unit, determinacy; everything else accumulated).
+SeriesSummary series(std::string name, std::string unit, bool determinate) {
+  SeriesSummary s;
+  s.name = std::move(name);
+  s.unit = std::move(unit);
+  s.determinate = determinate;
+  return s;
+}
+
+template <class Value, class Reported>
+SeriesSummary summarize_series(const CycleResult& result, SeriesSummary s, Value value,
+                               Reported reported) {
+  double sum2 = 0.0;
+  for (const DrivenPointView& p : result.points) {
+    if (!reported(p)) continue;
+    const double v = value(p);
+    sum2 += v * v;
+    const bool first = s.samples++ == 0;
+    if (first || std::abs(v) > s.peak) {
+      s.peak = std::abs(v);
+      s.peak_input = p.input;
+      s.peak_time = p.time;
+    }
+    if (first || v > s.max.value) s.max = {v, p.input, p.time};
+    if (first || v < s.min.value) s.min = {v, p.input, p.time};
+  }
+  s.rms = s.samples > 0 ? std::sqrt(sum2 / s.samples) : 0.0;
+  return s;
+}
+
+}  // namespace
+
 std::vector<SeriesSummary> summarize_cycle(const CycleResult& result,
                                            const std::vector<ReactionMagnitude>& magnitudes,
                                            const std::string& drive_unit) {
   std::vector<SeriesSummary> out;
-  auto summarize = [&](SeriesSummary s, auto value, auto reported) {
-    double sum2 = 0.0;
-    for (const DrivenPointView& p : result.points) {
-      if (!reported(p)) continue;
-      const double v = value(p);
-      sum2 += v * v;
-      if (s.samples++ == 0 || std::abs(v) > s.peak) {
-        s.peak = std::abs(v);
-        s.peak_input = p.input;
-        s.peak_time = p.time;
-      }
-    }
-    s.rms = s.samples > 0 ? std::sqrt(sum2 / s.samples) : 0.0;
-    out.push_back(std::move(s));
-  };
-  summarize(
-      SeriesSummary{"drive", drive_unit, true}, [](const DrivenPointView& p) { return p.drive; },
-      drive_reported);
+  out.push_back(summarize_series(
+      result, series("drive", drive_unit, true), [](const DrivenPointView& p) { return p.drive; },
+      drive_reported));
   for (const ReactionMagnitude& m : magnitudes) {
-    SeriesSummary s{m.name, m.unit, m.determinate};
+    SeriesSummary s = series(m.name, m.unit, m.determinate);
     for (const int c : m.components)
       if (!result.diverging.empty() && result.diverging[static_cast<size_t>(c)]) s.diverges = true;
-    summarize(
-        std::move(s), [&](const DrivenPointView& p) { return magnitude_at(p, m); },
-        [&](const DrivenPointView& p) { return magnitude_reported(result, p, m); });
+    out.push_back(summarize_series(
+        result, std::move(s), [&](const DrivenPointView& p) { return magnitude_at(p, m); },
+        [&](const DrivenPointView& p) { return magnitude_reported(result, p, m); }));
+  }
+  return out;
+}
+
+std::vector<SeriesSummary> summarize_components(const CycleResult& result) {
+  std::vector<SeriesSummary> out;
+  for (size_t i = 0; i < result.components.size(); ++i) {
+    SeriesSummary s = series(result.components[i].name, result.components[i].unit,
+                             result.determinate.empty() || result.determinate[i]);
+    s.diverges = !result.diverging.empty() && result.diverging[i];
+    out.push_back(summarize_series(
+        result, std::move(s), [i](const DrivenPointView& p) { return p.reactions[i]; },
+        [&](const DrivenPointView& p) { return component_reported(result, p, i); }));
   }
   return out;
 }

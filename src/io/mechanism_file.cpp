@@ -278,12 +278,21 @@ class Reader {
   }
   double speed_value(const YAML::Node& node, const std::string& element, bool angular) const;
   Table table(const YAML::Node& node, const std::string& element) const;
+  ActiveWhile active_while(const YAML::Node& node, const std::string& element) const;
 };
 
 // ---- units -------------------------------------------------------------------------------------
 void Reader::read_units(const YAML::Node& node) {
   if (!node) return;
   expect_map(node, "units", {"length", "angle", "mass", "time", "force"});
+  auto declared = [this](const std::string& key) -> std::string& {
+    DeclaredUnits& d = model_.units;
+    return key == "length"  ? d.length
+           : key == "angle" ? d.angle
+           : key == "mass"  ? d.mass
+           : key == "time"  ? d.time
+                            : d.force;
+  };
   auto pick = [&](const std::string& key, const std::vector<std::pair<std::string, double>>& table,
                   double& out) {
     const YAML::Node v = node[key];
@@ -292,6 +301,7 @@ void Reader::read_units(const YAML::Node& node) {
     for (const auto& [name, factor] : table)
       if (v.Scalar() == name) {
         out = factor;
+        declared(key) = name;
         return;
       }
     std::vector<std::string> names;
@@ -495,7 +505,7 @@ void Reader::read_nonholonomic(const YAML::Node& root) {
 Table Reader::table(const YAML::Node& node, const std::string& element) const {
   Table t;
   if (!node) return t;
-  expect_map(node, element, {"measure", "points"});
+  expect_map(node, element, {"measure", "points", "wrap"});
   const YAML::Node m = require(node, "measure", element);
   t.measure = model_.find_measure(m.Scalar());
   if (t.measure < 0) fail(m, element, "measure '" + m.Scalar() + "' is not defined");
@@ -515,7 +525,45 @@ Table Reader::table(const YAML::Node& node, const std::string& element) const {
   for (size_t k = 1; k < t.points.size(); ++k)
     if (!(t.points[k].first > t.points[k - 1].first))
       fail(pts[k], element, "table points must be in increasing order of the measure");
+  // A table over an angle wraps with the turn unless `wrap: false` (docs/file-format.md).
+  t.wrap = measure.unit == "rad";
+  if (const YAML::Node w = node["wrap"]) {
+    if (!w.IsScalar() || (w.Scalar() != "true" && w.Scalar() != "false"))
+      fail(w, element, "wrap must be true or false");
+    t.wrap = w.Scalar() == "true";
+    if (t.wrap && measure.unit != "rad")
+      fail(w, element,
+           "only a table over an angle can wrap (measure '" + measure.name + "' is a " +
+               (measure.unit == "m" ? "length" : measure.unit) + ")");
+  }
+  constexpr double kTurnSlack = 1e-9;  // rad: a table over exactly [0°, 360°] is one turn
+  if (t.wrap &&
+      t.points.back().first - t.points.front().first > 2.0 * std::numbers::pi + kTurnSlack)
+    fail(pts, element,
+         "the table spans more than one turn of '" + measure.name +
+             "' and wraps with the turn: give wrap: false to key it on the unwrapped angle");
   return t;
+}
+
+// `active_while: {measure: NAME, velocity: positive|negative}`: the load acts only while the
+// position measure's rate has that sign.
+ActiveWhile Reader::active_while(const YAML::Node& node, const std::string& element) const {
+  expect_map(node, element, {"measure", "velocity"});
+  const YAML::Node m = require(node, "measure", element);
+  ActiveWhile a;
+  a.measure = model_.find_measure(scalar(m, element, "a measure name"));
+  if (a.measure < 0) fail(m, element, "measure '" + m.Scalar() + "' is not defined");
+  if (model_.measures[static_cast<size_t>(a.measure)].derivative != 0)
+    fail(m, element, "active_while needs a position measure (derivative 0); its velocity is used");
+  const YAML::Node v = require(node, "velocity", element);
+  const std::string sign = scalar(v, element, "velocity");
+  if (sign == "positive")
+    a.sign = 1;
+  else if (sign == "negative")
+    a.sign = -1;
+  else
+    fail(v, element, "velocity must be 'positive' or 'negative', got '" + sign + "'");
+  return a;
 }
 
 // ---- loads -------------------------------------------------------------------------------------
@@ -536,9 +584,24 @@ void Reader::read_loads(const YAML::Node& root) {
       expect_map(item, element, {"name", "type", "g"});
       Gravity g;
       if (item["g"]) g.g = vec2(item["g"], element, "g", length / (units_.time * units_.time));
+      // A gravity far from the Earth's after unit conversion is most often a unit slip
+      // (g: [0, -9.81] in a mm file is 0.00981 m/s²): a warning, not an error
+      // (docs/file-format.md).
+      constexpr double kEarth = 9.81, kFactor = 2.0;  // warn outside [g/2, 2 g]
+      const double gn = g.g.norm();
+      if (gn < kEarth / kFactor || gn > kEarth * kFactor) {
+        const SourceLocation w = loc(item["g"] ? item["g"] : item);
+        std::ostringstream msg;
+        msg << w.file << ':' << w.line << ':' << w.column << ": warning: " << element
+            << ": |g| = " << gn << " m/s^2 after unit conversion (the file's length unit is "
+            << model_.units.length << ", time " << model_.units.time
+            << "), far from 9.81 m/s^2: is the unit right?";
+        model_.warnings.push_back(msg.str());
+      }
       l.kind = g;
     } else if (type == "force") {
-      expect_map(item, element, {"name", "type", "point", "force", "frame", "table"});
+      expect_map(item, element,
+                 {"name", "type", "point", "force", "frame", "table", "active_while"});
       PointForce f;
       f.at = point_ref(require(item, "point", element), element);
       f.force = vec2(require(item, "force", element), element, "force", force);
@@ -552,7 +615,7 @@ void Reader::read_loads(const YAML::Node& root) {
       f.table = table(item["table"], element);
       l.kind = f;
     } else if (type == "torque") {
-      expect_map(item, element, {"name", "type", "body", "torque", "table"});
+      expect_map(item, element, {"name", "type", "body", "torque", "table", "active_while"});
       Torque t;
       t.body = rigid_body_ref(require(item, "body", element), element);
       if (t.body == kGround) fail(item["body"], element, "a torque on the ground does nothing");
@@ -590,6 +653,7 @@ void Reader::read_loads(const YAML::Node& root) {
            "unknown load type '" + type +
                "' (allowed: gravity, force, torque, spring-damper, rotary-spring-damper)");
     }
+    if (const YAML::Node aw = item["active_while"]) l.active_while = active_while(aw, element);
     model_.loads.push_back(std::move(l));
   }
 }

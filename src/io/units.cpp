@@ -89,10 +89,118 @@ double parse_speed(const std::string& text, bool angular, double bare_factor) {
 
 double parse_position(const std::string& text, bool angular, double bare_factor) {
   static const UnitTable angular_units = {{"deg", std::numbers::pi / 180.0}, {"rad", 1.0}};
-  static const UnitTable linear_units = {{"m", 1.0}, {"mm", 1e-3}};
+  static const UnitTable linear_units = {
+      {"m", 1.0}, {"mm", 1e-3}, {"cm", 0.01}, {"in", 0.0254}, {"ft", 0.3048}};
   return parse_with_units(text, angular ? angular_units : linear_units, bare_factor, "input",
                           angular ? "revolute" : "prismatic",
                           angular ? Quantity::angle : Quantity::length);
+}
+
+namespace {
+
+const UnitTable& table_of(const std::string& kind) {
+  // The names a file may declare (docs/file-format.md "units"), SI per unit.
+  static const UnitTable length = {
+      {"m", 1.0}, {"cm", 0.01}, {"mm", 0.001}, {"in", 0.0254}, {"ft", 0.3048}};
+  static const UnitTable angle = {{"rad", 1.0}, {"deg", std::numbers::pi / 180.0}};
+  static const UnitTable mass = {{"kg", 1.0}, {"g", 0.001}, {"lb", 0.45359237}};
+  static const UnitTable time = {{"s", 1.0}, {"ms", 0.001}};
+  static const UnitTable force = {{"N", 1.0}, {"kN", 1000.0}, {"lbf", 4.4482216152605}};
+  if (kind == "length") return length;
+  if (kind == "angle") return angle;
+  if (kind == "mass") return mass;
+  if (kind == "time") return time;
+  return force;
+}
+
+double factor_of(const std::string& kind, const std::string& name) {
+  for (const auto& [n, f] : table_of(kind))
+    if (n == name) return f;
+  throw std::invalid_argument("unknown " + kind + " unit '" + name + "'");
+}
+
+}  // namespace
+
+UnitSystem unit_system(const DeclaredUnits& d) {
+  UnitSystem u;
+  u.length = d.length, u.angle = d.angle, u.mass = d.mass, u.time = d.time, u.force = d.force;
+  u.length_si = factor_of("length", d.length);
+  u.angle_si = factor_of("angle", d.angle);
+  u.mass_si = factor_of("mass", d.mass);
+  u.time_si = factor_of("time", d.time);
+  u.force_si = factor_of("force", d.force);
+  return u;
+}
+
+UnitSystem output_units(const Model& model, const std::string& choice) {
+  if (choice == "file") return unit_system(model.units);
+  if (choice == "si") return UnitSystem{};
+  throw std::invalid_argument("--units must be 'file' or 'si', got '" + choice + "'");
+}
+
+OutputUnit output_unit(Dimension q, const UnitSystem& u) {
+  const std::string &L = u.length, &A = u.angle, &T = u.time, &F = u.force;
+  switch (q) {
+    case Dimension::none:
+      return {"1", 1.0};
+    case Dimension::length:
+      return {L, u.length_si};
+    case Dimension::angle:
+      return {A, u.angle_si};
+    case Dimension::mass:
+      return {u.mass, u.mass_si};
+    case Dimension::time:
+      return {T, u.time_si};
+    case Dimension::force:
+      return {F, u.force_si};
+    case Dimension::moment:
+      return {F + "*" + L, u.force_si * u.length_si};
+    case Dimension::velocity:
+      return {L + "/" + T, u.length_si / u.time_si};
+    case Dimension::angular_velocity:
+      return {A + "/" + T, u.angle_si / u.time_si};
+    case Dimension::acceleration:
+      return {L + "/" + T + "^2", u.length_si / (u.time_si * u.time_si)};
+    case Dimension::angular_acceleration:
+      return {A + "/" + T + "^2", u.angle_si / (u.time_si * u.time_si)};
+    case Dimension::power:
+      return {F + "*" + L + "/" + T, u.force_si * u.length_si / u.time_si};
+    case Dimension::inertia:
+      return {u.mass + "*" + L + "^2", u.mass_si * u.length_si * u.length_si};
+    case Dimension::frequency:
+      return {"1/" + T, 1.0 / u.time_si};
+  }
+  return {"1", 1.0};
+}
+
+Dimension dimension_of(const std::string& s) {
+  static const std::vector<std::pair<std::string, Dimension>> names = {
+      {"m", Dimension::length},
+      {"rad", Dimension::angle},
+      {"kg", Dimension::mass},
+      {"s", Dimension::time},
+      {"N", Dimension::force},
+      {"N*m", Dimension::moment},
+      {"J", Dimension::moment},
+      {"m/s", Dimension::velocity},
+      {"rad/s", Dimension::angular_velocity},
+      {"m/s^2", Dimension::acceleration},
+      {"rad/s^2", Dimension::angular_acceleration},
+      {"W", Dimension::power},
+      {"kg*m^2", Dimension::inertia},
+      {"Hz", Dimension::frequency}};
+  for (const auto& [n, q] : names)
+    if (n == s) return q;
+  return Dimension::none;
+}
+
+std::string format_input(double value, bool angular, const UnitSystem& units) {
+  const OutputUnit unit = output_unit(angular ? Dimension::angle : Dimension::length, units);
+  double v = std::round(unit.from_si(value) * 1e6) / 1e6;
+  if (v == 0.0) v = 0.0;  // no "-0"
+  char buf[48];
+  std::snprintf(buf, sizeof buf, "%.10g %s", v, unit.name.c_str());
+  return buf;
 }
 
 std::string format_input(double value, bool angular) {

@@ -307,9 +307,14 @@ struct ReactionMagnitude {
 [[nodiscard]] bool magnitude_reported(const CycleResult& result, const DrivenPointView& p,
                                       const ReactionMagnitude& m);
 
-// Peak |x| (with the input and time where it occurs) and RMS over the positions of the sweep
-// where the series is reported (drive_reported, magnitude_reported): bridged positions next to a
-// change point count with their branch values, so neither is biased by positions left out.
+// One extreme of a series: its value and the input and time where it occurs.
+struct SeriesExtreme {
+  double value = 0.0, input = 0.0, time = 0.0;
+};
+// Signed maximum and minimum, peak |x| (with the input and time where each occurs) and RMS over
+// the positions of the sweep where the series is reported (drive_reported, magnitude_reported,
+// component_reported): bridged positions next to a change point count with their branch values,
+// so none is biased by positions left out. A tie keeps the first position in sweep order.
 struct SeriesSummary {
   std::string name, unit;
   bool determinate = true;
@@ -317,11 +322,14 @@ struct SeriesSummary {
   // is that of the positions outside the bridged gaps and grows as the grid approaches it.
   bool diverges = false;
   double peak = 0.0, peak_input = 0.0, peak_time = 0.0, rms = 0.0;
+  SeriesExtreme max, min;  // signed (for a magnitude: max = peak)
   int samples = 0;
 };
 // The drive first, then every reaction magnitude in joint order.
 [[nodiscard]] std::vector<SeriesSummary> summarize_cycle(
     const CycleResult& result, const std::vector<ReactionMagnitude>& magnitudes,
     const std::string& drive_unit);
+// Every reaction component (CycleResult::components order), signed.
+[[nodiscard]] std::vector<SeriesSummary> summarize_components(const CycleResult& result);
 
 }  // namespace orthomech

@@ -4,8 +4,56 @@
 #include <cstddef>
 #include <string>
 
+#include "orthomech/model/model.hpp"
+
 namespace orthomech {
 
+// ---- Output units ------------------------------------------------------------------------------
+// A system of units for outputs: the file's declared units (default of every command) or SI
+// (`--units si`). Compound units are built from the five base ones: a moment is force·length
+// ("N*mm"), a velocity length/time ("mm/s"), an angular velocity angle/time ("deg/s").
+struct UnitSystem {
+  std::string length = "m", angle = "rad", mass = "kg", time = "s", force = "N";
+  double length_si = 1.0, angle_si = 1.0, mass_si = 1.0, time_si = 1.0, force_si = 1.0;  // SI/unit
+  [[nodiscard]] bool is_si() const {
+    return length == "m" && angle == "rad" && mass == "kg" && time == "s" && force == "N";
+  }
+};
+// The units a file declared (names as in docs/file-format.md). Throws std::invalid_argument for
+// a name that is not one of them.
+[[nodiscard]] UnitSystem unit_system(const DeclaredUnits& declared);
+// "file" (the model's declared units) or "si". Throws std::invalid_argument otherwise.
+[[nodiscard]] UnitSystem output_units(const Model& model, const std::string& choice);
+
+enum class Dimension {
+  none,  // dimensionless: written as is
+  length,
+  angle,
+  mass,
+  time,
+  force,
+  moment,  // also energy and work (force·length)
+  velocity,
+  angular_velocity,
+  acceleration,
+  angular_acceleration,
+  power,      // force·length/time
+  inertia,    // mass·length²
+  frequency,  // 1/time
+};
+// A quantity's unit in a system: its name and its size in SI (value_out = value_SI / si).
+struct OutputUnit {
+  std::string name;
+  double si = 1.0;
+  [[nodiscard]] double from_si(double v) const { return v / si; }
+};
+[[nodiscard]] OutputUnit output_unit(Dimension q, const UnitSystem& units);
+// The dimension of an SI unit name as the library writes them ("m", "m/s", "m/s^2", "rad", "rad/s",
+// "rad/s^2", "N", "N*m", "J", "W", "kg", "kg*m^2", "s"); Dimension::none for anything else.
+[[nodiscard]] Dimension dimension_of(const std::string& si_unit);
+// A value and its unit for people, in `units`: "90 deg", "12.5 mm" (input rounded to 1e-6 of the
+// unit, never "-0").
+[[nodiscard]] std::string format_input(double value, bool angular, const UnitSystem& units);
 // ---- limits of every number entering the tool (docs/file-format.md "Limits") -------------------
 // The same limits apply to a number from a mechanism file and from the command line; they are
 // checked in SI, after the unit conversion. They are wide enough for any real linkage and narrow
@@ -46,7 +94,8 @@ inline constexpr std::size_t kMaxNumberLength = 64;
 // of Quantity::angle or Quantity::length).
 [[nodiscard]] double parse_position(const std::string& text, bool angular, double bare_factor);
 
-// An input position for people: degrees (angular) or millimetres, rounded to 1e-6 of the unit
+// An input position for people (library messages): degrees (angular) or millimetres, rounded to
+// 1e-6 of the unit
 // ("77.608916 deg", never "5e-14 deg").
 [[nodiscard]] std::string format_input(double value, bool angular);
 
