@@ -9,9 +9,12 @@
 #include <benchmark/benchmark.h>
 
 #include <array>
+#include <boost/math/special_functions/ellint_1.hpp>
+#include <boost/math/special_functions/jacobi_elliptic.hpp>
 #include <cmath>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "orthomech/dynamics/simulate.hpp"
 #include "orthomech/io/mechanism_file.hpp"
@@ -188,5 +191,112 @@ void CrankRocker(benchmark::State& bs, DynamicsForm form) {
 }
 BENCHMARK_CAPTURE(CrankRocker, dual_10s, DynamicsForm::dual)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(CrankRocker, primal_10s, DynamicsForm::primal)->Unit(benchmark::kMillisecond);
+
+// ---- Work–precision (issue 10; the table in docs/benchmarks.md) ----------------------------
+// Error against the reference versus CPU time, for every integrator and both forms:
+//   pendulum_2000s  IFToMM A01 to t = 2000 s; err = |P1 − exact| (m), the exact solution by
+//                   Jacobi elliptic functions (Boost.Math), rtol = atol.
+//   n40_20s         IFToMM A02, N = 40, to t = 20 s from the bundled file (its initial rates);
+//                   err = |B0 − reduction| (m), the exact one-DOF reduction on the parallelogram
+//                   branch integrated by RK4 (four_bar_reference above); atol 1e-12. The primal
+//                   form stops at the first change point (G singular): its rows run [0, 0.6 s].
+//   andrews_0_03s   Andrews' squeezer to t = 0.03 s; err = max relative error of the 7 angles
+//                   against the published state (references.md §1); atol 1e-12.
+// Run: build/bench/orthomech_bench --benchmark_filter=WorkPrecision
+Vec2 pendulum_exact(double t) {
+  const double k = std::sin(M_PI / 4.0);
+  const double K = boost::math::ellint_1(k);
+  const double theta = 2.0 * std::asin(k * boost::math::jacobi_sn(k, K - std::sqrt(9.81) * t));
+  return {-std::sin(theta), -std::cos(theta)};
+}
+
+enum class Problem { pendulum, n40, andrews };
+
+void WorkPrecision(benchmark::State& bs, Problem problem, DynamicsForm form, Integrator integrator,
+                   double rtol) {
+  const bool primal = form == DynamicsForm::primal;
+  const Model model = bundled(problem == Problem::pendulum ? "pendulum"
+                              : problem == Problem::n40    ? "n-four-bar-40"
+                                                           : "andrews-squeezer");
+  SimulateOptions o;
+  o.form = form;
+  o.integrator = integrator;
+  o.rtol = rtol;
+  o.atol = problem == Problem::pendulum ? rtol : 1e-12;
+  o.t_end = problem == Problem::pendulum ? 2000.0
+            : problem == Problem::n40    ? (primal ? 0.6 : 20.0)
+                                         : 0.03;
+  o.dt_out = o.t_end;
+  o.reactions = false;
+  SimulateResult r;
+  for (auto _ : bs) {
+    r = simulate(model, o);
+    benchmark::DoNotOptimize(r.final.q.data());
+  }
+  const auto measure = [&](const char* name) {
+    return r.final.measures[static_cast<size_t>(model.find_measure(name))];
+  };
+  double err = 0.0;
+  if (problem == Problem::pendulum) {
+    const Vec2 e = pendulum_exact(r.final.t);
+    err = std::hypot(measure("P1_x") - e.x(), measure("P1_y") - e.y());
+  } else if (problem == Problem::n40) {
+    const auto ref = four_bar_reference(40, r.final.t);
+    err = std::hypot(measure("B0_x") - ref[0], measure("B0_y") - ref[1]);
+  } else {
+    for (size_t k = 0; k < 7; ++k)
+      err = std::max(
+          err, std::abs(measure(test::andrews::kNames[k]) - kAndrews[k]) / std::abs(kAndrews[k]));
+  }
+  bs.counters["err"] = err;
+  bs.counters["steps"] = static_cast<double>(r.steps);
+  bs.counters["evals"] = static_cast<double>(r.evaluations);
+  bs.counters["t_end"] = r.final.t;
+  if (r.status != SimulateStatus::completed)
+    bs.SetLabel(std::string(to_string(r.status)) + " at t = " + std::to_string(r.final.t));
+}
+
+// The grid: per problem and integrator the tolerances worth a row (rosenbrock4, of order 4 with
+// a Jacobian of 2·dim x evaluations per step, only where it finishes in seconds).
+[[maybe_unused]] const bool kWorkPrecisionRegistered = [] {
+  struct Row {
+    Problem problem;
+    const char* name;
+    Integrator integrator;
+    std::vector<double> rtols;
+  };
+  const std::vector<Row> rows = {
+      {Problem::pendulum, "pendulum_2000s", Integrator::dopri5, {1e-8, 1e-10, 1e-12}},
+      {Problem::pendulum,
+       "pendulum_2000s",
+       Integrator::rkf78,
+       {1e-8, 1e-10, 1e-12, 1e-13, 1e-14, 1e-15}},
+      {Problem::pendulum,
+       "pendulum_2000s",
+       Integrator::bulirsch_stoer,
+       {1e-8, 1e-10, 1e-12, 1e-13, 1e-14, 1e-15}},
+      {Problem::pendulum, "pendulum_2000s", Integrator::rosenbrock4, {1e-6, 1e-8}},
+      {Problem::n40, "n40_20s", Integrator::dopri5, {1e-6, 1e-8, 1e-10, 1e-12}},
+      {Problem::n40, "n40_20s", Integrator::rkf78, {1e-6, 1e-8, 1e-10, 1e-12}},
+      {Problem::n40, "n40_20s", Integrator::bulirsch_stoer, {1e-6, 1e-8, 1e-10, 1e-12}},
+      {Problem::andrews, "andrews_0_03s", Integrator::dopri5, {1e-6, 1e-8, 1e-10}},
+      {Problem::andrews, "andrews_0_03s", Integrator::rkf78, {1e-6, 1e-8, 1e-10, 1e-12}},
+      {Problem::andrews, "andrews_0_03s", Integrator::bulirsch_stoer, {1e-6, 1e-8, 1e-10, 1e-12}},
+      {Problem::andrews, "andrews_0_03s", Integrator::rosenbrock4, {1e-6, 1e-8, 1e-10}},
+  };
+  for (const Row& row : rows)
+    for (const DynamicsForm form : {DynamicsForm::dual, DynamicsForm::primal})
+      for (const double rtol : row.rtols) {
+        std::ostringstream name;
+        name << "WorkPrecision/" << row.name << "/"
+             << (form == DynamicsForm::dual ? "dual" : "primal") << "/" << to_string(row.integrator)
+             << "/rtol:" << rtol;
+        benchmark::RegisterBenchmark(name.str().c_str(), WorkPrecision, row.problem, form,
+                                     row.integrator, rtol)
+            ->Unit(benchmark::kMillisecond)
+            ->Iterations(1);
+      }
+  return true;
+}();
 
 }  // namespace

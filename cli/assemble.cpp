@@ -16,7 +16,9 @@
 #include "commands.hpp"
 #include "common.hpp"
 #include "orthomech/analysis/assembly.hpp"
+#include "orthomech/analysis/validate.hpp"
 #include "orthomech/io/mechanism_writer.hpp"
+#include "orthomech/io/units.hpp"
 #include "orthomech/model/measures.hpp"
 
 namespace orthomech::cli {
@@ -33,6 +35,7 @@ struct AssembleOptions {
   std::string write;
   bool in_place = false;
   double tolerance = 1e-12;
+  std::string units = "file";
 };
 
 std::string fmt(double v, int precision = 6) {
@@ -46,7 +49,8 @@ std::string fmt(double v, int precision = 6) {
   throw InputError({"command line", 0, 0}, "option", what);
 }
 
-// "A0=30deg", "A0=0.5" (SI), "P=12mm": a lock value with an optional unit.
+// "A0=30deg", "A0=30" (the file's angle or length unit), "P=12mm": a lock value with an
+// optional unit.
 JointLock parse_lock(const Model& model, const std::string& text) {
   const auto eq = text.find('=');
   if (eq == std::string::npos) bad("--lock expects JOINT=VALUE, got '" + text + "'");
@@ -54,30 +58,24 @@ JointLock parse_lock(const Model& model, const std::string& text) {
   const int j = model.find_joint(name);
   if (j < 0) bad("--lock: joint '" + name + "' is not defined");
   const auto& kind = model.joints[static_cast<size_t>(j)].kind;
-  if (!std::holds_alternative<Revolute>(kind) && !std::holds_alternative<Prismatic>(kind))
+  const bool angular = std::holds_alternative<Revolute>(kind);
+  if (!angular && !std::holds_alternative<Prismatic>(kind))
     bad("--lock: joint '" + name + "' is neither revolute nor prismatic and has no coordinate");
-  const std::string value = text.substr(eq + 1);
-  size_t used = 0;
-  double v = 0.0;
+  const UnitSystem file = unit_system(model.units);
   try {
-    v = std::stod(value, &used);
-  } catch (const std::exception&) {
-    bad("--lock " + name + ": '" + value + "' is not a number");
+    return {j,
+            parse_position(text.substr(eq + 1), angular, angular ? file.angle_si : file.length_si)};
+  } catch (const std::invalid_argument& e) {
+    bad("--lock " + name + ": " + e.what());
   }
-  const std::string unit = value.substr(used);
-  static const std::vector<std::pair<std::string, double>> units = {
-      {"", 1.0},    {"rad", 1.0},  {"deg", std::numbers::pi / 180.0}, {"m", 1.0}, {"mm", 0.001},
-      {"cm", 0.01}, {"in", 0.0254}};
-  for (const auto& [u, f] : units)
-    if (u == unit) {
-      if (!std::isfinite(v)) bad("--lock " + name + ": value must be finite");
-      return {j, v * f};
-    }
-  bad("--lock " + name + ": unknown unit '" + unit + "' (rad, deg, m, mm, cm, in)");
 }
 
-// "crank=0,0,10": a velocity guess for one body (vx, vy[, ω]) in SI.
+// "crank=0,0,10": a velocity guess for one body (vx, vy[, ω]) in the file's length/time and
+// angle/time units.
 void parse_velocity(const Model& model, const std::string& text, VecX& u0) {
+  const UnitSystem file = unit_system(model.units);
+  const double scale[3] = {file.length_si / file.time_si, file.length_si / file.time_si,
+                           file.angle_si / file.time_si};
   const auto eq = text.find('=');
   if (eq == std::string::npos) bad("--velocity expects BODY=vx,vy,omega, got '" + text + "'");
   const std::string name = text.substr(0, eq);
@@ -88,19 +86,31 @@ void parse_velocity(const Model& model, const std::string& text, VecX& u0) {
   std::stringstream ss(text.substr(eq + 1));
   std::string item;
   while (std::getline(ss, item, ',')) {
-    try {
-      v.push_back(std::stod(item));
-    } catch (const std::exception&) {
+    char* end = nullptr;
+    const double x = std::strtod(item.c_str(), &end);
+    if (item.empty() || item.size() > kMaxNumberLength || end != item.c_str() + item.size())
       bad("--velocity " + name + ": '" + item + "' is not a number");
-    }
+    const std::string problem = range_problem(x, Quantity::general);
+    if (!problem.empty()) bad("--velocity " + name + ": '" + item + "': the value " + problem);
+    v.push_back(x);
   }
   if (static_cast<int>(v.size()) != body.nu())
     bad("--velocity " + name + ": expected " + std::to_string(body.nu()) + " numbers");
-  for (int k = 0; k < body.nu(); ++k) u0(body.u_offset + k) = v[static_cast<size_t>(k)];
+  for (int k = 0; k < body.nu(); ++k) u0(body.u_offset + k) = v[static_cast<size_t>(k)] * scale[k];
 }
 
 int run_assemble(const AssembleOptions& opt) {
   const Model model = load(opt.file);
+  const UnitSystem U = resolve_units(model, opt.units);
+  const OutputUnit length_u = output_unit(Dimension::length, U);
+  const OutputUnit angle_u = output_unit(Dimension::angle, U);
+  const OutputUnit energy_u = output_unit(Dimension::moment, U);
+  auto joint_unit = [&](int joint) {
+    return std::holds_alternative<Revolute>(model.joints[static_cast<size_t>(joint)].kind)
+               ? angle_u
+               : length_u;
+  };
+  auto measure_unit = [&](const Measure& m) { return output_unit(dimension_of(m.unit), U); };
   AssemblyOptions options;
   options.tolerance = opt.tolerance;
   options.use_limits = !opt.no_limits;
@@ -132,14 +142,20 @@ int run_assemble(const AssembleOptions& opt) {
       res.status == AssemblyStatus::assembled || res.status == AssemblyStatus::unchanged;
   VelocityProjection vel;
   if (ok) vel = project_velocities(model, res.q, u0);
+  // A limit that keeps it from closing: the value the joint would need.
+  const std::vector<LimitBlock> blocks =
+      ok ? std::vector<LimitBlock>{} : find_limit_blocks(model, q0, options);
 
   std::string written;
   if (ok && !write_to.empty()) {
     std::ifstream in(opt.file, std::ios::binary);
     std::ostringstream text;
     text << in.rdbuf();
+    // The edited text is checked to re-read as the assembled mechanism before anything is
+    // written; a file that cannot be edited so is an InputError (exit 2, printed once by main).
+    const std::string edited = replace_design_poses(text.str(), opt.file, model, res.q);
     try {
-      write_file_atomically(write_to, replace_design_poses(text.str(), opt.file, model, res.q));
+      write_file_atomically(write_to, edited);
     } catch (const std::runtime_error& e) {  // e.g. no such directory, no permission
       spdlog::error("{}", e.what());
       return kBadInput;
@@ -153,6 +169,7 @@ int run_assemble(const AssembleOptions& opt) {
     nlohmann::json j;
     j["mechanism"] = model.name;
     j["file"] = model.file;
+    j["units"] = units_json(U);
     j["status"] = to_string(res.status);
     j["message"] = res.message;
     j["solver_status"] = res.solver_status;
@@ -161,13 +178,15 @@ int run_assemble(const AssembleOptions& opt) {
     j["distance"] = res.distance;
     nlohmann::json locks = nlohmann::json::array();
     for (const JointLock& l : options.locks)
-      locks.push_back(
-          {{"joint", model.joints[static_cast<size_t>(l.joint)].name}, {"value", l.value}});
+      locks.push_back({{"joint", model.joints[static_cast<size_t>(l.joint)].name},
+                       {"value", joint_unit(l.joint).from_si(l.value)},
+                       {"unit", joint_unit(l.joint).name}});
     j["locks"] = locks;
     nlohmann::json bodies = nlohmann::json::array();
     for (const BodyMove& b : res.bodies)
-      bodies.push_back(
-          {{"name", b.body}, {"translation", b.translation}, {"rotation", b.rotation}});
+      bodies.push_back({{"name", b.body},
+                        {"translation", length_u.from_si(b.translation)},
+                        {"rotation", angle_u.from_si(b.rotation)}});
     j["bodies"] = bodies;
     auto joints_json = [&](const std::vector<JointResidual>& list) {
       nlohmann::json a = nlohmann::json::array();
@@ -176,7 +195,10 @@ int run_assemble(const AssembleOptions& opt) {
         const auto names = model.joints[static_cast<size_t>(ji)].component_names();
         nlohmann::json rows;
         for (size_t k = 0; k < r.rows.size(); ++k) rows[names[k]] = r.rows[k];
-        a.push_back({{"name", r.joint}, {"residual", r.residual}, {"gap", r.gap}, {"rows", rows}});
+        a.push_back({{"name", r.joint},
+                     {"residual", r.residual},
+                     {"gap", length_u.from_si(r.gap)},
+                     {"rows", rows}});
       }
       return a;
     };
@@ -185,15 +207,26 @@ int run_assemble(const AssembleOptions& opt) {
     if (ok)
       for (const Measure& m : model.measures)
         measures[m.name] = m.derivative < 2
-                               ? nlohmann::json(evaluate_measure(model, m, res.q, &vel.u, nullptr))
+                               ? nlohmann::json(measure_unit(m).from_si(
+                                     evaluate_measure(model, m, res.q, &vel.u, nullptr)))
                                : nlohmann::json(nullptr);
     j["measures"] = measures;
     j["q"] = std::vector<double>(res.q.data(), res.q.data() + res.q.size());
     if (ok)
       j["velocities"] = {{"u", std::vector<double>(vel.u.data(), vel.u.data() + vel.u.size())},
-                         {"kinetic_initial", vel.kinetic_initial},
-                         {"kinetic", vel.kinetic},
-                         {"kinetic_removed", vel.kinetic_removed}};
+                         {"kinetic_initial", energy_u.from_si(vel.kinetic_initial)},
+                         {"kinetic", energy_u.from_si(vel.kinetic)},
+                         {"kinetic_removed", energy_u.from_si(vel.kinetic_removed)}};
+    nlohmann::json lb = nlohmann::json::array();
+    for (const LimitBlock& b : blocks) {
+      const Joint& jt = model.joints[static_cast<size_t>(b.joint)];
+      const OutputUnit u = joint_unit(b.joint);
+      lb.push_back({{"joint", jt.name},
+                    {"needed", u.from_si(b.needed)},
+                    {"limits", {u.from_si(jt.limits->x()), u.from_si(jt.limits->y())}},
+                    {"unit", u.name}});
+    }
+    j["limit_blocks"] = lb;
     j["gaps"] = joints_json(res.gaps);
     j["total_gap"] = res.total_gap;
     j["written"] = written.empty() ? nlohmann::json(nullptr) : nlohmann::json(written);
@@ -205,16 +238,24 @@ int run_assemble(const AssembleOptions& opt) {
     if (!res.solver_status.empty())
       out << "solver      Ipopt " << res.solver_status << ", " << res.iterations
           << " iterations (Ipopt + Newton polish)\n";
+    for (const LimitBlock& b : blocks) {
+      const Joint& jt = model.joints[static_cast<size_t>(b.joint)];
+      const bool rev = std::holds_alternative<Revolute>(jt.kind);
+      out << "limit       joint '" << jt.name << "' would need " << format_input(b.needed, rev, U)
+          << ", outside its limits [" << format_input(jt.limits->x(), rev, U) << ", "
+          << format_input(jt.limits->y(), rev, U) << "]\n";
+    }
     out << "residual    " << fmt(res.residual, 3) << "   (max |f|, locks, limits; m or rad)\n";
     out << "distance    " << fmt(res.distance, 4) << "   (mass metric, sqrt(kg)*m)\n";
     for (const JointLock& l : options.locks)
       out << "lock        " << model.joints[static_cast<size_t>(l.joint)].name << " = "
-          << fmt(l.value, 10) << "\n";
-    out << "\nbody          moved [mm]   turned [deg]\n";
+          << fmt(joint_unit(l.joint).from_si(l.value), 10) << " " << joint_unit(l.joint).name
+          << "\n";
+    out << "\nbody          moved [" << length_u.name << "]   turned [" << angle_u.name << "]\n";
     for (const BodyMove& b : res.bodies) {
       char line[160];
       std::snprintf(line, sizeof line, "  %-12s %10.4f %12.5f\n", b.body.c_str(),
-                    b.translation * 1e3, b.rotation * 180.0 / std::numbers::pi);
+                    length_u.from_si(b.translation), angle_u.from_si(b.rotation));
       out << line;
     }
     out << "\njoint         residual\n";
@@ -227,17 +268,27 @@ int run_assemble(const AssembleOptions& opt) {
       if (!model.measures.empty()) out << "\nmeasure       value\n";
       for (const Measure& m : model.measures) {
         if (m.derivative > 1) continue;
-        out << "  " << m.name << "  " << fmt(evaluate_measure(model, m, res.q, &vel.u, nullptr), 10)
-            << " " << m.unit << "\n";
+        out << "  " << m.name << "  "
+            << fmt(measure_unit(m).from_si(evaluate_measure(model, m, res.q, &vel.u, nullptr)), 10)
+            << " " << measure_unit(m).name << "\n";
       }
-      out << "\nvelocities  u = alpha u0: kinetic energy " << fmt(vel.kinetic_initial) << " J -> "
-          << fmt(vel.kinetic) << " J (removed " << fmt(vel.kinetic_removed) << " J)\n";
+      out << "\nvelocities  u = alpha u0: kinetic energy "
+          << fmt(energy_u.from_si(vel.kinetic_initial)) << " " << energy_u.name << " -> "
+          << fmt(energy_u.from_si(vel.kinetic)) << " " << energy_u.name << " (removed "
+          << fmt(energy_u.from_si(vel.kinetic_removed)) << " " << energy_u.name << ")\n";
     }
     if (!written.empty()) out << "\nwritten     " << written << "\n";
   }
   std::cout << out.str();
   if (!ok) {
     spdlog::error("{}: {}", model.file, res.message);
+    for (const LimitBlock& b : blocks) {
+      const Joint& jt = model.joints[static_cast<size_t>(b.joint)];
+      const bool rev = std::holds_alternative<Revolute>(jt.kind);
+      spdlog::error("{}: joint '{}' would need {}, outside its limits [{}, {}]", model.file,
+                    jt.name, format_input(b.needed, rev, U), format_input(jt.limits->x(), rev, U),
+                    format_input(jt.limits->y(), rev, U));
+    }
     return kNumerical;
   }
   return kOk;
@@ -254,20 +305,24 @@ void register_assemble(CLI::App& app, const GlobalOptions& globals, int& exit_co
   cmd->add_option("file", opt->file, "mechanism file (YAML)")->required();
   cmd->add_flag("--json", opt->json, "one JSON document on stdout");
   cmd->add_option("--lock", opt->locks,
-                  "JOINT=VALUE: lock a revolute/prismatic joint (SI, or with unit: 30deg, 12mm); "
-                  "repeatable");
+                  "JOINT=VALUE: lock a revolute/prismatic joint (30deg, 12mm; a bare number is in "
+                  "the file's declared units); repeatable");
   cmd->add_option("--position", opt->position,
                   "lock the inputs of this design position of the file");
   cmd->add_flag("--no-limits", opt->no_limits, "ignore the joint limits of the file");
   cmd->add_option("--velocity", opt->velocities,
-                  "BODY=vx,vy,omega: initial velocity guess u0 of a body (SI); repeatable");
+                  "BODY=vx,vy,omega: initial velocity guess u0 of a body, in the file's declared "
+                  "units (length/time, angle/time); repeatable");
   cmd->add_option("--write", opt->write,
                   "save a mechanism file whose design position is the assembled one");
   cmd->add_flag("--in-place", opt->in_place, "overwrite the input file with the assembled one");
   cmd->add_option("--tolerance", opt->tolerance, "max residual of an assembled position (m, rad)")
-      ->check(CLI::PositiveNumber);
-  cmd->callback([opt, &globals, &exit_code] {
-    setup_logging(globals);
+      ->check(finite_range(0.0, 1.0, true));
+  add_units_option(cmd, opt->units);
+  auto log = std::make_shared<LogFlags>();
+  add_log_flags(cmd, *log);
+  cmd->callback([opt, log, &globals, &exit_code] {
+    setup_logging(globals, *log);
     exit_code = run_assemble(*opt);
   });
 }

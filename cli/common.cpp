@@ -3,7 +3,13 @@
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
+#include <CLI/CLI.hpp>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+
 #include "orthomech/io/mechanism_file.hpp"
+#include "orthomech/io/units.hpp"
 
 namespace orthomech::cli {
 
@@ -16,9 +22,90 @@ void setup_logging(const GlobalOptions& options) {
   spdlog::set_default_logger(logger);
 }
 
+void add_log_flags(CLI::App* cmd, LogFlags& flags) {
+  cmd->add_flag("-q,--quiet", flags.quiet, "only errors on stderr (also before the command)");
+  cmd->add_flag("-v,--verbose", flags.verbose,
+                "debug messages on stderr (also before the command)");
+}
+
+void setup_logging(const GlobalOptions& options, const LogFlags& flags) {
+  GlobalOptions merged = options;
+  merged.quiet = merged.quiet || flags.quiet;
+  merged.verbose = merged.verbose || flags.verbose;
+  setup_logging(merged);
+}
+
+CLI::Validator finite_range(double lo, double hi, bool lo_open) {
+  char description[80];
+  std::snprintf(description, sizeof description, "NUMBER in %s%g, %g]", lo_open ? "(" : "[", lo,
+                hi);
+  return CLI::Validator(
+      [lo, hi, lo_open](std::string& text) -> std::string {
+        char* end = nullptr;
+        const double v = std::strtod(text.c_str(), &end);
+        if (text.empty() || end != text.c_str() + text.size())
+          return "'" + text + "' is not a number";
+        if (!std::isfinite(v)) return "'" + text + "' is not finite";
+        if (v > hi || v < lo || (lo_open && v == lo)) {
+          char buf[120];
+          std::snprintf(buf, sizeof buf, "%s must be in %s%g, %g]", text.c_str(),
+                        lo_open ? "(" : "[", lo, hi);
+          return buf;
+        }
+        return "";
+      },
+      description);
+}
+
+double parse_number(const std::string& text, const std::string& option) {
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  if (text.empty() || text.size() > kMaxNumberLength || end != text.c_str() + text.size())
+    throw CLI::ValidationError(option, "'" + text + "' is not a number");
+  const std::string problem = range_problem(v, Quantity::general);
+  if (!problem.empty()) throw CLI::ValidationError(option, "'" + text + "': the value " + problem);
+  return v;
+}
+
 Model load(const std::string& path) {
   spdlog::debug("reading {}", path);
-  return load_mechanism(path);
+  Model model = load_mechanism(path);
+  for (const std::string& w : model.warnings) spdlog::warn("{}", w);
+  return model;
+}
+
+void add_units_option(CLI::App* cmd, std::string& choice) {
+  cmd->add_option("--units", choice,
+                  "units of every output: 'file' (the file's declared units, default) or 'si'")
+      ->check(CLI::IsMember({"file", "si"}));
+}
+
+UnitSystem resolve_units(const Model& model, const std::string& choice) {
+  try {
+    return output_units(model, choice);
+  } catch (const std::invalid_argument& e) {
+    throw CLI::ValidationError("--units", e.what());
+  }
+}
+
+nlohmann::json units_json(const UnitSystem& u) {
+  nlohmann::json j;
+  const std::pair<const char*, Dimension> kinds[] = {
+      {"length", Dimension::length},
+      {"angle", Dimension::angle},
+      {"mass", Dimension::mass},
+      {"time", Dimension::time},
+      {"force", Dimension::force},
+      {"moment", Dimension::moment},
+      {"energy", Dimension::moment},
+      {"power", Dimension::power},
+      {"velocity", Dimension::velocity},
+      {"angular_velocity", Dimension::angular_velocity},
+      {"acceleration", Dimension::acceleration},
+      {"angular_acceleration", Dimension::angular_acceleration},
+      {"inertia", Dimension::inertia}};
+  for (const auto& [name, q] : kinds) j[name] = output_unit(q, u).name;
+  return j;
 }
 
 }  // namespace orthomech::cli

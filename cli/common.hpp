@@ -1,9 +1,16 @@
 #pragma once
 // Shared by the subcommands: exit codes, loading with error reporting, logging set-up.
 // No math here (house style: cli/ holds no math).
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 #include <string>
 
+#include "orthomech/io/units.hpp"
 #include "orthomech/model/model.hpp"
+
+namespace CLI {
+class App;
+}
 
 namespace orthomech::cli {
 
@@ -22,7 +29,31 @@ struct GlobalOptions {
 };
 
 void setup_logging(const GlobalOptions& options);
-// Loads a mechanism; on failure throws InputError (main maps it to exit code 2).
+// `-q`/`--quiet` and `-v`/`--verbose` after the command too: a subcommand's own flags, merged
+// with the global ones (either place works).
+struct LogFlags {
+  bool quiet = false, verbose = false;
+};
+void add_log_flags(CLI::App* cmd, LogFlags& flags);
+// setup_logging with the global options and the subcommand's flags merged.
+void setup_logging(const GlobalOptions& options, const LogFlags& flags);
+// A number option that must be finite and lie in [lo, hi] (or (lo, hi] with `lo_open`): NaN and
+// inf are refused (CLI::Range and CLI::PositiveNumber let them through). Exit 2 naming the option.
+[[nodiscard]] CLI::Validator finite_range(double lo, double hi, bool lo_open = false);
+// A command-line number with no unit (e.g. "--rate x=1.5", "--velocity b=0,1"): the whole text
+// is a number, finite and within the limits of Quantity::general. Throws CLI::ValidationError
+// naming `option` otherwise.
+[[nodiscard]] double parse_number(const std::string& text, const std::string& option);
+// Loads a mechanism; on failure throws InputError (main maps it to exit code 2). The file's
+// warnings (Model::warnings) go to the log.
 [[nodiscard]] Model load(const std::string& path);
+
+// `--units file|si` of a subcommand (docs/cli.md "Units"): outputs in the file's declared units
+// (default) or in SI.
+void add_units_option(CLI::App* cmd, std::string& choice);
+// The chosen output units of a loaded model.
+[[nodiscard]] UnitSystem resolve_units(const Model& model, const std::string& choice);
+// The `units` object of every JSON document: the unit name of each kind of quantity.
+[[nodiscard]] nlohmann::json units_json(const UnitSystem& units);
 
 }  // namespace orthomech::cli

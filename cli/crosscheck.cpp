@@ -23,13 +23,16 @@ struct CrosscheckCliOptions {
   double tolerance = 1e-8;
   unsigned seed = 1;
   bool json = false;
+  std::string units = "file";
 };
 
 int run_crosscheck_cmd(const CrosscheckCliOptions& opt) {
   const Model model = load(opt.file);
+  const UnitSystem U = resolve_units(model, opt.units);
+  const OutputUnit time_u = output_unit(Dimension::time, U);
   CrosscheckOptions co;
   co.samples = opt.samples;
-  co.t_end = opt.t_end;
+  co.t_end = opt.t_end * unit_system(model.units).time_si;  // bare: the file's time unit
   co.tolerance = opt.tolerance;
   co.seed = opt.seed;
   const CrosscheckResult res = run_crosscheck(model, co);
@@ -37,6 +40,7 @@ int run_crosscheck_cmd(const CrosscheckCliOptions& opt) {
   if (opt.json) {
     nlohmann::json j;
     j["mechanism"] = model.name;
+    j["units"] = units_json(U);
     j["pass"] = res.pass;
     j["message"] = res.message;
     j["samples"] = res.samples;
@@ -50,14 +54,14 @@ int run_crosscheck_cmd(const CrosscheckCliOptions& opt) {
       items.push_back({{"name", it.name},
                        {"kind", it.kind},
                        {"max_relative", it.max_relative},
-                       {"at_t", it.at_t},
+                       {"at_t", time_u.from_si(it.at_t)},
                        {"pass", it.pass}});
     j["checks"] = items;
     out << j.dump(2) << '\n';
   } else {
     out << "mechanism   " << model.name << "  (" << model.file << ")\n";
-    out << "states      " << res.samples << " along a " << opt.t_end << " s motion; tolerance "
-        << res.tolerance << " (relative)\n";
+    out << "states      " << res.samples << " along a " << time_u.from_si(co.t_end) << " "
+        << time_u.name << " motion; tolerance " << res.tolerance << " (relative)\n";
     if (!res.primal_skipped_reason.empty())
       out << "primal      skipped: " << res.primal_skipped_reason << "\n";
     out << "\n";
@@ -71,7 +75,10 @@ int run_crosscheck_cmd(const CrosscheckCliOptions& opt) {
         << (res.pass ? "PASS" : "FAIL") << (res.message.empty() ? "" : ": ") << res.message << "\n";
   }
   std::cout << out.str();
-  if (res.samples == 0) return kNumerical;
+  if (res.samples == 0) {
+    spdlog::error("{}: {}", model.file, res.message);
+    return kNumerical;
+  }
   return res.pass ? kOk : kCheckFailed;
 }
 
@@ -84,14 +91,18 @@ void register_crosscheck(CLI::App& app, const GlobalOptions& globals, int& exit_
   cmd->add_option("file", opt->file, "mechanism file (YAML)")->required();
   cmd->add_option("--samples", opt->samples, "number of states (default 10)")
       ->check(CLI::Range(1, 100000));
-  cmd->add_option("--t-end", opt->t_end, "length of the motion, s (default 0.2)")
-      ->check(CLI::PositiveNumber);
+  cmd->add_option("--t-end", opt->t_end,
+                  "length of the motion, in the file's time unit (default 0.2)")
+      ->check(finite_range(0.0, 1e6, true));
   cmd->add_option("--tolerance", opt->tolerance, "largest relative difference (default 1e-8)")
-      ->check(CLI::PositiveNumber);
+      ->check(finite_range(0.0, 1.0, true));
   cmd->add_option("--seed", opt->seed, "seed of the initial velocity guess (default 1)");
   cmd->add_flag("--json", opt->json, "one JSON document on stdout");
-  cmd->callback([opt, &globals, &exit_code] {
-    setup_logging(globals);
+  add_units_option(cmd, opt->units);
+  auto log = std::make_shared<LogFlags>();
+  add_log_flags(cmd, *log);
+  cmd->callback([opt, log, &globals, &exit_code] {
+    setup_logging(globals, *log);
     exit_code = run_crosscheck_cmd(*opt);
   });
 }

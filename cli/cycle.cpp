@@ -23,6 +23,8 @@
 
 #include "commands.hpp"
 #include "common.hpp"
+#include "orthomech/analysis/cycle_metrics.hpp"
+#include "orthomech/error.hpp"
 #include "orthomech/io/cycle_output.hpp"
 #include "orthomech/io/units.hpp"
 
@@ -39,8 +41,10 @@ struct CycleCliOptions {
   bool json = false;
   bool positions = false;
   std::string out;
-  bool quiet = false;
+  bool quiet = false, verbose = false;
   bool reverse = false;
+  std::string units = "file";
+  double speed_fluctuation = 0.0;  // C_s for the flywheel inertia (0: not asked)
 };
 
 std::string fmt(double v, int precision = 4) {
@@ -110,7 +114,11 @@ Driver resolve_driver(const Model& model, const CycleCliOptions& opt) {
   }
   if (!opt.speed.empty()) {
     try {
-      driver.speed = parse_speed(opt.speed, is_angular(model, driver.joint), 1.0);
+      const UnitSystem file_units = unit_system(model.units);
+      const bool angular = is_angular(model, driver.joint);
+      driver.speed =
+          parse_speed(opt.speed, angular,
+                      (angular ? file_units.angle_si : file_units.length_si) / file_units.time_si);
     } catch (const std::invalid_argument& e) {
       throw CLI::ValidationError("--speed", e.what());
     }
@@ -120,14 +128,15 @@ Driver resolve_driver(const Model& model, const CycleCliOptions& opt) {
   return driver;
 }
 
-std::string speed_text(const Driver& d, bool angular) {
+std::string speed_text(const Driver& d, bool angular, const UnitSystem& u) {
   if (d.profile == Profile::harmonic)
-    return "harmonic, amplitude " + format_input(d.amplitude, angular) + " about " +
-           format_input(d.initial, angular) + ", " + fmt(d.frequency) + " Hz";
+    return "harmonic, amplitude " + format_input(d.amplitude, angular, u) + " about " +
+           format_input(d.initial, angular, u) + ", " + fmt(d.frequency) + " Hz";
   if (d.profile == Profile::polynomial) return "polynomial";
+  const OutputUnit v = output_unit(angular ? Dimension::angular_velocity : Dimension::velocity, u);
   return angular ? "constant speed " + fmt(d.speed * 60.0 / (2.0 * std::numbers::pi)) + " rpm (" +
-                       fmt(d.speed) + " rad/s)"
-                 : "constant speed " + fmt(d.speed) + " m/s";
+                       fmt(v.from_si(d.speed)) + " " + v.name + ")"
+                 : "constant speed " + fmt(v.from_si(d.speed)) + " " + v.name;
 }
 
 // Runs `program arg` in `dir` (fork/exec: no shell, so any path works), stdout discarded,
@@ -155,33 +164,81 @@ int run_in_directory(const std::filesystem::path& dir, const std::string& progra
   return WIFEXITED(status) ? WEXITSTATUS(status) : 126;
 }
 
-nlohmann::json positions_json(const Model& model, const CycleResult& r) {
+// Every position: input, time, measures, body poses and named points, velocities and
+// accelerations of the bodies, drive, reactions and energies, in the output units.
+nlohmann::json positions_json(const Model& model, const CycleResult& r, bool angular,
+                              const UnitSystem& u) {
+  const OutputUnit input_u = output_unit(angular ? Dimension::angle : Dimension::length, u);
+  const OutputUnit time_u = output_unit(Dimension::time, u);
+  const OutputUnit drive_u = output_unit(angular ? Dimension::moment : Dimension::force, u);
+  const OutputUnit energy_u = output_unit(Dimension::moment, u);
+  const OutputUnit length_u = output_unit(Dimension::length, u);
+  const OutputUnit angle_u = output_unit(Dimension::angle, u);
+  const OutputUnit vel[] = {output_unit(Dimension::velocity, u),
+                            output_unit(Dimension::velocity, u),
+                            output_unit(Dimension::angular_velocity, u)};
+  const OutputUnit acc[] = {output_unit(Dimension::acceleration, u),
+                            output_unit(Dimension::acceleration, u),
+                            output_unit(Dimension::angular_acceleration, u)};
+  std::vector<OutputUnit> measure_u, component_u;
+  for (const Measure& m : model.measures) measure_u.push_back(output_unit(dimension_of(m.unit), u));
+  for (const ReactionComponent& c : r.components)
+    component_u.push_back(output_unit(dimension_of(c.unit), u));
+  std::vector<double> pose;
   nlohmann::json pts = nlohmann::json::array();
   for (const DrivenPointView& p : r.points) {
     nlohmann::json j;
-    j["input"] = p.input;
-    j["time"] = p.time;
+    j["input"] = input_u.from_si(p.input);
+    j["time"] = time_u.from_si(p.time);
     j["singular"] = p.singular;
+    j["bridged"] = p.bridge >= 0;
     nlohmann::json m = nlohmann::json::object();
-    for (size_t i = 0; i < model.measures.size(); ++i) m[model.measures[i].name] = p.measures[i];
+    for (size_t i = 0; i < model.measures.size(); ++i)
+      m[model.measures[i].name] = measure_u[i].from_si(p.measures[i]);
     j["measures"] = m;
+    // Pose of every body's frame ([x, y, angle]; a particle [x, y]) and every named point.
+    compute_output_positions(model, VecX(p.q), pose);
+    nlohmann::json poses = nlohmann::json::object(), points = nlohmann::json::object();
+    size_t k = 0;
+    for (const Body& b : model.bodies) {
+      std::vector<double> v = {length_u.from_si(pose[k]), length_u.from_si(pose[k + 1])};
+      k += 2;
+      if (b.kind == BodyKind::rigid) v.push_back(angle_u.from_si(pose[k++]));
+      poses[b.name] = v;
+    }
+    for (const Body& b : model.bodies)
+      for (const auto& [name, local] : b.points) {
+        points[b.name + "." + name] = {length_u.from_si(pose[k]), length_u.from_si(pose[k + 1])};
+        k += 2;
+      }
+    j["poses"] = poses;
+    j["named_points"] = points;
     // Velocities and accelerations of every body's centre of mass (and angular ones).
     nlohmann::json bodies = nlohmann::json::object();
     for (const Body& b : model.bodies) {
-      const auto v = p.u.segment(b.u_offset, b.nu());
-      const auto a = p.udot.segment(b.u_offset, b.nu());
-      bodies[b.name] = {{"velocity", std::vector<double>(v.data(), v.data() + v.size())},
-                        {"acceleration", std::vector<double>(a.data(), a.data() + a.size())}};
+      std::vector<double> v, a;
+      for (int i = 0; i < b.nu(); ++i) {
+        v.push_back(vel[i].from_si(p.u(b.u_offset + i)));
+        a.push_back(acc[i].from_si(p.udot(b.u_offset + i)));
+      }
+      bodies[b.name] = {{"velocity", v}, {"acceleration", a}};
     }
     j["bodies"] = bodies;
-    if (!p.singular) {  // multipliers are not meaningful next to a change point
-      j["drive"] = p.drive;
-      nlohmann::json rc;
-      for (size_t i = 0; i < r.components.size(); ++i) rc[r.components[i].name] = p.reactions[i];
+    if (drive_reported(p)) {  // not at a change point that could not be bridged
+      j["drive"] = drive_u.from_si(p.drive);
+      nlohmann::json rc = nlohmann::json::object();
+      for (size_t i = 0; i < r.components.size(); ++i)
+        if (component_reported(r, p, i))
+          rc[r.components[i].name] = component_u[i].from_si(p.reactions[i]);
       j["reactions"] = rc;
     }
-    j["kinetic_energy"] = p.kinetic;
-    j["potential_energy"] = p.potential;
+    nlohmann::json outside = nlohmann::json::array();
+    for (size_t jt = 0; jt < model.joints.size(); ++jt)
+      if (outside_limits(model, static_cast<int>(jt), VecX(p.q)))
+        outside.push_back(model.joints[jt].name);
+    j["outside_limits"] = outside;
+    j["kinetic_energy"] = energy_u.from_si(p.kinetic);
+    j["potential_energy"] = energy_u.from_si(p.potential);
     pts.push_back(j);
   }
   return pts;
@@ -189,26 +246,33 @@ nlohmann::json positions_json(const Model& model, const CycleResult& r) {
 
 int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) {
   const Model model = load(opt.file);
+  const UnitSystem U = resolve_units(model, opt.units);
+  const UnitSystem file_units = unit_system(model.units);
   CycleOptions co;
   co.driver = resolve_driver(model, opt);
   const bool angular = is_angular(model, co.driver.joint);
-  const std::string drive_unit = angular ? "N*m" : "N";
+  const std::string drive_unit_si = angular ? "N*m" : "N";
   co.steps = opt.steps > 0 ? opt.steps : model.analysis.steps;
   co.reverse_at_dead_point = opt.reverse;
+  // Bare numbers are in the file's declared units (an angle in deg in a deg file).
+  const double bare = angular ? file_units.angle_si : file_units.length_si;
   try {
     if (!opt.from.empty()) {
       co.use_start = true;
-      co.start = parse_position(opt.from, angular, 1.0);
+      co.start = parse_position(opt.from, angular, bare);
     }
     if (!opt.to.empty()) {
       co.full_cycle = false;
-      co.end = parse_position(opt.to, angular, 1.0);
+      co.end = parse_position(opt.to, angular, bare);
     }
   } catch (const std::invalid_argument& e) {
     throw CLI::ValidationError(opt.from.empty() ? "--to" : "--from/--to", e.what());
   }
   if (!opt.from.empty() && opt.to.empty() && !angular)
     throw CLI::ValidationError("--to", "a prismatic driver needs the end of the range (--to)");
+  if (!opt.from.empty())
+    spdlog::info("start input {} ({})", format_input(co.start, angular, U), opt.from);
+  if (!opt.to.empty()) spdlog::info("end input {} ({})", format_input(co.end, angular, U), opt.to);
 
   // Progress on stderr for sweeps longer than a second, only on a terminal and not when quiet.
   const bool show_progress = !opt.quiet && !globals.quiet && isatty(STDERR_FILENO) != 0;
@@ -225,18 +289,55 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
   const CycleResult r = run_cycle(model, co);
   if (progress_shown) std::fprintf(stderr, "\r\033[K");
   const std::vector<ReactionMagnitude> magnitudes = reaction_magnitudes(r);
-  const std::vector<SeriesSummary> summary = summarize_cycle(r, magnitudes, drive_unit);
+  const std::vector<SeriesSummary> summary = summarize_cycle(r, magnitudes, drive_unit_si);
+  const std::vector<SeriesSummary> component_summary = summarize_components(r);
   const Joint& joint = model.joints[static_cast<size_t>(co.driver.joint)];
+  CycleMetricsOptions mo;
+  mo.driver_joint = co.driver.joint;
+  mo.full_cycle = co.full_cycle;
+  if (opt.speed_fluctuation > 0.0) mo.speed_fluctuation = opt.speed_fluctuation;
+  const CycleMetrics metrics = compute_cycle_metrics(model, r, mo);
 
-  if (r.status == CycleStatus::invalid_request) throw CLI::ValidationError(model.file, r.message);
+  if (r.status == CycleStatus::invalid_request) {
+    // A driver taken from the file as written: the problem is the file's, at the driver's line.
+    if (opt.speed.empty() && opt.from.empty() && opt.to.empty() && co.driver.where.line > 0)
+      throw InputError(co.driver.where, "driver '" + co.driver.name + "'", r.message);
+    throw CLI::ValidationError(model.file, r.message);
+  }
   if (r.status == CycleStatus::failed && r.points.empty()) {
     spdlog::error("{}: the cycle cannot be computed: {}", model.file, r.message);
     return kNumerical;
   }
   if (r.status == CycleStatus::failed)
     spdlog::error("{}: the sweep stopped: {}", model.file, r.message);
+  for (const std::string& w : r.warnings) spdlog::warn("{}: {}", model.file, w);
   if (r.status == CycleStatus::stopped_at_dead_point) spdlog::warn("{}: {}", model.file, r.message);
   for (const DeadPoint& d : r.singular_positions) spdlog::info("{}", d.message);
+  spdlog::info(
+      "{} chart switches: the dual form changed its independent velocities {} times along the "
+      "sweep (bookkeeping of the method; the results do not depend on it)",
+      model.file, r.chart_switches);
+  if (opt.speed_fluctuation > 0.0 && !metrics.power.flywheel_inertia)
+    spdlog::warn(
+        "--speed-fluctuation: no flywheel inertia (it needs a revolute driver and a drive)");
+
+  // Units of the outputs.
+  const OutputUnit input_u = output_unit(angular ? Dimension::angle : Dimension::length, U);
+  const OutputUnit time_u = output_unit(Dimension::time, U);
+  const OutputUnit power_u = output_unit(Dimension::power, U);
+  const OutputUnit energy_u = output_unit(Dimension::moment, U);
+  const OutputUnit inertia_u = output_unit(Dimension::inertia, U);
+  const OutputUnit angle_u = output_unit(Dimension::angle, U);
+  const OutputUnit speed_u =
+      output_unit(angular ? Dimension::angular_velocity : Dimension::velocity, U);
+  auto unit_of = [&](const std::string& si) { return output_unit(dimension_of(si), U); };
+  // Angles at extremes in [0°, 360°) (the sweep line keeps the continuous input).
+  auto wrapped = [angular](double s) {
+    if (!angular) return s;
+    double w = std::fmod(s, 2.0 * std::numbers::pi);
+    if (w < 0.0) w += 2.0 * std::numbers::pi;
+    return w > 2.0 * std::numbers::pi - 1e-9 ? 0.0 : w;
+  };
 
   // Files first: a failure to write is reported before anything goes to stdout.
   std::string files_note;
@@ -247,9 +348,9 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
     if (ec) throw CLI::ValidationError("--out", "cannot create " + opt.out + ": " + ec.message());
     try {
       const CycleColumns cols =
-          write_cycle_csv(dir / "cycle.csv", model, r, magnitudes, angular, drive_unit);
-      write_cycle_gnuplot(dir / "cycle.gp", "cycle.csv", model, magnitudes, cols, angular,
-                          drive_unit);
+          write_cycle_csv(dir / "cycle.csv", model, r, magnitudes, angular, U);
+      write_cycle_gnuplot(dir / "cycle.gp", "cycle.csv", model, r, magnitudes, cols, angular, U,
+                          speed_text(co.driver, angular, U));
     } catch (const std::runtime_error& e) {
       throw CLI::ValidationError("--out", e.what());
     }
@@ -280,9 +381,15 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
 
   std::ostringstream out;
   if (opt.json) {
+    auto extreme = [&](const SeriesExtreme& e, const OutputUnit& u) {
+      return nlohmann::json{{"value", u.from_si(e.value)},
+                            {"input", input_u.from_si(e.input)},
+                            {"time", time_u.from_si(e.time)}};
+    };
     nlohmann::json j;
     j["mechanism"] = model.name;
     j["file"] = model.file;
+    j["units"] = units_json(U);
     j["status"] = r.status == CycleStatus::completed               ? "completed"
                   : r.status == CycleStatus::stopped_at_dead_point ? "stopped_at_dead_point"
                                                                    : "failed";
@@ -290,9 +397,10 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
     j["driver"] = {{"joint", joint.name},
                    {"name", co.driver.name},
                    {"profile", profile_name(co.driver.profile)},
-                   {"speed", co.driver.speed},
-                   {"input_unit", angular ? "rad" : "m"},
-                   {"drive_unit", drive_unit}};
+                   {"speed", speed_u.from_si(co.driver.speed)},
+                   {"speed_unit", speed_u.name},
+                   {"input_unit", input_u.name},
+                   {"drive_unit", unit_of(drive_unit_si).name}};
     j["positions"] = r.points.size();
     j["steps"] = co.steps;
     j["dof"] = r.dof;
@@ -303,73 +411,215 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
     j["indeterminate_rows"] = redundant;
     j["chart_switches"] = r.chart_switches;
     j["reversals"] = r.reversals;
-    auto events = [](const std::vector<DeadPoint>& v) {
+    auto events = [&](const std::vector<DeadPoint>& v) {
       nlohmann::json a = nlohmann::json::array();
       for (const DeadPoint& d : v)
-        a.push_back({{"input", d.input}, {"time", d.time}, {"message", d.message}});
+        a.push_back({{"input", input_u.from_si(d.input)},
+                     {"time", time_u.from_si(d.time)},
+                     {"message", d.message}});
       return a;
     };
     j["dead_points"] = events(r.dead_points);
     j["singular_positions"] = events(r.singular_positions);
+    const OutputUnit drive_out = unit_of(drive_unit_si);
+    nlohmann::json bridges = nlohmann::json::array();
+    for (const ChangePointBridge& b : r.bridges) {
+      nlohmann::json div = nlohmann::json::array();
+      for (size_t i = 0; i < r.components.size(); ++i)
+        if (b.diverging[i]) div.push_back(r.components[i].name);
+      bridges.push_back({{"input", input_u.from_si(b.input)},
+                         {"time", time_u.from_si(b.time)},
+                         {"time_from", time_u.from_si(b.time_from)},
+                         {"time_to", time_u.from_si(b.time_to)},
+                         {"drive_error", drive_out.from_si(b.drive_error)},
+                         {"diverging", div}});
+    }
+    j["bridges"] = bridges;
+    // peaks: the drive, every reaction magnitude and every reaction component.
     nlohmann::json peaks;
-    for (const SeriesSummary& s : summary)
-      peaks[s.name] = {{"peak", s.peak}, {"input", s.peak_input}, {"time", s.peak_time},
-                       {"rms", s.rms},   {"unit", s.unit},        {"determinate", s.determinate}};
+    for (const auto* list : {&summary, &component_summary})
+      for (const SeriesSummary& s : *list) {
+        const OutputUnit u = unit_of(s.unit);
+        peaks[s.name] = {{"peak", u.from_si(s.peak)},
+                         {"input", input_u.from_si(s.peak_input)},
+                         {"time", time_u.from_si(s.peak_time)},
+                         {"rms", u.from_si(s.rms)},
+                         {"max", extreme(s.max, u)},
+                         {"min", extreme(s.min, u)},
+                         {"unit", u.name},
+                         {"determinate", s.determinate},
+                         {"diverges", s.diverges}};
+      }
     j["peaks"] = peaks;
     nlohmann::json comps = nlohmann::json::array();
     for (size_t i = 0; i < r.components.size(); ++i)
       comps.push_back({{"name", r.components[i].name},
                        {"joint", model.joints[static_cast<size_t>(r.components[i].joint)].name},
                        {"frame", r.components[i].global ? "global" : "joint"},
-                       {"unit", r.components[i].unit},
-                       {"determinate", r.determinate[i]}});
+                       {"unit", unit_of(r.components[i].unit).name},
+                       {"determinate", r.determinate[i]},
+                       {"diverging", r.diverging.empty() ? false : bool(r.diverging[i])}});
     j["components"] = comps;
-    if (opt.positions) j["points"] = positions_json(model, r);
+    // Design metrics.
+    nlohmann::json loops = nlohmann::json::array();
+    for (const LoopAngleMetric& l : metrics.loops)
+      loops.push_back({{"loop", l.loop},
+                       {"kind", l.slider_crank ? "slider-crank" : "four-bar"},
+                       {"angle", l.slider_crank ? "pressure" : "transmission"},
+                       {"min", extreme(l.min, angle_u)},
+                       {"max", extreme(l.max, angle_u)},
+                       {"worst", extreme(l.worst, angle_u)}});
+    j["loops"] = loops;
+    if (metrics.power.available) {
+      const PowerMetric& pw = metrics.power;
+      j["power"] = {{"mean", power_u.from_si(pw.mean)},
+                    {"peak", power_u.from_si(pw.peak)},
+                    {"max", extreme(pw.max, power_u)},
+                    {"min", extreme(pw.min, power_u)},
+                    {"unit", power_u.name}};
+      j["energy_fluctuation"] = {{"value", energy_u.from_si(pw.energy_fluctuation)},
+                                 {"max", extreme(pw.energy_max, energy_u)},
+                                 {"min", extreme(pw.energy_min, energy_u)},
+                                 {"unit", energy_u.name},
+                                 {"mean_speed", speed_u.from_si(pw.mean_speed)}};
+      if (pw.flywheel_inertia)
+        j["flywheel"] = {{"speed_fluctuation", opt.speed_fluctuation},
+                         {"inertia", inertia_u.from_si(*pw.flywheel_inertia)},
+                         {"unit", inertia_u.name}};
+    }
+    nlohmann::json strokes = nlohmann::json::array();
+    for (const StrokeMetric& st : metrics.strokes) {
+      const OutputUnit u = unit_of(st.unit);
+      nlohmann::json e = {{"name", st.name},
+                          {"min", extreme(st.min, u)},
+                          {"max", extreme(st.max, u)},
+                          {"range", u.from_si(st.range)},
+                          {"unit", u.name}};
+      if (st.time_ratio)
+        e["time_ratio"] = {{"forward_over_return", *st.time_ratio},
+                           {"forward_time", time_u.from_si(st.forward_time)},
+                           {"return_time", time_u.from_si(st.return_time)}};
+      strokes.push_back(e);
+    }
+    j["strokes"] = strokes;
+    nlohmann::json limits = nlohmann::json::array();
+    for (const LimitExcursion& l : metrics.limits) {
+      const Joint& lj = model.joints[static_cast<size_t>(l.joint)];
+      const OutputUnit u = output_unit(
+          std::holds_alternative<Revolute>(lj.kind) ? Dimension::angle : Dimension::length, U);
+      limits.push_back({{"joint", lj.name},
+                        {"limits", {u.from_si(lj.limits->x()), u.from_si(lj.limits->y())}},
+                        {"first", extreme(l.first, u)},
+                        {"furthest", extreme(l.furthest, u)},
+                        {"positions", l.positions},
+                        {"unit", u.name}});
+    }
+    j["limits"] = limits;
+    if (opt.positions) j["points"] = positions_json(model, r, angular, U);
     out << j.dump(2) << '\n';
   } else {
     out << "mechanism       " << model.name << "  (" << model.file << ")\n";
     out << "driver          joint '" << joint.name << "' (" << joint.type_name() << "), "
-        << speed_text(co.driver, angular) << "\n";
+        << speed_text(co.driver, angular, U) << "\n";
     if (r.points.empty())
       out << "sweep           no position computed\n";
     else
       out << "sweep           " << r.points.size() << " positions, input "
-          << format_input(r.points.front().input, angular) << " -> "
-          << format_input(r.points.back().input, angular) << ", t = 0 -> "
-          << fmt(r.points.back().time) << " s\n";
+          << format_input(r.points.front().input, angular, U) << " -> "
+          << format_input(r.points.back().input, angular, U) << ", t = 0 -> "
+          << fmt(time_u.from_si(r.points.back().time)) << " " << time_u.name << "\n";
     out << "status          " << to_string(r.status) << (r.message.empty() ? "" : ": ") << r.message
         << "\n";
     out << "mobility        DOF " << r.dof << ", rank of E " << r.rank << ", "
         << (r.redundant ? std::to_string(r.redundant) + " redundant equation(s)"
                         : std::string("no redundant equations"))
         << "\n";
-    out << "chart switches  " << r.chart_switches << "\n";
     out << "dead points     " << (r.dead_points.empty() ? "none" : "") << "\n";
     for (const DeadPoint& d : r.dead_points)
-      out << "  t = " << fmt(d.time, 6) << " s: " << d.message << "\n";
+      out << "  t = " << fmt(time_u.from_si(d.time), 6) << " " << time_u.name << ": " << d.message
+          << "\n";
     out << "singular        " << (r.singular_positions.empty() ? "none" : "") << "\n";
     for (const DeadPoint& d : r.singular_positions)
-      out << "  at input " << format_input(d.input, angular) << ": passed (E loses rank; the "
-          << "reactions there are omitted)\n";
+      out << "  at input " << format_input(d.input, angular, U) << ": passed (E loses rank)\n";
+    for (const ChangePointBridge& b : r.bridges) {
+      int diverging = 0;
+      for (const bool x : b.diverging) diverging += x ? 1 : 0;
+      const OutputUnit du = unit_of(drive_unit_si);
+      out << "  bridged at " << format_input(b.input, angular, U) << ": values within "
+          << format_input(std::abs(b.time_to - b.time) * std::abs(co.driver.speed), angular, U)
+          << " from the branch (drive error estimate " << fmt(du.from_si(b.drive_error), 2) << " "
+          << du.name << "; " << diverging << " diverging component(s) not reported there)\n";
+    }
+    out << "limits          " << (metrics.limits.empty() ? "kept" : "") << "\n";
+    for (const LimitExcursion& l : metrics.limits) {
+      const Joint& lj = model.joints[static_cast<size_t>(l.joint)];
+      const bool rev = std::holds_alternative<Revolute>(lj.kind);
+      out << "  joint '" << lj.name << "' leaves its limits ["
+          << format_input(lj.limits->x(), rev, U) << ", " << format_input(lj.limits->y(), rev, U)
+          << "] at input " << format_input(wrapped(l.first.input), angular, U) << " and reaches "
+          << format_input(l.furthest.value, rev, U) << " at input "
+          << format_input(wrapped(l.furthest.input), angular, U) << " (" << l.positions
+          << " positions outside)\n";
+    }
     if (!files_note.empty()) out << "files           " << files_note << "\n";
     out << "\n";
-    // Angles at peaks in [0°, 360°) (the sweep line keeps the continuous input).
-    auto wrapped = [angular](double s) {
-      if (!angular) return s;
-      double w = std::fmod(s, 2.0 * std::numbers::pi);
-      if (w < 0.0) w += 2.0 * std::numbers::pi;
-      return w > 2.0 * std::numbers::pi - 1e-9 ? 0.0 : w;
-    };
-    char line[200];
-    std::snprintf(line, sizeof line, "%-20s %-5s %13s %16s %13s\n", "quantity", "unit", "peak",
-                  "at input", "RMS");
+    // The table: columns sized to the longest name.
+    size_t name_w = 8, unit_w = 4;
+    for (const SeriesSummary& s : summary) {
+      name_w = std::max(name_w, s.name.size());
+      unit_w = std::max(unit_w, unit_of(s.unit).name.size());
+    }
+    char line[400];
+    const int nw = static_cast<int>(name_w), uw = static_cast<int>(unit_w);
+    std::snprintf(line, sizeof line, "%-*s  %-*s %12s %14s %12s %14s %12s\n", nw, "quantity", uw,
+                  "unit", "max", "at input", "min", "at input", "RMS");
     out << line;
     for (const SeriesSummary& s : summary) {
       if (s.samples == 0) continue;
-      std::snprintf(line, sizeof line, "%-20s %-5s %13.5g %16s %13.5g%s\n", s.name.c_str(),
-                    s.unit.c_str(), s.peak, format_input(wrapped(s.peak_input), angular).c_str(),
-                    s.rms, s.determinate ? "" : "   indeterminate (minimum norm)");
+      const OutputUnit u = unit_of(s.unit);
+      std::snprintf(line, sizeof line, "%-*s  %-*s %12.5g %14s %12.5g %14s %12.5g%s\n", nw,
+                    s.name.c_str(), uw, u.name.c_str(), u.from_si(s.max.value),
+                    format_input(wrapped(s.max.input), angular, U).c_str(), u.from_si(s.min.value),
+                    format_input(wrapped(s.min.input), angular, U).c_str(), u.from_si(s.rms),
+                    s.determinate ? ""
+                    : s.diverges  ? "   indeterminate (minimum norm), diverges at a change point"
+                                  : "   indeterminate (minimum norm)");
       out << line;
+    }
+    // Design metrics.
+    if (!metrics.loops.empty() || metrics.power.available || !metrics.strokes.empty()) out << "\n";
+    for (const LoopAngleMetric& l : metrics.loops) {
+      if (l.slider_crank)
+        out << "pressure angle      loop " << l.loop << ": max "
+            << format_input(l.max.value, true, U) << " at input "
+            << format_input(wrapped(l.max.input), angular, U) << "\n";
+      else
+        out << "transmission angle  loop " << l.loop << ": " << format_input(l.min.value, true, U)
+            << " ... " << format_input(l.max.value, true, U) << "; worst "
+            << format_input(l.worst.value, true, U) << " from a straight line at input "
+            << format_input(wrapped(l.worst.input), angular, U) << "\n";
+    }
+    if (metrics.power.available) {
+      const PowerMetric& pw = metrics.power;
+      out << "drive power         mean " << fmt(power_u.from_si(pw.mean), 5) << " " << power_u.name
+          << ", max " << fmt(power_u.from_si(pw.max.value), 5) << " at input "
+          << format_input(wrapped(pw.max.input), angular, U) << ", min "
+          << fmt(power_u.from_si(pw.min.value), 5) << " at input "
+          << format_input(wrapped(pw.min.input), angular, U) << "\n";
+      out << "energy fluctuation  " << fmt(energy_u.from_si(pw.energy_fluctuation), 5) << " "
+          << energy_u.name << " (max - min of the integral of drive power minus its mean)\n";
+      if (pw.flywheel_inertia)
+        out << "flywheel            " << fmt(inertia_u.from_si(*pw.flywheel_inertia), 5) << " "
+            << inertia_u.name << " on the input for a speed fluctuation of "
+            << fmt(opt.speed_fluctuation) << "\n";
+    }
+    for (const StrokeMetric& st : metrics.strokes) {
+      const OutputUnit u = unit_of(st.unit);
+      out << "range  " << st.name << ": " << fmt(u.from_si(st.min.value), 7) << " ... "
+          << fmt(u.from_si(st.max.value), 7) << " " << u.name << " (stroke "
+          << fmt(u.from_si(st.range), 7) << ")";
+      if (st.time_ratio) out << ", time ratio forward/return " << fmt(*st.time_ratio, 6);
+      out << "\n";
     }
     bool any = false;
     for (size_t i = 0; i < r.components.size(); ++i) {
@@ -383,7 +633,8 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
     if (any) out << "\n";
     out << "\nconvention: reactions are forces and moments on a joint's first body from its "
            "second; \"_local\" and joint-frame components are in the joint's frame (the first "
-           "body's, or the second's when the first is the ground).\n";
+           "body's, or the second's when the first is the ground). Signed max and min of every "
+           "component: --json.\n";
   }
   std::cout << out.str();  // all at once
   return r.status == CycleStatus::completed               ? kOk
@@ -403,21 +654,33 @@ void register_cycle(CLI::App& app, const GlobalOptions& globals, int& exit_code)
   cmd->add_option("--driver", opt->driver,
                   "driven joint (default: the file's analysis.driver, else its first driver)");
   cmd->add_option("--speed", opt->speed,
-                  "constant input speed, e.g. 300rpm, 31.4rad/s, 90deg/s, 0.5m/s (bare: SI)");
+                  "constant input speed, e.g. 300rpm, 31.4rad/s, 90deg/s, 0.5m/s; a bare number is "
+                  "in the file's angle (or length) unit per time unit");
   cmd->add_option("--steps", opt->steps, "positions per cycle (default: the file's, else 360)")
-      ->check(CLI::Range(2, 100000));
-  cmd->add_option("--from", opt->from, "start input, e.g. 30deg, 20mm (bare: SI)");
-  cmd->add_option("--to", opt->to, "end input: sweep the range instead of a full turn");
+      ->check(CLI::Range(2, kMaxCycleSteps));
+  cmd->add_option("--from", opt->from,
+                  "start input, e.g. 30deg, 20mm; a bare number is in the file's declared units");
+  cmd->add_option("--to", opt->to,
+                  "end input: sweep the range instead of a full turn (units as --from)");
   cmd->add_flag("--reverse-at-dead-point", opt->reverse,
                 "at a dead point, pass it and drive the input back (sweeps a rocker's closed "
                 "curve)");
   cmd->add_flag("--json", opt->json, "one JSON document on stdout");
-  cmd->add_flag("--positions", opt->positions, "with --json: every position too");
+  cmd->add_flag(
+      "--positions", opt->positions,
+      "with --json: every position too (body poses, named points, velocities, reactions)");
+  cmd->add_option("--speed-fluctuation", opt->speed_fluctuation,
+                  "coefficient of speed fluctuation C_s (e.g. 0.02): report the flywheel inertia "
+                  "on the input that keeps it")
+      ->check(CLI::PositiveNumber);
+  add_units_option(cmd, opt->units);
   cmd->add_option("--out", opt->out, "directory for cycle.csv, cycle.gp and the plots");
-  cmd->add_flag("--quiet", opt->quiet, "no progress and only errors on stderr");
+  cmd->add_flag("-q,--quiet", opt->quiet, "no progress and only errors on stderr");
+  cmd->add_flag("-v,--verbose", opt->verbose, "debug messages on stderr (also before the command)");
   cmd->callback([opt, &globals, &exit_code] {
     GlobalOptions g = globals;
     g.quiet = g.quiet || opt->quiet;
+    g.verbose = g.verbose || opt->verbose;
     setup_logging(g);
     exit_code = run_cycle_command(*opt, g);
   });

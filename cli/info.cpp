@@ -4,6 +4,8 @@
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <nlohmann/json.hpp>
@@ -21,6 +23,7 @@ namespace {
 struct InfoOptions {
   std::string file;
   bool json = false;
+  std::string units = "file";
 };
 
 std::string fmt_double(double v) {
@@ -44,12 +47,26 @@ int run_info(const InfoOptions& opt) {
   }
   const double moved = (q - q_design).cwiseAbs().maxCoeff();
   const Mobility mob = compute_mobility(model, q);
+  // How far the projection moved the bodies, in the output units: translation and rotation.
+  const UnitSystem U = resolve_units(model, opt.units);
+  const OutputUnit length_u = output_unit(Dimension::length, U);
+  const OutputUnit angle_u = output_unit(Dimension::angle, U);
+  const OutputUnit mass_u = output_unit(Dimension::mass, U);
+  const OutputUnit inertia_u = output_unit(Dimension::inertia, U);
+  double moved_length = 0.0, moved_angle = 0.0;
+  for (const Body& b : model.bodies) {
+    moved_length =
+        std::max(moved_length, (q.segment<2>(b.q_offset) - q_design.segment<2>(b.q_offset)).norm());
+    if (b.kind == BodyKind::rigid)
+      moved_angle = std::max(moved_angle, std::abs(q(b.q_offset + 2) - q_design(b.q_offset + 2)));
+  }
 
   std::ostringstream out;
   if (opt.json) {
     nlohmann::json j;
     j["mechanism"] = model.name;
     j["file"] = model.file;
+    j["units"] = units_json(U);
     j["coordinates"] = mob.nq;
     j["velocities"] = mob.n;
     j["constraints"] = mob.nc;
@@ -62,13 +79,15 @@ int run_info(const InfoOptions& opt) {
     j["assembly"] = {{"status", to_string(assembly.status)},
                      {"iterations", assembly.iterations},
                      {"residual", assembly.residual},
-                     {"max_coordinate_change", moved}};
+                     {"max_coordinate_change", moved},
+                     {"max_translation", length_u.from_si(moved_length)},
+                     {"max_rotation", angle_u.from_si(moved_angle)}};
     nlohmann::json bodies = nlohmann::json::array();
     for (const Body& b : model.bodies)
       bodies.push_back({{"name", b.name},
                         {"type", b.kind == BodyKind::rigid ? "rigid" : "particle"},
-                        {"mass", b.mass},
-                        {"inertia", b.inertia}});
+                        {"mass", mass_u.from_si(b.mass)},
+                        {"inertia", inertia_u.from_si(b.inertia)}});
     j["bodies"] = bodies;
     nlohmann::json joints = nlohmann::json::array();
     for (const Joint& jt : model.joints)
@@ -77,7 +96,7 @@ int run_info(const InfoOptions& opt) {
     j["joints"] = joints;
     nlohmann::json measures = nlohmann::json::array();
     for (const Measure& m : model.measures)
-      measures.push_back({{"name", m.name}, {"unit", m.unit}});
+      measures.push_back({{"name", m.name}, {"unit", output_unit(dimension_of(m.unit), U).name}});
     j["measures"] = measures;
     out << j.dump(2) << '\n';
   } else {
@@ -93,7 +112,9 @@ int run_info(const InfoOptions& opt) {
     for (size_t k = 0; k < mob.redundant.size(); ++k) out << (k ? "; " : "") << mob.redundant[k];
     out << "\n";
     out << "design pose   " << to_string(assembly.status) << " onto f(q) = 0 in "
-        << assembly.iterations << " iterations, max coordinate change " << fmt_double(moved)
+        << assembly.iterations << " iterations, bodies moved up to "
+        << fmt_double(length_u.from_si(moved_length)) << " " << length_u.name
+        << " and turned up to " << fmt_double(angle_u.from_si(moved_angle)) << " " << angle_u.name
         << ", residual " << fmt_double(assembly.residual) << "\n\n";
     out << "joints\n";
     for (const Joint& jt : model.joints) {
@@ -104,7 +125,8 @@ int run_info(const InfoOptions& opt) {
     }
     if (!model.measures.empty()) {
       out << "measures\n";
-      for (const Measure& m : model.measures) out << "  " << m.name << " [" << m.unit << "]\n";
+      for (const Measure& m : model.measures)
+        out << "  " << m.name << " [" << output_unit(dimension_of(m.unit), U).name << "]\n";
     }
   }
   std::cout << out.str();  // all at once: no partial output on failure
@@ -121,8 +143,11 @@ void register_info(CLI::App& app, const GlobalOptions& globals, int& exit_code) 
                          "redundant equations");
   cmd->add_option("file", opt->file, "mechanism file (YAML)")->required();
   cmd->add_flag("--json", opt->json, "one JSON document on stdout");
-  cmd->callback([opt, &globals, &exit_code] {
-    setup_logging(globals);
+  add_units_option(cmd, opt->units);
+  auto log = std::make_shared<LogFlags>();
+  add_log_flags(cmd, *log);
+  cmd->callback([opt, log, &globals, &exit_code] {
+    setup_logging(globals, *log);
     exit_code = run_info(*opt);
   });
 }

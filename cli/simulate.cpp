@@ -15,6 +15,8 @@
 
 #include "commands.hpp"
 #include "common.hpp"
+#include "orthomech/io/cycle_output.hpp"
+#include "orthomech/io/units.hpp"
 
 namespace orthomech::cli {
 
@@ -28,7 +30,29 @@ struct SimulateCliOptions {
   std::string integrator = "dopri5";
   std::vector<std::string> rates;  // NAME=VALUE
   bool json = false;
+  bool positions = false;
   std::string out_dir;
+  std::string units = "file";
+};
+
+// Output units of every column of simulate (measures, reactions, energies, positions).
+struct SimulateUnits {
+  UnitSystem system;
+  OutputUnit time, energy, length;
+  std::vector<OutputUnit> measures, components, positions;
+  std::vector<PositionColumn> position_columns;
+  SimulateUnits(const Model& model, const SimulateResult& res, const UnitSystem& u)
+      : system(u),
+        time(output_unit(Dimension::time, u)),
+        energy(output_unit(Dimension::moment, u)),
+        length(output_unit(Dimension::length, u)),
+        position_columns(orthomech::position_columns(model)) {
+    for (const Measure& m : model.measures)
+      measures.push_back(output_unit(dimension_of(m.unit), u));
+    for (const auto& c : res.components) components.push_back(output_unit(dimension_of(c.unit), u));
+    for (const PositionColumn& c : position_columns)
+      positions.push_back(output_unit(c.dimension, u));
+  }
 };
 
 std::string g(double v, int precision = 10) {
@@ -38,51 +62,71 @@ std::string g(double v, int precision = 10) {
   return s.str();
 }
 
-// "B0_vx=1": the rate of a measure's position quantity (SI).
+// "B0_vx=1": the rate of a measure's position quantity, in the file's units (length or angle per
+// time unit).
 InitialRate parse_rate(const Model& model, const std::string& text) {
   const auto eq = text.find('=');
   if (eq == std::string::npos)
     throw CLI::ValidationError("--rate",
-                               "--rate '" + text + "': expected MEASURE=VALUE (SI units)");
+                               "--rate '" + text + "': expected MEASURE=VALUE (the file's units)");
   const std::string name = text.substr(0, eq);
   const int m = model.find_measure(name);
   if (m < 0)
     throw CLI::ValidationError("--rate",
                                "--rate '" + text + "': measure '" + name + "' is not defined");
-  try {
-    return {m, std::stod(text.substr(eq + 1))};
-  } catch (const std::exception&) {
-    throw CLI::ValidationError(
-        "--rate", "--rate '" + text + "': '" + text.substr(eq + 1) + "' is not a number");
-  }
+  const UnitSystem file = unit_system(model.units);
+  const bool angle = model.measures[static_cast<size_t>(m)].unit.rfind("rad", 0) == 0;
+  const double scale = (angle ? file.angle_si : file.length_si) / file.time_si;
+  return {m, parse_number(text.substr(eq + 1), "--rate " + name) * scale};
 }
 
-void write_csv(const std::filesystem::path& dir, const Model& model, const SimulateResult& res) {
-  std::filesystem::create_directories(dir);
+// simulate.csv: every column with its unit in the header (the output units), every body's pose
+// and named point; chart_switches.csv.
+void write_csv(const std::filesystem::path& dir, const Model& model, const SimulateResult& res,
+               const SimulateUnits& U) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec)
+    throw CLI::ValidationError("--out", "cannot create " + dir.string() + ": " + ec.message());
   std::ofstream out(dir / "simulate.csv");
   out.precision(12);
-  out << "t";
-  for (const Measure& m : model.measures) out << "," << m.name;
-  for (const auto& c : res.components) out << "," << c.name;
-  out << ",kinetic,potential,work,energy,residual\n";
+  out << "t [" << U.time.name << "]";
+  for (size_t k = 0; k < model.measures.size(); ++k)
+    out << "," << model.measures[k].name << " [" << U.measures[k].name << "]";
+  for (size_t k = 0; k < U.position_columns.size(); ++k)
+    out << "," << U.position_columns[k].name << " [" << U.positions[k].name << "]";
+  for (size_t k = 0; k < res.components.size(); ++k)
+    out << "," << res.components[k].name << " [" << U.components[k].name << "]";
+  const std::string e = " [" + U.energy.name + "]";
+  out << ",kinetic" << e << ",potential" << e << ",work" << e << ",energy" << e
+      << ",residual [m or rad]\n";
+  std::vector<double> pose;
   for (const SimulationSample& s : res.samples) {
-    out << s.t;
-    for (double v : s.measures) out << "," << v;
+    out << U.time.from_si(s.t);
+    for (size_t k = 0; k < s.measures.size(); ++k)
+      out << "," << U.measures[k].from_si(s.measures[k]);
+    compute_output_positions(model, s.q, pose);
+    for (size_t k = 0; k < pose.size(); ++k) out << "," << U.positions[k].from_si(pose[k]);
     for (size_t k = 0; k < res.components.size(); ++k)
-      out << "," << (k < s.reactions.size() ? s.reactions[k] : 0.0);
-    out << "," << s.kinetic << "," << s.potential << "," << s.work << ","
-        << s.kinetic + s.potential - s.work << "," << s.residual << "\n";
+      out << "," << (k < s.reactions.size() ? U.components[k].from_si(s.reactions[k]) : 0.0);
+    out << "," << U.energy.from_si(s.kinetic) << "," << U.energy.from_si(s.potential) << ","
+        << U.energy.from_si(s.work) << "," << U.energy.from_si(s.kinetic + s.potential - s.work)
+        << "," << s.residual << "\n";
   }
   std::ofstream sw(dir / "chart_switches.csv");
-  sw << "t,from,to\n";
+  sw << "t [" << U.time.name << "],from,to\n";
   for (const ChartSwitch& c : res.chart_switches)
-    sw << g(c.t, 12) << ",\"" << c.from << "\",\"" << c.to << "\"\n";
+    sw << g(U.time.from_si(c.t), 12) << ",\"" << c.from << "\",\"" << c.to << "\"\n";
+  out.close();
+  sw.close();
+  if (!out || !sw) throw CLI::ValidationError("--out", "cannot write the files in " + dir.string());
 }
 
 // The time histories, one array per quantity over the output times (columns, as plotting tools
 // read them; a tenth of the objects of one record per sample, measured: 100 samples of Andrews
-// cost about 2.5 ms as records).
-nlohmann::json series_json(const Model& model, const SimulateResult& res) {
+// cost about 2.5 ms as records). With `positions`: every body's pose and named point too.
+nlohmann::json series_json(const Model& model, const SimulateResult& res, const SimulateUnits& U,
+                           bool positions) {
   const size_t ns = res.samples.size();
   const auto column = [&](auto&& value) {
     std::vector<double> c;
@@ -91,59 +135,76 @@ nlohmann::json series_json(const Model& model, const SimulateResult& res) {
     return nlohmann::json(c);
   };
   nlohmann::json j;
-  j["t"] = column([](const SimulationSample& s) { return s.t; });
+  j["t"] = column([&](const SimulationSample& s) { return U.time.from_si(s.t); });
   nlohmann::json m = nlohmann::json::object();
   for (size_t k = 0; k < model.measures.size(); ++k)
-    m[model.measures[k].name] = column([k](const SimulationSample& s) { return s.measures[k]; });
+    m[model.measures[k].name] =
+        column([&, k](const SimulationSample& s) { return U.measures[k].from_si(s.measures[k]); });
   j["measures"] = m;
   nlohmann::json r = nlohmann::json::object();
   for (size_t k = 0; k < res.components.size(); ++k)
-    r[res.components[k].name] = column([k](const SimulationSample& s) {
-      return k < s.reactions.size() ? s.reactions[k] : std::nan("");
+    r[res.components[k].name] = column([&, k](const SimulationSample& s) {
+      return k < s.reactions.size() ? U.components[k].from_si(s.reactions[k]) : std::nan("");
     });
   j["reactions"] = r;
-  j["kinetic"] = column([](const SimulationSample& s) { return s.kinetic; });
-  j["potential"] = column([](const SimulationSample& s) { return s.potential; });
-  j["work"] = column([](const SimulationSample& s) { return s.work; });
+  j["kinetic"] = column([&](const SimulationSample& s) { return U.energy.from_si(s.kinetic); });
+  j["potential"] = column([&](const SimulationSample& s) { return U.energy.from_si(s.potential); });
+  j["work"] = column([&](const SimulationSample& s) { return U.energy.from_si(s.work); });
   j["residual"] = column([](const SimulationSample& s) { return s.residual; });
+  if (positions) {
+    std::vector<std::vector<double>> cols(U.position_columns.size());
+    std::vector<double> pose;
+    for (const SimulationSample& s : res.samples) {
+      compute_output_positions(model, s.q, pose);
+      for (size_t k = 0; k < pose.size(); ++k) cols[k].push_back(U.positions[k].from_si(pose[k]));
+    }
+    nlohmann::json p = nlohmann::json::object();
+    for (size_t k = 0; k < cols.size(); ++k) p[U.position_columns[k].name] = cols[k];
+    j["positions"] = p;
+  }
   return j;
 }
 
-nlohmann::json sample_json(const Model& model, const SimulateResult& res,
-                           const SimulationSample& s) {
+nlohmann::json sample_json(const Model& model, const SimulateResult& res, const SimulationSample& s,
+                           const SimulateUnits& U) {
   nlohmann::json j;
-  j["t"] = s.t;
+  j["t"] = U.time.from_si(s.t);
   nlohmann::json m = nlohmann::json::object();
-  for (size_t k = 0; k < model.measures.size(); ++k) m[model.measures[k].name] = s.measures[k];
+  for (size_t k = 0; k < model.measures.size(); ++k)
+    m[model.measures[k].name] = U.measures[k].from_si(s.measures[k]);
   j["measures"] = m;
   nlohmann::json r = nlohmann::json::object();
   for (size_t k = 0; k < s.reactions.size() && k < res.components.size(); ++k)
-    r[res.components[k].name] = s.reactions[k];
+    r[res.components[k].name] = U.components[k].from_si(s.reactions[k]);
   j["reactions"] = r;
-  j["kinetic"] = s.kinetic;
-  j["potential"] = s.potential;
-  j["work"] = s.work;
+  j["kinetic"] = U.energy.from_si(s.kinetic);
+  j["potential"] = U.energy.from_si(s.potential);
+  j["work"] = U.energy.from_si(s.work);
   j["residual"] = s.residual;
   return j;
 }
 
 int run_simulate(const SimulateCliOptions& opt) {
   const Model model = load(opt.file);
+  const UnitSystem system = resolve_units(model, opt.units);
+  const double file_time = unit_system(model.units).time_si;  // bare times: the file's unit
   SimulateOptions so;
-  so.t_end = opt.t_end;
+  so.t_end = opt.t_end * file_time;
   so.rtol = opt.rtol;
   so.atol = opt.atol;
-  so.dt_out = opt.dt_out;
-  so.max_step = opt.max_step;
+  so.dt_out = opt.dt_out * file_time;
+  so.max_step = opt.max_step * file_time;
   so.form = opt.form == "primal" ? DynamicsForm::primal : DynamicsForm::dual;
-  so.integrator = opt.integrator == "rkf78" ? Integrator::rkf78 : Integrator::dopri5;
+  if (!parse_integrator(opt.integrator, so.integrator))  // CLI::IsMember checked the name
+    throw std::logic_error("simulate: integrator '" + opt.integrator + "' has no stepper");
   for (const std::string& r : opt.rates) so.initial_rates.push_back(parse_rate(model, r));
   so.record_samples = true;
   const SimulateResult res = simulate(model, so);
+  const SimulateUnits U(model, res, system);
   if (res.kinetic_removed > 0.0)
-    spdlog::info("initial velocity projection removed {:.6g} J of kinetic energy",
-                 res.kinetic_removed);
-  if (!opt.out_dir.empty()) write_csv(opt.out_dir, model, res);
+    spdlog::info("initial velocity projection removed {:.6g} {} of kinetic energy",
+                 U.energy.from_si(res.kinetic_removed), U.energy.name);
+  if (!opt.out_dir.empty()) write_csv(opt.out_dir, model, res, U);
 
   std::ostringstream out;
   const bool ok = res.status == SimulateStatus::completed;
@@ -151,39 +212,42 @@ int run_simulate(const SimulateCliOptions& opt) {
   if (opt.json) {
     nlohmann::json j;
     j["mechanism"] = model.name;
+    j["units"] = units_json(system);
     j["status"] = to_string(res.status);
     j["message"] = res.message;
     j["form"] = so.form == DynamicsForm::dual ? "dual" : "primal";
-    j["integrator"] = so.integrator == Integrator::dopri5 ? "dopri5" : "rkf78";
+    j["integrator"] = to_string(so.integrator);
     j["rtol"] = so.rtol;
     j["atol"] = so.atol;
-    j["final"] = sample_json(model, res, res.final);
-    j["energy"] = {{"initial", res.energy_initial},
-                   {"final", res.energy_final},
-                   {"max_drift", res.energy_max_drift},
+    j["final"] = sample_json(model, res, res.final, U);
+    j["energy"] = {{"initial", U.energy.from_si(res.energy_initial)},
+                   {"final", U.energy.from_si(res.energy_final)},
+                   {"max_drift", U.energy.from_si(res.energy_max_drift)},
                    {"relative_drift", rel_drift}};
     j["max_constraint_residual"] = res.max_constraint_residual;
     j["max_velocity_residual"] = res.max_velocity_residual;
     if (so.form == DynamicsForm::primal) j["max_invariant_J"] = res.max_invariant_J;
-    j["kinetic_energy_removed"] = res.kinetic_removed;
+    j["kinetic_energy_removed"] = U.energy.from_si(res.kinetic_removed);
     j["steps"] = res.steps;
     j["evaluations"] = res.evaluations;
+    j["rejected_steps"] = res.rejected_steps;
+    j["jacobians"] = res.jacobians;
     nlohmann::json sw = nlohmann::json::array();
     for (const ChartSwitch& c : res.chart_switches)
-      sw.push_back({{"t", c.t}, {"from", c.from}, {"to", c.to}});
+      sw.push_back({{"t", U.time.from_si(c.t)}, {"from", c.from}, {"to", c.to}});
     j["chart_switches"] = sw;
     nlohmann::json cp = nlohmann::json::array();
     for (const ChangePointPassage& c : res.passages)
-      cp.push_back({{"t", c.t},
-                    {"from", c.t_from},
-                    {"to", c.t_to},
+      cp.push_back({{"t", U.time.from_si(c.t)},
+                    {"from", U.time.from_si(c.t_from)},
+                    {"to", U.time.from_si(c.t_to)},
                     {"quality_from", c.sigma_from},
                     {"quality_to", c.sigma_to},
                     {"velocity_jump", c.velocity_jump},
                     {"tangent_cosine", c.tangent_cosine}});
     j["change_points_passed"] = res.passages.size();
     j["change_points"] = cp;
-    j["samples"] = series_json(model, res);
+    j["samples"] = series_json(model, res, U, opt.positions);
     out << j.dump(2) << '\n';
   } else {
     out << "mechanism   " << model.name << "  (" << model.file << ")\n";
@@ -191,22 +255,28 @@ int run_simulate(const SimulateCliOptions& opt) {
         << ", atol " << g(so.atol, 3) << "\n";
     out << "status      " << to_string(res.status) << (res.message.empty() ? "" : ": ")
         << res.message << "\n";
-    out << "steps       " << res.steps << " (" << res.evaluations << " evaluations), "
-        << res.chart_switches.size() << " chart switches, " << res.passages.size()
+    out << "steps       " << res.steps << " (" << res.evaluations << " evaluations";
+    if (res.rejected_steps > 0) out << ", " << res.rejected_steps << " rejected";
+    if (res.jacobians > 0) out << ", " << res.jacobians << " Jacobians";
+    out << "), " << res.chart_switches.size() << " chart switches, " << res.passages.size()
         << " change points passed\n";
-    out << "energy      initial " << g(res.energy_initial) << " J, final " << g(res.energy_final)
-        << " J, max drift " << g(res.energy_max_drift, 3) << " J (relative " << g(rel_drift, 3)
+    const std::string eu = " " + U.energy.name;
+    out << "energy      initial " << g(U.energy.from_si(res.energy_initial)) << eu << ", final "
+        << g(U.energy.from_si(res.energy_final)) << eu << ", max drift "
+        << g(U.energy.from_si(res.energy_max_drift), 3) << eu << " (relative " << g(rel_drift, 3)
         << ")\n";
-    out << "residual    max |f| " << g(res.max_constraint_residual, 3);
+    out << "residual    max |f| " << g(res.max_constraint_residual, 3) << " (m or rad)";
     if (so.form == DynamicsForm::primal) out << ", max |J| " << g(res.max_invariant_J, 3);
     out << "\n\n";
-    out << "t";
-    for (const Measure& m : model.measures) out << "\t" << m.name;
-    out << "\tenergy\n";
+    out << "t [" << U.time.name << "]";
+    for (size_t k = 0; k < model.measures.size(); ++k)
+      out << "\t" << model.measures[k].name << " [" << U.measures[k].name << "]";
+    out << "\tenergy [" << U.energy.name << "]\n";
     for (const SimulationSample& s : res.samples) {
-      out << g(s.t, 6);
-      for (double v : s.measures) out << "\t" << g(v, 8);
-      out << "\t" << g(s.kinetic + s.potential - s.work, 8) << "\n";
+      out << g(U.time.from_si(s.t), 6);
+      for (size_t k = 0; k < s.measures.size(); ++k)
+        out << "\t" << g(U.measures[k].from_si(s.measures[k]), 8);
+      out << "\t" << g(U.energy.from_si(s.kinetic + s.potential - s.work), 8) << "\n";
     }
   }
   std::cout << out.str();
@@ -221,22 +291,39 @@ void register_simulate(CLI::App& app, const GlobalOptions& globals, int& exit_co
   CLI::App* cmd = app.add_subcommand(
       "simulate", "forward dynamics: time histories of measures, reactions, energy, residuals");
   cmd->add_option("file", opt->file, "mechanism file (YAML)")->required();
-  cmd->add_option("--t-end", opt->t_end, "end time (s)")->required()->check(CLI::PositiveNumber);
-  cmd->add_option("--rtol", opt->rtol, "relative tolerance")->check(CLI::PositiveNumber);
-  cmd->add_option("--atol", opt->atol, "absolute tolerance")->check(CLI::PositiveNumber);
-  cmd->add_option("--dt-out", opt->dt_out, "output interval (s; default t_end/100)")
-      ->check(CLI::PositiveNumber);
-  cmd->add_option("--max-step", opt->max_step, "largest step (s)")->check(CLI::PositiveNumber);
+  cmd->add_option("--t-end", opt->t_end, "end time, in the file's time unit")
+      ->required()
+      ->check(finite_range(0.0, kMaxGeneral, true));
+  cmd->add_option("--rtol", opt->rtol, "relative tolerance")->check(finite_range(1e-15, 1.0));
+  cmd->add_option("--atol", opt->atol, "absolute tolerance")->check(finite_range(0.0, 1e6, true));
+  cmd->add_option("--dt-out", opt->dt_out,
+                  "output interval (the file's time unit; default t_end/100; at most 1e6 output "
+                  "samples)")
+      ->check(finite_range(0.0, kMaxGeneral, true));
+  cmd->add_option("--max-step", opt->max_step, "largest step (the file's time unit)")
+      ->check(finite_range(0.0, kMaxGeneral, true));
   cmd->add_option("--form", opt->form, "dual (default) or primal (Theorem 7)")
       ->check(CLI::IsMember({"dual", "primal"}));
-  cmd->add_option("--integrator", opt->integrator, "dopri5 (default) or rkf78")
-      ->check(CLI::IsMember({"dopri5", "rkf78"}));
+  cmd->add_option("--integrator", opt->integrator,
+                  "dopri5 (default), rkf78, bulirsch-stoer (long runs, tight tolerances) or "
+                  "rosenbrock4 (stiff)")
+      ->check(CLI::IsMember({"dopri5", "rkf78", "bulirsch-stoer", "rosenbrock4"}));
   cmd->add_option("--rate", opt->rates,
-                  "initial rate MEASURE=VALUE (SI) of a measure's position quantity; repeatable");
+                  "initial rate MEASURE=VALUE of a measure's position quantity, in the file's "
+                  "declared units (length or angle per time unit); repeatable");
   cmd->add_flag("--json", opt->json, "one JSON document on stdout");
+  cmd->add_flag("--positions", opt->positions,
+                "with --json: every body's pose and named point at every output time");
   cmd->add_option("--out", opt->out_dir, "directory for simulate.csv and chart_switches.csv");
-  cmd->callback([opt, &globals, &exit_code] {
-    setup_logging(globals);
+  add_units_option(cmd, opt->units);
+  auto log = std::make_shared<LogFlags>();
+  add_log_flags(cmd, *log);
+  cmd->callback([opt, log, &globals, &exit_code] {
+    if (opt->dt_out > 0.0 && opt->t_end / opt->dt_out + 1.0 > kMaxOutputSamples)
+      throw CLI::ValidationError("--dt-out",
+                                 "--t-end / --dt-out gives more than 1e6 output "
+                                 "samples; give a larger --dt-out");
+    setup_logging(globals, *log);
     exit_code = run_simulate(*opt);
   });
 }

@@ -23,9 +23,10 @@ namespace {
 struct ValidateCliOptions {
   std::string file;
   bool json = false;
-  double min_transmission_deg = 30.0;
+  std::string min_transmission = "30deg";
   int starts = 24;
   unsigned seed = 1;
+  std::string units = "file";
 };
 
 nlohmann::json opt_json(const std::optional<double>& v) {
@@ -41,8 +42,16 @@ std::string cell(const std::optional<double>& v, double scale, const char* f = "
 
 int run_validate(const ValidateCliOptions& opt) {
   const Model model = load(opt.file);
+  const UnitSystem U = resolve_units(model, opt.units);
   ValidateOptions vo;
-  vo.min_transmission = opt.min_transmission_deg * std::numbers::pi / 180.0;
+  try {  // a bare number is in the file's angle unit
+    vo.min_transmission =
+        parse_position(opt.min_transmission, true, unit_system(model.units).angle_si);
+  } catch (const std::invalid_argument& e) {
+    throw CLI::ValidationError("--min-transmission", e.what());
+  }
+  if (!(vo.min_transmission >= 0.0 && vo.min_transmission <= std::numbers::pi / 2))
+    throw CLI::ValidationError("--min-transmission", "must lie in [0, 90] deg");
   vo.starts = opt.starts;
   vo.seed = opt.seed;
   if (model.design_positions.empty())
@@ -52,17 +61,25 @@ int run_validate(const ValidateCliOptions& opt) {
       !rep.input.empty() &&
       std::holds_alternative<Revolute>(
           model.joints[static_cast<size_t>(model.find_joint(rep.input))].kind);
-  const double in_scale = input_angular ? 180.0 / std::numbers::pi : 1e3;
-  const char* in_unit = input_angular ? "deg" : "mm";
+  const OutputUnit length_u = output_unit(Dimension::length, U);
+  const OutputUnit angle_u = output_unit(Dimension::angle, U);
+  const OutputUnit in_u = input_angular ? angle_u : length_u;
+  const double in_scale = 1.0 / in_u.si;
+  const std::string in_unit = "[" + in_u.name + "]";
+  auto conv = [](const std::optional<double>& v, const OutputUnit& u) {
+    return v ? nlohmann::json(u.from_si(*v)) : nlohmann::json(nullptr);
+  };
 
   std::ostringstream out;
   if (opt.json) {
     nlohmann::json j;
     j["mechanism"] = model.name;
     j["file"] = model.file;
+    j["units"] = units_json(U);
     j["pass"] = rep.pass();
     j["input"] = rep.input;
     j["generic_rank"] = rep.generic_rank;
+    j["loop_basis"] = loop_basis_size(model);
     j["circuits"] = rep.circuits;
     j["circuit_defect"] = rep.circuit_defect;
     j["branch_defect"] = rep.branch_defect;
@@ -75,27 +92,42 @@ int run_validate(const ValidateCliOptions& opt) {
       for (const FourBarReport& f : p.four_bars)
         fb.push_back({{"joints", f.joints},
                       {"grashof", to_string(f.type)},
-                      {"transmission_angle", f.transmission},
+                      {"transmission_angle", angle_u.from_si(f.transmission)},
                       {"ok", f.ok}});
+      nlohmann::json sc = nlohmann::json::array();
+      for (const SliderCrankReport& c : p.slider_cranks)
+        sc.push_back(
+            {{"joints", c.joints}, {"pressure_angle", angle_u.from_si(c.pressure)}, {"ok", c.ok}});
+      nlohmann::json blocks = nlohmann::json::array();
+      for (const LimitBlock& b : p.limit_blocks) {
+        const Joint& jt = model.joints[static_cast<size_t>(b.joint)];
+        const OutputUnit u = std::holds_alternative<Revolute>(jt.kind) ? angle_u : length_u;
+        blocks.push_back({{"joint", jt.name},
+                          {"needed", u.from_si(b.needed)},
+                          {"limits", {u.from_si(jt.limits->x()), u.from_si(jt.limits->y())}},
+                          {"unit", u.name}});
+      }
       positions.push_back({{"name", p.name},
                            {"pass", p.pass()},
                            {"failures", p.failures},
                            {"assembles", p.assembles},
                            {"assembly_status", to_string(p.assembly)},
                            {"distance", p.distance},
-                           {"max_translation", p.max_translation},
-                           {"target_error", opt_json(p.target_error)},
-                           {"target_angle_error", opt_json(p.target_angle_error)},
+                           {"max_translation", length_u.from_si(p.max_translation)},
+                           {"target_error", conv(p.target_error, length_u)},
+                           {"target_angle_error", conv(p.target_angle_error, angle_u)},
                            {"target_met", p.target_met},
                            {"dof", p.dof},
                            {"rank", p.rank},
                            {"redundant", p.redundant},
                            {"sigma_min", p.singular.sigma_min},
                            {"transmission_index", opt_json(p.singular.eta)},
-                           {"singular_distance", opt_json(p.singular_distance)},
+                           {"singular_distance", conv(p.singular_distance, in_u)},
                            {"singular_kind", p.singular_kind},
-                           {"singular_input", opt_json(p.singular_input)},
+                           {"singular_input", conv(p.singular_input, in_u)},
                            {"four_bars", fb},
+                           {"slider_cranks", sc},
+                           {"limit_blocks", blocks},
                            {"modes", p.modes},
                            {"mode", p.mode},
                            {"mode_signature", p.mode_signature},
@@ -114,7 +146,8 @@ int run_validate(const ValidateCliOptions& opt) {
                   "mu_min", "mode", "circ", "br", "result");
     out << line;
     std::snprintf(line, sizeof line, "%-10s %-5s %9s %9s %3s %9s %9s %11s %8s %7s %5s %5s\n", "",
-                  "", "[mm]", "[mm]", "", "", "", in_unit, "[deg]", "", "", "");
+                  "", ("[" + length_u.name + "]").c_str(), ("[" + length_u.name + "]").c_str(), "",
+                  "", "", in_unit.c_str(), ("[" + angle_u.name + "]").c_str(), "", "", "");
     out << line;
     for (const PositionReport& p : rep.positions) {
       std::optional<double> mu;
@@ -127,11 +160,11 @@ int run_validate(const ValidateCliOptions& opt) {
       std::snprintf(
           line, sizeof line, "%-10s %-5s %9s %9s %3d %9s %9s %11s %8s %7s %5s %5s  %s\n",
           p.name.c_str(), p.assembles ? "yes" : "NO",
-          cell(std::optional<double>(p.max_translation), 1e3).c_str(),
-          cell(p.target_error, 1e3).c_str(), p.dof,
+          cell(std::optional<double>(p.max_translation), 1.0 / length_u.si).c_str(),
+          cell(p.target_error, 1.0 / length_u.si).c_str(), p.dof,
           cell(std::optional<double>(p.singular.sigma_min), 1.0, "%.3g").c_str(),
           cell(p.singular.eta, 1.0, "%.3g").c_str(), cell(p.singular_distance, in_scale).c_str(),
-          cell(mu, 180.0 / std::numbers::pi, "%.2f").c_str(), mode.c_str(),
+          cell(mu, 1.0 / angle_u.si, "%.2f").c_str(), mode.c_str(),
           p.circuit > 0 ? std::to_string(p.circuit).c_str() : "-",
           p.branch > 0 ? std::to_string(p.branch).c_str() : "-", p.pass() ? "pass" : "FAIL");
       out << line;
@@ -140,10 +173,17 @@ int run_validate(const ValidateCliOptions& opt) {
     for (const PositionReport& p : rep.positions)
       if (!p.four_bars.empty() && !any_loop) {
         any_loop = true;
-        out << "\nfour-bar loops\n";
+        out << "\nfour-bar loops (every 4-cycle of the pin graph; a loop basis of the joint "
+               "graph has "
+            << loop_basis_size(model) << " loops)\n";
         for (const FourBarReport& f : p.four_bars)
           out << "  " << f.joints << "  " << to_string(f.type) << "\n";
       }
+    for (const PositionReport& p : rep.positions)
+      for (const SliderCrankReport& c : p.slider_cranks)
+        out << (&c == &p.slider_cranks.front() ? "\nslider-crank loops at " + p.name + "\n" : "")
+            << "  " << c.joints << "  pressure angle " << format_input(c.pressure, true, U)
+            << (c.ok ? "" : "  (too large)") << "\n";
     bool header = false;
     for (const PositionReport& p : rep.positions)
       if (!p.redundant.empty()) {
@@ -176,15 +216,17 @@ void register_validate(CLI::App& app, const GlobalOptions& globals, int& exit_co
       "assembly modes, circuit/branch/order defects; exit 0 only when every position passes");
   cmd->add_option("file", opt->file, "mechanism file (YAML)")->required();
   cmd->add_flag("--json", opt->json, "one JSON document on stdout");
-  cmd->add_option("--min-transmission", opt->min_transmission_deg,
-                  "smallest acceptable transmission angle deviation from a straight line, deg "
-                  "(default 30)")
-      ->check(CLI::Range(0.0, 90.0));
+  cmd->add_option("--min-transmission", opt->min_transmission,
+                  "smallest acceptable transmission angle deviation from a straight line, e.g. "
+                  "30deg (default); a bare number is in the file's angle unit");
   cmd->add_option("--starts", opt->starts, "multi-start projections per position (default 24)")
       ->check(CLI::Range(0, 100000));
   cmd->add_option("--seed", opt->seed, "seed of the multi-start (default 1)");
-  cmd->callback([opt, &globals, &exit_code] {
-    setup_logging(globals);
+  add_units_option(cmd, opt->units);
+  auto log = std::make_shared<LogFlags>();
+  add_log_flags(cmd, *log);
+  cmd->callback([opt, log, &globals, &exit_code] {
+    setup_logging(globals, *log);
     exit_code = run_validate(*opt);
   });
 }

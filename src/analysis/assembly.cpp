@@ -428,6 +428,13 @@ VelocityProjection project_velocities(const Model& model, const VecX& q, const V
   VelocityProjection v;
   MatX M(model.n, model.n), A(model.n, model.n), Et(model.nc, model.n);
   compute_mass_matrix(model, q, M);
+  if (model.nc == 0) {  // no constraint: α = I, nothing removed (and no empty factorisation)
+    v.ok = true;
+    v.u = u0;
+    v.kinetic_initial = v.kinetic = 0.5 * u0.dot(M * u0);
+    v.kinetic_removed = 0.0;
+    return v;
+  }
   compute_inverse_mass_matrix(model, q, A);
   compute_constraint_jacobian(model, q, Et);
   const MatX AE = A * Et.transpose();

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
+#include <map>
 #include <numbers>
 #include <stdexcept>
 
@@ -79,7 +81,8 @@ DrivenPointView DrivenPoints::operator[](std::size_t k) const {
                          s.kinetic,
                          s.potential,
                          s.dissipated,
-                         s.singular};
+                         s.singular,
+                         s.bridge};
 }
 
 void DrivenPoints::reserve(std::size_t count) {
@@ -87,25 +90,20 @@ void DrivenPoints::reserve(std::size_t count) {
   if (stride_ > 0) values_.reserve(count * stride_);
 }
 
-void DrivenPoints::push_back(const DrivenPoint& p) {
-  if (scalars_.empty() && values_.empty()) {  // the first position fixes the sizes
-    n_tangent_ = p.tangent.size(), n_q_ = p.q.size(), n_u_ = p.u.size();
-    n_lambda_ = p.lambda.size(), n_reactions_ = p.reactions.size();
-    n_measures_ = p.measures.size();
-    stride_ = static_cast<std::size_t>(n_tangent_ + n_q_ + 2 * n_u_ + n_lambda_) + n_reactions_ +
-              n_measures_;
-    values_.reserve(std::max<std::size_t>(1, scalars_.capacity()) * stride_);
-  }
+DrivenPoints::Scalars DrivenPoints::scalars_of(const DrivenPoint& p) const {
+  return {p.input,    p.time,    p.input_rate, p.input_acceleration, p.drive,    p.chart_quality,
+          p.dTF,      p.kinetic, p.potential,  p.dissipated,         p.chart_id, p.chart_sign,
+          p.singular, p.bridge};
+}
+
+void DrivenPoints::check_sizes(const DrivenPoint& p) const {
   if (p.tangent.size() != n_tangent_ || p.q.size() != n_q_ || p.u.size() != n_u_ ||
       p.udot.size() != n_u_ || p.lambda.size() != n_lambda_ || p.reactions.size() != n_reactions_ ||
       p.measures.size() != n_measures_)
     throw std::logic_error("DrivenPoints: a position with other vector sizes");
-  scalars_.push_back({p.input, p.time, p.input_rate, p.input_acceleration, p.drive, p.chart_quality,
-                      p.dTF, p.kinetic, p.potential, p.dissipated, p.chart_id, p.chart_sign,
-                      p.singular});
-  const std::size_t at = values_.size();
-  values_.resize(at + stride_);  // within the reserved block (amortised growth beyond it)
-  double* v = values_.data() + at;
+}
+
+void DrivenPoints::put_values(const DrivenPoint& p, double* v) const {
   auto put = [&v](const double* from, std::size_t count) {
     std::copy(from, from + count, v);
     v += count;
@@ -117,6 +115,28 @@ void DrivenPoints::push_back(const DrivenPoint& p) {
   put(p.lambda.data(), static_cast<std::size_t>(n_lambda_));
   put(p.reactions.data(), n_reactions_);
   put(p.measures.data(), n_measures_);
+}
+
+void DrivenPoints::push_back(const DrivenPoint& p) {
+  if (scalars_.empty() && values_.empty()) {  // the first position fixes the sizes
+    n_tangent_ = p.tangent.size(), n_q_ = p.q.size(), n_u_ = p.u.size();
+    n_lambda_ = p.lambda.size(), n_reactions_ = p.reactions.size();
+    n_measures_ = p.measures.size();
+    stride_ = static_cast<std::size_t>(n_tangent_ + n_q_ + 2 * n_u_ + n_lambda_) + n_reactions_ +
+              n_measures_;
+    values_.reserve(std::max<std::size_t>(1, scalars_.capacity()) * stride_);
+  }
+  check_sizes(p);
+  scalars_.push_back(scalars_of(p));
+  const std::size_t at = values_.size();
+  values_.resize(at + stride_);  // within the reserved block (amortised growth beyond it)
+  put_values(p, values_.data() + at);
+}
+
+void DrivenPoints::assign(std::size_t k, const DrivenPoint& p) {
+  check_sizes(p);
+  scalars_.at(k) = scalars_of(p);
+  put_values(p, values_.data() + k * stride_);
 }
 
 // ---- reaction components -------------------------------------------------------------------
@@ -194,7 +214,18 @@ void compute_reactions(const Model& model, const VecX& q, const Eigen::Ref<const
             const double normal = -lambda(r);
             out.push_back(normal * n.x());
             out.push_back(normal * n.y());
-            if constexpr (std::is_same_v<T, Prismatic>) out.push_back(-lambda(r + 1));
+            if constexpr (std::is_same_v<T, Prismatic>) {
+              // Moment about the joint's point pi on the first body (issue 10 item 8). The
+              // normal row nᵀ(r_Pj − r_Pi) gives the first body the force N n acting at P_j
+              // (its rotation entry is −λ(nᵀR'_i s_i + eᵀΔ), the moment of −λn applied at
+              // P_i + Δ, Δ = r_Pj − r_Pi, e = R_i a) (M1); the angle row φ_j − φ_i the couple −λ_φ
+              // (M2). About P_i: M = −λ_φ + Δ × (N n) = −λ_φ + N eᵀΔ, since Δ × n = eᵀΔ for
+              // n = J e (M3).
+              const Vec2 e = rot(k.pi.body) * k.axis_local;
+              const Vec2 delta = point_kinematics(model, k.pj, q, none, rotations).r -
+                                 point_kinematics(model, k.pi, q, none, rotations).r;
+              out.push_back(-lambda(r + 1) + normal * e.dot(delta));  // (M3)
+            }
             out.push_back(normal);
           } else if constexpr (std::is_same_v<T, GearPair>) {
             out.push_back(lambda(r));
@@ -499,14 +530,49 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
     result.message = "a prismatic driver has no full turn: give the end of the input range (--to)";
     return result;
   }
-  // Start: the design position projected onto f(q) = 0.
+  // Start: the design position projected onto f(q) = 0 with the driven joint held at its drawn
+  // value (as `assemble --lock`); only where it cannot be held (a dead point of the driver, or
+  // the joints close only with the driver moved) is it projected freely. Bodies moved by more
+  // than the tolerances are listed and warned about.
   State state(model);
-  state.q = model.design_q();
-  const SolveResult assembly = project_positions(model, state.q);
+  const VecX drawn = model.design_q();
+  state.q = drawn;
+  PositionOptions hold;
+  hold.locked_joint = joint;
+  hold.locked_value = compute_scalar(model, JointCoordinate{joint}, drawn, nullptr).value;
+  SolveResult assembly = project_positions(model, state.q, hold);
+  if (assembly.status != SolveStatus::converged) {
+    state.q = drawn;
+    assembly = project_positions(model, state.q);
+    if (assembly.status == SolveStatus::converged)
+      result.warnings.push_back(
+          "the design position closes only with driver joint '" + joint_name +
+          "' moved from its drawn " + format_input(hold.locked_value, angular) + " to " +
+          format_input(compute_scalar(model, JointCoordinate{joint}, state.q, nullptr).value,
+                       angular));
+  }
   if (assembly.status != SolveStatus::converged) {
     result.message = "the design position does not assemble (residual " +
                      std::to_string(assembly.residual) + ")";
     return result;
+  }
+  {
+    double size = 1e-3;
+    for (const Body& b : model.bodies) size = std::max(size, b.design_pose.head<2>().norm());
+    for (const Body& b : model.bodies) {
+      const double distance =
+          (state.q.segment<2>(b.q_offset) - drawn.segment<2>(b.q_offset)).norm();
+      const double angle = b.kind == BodyKind::rigid
+                               ? std::abs(state.q(b.q_offset + 2) - drawn(b.q_offset + 2))
+                               : 0.0;
+      if (distance <= kStartMoveTolerance * size && angle <= kStartTurnTolerance) continue;
+      result.start_moves.push_back({b.name, distance, angle});
+      char text[160];
+      std::snprintf(text, sizeof text, "%.6g mm and %.6g deg", distance * 1e3,
+                    angle * 180.0 / std::numbers::pi);
+      result.warnings.push_back("the design position does not close as drawn: body '" + b.name +
+                                "' moved by " + text + " to close the joints");
+    }
   }
   const Mobility mob = compute_mobility(model, state.q);
   result.rank = mob.rank;
@@ -530,12 +596,45 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
   } else if (options.use_start) {
     start_target = options.start;
   }
+  // A start elsewhere is reached by continuation along the design position's branch (the same
+  // circuit, every angle unwrapped continuously): a range sweep from the design input to it, so
+  // that the cycle from X equals the full cycle at X. For a full turn that is the input the full
+  // cycle has there, X' = s₀ + σ ((σ(X − s₀)) mod 2π) with σ the direction of the drive (so X' may
+  // differ from X by whole turns).
+  if (constant && options.use_start && options.full_cycle && angular) {
+    const double sigma = driver.speed > 0.0 ? 1.0 : -1.0;
+    double ahead = std::fmod(sigma * (start_target - s0), 2.0 * std::numbers::pi);
+    if (ahead < 0.0) ahead += 2.0 * std::numbers::pi;
+    if (ahead < 1e-12 || 2.0 * std::numbers::pi - ahead < 1e-12) ahead = 0.0;
+    start_target = s0 + sigma * ahead;
+  }
+  VecX start_tangent;  // set when the start was reached along the branch
   if (start_target != s0) {
-    if (!sweep.corrector(state.q, start_target, std::numeric_limits<double>::infinity())) {
+    CycleOptions reach;
+    reach.driver = driver;
+    reach.driver.profile = Profile::constant_speed;
+    reach.driver.speed = constant ? std::abs(driver.speed) : 1.0;
+    reach.full_cycle = false;
+    reach.end = start_target;
+    // Positions every 2° (or 1/180 of the range for a prismatic joint): each is converged, and
+    // longer steps are split by the sweep itself.
+    const double per_step = angular ? 2.0 * std::numbers::pi / 180.0 : 0.0;
+    const double span = std::abs(start_target - s0);
+    reach.steps = per_step > 0.0
+                      ? std::clamp(static_cast<int>(std::ceil(span / per_step)) + 1, 2, 100000)
+                      : 181;
+    reach.bridge_change_points = false;  // only its last position (a converged one) is used
+    const CycleResult path = run_cycle(model, reach);
+    if (path.status != CycleStatus::completed || path.points.empty()) {
       result.message = "cannot reach the start input " + format_input(start_target, angular) +
-                       " from the design position";
+                       " from the design position along its branch: " + path.message;
       return result;
     }
+    state.q = path.points.back().q;
+    // The branch's tangent where the path arrived (its last regular position): the first step
+    // from a start on a change point predicts with it.
+    for (const DrivenPointView& p : path.points)
+      if (!p.singular && p.chart_quality >= 1e-3) start_tangent = p.tangent;
     s0 = start_target;
   }
   // Period and time grid.
@@ -618,7 +717,7 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
   VecX trial(model.nq);  // predictor/corrector iterate, reused across positions
   DrivenPoint anchor;    // the last converged point: the predictor starts from it
   VecX good_tangent;     // of the last regular point: used next to a change point
-  DrivenPoint point, probe, sub;
+  DrivenPoint point, probe, sub, check;
   // One continuation step from a converged point to time t: predictor, corrector with the input
   // locked, evaluation; false if it does not converge on the same branch or is too long. From a
   // point next to a change point (whose F is unreliable) the last regular tangent is used.
@@ -660,7 +759,7 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
     result.message = result.dead_points.back().message;
     return result;
   }
-  if (anchor.singular) {
+  if (anchor.singular && start_tangent.size() == 0) {
     result.message =
         "the start position is a singular position (E loses rank there); start "
         "the sweep elsewhere";
@@ -669,6 +768,13 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
   update_determinacy(anchor);
   result.points.push_back(anchor);
   good_tangent = anchor.tangent;
+  if (anchor.singular) {  // a start on a change point, reached along the branch: its tangent
+    good_tangent = start_tangent;
+    result.singular_positions.push_back(
+        {s0, 0.0,
+         "singular position (E loses rank) at input " + format_input(s0, angular) +
+             ": the start; passed, branch kept by continuity of the tangent"});
+  }
   result.status = CycleStatus::completed;  // unless the loop below says otherwise
   int reversals = 0;
   const int report_every = std::max(1, steps / 100);
@@ -712,8 +818,20 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
         if (!from->singular && !probe.singular && from->chart_id == probe.chart_id &&
             from->chart_sign != probe.chart_sign) {  // |det| ∝ distance: interpolate
           const double a = from->chart_quality / (from->chart_quality + probe.chart_quality);
-          record_singular(from->input + a * (probe.input - from->input),
-                          from->time + a * (probe.time - from->time));
+          const double t_a = from->time + a * (probe.time - from->time);
+          // A change point only if E loses rank there: the best chart's quality at t_a is far
+          // below both neighbours' (a chart whose own block degenerated between two positions
+          // of a coarse grid, with E regular, is not one). The check re-selects the chart, so
+          // the next interval is not compared across it.
+          const bool confirmed =
+              !try_step(*from, t_a, check) ||
+              check.chart_quality < 0.1 * std::min(from->chart_quality, probe.chart_quality);
+          if (confirmed) record_singular(from->input + a * (probe.input - from->input), t_a);
+          // The workspace back at the probe (its null space N feeds the determinacy update).
+          trial = probe.q;
+          const long id = probe.chart_id;
+          (void)evaluate_at(trial, probe.time, probe);  // succeeded there a moment ago
+          probe.chart_id = -1 - id;                     // no sign comparison across the check
         }
         if (probe.singular)
           record_singular(probe.input, probe.time);
@@ -848,10 +966,283 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
     if (!anchor.singular) good_tangent = anchor.tangent;
     k = static_cast<long>(std::floor(t_p / dt));  // the loop's ++k gives the next grid time
   }
+  // ---- Change points bridged on the branch -----------------------------------------------
+  // Next to a change point the direct evaluation at the computed q loses accuracy like
+  // ε/quality³: q satisfies f(q) = O(ε), and the level set through it is, near the crossing of
+  // two branches, a hyperbola whose curvature at a distance δ is ε/δ³ — what u̇, and so the drive
+  // and the reactions, are computed from (measured on the triple-crank: 3e-5 N·m 0.01° from the
+  // change point, 0.16 N·m at 0.001°). The branch itself is smooth there. So the positions with
+  // quality < kBridgeQuality take their values from the branch (ChangePointBridge): a degree-7
+  // polynomial in time through 8 positions at t* ± {1, 2, 3, 4} ρ, reached by continuation from
+  // the stored positions on each side, where the quality is ≥ kBridgeQuality and every value is
+  // accurate. With the nodes outside the gap on both sides its Lebesgue constant is 2.7 and its
+  // error ~ (4ρ)⁸ f⁽⁸⁾/8!. (L1)
+  result.diverging.assign(result.components.size(), false);
+  if (reversals == 0 && options.bridge_change_points) {
+    // Reaches time t on the branch from a regular position: whole step, else sub-steps (halved on
+    // failure, doubled again on success).
+    DrivenPoint cur, nxt;
+    auto advance = [&](const DrivenPoint& from, double t, DrivenPoint& out) {
+      cur = from;
+      double h = t - cur.time;
+      for (int guard = 0; guard < 200; ++guard) {
+        const bool last = std::abs(t - cur.time) <= std::abs(h) * (1.0 + 1e-12);
+        const double t_next = last ? t : cur.time + h;
+        if (try_step(cur, t_next, nxt) && !nxt.singular) {
+          if (last) {
+            out = nxt;
+            return true;
+          }
+          std::swap(cur, nxt);
+          h = std::copysign(std::min(2.0 * std::abs(h), std::abs(t - cur.time)), h);
+          continue;
+        }
+        h *= 0.5;
+        if (std::abs(h) < 1e-7 * dt) return false;
+      }
+      return false;
+    };
+    // Every value of a position as one vector (and back), for the interpolation.
+    auto pack = [&](const DrivenPoint& p, VecX& v) {
+      const Eigen::Index nr = static_cast<Eigen::Index>(p.reactions.size());
+      const Eigen::Index nm = static_cast<Eigen::Index>(p.measures.size());
+      v.resize(p.q.size() + 3 * p.u.size() + p.lambda.size() + nr + nm + 4);
+      Eigen::Index at = 0;
+      auto put = [&](const auto& x) {
+        for (Eigen::Index i = 0; i < static_cast<Eigen::Index>(x.size()); ++i)
+          v(at++) = x[static_cast<size_t>(i)];
+      };
+      put(p.q), put(p.u), put(p.udot), put(p.tangent), put(p.lambda);
+      put(p.reactions), put(p.measures);
+      v(at++) = p.drive, v(at++) = p.kinetic, v(at++) = p.potential, v(at++) = p.dissipated;
+    };
+    auto unpack = [&](const VecX& v, DrivenPoint& p) {
+      Eigen::Index at = 0;
+      auto get = [&](auto& x) {
+        for (Eigen::Index i = 0; i < static_cast<Eigen::Index>(x.size()); ++i)
+          x[static_cast<size_t>(i)] = v(at++);
+      };
+      get(p.q), get(p.u), get(p.udot), get(p.tangent), get(p.lambda);
+      get(p.reactions), get(p.measures);
+      p.drive = v(at++), p.kinetic = v(at++), p.potential = v(at++), p.dissipated = v(at++);
+    };
+    const Eigen::Index reactions_at = model.nq + 3 * model.n + model.nc;
+    constexpr int kNodes = 8;
+    constexpr double kNodeDistance[4] = {1.0, 2.0, 3.0, 4.0};
+    // Lagrange basis at `at` of the nodes whose bit is set in `used`.
+    constexpr unsigned kAll = (1u << kNodes) - 1;
+    auto basis = [&](const double* x, double at, unsigned used, double* l) {
+      for (int i = 0; i < kNodes; ++i) {
+        l[i] = 0.0;
+        if (!(used >> i & 1u)) continue;
+        double li = 1.0;
+        for (int j = 0; j < kNodes; ++j)
+          if (j != i && (used >> j & 1u)) li *= (at - x[j]) / (x[i] - x[j]);
+        l[i] = li;
+      }
+    };
+    std::vector<VecX> node_values(kNodes);
+    VecX value, loo_error;
+    DrivenPoint base, node, bridged;
+    const size_t np = result.points.size();
+    // One change point: false when it cannot be bridged (its positions then stay as they are:
+    // flagged singular ones are not reported).
+    // The change points to bridge: those the sweep listed, and any other dip of the chart
+    // quality well below kBridgeQuality among the stored positions (a change point passed within
+    // one step together with a chart switch, or a near one: the direct values are as inaccurate).
+    struct Candidate {
+      double time, input;
+      bool listed;  // a change point the sweep located (else a dip of the quality)
+    };
+    std::vector<Candidate> candidates;
+    for (const DeadPoint& sp : result.singular_positions)
+      candidates.push_back({sp.time, sp.input, true});
+    for (size_t k = 0; k < np; ++k) {
+      const DrivenPointView p = result.points[k];
+      // (Below a fifth of it: a chart about to be switched can sit just below kBridgeQuality.)
+      if (!(p.chart_quality < 0.2 * kBridgeQuality)) continue;
+      if ((k > 0 && result.points[k - 1].chart_quality < p.chart_quality) ||
+          (k + 1 < np && result.points[k + 1].chart_quality < p.chart_quality))
+        continue;             // not the dip's lowest position
+      size_t lo = k, hi = k;  // the run of poor positions around it
+      while (lo > 0 && result.points[lo - 1].chart_quality < kBridgeQuality) --lo;
+      while (hi + 1 < np && result.points[hi + 1].chart_quality < kBridgeQuality) ++hi;
+      const double t_lo = result.points[lo].time - dt, t_hi = result.points[hi].time + dt;
+      bool listed = false;
+      for (const Candidate& c : candidates) listed = listed || (c.time > t_lo && c.time < t_hi);
+      if (!listed) candidates.push_back({p.time, p.input, false});
+    }
+    auto bridge_at = [&](size_t j, double radius_factor) -> bool {
+      const double ts = candidates[j].time;
+      // ρ: where the quality, ∝ the distance to the change point, reaches kBridgeQuality
+      // (slope from the nearest stored position on each side whose quality is ≥ 1e-3).
+      double slope = std::numeric_limits<double>::infinity();
+      for (const int side : {-1, 1}) {
+        double best = std::numeric_limits<double>::infinity(), q_at = 0.0;
+        for (const DrivenPointView& p : result.points) {
+          const double d = (p.time - ts) * side;
+          if (d > 0.0 && d < best && p.chart_quality >= 1e-3) best = d, q_at = p.chart_quality;
+        }
+        // A position's quality is that of its chart, within the hysteresis factor of the best
+        // one below the switching threshold: the larger slope is the better estimate.
+        if (std::isfinite(best))
+          slope = std::isfinite(slope) ? std::max(slope, q_at / best) : q_at / best;
+      }
+      if (!std::isfinite(slope) || !(slope > 0.0)) return false;
+      double rho = radius_factor * kBridgeQuality / slope;
+      for (const DrivenPointView& p : result.points)  // a dip locates ts only to about this
+        if (!candidates[j].listed && std::abs(p.time - ts) < dt && p.chart_quality < kBridgeQuality)
+          rho = std::max(rho, radius_factor * kBridgeQuality / slope + p.chart_quality / slope);
+      // Every position of the run of poor ones around ts lies in the gap.
+      size_t nearest = 0;
+      for (size_t k = 1; k < np; ++k)
+        if (std::abs(result.points[k].time - ts) < std::abs(result.points[nearest].time - ts))
+          nearest = k;
+      for (const int step : {-1, 1})
+        for (long k = static_cast<long>(nearest);
+             k >= 0 && k < static_cast<long>(np) &&
+             result.points[static_cast<size_t>(k)].chart_quality < kBridgeQuality;
+             k += step)
+          rho = std::max(rho, 1.05 * std::abs(result.points[static_cast<size_t>(k)].time - ts));
+      // Only where a stored position needs it: one in the gap whose quality is below
+      // kBridgeQuality (a coarse grid that passes the change point far from every position, or a
+      // chart that degenerated between two positions, has none: its values are accurate as
+      // they are, and nothing is flagged).
+      bool needed = false;
+      for (const DrivenPointView& p : result.points)
+        needed = needed || (std::abs(p.time - ts) < rho && p.chart_quality < kBridgeQuality);
+      if (!needed) return true;                       // nothing to do: not an attempt that failed
+      for (size_t i = 0; i < candidates.size(); ++i)  // one change point only
+        if (i != j && std::abs(candidates[i].time - ts) < 6.0 * rho) return false;
+      // The nodes: by continuation from the stored position on each side nearest to them (any
+      // not next to the change point will do: the corrector makes each node exact). A side with
+      // no stored position (a sweep that ends or starts next to the change point) is reached
+      // from the other side's inner node, across the change point (the step the sweep itself
+      // takes there: predictor along the tangent, bounded corrector, same branch).
+      double x[kNodes];
+      long from[2] = {-1, -1};
+      for (const int side : {-1, 1}) {
+        double best = std::numeric_limits<double>::infinity();
+        for (size_t k = 0; k < np; ++k) {
+          const DrivenPointView p = result.points[k];
+          const double d = (p.time - ts) * side;
+          const double off = std::max({0.0, rho - d, d - 4.0 * rho});
+          if (d > 0.0 && off < best && p.chart_quality >= 1e-3 && !p.singular)
+            best = off, from[side > 0] = static_cast<long>(k);
+        }
+      }
+      if (from[0] < 0 && from[1] < 0) return false;
+      const int first_side = from[0] >= 0 ? -1 : 1;
+      DrivenPoint first_inner;  // the first side's inner node
+      for (const int side : {first_side, -first_side}) {
+        const long f = from[side > 0];
+        if (f >= 0) {
+          const DrivenPointView p = result.points[static_cast<size_t>(f)];
+          if (!evaluate_at(VecX(p.q), p.time, base)) return false;
+        } else {
+          base = first_inner;
+        }
+        for (int a = 0; a < 4; ++a) {
+          const int i = side < 0 ? 3 - a : 4 + a;  // nodes in increasing time
+          x[i] = ts + side * kNodeDistance[a] * rho;
+          // (The quality is that of the chart's block, relative to its own largest pivot: on a
+          // long chain such as the N-four-bar with N = 40 it stays below kBridgeQuality well
+          // away from a change point. A node's accuracy is checked by the error estimate below.)
+          if (!advance(base, x[i], node) || node.chart_quality < 0.1 * kBridgeQuality) return false;
+          pack(node, node_values[static_cast<size_t>(i)]);
+          if (a == 0 && side == first_side) first_inner = node;
+        }
+      }
+      // Error estimate per value: the two inner nodes against the degree-6 interpolant through
+      // the other seven.
+      double l[kNodes];
+      loo_error = VecX::Zero(node_values[0].size());
+      VecX node_scale = VecX::Zero(node_values[0].size());
+      for (int i = 0; i < kNodes; ++i)
+        node_scale = node_scale.cwiseMax(node_values[static_cast<size_t>(i)].cwiseAbs());
+      auto interpolate = [&](double at, unsigned used, VecX& out) {
+        basis(x, at, used, l);
+        out = VecX::Zero(node_values[0].size());
+        for (int i = 0; i < kNodes; ++i) out += l[i] * node_values[static_cast<size_t>(i)];
+      };
+      for (const int inner : {3, 4}) {
+        interpolate(x[inner], kAll & ~(1u << inner), value);
+        loo_error =
+            loo_error.cwiseMax((value - node_values[static_cast<size_t>(inner)]).cwiseAbs());
+      }
+      // At the change point itself: against the degree-5 interpolant through the six inner
+      // nodes (the error of the lower degree, so an upper estimate).
+      VecX centre;
+      interpolate(ts, kAll, centre);
+      interpolate(ts, kAll & ~1u & ~(1u << (kNodes - 1)), value);
+      const Eigen::Index drive_centre = node_values[0].size() - 4;
+      loo_error(drive_centre) =
+          std::max(loo_error(drive_centre), std::abs(centre(drive_centre) - value(drive_centre)));
+      const Eigen::Index drive_at = node_values[0].size() - 4;
+      if (!(loo_error(drive_at) <= kBridgeTolerance * node_scale(drive_at) + 1e-300)) return false;
+      ChangePointBridge b;
+      b.input = candidates[j].input;
+      b.time = ts;
+      b.time_from = ts - rho;
+      b.time_to = ts + rho;
+      b.drive_error = loo_error(drive_at);
+      // A component diverges when its estimate exceeds kBridgeTolerance of its size at the
+      // nodes (floored at 1e-6 of the largest component of the same unit, so that components
+      // at rounding level are not called diverging).
+      std::map<std::string, double> unit_scale;
+      for (size_t c = 0; c < result.components.size(); ++c) {
+        double& us = unit_scale[result.components[c].unit];
+        us = std::max(us, node_scale(reactions_at + static_cast<Eigen::Index>(c)));
+      }
+      b.diverging.assign(result.components.size(), false);
+      for (size_t c = 0; c < result.components.size(); ++c) {
+        const Eigen::Index at = reactions_at + static_cast<Eigen::Index>(c);
+        const double size_c =
+            std::max(node_scale(at), 1e-6 * unit_scale[result.components[c].unit]);
+        b.diverging[c] = !(loo_error(at) <= kBridgeTolerance * size_c);
+      }
+      // The positions in the gap: their values at their grid time from the polynomial.
+      const int index = static_cast<int>(result.bridges.size());
+      for (size_t k = 0; k < np; ++k) {
+        const DrivenPointView p = result.points[k];
+        if (!(std::abs(p.time - ts) < rho)) continue;
+        const double t = static_cast<double>(k) * dt;  // its grid time (exactly on a change
+                                                       // point it was evaluated just past it)
+        bridged = anchor;                              // sizes
+        bridged.time = t;
+        law.at(t, bridged.input, bridged.input_rate, bridged.input_acceleration);
+        interpolate(t, kAll, value);
+        unpack(value, bridged);
+        bridged.chart_quality = p.chart_quality;
+        bridged.chart_sign = p.chart_sign;
+        bridged.chart_id = p.chart_id;
+        bridged.dTF = p.dTF;
+        bridged.singular = p.singular;
+        bridged.bridge = index;
+        result.points.assign(k, bridged);
+      }
+      for (size_t c = 0; c < result.components.size(); ++c)
+        if (b.diverging[c]) result.diverging[c] = true;
+      result.bridges.push_back(std::move(b));
+      return true;
+    };
+    for (size_t j = 0; j < candidates.size(); ++j)
+      for (const double factor : {1.0, 0.5, 2.0, 4.0})  // the first with a consistent drive
+        if (bridge_at(j, factor)) break;
+  }
   result.chart_switches = ws.dual.switch_count;
   result.reversals = reversals;
   if (options.progress) options.progress(1.0);
   return result;
+}
+
+bool drive_reported(const DrivenPointView& p) { return p.bridge >= 0 || !p.singular; }
+
+bool component_reported(const CycleResult& result, const DrivenPointView& p,
+                        std::size_t component) {
+  if (p.bridge < 0) return !p.singular;
+  const auto& diverging = result.bridges.at(static_cast<size_t>(p.bridge)).diverging;
+  return !diverging.at(component);
 }
 
 std::vector<ReactionMagnitude> reaction_magnitudes(const CycleResult& result) {
@@ -892,6 +1283,13 @@ std::vector<ReactionMagnitude> reaction_magnitudes(const CycleResult& result) {
   return out;
 }
 
+bool magnitude_reported(const CycleResult& result, const DrivenPointView& p,
+                        const ReactionMagnitude& m) {
+  for (const int c : m.components)
+    if (!component_reported(result, p, static_cast<size_t>(c))) return false;
+  return true;
+}
+
 double magnitude_at(const DrivenPointView& p, const ReactionMagnitude& m) {
   double sum = 0.0;
   for (const int c : m.components)
@@ -899,30 +1297,69 @@ double magnitude_at(const DrivenPointView& p, const ReactionMagnitude& m) {
   return std::sqrt(sum);
 }
 
+namespace {
+
+// Max, min, peak |x| and RMS of value(p) over the positions where reported(p).
+// A fresh summary of one series (name, unit, determinacy; everything else accumulated).
+SeriesSummary series(std::string name, std::string unit, bool determinate) {
+  SeriesSummary s;
+  s.name = std::move(name);
+  s.unit = std::move(unit);
+  s.determinate = determinate;
+  return s;
+}
+
+template <class Value, class Reported>
+SeriesSummary summarize_series(const CycleResult& result, SeriesSummary s, Value value,
+                               Reported reported) {
+  double sum2 = 0.0;
+  for (const DrivenPointView& p : result.points) {
+    if (!reported(p)) continue;
+    const double v = value(p);
+    sum2 += v * v;
+    const bool first = s.samples++ == 0;
+    if (first || std::abs(v) > s.peak) {
+      s.peak = std::abs(v);
+      s.peak_input = p.input;
+      s.peak_time = p.time;
+    }
+    if (first || v > s.max.value) s.max = {v, p.input, p.time};
+    if (first || v < s.min.value) s.min = {v, p.input, p.time};
+  }
+  s.rms = s.samples > 0 ? std::sqrt(sum2 / s.samples) : 0.0;
+  return s;
+}
+
+}  // namespace
+
 std::vector<SeriesSummary> summarize_cycle(const CycleResult& result,
                                            const std::vector<ReactionMagnitude>& magnitudes,
                                            const std::string& drive_unit) {
   std::vector<SeriesSummary> out;
-  auto summarize = [&](SeriesSummary s, auto value) {
-    double sum2 = 0.0;
-    for (const DrivenPointView& p : result.points) {
-      if (p.singular) continue;
-      const double v = value(p);
-      sum2 += v * v;
-      if (s.samples++ == 0 || std::abs(v) > s.peak) {
-        s.peak = std::abs(v);
-        s.peak_input = p.input;
-        s.peak_time = p.time;
-      }
-    }
-    s.rms = s.samples > 0 ? std::sqrt(sum2 / s.samples) : 0.0;
-    out.push_back(std::move(s));
-  };
-  summarize(SeriesSummary{"drive", drive_unit, true},
-            [](const DrivenPointView& p) { return p.drive; });
-  for (const ReactionMagnitude& m : magnitudes)
-    summarize(SeriesSummary{m.name, m.unit, m.determinate},
-              [&](const DrivenPointView& p) { return magnitude_at(p, m); });
+  out.push_back(summarize_series(
+      result, series("drive", drive_unit, true), [](const DrivenPointView& p) { return p.drive; },
+      drive_reported));
+  for (const ReactionMagnitude& m : magnitudes) {
+    SeriesSummary s = series(m.name, m.unit, m.determinate);
+    for (const int c : m.components)
+      if (!result.diverging.empty() && result.diverging[static_cast<size_t>(c)]) s.diverges = true;
+    out.push_back(summarize_series(
+        result, std::move(s), [&](const DrivenPointView& p) { return magnitude_at(p, m); },
+        [&](const DrivenPointView& p) { return magnitude_reported(result, p, m); }));
+  }
+  return out;
+}
+
+std::vector<SeriesSummary> summarize_components(const CycleResult& result) {
+  std::vector<SeriesSummary> out;
+  for (size_t i = 0; i < result.components.size(); ++i) {
+    SeriesSummary s = series(result.components[i].name, result.components[i].unit,
+                             result.determinate.empty() || result.determinate[i]);
+    s.diverges = !result.diverging.empty() && result.diverging[i];
+    out.push_back(summarize_series(
+        result, std::move(s), [i](const DrivenPointView& p) { return p.reactions[i]; },
+        [&](const DrivenPointView& p) { return component_reported(result, p, i); }));
+  }
   return out;
 }
 

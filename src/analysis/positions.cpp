@@ -4,6 +4,7 @@
 
 #include "orthomech/constraints/joints.hpp"
 #include "orthomech/model/free_system.hpp"
+#include "orthomech/model/measures.hpp"
 #include "orthomech/projection/dual.hpp"
 #include "orthomech/projection/primal.hpp"
 
@@ -32,11 +33,20 @@ SolveResult project_positions(const Model& model, VecX& q, const PositionOptions
   Chart chart;
   ChartOptions chart_options;
   VecX du(model.n);
+  const bool locked = options.locked_joint >= 0;
+  VecX d(model.n);  // gradient of the held joint coordinate
   double previous = std::numeric_limits<double>::infinity();
   int stalled = 0;
   for (int it = 0;; ++it) {
     compute_constraint_residual(model, q, f);
     result.residual = f.size() ? f.cwiseAbs().maxCoeff() : 0.0;
+    double lock_residual = 0.0;
+    if (locked) {
+      lock_residual =
+          compute_scalar(model, JointCoordinate{options.locked_joint}, q, nullptr, d).value -
+          options.locked_value;
+      result.residual = std::max(result.residual, std::abs(lock_residual));
+    }
     result.iterations = it;
     if (!std::isfinite(result.residual)) {
       result.status = SolveStatus::not_converged;
@@ -62,15 +72,28 @@ SolveResult project_positions(const Model& model, VecX& q, const PositionOptions
       result.message = "constraint Jacobian is zero";
       return result;
     }
-    MatX Er(r, model.n);
-    VecX fr(r);
+    const int rows = locked ? r + 1 : r;
+    MatX Er(rows, model.n);
+    VecX fr(rows);
     for (int i = 0; i < r; ++i) {
       Er.row(i) = Et.row(chart.rows[static_cast<size_t>(i)]);
       fr(i) = f(chart.rows[static_cast<size_t>(i)]);
     }
+    if (locked) {  // the held joint's row
+      Er.row(r) = d.transpose();
+      fr(r) = lock_residual;
+    }
     const MatX AEr = A * Er.transpose();
     const MatX Gr = Er * AEr;  // eq. (42) on the independent rows
     const Eigen::LDLT<MatX> ldlt(Gr);
+    if (locked) {  // the held row must be independent of the constraints' rows
+      const VecX D = ldlt.vectorD().cwiseAbs();
+      if (!(D.minCoeff() > 1e-12 * D.maxCoeff())) {
+        result.status = SolveStatus::singular;
+        result.message = "the held joint cannot move the mechanism here";
+        return result;
+      }
+    }
     du = -AEr * ldlt.solve(fr);
     integrate_positions(model, q, du, 1.0);
   }

@@ -13,8 +13,10 @@
 #include <sstream>
 
 #include "../solvers/nlopt_minimize.hpp"
+#include "orthomech/analysis/cycle_metrics.hpp"
 #include "orthomech/analysis/mobility.hpp"
 #include "orthomech/constraints/joints.hpp"
+#include "orthomech/io/units.hpp"
 #include "orthomech/model/free_system.hpp"
 #include "orthomech/model/measures.hpp"
 
@@ -356,12 +358,9 @@ std::string mode_signature(const Model& model, const VecX& q, const std::vector<
                            const std::vector<int>& inputs) {
   std::string sig;
   for (const FourBarLoop& l : loops) {
-    const auto& j1 = std::get<Revolute>(model.joints[static_cast<size_t>(l.joints[1])].kind);
-    const auto& j2 = std::get<Revolute>(model.joints[static_cast<size_t>(l.joints[2])].kind);
-    const auto& j3 = std::get<Revolute>(model.joints[static_cast<size_t>(l.joints[3])].kind);
-    const Vec2 A = world(model, side_on(j1, l.bodies[1]), q);
-    const Vec2 B = world(model, side_on(j2, l.bodies[1]), q);
-    const Vec2 B0 = world(model, side_on(j3, kGround), q);
+    const Vec2 A = world(model, l.at[0], q);
+    const Vec2 B = world(model, l.at[1], q);
+    const Vec2 B0 = world(model, l.at[2], q);
     const Vec2 u = A - B, v = B0 - B;
     sig += (u.x() * v.y() - u.y() * v.x()) >= 0.0 ? '+' : '-';
   }
@@ -433,54 +432,218 @@ GrashofType classify_grashof(double ground, double crank, double coupler, double
 }
 
 std::vector<FourBarLoop> find_four_bar_loops(const Model& model, int input_joint) {
-  struct Edge {
-    int joint, a, b;
+  // 1. Pin ends: the two ends (body, point) of every revolute, merged into pins (union-find):
+  //    the two ends of a joint, and ends at the same point of one body.
+  struct End {
+    int joint, body;
+    PointRef ref;
   };
-  std::vector<Edge> edges;
+  std::vector<End> ends;
   for (size_t j = 0; j < model.joints.size(); ++j)
-    if (const auto* r = std::get_if<Revolute>(&model.joints[j].kind))
-      edges.push_back({static_cast<int>(j), r->pi.body, r->pj.body});
-  auto other = [](const Edge& e, int body) { return e.a == body ? e.b : e.a; };
-  auto touches = [](const Edge& e, int body) { return e.a == body || e.b == body; };
+    if (const auto* r = std::get_if<Revolute>(&model.joints[j].kind)) {
+      ends.push_back({static_cast<int>(j), r->pi.body, r->pi});
+      ends.push_back({static_cast<int>(j), r->pj.body, r->pj});
+    }
+  std::vector<int> parent(ends.size());
+  for (size_t k = 0; k < parent.size(); ++k) parent[k] = static_cast<int>(k);
+  std::function<int(int)> root = [&](int k) {
+    return parent[static_cast<size_t>(k)] == k
+               ? k
+               : parent[static_cast<size_t>(k)] = root(parent[static_cast<size_t>(k)]);
+  };
+  auto unite = [&](int a, int b) { parent[static_cast<size_t>(root(a))] = root(b); };
+  constexpr double kSamePoint = 1e-12;  // m: one pin
+  for (size_t k = 0; k + 1 < ends.size(); k += 2)
+    unite(static_cast<int>(k), static_cast<int>(k + 1));
+  for (size_t a = 0; a < ends.size(); ++a)
+    for (size_t b = a + 1; b < ends.size(); ++b)
+      if (ends[a].body == ends[b].body && (ends[a].ref.s - ends[b].ref.s).norm() < kSamePoint)
+        unite(static_cast<int>(a), static_cast<int>(b));
+  // 2. The links: for each body, its pins and the point of each on it.
+  auto on = [&](int pin, int body) -> const End* {
+    for (size_t k = 0; k < ends.size(); ++k)
+      if (root(static_cast<int>(k)) == pin && ends[k].body == body) return &ends[k];
+    return nullptr;
+  };
+  // A joint at a pin for its name: one that connects the two links meeting there if any.
+  auto joint_at = [&](int pin, int b1, int b2) {
+    int any = -1;
+    for (size_t k = 0; k < ends.size(); ++k) {
+      if (root(static_cast<int>(k)) != pin) continue;
+      const End& e = ends[k];
+      const End& other = ends[k ^ 1U];
+      if ((e.body == b1 && other.body == b2) || (e.body == b2 && other.body == b1)) return e.joint;
+      if (any < 0 || ((e.body == b1 || e.body == b2) && any > e.joint)) any = e.joint;
+    }
+    return any;
+  };
+  std::set<int> pin_set;
+  for (size_t k = 0; k < ends.size(); ++k) pin_set.insert(root(static_cast<int>(k)));
+  std::vector<int> bodies_all = {kGround};
+  for (size_t b = 0; b < model.bodies.size(); ++b) bodies_all.push_back(static_cast<int>(b));
+  std::vector<std::vector<int>> pins_of(bodies_all.size());  // index b + 1
+  for (const int b : bodies_all)
+    for (const int p : pin_set)
+      if (on(p, b)) pins_of[static_cast<size_t>(b + 1)].push_back(p);
+  auto has = [&](int body, int pin) {
+    const auto& v = pins_of[static_cast<size_t>(body + 1)];
+    return std::find(v.begin(), v.end(), pin) != v.end();
+  };
+  // 3. Distance of every body from the ground in the joint graph (for a floating loop's frame).
+  std::vector<int> dist(bodies_all.size(), 1 << 20);
+  dist[0] = 0;
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (const int p : pin_set)
+      for (const int a : bodies_all)
+        for (const int b : bodies_all)
+          if (has(a, p) && has(b, p) &&
+              dist[static_cast<size_t>(a + 1)] + 1 < dist[static_cast<size_t>(b + 1)]) {
+            dist[static_cast<size_t>(b + 1)] = dist[static_cast<size_t>(a + 1)] + 1;
+            changed = true;
+          }
+  }
+  // 4. Every cycle of four pins through four distinct links.
   std::vector<FourBarLoop> loops;
   std::set<std::vector<int>> seen;
-  for (const Edge& g1 : edges) {
-    if (!touches(g1, kGround)) continue;
+  const double L_tol = 1e-12;
+  for (const int b0 : bodies_all)
+    for (const int p0 : pins_of[static_cast<size_t>(b0 + 1)])
+      for (const int p1 : pins_of[static_cast<size_t>(b0 + 1)]) {
+        if (p1 == p0) continue;
+        for (const int b1 : bodies_all) {
+          if (b1 == b0 || !has(b1, p1)) continue;
+          for (const int p2 : pins_of[static_cast<size_t>(b1 + 1)]) {
+            if (p2 == p1 || p2 == p0) continue;
+            for (const int b2 : bodies_all) {
+              if (b2 == b0 || b2 == b1 || !has(b2, p2)) continue;
+              for (const int p3 : pins_of[static_cast<size_t>(b2 + 1)]) {
+                if (p3 == p2 || p3 == p1 || p3 == p0) continue;
+                for (const int b3 : bodies_all) {
+                  if (b3 == b0 || b3 == b1 || b3 == b2 || !has(b3, p3) || !has(b3, p0)) continue;
+                  std::vector<int> key = {p0, p1, p2, p3};
+                  std::sort(key.begin(), key.end());
+                  std::vector<int> kb = {b0, b1, b2, b3};
+                  std::sort(kb.begin(), kb.end());
+                  key.insert(key.end(), kb.begin(), kb.end());
+                  if (!seen.insert(key).second) continue;
+                  // Ring of links b0 (p0–p1), b1 (p1–p2), b2 (p2–p3), b3 (p3–p0); rotate it
+                  // so that the frame comes first.
+                  int ring_b[4] = {b0, b1, b2, b3}, ring_p[4] = {p0, p1, p2, p3};
+                  int f = 0;
+                  for (int k = 1; k < 4; ++k) {
+                    const auto dk = dist[static_cast<size_t>(ring_b[k] + 1)];
+                    const auto df = dist[static_cast<size_t>(ring_b[f] + 1)];
+                    if (dk < df || (dk == df && ring_b[k] < ring_b[f])) f = k;
+                  }
+                  // Frame F = ring_b[f] between pins ring_p[f] and ring_p[f+1]: the loop
+                  // F —P0— X —P1— Y —P2— Z —P3— F with P0 = ring_p[f+1], going forward.
+                  int B[4], P[4];
+                  for (int k = 0; k < 4; ++k) {
+                    B[k] = ring_b[(f + k) % 4];
+                    P[k] = ring_p[(f + k + 1) % 4];
+                  }
+                  // B = {F, X, Y, Z}; pins: P[0] = F∩X, P[1] = X∩Y, P[2] = Y∩Z, P[3] = Z∩F.
+                  int J[4] = {joint_at(P[0], B[0], B[1]), joint_at(P[1], B[1], B[2]),
+                              joint_at(P[2], B[2], B[3]), joint_at(P[3], B[3], B[0])};
+                  auto input_at = [&](int pin) {
+                    for (size_t k = 0; k < ends.size(); ++k)
+                      if (ends[k].joint == input_joint && root(static_cast<int>(k)) == pin)
+                        return true;
+                    return false;
+                  };
+                  const bool input_at_3 = input_joint >= 0 && input_at(P[3]);
+                  const bool input_at_0 = input_joint >= 0 && input_at(P[0]);
+                  const bool flip = input_at_3 || (!input_at_0 && J[3] < J[0]);
+                  if (flip) {  // F —P3— Z —P2— Y —P1— X —P0— F
+                    std::swap(B[1], B[3]);
+                    std::swap(P[0], P[3]);
+                    std::swap(P[1], P[2]);
+                    std::swap(J[0], J[3]);
+                    std::swap(J[1], J[2]);
+                  }
+                  FourBarLoop l;
+                  std::copy(J, J + 4, l.joints);
+                  l.bodies[0] = B[1], l.bodies[1] = B[2], l.bodies[2] = B[3];
+                  l.frame = B[0];
+                  l.at[0] = on(P[1], B[2])->ref;
+                  l.at[1] = on(P[2], B[2])->ref;
+                  l.at[2] = on(P[3], B[3])->ref;
+                  auto length = [&](int body, int pa, int pb) {
+                    return (on(pa, body)->ref.s - on(pb, body)->ref.s).norm();
+                  };
+                  l.ground = length(B[0], P[0], P[3]);
+                  l.crank = length(B[1], P[0], P[1]);
+                  l.coupler = length(B[2], P[1], P[2]);
+                  l.follower = length(B[3], P[2], P[3]);
+                  if (std::min({l.ground, l.crank, l.coupler, l.follower}) < L_tol) continue;
+                  l.type = classify_grashof(l.ground, l.crank, l.coupler, l.follower);
+                  loops.push_back(l);
+                }
+              }
+            }
+          }
+        }
+      }
+  return loops;
+}
+
+int loop_basis_size(const Model& model) {
+  int edges = 0;
+  for (const Joint& j : model.joints)
+    if (std::holds_alternative<Revolute>(j.kind) || std::holds_alternative<Prismatic>(j.kind))
+      ++edges;
+  return edges - static_cast<int>(model.bodies.size() + 1) + 1;  // j − b + 1, b with the ground
+}
+
+double transmission_angle(const Model& model, const FourBarLoop& l, const VecX& q) {
+  const Vec2 A = world(model, l.at[0], q);   // crank–coupler pin
+  const Vec2 B = world(model, l.at[1], q);   // coupler–follower pin
+  const Vec2 B0 = world(model, l.at[2], q);  // follower's frame pivot
+  const Vec2 u = A - B, v = B0 - B;
+  return std::atan2(std::abs(u.x() * v.y() - u.y() * v.x()), u.dot(v));
+}
+
+std::vector<SliderCrankLoop> find_slider_crank_loops(const Model& model) {
+  // The joint graph with bodies as nodes: revolutes and prismatics as edges.
+  struct Edge {
+    int joint, a, b;
+    bool prismatic;
+  };
+  std::vector<Edge> edges;
+  for (size_t j = 0; j < model.joints.size(); ++j) {
+    if (const auto* r = std::get_if<Revolute>(&model.joints[j].kind))
+      edges.push_back({static_cast<int>(j), r->pi.body, r->pj.body, false});
+    else if (const auto* p = std::get_if<Prismatic>(&model.joints[j].kind))
+      edges.push_back({static_cast<int>(j), p->pi.body, p->pj.body, true});
+  }
+  auto other = [](const Edge& e, int body) { return e.a == body ? e.b : e.a; };
+  auto touches = [](const Edge& e, int body) { return e.a == body || e.b == body; };
+  auto pin = [&](int joint) -> const Revolute& {
+    return std::get<Revolute>(model.joints[static_cast<size_t>(joint)].kind);
+  };
+  std::vector<SliderCrankLoop> loops;
+  for (const Edge& g1 : edges) {  // ground —rev— crank
+    if (g1.prismatic || !touches(g1, kGround)) continue;
     const int X = other(g1, kGround);
-    for (const Edge& e2 : edges) {
-      if (e2.joint == g1.joint || !touches(e2, X)) continue;
+    for (const Edge& e2 : edges) {  // crank —rev— rod
+      if (e2.prismatic || e2.joint == g1.joint || !touches(e2, X)) continue;
       const int Y = other(e2, X);
       if (Y == kGround || Y == X) continue;
-      for (const Edge& e3 : edges) {
-        if (e3.joint == e2.joint || e3.joint == g1.joint || !touches(e3, Y)) continue;
+      for (const Edge& e3 : edges) {  // rod —rev— slider
+        if (e3.prismatic || e3.joint == e2.joint || e3.joint == g1.joint || !touches(e3, Y))
+          continue;
         const int Z = other(e3, Y);
         if (Z == kGround || Z == X || Z == Y) continue;
-        for (const Edge& g4 : edges) {
-          if (g4.joint == g1.joint || g4.joint == e2.joint || g4.joint == e3.joint) continue;
-          if (!touches(g4, Z) || other(g4, Z) != kGround) continue;
-          std::vector<int> key = {g1.joint, e2.joint, e3.joint, g4.joint};
-          std::sort(key.begin(), key.end());
-          if (!seen.insert(key).second) continue;
-          FourBarLoop l;
-          int J[4] = {g1.joint, e2.joint, e3.joint, g4.joint};
-          int Bd[3] = {X, Y, Z};
-          // The input pivot first; otherwise the lower joint index.
-          const bool flip = J[3] == input_joint || (J[0] != input_joint && J[3] < J[0]);
-          if (flip) {
-            std::swap(J[0], J[3]);
-            std::swap(J[1], J[2]);
-            std::swap(Bd[0], Bd[2]);
-          }
-          for (int k = 0; k < 4; ++k) l.joints[k] = J[k];
-          for (int k = 0; k < 3; ++k) l.bodies[k] = Bd[k];
-          auto rev = [&](int k) -> const Revolute& {
-            return std::get<Revolute>(model.joints[static_cast<size_t>(J[k])].kind);
-          };
-          l.ground = (side_on(rev(0), kGround).s - side_on(rev(3), kGround).s).norm();
-          l.crank = (side_on(rev(0), Bd[0]).s - side_on(rev(1), Bd[0]).s).norm();
-          l.coupler = (side_on(rev(1), Bd[1]).s - side_on(rev(2), Bd[1]).s).norm();
-          l.follower = (side_on(rev(2), Bd[2]).s - side_on(rev(3), Bd[2]).s).norm();
-          l.type = classify_grashof(l.ground, l.crank, l.coupler, l.follower);
+        for (const Edge& g4 : edges) {  // slider —prismatic— ground
+          if (!g4.prismatic || !touches(g4, Z) || other(g4, Z) != kGround) continue;
+          SliderCrankLoop l;
+          const int J[4] = {g1.joint, e2.joint, e3.joint, g4.joint};
+          const int Bd[3] = {X, Y, Z};
+          std::copy(J, J + 4, l.joints);
+          std::copy(Bd, Bd + 3, l.bodies);
+          l.crank = (side_on(pin(J[0]), X).s - side_on(pin(J[1]), X).s).norm();
+          l.rod = (side_on(pin(J[1]), Y).s - side_on(pin(J[2]), Y).s).norm();
           loops.push_back(l);
         }
       }
@@ -489,15 +652,32 @@ std::vector<FourBarLoop> find_four_bar_loops(const Model& model, int input_joint
   return loops;
 }
 
-double transmission_angle(const Model& model, const FourBarLoop& l, const VecX& q) {
+double pressure_angle(const Model& model, const SliderCrankLoop& l, const VecX& q) {
   const auto& j1 = std::get<Revolute>(model.joints[static_cast<size_t>(l.joints[1])].kind);
   const auto& j2 = std::get<Revolute>(model.joints[static_cast<size_t>(l.joints[2])].kind);
-  const auto& j3 = std::get<Revolute>(model.joints[static_cast<size_t>(l.joints[3])].kind);
-  const Vec2 A = world(model, side_on(j1, l.bodies[1]), q);  // crank–coupler joint
-  const Vec2 B = world(model, side_on(j2, l.bodies[1]), q);  // coupler–follower joint
-  const Vec2 B0 = world(model, side_on(j3, kGround), q);     // follower's ground pivot
-  const Vec2 u = A - B, v = B0 - B;
-  return std::atan2(std::abs(u.x() * v.y() - u.y() * v.x()), u.dot(v));
+  const auto& slide = std::get<Prismatic>(model.joints[static_cast<size_t>(l.joints[3])].kind);
+  const Vec2 A = world(model, side_on(j1, l.bodies[1]), q);  // crank pin
+  const Vec2 B = world(model, side_on(j2, l.bodies[1]), q);  // wrist pin
+  // The slide axis in the world: axis_local turns with body i of the prismatic joint.
+  const Vec2 axis = slide.pi.body == kGround
+                        ? slide.axis_local
+                        : Vec2(rotation(body_angle(model, slide.pi.body, q)) * slide.axis_local);
+  const Vec2 u = B - A;
+  return std::atan2(std::abs(u.x() * axis.y() - u.y() * axis.x()), std::abs(u.dot(axis)));
+}
+
+std::vector<LimitBlock> find_limit_blocks(const Model& model, const VecX& q_guess,
+                                          const AssemblyOptions& options) {
+  std::vector<LimitBlock> out;
+  if (!options.use_limits) return out;
+  AssemblyOptions free = options;
+  free.use_limits = false;
+  const AssemblyResult a = assemble(model, q_guess, free);
+  if (a.status != AssemblyStatus::assembled && a.status != AssemblyStatus::unchanged) return out;
+  for (size_t j = 0; j < model.joints.size(); ++j)
+    if (outside_limits(model, static_cast<int>(j), a.q))
+      out.push_back({static_cast<int>(j), limit_coordinate(model, static_cast<int>(j), a.q)});
+  return out;
 }
 
 SingularityMeasures singularity_measures(const Model& model, const VecX& q,
@@ -558,6 +738,7 @@ ValidationReport validate_design_positions(const Model& model, const ValidateOpt
   if (!common) input = -1;
   if (input >= 0) rep.input = model.joints[static_cast<size_t>(input)].name;
   const std::vector<FourBarLoop> loops = find_four_bar_loops(model, input);
+  const std::vector<SliderCrankLoop> slider_cranks = find_slider_crank_loops(model);
 
   // Generic rank: at the assembled design pose and at every position (max).
   {
@@ -582,6 +763,14 @@ ValidationReport validate_design_positions(const Model& model, const ValidateOpt
     pr.assembly_message = a.message;
     pr.assembles = a.status == AssemblyStatus::assembled || a.status == AssemblyStatus::unchanged;
     if (!pr.assembles) {
+      pr.limit_blocks = find_limit_blocks(model, q_design, ao);
+      for (const LimitBlock& b : pr.limit_blocks) {
+        const Joint& jt = model.joints[static_cast<size_t>(b.joint)];
+        const bool rev = std::holds_alternative<Revolute>(jt.kind);
+        pr.failures.push_back("joint '" + jt.name + "' would need " + format_input(b.needed, rev) +
+                              ", outside its limits [" + format_input(jt.limits->x(), rev) + ", " +
+                              format_input(jt.limits->y(), rev) + "]");
+      }
       pr.failures.push_back("does not assemble: " + a.message);
       rep.positions.push_back(std::move(pr));
       continue;
@@ -688,6 +877,18 @@ ValidationReport validate_design_positions(const Model& model, const ValidateOpt
                               fmt(180.0 - opt.min_transmission * 180.0 / kPi) + " deg)");
       pr.four_bars.push_back(fb);
     }
+    for (const SliderCrankLoop& l : slider_cranks) {
+      SliderCrankReport sc;
+      for (int j = 0; j < 4; ++j)
+        sc.joints += (j ? "-" : "") + model.joints[static_cast<size_t>(l.joints[j])].name;
+      sc.pressure = pressure_angle(model, l, pr.q);
+      sc.ok = sc.pressure <= kPi / 2.0 - opt.min_transmission;
+      if (!sc.ok)
+        pr.failures.push_back("pressure angle " + fmt(sc.pressure * 180.0 / kPi) +
+                              " deg in slider-crank loop " + sc.joints + " (needs at most " +
+                              fmt(90.0 - opt.min_transmission * 180.0 / kPi) + " deg)");
+      pr.slider_cranks.push_back(sc);
+    }
   }
 
   // Order defect: the input must move monotonically through the positions, in the given order
@@ -743,8 +944,8 @@ ValidationReport validate_design_positions(const Model& model, const ValidateOpt
         where[k] = 0.0;
         for (const SingularPoint& sp : circuits.back().singular)
           rep.singular_points.push_back(sp.kind + " of input '" + rep.input + "' at " +
-                                        fmt(sp.s, 10) + " on circuit " +
-                                        std::to_string(pr.circuit));
+                                        format_input(sp.s, is_revolute(model, input)) +
+                                        " on circuit " + std::to_string(pr.circuit));
       }
       if (pr.circuit < 0) continue;
       const Circuit& c = circuits[static_cast<size_t>(pr.circuit - 1)];

@@ -17,8 +17,11 @@ namespace {
 
 // ‖a − b‖∞ / max(‖a‖∞, ‖b‖∞, floor): relative difference with a floor for quantities that
 // vanish (e.g. accelerations at rest); floor = 1e-300 gives the pure relative value.
+// The scale is at least 1e-300, so that two zeros (a mechanism at rest without loads) compare
+// as 0, not 0/0.
 double relative(const MatX& a, const MatX& b, double floor) {
-  const double scale = std::max({a.cwiseAbs().maxCoeff(), b.cwiseAbs().maxCoeff(), floor});
+  if (a.size() == 0) return 0.0;
+  const double scale = std::max({a.cwiseAbs().maxCoeff(), b.cwiseAbs().maxCoeff(), floor, 1e-300});
   return (a - b).cwiseAbs().maxCoeff() / scale;
 }
 // ‖x‖∞ / scale for an identity x = 0 whose terms are of size `scale`.
@@ -60,6 +63,7 @@ CrosscheckResult run_crosscheck(const Model& model, const CrosscheckOptions& opt
   so.atol = 1e-11;
   so.dt_out = options.t_end / std::max(1, options.samples - 1);
   so.reactions = false;
+  so.use_file_rates = false;  // the seeded guess below, not the file's initial rates
   std::mt19937 rng(options.seed);
   std::uniform_real_distribution<double> uni(-1.0, 1.0);
   so.initial_u = VecX(n);
@@ -72,9 +76,17 @@ CrosscheckResult run_crosscheck(const Model& model, const CrosscheckOptions& opt
   if (motion.status != SimulateStatus::completed)
     result.message = "the motion stopped early (" + motion.message + "); checked the states before";
 
-  // 2. Rank on the branch (at the first state).
+  // 2. Rank on the branch (at the first state). Without joints or without a degree of freedom
+  //    there is no projection to compare (α = I, or no motion at all): said, not computed.
   const Mobility mob = compute_mobility(model, motion.samples.front().q);
   result.rank = mob.rank;
+  if (model.nc == 0 || mob.dof == 0) {
+    result.message = model.nc == 0 ? "the mechanism has no joints: the dual and the primal form "
+                                     "are both the free system, there is nothing to cross-check"
+                                   : "the mechanism has no degree of freedom (DOF 0): it cannot "
+                                     "move, there is no motion to cross-check";
+    return result;
+  }
   Workspace wd(model, mob.rank), wp(model, mob.rank);
   DynamicsPoint dd(model), dp(model);
   Recorder rec(options.tolerance);

@@ -8,6 +8,10 @@
 namespace orthomech {
 
 void compute_multipliers(const MatX& Et, const VecX& R, VecX& lambda) {
+  if (Et.rows() == 0) {  // no constraint, no multiplier (Eigen's QR fails on empty matrices)
+    lambda.resize(0);
+    return;
+  }
   const MatX E = Et.transpose();
   const Eigen::CompleteOrthogonalDecomposition<MatX> cod(E);
   lambda = cod.solve(R);

@@ -5,6 +5,14 @@
 // The integrators of simulate step manually so that the state can be corrected after every
 // accepted step (position correction, chart switch): after `accept` changes x the stepper is
 // re-initialised (its first-same-as-last derivative is recomputed).
+//
+// Output times (issue 10, item 5): every output is at the integrator's own accuracy.
+//   - dopri5, bulirsch_stoer: the stepper's dense output between step ends (Dormand–Prince's
+//     continuous extension of order 4 [Hairer, Nørsett, Wanner I, §II.6]; the Bulirsch–Stoer
+//     extrapolation's Hermite interpolation of order 2k + 1 with its own error check
+//     [Hairer, Nørsett, Wanner I, §II.9]).
+//   - rkf78, rosenbrock4 (no dense output of their order): the step is shortened to land on the
+//     next output time, so every output is a step end (corrected like any other step end).
 #include <functional>
 #include <string>
 
@@ -12,7 +20,12 @@
 
 namespace orthomech::detail {
 
-enum class OdeStepper { dopri5, rkf78 };
+enum class OdeStepper {
+  dopri5,          // Dormand–Prince 5(4), dense output
+  rkf78,           // Runge–Kutta–Fehlberg 7(8), lands on the output times
+  bulirsch_stoer,  // Bulirsch–Stoer extrapolation (orders up to 16), dense output
+  rosenbrock4,     // Rosenbrock 4(3), L-stable (stiff), Jacobian by central differences
+};
 
 struct OdeProblem {
   // dx/dt at (x, t).
@@ -40,10 +53,21 @@ struct OdeStats {
   std::string message;  // why it stopped early
   double t = 0.0;       // time reached
   long steps = 0;       // accepted steps
+  long rejected = 0;    // rejected step attempts (controlled steppers; 0 for the dense ones)
+  long jacobians = 0;   // Jacobians evaluated (rosenbrock4)
 };
 
 // Integrates from (t0, x) to t_end; x holds the final (corrected) state. Never throws for
 // numerical trouble (odeint's step-size exceptions become a message).
 OdeStats integrate_ode(const OdeProblem& problem, VecX& x, const OdeOptions& options);
+
+// Jacobian ∂f/∂x and ∂f/∂t of problem.rhs at (x, t) by central differences, step
+// h_j = ∛ε · max(1, |x_j|) (truncation O(h²) and rounding O(ε/h) balanced: ~1e-11 relative for a
+// smooth f) [Nocedal & Wright 2006, §8.1]. Costs 2·(dim x + 1) evaluations of f. Buffers are the
+// caller's (no allocation after the first call with a given size).
+struct FiniteDifferenceJacobian {
+  VecX xp, fp, fm;
+  void compute(const OdeProblem& problem, const VecX& x, double t, MatX& J, VecX& dfdt);
+};
 
 }  // namespace orthomech::detail

@@ -37,7 +37,45 @@ const char* to_string(SimulateStatus s) {
   return "?";
 }
 
+const char* to_string(Integrator i) {
+  switch (i) {
+    case Integrator::dopri5:
+      return "dopri5";
+    case Integrator::rkf78:
+      return "rkf78";
+    case Integrator::bulirsch_stoer:
+      return "bulirsch-stoer";
+    case Integrator::rosenbrock4:
+      return "rosenbrock4";
+  }
+  return "?";
+}
+
+bool parse_integrator(const std::string& name, Integrator& out) {
+  for (const Integrator i :
+       {Integrator::dopri5, Integrator::rkf78, Integrator::bulirsch_stoer, Integrator::rosenbrock4})
+    if (name == to_string(i)) {
+      out = i;
+      return true;
+    }
+  return false;
+}
+
 namespace {
+
+detail::OdeStepper ode_stepper(Integrator i) {
+  switch (i) {
+    case Integrator::dopri5:
+      return detail::OdeStepper::dopri5;
+    case Integrator::rkf78:
+      return detail::OdeStepper::rkf78;
+    case Integrator::bulirsch_stoer:
+      return detail::OdeStepper::bulirsch_stoer;
+    case Integrator::rosenbrock4:
+      return detail::OdeStepper::rosenbrock4;
+  }
+  return detail::OdeStepper::dopri5;
+}
 
 using detail::ChartSolver;
 
@@ -427,6 +465,12 @@ SimulateResult simulate(const Model& model, const SimulateOptions& options) {
   State s(model);
   s.q = model.design_q();
   if (options.initial_u.size() == model.n) s.u = options.initial_u;
+  if (options.initial_rates.empty() && options.use_file_rates && !model.initial.rates.empty()) {
+    SimulateOptions with_file_rates = options;  // the file's initial rates (Model::initial)
+    for (const InitialRateSpec& r : model.initial.rates)
+      with_file_rates.initial_rates.push_back({r.measure, r.rate});
+    return simulate(model, s, with_file_rates);
+  }
   return simulate(model, s, options);
 }
 
@@ -829,8 +873,7 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
   }
 
   detail::OdeOptions base;
-  base.stepper = options.integrator == Integrator::dopri5 ? detail::OdeStepper::dopri5
-                                                          : detail::OdeStepper::rkf78;
+  base.stepper = ode_stepper(options.integrator);
   base.rtol = options.rtol;
   base.atol = options.atol;
   base.max_dt = options.max_step;
@@ -840,6 +883,7 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
   // that the integrator's output clock (t0 + k·dt_out) hits the grid times. Stops early when
   // `accept` stops it (a change point ahead, or a failed check).
   double t_now = T0;
+  long rejected_steps = 0, jacobians = 0;  // summed over the segments
   const auto run_to = [&](double t_e, double max_dt) {
     detail::OdeStats st;
     st.completed = true;
@@ -862,6 +906,8 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
       }
       if (oo.dt_init > 0.0 && oo.dt_init > oo.t_end - t_now) oo.dt_init = oo.t_end - t_now;
       st = detail::integrate_ode(problem, x, oo);
+      rejected_steps += st.rejected;
+      jacobians += st.jacobians;
       if (st.completed) st.t = oo.t_end;
       t_now = st.t;
       // An output time at a stop (accept stopped the integrator before its output there).
@@ -1159,6 +1205,8 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
     failure = e.message;
   }
   result.evaluations = evaluations;
+  result.rejected_steps = rejected_steps;
+  result.jacobians = jacobians;
   if (!failure.empty()) {
     result.status = failure_status;
     result.message = failure;

@@ -1,12 +1,16 @@
 #include "orthomech/io/cycle_output.hpp"
 
+#include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <numbers>
 #include <sstream>
 #include <stdexcept>
+
+#include "orthomech/analysis/cycle_metrics.hpp"
 
 namespace orthomech {
 
@@ -54,85 +58,208 @@ void write_file_atomically(const std::filesystem::path& file, const std::string&
   }
 }
 
+std::vector<PositionColumn> position_columns(const Model& model) {
+  std::vector<PositionColumn> cols;
+  for (const Body& b : model.bodies) {
+    cols.push_back({b.name + ".x", Dimension::length});
+    cols.push_back({b.name + ".y", Dimension::length});
+    if (b.kind == BodyKind::rigid) cols.push_back({b.name + ".angle", Dimension::angle});
+  }
+  for (const Body& b : model.bodies)
+    for (const auto& [name, local] : b.points) {
+      cols.push_back({b.name + "." + name + ".x", Dimension::length});
+      cols.push_back({b.name + "." + name + ".y", Dimension::length});
+    }
+  return cols;
+}
+
+void compute_output_positions(const Model& model, const VecX& q, std::vector<double>& out) {
+  out.clear();
+  // The body frame: q holds the centre of mass r_c and the angle φ; the frame's origin is
+  // r_o = r_c − R(φ) c, c the centre of mass in the body frame; a point p of the body is at
+  // r_o + R(φ) p.
+  auto frame = [&](const Body& b, Vec2& origin, Eigen::Matrix2d& R) {
+    const double phi = b.kind == BodyKind::rigid ? q(b.q_offset + 2) : 0.0;
+    R << std::cos(phi), -std::sin(phi), std::sin(phi), std::cos(phi);
+    origin = Vec2(q(b.q_offset), q(b.q_offset + 1)) - R * b.com_local;
+    return phi;
+  };
+  Vec2 origin;
+  Eigen::Matrix2d R;
+  for (const Body& b : model.bodies) {
+    const double phi = frame(b, origin, R);
+    out.push_back(origin.x());
+    out.push_back(origin.y());
+    if (b.kind == BodyKind::rigid) out.push_back(phi);
+  }
+  for (const Body& b : model.bodies) {
+    frame(b, origin, R);
+    for (const auto& [name, local] : b.points) {
+      const Vec2 r = origin + R * local;
+      out.push_back(r.x());
+      out.push_back(r.y());
+    }
+  }
+}
+
 CycleColumns write_cycle_csv(const std::filesystem::path& file, const Model& model,
                              const CycleResult& result,
                              const std::vector<ReactionMagnitude>& magnitudes, bool angular,
-                             const std::string& drive_unit) {
+                             const UnitSystem& units) {
   CycleColumns cols;
   std::ostringstream out;
   int col = 0;
-  out << (angular ? "input [rad],input [deg]" : "input [m],input [mm]") << ",time [s]";
-  col = 3;
-  for (const Measure& m : model.measures) out << ',' << field(m.name + " [" + m.unit + "]"), ++col;
+  auto head = [&](const std::string& name, const OutputUnit& unit) {
+    out << (col ? "," : "") << field(name + " [" + unit.name + "]");
+    return ++col;
+  };
+  const OutputUnit input_unit = output_unit(angular ? Dimension::angle : Dimension::length, units);
+  const OutputUnit time_unit = output_unit(Dimension::time, units);
+  const OutputUnit drive_unit = output_unit(angular ? Dimension::moment : Dimension::force, units);
+  cols.input_display = head("input", input_unit);
+  head("time", time_unit);
+  std::vector<OutputUnit> measure_units;
+  for (const Measure& m : model.measures) {
+    measure_units.push_back(output_unit(dimension_of(m.unit), units));
+    head(m.name, measure_units.back());
+  }
+  const std::vector<PositionColumn> positions = position_columns(model);
+  std::vector<OutputUnit> position_units;
+  for (const PositionColumn& c : positions) {
+    position_units.push_back(output_unit(c.dimension, units));
+    head(c.name, position_units.back());
+  }
   // Velocity and acceleration of every body's centre of mass, and angular ones.
   // The columns follow u and u̇ of the body: (vx, vy[, ω]) then (ax, ay[, α]).
-  static const char* const kVelocity[] = {"vx [m/s]", "vy [m/s]", "omega [rad/s]"};
-  static const char* const kAcceleration[] = {"ax [m/s^2]", "ay [m/s^2]", "alpha [rad/s^2]"};
+  static const char* const kVelocity[] = {"vx", "vy", "omega"};
+  static const char* const kAcceleration[] = {"ax", "ay", "alpha"};
+  const OutputUnit v_unit[] = {output_unit(Dimension::velocity, units),
+                               output_unit(Dimension::velocity, units),
+                               output_unit(Dimension::angular_velocity, units)};
+  const OutputUnit a_unit[] = {output_unit(Dimension::acceleration, units),
+                               output_unit(Dimension::acceleration, units),
+                               output_unit(Dimension::angular_acceleration, units)};
   for (const Body& b : model.bodies) {
-    for (int i = 0; i < b.nu(); ++i) out << ',' << field(b.name + "." + kVelocity[i]), ++col;
-    for (int i = 0; i < b.nu(); ++i) out << ',' << field(b.name + "." + kAcceleration[i]), ++col;
+    for (int i = 0; i < b.nu(); ++i) head(b.name + "." + kVelocity[i], v_unit[i]);
+    for (int i = 0; i < b.nu(); ++i) head(b.name + "." + kAcceleration[i], a_unit[i]);
   }
-  out << ",drive [" << drive_unit << "]";
-  cols.drive = ++col;
-  for (const ReactionComponent& c : result.components)
-    out << ',' << field(c.name + " [" + c.unit + "]"), ++col;
+  cols.drive = head("drive", drive_unit);
+  std::vector<OutputUnit> component_units;
+  for (const ReactionComponent& c : result.components) {
+    component_units.push_back(output_unit(dimension_of(c.unit), units));
+    head(c.name, component_units.back());
+  }
+  std::vector<OutputUnit> magnitude_units;
   for (const ReactionMagnitude& m : magnitudes) {
-    out << ',' << field(m.name + " [" + m.unit + "]");
-    cols.magnitudes.push_back(++col);
+    const Dimension qm = dimension_of(m.unit);
+    magnitude_units.push_back(output_unit(qm, units));
+    const int c = head(m.name, magnitude_units.back());
+    cols.magnitudes.push_back(c);
+    (qm == Dimension::force ? cols.forces : cols.moments).push_back(c);
   }
-  out << '\n';
-  const double display = angular ? 180.0 / std::numbers::pi : 1e3;
+  out << ",limits\n";
+  std::vector<double> pose;
   for (const DrivenPointView& p : result.points) {
-    out << number(p.input) << ',' << number(p.input * display) << ',' << number(p.time);
-    for (const double v : p.measures) out << ',' << number(v);
+    out << number(input_unit.from_si(p.input)) << ',' << number(time_unit.from_si(p.time));
+    for (size_t i = 0; i < p.measures.size(); ++i)
+      out << ',' << number(measure_units[i].from_si(p.measures[i]));
+    compute_output_positions(model, VecX(p.q), pose);
+    for (size_t i = 0; i < pose.size(); ++i)
+      out << ',' << number(position_units[i].from_si(pose[i]));
     for (const Body& b : model.bodies) {
-      for (int i = 0; i < b.nu(); ++i) out << ',' << number(p.u(b.u_offset + i));
-      for (int i = 0; i < b.nu(); ++i) out << ',' << number(p.udot(b.u_offset + i));
+      for (int i = 0; i < b.nu(); ++i) out << ',' << number(v_unit[i].from_si(p.u(b.u_offset + i)));
+      for (int i = 0; i < b.nu(); ++i)
+        out << ',' << number(a_unit[i].from_si(p.udot(b.u_offset + i)));
     }
-    if (p.singular) {
+    // Empty cells where a value is not reported (an unbridged change point; a component that
+    // diverges towards the change point a bridged position is next to).
+    out << ',';
+    if (drive_reported(p)) out << number(drive_unit.from_si(p.drive));
+    for (size_t i = 0; i < p.reactions.size(); ++i) {
       out << ',';
-      for (size_t i = 0; i < result.components.size() + magnitudes.size(); ++i) out << ',';
-    } else {
-      out << ',' << number(p.drive);
-      for (const double v : p.reactions) out << ',' << number(v);
-      for (const ReactionMagnitude& m : magnitudes) out << ',' << number(magnitude_at(p, m));
+      if (component_reported(result, p, i))
+        out << number(component_units[i].from_si(p.reactions[i]));
     }
-    out << '\n';
+    for (size_t i = 0; i < magnitudes.size(); ++i) {
+      out << ',';
+      if (magnitude_reported(result, p, magnitudes[i]))
+        out << number(magnitude_units[i].from_si(magnitude_at(p, magnitudes[i])));
+    }
+    std::string outside;
+    for (size_t j = 0; j < model.joints.size(); ++j)
+      if (outside_limits(model, static_cast<int>(j), VecX(p.q)))
+        outside += (outside.empty() ? "" : " ") + model.joints[j].name;
+    out << ',' << field(outside) << '\n';
   }
   write_file_atomically(file, out.str());
   return cols;
 }
 
 void write_cycle_gnuplot(const std::filesystem::path& script, const std::string& csv_name,
-                         const Model& model, const std::vector<ReactionMagnitude>& magnitudes,
-                         const CycleColumns& columns, bool angular, const std::string& drive_unit) {
+                         const Model& model, const CycleResult& result,
+                         const std::vector<ReactionMagnitude>& magnitudes,
+                         const CycleColumns& columns, bool angular, const UnitSystem& units,
+                         const std::string& speed_text) {
   std::ostringstream gp;
-  const std::string x = angular ? "input angle [deg]" : "input displacement [mm]";
+  const OutputUnit input_unit = output_unit(angular ? Dimension::angle : Dimension::length, units);
+  const std::string x =
+      std::string(angular ? "input angle" : "input displacement") + " [" + input_unit.name + "]";
   gp << "# orthomech cycle: drive and joint reactions of " << model.name
      << " versus the input.\n# Run in this directory: gnuplot " << script.filename().string()
      << "\nset datafile separator ','\nset key outside right top\nset grid\n"
      << "set xlabel " << gp_string(x) << "\n";
+  // The input axis over the sweep, from its start.
+  if (result.points.size() >= 2) {
+    double lo = input_unit.from_si(result.points.front().input);
+    double hi = input_unit.from_si(result.points.back().input);
+    if (lo > hi) std::swap(lo, hi);
+    if (hi > lo) gp << "set xrange [" << number(lo) << ":" << number(hi) << "]\n";
+  }
+  // Dead and singular positions: dashed vertical lines.
+  int arrow = 0;
+  for (const auto* events : {&result.dead_points, &result.singular_positions})
+    for (const DeadPoint& d : *events)
+      gp << "set arrow " << ++arrow << " from first " << number(input_unit.from_si(d.input))
+         << ", graph 0 to first " << number(input_unit.from_si(d.input))
+         << ", graph 1 nohead dt 2 lc rgb 'gray40'\n";
+  // Series told apart by colour and dash (more than eight lines stay distinguishable).
+  auto style = [](size_t i) {
+    return " lw 2 lc " + std::to_string(i % 8 + 1) + " dt " + std::to_string(i / 8 % 5 + 1);
+  };
   auto plot_both = [&](const std::string& stem, const std::string& title, const std::string& ylabel,
-                       const std::string& plot) {
+                       const std::string& y2label, const std::string& plot) {
     gp << "set title " << gp_string(title) << "\nset ylabel " << gp_string(ylabel) << '\n';
+    if (y2label.empty())
+      gp << "unset y2label\nunset y2tics\nset ytics mirror\n";
+    else
+      gp << "set y2label " << gp_string(y2label) << "\nset y2tics\nset ytics nomirror\n";
     gp << "set terminal svg size 1000,560 dynamic\nset output " << gp_string(stem + ".svg") << '\n'
        << plot << '\n';
     gp << "set terminal pngcairo size 1000,560\nset output " << gp_string(stem + ".png") << '\n'
        << plot << "\nset output\n";
   };
-  plot_both("drive", model.name + ": drive", "drive [" + drive_unit + "]",
+  const OutputUnit drive_unit = output_unit(angular ? Dimension::moment : Dimension::force, units);
+  const std::string title_tail = speed_text.empty() ? "" : " (" + speed_text + ")";
+  plot_both("drive", model.name + ": drive" + title_tail, "drive [" + drive_unit.name + "]", "",
             "plot " + gp_string(csv_name) + " using " + std::to_string(columns.input_display) +
-                ":" + std::to_string(columns.drive) + " with lines lw 2 title 'drive'");
+                ":" + std::to_string(columns.drive) + " with lines" + style(0) + " title 'drive'");
+  // Forces on the left axis, moments on the right.
+  const std::string force_unit = output_unit(Dimension::force, units).name;
+  const std::string moment_unit = output_unit(Dimension::moment, units).name;
   std::string plot;
   for (size_t i = 0; i < magnitudes.size(); ++i) {
+    const bool moment = std::find(columns.moments.begin(), columns.moments.end(),
+                                  columns.magnitudes[i]) != columns.moments.end();
     plot += (i ? ", \\\n     " : "plot ") + gp_string(i ? std::string() : csv_name) + " using " +
             std::to_string(columns.input_display) + ":" + std::to_string(columns.magnitudes[i]) +
-            " with lines lw 2 title " +
-            gp_string(magnitudes[i].name + " [" + magnitudes[i].unit + "]" +
+            (moment ? " axes x1y2" : "") + " with lines" + style(i) + " title " +
+            gp_string(magnitudes[i].name + " [" + (moment ? moment_unit : force_unit) + "]" +
                       (magnitudes[i].determinate ? "" : " (min-norm)"));
   }
   if (!plot.empty())
-    plot_both("reactions", model.name + ": joint reactions (magnitudes)", "reaction", plot);
+    plot_both("reactions", model.name + ": joint reactions (magnitudes)" + title_tail,
+              "force [" + force_unit + "]",
+              columns.moments.empty() ? "" : "moment [" + moment_unit + "]", plot);
   write_file_atomically(script, gp.str());
 }
 

@@ -20,6 +20,11 @@ namespace orthomech {
 
 namespace {
 
+// Limits of the file beyond the numbers' (docs/file-format.md "Limits").
+constexpr size_t kMaxBodies = 1000;      // the dense rank of E (info) stays within seconds
+constexpr size_t kMaxCoefficients = 16;  // a polynomial driver of degree 15 at most
+constexpr size_t kMaxListItems = 10000;  // joints, loads, measures, drivers, design positions
+
 struct Units {
   double length = 1.0, angle = 1.0, mass = 1.0, time = 1.0, force = 1.0;
 };
@@ -38,9 +43,11 @@ class Reader {
   std::vector<std::pair<std::string, Vec2>> ground_points_;
 
   // ---- error helpers --------------------------------------------------------------------------
+  // A node without a place (the empty document, a key that is missing) is a whole-file matter:
+  // reported at 1:1.
   [[nodiscard]] SourceLocation loc(const YAML::Node& node) const {
     const YAML::Mark m = node.Mark();
-    if (m.is_null()) return {file_, 0, 0};
+    if (m.is_null()) return {file_, 1, 1};
     return {file_, m.line + 1, m.column + 1};
   }
   [[noreturn]] void fail(const YAML::Node& node, const std::string& element,
@@ -73,9 +80,20 @@ class Reader {
     if (child.IsNull()) fail(child, element, "field '" + key + "' is empty");
     return child;
   }
+  // A number: a plain (unquoted, untagged or !!int/!!float-tagged) YAML scalar of at most
+  // kMaxNumberLength characters, finite and within the limits of `quantity` after scaling to SI.
   double number(const YAML::Node& node, const std::string& element, const std::string& field,
-                double scale = 1.0) const {
+                double scale = 1.0, Quantity quantity = Quantity::general) const {
     if (!node.IsScalar()) fail(node, element, "field '" + field + "' must be a number");
+    const std::string& tag = node.Tag();
+    if (tag != "?" && tag != "tag:yaml.org,2002:float" && tag != "tag:yaml.org,2002:int")
+      fail(node, element,
+           "field '" + field + "' must be a number, not a quoted or tagged string (got '" +
+               clip(node.Scalar()) + "')");
+    if (node.Scalar().size() > kMaxNumberLength)
+      fail(node, element,
+           "field '" + field + "' must be a number of at most " + std::to_string(kMaxNumberLength) +
+               " characters");
     double v = 0.0;
     try {
       v = node.as<double>();
@@ -84,16 +102,30 @@ class Reader {
     }
     if (!std::isfinite(v) || !std::isfinite(v * scale))
       fail(node, element, "field '" + field + "' must be finite, got '" + node.Scalar() + "'");
+    if (quantity == Quantity::mass || quantity == Quantity::inertia) {
+      if (!(v > 0.0))
+        fail(node, element,
+             std::string(quantity == Quantity::mass ? "mass" : "inertia") +
+                 " must be positive, got " + node.Scalar());
+    }
+    const std::string problem = range_problem(v * scale, quantity);
+    if (!problem.empty())
+      fail(node, element, "field '" + field + "' " + problem + ", got '" + node.Scalar() + "'");
     return v * scale;
   }
+  // At most 40 characters of a text, for a message.
+  static std::string clip(const std::string& text) {
+    return text.size() <= 40 ? text : text.substr(0, 40) + "...";
+  }
   double number_field(const YAML::Node& node, const std::string& key, const std::string& element,
-                      double scale = 1.0) const {
-    return number(require(node, key, element), element, key, scale);
+                      double scale = 1.0, Quantity quantity = Quantity::general) const {
+    return number(require(node, key, element), element, key, scale, quantity);
   }
   double optional_number(const YAML::Node& node, const std::string& key, const std::string& element,
-                         double fallback, double scale = 1.0) const {
+                         double fallback, double scale = 1.0,
+                         Quantity quantity = Quantity::general) const {
     const YAML::Node child = node[key];
-    return child ? number(child, element, key, scale) : fallback;
+    return child ? number(child, element, key, scale, quantity) : fallback;
   }
   std::string scalar(const YAML::Node& node, const std::string& element,
                      const std::string& what) const {
@@ -108,27 +140,28 @@ class Reader {
     return child.Scalar();
   }
   std::vector<double> numbers(const YAML::Node& node, const std::string& element,
-                              const std::string& field, size_t count, double scale = 1.0) const {
+                              const std::string& field, size_t count, double scale = 1.0,
+                              Quantity quantity = Quantity::general) const {
     if (!node.IsSequence() || (count > 0 && node.size() != count))
       fail(node, element,
            "field '" + field + "' must be a list of " +
                (count > 0 ? std::to_string(count) + " numbers" : std::string("numbers")));
     std::vector<double> out;
-    for (const auto& item : node) out.push_back(number(item, element, field, scale));
+    for (const auto& item : node) out.push_back(number(item, element, field, scale, quantity));
     return out;
   }
   // `limits: [min, max]` of a revolute or prismatic joint (min ≤ max), or nothing.
-  std::optional<Vec2> joint_limits(const YAML::Node& item, const std::string& element,
-                                   double scale) const {
+  std::optional<Vec2> joint_limits(const YAML::Node& item, const std::string& element, double scale,
+                                   Quantity quantity) const {
     const YAML::Node l = item["limits"];
     if (!l) return std::nullopt;
-    const auto v = numbers(l, element, "limits", 2, scale);
+    const auto v = numbers(l, element, "limits", 2, scale, quantity);
     if (!(v[0] <= v[1])) fail(l, element, "limits must be [min, max] with min ≤ max");
     return Vec2(v[0], v[1]);
   }
   Vec2 vec2(const YAML::Node& node, const std::string& element, const std::string& field,
-            double scale) const {
-    const auto v = numbers(node, element, field, 2, scale);
+            double scale, Quantity quantity = Quantity::general) const {
+    const auto v = numbers(node, element, field, 2, scale, quantity);
     return Vec2(v[0], v[1]);
   }
   std::string name_of(const YAML::Node& item, const std::string& kind, size_t index,
@@ -149,6 +182,8 @@ class Reader {
     const YAML::Node node = root[key];
     if (node && !node.IsNull() && !node.IsSequence())
       fail(node, key, "expected a list (items starting with '- ')");
+    if (node && node.IsSequence() && node.size() > kMaxListItems)
+      fail(node, key, "at most " + std::to_string(kMaxListItems) + " items");
     return node;
   }
 
@@ -166,7 +201,8 @@ class Reader {
         fail(kv.first, element, "a point name must not contain '.'");
       if (!seen.insert(name).second)
         fail(kv.first, element, "point '" + name + "' is defined twice");
-      out.emplace_back(name, vec2(kv.second, element, "points." + name, units_.length));
+      out.emplace_back(name,
+                       vec2(kv.second, element, "points." + name, units_.length, Quantity::length));
     }
     return out;
   }
@@ -180,6 +216,7 @@ class Reader {
   void read_drivers(const YAML::Node& node);
   void read_design_positions(const YAML::Node& node);
   void read_analysis(const YAML::Node& node);
+  void read_initial(const YAML::Node& node);
 
   int body_ref(const YAML::Node& node, const std::string& element) const {
     if (!node.IsScalar()) fail(node, element, "expected a body name");
@@ -232,20 +269,30 @@ class Reader {
     const YAML::Node node = item["axis"];
     if (!node) return Vec2::UnitX();
     const Vec2 a = vec2(node, element, "axis", 1.0);
-    if (a.norm() == 0.0) fail(node, element, "axis must not be zero");
-    return a.normalized();
+    const double norm = a.stableNorm();  // no underflow for tiny components
+    if (!(norm > 0.0)) fail(node, element, "axis must not be zero");
+    return a / norm;
   }
   double design_angle(int body) const {
     return body == kGround ? 0.0 : model_.bodies[static_cast<size_t>(body)].design_pose.z();
   }
   double speed_value(const YAML::Node& node, const std::string& element, bool angular) const;
   Table table(const YAML::Node& node, const std::string& element) const;
+  ActiveWhile active_while(const YAML::Node& node, const std::string& element) const;
 };
 
 // ---- units -------------------------------------------------------------------------------------
 void Reader::read_units(const YAML::Node& node) {
   if (!node) return;
   expect_map(node, "units", {"length", "angle", "mass", "time", "force"});
+  auto declared = [this](const std::string& key) -> std::string& {
+    DeclaredUnits& d = model_.units;
+    return key == "length"  ? d.length
+           : key == "angle" ? d.angle
+           : key == "mass"  ? d.mass
+           : key == "time"  ? d.time
+                            : d.force;
+  };
   auto pick = [&](const std::string& key, const std::vector<std::pair<std::string, double>>& table,
                   double& out) {
     const YAML::Node v = node[key];
@@ -254,6 +301,7 @@ void Reader::read_units(const YAML::Node& node) {
     for (const auto& [name, factor] : table)
       if (v.Scalar() == name) {
         out = factor;
+        declared(key) = name;
         return;
       }
     std::vector<std::string> names;
@@ -280,6 +328,10 @@ void Reader::read_bodies(const YAML::Node& root) {
   const YAML::Node node = list(root, "bodies");
   if (!node || node.IsNull() || node.size() == 0)
     fail(node ? node : root, "bodies", "a mechanism needs at least one moving body");
+  if (node.size() > kMaxBodies)
+    fail(node, "bodies",
+         "at most " + std::to_string(kMaxBodies) + " moving bodies, got " +
+             std::to_string(node.size()));
   std::set<std::string> seen;
   size_t index = 0;
   for (const auto& item : node) {
@@ -304,28 +356,29 @@ void Reader::read_bodies(const YAML::Node& root) {
                  {"name", "type", "mass", "inertia", "com", "pose", "points", "outline"});
     else
       expect_map(item, element, {"name", "type", "mass", "pose", "points", "outline"});
-    b.mass = number_field(item, "mass", element, units_.mass);
-    if (!(b.mass > 0.0))
-      fail(item["mass"], element, "mass must be positive, got " + item["mass"].Scalar());
+    b.mass = number_field(item, "mass", element, units_.mass, Quantity::mass);
     if (b.kind == BodyKind::rigid) {
-      b.inertia =
-          number_field(item, "inertia", element, units_.mass * units_.length * units_.length);
-      if (!(b.inertia > 0.0))
-        fail(item["inertia"], element, "inertia must be positive, got " + item["inertia"].Scalar());
-      if (item["com"]) b.com_local = vec2(item["com"], element, "com", units_.length);
+      b.inertia = number_field(item, "inertia", element,
+                               units_.mass * units_.length * units_.length, Quantity::inertia);
+      if (item["com"])
+        b.com_local = vec2(item["com"], element, "com", units_.length, Quantity::length);
     }
     const YAML::Node pose = require(item, "pose", element);
     if (b.kind == BodyKind::rigid) {
-      const auto p = numbers(pose, element, "pose", 3);
-      b.design_pose = Vec3(p[0] * units_.length, p[1] * units_.length, p[2] * units_.angle);
+      if (!pose.IsSequence() || pose.size() != 3)
+        fail(pose, element, "field 'pose' must be a list of 3 numbers");
+      b.design_pose = Vec3(number(pose[0], element, "pose", units_.length, Quantity::length),
+                           number(pose[1], element, "pose", units_.length, Quantity::length),
+                           number(pose[2], element, "pose", units_.angle, Quantity::angle));
     } else {
-      const auto p = numbers(pose, element, "pose", 2, units_.length);
+      const auto p = numbers(pose, element, "pose", 2, units_.length, Quantity::length);
       b.design_pose = Vec3(p[0], p[1], 0.0);
     }
     if (const YAML::Node pts = item["points"]) b.points = points_map(pts, element);
     if (const YAML::Node outline = item["outline"]) {
       if (!outline.IsSequence()) fail(outline, element, "field 'outline' must be a list of [x, y]");
-      for (const auto& p : outline) b.outline.push_back(vec2(p, element, "outline", units_.length));
+      for (const auto& p : outline)
+        b.outline.push_back(vec2(p, element, "outline", units_.length, Quantity::length));
     }
     model_.bodies.push_back(std::move(b));
   }
@@ -361,7 +414,7 @@ void Reader::read_joints(const YAML::Node& root) {
       expect_map(item, element, {"name", "type", "connects", "limits"});
       auto [a, b] = connects(item, element);
       j.kind = Revolute{a, b};
-      j.limits = joint_limits(item, element, units_.angle);
+      j.limits = joint_limits(item, element, units_.angle, Quantity::angle);
     } else if (type == "prismatic" || type == "fixed") {
       if (type == "prismatic")
         expect_map(item, element, {"name", "type", "connects", "axis", "angle", "limits"});
@@ -369,11 +422,12 @@ void Reader::read_joints(const YAML::Node& root) {
         expect_map(item, element, {"name", "type", "connects", "angle"});
       auto [a, b] = connects(item, element);
       no_particles(a, b);
-      const double phi0 = optional_number(
-          item, "angle", element, design_angle(b.body) - design_angle(a.body), units_.angle);
+      const double phi0 =
+          optional_number(item, "angle", element, design_angle(b.body) - design_angle(a.body),
+                          units_.angle, Quantity::angle);
       if (type == "prismatic") {
         j.kind = Prismatic{a, b, unit_axis(item, element), phi0};
-        j.limits = joint_limits(item, element, units_.length);
+        j.limits = joint_limits(item, element, units_.length, Quantity::length);
       } else {
         j.kind = Fixed{a, b, phi0};
       }
@@ -408,7 +462,7 @@ void Reader::read_joints(const YAML::Node& root) {
       finalize_model(tmp);
       const double drawn =
           (point_kinematics(tmp, b, q0, none).r - point_kinematics(tmp, a, q0, none).r).norm();
-      d.length = optional_number(item, "length", element, drawn, units_.length);
+      d.length = optional_number(item, "length", element, drawn, units_.length, Quantity::length);
       if (!(d.length > 0.0))
         fail(item["length"] ? item["length"] : item, element, "length must be positive");
       j.kind = d;
@@ -451,7 +505,7 @@ void Reader::read_nonholonomic(const YAML::Node& root) {
 Table Reader::table(const YAML::Node& node, const std::string& element) const {
   Table t;
   if (!node) return t;
-  expect_map(node, element, {"measure", "points"});
+  expect_map(node, element, {"measure", "points", "wrap"});
   const YAML::Node m = require(node, "measure", element);
   t.measure = model_.find_measure(m.Scalar());
   if (t.measure < 0) fail(m, element, "measure '" + m.Scalar() + "' is not defined");
@@ -462,13 +516,54 @@ Table Reader::table(const YAML::Node& node, const std::string& element) const {
   if (!pts.IsSequence() || pts.size() < 2)
     fail(pts, element, "table 'points' needs at least two [x, factor] pairs");
   for (const auto& p : pts) {
-    const auto v = numbers(p, element, "points", 2);
-    t.points.emplace_back(v[0] * scale, v[1]);
+    if (!p.IsSequence() || p.size() != 2)
+      fail(p, element, "field 'points' must be a list of [x, factor] pairs");
+    t.points.emplace_back(number(p[0], element, "points", scale,
+                                 measure.unit == "rad" ? Quantity::angle : Quantity::length),
+                          number(p[1], element, "points"));
   }
   for (size_t k = 1; k < t.points.size(); ++k)
     if (!(t.points[k].first > t.points[k - 1].first))
       fail(pts[k], element, "table points must be in increasing order of the measure");
+  // A table over an angle wraps with the turn unless `wrap: false` (docs/file-format.md).
+  t.wrap = measure.unit == "rad";
+  if (const YAML::Node w = node["wrap"]) {
+    if (!w.IsScalar() || (w.Scalar() != "true" && w.Scalar() != "false"))
+      fail(w, element, "wrap must be true or false");
+    t.wrap = w.Scalar() == "true";
+    if (t.wrap && measure.unit != "rad")
+      fail(w, element,
+           "only a table over an angle can wrap (measure '" + measure.name + "' is a " +
+               (measure.unit == "m" ? "length" : measure.unit) + ")");
+  }
+  constexpr double kTurnSlack = 1e-9;  // rad: a table over exactly [0°, 360°] is one turn
+  if (t.wrap &&
+      t.points.back().first - t.points.front().first > 2.0 * std::numbers::pi + kTurnSlack)
+    fail(pts, element,
+         "the table spans more than one turn of '" + measure.name +
+             "' and wraps with the turn: give wrap: false to key it on the unwrapped angle");
   return t;
+}
+
+// `active_while: {measure: NAME, velocity: positive|negative}`: the load acts only while the
+// position measure's rate has that sign.
+ActiveWhile Reader::active_while(const YAML::Node& node, const std::string& element) const {
+  expect_map(node, element, {"measure", "velocity"});
+  const YAML::Node m = require(node, "measure", element);
+  ActiveWhile a;
+  a.measure = model_.find_measure(scalar(m, element, "a measure name"));
+  if (a.measure < 0) fail(m, element, "measure '" + m.Scalar() + "' is not defined");
+  if (model_.measures[static_cast<size_t>(a.measure)].derivative != 0)
+    fail(m, element, "active_while needs a position measure (derivative 0); its velocity is used");
+  const YAML::Node v = require(node, "velocity", element);
+  const std::string sign = scalar(v, element, "velocity");
+  if (sign == "positive")
+    a.sign = 1;
+  else if (sign == "negative")
+    a.sign = -1;
+  else
+    fail(v, element, "velocity must be 'positive' or 'negative', got '" + sign + "'");
+  return a;
 }
 
 // ---- loads -------------------------------------------------------------------------------------
@@ -489,13 +584,29 @@ void Reader::read_loads(const YAML::Node& root) {
       expect_map(item, element, {"name", "type", "g"});
       Gravity g;
       if (item["g"]) g.g = vec2(item["g"], element, "g", length / (units_.time * units_.time));
+      // A gravity far from the Earth's after unit conversion is most often a unit slip
+      // (g: [0, -9.81] in a mm file is 0.00981 m/s²): a warning, not an error
+      // (docs/file-format.md).
+      constexpr double kEarth = 9.81, kFactor = 2.0;  // warn outside [g/2, 2 g]
+      const double gn = g.g.norm();
+      if (gn < kEarth / kFactor || gn > kEarth * kFactor) {
+        const SourceLocation w = loc(item["g"] ? item["g"] : item);
+        std::ostringstream msg;
+        msg << w.file << ':' << w.line << ':' << w.column << ": warning: " << element
+            << ": |g| = " << gn << " m/s^2 after unit conversion (the file's length unit is "
+            << model_.units.length << ", time " << model_.units.time
+            << "), far from 9.81 m/s^2: is the unit right?";
+        model_.warnings.push_back(msg.str());
+      }
       l.kind = g;
     } else if (type == "force") {
-      expect_map(item, element, {"name", "type", "point", "force", "frame", "table"});
+      expect_map(item, element,
+                 {"name", "type", "point", "force", "frame", "table", "active_while"});
       PointForce f;
       f.at = point_ref(require(item, "point", element), element);
       f.force = vec2(require(item, "force", element), element, "force", force);
       if (const YAML::Node fr = item["frame"]) {
+        if (!fr.IsScalar()) fail(fr, element, "frame must be 'world' or 'body'");
         if (fr.Scalar() == "body")
           f.body_fixed = true;
         else if (fr.Scalar() != "world")
@@ -504,7 +615,7 @@ void Reader::read_loads(const YAML::Node& root) {
       f.table = table(item["table"], element);
       l.kind = f;
     } else if (type == "torque") {
-      expect_map(item, element, {"name", "type", "body", "torque", "table"});
+      expect_map(item, element, {"name", "type", "body", "torque", "table", "active_while"});
       Torque t;
       t.body = rigid_body_ref(require(item, "body", element), element);
       if (t.body == kGround) fail(item["body"], element, "a torque on the ground does nothing");
@@ -515,8 +626,8 @@ void Reader::read_loads(const YAML::Node& root) {
       expect_map(item, element,
                  {"name", "type", "connects", "stiffness", "free_length", "damping"});
       auto [a, b] = connects(item, element);
-      SpringDamper s{a, b, optional_number(item, "stiffness", element, 0.0, force / length),
-                     optional_number(item, "free_length", element, 0.0, length),
+      SpringDamper s{a, b, number_field(item, "stiffness", element, force / length),
+                     optional_number(item, "free_length", element, 0.0, length, Quantity::length),
                      optional_number(item, "damping", element, 0.0, force * units_.time / length)};
       if (s.stiffness < 0.0 || s.damping < 0.0 || s.free_length < 0.0)
         fail(item, element, "stiffness, free_length and damping must not be negative");
@@ -529,8 +640,9 @@ void Reader::read_loads(const YAML::Node& root) {
       RotarySpringDamper r;
       r.bi = rigid_body_ref(bodies[0], element);
       r.bj = rigid_body_ref(bodies[1], element);
-      r.stiffness = optional_number(item, "stiffness", element, 0.0, force * length / angle);
-      r.free_angle = optional_number(item, "free_angle", element, 0.0, angle);
+      if (r.bi == r.bj) fail(bodies, element, "a rotary spring-damper needs two different bodies");
+      r.stiffness = number_field(item, "stiffness", element, force * length / angle);
+      r.free_angle = optional_number(item, "free_angle", element, 0.0, angle, Quantity::angle);
       r.damping =
           optional_number(item, "damping", element, 0.0, force * length * units_.time / angle);
       if (r.stiffness < 0.0 || r.damping < 0.0)
@@ -541,6 +653,7 @@ void Reader::read_loads(const YAML::Node& root) {
            "unknown load type '" + type +
                "' (allowed: gravity, force, torque, spring-damper, rotary-spring-damper)");
     }
+    if (const YAML::Node aw = item["active_while"]) l.active_while = active_while(aw, element);
     model_.loads.push_back(std::move(l));
   }
 }
@@ -657,20 +770,43 @@ void Reader::read_drivers(const YAML::Node& root) {
       fail(jn, element,
            "joint '" + jn.Scalar() + "' is neither revolute nor prismatic and cannot be driven");
     const double unit = angular ? units_.angle : units_.length;
-    const std::string profile = item["profile"] ? item["profile"].Scalar() : "constant-speed";
-    d.initial = optional_number(item, "initial", element, 0.0, unit);
+    const Quantity position = angular ? Quantity::angle : Quantity::length;
+    const std::string profile =
+        item["profile"] ? scalar(item["profile"], element, "field 'profile'") : "constant-speed";
+    // Each profile has its own keys; a key of another profile is a mistake, not ignored.
+    const auto only = [&](const std::vector<std::string>& keys) {
+      for (const char* key : {"speed", "initial", "amplitude", "frequency", "coefficients"})
+        if (item[key] && std::find(keys.begin(), keys.end(), key) == keys.end())
+          fail(item[key], element,
+               "key '" + std::string(key) + "' does not belong to a " + profile +
+                   " driver (its keys: " + join(keys) + ")");
+    };
     if (profile == "constant-speed") {
+      only({"speed"});
       d.profile = Profile::constant_speed;
       d.speed = speed_value(require(item, "speed", element), element, angular);
     } else if (profile == "harmonic") {
+      only({"initial", "amplitude", "frequency"});
       d.profile = Profile::harmonic;
-      d.amplitude = number_field(item, "amplitude", element, unit);
+      d.initial = optional_number(item, "initial", element, 0.0, unit, position);
+      d.amplitude = number_field(item, "amplitude", element, unit, position);
+      if (d.amplitude == 0.0) fail(item["amplitude"], element, "amplitude must not be zero");
       d.frequency = number_field(item, "frequency", element, 1.0 / units_.time);
+      if (!(d.frequency > 0.0)) fail(item["frequency"], element, "frequency must be positive");
     } else if (profile == "polynomial") {
+      only({"coefficients"});
       d.profile = Profile::polynomial;
-      d.coefficients = numbers(require(item, "coefficients", element), element, "coefficients", 0);
-      for (size_t k = 0; k < d.coefficients.size(); ++k)
+      const YAML::Node c = require(item, "coefficients", element);
+      d.coefficients = numbers(c, element, "coefficients", 0);
+      if (d.coefficients.size() < 2 || d.coefficients.size() > kMaxCoefficients)
+        fail(c, element,
+             "a polynomial driver needs 2 to " + std::to_string(kMaxCoefficients) +
+                 " coefficients [c0, c1, ...] (s = c0 + c1 t + ...)");
+      for (size_t k = 0; k < d.coefficients.size(); ++k) {
         d.coefficients[k] *= unit / std::pow(units_.time, static_cast<double>(k));
+        const std::string problem = range_problem(d.coefficients[k], Quantity::general);
+        if (!problem.empty()) fail(c[k], element, "coefficient in SI " + problem);
+      }
     } else {
       fail(item["profile"], element,
            "unknown profile '" + profile + "' (allowed: constant-speed, harmonic, polynomial)");
@@ -705,16 +841,20 @@ void Reader::read_design_positions(const YAML::Node& root) {
             !std::holds_alternative<Prismatic>(model_.joints[static_cast<size_t>(j)].kind))
           fail(kv.first, element, "joint '" + kv.first.Scalar() + "' has no scalar input");
         p.inputs.emplace_back(j, number(kv.second, element, "inputs." + kv.first.Scalar(),
-                                        angular ? units_.angle : units_.length));
+                                        angular ? units_.angle : units_.length,
+                                        angular ? Quantity::angle : Quantity::length));
       }
     }
     if (const YAML::Node t = item["target"]) {
       expect_map(t, element, {"point", "at", "angle", "tolerance"});
       DesignTarget target;
       target.point = point_ref(require(t, "point", element), element);
-      target.position = vec2(require(t, "at", element), element, "at", units_.length);
-      if (t["angle"]) target.angle = number(t["angle"], element, "angle", units_.angle);
-      target.tolerance = optional_number(t, "tolerance", element, 1e-3, units_.length);
+      target.position =
+          vec2(require(t, "at", element), element, "at", units_.length, Quantity::length);
+      if (t["angle"])
+        target.angle = number(t["angle"], element, "angle", units_.angle, Quantity::angle);
+      target.tolerance =
+          optional_number(t, "tolerance", element, 1e-3, units_.length, Quantity::length);
       if (!(target.tolerance > 0.0)) fail(t["tolerance"], element, "tolerance must be positive");
       p.target = target;
     }
@@ -733,29 +873,95 @@ void Reader::read_analysis(const YAML::Node& node) {
   }
   if (const YAML::Node s = node["steps"]) {
     const double v = number(s, "analysis", "steps");
-    if (v < 2.0 || v != std::floor(v) || v > 1e7)
-      fail(s, "analysis", "steps must be an integer ≥ 2");
+    if (v < 2.0 || v != std::floor(v) || v > kMaxCycleSteps)
+      fail(s, "analysis",
+           "steps must be an integer from 2 to " + std::to_string(kMaxCycleSteps) +
+               " (as the option --steps)");
     model_.analysis.steps = static_cast<int>(v);
   }
 }
 
+// ---- initial velocities ------------------------------------------------------------------------
+// initial: {rates: {MEASURE: RATE, …}}: the rate of each named measure's position quantity at
+// t = 0, in the file's length or angle unit per time unit, or a string with its unit ('1 m/s',
+// '30 rpm'). A velocity measure (derivative: 1) names the same quantity as its position measure
+// (its value at t = 0 is the rate); an acceleration measure has no rate to give.
+void Reader::read_initial(const YAML::Node& node) {
+  if (!node) return;
+  expect_map(node, "initial", {"rates"});
+  const YAML::Node rates = require(node, "rates", "initial");
+  if (!rates.IsMap()) fail(rates, "initial", "field 'rates' must be a mapping measure: rate");
+  std::set<std::string> seen;
+  for (const auto& kv : rates) {
+    const std::string name = scalar(kv.first, "initial", "a measure name");
+    if (!seen.insert(name).second)
+      fail(kv.first, "initial", "the rate of measure '" + name + "' is given twice");
+    const int m = model_.find_measure(name);
+    if (m < 0) fail(kv.first, "initial", "measure '" + name + "' is not defined");
+    const Measure& measure = model_.measures[static_cast<size_t>(m)];
+    if (measure.derivative == 2)
+      fail(kv.first, "initial",
+           "measure '" + name + "' is an acceleration: give the rate of a position measure");
+    const bool angular = measure.unit.rfind("rad", 0) == 0;
+    const std::string what = "the rate of measure '" + name + "'";
+    if (!kv.second.IsScalar() || kv.second.Scalar().empty())
+      fail(kv.second, "initial", what + " must be a number or a string like '1 m/s'");
+    InitialRateSpec spec;
+    spec.measure = m;
+    try {
+      spec.rate = parse_speed(kv.second.Scalar(), angular,
+                              (angular ? units_.angle : units_.length) / units_.time);
+    } catch (const std::invalid_argument& e) {
+      // parse_speed speaks of a joint's speed; here it is a measure's rate.
+      std::string message = e.what();
+      const std::pair<std::string, std::string> rewrites[] = {
+          {"speed must", "it must"},
+          {"unknown speed unit", "unknown unit"},
+          {" for a revolute joint", " for the rate of an angle"},
+          {" for a prismatic joint", " for the rate of a length"}};
+      for (const auto& [from, to] : rewrites)
+        if (const auto at = message.find(from); at != std::string::npos)
+          message.replace(at, from.size(), to);
+      fail(kv.second, "initial", what + ": " + message);
+    }
+    spec.where = loc(kv.first);
+    model_.initial.rates.push_back(spec);
+  }
+}
+
 Model Reader::read(const YAML::Node& root) {
+  if (!root.IsDefined() || root.IsNull())
+    throw InputError({file_, 1, 1}, "file",
+                     "the file holds no mechanism (empty, or only comments): expected a mapping "
+                     "at the top level (orthomech: 1, bodies: ...)");
   if (!root.IsMap())
     fail(root, "file", "expected a mapping at the top level (orthomech: 1, bodies: ...)");
   expect_map(root, "file",
              {"orthomech", "name", "description", "units", "ground", "bodies", "joints", "loads",
-              "measures", "drivers", "design_positions", "analysis", "nonholonomic"});
+              "measures", "drivers", "design_positions", "analysis", "nonholonomic", "initial"});
   const YAML::Node version = require(root, "orthomech", "file");
-  if (version.Scalar() != "1")
+  if (version.IsScalar() && version.Tag() != "?")
     fail(version, "file",
-         "unsupported format version '" + version.Scalar() + "' (this build reads 1)");
+         "the format version must be the plain number 1, not a quoted or tagged string");
+  if (!version.IsScalar() || version.Scalar() != "1")
+    fail(version, "file",
+         "unsupported format version '" +
+             (version.IsScalar() ? clip(version.Scalar()) : std::string("(not a number)")) +
+             "' (this build reads 1)");
   model_.file = file_;
-  if (root["name"]) model_.name = root["name"].Scalar();
+  // name and description: text (a plain or quoted scalar), not a list or mapping.
+  const auto text_field = [&](const char* key) {
+    const YAML::Node node = root[key];
+    if (!node || node.IsNull()) return std::string();
+    if (!node.IsScalar()) fail(node, "file", "field '" + std::string(key) + "' must be text");
+    return node.Scalar();
+  };
+  model_.name = text_field("name");
   if (model_.name.empty()) {
     const auto slash = file_.find_last_of('/');
     model_.name = file_.substr(slash == std::string::npos ? 0 : slash + 1);
   }
-  if (root["description"]) model_.description = root["description"].Scalar();
+  model_.description = text_field("description");
   read_units(root["units"]);
   read_ground(root["ground"]);
   read_bodies(root);
@@ -766,6 +972,7 @@ Model Reader::read(const YAML::Node& root) {
   read_drivers(root);
   read_design_positions(root);
   read_analysis(root["analysis"]);
+  read_initial(root["initial"]);
   finalize_model(model_);
   if (model_.nc > model_.n + 1000)
     fail(root["joints"], "joints", "far more constraint equations than coordinates");
@@ -818,7 +1025,7 @@ Model parse_text(const std::string& text, const std::string& origin) {
     return Reader(origin).read(root);
   } catch (const YAML::Exception& e) {  // anything yaml-cpp still throws: report, do not crash
     throw InputError(
-        {origin, e.mark.is_null() ? 0 : e.mark.line + 1, e.mark.is_null() ? 0 : e.mark.column + 1},
+        {origin, e.mark.is_null() ? 1 : e.mark.line + 1, e.mark.is_null() ? 1 : e.mark.column + 1},
         "YAML", e.msg);
   }
 }

@@ -8,13 +8,16 @@
 #include <algorithm>
 #include <cerrno>
 #include <charconv>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <map>
 #include <numbers>
 #include <stdexcept>
 #include <vector>
 
 #include "orthomech/error.hpp"
+#include "orthomech/io/mechanism_file.hpp"
 
 namespace orthomech {
 
@@ -49,12 +52,85 @@ struct Edit {
   std::string text;
 };
 
+// How many times each scalar of the document is reached from the root, by its offset in the
+// text: more than once when it is (or lies inside) an anchored node reused through an alias.
+void count_uses(const YAML::Node& node, std::map<int, int>& uses, int depth = 0) {
+  if (depth > 200) return;  // the reader accepted the file; yaml-cpp itself limits nesting
+  if (node.IsScalar()) {
+    ++uses[node.Mark().pos];
+  } else if (node.IsSequence()) {
+    for (const auto& item : node) count_uses(item, uses, depth + 1);
+  } else if (node.IsMap()) {
+    for (const auto& kv : node) {
+      count_uses(kv.first, uses, depth + 1);
+      count_uses(kv.second, uses, depth + 1);
+    }
+  }
+}
+
+// The written text must re-read as the model with the new design poses: the same elements, the
+// same masses, inertias, centres of mass and points (bit for bit: their text is unchanged), and
+// every body frame within kRoundTrip of the one asked for. The written numbers are the shortest
+// text that reads back as the value in file units; reading multiplies by the unit factor once:
+// a few ulps, far below 1e-12 (m or rad) for the limits of docs/file-format.md (|x| <= 1e6).
+constexpr double kRoundTrip = 1e-12;
+
+void verify_written(const std::string& written, const std::string& origin, const Model& model,
+                    const std::vector<Vec3>& frames) {
+  Model back;
+  try {
+    back = parse_mechanism(written, origin);
+  } catch (const InputError& e) {
+    throw InputError(
+        {origin, 1, 1}, "file",
+        "the edited file would not read back (" + e.message() + "); nothing was written");
+  }
+  const auto differ = [&](const std::string& what) {
+    throw InputError({origin, 1, 1}, "file",
+                     "the edited file would not read back as the assembled mechanism (" + what +
+                         " differs); nothing was written");
+  };
+  if (back.bodies.size() != model.bodies.size() || back.joints.size() != model.joints.size() ||
+      back.loads.size() != model.loads.size() || back.measures.size() != model.measures.size() ||
+      back.drivers.size() != model.drivers.size() ||
+      back.design_positions.size() != model.design_positions.size() || back.nq != model.nq ||
+      back.nc != model.nc)
+    differ("the number of elements");
+  for (size_t b = 0; b < model.bodies.size(); ++b) {
+    const Body &x = model.bodies[b], &y = back.bodies[b];
+    if (x.name != y.name || x.kind != y.kind || x.mass != y.mass || x.inertia != y.inertia ||
+        x.com_local != y.com_local || x.points != y.points)
+      differ("body '" + x.name + "'");
+    const Vec3 d = y.design_pose - frames[b];
+    const double scale = std::max(1.0, frames[b].head<2>().cwiseAbs().maxCoeff());
+    if (!(std::abs(d.x()) <= kRoundTrip * scale && std::abs(d.y()) <= kRoundTrip * scale &&
+          std::abs(d.z()) <= kRoundTrip * std::max(1.0, std::abs(frames[b].z()))))
+      differ("the pose of body '" + x.name + "'");
+  }
+  for (size_t j = 0; j < model.joints.size(); ++j)
+    if (model.joints[j].name != back.joints[j].name ||
+        model.joints[j].type_name() != back.joints[j].type_name())
+      differ("joint '" + model.joints[j].name + "'");
+}
+
 }  // namespace
 
-std::string replace_design_poses(const std::string& text, const std::string& origin,
+std::string replace_design_poses(const std::string& file_text, const std::string& origin,
                                  const Model& model, const VecX& q) {
   if (q.size() != model.nq) throw std::invalid_argument("replace_design_poses: q size");
-  const YAML::Node root = YAML::Load(text);
+  // A UTF-8 byte order mark is kept as it is; the YAML parser's offsets start after it.
+  static const std::string bom = "\xEF\xBB\xBF";
+  const bool has_bom = file_text.rfind(bom, 0) == 0;
+  const std::string text = has_bom ? file_text.substr(bom.size()) : file_text;
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    throw InputError({origin, e.mark.line + 1, e.mark.column + 1}, "YAML", e.msg);
+  }
+  std::map<int, int> uses;
+  count_uses(root, uses);
+  std::vector<Vec3> frames;
   const double length = unit_factor(root["units"], "length", origin);
   const double angle = unit_factor(root["units"], "angle", origin);
   const YAML::Node bodies = root["bodies"];
@@ -76,6 +152,7 @@ std::string replace_design_poses(const std::string& text, const std::string& ori
     const Vec2 r(q(body.q_offset) - com_world.x(), q(body.q_offset + 1) - com_world.y());
     std::vector<double> values = {r.x() / length, r.y() / length};
     if (body.kind == BodyKind::rigid) values.push_back(phi / angle);
+    frames.emplace_back(r.x(), r.y(), phi);
     if (pose.size() != values.size())
       throw InputError({origin, 0, 0}, "body '" + body.name + "'", "pose has the wrong size");
     for (size_t k = 0; k < values.size(); ++k) {
@@ -87,6 +164,11 @@ std::string replace_design_poses(const std::string& text, const std::string& ori
         throw InputError({origin, m.line + 1, m.column + 1}, "body '" + body.name + "'",
                          "cannot locate the pose numbers in the file text (quoted or unusual "
                          "YAML); --write needs plain numbers");
+      if (uses[m.pos] != 1)
+        throw InputError({origin, m.line + 1, m.column + 1}, "body '" + body.name + "'",
+                         "the pose is shared with another place through a YAML anchor and alias; "
+                         "--write edits numbers in place and would change the other uses too: "
+                         "write this pose out in full");
       const size_t begin = static_cast<size_t>(m.pos);
       edits.push_back({begin, begin + scalar.size(), shortest_exact(values[k])});
     }
@@ -95,7 +177,8 @@ std::string replace_design_poses(const std::string& text, const std::string& ori
             [](const Edit& a, const Edit& b) { return a.begin > b.begin; });
   std::string out = text;
   for (const Edit& e : edits) out.replace(e.begin, e.end - e.begin, e.text);
-  return out;
+  verify_written(out, origin, model, frames);
+  return has_bom ? bom + out : out;
 }
 
 void write_file_atomically(const std::string& path, const std::string& text) {

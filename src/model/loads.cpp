@@ -1,6 +1,8 @@
 #include "orthomech/model/loads.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <numbers>
 
 #include "orthomech/model/free_system.hpp"
 #include "orthomech/model/general_system.hpp"
@@ -11,8 +13,13 @@ namespace orthomech {
 double table_factor(const Model& model, const Table& table, const VecX& q) {
   if (table.points.empty()) return 1.0;
   const Measure& m = model.measures[static_cast<size_t>(table.measure)];
-  const double x = compute_scalar(model, m.kind, q, nullptr).value;
+  double x = compute_scalar(model, m.kind, q, nullptr).value;
   const auto& p = table.points;
+  if (table.wrap) {  // periodic in 2π: x into [x_0, x_0 + 2π)
+    constexpr double kTurn = 2.0 * std::numbers::pi;
+    x = p.front().first + std::fmod(x - p.front().first, kTurn);
+    if (x < p.front().first) x += kTurn;
+  }
   if (x <= p.front().first) return p.front().second;
   if (x >= p.back().first) return p.back().second;
   const auto hi =
@@ -48,7 +55,15 @@ void add_angle(const Model& model, int body, double value, VecX& Q) {
 
 }  // namespace
 
+bool load_active(const Model& model, const Load& load, const State& st) {
+  if (load.active_while.measure < 0) return true;
+  const Measure& m = model.measures[static_cast<size_t>(load.active_while.measure)];
+  const double rate = compute_scalar(model, m.kind, st.q, &st.u).rate;
+  return load.active_while.sign > 0 ? rate > 0.0 : rate < 0.0;
+}
+
 void add_load(const Model& model, const Load& load, const State& st, VecX& Q) {
+  if (!load_active(model, load, st)) return;
   std::visit(
       [&](const auto& l) {
         using T = std::decay_t<decltype(l)>;

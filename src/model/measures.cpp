@@ -63,10 +63,16 @@ struct Evaluator {
     const Vec2 dd = kj.v - ki.v;
     ScalarKinematics s;
     s.value = dv.norm();
-    if (s.value == 0.0) throw std::domain_error("distance measure of coincident points");
-    const Vec2 e = dv / s.value;
+    // Where the points coincide |d| has no gradient; the one-sided limit along the relative
+    // velocity is taken (e = ḋ/|ḋ|, ṡ = |ḋ|; the (|ḋ|² − (eᵀḋ)²)/s term vanishes with e ∥ ḋ),
+    // and e = x̂ when ḋ = 0 too: finite values, never an exception, at such an isolated position.
+    const bool coincident = !(s.value > 0.0);
+    const double dd_norm = dd.norm();
+    const Vec2 e = !coincident     ? Vec2(dv / s.value)
+                   : dd_norm > 0.0 ? Vec2(dd / dd_norm)
+                                   : Vec2::UnitX();
     s.rate = e.dot(dd);
-    s.ddot_u = (dd.squaredNorm() - s.rate * s.rate) / s.value -
+    s.ddot_u = (coincident ? 0.0 : (dd.squaredNorm() - s.rate * s.rate) / s.value) -
                kj.phidot * kj.phidot * e.dot(kj.Rs) + ki.phidot * ki.phidot * e.dot(ki.Rs);
     if (d) {
       add_point_jacobian(model, m.pj, kj, e, 1.0, *d);

@@ -43,7 +43,21 @@ struct CycleOptions {
   bool reverse_at_dead_point = false;
   // Called now and then with the fraction of the sweep done (0–1]; may be empty.
   std::function<void(double)> progress;
+  // Take the positions next to change points from the branch (CycleResult::bridges).
+  bool bridge_change_points = true;
 };
+
+// How far the initial projection moved a body from its drawn pose (with the driven joint held at
+// its drawn value). Listed, and warned about, when above kStartMoveTolerance × the mechanism's
+// size (the largest distance of a drawn body pose from the origin, at least 1 mm) or
+// kStartTurnTolerance rad: a rounded pose moves less, a wrong length or a sketch more.
+struct StartMove {
+  std::string body;
+  double distance = 0.0;  // of its centre of mass (m)
+  double angle = 0.0;     // |Δφ| (rad)
+};
+inline constexpr double kStartMoveTolerance = 1e-4;
+inline constexpr double kStartTurnTolerance = 1e-4;
 
 // One joint's reaction at one position, in the global frame and in the joint's frame.
 // Convention (docs/notation.md): forces and moments that the second body of the joint exerts on
@@ -70,9 +84,15 @@ struct DrivenPoint {
   std::vector<double> reactions;  // per ReactionComponent
   std::vector<double> measures;   // per Model::measures
   double kinetic = 0.0, potential = 0.0, dissipated = 0.0;
-  // Next to a change point (E loses rank): evaluated just past it; its multipliers are not
-  // meaningful (they grow without bound as the rank drops) and outputs omit them.
+  // At a change point (E loses rank; chart quality < 1e-4): the direct evaluation there is not
+  // meaningful (the multipliers grow without bound as the rank drops). A grid position exactly
+  // on one is first evaluated just past it.
   bool singular = false;
+  // Next to a change point (chart quality < kBridgeQuality): index into CycleResult::bridges when
+  // every value of this position (q, u, u̇, drive, reactions, measures, energies) was taken from
+  // the branch — interpolated across the change point from positions on both sides where the
+  // direct evaluation is well conditioned — instead of the ill-conditioned solve at q; −1 else.
+  int bridge = -1;
 };
 
 // A stored position of CycleResult::points, read-only: the same fields as DrivenPoint, the vectors
@@ -92,6 +112,7 @@ struct DrivenPointView {
   std::span<const double> measures;
   double kinetic = 0.0, potential = 0.0, dissipated = 0.0;
   bool singular = false;
+  int bridge = -1;
 };
 
 // The positions of a sweep, stored compactly: the scalars of each position in one array and all
@@ -111,6 +132,8 @@ class DrivenPoints {
   // Appends a copy of p. Every position of one sweep has the same vector sizes (else throws
   // std::logic_error).
   void push_back(const DrivenPoint& p);
+  // Replaces position k by p (same vector sizes, else throws std::logic_error).
+  void assign(std::size_t k, const DrivenPoint& p);
 
   class const_iterator {
    public:
@@ -140,7 +163,11 @@ class DrivenPoints {
     long chart_id;
     int chart_sign;
     bool singular;
+    int bridge;
   };
+  [[nodiscard]] Scalars scalars_of(const DrivenPoint& p) const;
+  void check_sizes(const DrivenPoint& p) const;
+  void put_values(const DrivenPoint& p, double* v) const;
   std::vector<Scalars> scalars_;
   std::vector<double> values_;  // per position: tangent, q, u, udot, lambda, reactions, measures
   // Sizes of those vectors (fixed by the first position) and their sum, the stride of values_.
@@ -153,6 +180,36 @@ struct DeadPoint {
   double time = 0.0;
   std::string message;
 };
+
+// Chart quality below which a position counts as next to a change point: there the direct
+// evaluation loses accuracy like ε/quality³ (the computed q lies on a level set f = O(ε) of the
+// constraints, whose curvature near the crossing of two branches is ε/δ³ at a distance δ), and
+// its values are taken from the branch instead (CycleResult::bridges).
+inline constexpr double kBridgeQuality = 0.05;
+
+// A change point bridged on the branch: positions with time in (time_from, time_to) take their
+// values from a polynomial through 8 positions on the branch at times t* ± {1, 2, 3, 4} ρ
+// (ρ = time_to − t* = t* − time_from, where the chart quality is about kBridgeQuality, so that each
+// of them is evaluated to full accuracy), degree 7 in time. Quantities that are smooth along the
+// branch (q, velocities, accelerations, the drive, the measures and every bounded reaction
+// component) are so their branch values — at the change point itself their limits from both
+// sides. Components that grow without bound towards the change point (the minimum-norm
+// multipliers along the self-stress that appears there) have no limit: they are marked
+// `diverging` and not reported at the bridged positions.
+struct ChangePointBridge {
+  double input = 0.0, time = 0.0;  // the change point t* (as located by the sweep)
+  double time_from = 0.0, time_to = 0.0;
+  // Estimated error of the bridged drive (N·m or N): the largest difference between a node's
+  // value and the degree-6 interpolant through the other seven, at the two inner nodes (an upper
+  // estimate of the degree-7 interpolant's error). A bridge is used only when it is at most
+  // kBridgeTolerance of the drive's size there.
+  double drive_error = 0.0;
+  std::vector<bool> diverging;  // per reaction component (CycleResult::components)
+};
+// A reaction component is `diverging` at a bridge when that estimate exceeds this fraction of
+// its size at the nodes: a bounded component is interpolated to ~1e-10 of its size, one growing
+// like 1/(t − t*) misses by O(1).
+inline constexpr double kBridgeTolerance = 1e-6;
 
 // invalid_request: the options do not fit the driver or the mechanism (a range for a harmonic
 // law, a full turn of a prismatic joint, an empty range): a usage error, not a numerical one.
@@ -168,6 +225,14 @@ struct CycleResult {
   DrivenPoints points;
   std::vector<DeadPoint> dead_points;
   std::vector<DeadPoint> singular_positions;  // change points passed (rank drop of E)
+  std::vector<ChangePointBridge> bridges;     // change points whose neighbourhood was bridged
+  // Bodies the initial projection moved by more than the tolerances (StartMove), and a warning
+  // per body, with lengths in mm and angles in degrees.
+  std::vector<StartMove> start_moves;
+  std::vector<std::string> warnings;
+  // Per reaction component: grows without bound towards a change point (diverging at one of the
+  // bridges): its peak over the cycle depends on how close the grid comes to the change point.
+  std::vector<bool> diverging;
   long chart_switches = 0;
   int reversals = 0;  // dead points passed by reversing the input (reverse_at_dead_point)
   int rank = 0, dof = 0, redundant = 0;
@@ -216,6 +281,13 @@ bool compute_driven(const Model& model, int driver_joint, double sdot, double sd
 // The sweep. Never throws for numerical trouble: the status says what happened.
 [[nodiscard]] CycleResult run_cycle(const Model& model, const CycleOptions& options);
 
+// Whether a position's drive, or reaction component `component`, is reported (outputs,
+// summaries): everywhere except at a change point that could not be bridged (singular and not
+// bridged), and except a component diverging at the bridge the position belongs to.
+[[nodiscard]] bool drive_reported(const DrivenPointView& p);
+[[nodiscard]] bool component_reported(const CycleResult& result, const DrivenPointView& p,
+                                      std::size_t component);
+
 [[nodiscard]] const char* to_string(CycleStatus s);
 
 // ---- Summary (peaks and RMS) -----------------------------------------------------------------
@@ -231,18 +303,33 @@ struct ReactionMagnitude {
 };
 [[nodiscard]] std::vector<ReactionMagnitude> reaction_magnitudes(const CycleResult& result);
 [[nodiscard]] double magnitude_at(const DrivenPointView& p, const ReactionMagnitude& m);
+// Whether every component of m is reported at p (component_reported).
+[[nodiscard]] bool magnitude_reported(const CycleResult& result, const DrivenPointView& p,
+                                      const ReactionMagnitude& m);
 
-// Peak |x| (with the input and time where it occurs) and RMS over the positions of the sweep;
-// positions flagged `singular` are left out (their multipliers are not meaningful).
+// One extreme of a series: its value and the input and time where it occurs.
+struct SeriesExtreme {
+  double value = 0.0, input = 0.0, time = 0.0;
+};
+// Signed maximum and minimum, peak |x| (with the input and time where each occurs) and RMS over
+// the positions of the sweep where the series is reported (drive_reported, magnitude_reported,
+// component_reported): bridged positions next to a change point count with their branch values,
+// so none is biased by positions left out. A tie keeps the first position in sweep order.
 struct SeriesSummary {
   std::string name, unit;
   bool determinate = true;
+  // Some component grows without bound towards a change point (CycleResult::diverging): the peak
+  // is that of the positions outside the bridged gaps and grows as the grid approaches it.
+  bool diverges = false;
   double peak = 0.0, peak_input = 0.0, peak_time = 0.0, rms = 0.0;
+  SeriesExtreme max, min;  // signed (for a magnitude: max = peak)
   int samples = 0;
 };
 // The drive first, then every reaction magnitude in joint order.
 [[nodiscard]] std::vector<SeriesSummary> summarize_cycle(
     const CycleResult& result, const std::vector<ReactionMagnitude>& magnitudes,
     const std::string& drive_unit);
+// Every reaction component (CycleResult::components order), signed.
+[[nodiscard]] std::vector<SeriesSummary> summarize_components(const CycleResult& result);
 
 }  // namespace orthomech

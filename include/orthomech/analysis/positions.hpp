@@ -20,11 +20,18 @@ struct SolveResult {
 struct PositionOptions {
   double tolerance = 1e-12;  // max |f_k| (m, rad); positions of mechanisms of 1 mm–10 m
   int max_iterations = 50;
+  // project_positions: hold this joint's coordinate at `locked_value` (rad or m), as
+  // `assemble --lock` does: the other bodies move to close the joints. −1: nothing held.
+  int locked_joint = -1;
+  double locked_value = 0.0;
 };
 
 // Gauss–Newton in the mass metric (the paper's natural metric): Δq = −A E_R (E_Rᵀ A E_R)⁻¹ f_R
 // on the independent rows R (rank-revealing), i.e. the smallest correction in the kinetic-energy
-// norm. Moves every body; works with redundant constraints. For one-off projections.
+// norm. Moves every body; works with redundant constraints. For one-off projections. With
+// options.locked_joint, the joint's coordinate s(q) = locked_value is one more row (its gradient
+// d appended to E_R); if that row depends on the constraints' (the joint cannot move there, a dead
+// point of it), the result is `singular`.
 SolveResult project_positions(const Model& model, VecX& q, const PositionOptions& options = {});
 
 // Newton in the current chart of ws: the independent coordinates stay fixed, the dependent ones

@@ -43,22 +43,50 @@ enum class GrashofType {
 };
 [[nodiscard]] const char* to_string(GrashofType t);
 
-// A planar four-bar loop: ground —j[0]— crank —j[1]— coupler —j[2]— follower —j[3]— ground.
-// Oriented so that the input joint (if it is a ground pivot of the loop) is j[0].
+// A planar four-bar loop: frame —P0— crank —P1— coupler —P2— follower —P3— frame, the Pk pins
+// (revolute joints). Found on the pin graph of the mechanism: its vertices are the pins (the
+// revolute joints, those at one point of a body merged into one pin: three links on one pivot
+// are one pin), its edges the links between two pins of one body (a ternary link gives three).
+// Every cycle of four pins through four distinct links is a four-bar loop; the frame is the
+// ground when the loop holds it (a grounded loop), else the loop's link nearest the ground in
+// the joint graph (a floating loop, e.g. the knee of a Jansen leg). A loop basis of the joint
+// graph has j − b + 1 loops (j revolute joints, b links with the ground; `loop_basis_size`);
+// the four-bar loops are every 4-cycle, whether or not in one basis. Oriented so that the input
+// joint, when it is at a frame pin, is at P0; else the frame pin with the lower joint index.
 struct FourBarLoop {
-  int joints[4] = {-1, -1, -1, -1};
-  int bodies[3] = {-1, -1, -1};                                     // crank, coupler, follower
-  double ground = 0.0, crank = 0.0, coupler = 0.0, follower = 0.0;  // link lengths, m
+  int joints[4] = {-1, -1, -1, -1};  // a revolute joint at each pin (for names)
+  int bodies[3] = {-1, -1, -1};      // crank, coupler, follower
+  int frame = kGround;
+  PointRef at[3];  // P1 and P2 on the coupler, P3 on the follower (transmission angle)
+  double ground = 0.0, crank = 0.0, coupler = 0.0,
+         follower = 0.0;  // link lengths, m (frame: ground)
   GrashofType type = GrashofType::triple_rocker;
 };
-// Every four-bar loop of the mechanism (revolutes only, ground included).
+// Every four-bar loop of the mechanism (revolutes only).
 [[nodiscard]] std::vector<FourBarLoop> find_four_bar_loops(const Model& model, int input_joint);
+// j − b + 1: the number of independent loops of the joint graph (revolutes and prismatics as
+// edges, the ground and every body as vertices; a connected graph).
+[[nodiscard]] int loop_basis_size(const Model& model);
 // Grashof type from the four lengths (s + l vs p + q, which link is shortest); `tol` relative.
 [[nodiscard]] GrashofType classify_grashof(double ground, double crank, double coupler,
                                            double follower, double tol = 1e-9);
-// Transmission angle μ ∈ [0, π] at q: angle at the coupler–follower joint between the coupler
-// (toward the crank joint) and the follower (toward its ground pivot).
+// Transmission angle μ ∈ [0, π] at q: angle at the coupler–follower pin P2 between the coupler
+// (toward P1) and the follower (toward its frame pivot P3).
 [[nodiscard]] double transmission_angle(const Model& model, const FourBarLoop& loop, const VecX& q);
+
+// A slider-crank loop: ground —j[0] revolute— crank —j[1] revolute— rod —j[2] revolute— slider
+// —j[3] prismatic— ground. Its pressure angle is the angle between the rod (the line of the force
+// it carries, a two-force member) and the slide axis.
+struct SliderCrankLoop {
+  int joints[4] = {-1, -1, -1, -1};
+  int bodies[3] = {-1, -1, -1};   // crank, rod, slider
+  double crank = 0.0, rod = 0.0;  // link lengths, m
+};
+// Every slider-crank loop of the mechanism.
+[[nodiscard]] std::vector<SliderCrankLoop> find_slider_crank_loops(const Model& model);
+// Pressure angle ∈ [0, π/2] at q: the acute angle between the rod (crank pin → wrist pin) and the
+// slide axis. For an offset slider-crank, sin α = |r sin θ − e| / l.
+[[nodiscard]] double pressure_angle(const Model& model, const SliderCrankLoop& loop, const VecX& q);
 
 struct SingularityMeasures {
   double sigma_min = 0.0;  // σ_r/σ_1 of the scaled Eᵀ, r the generic rank (→ 0 at change points)
@@ -74,6 +102,18 @@ struct FourBarReport {
   GrashofType type;
   double transmission = 0.0;  // μ, rad
   bool ok = true;             // min(μ, π − μ) ≥ min_transmission
+};
+struct SliderCrankReport {
+  std::string joints;     // "O-A-B-slide"
+  double pressure = 0.0;  // α, rad
+  bool ok = true;         // α ≤ π/2 − min_transmission
+};
+
+// A joint limit that keeps a position from closing: without the limits it assembles with the
+// joint at `needed` (rad or m), outside [limits.x(), limits.y()].
+struct LimitBlock {
+  int joint = -1;
+  double needed = 0.0;
 };
 
 struct PositionReport {
@@ -94,12 +134,14 @@ struct PositionReport {
   std::string singular_kind;                // "dead point" / "change point"
   std::optional<double> singular_input;     // input value there
   std::vector<FourBarReport> four_bars;
+  std::vector<SliderCrankReport> slider_cranks;
   int modes = 0;               // distinct assembly modes found at the inputs
   int mode = -1;               // 1-based index of this position's mode (modes sorted by signature)
   std::string mode_signature;  // e.g. "+" per four-bar loop, then the sign of det [Eᵀ; d]
   int circuit = -1;            // 1-based, −1 when not traced (DOF ≠ 1 or no single input)
   int branch = -1;             // 1-based within the circuit
-  std::vector<std::string> failures;  // checks that failed, in words
+  std::vector<LimitBlock> limit_blocks;  // when it does not assemble because of joint limits
+  std::vector<std::string> failures;     // checks that failed, in words
   [[nodiscard]] bool pass() const { return failures.empty(); }
 };
 
@@ -113,6 +155,12 @@ struct ValidationReport {
   std::vector<std::string> singular_points;  // every dead/change point found, in words
   [[nodiscard]] bool pass() const;
 };
+
+// Which joint limits keep `options` from assembling: assembles again without the limits and
+// returns the joints whose coordinate then lies outside them (empty when it does not assemble
+// either, or every limit is kept).
+[[nodiscard]] std::vector<LimitBlock> find_limit_blocks(const Model& model, const VecX& q_guess,
+                                                        const AssemblyOptions& options);
 
 [[nodiscard]] ValidationReport validate_design_positions(const Model& model,
                                                          const ValidateOptions& options = {});

@@ -29,7 +29,17 @@
 namespace orthomech {
 
 enum class DynamicsForm { dual, primal };
-enum class Integrator { dopri5, rkf78 };  // Dormand–Prince 5(4) dense output; Fehlberg 7(8)
+// The integrators behind `simulate --integrator` (docs/theory.md, "Integrators"):
+//   dopri5          Dormand–Prince 5(4), dense output of order 4 (default; moderate tolerances)
+//   rkf78           Runge–Kutta–Fehlberg 7(8); steps land on the output times
+//   bulirsch_stoer  Bulirsch–Stoer extrapolation (orders up to 16), dense output: long runs at
+//                   tight tolerances
+//   rosenbrock4     Rosenbrock 4(3), L-stable, Jacobian by central differences of the right-hand
+//                   side: stiff mechanisms (stiff spring-dampers); steps land on the output times
+enum class Integrator { dopri5, rkf78, bulirsch_stoer, rosenbrock4 };
+[[nodiscard]] const char* to_string(Integrator i);  // "dopri5", "rkf78", "bulirsch-stoer", …
+// The integrator named `name` (as to_string gives it); false when there is none.
+[[nodiscard]] bool parse_integrator(const std::string& name, Integrator& out);
 
 // A prescribed initial rate: the rate of a measure's underlying position quantity (a joint
 // coordinate, a point coordinate, a distance, a body angle).
@@ -47,7 +57,10 @@ struct SimulateOptions {
   double dt_out = 0.0;    // s; 0: t_end / 100
   double max_step = 0.0;  // s; 0: unlimited
   VecX initial_u;         // guess u₀ (size n) or empty (zero)
+  // Prescribed initial rates. When empty, those of the mechanism file (Model::initial.rates)
+  // are used unless use_file_rates is false; when given, they replace the file's (all of them).
   std::vector<InitialRate> initial_rates;
+  bool use_file_rates = true;
   bool record_samples = true;         // keep every output sample (else only the final one)
   bool reactions = true;              // compute λ and joint reactions at the samples
   double position_tolerance = 1e-12;  // max |f| after the per-step correction (m, rad)
@@ -112,10 +125,11 @@ struct SimulateResult {
   double max_velocity_residual = 0.0;    // max |Eᵀ u| (dual: after the step; primal: |J|)
   double max_invariant_J = 0.0;          // primal: max |J|, eq. (105), before projection
   long steps = 0;
-  long uncorrected_steps = 0;
-  long rewinds = 0;  // steps undone because they crossed a change point unannounced  // steps left
-                     // uncorrected next to a change point
-  long evaluations = 0;  // right-hand side evaluations
+  long uncorrected_steps = 0;  // steps left uncorrected next to a change point
+  long rewinds = 0;            // steps undone because they crossed a change point unannounced
+  long evaluations = 0;        // right-hand side evaluations
+  long rejected_steps = 0;     // rejected step attempts (rkf78, rosenbrock4)
+  long jacobians = 0;          // Jacobians by finite differences (rosenbrock4)
 };
 
 // Simulates from the design position (projected) with the velocity given by the options.

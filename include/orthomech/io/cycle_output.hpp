@@ -6,30 +6,50 @@
 #include <vector>
 
 #include "orthomech/analysis/cycle.hpp"
+#include "orthomech/io/units.hpp"
 #include "orthomech/model/model.hpp"
 
 namespace orthomech {
 
+// ---- Positions for outputs -------------------------------------------------------------------
+// The pose of every moving body (its frame's origin x, y and angle, as `pose:` in the file; a
+// particle: x, y) and the world position of every named point of a moving body ("coupler.P.x",
+// "coupler.P.y"), in this order.
+struct PositionColumn {
+  std::string name;  // "crank.x", "crank.angle", "coupler.P.y"
+  Dimension dimension = Dimension::length;
+};
+[[nodiscard]] std::vector<PositionColumn> position_columns(const Model& model);
+// Their values at q (SI), in position_columns order; out is resized.
+void compute_output_positions(const Model& model, const VecX& q, std::vector<double>& out);
+
 struct CycleColumns {
-  int input_display = 2;        // 1-based CSV column of the input in display units (deg or mm)
-  int drive = 0;                // 1-based CSV column of the drive
-  std::vector<int> magnitudes;  // 1-based CSV columns of the reaction magnitudes
+  int input_display = 1;             // 1-based CSV column of the input
+  int drive = 0;                     // 1-based CSV column of the drive
+  std::vector<int> magnitudes;       // 1-based CSV columns of the reaction magnitudes
+  std::vector<int> forces, moments;  // the magnitudes' columns that are forces, moments
 };
 
-// One row per position: input (SI and display unit), time, every measure, the drive, every
-// reaction component, every reaction magnitude; units in the header ("drive [N*m]"). At positions
-// flagged `singular` the drive and reaction cells are empty (not meaningful there). Written
-// atomically (temporary file, then rename). Throws std::runtime_error naming the file on failure.
+// One row per position, every quantity in `units` (units in the header: "drive [N*mm]"):
+// input, time, every measure, every body's pose and named point, every body's velocity and
+// acceleration, the drive, every reaction component, every reaction magnitude, and `limits`
+// (the joints outside their limits there, space-separated; empty inside). Cells that are not
+// reported are empty (drive_reported, component_reported: an unbridged singular position, a
+// component diverging next to a bridged change point). Written atomically
+// (temporary file, then rename). Throws std::runtime_error naming the file on failure.
 CycleColumns write_cycle_csv(const std::filesystem::path& file, const Model& model,
                              const CycleResult& result,
                              const std::vector<ReactionMagnitude>& magnitudes, bool angular,
-                             const std::string& drive_unit);
+                             const UnitSystem& units);
 
 // A gnuplot script, next to the CSV, that writes drive.svg, drive.png, reactions.svg and
-// reactions.png in its own directory. Throws std::runtime_error naming the file on failure.
+// reactions.png in its own directory (forces and moments on separate axes; dead and singular
+// positions marked; the speed in the title). Throws std::runtime_error naming the file on failure.
 void write_cycle_gnuplot(const std::filesystem::path& script, const std::string& csv_name,
-                         const Model& model, const std::vector<ReactionMagnitude>& magnitudes,
-                         const CycleColumns& columns, bool angular, const std::string& drive_unit);
+                         const Model& model, const CycleResult& result,
+                         const std::vector<ReactionMagnitude>& magnitudes,
+                         const CycleColumns& columns, bool angular, const UnitSystem& units,
+                         const std::string& speed_text);
 
 // Writes `text` to `file` atomically. Throws std::runtime_error naming the file on failure.
 void write_file_atomically(const std::filesystem::path& file, const std::string& text);

@@ -11,7 +11,10 @@
 namespace orthomech {
 
 // The text of a mechanism file (`text`, parsed from `origin`) with every body pose replaced by
-// the pose in q. Throws InputError when the text is not the file the model was read from.
+// the pose in q. Throws InputError when the text is not the file the model was read from, when a
+// pose is shared through a YAML alias (editing it would change the other uses), or when the
+// edited text would not re-read as the model with the new poses (checked by reading it back).
+// A UTF-8 byte order mark and CRLF line ends are kept.
 [[nodiscard]] std::string replace_design_poses(const std::string& text, const std::string& origin,
                                                const Model& model, const VecX& q);
 

@@ -116,9 +116,18 @@ struct Gravity {
 };
 // Scalar function of a measure, by linear interpolation in a table (e.g. gas force vs stroke);
 // constant when the table is empty.
+// A table over an angle measure (unit rad) wraps with the turn by default: the measure is taken
+// modulo 2π into [x_0, x_0 + 2π) before the look-up (`wrap: false` in the file turns it off).
 struct Table {
   int measure = -1;
   std::vector<std::pair<double, double>> points;  // (measure value, factor), sorted
+  bool wrap = false;                              // periodic in 2π (angle measures by default)
+};
+// A load that acts only while a measure's velocity has a sign (`active_while` in the file), e.g.
+// a process force on the down-stroke only. measure < 0: always active.
+struct ActiveWhile {
+  int measure = -1;  // a position measure (derivative 0)
+  int sign = 0;      // +1: while its rate is > 0; −1: while < 0
 };
 struct PointForce {  // force at a point: world or body-fixed direction, magnitude × table factor
   PointRef at;
@@ -145,6 +154,7 @@ struct Load {
   std::string name;
   LoadKind kind;
   SourceLocation where;
+  ActiveWhile active_while = {};  // force and torque loads only
 };
 
 // ---- Measures: scalar functions s(q) of position, with derivative order 0/1/2. ---------------
@@ -197,7 +207,26 @@ struct DesignPosition {
   SourceLocation where;
 };
 
+// ---- Initial velocities (file section `initial`; used by simulate). -----------------------
+// The rate at t = 0 of a measure's position quantity (a joint coordinate, a point coordinate, a
+// distance, a body angle), SI (m/s or rad/s). simulate makes the velocity admissible and fits
+// these rates by least squares in the chart coordinates (dynamics/simulate.hpp).
+struct InitialRateSpec {
+  int measure = -1;  // index into Model::measures
+  double rate = 0.0;
+  SourceLocation where;
+};
+struct InitialConditions {
+  std::vector<InitialRateSpec> rates;
+};
+
 struct GeneralSystem;  // model/general_system.hpp
+
+// The units a file declares (`units:`), by name (docs/file-format.md); every value in the Model is
+// SI. Outputs use them by default (io/units.hpp: UnitSystem).
+struct DeclaredUnits {
+  std::string length = "m", angle = "rad", mass = "kg", time = "s", force = "N";
+};
 
 struct AnalysisDefaults {
   int steps = 360;
@@ -218,6 +247,9 @@ struct Model {
   std::vector<Driver> drivers;
   std::vector<DesignPosition> design_positions;
   AnalysisDefaults analysis;
+  DeclaredUnits units;                // as declared by the file (SI when built in code)
+  std::vector<std::string> warnings;  // "file:line:col: warning: element: message", from loading
+  InitialConditions initial;  // initial velocities of simulate (may be empty: at rest)
   // Set by make_general_model (model/general_system.hpp): a free system given by functions,
   // with M(q), instead of bodies, joints and loads (which are then empty).
   std::shared_ptr<const GeneralSystem> general;

@@ -71,8 +71,9 @@ TEST(AssembleCli, Json_StatusAndMeasures_LockedCrank) {
   ASSERT_EQ(r.status, 0) << r.err;
   const auto j = nlohmann::json::parse(r.out);
   EXPECT_EQ(j["status"], "assembled");
-  EXPECT_NEAR(j["measures"]["crank_angle"].get<double>(),
-              53.13010235415598 * std::numbers::pi / 180, 1e-12);
+  // In the file's angle unit (deg): the locked value itself.
+  EXPECT_EQ(j["units"]["angle"], "deg");
+  EXPECT_NEAR(j["measures"]["crank_angle"].get<double>(), 53.13010235415598, 1e-10);
   EXPECT_LE(j["residual"].get<double>(), 1e-12);
   EXPECT_EQ(j["bodies"].size(), 3u);
   EXPECT_EQ(j["joints"].size(), 4u);

@@ -1,10 +1,11 @@
 // `orthomech cycle` (docs/cli.md): exit codes, the JSON document (peaks against the positions it
 // lists, dead points against their closed form), the CSV (header units, one row per position,
-// empty reaction cells at singular positions, RMS recomputed from it), the gnuplot script and
-// plots, and command-line errors.
+// empty cells of the components that diverge next to a change point, RMS recomputed from it), the
+// gnuplot script and plots, and command-line errors.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -59,7 +60,8 @@ std::vector<std::vector<std::string>> read_csv(const fs::path& file) {
 }
 
 TEST(CycleCli, CrankRockerJsonPeaksMatchThePositions) {
-  const CliResult r = run_cli({"cycle", bundled("crank-rocker"), "--json", "--positions"});
+  const CliResult r =
+      run_cli({"cycle", bundled("crank-rocker"), "--json", "--positions", "--units", "si"});
   ASSERT_EQ(r.status, 0) << r.err;
   const auto j = nlohmann::json::parse(r.out);
   EXPECT_EQ(j["status"], "completed");
@@ -104,8 +106,8 @@ TEST(CycleCli, TableIsTheDefault) {
 }
 
 TEST(CycleCli, DoubleRockerStopsAtTheDeadPointWithExitOne) {
-  const CliResult r =
-      run_cli({"cycle", bundled("double-rocker"), "--speed", "10rpm", "--json", "--positions"});
+  const CliResult r = run_cli({"cycle", bundled("double-rocker"), "--speed", "10rpm", "--json",
+                               "--positions", "--units", "si"});
   ASSERT_EQ(r.status, 1) << r.err;
   EXPECT_NE(r.err.find("dead point of driver joint 'A0'"), std::string::npos) << r.err;
   const auto j = nlohmann::json::parse(r.out);
@@ -155,8 +157,8 @@ TEST(CycleCli, ReverseAtDeadPointCloses) {
 
 TEST(CycleCli, TripleCrankSaysWhichComponentsAreIndeterminate) {
   TempDir dir;
-  const CliResult r = run_cli(
-      {"cycle", bundled("triple-crank"), "--steps", "90", "--json", "--out", dir.path.string()});
+  const CliResult r = run_cli({"cycle", bundled("triple-crank"), "--steps", "90", "--json", "--out",
+                               dir.path.string(), "--units", "si"});
   ASSERT_EQ(r.status, 0) << r.err;
   const auto j = nlohmann::json::parse(r.out);
   EXPECT_TRUE(j["peaks"]["drive"]["determinate"].get<bool>());
@@ -171,43 +173,58 @@ TEST(CycleCli, TripleCrankSaysWhichComponentsAreIndeterminate) {
     }
   }
   EXPECT_EQ(j["singular_positions"].size(), 2u);
-  // CSV: the two singular positions have empty drive and reaction cells.
+  // Both change points are bridged on the branch (issue 10 item 3): the axial crank forces
+  // diverge there (the self-stress that appears at the change point), the transverse ones do not.
+  ASSERT_EQ(j["bridges"].size(), 2u);
+  for (const auto& b : j["bridges"]) {
+    const auto& div = b["diverging"];
+    EXPECT_NE(std::find(div.begin(), div.end(), "A1.Fx_local"), div.end());
+    EXPECT_EQ(std::find(div.begin(), div.end(), "A2.Fy_local"), div.end());
+  }
+  // CSV: every position has its drive; at the bridged positions the cells of the diverging
+  // components are empty and the others are filled.
   const auto rows = read_csv(dir.path / "cycle.csv");
   ASSERT_EQ(rows.size(), 91u);
-  size_t drive_col = 0;
-  for (size_t c = 0; c < rows[0].size(); ++c)
+  size_t drive_col = 0, axial_col = 0, transverse_col = 0;
+  for (size_t c = 0; c < rows[0].size(); ++c) {
     if (rows[0][c] == "drive [N*m]") drive_col = c;
+    if (rows[0][c] == "A1.Fx_local [N]") axial_col = c;
+    if (rows[0][c] == "A2.Fy_local [N]") transverse_col = c;
+  }
   ASSERT_GT(drive_col, 0u);
+  ASSERT_GT(axial_col, 0u);
+  ASSERT_GT(transverse_col, 0u);
   int empty = 0;
   for (size_t k = 1; k < rows.size(); ++k) {
     ASSERT_EQ(rows[k].size(), rows[0].size()) << k;
-    if (rows[k][drive_col].empty()) {
-      ++empty;
-      for (size_t c = drive_col; c < rows[k].size(); ++c) EXPECT_EQ(rows[k][c], "");
-    }
+    EXPECT_FALSE(rows[k][drive_col].empty()) << k;
+    EXPECT_FALSE(rows[k][transverse_col].empty()) << k;
+    if (rows[k][axial_col].empty()) ++empty;
   }
-  EXPECT_EQ(empty, 2);
+  EXPECT_GE(empty, 2);  // at least the two grid positions on the change points (90 steps: 4°)
 }
 
 // --out: CSV with units in the header, one row per position, RMS of the drive from the CSV equal
 // to the JSON's; the gnuplot script is always written; plots when gnuplot is there.
 TEST(CycleCli, CsvAndPlots) {
   TempDir dir;
-  const CliResult r =
-      run_cli({"cycle", bundled("slider-crank"), "--json", "--out", dir.path.string()});
+  const CliResult r = run_cli(
+      {"cycle", bundled("slider-crank"), "--json", "--out", dir.path.string(), "--units", "si"});
   ASSERT_EQ(r.status, 0) << r.err;
   const auto j = nlohmann::json::parse(r.out);
   const auto rows = read_csv(dir.path / "cycle.csv");
   ASSERT_EQ(rows.size(), 1u + j["positions"].get<size_t>());
   const auto& head = rows[0];
   EXPECT_EQ(head[0], "input [rad]");
-  EXPECT_EQ(head[1], "input [deg]");
-  EXPECT_EQ(head[2], "time [s]");
+  EXPECT_EQ(head[1], "time [s]");
+  EXPECT_EQ(head.back(), "limits");
   size_t drive_col = 0, slide_n = 0;
   for (size_t c = 0; c < head.size(); ++c) {
     if (head[c] == "drive [N*m]") drive_col = c;
     if (head[c] == "slide.N [N]") slide_n = c;
-    EXPECT_NE(head[c].find(" ["), std::string::npos) << "no unit: " << head[c];
+    if (c + 1 < head.size()) {
+      EXPECT_NE(head[c].find(" ["), std::string::npos) << "no unit: " << head[c];
+    }
   }
   ASSERT_GT(drive_col, 0u);
   ASSERT_GT(slide_n, 0u);
@@ -293,8 +310,8 @@ TEST(CycleCli, OutputDirectoryWithAQuote) {
 TEST(CycleCli, BodyVelocitiesInTheCsv) {
   TempDir dir;
   ::setenv("ORTHOMECH_GNUPLOT", "none", 1);
-  const CliResult r =
-      run_cli({"cycle", bundled("crank-rocker"), "--steps", "12", "--out", dir.path.string()});
+  const CliResult r = run_cli({"cycle", bundled("crank-rocker"), "--steps", "12", "--out",
+                               dir.path.string(), "--units", "si"});
   ::unsetenv("ORTHOMECH_GNUPLOT");
   ASSERT_EQ(r.status, 0) << r.err;
   const auto rows = read_csv(dir.path / "cycle.csv");
@@ -320,7 +337,7 @@ TEST(CycleCli, DriverAndRangeFromTheCommandLine) {
   // A range of the crank at another speed than the file's.
   const CliResult r =
       run_cli({"cycle", bundled("slider-crank"), "--from", "30deg", "--to", "120deg", "--steps",
-               "10", "--speed", "600rpm", "--json", "--positions"});
+               "10", "--speed", "600rpm", "--json", "--positions", "--units", "si"});
   ASSERT_EQ(r.status, 0) << r.err;
   const auto j = nlohmann::json::parse(r.out);
   ASSERT_EQ(j["points"].size(), 10u);

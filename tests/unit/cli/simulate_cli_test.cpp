@@ -58,7 +58,7 @@ TEST(SimulateCli, PrimalFormAndCsv) {
                           "--dt-out", "0.5", "--form", "primal", "--out", dir.string()});
   ASSERT_EQ(r.status, 0) << r.err;
   const std::string csv = test::read_text(dir / "simulate.csv");
-  EXPECT_NE(csv.find("t,P1_x,P1_y"), std::string::npos);
+  EXPECT_NE(csv.find("t [s],P1_x [m],P1_y [m]"), std::string::npos);
   // Three rows (t = 0, 0.5, 1) after the header.
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 4);
   std::filesystem::remove_all(dir);

@@ -5,6 +5,9 @@
 //  - measures: d = ∂s/∂q, ṡ = d u, and ḋu = d²s/dt² along q + t u.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+#include <numbers>
 #include <vector>
 
 #include "orthomech/io/mechanism_file.hpp"
@@ -196,11 +199,20 @@ TEST(Measures, TableFactorInterpolatesLinearlyAndClamps) {
   const Model model = parse_mechanism(test::kZooYaml, "zoo");
   const auto& push = std::get<PointForce>(find_load(model, "push").kind);
   VecX q = model.design_q();
-  // m_rev = φ_a − 0 = q(2); table [(-1, 0.5), (2, 1.5)]: factor = 0.5 + (φ + 1)/3.
-  for (const double phi : {-3.0, -1.0, 0.0, 0.4, 2.0, 5.0}) {
+  // m_rev = φ_a − 0 = q(2); table [(-1, 0.5), (2, 1.5)]: factor = 0.5 + (φ + 1)/3. The table is
+  // over an angle, so it wraps with the turn by default: φ is first taken into [−1, −1 + 2π).
+  ASSERT_TRUE(push.table.wrap);
+  constexpr double kTurn = 2.0 * std::numbers::pi;
+  Table unwrapped = push.table;
+  unwrapped.wrap = false;
+  for (const double phi : {-3.0, -1.0, 0.0, 0.4, 2.0, 5.0, 5.0 + kTurn, 0.4 - 3.0 * kTurn}) {
     q(2) = phi;
-    const double clamped = std::clamp(phi, -1.0, 2.0);
-    EXPECT_NEAR(table_factor(model, push.table, q), 0.5 + (clamped + 1.0) / 3.0, 1e-15) << phi;
+    const double turned = phi + kTurn * std::ceil(-(phi + 1.0) / kTurn - 1e-15);  // into [−1, …)
+    const double clamped = std::clamp(turned, -1.0, 2.0);
+    // 4 ulp of a few turns: the wrap subtracts multiples of 2π.
+    EXPECT_NEAR(table_factor(model, push.table, q), 0.5 + (clamped + 1.0) / 3.0, 1e-14) << phi;
+    const double plain = std::clamp(phi, -1.0, 2.0);
+    EXPECT_NEAR(table_factor(model, unwrapped, q), 0.5 + (plain + 1.0) / 3.0, 1e-15) << phi;
   }
 }
 

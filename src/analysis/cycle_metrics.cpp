@@ -1,0 +1,271 @@
+#include "orthomech/analysis/cycle_metrics.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "orthomech/analysis/validate.hpp"
+#include "orthomech/model/measures.hpp"
+
+namespace orthomech {
+
+namespace {
+
+// The positions that carry a drive (drive_reported: bridged values next to a change point
+// count), in sweep order.
+std::vector<size_t> regular_positions(const CycleResult& r) {
+  std::vector<size_t> k;
+  for (size_t i = 0; i < r.points.size(); ++i)
+    if (drive_reported(r.points[i])) k.push_back(i);
+  return k;
+}
+
+// The extreme of samples y at index k refined by the parabola through k − 1, k, k + 1 (M1):
+// vertex offset δ = (y₋ − y₊) / (2 (y₋ − 2y + y₊)) in steps, value y − (y₋ − y₊) δ / 4. Times and
+// inputs are interpolated linearly in δ. Neighbours wrap round on a full cycle; at the ends of a
+// range (or where the parabola is flat) the sample itself is kept.
+SeriesExtreme refined_extreme(const CycleResult& r, const std::vector<double>& y, size_t k,
+                              bool cyclic, double period) {
+  const size_t n = y.size();
+  const DrivenPointView p = r.points[k];
+  SeriesExtreme e{y[k], p.input, p.time};
+  if (n < 3 || (!cyclic && (k == 0 || k + 1 == n))) return e;
+  const size_t km = k == 0 ? n - 1 : k - 1, kp = k + 1 == n ? 0 : k + 1;
+  const double ym = y[km], yp = y[kp];
+  const double curvature = ym - 2.0 * y[k] + yp;
+  if (curvature == 0.0) return e;
+  const double delta = 0.5 * (ym - yp) / curvature;  // (M1)
+  if (!(std::abs(delta) <= 1.0)) return e;
+  e.value = y[k] - 0.25 * (ym - yp) * delta;
+  // Step in time and input towards the neighbour on δ's side (a wrap adds one period).
+  const size_t kn = delta > 0.0 ? kp : km;
+  const DrivenPointView q = r.points[kn];
+  double dt = q.time - p.time, ds = q.input - p.input;
+  if (delta > 0.0 && kn == 0) dt += period, ds = r.points[1].input - r.points[0].input;
+  if (delta < 0.0 && kn == n - 1) dt -= period, ds = r.points[0].input - r.points[1].input;
+  e.time = p.time + std::abs(delta) * dt;
+  e.input = p.input + std::abs(delta) * ds;
+  return e;
+}
+
+// Extremes, range and time ratio of the series y over the positions (all of them).
+StrokeMetric stroke(const CycleResult& r, std::string name, std::string unit,
+                    const std::vector<double>& y, bool cyclic, double period) {
+  StrokeMetric s;
+  s.name = std::move(name);
+  s.unit = std::move(unit);
+  const size_t kmin = static_cast<size_t>(std::min_element(y.begin(), y.end()) - y.begin());
+  const size_t kmax = static_cast<size_t>(std::max_element(y.begin(), y.end()) - y.begin());
+  s.min = refined_extreme(r, y, kmin, cyclic, period);
+  s.max = refined_extreme(r, y, kmax, cyclic, period);
+  s.range = s.max.value - s.min.value;
+  if (cyclic && s.range > 0.0) {
+    // Forward: from the minimum to the maximum, in time, round the period.
+    double forward = std::fmod(s.max.time - s.min.time, period);
+    if (forward < 0.0) forward += period;
+    s.forward_time = forward;
+    s.return_time = period - forward;
+    if (s.return_time > 0.0) s.time_ratio = s.forward_time / s.return_time;
+  }
+  return s;
+}
+
+}  // namespace
+
+double limit_coordinate(const Model& model, int joint, const VecX& q) {
+  const Joint& j = model.joints[static_cast<size_t>(joint)];
+  const double x = compute_scalar(model, JointCoordinate{joint}, q, nullptr).value;
+  if (!std::holds_alternative<Revolute>(j.kind)) return x;
+  const double mid = j.limits ? 0.5 * (j.limits->x() + j.limits->y()) : 0.0;
+  constexpr double kTurn = 2.0 * std::numbers::pi;
+  return x - kTurn * std::round((x - mid) / kTurn);
+}
+
+bool outside_limits(const Model& model, int joint, const VecX& q) {
+  const Joint& j = model.joints[static_cast<size_t>(joint)];
+  if (!j.limits) return false;
+  const double x = limit_coordinate(model, joint, q);
+  return x < j.limits->x() - kLimitSlack || x > j.limits->y() + kLimitSlack;
+}
+
+CycleMetrics compute_cycle_metrics(const Model& model, const CycleResult& r,
+                                   const CycleMetricsOptions& opt) {
+  CycleMetrics out;
+  const size_t n = r.points.size();
+  if (n == 0) return out;
+  // A full cycle: positions at t_k = k T / N, k = 0 … N − 1 (no repeated end), so T = N Δt.
+  // (Not when the sweep stopped early, at a dead point or a failure, or reversed.)
+  const bool cyclic =
+      opt.full_cycle && n >= 3 && r.reversals == 0 && r.status == CycleStatus::completed;
+  const double dt = n >= 2 ? r.points[1].time - r.points[0].time : 0.0;
+  const double period = cyclic ? static_cast<double>(n) * dt : r.points.back().time;
+
+  // ---- loop angles over the cycle ----------------------------------------------------------
+  auto joint_names = [&](const int* joints) {
+    std::string s;
+    for (int k = 0; k < 4; ++k)
+      s += (k ? "-" : "") + model.joints[static_cast<size_t>(joints[k])].name;
+    return s;
+  };
+  for (const FourBarLoop& l : find_four_bar_loops(model, opt.driver_joint)) {
+    LoopAngleMetric m;
+    m.loop = joint_names(l.joints);
+    bool first = true;
+    for (const DrivenPointView& p : r.points) {
+      const double mu = transmission_angle(model, l, p.q);
+      const double dev = std::min(mu, std::numbers::pi - mu);
+      if (first || mu < m.min.value) m.min = {mu, p.input, p.time};
+      if (first || mu > m.max.value) m.max = {mu, p.input, p.time};
+      if (first || dev < m.worst.value) m.worst = {dev, p.input, p.time};
+      first = false;
+    }
+    out.loops.push_back(m);
+  }
+  for (const SliderCrankLoop& l : find_slider_crank_loops(model)) {
+    LoopAngleMetric m;
+    m.loop = joint_names(l.joints);
+    m.slider_crank = true;
+    bool first = true;
+    for (const DrivenPointView& p : r.points) {
+      const double alpha = pressure_angle(model, l, p.q);
+      if (first || alpha < m.min.value) m.min = {alpha, p.input, p.time};
+      if (first || alpha > m.max.value) m.max = {alpha, p.input, p.time};
+      first = false;
+    }
+    m.worst = m.max;
+    out.loops.push_back(m);
+  }
+
+  // ---- drive power and energy fluctuation --------------------------------------------------
+  const std::vector<size_t> reg = regular_positions(r);
+  PowerMetric& pw = out.power;
+  if (reg.size() >= 2) {
+    pw.available = true;
+    std::vector<double> P(reg.size());
+    for (size_t i = 0; i < reg.size(); ++i) {
+      const DrivenPointView p = r.points[reg[i]];
+      P[i] = p.drive * p.input_rate;  // power of the drive into the joint
+      if (i == 0 || P[i] > pw.max.value) pw.max = {P[i], p.input, p.time};
+      if (i == 0 || P[i] < pw.min.value) pw.min = {P[i], p.input, p.time};
+      pw.peak = std::max(pw.peak, std::abs(P[i]));
+    }
+    // Trapezoid rule over the positions, closed round the period on a full cycle.
+    const size_t segments = cyclic && reg.size() == n ? reg.size() : reg.size() - 1;
+    auto t_of = [&](size_t i) {
+      return i < reg.size() ? r.points[reg[i]].time : r.points[reg[0]].time + period;
+    };
+    auto P_of = [&](size_t i) { return P[i % reg.size()]; };
+    double work = 0.0, span = 0.0;
+    for (size_t i = 0; i < segments; ++i) {
+      const double h = t_of(i + 1) - t_of(i);
+      work += 0.5 * h * (P_of(i) + P_of(i + 1));
+      span += h;
+    }
+    pw.mean = span > 0.0 ? work / span : 0.0;
+    // E(t) = ∫ (P − P̄) dt at every position; ΔE = max − min.
+    double E = 0.0;
+    pw.energy_max = pw.energy_min = {0.0, r.points[reg[0]].input, r.points[reg[0]].time};
+    for (size_t i = 0; i < segments; ++i) {
+      const double h = t_of(i + 1) - t_of(i);
+      E += 0.5 * h * (P_of(i) + P_of(i + 1)) - pw.mean * h;
+      if (i + 1 >= reg.size()) break;  // back at the start
+      const DrivenPointView p = r.points[reg[i + 1]];
+      if (E > pw.energy_max.value) pw.energy_max = {E, p.input, p.time};
+      if (E < pw.energy_min.value) pw.energy_min = {E, p.input, p.time};
+    }
+    pw.energy_fluctuation = pw.energy_max.value - pw.energy_min.value;
+    for (const size_t k : reg) pw.mean_speed += std::abs(r.points[k].input_rate);
+    pw.mean_speed /= static_cast<double>(reg.size());  // ω̄: mean |ṡ| over the positions
+    const bool angular =
+        opt.driver_joint >= 0 &&
+        std::holds_alternative<Revolute>(model.joints[static_cast<size_t>(opt.driver_joint)].kind);
+    if (opt.speed_fluctuation && *opt.speed_fluctuation > 0.0 && angular && pw.mean_speed > 0.0)
+      pw.flywheel_inertia =
+          pw.energy_fluctuation / (*opt.speed_fluctuation * pw.mean_speed * pw.mean_speed);
+  }
+
+  // ---- strokes: prismatic joints and position measures --------------------------------------
+  std::vector<double> y(n);
+  for (size_t j = 0; j < model.joints.size(); ++j) {
+    if (!std::holds_alternative<Prismatic>(model.joints[j].kind)) continue;
+    if (static_cast<int>(j) == opt.driver_joint) continue;
+    bool measured = false;  // a measure of this joint's coordinate reports it already
+    for (const Measure& m : model.measures)
+      if (const auto* jc = std::get_if<JointCoordinate>(&m.kind))
+        measured = measured || (jc->joint == static_cast<int>(j) && m.derivative == 0);
+    if (measured) continue;
+    for (size_t k = 0; k < n; ++k)
+      y[k] =
+          compute_scalar(model, JointCoordinate{static_cast<int>(j)}, VecX(r.points[k].q), nullptr)
+              .value;
+    out.strokes.push_back(stroke(r, model.joints[j].name, "m", y, cyclic, period));
+  }
+  for (size_t i = 0; i < model.measures.size(); ++i) {
+    const Measure& m = model.measures[i];
+    if (m.derivative != 0) continue;
+    if (const auto* jc = std::get_if<JointCoordinate>(&m.kind))
+      if (jc->joint == opt.driver_joint) continue;  // the input itself
+    for (size_t k = 0; k < n; ++k) y[k] = r.points[k].measures[i];
+    out.strokes.push_back(stroke(r, m.name, m.unit, y, cyclic, period));
+  }
+  // Named points that no joint uses (tracer points: a coupler point, a foot) and no measure
+  // reports: the range of their x and y.
+  auto used_by_joint = [&](int body, const Vec2& local) {
+    for (const Joint& j : model.joints) {
+      const PointRef* refs[2] = {nullptr, nullptr};
+      std::visit(
+          [&](const auto& k) {
+            if constexpr (requires { k.pi; }) refs[0] = &k.pi, refs[1] = &k.pj;
+          },
+          j.kind);
+      for (const PointRef* ref : refs)
+        if (ref && ref->body == body) {
+          const Body& b = model.bodies[static_cast<size_t>(body)];
+          if ((ref->s + b.com_local - local).norm() < 1e-12) return true;
+        }
+    }
+    return false;
+  };
+  for (size_t b = 0; b < model.bodies.size(); ++b) {
+    const Body& body = model.bodies[b];
+    for (const auto& [name, local] : body.points) {
+      if (used_by_joint(static_cast<int>(b), local)) continue;
+      for (int axis = 0; axis < 2; ++axis) {
+        bool measured = false;
+        for (const Measure& m : model.measures)
+          if (const auto* pc = std::get_if<PointCoordinate>(&m.kind))
+            measured = measured || (m.derivative == 0 && pc->axis == axis &&
+                                    pc->point.body == static_cast<int>(b) &&
+                                    (pc->point.s + body.com_local - local).norm() < 1e-12);
+        if (measured) continue;
+        const PointRef ref{static_cast<int>(b), local - body.com_local, ""};
+        for (size_t k = 0; k < n; ++k)
+          y[k] =
+              compute_scalar(model, PointCoordinate{ref, axis}, VecX(r.points[k].q), nullptr).value;
+        out.strokes.push_back(
+            stroke(r, body.name + "." + name + (axis == 0 ? ".x" : ".y"), "m", y, cyclic, period));
+      }
+    }
+  }
+
+  // ---- joints outside their limits ---------------------------------------------------------
+  for (size_t j = 0; j < model.joints.size(); ++j) {
+    const Joint& joint = model.joints[j];
+    if (!joint.limits) continue;
+    LimitExcursion ex;
+    ex.joint = static_cast<int>(j);
+    double worst = 0.0;
+    for (const DrivenPointView& p : r.points) {
+      const VecX q = p.q;
+      if (!outside_limits(model, ex.joint, q)) continue;
+      const double x = limit_coordinate(model, ex.joint, q);
+      const double beyond = std::max(joint.limits->x() - x, x - joint.limits->y());
+      if (ex.positions++ == 0) ex.first = {x, p.input, p.time};
+      if (beyond > worst) worst = beyond, ex.furthest = {x, p.input, p.time};
+    }
+    if (ex.positions > 0) out.limits.push_back(ex);
+  }
+  return out;
+}
+
+}  // namespace orthomech

@@ -1,0 +1,153 @@
+// `assemble --write` edits the pose numbers in the file text (issue 17, "nothing lost"): for every
+// YAML feature the edited text is either re-read (here, by the reader, independently of the
+// writer's own check) as exactly the mechanism with the new poses, or refused with a reason and
+// nothing written. One test per feature: flow and block style, anchors without and with aliases,
+// merge keys, a UTF-8 byte order mark, CRLF line ends.
+#include "orthomech/io/mechanism_writer.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "orthomech/error.hpp"
+#include "orthomech/io/mechanism_file.hpp"
+#include "support/cli_runner.hpp"
+
+namespace orthomech {
+namespace {
+
+// A two-link arm, SI units, in the style given by `pose_a` and `pose_b` (the text after `pose:`).
+std::string arm(const std::string& pose_a, const std::string& pose_b,
+                const std::string& extra = "") {
+  return "orthomech: 1\n"
+         "bodies:\n"
+         "  - name: upper\n"
+         "    mass: 1\n"
+         "    inertia: 0.1\n"
+         "    com: [0.5, 0]\n"
+         "    pose: " +
+         pose_a +
+         "\n"
+         "    points: {E: [1, 0]}\n"
+         "  - name: fore\n"
+         "    mass: 2\n"
+         "    inertia: 0.2\n"
+         "    pose: " +
+         pose_b + "\n" + extra +
+         "joints:\n"
+         "  - {name: S, type: revolute, connects: [ground.origin, upper.origin]}\n"
+         "  - {name: E, type: revolute, connects: [upper.E, fore.origin]}\n";
+}
+
+// New design coordinates: every coordinate moved (by 0.1 + k/100, a value that is not short in
+// decimal), so every pose number must be rewritten.
+VecX moved(const Model& m) {
+  VecX q = m.design_q();
+  for (Eigen::Index k = 0; k < q.size(); ++k) q(k) += 0.1 + 0.01 * static_cast<double>(k) / 3.0;
+  return q;
+}
+
+// The writer's output re-read by the reader gives the coordinates asked for. Tolerance: the
+// shortest round-trip text in file units (SI here) is exact; the centre of mass adds one
+// rotation of com (a few ulps of 1 m).
+constexpr double kRoundTrip = 1e-14;
+
+void expect_round_trip(const std::string& text) {
+  const Model m = parse_mechanism(text, "arm.yaml");
+  const VecX q = moved(m);
+  const std::string out = replace_design_poses(text, "arm.yaml", m, q);
+  const Model back = parse_mechanism(out, "arm.yaml");
+  EXPECT_LE((back.design_q() - q).cwiseAbs().maxCoeff(), kRoundTrip) << out;
+  ASSERT_EQ(back.bodies.size(), m.bodies.size());
+  for (size_t b = 0; b < m.bodies.size(); ++b) {
+    EXPECT_EQ(back.bodies[b].mass, m.bodies[b].mass);
+    EXPECT_EQ(back.bodies[b].points, m.bodies[b].points);
+  }
+}
+
+TEST(MechanismWriter, FlowStylePosesRoundTrip) { expect_round_trip(arm("[0, 0, 0]", "[1, 0, 0]")); }
+
+TEST(MechanismWriter, BlockStylePosesRoundTrip) {
+  expect_round_trip(arm("\n      - 0\n      - 0\n      - 0", "\n      - 1\n      - 0\n      - 0"));
+}
+
+TEST(MechanismWriter, AnchoredPoseWithoutAliasRoundTrips) {
+  expect_round_trip(arm("&a [0, 0, 0]", "&b [1, 0, 0]"));
+}
+
+TEST(MechanismWriter, CrlfLineEndsRoundTripAndAreKept) {
+  std::string text = arm("[0, 0, 0]", "[1, 0, 0]");
+  std::string crlf;
+  for (char c : text) crlf += c == '\n' ? std::string("\r\n") : std::string(1, c);
+  expect_round_trip(crlf);
+  const Model m = parse_mechanism(crlf, "arm.yaml");
+  const std::string out = replace_design_poses(crlf, "arm.yaml", m, moved(m));
+  EXPECT_EQ(out.find("\n"), out.find("\r\n") + 1);  // the first line end is still CRLF
+}
+
+TEST(MechanismWriter, ByteOrderMarkIsKeptAndTheFileRoundTrips) {
+  const std::string text = "\xEF\xBB\xBF" + arm("[0, 0, 0]", "[1, 0, 0]");
+  expect_round_trip(text);
+  const Model m = parse_mechanism(text, "arm.yaml");
+  EXPECT_EQ(replace_design_poses(text, "arm.yaml", m, moved(m)).rfind("\xEF\xBB\xBF", 0), 0u);
+}
+
+// A pose shared through an alias: one edit would change both bodies (the corrupt file of
+// issue 17); refused at the pose, with the reason.
+TEST(MechanismWriter, PoseSharedThroughAnAliasIsRefused) {
+  const std::string text = arm("&p [0, 0, 0]", "*p");
+  const Model m = parse_mechanism(text, "arm.yaml");
+  try {
+    (void)replace_design_poses(text, "arm.yaml", m, moved(m));
+    FAIL() << "an aliased pose was edited";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where().line, 7);
+    EXPECT_NE(e.message().find("alias"), std::string::npos) << e.message();
+  }
+}
+
+// A particle's pose reused as a point of another body: editing the pose would move the point.
+TEST(MechanismWriter, PoseReusedAsAPointIsRefused) {
+  const std::string text =
+      "orthomech: 1\n"
+      "bodies:\n"
+      "  - {name: bob, type: particle, mass: 1, pose: &p [1, 0]}\n"
+      "  - {name: bar, mass: 1, inertia: 0.1, pose: [0, 0, 0], points: {B: *p}}\n"
+      "joints:\n"
+      "  - {name: O, type: revolute, connects: [ground.origin, bar.origin]}\n"
+      "  - {name: B, type: revolute, connects: [bar.B, bob.origin]}\n";
+  const Model m = parse_mechanism(text, "p.yaml");
+  EXPECT_THROW((void)replace_design_poses(text, "p.yaml", m, moved(m)), InputError);
+}
+
+// Merge keys are not part of the format: the reader refuses them, so nothing is ever written.
+TEST(MechanismWriter, MergeKeysAreRefusedByTheReader) {
+  const std::string text = arm("[0, 0, 0]", "[1, 0, 0]") +
+                           "loads:\n"
+                           "  - &g {name: g1, type: gravity}\n"
+                           "  - {<<: *g, name: g2}\n";
+  EXPECT_THROW((void)parse_mechanism(text, "m.yaml"), InputError);
+}
+
+// Through the command line: `assemble --in-place` on a file with an aliased pose exits 2 with the
+// reason printed once ("error:" once), and the input is untouched byte for byte.
+TEST(MechanismWriter, InPlaceOnAnAliasedPoseLeavesTheInputUntouched) {
+  namespace fs = std::filesystem;
+  const fs::path file = fs::temp_directory_path() / "orthomech-writer-alias.yaml";
+  // Drawn open so that assembly moves the bodies (the pin E is 0.5 m apart).
+  const std::string text = arm("&p [0, 0, 0.5]", "*p");
+  std::ofstream(file, std::ios::binary) << text;
+  const test::CliResult r = test::run_cli({"assemble", file.string(), "--in-place"});
+  const std::string after = test::read_text(file);
+  fs::remove(file);
+  EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_EQ(after, text);
+  EXPECT_NE(r.err.find("alias"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("error:"), r.err.rfind("error:")) << r.err;  // one prefix
+  EXPECT_EQ(r.out, "");
+}
+
+}  // namespace
+}  // namespace orthomech
