@@ -236,6 +236,17 @@ int run_simulate(const SimulateCliOptions& opt) {
     for (const ChartSwitch& c : res.chart_switches)
       sw.push_back({{"t", U.time.from_si(c.t)}, {"from", c.from}, {"to", c.to}});
     j["chart_switches"] = sw;
+    nlohmann::json cp = nlohmann::json::array();
+    for (const ChangePointPassage& c : res.passages)
+      cp.push_back({{"t", U.time.from_si(c.t)},
+                    {"from", U.time.from_si(c.t_from)},
+                    {"to", U.time.from_si(c.t_to)},
+                    {"quality_from", c.sigma_from},
+                    {"quality_to", c.sigma_to},
+                    {"velocity_jump", c.velocity_jump},
+                    {"tangent_cosine", c.tangent_cosine}});
+    j["change_points_passed"] = res.passages.size();
+    j["change_points"] = cp;
     j["samples"] = series_json(model, res, U, opt.positions);
     out << j.dump(2) << '\n';
   } else {
@@ -247,7 +258,8 @@ int run_simulate(const SimulateCliOptions& opt) {
     out << "steps       " << res.steps << " (" << res.evaluations << " evaluations";
     if (res.rejected_steps > 0) out << ", " << res.rejected_steps << " rejected";
     if (res.jacobians > 0) out << ", " << res.jacobians << " Jacobians";
-    out << "), " << res.chart_switches.size() << " chart switches\n";
+    out << "), " << res.chart_switches.size() << " chart switches, " << res.passages.size()
+        << " change points passed\n";
     const std::string eu = " " + U.energy.name;
     out << "energy      initial " << g(U.energy.from_si(res.energy_initial)) << eu << ", final "
         << g(U.energy.from_si(res.energy_final)) << eu << ", max drift "

@@ -29,7 +29,8 @@ ChartSolver::ChartSolver(const Model& model, int rank)
       piv_(Eigen::VectorXi::Zero(rank)),
       EDs_(rank, rank),
       br_(rank),
-      xd_(rank) {
+      xd_(rank),
+      sw_(rank) {
   triplets_.reserve(static_cast<size_t>(8 * rank + 8));
 }
 
@@ -132,6 +133,64 @@ void ChartSolver::solve_transposed(const MatX& Et, const VecX& c, VecX& lambda) 
   }
   (void)Et;
   for (int i = 0; i < r_; ++i) lambda(chart_.rows[static_cast<size_t>(i)]) = lr(i);
+}
+
+double ChartSolver::polish_positions(VecX& q, MatX& Et, VecX& f, VecX& dq, int iterations) {
+  compute_constraint_residual_and_jacobian(model_, q, f, Et);
+  double residual = f.size() ? f.cwiseAbs().maxCoeff() : 0.0;
+  if (!factor(Et)) return residual;
+  for (int it = 0; it < iterations && residual > 0.0; ++it) {
+    solve(f, dq);
+    VecX trial = q;  // (set-up of a passage only: not a hot path)
+    integrate_positions(model_, trial, dq, -1.0);
+    VecX f_trial(f.size());
+    MatX Et_trial(Et.rows(), Et.cols());
+    compute_constraint_residual_and_jacobian(model_, trial, f_trial, Et_trial);
+    const double r_trial = f_trial.cwiseAbs().maxCoeff();
+    if (!(r_trial <= 0.5 * residual)) break;
+    q = trial;
+    f = f_trial;
+    Et = Et_trial;
+    residual = r_trial;
+    if (!factor(Et)) break;
+  }
+  (void)factor(Et);
+  return residual;
+}
+
+double ChartSolver::estimate_sigma_min(const VecX& col_scale, VecX& w) {
+  if (r_ == 0) return std::numeric_limits<double>::infinity();
+  if (w.size() != r_ || !(w.norm() > 0.0) || !w.allFinite()) {
+    w.resize(r_);  // a start with no structure (set-up or after a breakdown)
+    for (int k = 0; k < r_; ++k) w(k) = 1.0 + 0.37 * std::sin(1.0 + 3.1 * k);
+  }
+  // B̃ = B S with B = E_RDᵀ: B̃⁻ᵀ = B⁻ᵀ S⁻¹ and B̃⁻¹ = S⁻¹ B⁻¹ (w and z indexed by D).
+  double sigma = 0.0;
+  constexpr int kIterations = 2;
+  for (int it = 0; it < kIterations; ++it) {
+    w /= w.norm();
+    for (int k = 0; k < r_; ++k)  // y = B⁻ᵀ (S⁻¹ ŵ)
+      sw_(k) = w(k) / col_scale(chart_.dependent[static_cast<size_t>(k)]);
+    if (sparse_) {
+      xd_ = slu_.transpose().solve(sw_);
+      sw_ = xd_;
+    } else {
+      lu_solve_transposed(ED_, piv_, sw_);
+    }
+    const double ny = sw_.norm();
+    if (!(ny > 0.0) || !std::isfinite(ny)) return 0.0;
+    sigma = 1.0 / ny;
+    if (sparse_) {  // z = S⁻¹ B⁻¹ y
+      xd_ = slu_.solve(sw_);
+      sw_ = xd_;
+    } else {
+      lu_solve(ED_, piv_, sw_);
+    }
+    for (int k = 0; k < r_; ++k)
+      w(k) = sw_(k) / col_scale(chart_.dependent[static_cast<size_t>(k)]);
+    if (!w.allFinite()) return 0.0;
+  }
+  return sigma;
 }
 
 SolveResult ChartSolver::correct_positions(VecX& q, MatX& Et, VecX& f, VecX& dq, double tolerance,

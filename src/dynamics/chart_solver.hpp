@@ -48,6 +48,19 @@ class ChartSolver {
   SolveResult correct_positions(VecX& q, MatX& Et, VecX& f, VecX& dq, double tolerance,
                                 double max_gain = 0.0, bool* near_singular = nullptr,
                                 bool prepared = false);
+  // Newton in the chart beyond a tolerance: iterates from a corrected q while max |f| falls by
+  // at least half per iteration (at most `iterations`), down to rounding. Next to a change point
+  // F off f(q) = 0 is the tangent of the level set f = c, which bends away from the branch by
+  // ~c/σ² at a distance σ: the passage evaluates its equations at positions polished to
+  // rounding. Leaves f, Eᵀ at the returned q, factorised in the chart. Returns max |f|.
+  double polish_positions(VecX& q, MatX& Et, VecX& f, VecX& dq, int iterations);
+  // Estimate of the smallest singular value of the factorised block scaled to the mass metric,
+  // σ_min(E_RDᵀ S_D) with S = diag(col_scale) (col_scale = 1/√M_kk): two steps of inverse
+  // iteration on (B̃ᵀB̃)⁻¹, B̃ = E_RDᵀ S_D, warm-started from w (size rank, kept by the caller
+  // between calls). Returns 1/‖B̃⁻ᵀ ŵ‖ for the unit iterate ŵ, an upper bound of σ_min that
+  // converges to it. Near a change point σ_min → 0 linearly in the distance to it (E loses
+  // rank there, so does every chart block). Allocation-free on the dense path.
+  [[nodiscard]] double estimate_sigma_min(const VecX& col_scale, VecX& w);
   [[nodiscard]] const Chart& chart() const { return chart_; }
   void set_chart(const Chart& c);
   [[nodiscard]] int rank() const { return r_; }
@@ -69,6 +82,7 @@ class ChartSolver {
   bool analyzed_ = false;  // slu_ has the ordering of pattern_*
   std::vector<int> pattern_inner_, pattern_outer_;
   VecX br_, xd_;  // r
+  VecX sw_;       // r: work vector of estimate_sigma_min
 };
 
 }  // namespace orthomech::detail

@@ -5,6 +5,8 @@
 #include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <limits>
 #include <stdexcept>
 #include <vector>
 
@@ -87,6 +89,59 @@ constexpr double kSpreadLimit = 4.0;
 // left uncorrected (its residual is the integrator's local error) rather than risk a jump to
 // another branch; counted in SimulateResult::uncorrected_steps.
 constexpr double kMaxCorrectionGain = 1e4;
+
+// Change points (docs/theory.md, "Change points"; (C1)–(C6) there). σ̂ is the chart quality,
+// σ_min of the chart's dependent block in the mass metric relative to the largest mass-scaled
+// column norm of Eᵀ at the start; it falls linearly to 0 at a change point.
+// Watch: below this σ̂, a falling σ̂ is extrapolated to its zero t* (C1).
+constexpr double kWatchQuality = 0.3;
+// Reach: t* within this many of the last step sizes is within reach of the next step (odeint's
+// controllers grow a step by at most 5): the integrator is stopped and the point approached.
+constexpr double kReachSteps = 6.0;
+// Pass: at σ̂ ≤ pass_quality the point is passed by one passage step (C3)–(C5), first tried at
+// kPassQuality. A passage whose checks fail is tried again from 4 times closer (its truncation
+// error, O(h⁵), falls 1000-fold; a branch jump does not), down to kPassQualityFloor, where the
+// run stops. Closer is not always better: off f(q) = 0 by c, F bends by ~c/σ² (rounding c):
+// the passage's own noise grows as σ̂ falls.
+constexpr double kPassQuality = 1e-3;
+constexpr double kPassQualityFloor = 1e-6;
+// Approach: each approach segment covers at most this fraction of the way to t* and aims at
+// kApproachTarget · pass_quality.
+constexpr double kApproachFraction = 0.75;
+constexpr double kApproachTarget = 0.8;
+// Steps of an approach segment at most this fraction of the estimated distance to t*: far from
+// the point σ̂ is not yet linear and t* is rough; every step re-estimates it (C2).
+constexpr double kApproachStep = 0.25;
+constexpr int kMaxApproaches = 60;
+// A falling σ̂ whose parabola through the last three values bottoms out above this fraction of
+// the current value is heading for a minimum above 0 (a well-conditioned position), not for a
+// change point (where σ̂ is linear in t near its zero).
+constexpr double kMinimumAboveZero = 0.5;
+// (C2') a V of σ̂ through 0 across two steps: the third σ̂ within this fraction of the V's.
+constexpr double kVShapeTolerance = 1.0;
+// Passage checks (C6). Velocity jump: the quadrature velocity at the landing is admissible up
+// to the step's truncation and rounding error; a landing on another branch removes the
+// velocity's component normal to that branch's tangent (8e-2 relative on the N = 40 bar with
+// link0 held, O(1) in general). The bound is rtol/10 within [1e-9, 1e-7]: the passage is then
+// about as accurate as the steps around it (20 passages with 3e-9 put B0 of the N = 40 bar 3e-6
+// off at 20 s), and a branch jump is still refused by decades.
+// Where the passage's own rounding noise is larger (the corrector stalls above 1e-10: 4e-10 on
+// the triple-crank), the bound is 10× that noise, up to kPassageJumpCeiling.
+constexpr double kPassageJumpCeiling = 1e-7;
+[[nodiscard]] double passage_velocity_jump_bound(double rtol) {
+  return std::clamp(0.1 * rtol, 1e-9, kPassageJumpCeiling);
+}
+constexpr int kPassageIterations = 8;
+// Corrector: iterated until the change of u (relative) is below kPassageConverged or stalls at
+// the rounding noise of the stages (~1e-10 … 4e-10 measured next to the point); accepted if the
+// last change is below kPassageConvergence, 10× under the jump bound's floor.
+constexpr double kPassageConverged = 1e-11;
+constexpr double kPassageConvergence = 1e-9;
+// Landing: σ̂ after the passage at least this fraction of σ̂ before (beyond the point, regular).
+constexpr double kLandingQualityRatio = 0.2;
+// An ordinary step whose velocity changes by more than this (relative, mass metric) when made
+// admissible at its corrected position left its branch (its own error is ~rtol).
+constexpr double kStepVelocityJump = 1e-2;
 
 // Thrown inside a right-hand side when the equations cannot be evaluated (singular chart block
 // or singular G); caught in simulate() and returned as a status (never escapes the library).
@@ -439,6 +494,23 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
   }
   const Mobility mob = compute_mobility(model, q);
   const int rank = mob.rank;
+  // A start on a change point: E has lost rank there, so the velocity has more admissible
+  // directions than on any branch through it and no branch is defined by the start. Refused
+  // when the rank is below that at the design position (the generic rank of the file).
+  if (initial.q.size() == model.nq && initial.q != model.design_q()) {
+    VecX qd = model.design_q();
+    if (project_positions(model, qd, popt).status == SolveStatus::converged) {
+      const int generic = compute_mobility(model, qd).rank;
+      if (rank < generic) {
+        result.status = SimulateStatus::singular;
+        result.message =
+            "the initial position is a change point: rank E = " + std::to_string(rank) +
+            " there, " + std::to_string(generic) +
+            " at the design position (the motion's branch is not defined there)";
+        return result;
+      }
+    }
+  }
   const int n = model.n, nq = model.nq, na = n - rank;
   Dynamics dyn(model, rank, options);
   result.components = reaction_components(model);
@@ -504,6 +576,54 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
   VecX f(model.nc), dq(n), u_step(VecX::Zero(n));
   double spread_limit = kSpreadLimit;  // chart monitor threshold (raised while no chart helps)
 
+  // Output grid T0 + k·dt_out ≤ T1. The integration runs in segments (between change-point
+  // passages and approaches): every output time is emitted once, whatever segment reaches it.
+  const double T0 = initial.t, T1 = initial.t + options.t_end;
+  const double dt_out = options.dt_out > 0.0 ? options.dt_out : options.t_end / 100.0;
+  const double grid_slack = 1e-12 * std::max(1.0, std::abs(T1));
+  const double end_slack = 1e-14 * std::max(1.0, std::abs(T1));
+  long next_out = 0;
+  const auto grid_time = [&](long k) { return T0 + static_cast<double>(k) * dt_out; };
+  const auto grid_pending = [&] { return grid_time(next_out) <= T1 + grid_slack; };
+
+  // Change-point monitor (both forms): σ̂ = σ_min(E_RDᵀ S_D)/σ_ref at every accepted, corrected
+  // state (ChartSolver::estimate_sigma_min; S = diag(1/√M_kk), σ_ref the largest mass-scaled
+  // column norm of Eᵀ at the start). Near a change point σ̂ ≈ a |t − t*| (C1), so two states
+  // give the estimate t* = t_k + σ̂_k (t_k − t_{k−1}) / (σ̂_{k−1} − σ̂_k).
+  VecX sigma_w;
+  double sigma_ref = 0.0;
+  for (int k = 0; k < n; ++k)
+    sigma_ref = std::max(sigma_ref, dyn.ws_.constraints.Et.col(k).norm() * dyn.ws_.free.A_sqrt(k));
+  if (!(sigma_ref > 0.0)) sigma_ref = 1.0;
+  struct MonitorPoint {
+    bool valid = false;
+    double t = 0.0, sigma = 0.0;
+  } monitor;
+  struct Request {
+    bool pending = false;
+    double t_star = 0.0, sigma = 0.0;
+  } request;
+  // The last two accepted states (with their charts): a step that crossed a change point
+  // unannounced (C2') is undone back to the last state before it.
+  struct SavedState {
+    bool valid = false;
+    double t = 0.0, sigma = 0.0;
+    VecX x;
+    Chart chart;
+  } saved_older, saved_prev;
+  int rewind_to = -1;  // 0: saved_older, 1: saved_prev (with request)
+  double last_rewind_t_star = -std::numeric_limits<double>::infinity();
+  bool monitor_armed = true;
+  // Set when an approach does not reach σ̂ ≤ pass_quality in kMaxApproaches segments (σ̂ has a
+  // minimum above 0 there, not a change point): no request until σ̂ rises again.
+  bool monitor_quiet = false;
+  double pass_quality = kPassQuality;  // σ̂ at which the next passage is tried
+  double t_last_accept = T0, h_last = 0.0;
+  const auto chart_quality = [&]() {
+    if (model.nc == 0 || rank == 0) return std::numeric_limits<double>::infinity();
+    return dyn.cs_.estimate_sigma_min(dyn.ws_.free.A_sqrt, sigma_w) / sigma_ref;
+  };
+
   detail::OdeProblem problem;
   problem.rhs = [&](const VecX& y, VecX& dy, double t) {
     ++evaluations;
@@ -532,17 +652,24 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
     dyn.fill_sample(y(nx - 1), smp, primal);
   };
 
-  problem.output = [&](double t, const VecX& y) {
-    if (!options.record_samples) return;
-    result.samples.emplace_back();
-    sample_at(t, y, result.samples.back());
+  // An output at t (a grid time within the slack, not yet emitted); other times (a segment's
+  // start) are ignored.
+  const auto emit = [&](double t, const VecX& y) {
+    if (!grid_pending() || std::abs(t - grid_time(next_out)) > grid_slack) return;
+    if (options.record_samples) {
+      result.samples.emplace_back();
+      sample_at(t, y, result.samples.back());
+    }
+    ++next_out;
   };
+  problem.output = [&](double t, const VecX& y) { emit(t, y); };
 
   std::string stop_message;
   problem.accept = [&](double t, VecX& y) {
     auto qy = y.head(nq);
     MatX& Et = dyn.ws_.constraints.Et;
     dyn.chart_ready_ = false;  // Eᵀ, the chart's factors and F change below
+    bool chart_changed = false;
     // Residual left by the step (before correction), with Eᵀ at the same q.
     q = qy;
     dyn.mass_at(q);
@@ -581,6 +708,7 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
       compute_constraint_jacobian(model, q, Et);
       if (dyn.cs_.select(Et, dyn.ws_.free.A_diag))
         corr = dyn.cs_.correct_positions(q, Et, f, dq, options.position_tolerance);
+      chart_changed = true;
     }
     if (corr.status != SolveStatus::converged) {
       stop_message = "position correction failed at t = " + std::to_string(t) + ": " + corr.message;
@@ -601,20 +729,35 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
       if (dyn.chart_spread() > kSpreadLimit) {
         const Chart old = dyn.cs_.chart();
         dyn.cs_.select_from_tangent(dyn.F_, dyn.M_sqrt());
+        chart_changed = true;
         if (!dyn.cs_.factor(dyn.ws_.constraints.Et)) {
           dyn.cs_.set_chart(old);
           (void)dyn.cs_.factor(dyn.ws_.constraints.Et);
         }
       }
     } else {
-      // Chart monitor: re-select when F's mass-scaled entries grow; switch if the new chart is
-      // clearly better (hysteresis 2), re-expressing v from u = F v.
       // v ← H⁻¹ Fᵀ M u_step: the admissible velocity at the corrected position closest to the
       // step's velocity in the mass metric (eq. (70), u = α u_step), rather than keeping u_I.
       if (u_step.squaredNorm() > 0.0) {
         dyn.compute_H();
         y.segment(nq, na) = project_velocity(dyn, u_step);
+        // The velocity the projection removes is the step's own error; a step that left the
+        // branch (a change point crossed within one step onto another branch) loses a finite
+        // part of it: refused (C6).
+        const VecX du = u_step - dyn.F_ * y.segment(nq, na);
+        const double uu = u_step.dot(dyn.ws_.free.M * u_step);
+        const double jump = uu > 0.0 ? std::sqrt(du.dot(dyn.ws_.free.M * du) / uu) : 0.0;
+        if (jump > kStepVelocityJump) {
+          stop_message = "the step to t = " + std::to_string(t) +
+                         " s left the motion's branch (its velocity changes by " +
+                         std::to_string(jump) +
+                         " relative when made admissible): a change point was crossed within "
+                         "one step";
+          return false;
+        }
       }
+      // Chart monitor: re-select when F's mass-scaled entries grow; switch if the new chart is
+      // clearly better (hysteresis 2), re-expressing v from u = F v.
       const double spread = dyn.chart_spread();
       if (spread > spread_limit) {
         const Chart old = dyn.cs_.chart();
@@ -632,6 +775,7 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
                 {t, chart_name(model, old), chart_name(model, dyn.cs_.chart())});
             spread_limit = kSpreadLimit;
             switched = true;
+            chart_changed = true;
           }
         }
         if (!switched) {  // keep the chart; try again only when it degrades further
@@ -656,7 +800,66 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
     result.energy_max_drift = std::max(result.energy_max_drift, std::abs(E - energy0));
     result.energy_scale = std::max(result.energy_scale, std::abs(T) + std::abs(V) + std::abs(W));
     ++result.steps;
-    return true;
+    h_last = t - t_last_accept;
+    t_last_accept = t;
+    // Change-point monitor: stop the segment when a change point is within reach of the next
+    // steps (C2) or close enough to be passed (C3); the driver below approaches or passes it.
+    const double sigma = chart_quality();
+    if (chart_changed) monitor.valid = false;  // σ̂ of another chart block: no trend
+    bool stop = false;
+    // A falling σ̂ that bottoms out above 0 (C1'): the parabola through the last three values.
+    bool minimum_above_zero = false;
+    if (saved_older.valid && saved_prev.valid && monitor.valid && sigma < saved_prev.sigma) {
+      const double t0 = saved_older.t, t1 = saved_prev.t, s0 = saved_older.sigma,
+                   s1 = saved_prev.sigma;
+      const double d01 = (s1 - s0) / (t1 - t0), d12 = (sigma - s1) / (t - t1);
+      const double curv = (d12 - d01) / (t - t0);  // p(τ) = σ + d (τ − t) + curv (τ − t)²
+      if (curv > 0.0) {
+        const double d = d12 + curv * (t - t1);  // slope at t
+        const double p_min = sigma - d * d / (4.0 * curv);
+        minimum_above_zero = p_min > kMinimumAboveZero * sigma;
+      }
+    }
+    if (monitor_quiet && monitor.valid && sigma > monitor.sigma) monitor_quiet = false;
+    if (monitor_armed && !monitor_quiet && !minimum_above_zero && monitor.valid &&
+        sigma < monitor.sigma && sigma < kWatchQuality) {
+      const double t_star = t + sigma * (t - monitor.t) / (monitor.sigma - sigma);  // (C1)
+      if (sigma <= pass_quality || t_star - t < kReachSteps * h_last) {
+        request = {true, t_star, sigma};
+        stop = true;
+      }
+    }
+    // (C2') σ̂ fell and rose again across the last two steps along a V through 0: a change point
+    // was crossed within one of them without being approached (large steps at a loose rtol).
+    // Both hypotheses: crossing in the last step (zero of the falling line before t) or in the
+    // one before (zero of the rising line after t_{k−2}), each checked against the third σ̂.
+    if (!stop && monitor_armed && saved_older.valid && saved_prev.valid &&
+        saved_older.t > last_rewind_t_star && sigma > saved_prev.sigma &&
+        saved_prev.sigma < saved_older.sigma && saved_prev.sigma < kWatchQuality) {
+      const double t0 = saved_older.t, s0 = saved_older.sigma;
+      const double t1 = saved_prev.t, s1 = saved_prev.sigma;
+      const double a1 = (s0 - s1) / (t1 - t0), z1 = t1 + s1 / a1;
+      const double a2 = (sigma - s1) / (t - t1), z2 = t1 - s1 / a2;
+      if (z1 < t && std::abs(a1 * (t - z1) - sigma) <= kVShapeTolerance * sigma) {
+        rewind_to = 1;
+        request = {true, z1, s1};
+        last_rewind_t_star = z1;
+        stop = true;
+      } else if (z2 > t0 && std::abs(a2 * (z2 - t0) - s0) <= kVShapeTolerance * s0) {
+        rewind_to = 0;
+        request = {true, z2, s0};
+        last_rewind_t_star = z2;
+        stop = true;
+      }
+    }
+    saved_older = saved_prev;
+    saved_prev.valid = true;
+    saved_prev.t = t;
+    saved_prev.sigma = sigma;
+    saved_prev.x = y;
+    saved_prev.chart = dyn.cs_.chart();
+    monitor = {true, t, sigma};
+    return !stop;
   };
 
   // Initial energy (at the consistent initial state).
@@ -669,32 +872,357 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
         std::abs(kinetic_energy(model, dyn.state_)) + std::abs(potential_energy(model, q));
   }
 
-  detail::OdeOptions oo;
-  oo.stepper = ode_stepper(options.integrator);
-  oo.rtol = options.rtol;
-  oo.atol = options.atol;
-  oo.t0 = initial.t;
-  oo.t_end = initial.t + options.t_end;
-  oo.dt_out = options.dt_out > 0.0 ? options.dt_out : options.t_end / 100.0;
-  oo.max_dt = options.max_step;
-  oo.max_steps = options.max_steps;
+  detail::OdeOptions base;
+  base.stepper = ode_stepper(options.integrator);
+  base.rtol = options.rtol;
+  base.atol = options.atol;
+  base.max_dt = options.max_step;
+  base.max_steps = options.max_steps;
 
-  detail::OdeStats stats;
+  // The integrator from t to t_e in segments that start on the output grid or end on it, so
+  // that the integrator's output clock (t0 + k·dt_out) hits the grid times. Stops early when
+  // `accept` stops it (a change point ahead, or a failed check).
+  double t_now = T0;
+  long rejected_steps = 0, jacobians = 0;  // summed over the segments
+  const auto run_to = [&](double t_e, double max_dt) {
+    detail::OdeStats st;
+    st.completed = true;
+    st.t = t_now;
+    while (t_now < t_e - end_slack) {
+      detail::OdeOptions oo = base;
+      oo.t0 = t_now;
+      if (max_dt > 0.0) oo.max_dt = oo.max_dt > 0.0 ? std::min(oo.max_dt, max_dt) : max_dt;
+      oo.dt_init = h_last > 0.0 ? h_last : 0.0;
+      const bool on_grid =
+          std::abs(t_now - grid_time(next_out)) <= grid_slack ||
+          (next_out > 0 && std::abs(t_now - grid_time(next_out - 1)) <= grid_slack);
+      if (on_grid || !grid_pending()) {
+        oo.t_end = t_e;
+        oo.dt_out = on_grid ? dt_out : 2.0 * (t_e - t_now);
+      } else {  // off the grid: to the next output time first
+        const double g = grid_time(next_out);
+        oo.t_end = std::min(t_e, g);
+        oo.dt_out = g <= t_e ? g - t_now : 2.0 * (t_e - t_now);
+      }
+      if (oo.dt_init > 0.0 && oo.dt_init > oo.t_end - t_now) oo.dt_init = oo.t_end - t_now;
+      st = detail::integrate_ode(problem, x, oo);
+      rejected_steps += st.rejected;
+      jacobians += st.jacobians;
+      if (st.completed) st.t = oo.t_end;
+      t_now = st.t;
+      // An output time at a stop (accept stopped the integrator before its output there).
+      if (std::abs(t_now - grid_time(next_out)) <= grid_slack && grid_pending()) emit(t_now, x);
+      if (!st.completed) return st;
+    }
+    st.completed = true;
+    st.t = t_now;
+    return st;
+  };
+
+  // The passage step (dual form) from the approached state (t_a, x) over the change point at
+  // t* to t_b = t_a + 2 (t* − t_a), landing at about the same distance beyond it (C3)–(C6).
+  const auto mnorm2 = [&](const VecX& a, const VecX& b) {
+    return dyn.ws_.free.diagonal_mass ? a.dot(dyn.ws_.free.M_diag.cwiseProduct(b))
+                                      : a.dot(dyn.ws_.free.M * b);
+  };
+  // (C4) a state on the branch at time tt from a guess (qq, uu): positions corrected in the
+  // incoming chart (Newton, q_I fixed) and polished to rounding, the velocity made admissible
+  // (u = α uu, eq. (70)); then the dual equations there.
+  struct BranchState {
+    VecX q, v, u, a;
+    double P = 0.0;
+  };
+  const auto on_branch = [&](double tt, const VecX& qq, const VecX& uu, BranchState& s,
+                             std::string& why) {
+    s.q = qq;
+    MatX& Et = dyn.ws_.constraints.Et;
+    const SolveResult corr = dyn.cs_.correct_positions(s.q, Et, f, dq, options.position_tolerance);
+    if (corr.status != SolveStatus::converged) {
+      why = "a position of the passage does not close (" + corr.message + ")";
+      return false;
+    }
+    (void)dyn.cs_.polish_positions(s.q, Et, f, dq, 3);
+    dyn.mass_at(s.q);
+    dyn.compute_F();
+    dyn.compute_H();
+    s.v = project_velocity(dyn, uu);  // eq. (70)
+    dyn.chart_q_ = s.q;
+    dyn.chart_ready_ = true;
+    dyn.evaluate_dual(tt, s.q, s.v);
+    s.u = dyn.state_.u;
+    s.a = dyn.udot_;
+    s.P = dyn.nonconservative_power();
+    return true;
+  };
+  // Quintic Hermite through (q, u, u̇) at both ends of [t_a, t_a + h], at s ∈ [0, 1]: q and its
+  // derivative u (orders 6 and 5).
+  const auto quintic = [](double s, double h, const BranchState& A, const BranchState& B, VecX& qs,
+                          VecX& us) {
+    const double s2 = s * s, s3 = s2 * s, s4 = s3 * s, s5 = s4 * s;
+    const double H0 = 1 - 10 * s3 + 15 * s4 - 6 * s5, H1 = s - 6 * s3 + 8 * s4 - 3 * s5;
+    const double H2 = 0.5 * s2 - 1.5 * s3 + 1.5 * s4 - 0.5 * s5, H3 = 0.5 * s3 - s4 + 0.5 * s5;
+    const double H4 = -4 * s3 + 7 * s4 - 3 * s5, H5 = 10 * s3 - 15 * s4 + 6 * s5;
+    const double D0 = -30 * s2 + 60 * s3 - 30 * s4, D1 = 1 - 18 * s2 + 32 * s3 - 15 * s4;
+    const double D2 = s - 4.5 * s2 + 6 * s3 - 2.5 * s4, D3 = 1.5 * s2 - 4 * s3 + 2.5 * s4;
+    const double D4 = -12 * s2 + 28 * s3 - 15 * s4, D5 = 30 * s2 - 60 * s3 + 30 * s4;
+    qs = H0 * A.q + (H1 * h) * A.u + (H2 * h * h) * A.a + (H3 * h * h) * B.a + (H4 * h) * B.u +
+         H5 * B.q;
+    us = (D0 / h) * A.q + D1 * A.u + (D2 * h) * A.a + (D3 * h) * B.a + D4 * B.u + (D5 / h) * B.q;
+  };
+
+  // Outputs strictly inside a passage step (t_a, t_b): the quintic Hermite of the step in q and
+  // u, u̇ linear (no equations are evaluated next to the point; no reactions: some multipliers
+  // are indeterminate there).
+  const auto passage_outputs = [&](double t_a, double t_b, const BranchState& A,
+                                   const BranchState& B, double W_a, double W_b) {
+    const double h = t_b - t_a;
+    VecX qs, us;
+    while (grid_pending() && grid_time(next_out) < t_b - grid_slack) {
+      const double to = grid_time(next_out);
+      if (to > t_a + grid_slack && options.record_samples) {
+        const double s = (to - t_a) / h;
+        quintic(s, h, A, B, qs, us);
+        dyn.state_.t = to;
+        dyn.state_.q = qs;
+        dyn.state_.u = us;
+        dyn.udot_ = (1 - s) * A.a + s * B.a;
+        SimulationSample& smp = result.samples.emplace_back();
+        smp.t = to;
+        smp.q = qs;
+        smp.u = us;
+        smp.udot = dyn.udot_;
+        smp.kinetic = kinetic_energy(model, dyn.state_);
+        smp.potential = potential_energy(model, qs);
+        smp.work = (1 - s) * W_a + s * W_b;
+        compute_constraint_residual(model, qs, f);
+        smp.residual = model.nc ? f.cwiseAbs().maxCoeff() : 0.0;
+        for (const Measure& m : model.measures)
+          smp.measures.push_back(evaluate_measure(model, m, qs, &us, &dyn.udot_));
+      }
+      ++next_out;
+    }
+  };
+
+  const auto pass_change_point = [&](double t_star, double sigma_a, std::string& why) -> bool {
+    const double t_a = t_now;
+    double h = 2.0 * (t_star - t_a);
+    if (t_a + h > T1) h = T1 - t_a;
+    const double t_b = t_a + h;
+    BranchState A, B, S1, S2;
+    // The incoming state, polished (its equations are those the step integrated).
+    if (!on_branch(t_a, x.head(nq), dyn.F_ * x.segment(nq, na), A, why)) return false;
+    const double W_a = x(nx - 1);
+    // (C5) one step of the 4-stage Lobatto IIIA collocation method (order 6) [Hairer, Nørsett
+    // & Wanner, Solving ODEs II, §IV.5] on q̇ = u, u̇ = a(q, u), Ẇ = P, whose stages are states
+    // on the branch (C4): nodes t_a + c_i h, c = (0, (5 ∓ √5)/10, 1). The interior nodes are
+    // 0.45 (t* − t_a) from the point, the last is the landing. Stage values by fixed-point
+    // iteration from the Taylor predictor (C3), q_i = q_a + c_i h u_a + ½ (c_i h)² u̇_a,
+    // u_i = u_a + c_i h u̇_a.
+    const double r5 = std::sqrt(5.0);
+    const double c[4] = {0.0, (5.0 - r5) / 10.0, (5.0 + r5) / 10.0, 1.0};
+    const double L[4][4] = {
+        {0.0, 0.0, 0.0, 0.0},
+        {(11 + r5) / 120, (25 - r5) / 120, (25 - 13 * r5) / 120, (-1 + r5) / 120},
+        {(11 - r5) / 120, (25 + 13 * r5) / 120, (25 + r5) / 120, (-1 - r5) / 120},
+        {1.0 / 12, 5.0 / 12, 5.0 / 12, 1.0 / 12}};
+    BranchState* st[4] = {&A, &S1, &S2, &B};
+    VecX q_p, u_p;
+    for (int i = 1; i < 4; ++i) {
+      const double ch = c[i] * h;
+      q_p = A.q + ch * A.u + 0.5 * ch * ch * A.a;
+      u_p = A.u + ch * A.a;
+      if (i == 3 && options.passage_hook) options.passage_hook(t_b, q_p, u_p);
+      if (!on_branch(t_a + ch, q_p, u_p, *st[i], why)) return false;
+    }
+    double change = std::numeric_limits<double>::infinity(), W_b = W_a, jump = 0.0;
+    int it = 0;
+    std::vector<VecX> Qn(4), Un(4);
+    // Iterated to a change of u below kPassageConverged, or until it stalls at the rounding
+    // noise (a change not halving); accepted below kPassageConvergence (C6).
+    double previous_change = std::numeric_limits<double>::infinity();
+    while (it < kPassageIterations && !(change <= kPassageConverged) &&
+           !(change > 0.5 * previous_change)) {
+      ++it;
+      previous_change = change;
+      for (int i = 1; i < 4; ++i) {  // q_i = q_a + h Σ L_ij u_j, u_i = u_a + h Σ L_ij u̇_j
+        Qn[static_cast<size_t>(i)] = A.q;
+        Un[static_cast<size_t>(i)] = A.u;
+        for (int j = 0; j < 4; ++j) {
+          Qn[static_cast<size_t>(i)] += (h * L[i][j]) * st[j]->u;
+          Un[static_cast<size_t>(i)] += (h * L[i][j]) * st[j]->a;
+        }
+      }
+      W_b = W_a;
+      for (int j = 0; j < 4; ++j) W_b += h * L[3][j] * st[j]->P;
+      if (options.passage_hook) options.passage_hook(t_b, Qn[3], Un[3]);
+      const VecX u_old = B.u;
+      for (int i = 1; i < 4; ++i)
+        if (!on_branch(t_a + c[i] * h, Qn[static_cast<size_t>(i)], Un[static_cast<size_t>(i)],
+                       *st[i], why))
+          return false;
+      const VecX du = B.u - u_old, dj = Un[3] - B.u;
+      const double ub2 = std::max(mnorm2(B.u, B.u), 1e-300);
+      change = std::sqrt(mnorm2(du, du) / ub2);
+      jump = std::sqrt(mnorm2(dj, dj) / ub2);
+    }
+    // (C6) the checks: velocity continuity (the quadrature velocity is admissible at the
+    // landing up to the step's truncation error), no reversal, and a regular landing beyond.
+    const double ub2 = mnorm2(B.u, B.u), ua2 = mnorm2(A.u, A.u);
+    const double cosine = ua2 > 0.0 && ub2 > 0.0 ? mnorm2(A.u, B.u) / std::sqrt(ua2 * ub2) : 1.0;
+    (void)chart_quality();  // one more inverse-iteration pair: σ̂ at the landing converged
+    const double sigma_b = chart_quality();
+    const ChangePointPassage pass{t_star, t_a, t_b, sigma_a, sigma_b, jump, cosine, it};
+    char buf[200];
+    std::snprintf(buf, sizeof buf,
+                  " (velocity jump %.3g relative, cosine %.9f, corrector change %.3g, chart "
+                  "quality %.3g before, %.3g after)",
+                  jump, cosine, change, sigma_a, sigma_b);
+    // The bound, raised to 10× the passage's own rounding noise (the corrector's last change,
+    // where it stalled) when that is larger, never above kPassageJumpCeiling.
+    const double jump_bound = std::min(
+        kPassageJumpCeiling, std::max(passage_velocity_jump_bound(options.rtol), 10.0 * change));
+    if (!(jump <= jump_bound) || !(cosine > 0.0)) {
+      why = "the passage would change the velocity discontinuously, leaving the motion's branch" +
+            std::string(buf);
+      return false;
+    }
+    if (!(change <= kPassageConvergence)) {
+      why = "the passage step's corrector did not converge" + std::string(buf);
+      return false;
+    }
+    if (!(sigma_b >= kLandingQualityRatio * sigma_a)) {
+      why = "the landing is not beyond the change point at a regular position" + std::string(buf);
+      return false;
+    }
+    passage_outputs(t_a, t_b, A, B, W_a, W_b);
+    x.head(nq) = B.q;
+    x.segment(nq, na) = B.v;
+    x(nx - 1) = W_b;
+    t_now = t_b;
+    t_last_accept = t_b;
+    result.passages.push_back(pass);
+    // Energy balance at the landing, as after every step.
+    dyn.state_.q = B.q;
+    dyn.state_.u = B.u;
+    const double E = kinetic_energy(model, dyn.state_) + potential_energy(model, B.q) - W_b;
+    result.energy_max_drift = std::max(result.energy_max_drift, std::abs(E - energy0));
+    if (std::abs(t_now - grid_time(next_out)) <= grid_slack && grid_pending()) emit(t_now, x);
+    return true;
+  };
+
+  const auto change_point_name = [&](double t_star) {
+    char buf[96];
+    std::snprintf(buf, sizeof buf, "the change point at t ≈ %.9g s", t_star);
+    return std::string(buf);
+  };
+
+  std::string failure;
+  SimulateStatus failure_status = SimulateStatus::failed_step;
+  int approaches = 0;
   try {
-    stats = detail::integrate_ode(problem, x, oo);
+    while (true) {
+      if (!request.pending) {
+        const detail::OdeStats st = run_to(T1, 0.0);
+        if (st.completed && !request.pending) break;
+        if (!request.pending) {
+          failure = !stop_message.empty() ? stop_message : st.message;
+          if (stop_message.empty() && result.uncorrected_steps > 0)
+            failure +=
+                "; steps were left uncorrected next to a change point (E nearly loses rank there)";
+          break;
+        }
+      }
+      const Request rq = request;
+      request.pending = false;
+      if (rewind_to >= 0) {  // (C2') undo the steps that crossed the point unannounced
+        const SavedState& back = rewind_to == 0 ? saved_older : saved_prev;
+        rewind_to = -1;
+        x = back.x;
+        t_now = back.t;
+        t_last_accept = back.t;
+        dyn.cs_.set_chart(back.chart);
+        dyn.chart_ready_ = false;
+        while (!result.samples.empty() && result.samples.back().t > t_now + grid_slack)
+          result.samples.pop_back();
+        while (next_out > 0 && grid_time(next_out - 1) > t_now + grid_slack) --next_out;
+        monitor = {true, back.t, back.sigma};
+        saved_older.valid = saved_prev.valid = false;
+        ++result.rewinds;
+      }
+      if (rq.t_star >= T1 - end_slack) {  // the change point lies beyond the end: finish
+        monitor_armed = false;
+        continue;
+      }
+      if (rq.sigma <= pass_quality) {
+        if (primal) {  // G = EᵀAE is singular at the change point: no equation there
+          failure_status = SimulateStatus::singular;
+          failure = change_point_name(rq.t_star) +
+                    " is ahead (E loses rank there, G = EᵀAE is singular): the primal form stops "
+                    "at t = " +
+                    std::to_string(t_now) + " s; the dual form passes it";
+          break;
+        }
+        std::string why;
+        const double t_from = t_now;
+        if (!pass_change_point(rq.t_star, rq.sigma, why)) {
+          dyn.chart_ready_ = false;  // the attempt moved the chart's factors elsewhere
+          if (rq.sigma / 4.0 >= kPassQualityFloor) {  // try again from closer
+            pass_quality = rq.sigma / 4.0;
+            request = {true, rq.t_star, rq.sigma};
+            approaches = 0;
+            continue;
+          }
+          failure = "cannot pass " + change_point_name(rq.t_star) +
+                    " from t = " + std::to_string(t_from) + " s: " + why;
+          break;
+        }
+        monitor.valid = false;
+        saved_older.valid = saved_prev.valid = false;
+        approaches = 0;
+        pass_quality = std::min(kPassQuality, 2.0 * pass_quality);
+        continue;
+      }
+      // (C2) approach: a segment that ends short of the change point (its estimate improves as
+      // σ̂ falls), until σ̂ ≤ pass_quality.
+      if (++approaches > kMaxApproaches) {  // σ̂ does not go to 0 here: not a change point
+        monitor_quiet = true;
+        approaches = 0;
+        continue;
+      }
+      const double fraction =
+          std::min(kApproachFraction, 1.0 - kApproachTarget * pass_quality / rq.sigma);
+      const double dist = rq.t_star - t_now;
+      const detail::OdeStats sa = run_to(t_now + fraction * dist, kApproachStep * dist);
+      if (!sa.completed && !request.pending) {
+        failure = !stop_message.empty() ? stop_message : sa.message;
+        break;
+      }
+      // Completed (its last step raises a new request when the point is near) or stopped by a
+      // newer request: the loop goes on from there.
+    }
   } catch (const SingularEvaluation& e) {
-    result.status = SimulateStatus::singular;
-    result.message = e.message;
-    result.evaluations = evaluations;
-    if (!result.samples.empty()) result.final = result.samples.back();  // last good output
-    return result;
+    failure_status = SimulateStatus::singular;
+    failure = e.message;
   }
   result.evaluations = evaluations;
-  result.rejected_steps = stats.rejected;
-  result.jacobians = stats.jacobians;
+  result.rejected_steps = rejected_steps;
+  result.jacobians = jacobians;
+  if (!failure.empty()) {
+    result.status = failure_status;
+    result.message = failure;
+    // The final sample at the stop time (the last accepted, corrected state).
+    try {
+      sample_at(t_last_accept > t_now ? t_last_accept : t_now, x, result.final);
+    } catch (const SingularEvaluation&) {
+      if (!result.samples.empty()) result.final = result.samples.back();
+      result.final.t = std::max(t_now, t_last_accept);
+    }
+    result.energy_initial = energy0;
+    return result;
+  }
   // Final sample at the corrected final state.
   try {
-    sample_at(stats.t, x, result.final);
+    sample_at(t_now, x, result.final);
   } catch (const SingularEvaluation& e) {
     result.status = SimulateStatus::singular;
     result.message = e.message;
@@ -706,16 +1234,6 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
   if (!primal)
     for (const auto& smp : result.samples)
       result.max_velocity_residual = std::max(result.max_velocity_residual, smp.velocity_residual);
-  if (!stats.completed) {
-    result.status = SimulateStatus::failed_step;
-    result.message = !stop_message.empty() ? stop_message : stats.message;
-    if (stop_message.empty() && result.uncorrected_steps > 0)
-      result.message +=
-          "; steps were left uncorrected next to a change point (E nearly loses rank there), "
-          "where a tight rtol can stall the step-size control: a looser one (e.g. 1e-8) passes "
-          "it";
-    return result;
-  }
   result.status = SimulateStatus::completed;
   return result;
 }

@@ -17,6 +17,7 @@
 // and the momenta projected (p ← M α u).
 // Energy: T + V − W, with W the work of the non-conservative loads (torques, point forces,
 // dampers), integrated with the motion; it is constant for every model.
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -68,6 +69,10 @@ struct SimulateOptions {
   // size; costs about one Newton iteration per evaluation.
   bool project_stages = false;
   long max_steps = 100'000'000;
+  // For tests only: called with the predicted landing state (t, q, u) of every change-point
+  // passage before it is corrected, so that a test can force a passage onto a wrong branch and
+  // see it refused. Empty in every normal run.
+  std::function<void(double t, VecX& q, VecX& u)> passage_hook;
 };
 
 enum class SimulateStatus { completed, failed_assembly, failed_step, singular };
@@ -89,6 +94,19 @@ struct ChartSwitch {
   std::string from, to;  // independent velocity components, e.g. "link0.phi"
 };
 
+// A change point passed by the dual form (docs/theory.md, "Change points"): the passage step
+// from t_from (approach, chart quality sigma_from) to t_to (landing beyond the point), and its
+// checks: the velocity removed when the landed velocity is made admissible (relative, in the
+// mass metric) and the cosine of the incoming and outgoing velocities in the mass metric.
+struct ChangePointPassage {
+  double t = 0.0;                           // estimated time of the change point (s)
+  double t_from = 0.0, t_to = 0.0;          // the passage step (s)
+  double sigma_from = 0.0, sigma_to = 0.0;  // chart quality σ̂ before and after
+  double velocity_jump = 0.0;               // ‖u_pred − u_to‖_M / ‖u_to‖_M
+  double tangent_cosine = 0.0;              // ⟨u_from, u_to⟩_M / (‖u_from‖_M ‖u_to‖_M)
+  int iterations = 0;                       // corrector iterations of the passage step
+};
+
 struct SimulateResult {
   SimulateStatus status = SimulateStatus::failed_step;
   std::string message;
@@ -99,6 +117,7 @@ struct SimulateResult {
   std::vector<SimulationSample> samples;  // at t = 0, dt_out, 2 dt_out, …, t_end
   SimulationSample final;
   std::vector<ChartSwitch> chart_switches;
+  std::vector<ChangePointPassage> passages;  // change points passed (dual form), in order
   double energy_initial = 0.0, energy_final = 0.0;
   double energy_max_drift = 0.0;         // max |E(t) − E(0)| over the accepted steps (J)
   double energy_scale = 0.0;             // max (|T| + |V| + |W|) (J): for relative drifts
@@ -107,6 +126,7 @@ struct SimulateResult {
   double max_invariant_J = 0.0;          // primal: max |J|, eq. (105), before projection
   long steps = 0;
   long uncorrected_steps = 0;  // steps left uncorrected next to a change point
+  long rewinds = 0;            // steps undone because they crossed a change point unannounced
   long evaluations = 0;        // right-hand side evaluations
   long rejected_steps = 0;     // rejected step attempts (rkf78, rosenbrock4)
   long jacobians = 0;          // Jacobians by finite differences (rosenbrock4)
