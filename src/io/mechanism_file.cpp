@@ -284,6 +284,14 @@ class Reader {
 void Reader::read_units(const YAML::Node& node) {
   if (!node) return;
   expect_map(node, "units", {"length", "angle", "mass", "time", "force"});
+  auto declared = [this](const std::string& key) -> std::string& {
+    DeclaredUnits& d = model_.units;
+    return key == "length"  ? d.length
+           : key == "angle" ? d.angle
+           : key == "mass"  ? d.mass
+           : key == "time"  ? d.time
+                            : d.force;
+  };
   auto pick = [&](const std::string& key, const std::vector<std::pair<std::string, double>>& table,
                   double& out) {
     const YAML::Node v = node[key];
@@ -292,6 +300,7 @@ void Reader::read_units(const YAML::Node& node) {
     for (const auto& [name, factor] : table)
       if (v.Scalar() == name) {
         out = factor;
+        declared(key) = name;
         return;
       }
     std::vector<std::string> names;

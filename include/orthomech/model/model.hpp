@@ -212,6 +212,12 @@ struct InitialConditions {
 
 struct GeneralSystem;  // model/general_system.hpp
 
+// The units a file declares (`units:`), by name (docs/file-format.md); every value in the Model is
+// SI. Outputs use them by default (io/units.hpp: UnitSystem).
+struct DeclaredUnits {
+  std::string length = "m", angle = "rad", mass = "kg", time = "s", force = "N";
+};
+
 struct AnalysisDefaults {
   int steps = 360;
   std::string driver;
@@ -231,6 +237,7 @@ struct Model {
   std::vector<Driver> drivers;
   std::vector<DesignPosition> design_positions;
   AnalysisDefaults analysis;
+  DeclaredUnits units;        // as declared by the file (SI when built in code)
   InitialConditions initial;  // initial velocities of simulate (may be empty: at rest)
   // Set by make_general_model (model/general_system.hpp): a free system given by functions,
   // with M(q), instead of bodies, joints and loads (which are then empty).

@@ -1,0 +1,354 @@
+// `orthomech render` (issue 14; io/render.hpp, cli/render.cpp).
+//
+// Oracle of the drawing: the crank-rocker (30/80/60 mm on a 70 mm ground, coupler point P =
+// [40, 20] in the coupler frame, open assembly) is solved here in closed form at crank 0° and 90°
+// (circle–circle intersection), mapped to pixels by the transform documented in io/render.hpp and
+// docs/cli.md (box of the drawn model points, margins, uniform scale, centred), and the PNG that
+// the command wrote is read back with Cairo: at every joint's pixel the centre must have the
+// revolute symbol's fill and the ring its ink. SVG output is parsed as XML (expat) and its
+// revolute symbols counted against the revolute joints of the file; PDF output starts with %PDF.
+// Errors: unknown image type, unknown design position (exit 2), an input that cannot assemble
+// (exit 3, with the reason), no file left behind.
+#include "orthomech/io/render.hpp"
+
+#include <cairo.h>
+#include <expat.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include "support/cli_runner.hpp"
+#include "support/fixtures.hpp"
+
+namespace orthomech {
+namespace {
+
+namespace fs = std::filesystem;
+using test::CliResult;
+using test::run_cli;
+
+std::string bundled(const std::string& name) {
+  return std::string(ORTHOMECH_SOURCE_DIR) + "/mechanisms/" + name + ".yaml";
+}
+
+struct TempDir {
+  fs::path path;
+  TempDir() {
+    static int counter = 0;
+    path = fs::temp_directory_path() /
+           ("orthomech_render_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
+    fs::create_directories(path);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path, ec);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+};
+
+// ---- the crank-rocker in closed form (mm), independent of the library ------------------------
+struct FourBarPose {
+  Vec2 A0, B0, A, B, P;
+};
+// Links of mechanisms/crank-rocker.yaml (its comment block): ground d, crank a, coupler b, rocker
+// c.
+constexpr double kGroundLength = 70.0, kCrank = 30.0, kCoupler = 80.0, kRocker = 60.0;
+const Vec2 kCouplerPoint(40.0, 20.0);  // P in the coupler frame (x from A to B)
+
+// B is the intersection of the circles |B − A| = b and |B − B0| = c on the open circuit (B to the
+// left of the line A → B0, as in the file's design pose).
+FourBarPose crank_rocker_at(double crank_deg) {
+  FourBarPose p;
+  p.A0 = Vec2(0.0, 0.0);
+  p.B0 = Vec2(kGroundLength, 0.0);
+  const double t = crank_deg * std::numbers::pi / 180.0;
+  p.A = kCrank * Vec2(std::cos(t), std::sin(t));
+  const Vec2 AB0 = p.B0 - p.A;
+  const double e = AB0.norm();
+  // Along A → B0 the foot of B lies at x = (b² − c² + e²) / (2e); B is h to the left of it.
+  const double x = (kCoupler * kCoupler - kRocker * kRocker + e * e) / (2.0 * e);
+  const double h = std::sqrt(kCoupler * kCoupler - x * x);
+  const Vec2 u = AB0 / e, left(-u.y(), u.x());
+  p.B = p.A + x * u + h * left;
+  const Vec2 ex = (p.B - p.A) / kCoupler, ey(-ex.y(), ex.x());
+  p.P = p.A + kCouplerPoint.x() * ex + kCouplerPoint.y() * ey;
+  return p;
+}
+
+// The documented transform (docs/cli.md, "render"): the box of the drawn model points (here the
+// five points; the coupler outline is A–P–B), the drawing area inside the margins and above the
+// legend strip, one scale, centred. Works in mm: the pixels do not depend on the length unit.
+struct ExpectedView {
+  double scale;  // px per mm
+  Vec2 centre, centre_px;
+  [[nodiscard]] Vec2 pixel(const Vec2& p) const {
+    return Vec2(centre_px.x() + scale * (p.x() - centre.x()),
+                centre_px.y() - scale * (p.y() - centre.y()));
+  }
+};
+ExpectedView expected_view(const FourBarPose& p, int width, int height) {
+  const RenderOptions defaults;  // the documented margins: 40 px, legend 40 px
+  Vec2 lo = p.A0, hi = p.A0;
+  for (const Vec2& v : {p.B0, p.A, p.B, p.P}) {
+    lo = lo.cwiseMin(v);
+    hi = hi.cwiseMax(v);
+  }
+  const double area_w = width - 2.0 * defaults.margin;
+  const double area_h = height - 2.0 * defaults.margin - defaults.legend;
+  ExpectedView v;
+  v.scale = std::min(area_w / (hi.x() - lo.x()), area_h / (hi.y() - lo.y()));
+  v.centre = 0.5 * (lo + hi);
+  v.centre_px = Vec2(0.5 * width, defaults.margin + 0.5 * area_h);
+  return v;
+}
+
+// ---- reading a PNG back with Cairo -------------------------------------------------------------
+struct Png {
+  std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)> surface{nullptr,
+                                                                             cairo_surface_destroy};
+  int width = 0, height = 0, stride = 0;
+  const unsigned char* data = nullptr;
+  explicit Png(const std::string& path) {
+    surface.reset(cairo_image_surface_create_from_png(path.c_str()));
+    if (cairo_surface_status(surface.get()) != CAIRO_STATUS_SUCCESS) return;
+    cairo_surface_flush(surface.get());
+    width = cairo_image_surface_get_width(surface.get());
+    height = cairo_image_surface_get_height(surface.get());
+    stride = cairo_image_surface_get_stride(surface.get());
+    data = cairo_image_surface_get_data(surface.get());
+  }
+  // Colour of the pixel containing the point (x, y) (pixel (i, j) covers [i, i+1) × [j, j+1)),
+  // 0…1; the image is opaque, so Cairo's premultiplied ARGB32 is the colour itself.
+  [[nodiscard]] Rgba at(const Vec2& p) const {
+    const int i = static_cast<int>(std::floor(p.x())), j = static_cast<int>(std::floor(p.y()));
+    if (i < 0 || j < 0 || i >= width || j >= height) return Rgba{-1, -1, -1, -1};
+    uint32_t v = 0;
+    std::memcpy(&v, data + static_cast<size_t>(j) * stride + static_cast<size_t>(i) * 4, 4);
+    return Rgba{((v >> 16) & 0xff) / 255.0, ((v >> 8) & 0xff) / 255.0, (v & 0xff) / 255.0,
+                ((v >> 24) & 0xff) / 255.0};
+  }
+};
+
+// 8-bit quantisation of the colour (1/255) plus a margin for antialiasing leaking into a pixel
+// that lies wholly inside the shape: 3/255.
+constexpr double kColourTolerance = 3.0 / 255.0;
+bool same_colour(const Rgba& a, const Rgba& b) {
+  return std::abs(a.r - b.r) <= kColourTolerance && std::abs(a.g - b.g) <= kColourTolerance &&
+         std::abs(a.b - b.b) <= kColourTolerance && std::abs(a.a - b.a) <= kColourTolerance;
+}
+std::string str(const Rgba& c) {
+  char s[80];
+  std::snprintf(s, sizeof s, "rgba(%.3f, %.3f, %.3f, %.3f)", c.r, c.g, c.b, c.a);
+  return s;
+}
+
+// The revolute symbol at pixel c: fill at the centre (the filled disc reaches kJointRadius −
+// kJointRing/2 = 5.5 px, so every pixel within 1.2 px of the centre is wholly inside it) and ink
+// on the ring, sampled in four directions at kJointRadius (the ring spans ±1.5 px around it, so
+// the sampled pixel, within 0.71 px of the sample point, is wholly on the ring). A joint drawn
+// more than about 1.5 px from c fails one of the ring samples.
+void expect_joint_at(const Png& png, const Vec2& c, const std::string& name) {
+  EXPECT_TRUE(same_colour(png.at(c), kJointFill)) << "joint " << name << " centre pixel (" << c.x()
+                                                  << ", " << c.y() << ") is " << str(png.at(c));
+  for (const Vec2& d : {Vec2(1, 0), Vec2(-1, 0), Vec2(0, 1), Vec2(0, -1)}) {
+    const Vec2 p = c + kJointRadius * d;
+    EXPECT_TRUE(same_colour(png.at(p), kJointInk)) << "joint " << name << " ring pixel (" << p.x()
+                                                   << ", " << p.y() << ") is " << str(png.at(p));
+  }
+}
+
+class RenderCrankRocker : public ::testing::TestWithParam<double> {};
+
+TEST_P(RenderCrankRocker, PngJointsAtTheClosedFormPixels) {
+  const double crank = GetParam();
+  TempDir dir;
+  const std::string out = (dir.path / "crank-rocker.png").string();
+  // A bare --input number is in the file's angle unit (deg).
+  const CliResult r =
+      run_cli({"render", bundled("crank-rocker"), "--input", std::to_string(crank), "--out", out});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const Png png(out);
+  ASSERT_NE(png.data, nullptr) << "cannot read " << out;
+  ASSERT_EQ(png.width, 800);
+  ASSERT_EQ(png.height, 600);
+  const FourBarPose pose = crank_rocker_at(crank);
+  const ExpectedView view = expected_view(pose, 800, 600);
+  expect_joint_at(png, view.pixel(pose.A0), "A0");
+  expect_joint_at(png, view.pixel(pose.A), "A");
+  expect_joint_at(png, view.pixel(pose.B), "B");
+  expect_joint_at(png, view.pixel(pose.B0), "B0");
+  // And the coupler point P (not a joint) is a dark dot, not a joint symbol.
+  EXPECT_FALSE(same_colour(png.at(view.pixel(pose.P)), kJointFill));
+}
+
+INSTANTIATE_TEST_SUITE_P(CrankAngles, RenderCrankRocker, ::testing::Values(0.0, 90.0));
+
+// The same through a design position: p2 locks the crank at 150°.
+TEST(Render, PngAtADesignPosition) {
+  TempDir dir;
+  const std::string out = (dir.path / "p2.png").string();
+  const CliResult r =
+      run_cli({"render", bundled("crank-rocker"), "--position", "p2", "--out", out});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const Png png(out);
+  ASSERT_NE(png.data, nullptr);
+  const FourBarPose pose = crank_rocker_at(150.0);
+  const ExpectedView view = expected_view(pose, 800, 600);
+  expect_joint_at(png, view.pixel(pose.A), "A");
+  expect_joint_at(png, view.pixel(pose.B), "B");
+}
+
+// The library's transform is the documented one (the same box, scale and centre as above; the
+// model is in metres, the closed form in mm).
+TEST(Render, SceneTransformIsTheDocumentedOne) {
+  const Model model = test::load_bundled("crank-rocker");
+  const PoseResult pose = assemble_pose(model, RenderPose{"", "90deg"});
+  ASSERT_EQ(pose.status, PoseStatus::ok) << pose.message;
+  RenderOptions options;
+  options.driver = pose.driver;
+  const Scene scene = build_scene(model, pose.q, options);
+  const ExpectedView expected = expected_view(crank_rocker_at(90.0), 800, 600);
+  constexpr double kRelative = 1e-9;  // the closed form and the assembly agree to ~1e-12 mm
+  EXPECT_NEAR(scene.view.scale * 1e-3, expected.scale, kRelative * expected.scale);
+  EXPECT_NEAR(scene.view.centre.x() * 1e3, expected.centre.x(), 1e-6);
+  EXPECT_NEAR(scene.view.centre.y() * 1e3, expected.centre.y(), 1e-6);
+  int revolutes = 0, drivers = 0;
+  for (const Primitive& p : scene.primitives) {
+    revolutes += p.role == Role::revolute;
+    drivers += p.role == Role::driver && p.element == "A0";
+  }
+  EXPECT_EQ(revolutes, 4);
+  EXPECT_GT(drivers, 0) << "the driven joint A0 is marked";
+}
+
+// ---- SVG parsed as XML -------------------------------------------------------------------------
+struct SvgCount {
+  int elements = 0;
+  int joint_fills = 0;  // <path> elements filled with the revolute symbol's colour
+  bool svg_root = false;
+};
+
+// "fill:rgb(100%,85%,30%)" (Cairo's SVG style syntax) → the colour, if present.
+std::optional<Rgba> style_fill(const std::string& style) {
+  const auto k = style.find("fill:rgb(");
+  if (k == std::string::npos) return std::nullopt;
+  Rgba c;
+  if (std::sscanf(style.c_str() + k, "fill:rgb(%lf%%,%lf%%,%lf%%)", &c.r, &c.g, &c.b) != 3)
+    return std::nullopt;
+  c.r /= 100.0;
+  c.g /= 100.0;
+  c.b /= 100.0;
+  return c;
+}
+
+void XMLCALL start_element(void* data, const XML_Char* name, const XML_Char** attributes) {
+  auto* count = static_cast<SvgCount*>(data);
+  if (count->elements++ == 0) count->svg_root = std::string(name) == "svg";
+  if (std::string(name) != "path") return;
+  for (int k = 0; attributes[k]; k += 2)
+    if (std::string(attributes[k]) == "style")
+      if (const auto fill = style_fill(attributes[k + 1])) {
+        Rgba f = *fill;
+        f.a = 1.0;
+        count->joint_fills += same_colour(f, kJointFill);
+      }
+}
+void XMLCALL end_element(void*, const XML_Char*) {}
+
+SvgCount parse_svg(const std::string& text, std::string& error) {
+  SvgCount count;
+  std::unique_ptr<std::remove_pointer_t<XML_Parser>, decltype(&XML_ParserFree)> parser(
+      XML_ParserCreate(nullptr), XML_ParserFree);
+  XML_SetUserData(parser.get(), &count);
+  XML_SetElementHandler(parser.get(), start_element, end_element);
+  if (XML_Parse(parser.get(), text.data(), static_cast<int>(text.size()), 1) != XML_STATUS_OK)
+    error = XML_ErrorString(XML_GetErrorCode(parser.get()));
+  return count;
+}
+
+// The expected number of revolute symbols is the number of revolute joints in each file's
+// comment block: crank-rocker 4, Andrews' squeezer 10, slider-crank 3 (+ the prismatic slide).
+TEST(Render, SvgIsXmlWithOneSymbolPerRevolute) {
+  TempDir dir;
+  for (const auto& [name, revolutes] : std::vector<std::pair<std::string, int>>{
+           {"crank-rocker", 4}, {"andrews-squeezer", 10}, {"slider-crank", 3}}) {
+    const std::string out = (dir.path / (name + ".svg")).string();
+    const CliResult r = run_cli({"render", bundled(name), "--labels", "--out", out});
+    ASSERT_EQ(r.status, 0) << name << ": " << r.err;
+    std::string error;
+    const SvgCount count = parse_svg(test::read_text(out), error);
+    EXPECT_EQ(error, "") << name << ": not well-formed XML";
+    EXPECT_TRUE(count.svg_root) << name;
+    EXPECT_EQ(count.joint_fills, revolutes) << name;
+  }
+}
+
+TEST(Render, PdfStartsWithItsSignature) {
+  TempDir dir;
+  const std::string out = (dir.path / "slider-crank.PDF").string();  // the extension in any case
+  const CliResult r = run_cli({"render", bundled("slider-crank"), "--out", out});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::string text = test::read_text(out);
+  EXPECT_EQ(text.substr(0, 5), "%PDF-");
+  EXPECT_NE(text.find("%%EOF"), std::string::npos);
+}
+
+// ---- errors ----------------------------------------------------------------------------------
+TEST(RenderCli, UnknownImageTypeIsBadInput) {
+  TempDir dir;
+  const std::string out = (dir.path / "x.jpg").string();
+  const CliResult r = run_cli({"render", bundled("crank-rocker"), "--out", out});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("unknown image type"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(".svg, .png or .pdf"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+TEST(RenderCli, UnknownDesignPositionIsBadInput) {
+  TempDir dir;
+  const std::string out = (dir.path / "x.png").string();
+  const CliResult r =
+      run_cli({"render", bundled("crank-rocker"), "--position", "p9", "--out", out});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("design position 'p9' is not defined (the file has p1, p2, p3)"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+// The double rocker's input reaches ±77.608916° only (its comment block): at 120° it cannot close.
+TEST(RenderCli, InputThatCannotAssembleIsANumericalFailure) {
+  TempDir dir;
+  const std::string out = (dir.path / "x.svg").string();
+  const CliResult r =
+      run_cli({"render", bundled("double-rocker"), "--input", "120deg", "--out", out});
+  EXPECT_EQ(r.status, 3);
+  EXPECT_NE(r.err.find("cannot assemble joint 'A0' at 120 deg"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+TEST(RenderCli, PositionAndInputAreExclusiveAndOutIsRequired) {
+  TempDir dir;
+  const std::string out = (dir.path / "x.png").string();
+  EXPECT_EQ(run_cli({"render", bundled("crank-rocker"), "--position", "p1", "--input", "10",
+                     "--out", out})
+                .status,
+            2);
+  EXPECT_EQ(run_cli({"render", bundled("crank-rocker")}).status, 2);
+  const CliResult bad_unit =
+      run_cli({"render", bundled("crank-rocker"), "--input", "10mm", "--out", out});
+  EXPECT_EQ(bad_unit.status, 2) << bad_unit.err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+}  // namespace
+}  // namespace orthomech
