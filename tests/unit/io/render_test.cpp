@@ -20,13 +20,16 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <numbers>
 #include <string>
 #include <vector>
 
+#include "orthomech/io/mechanism_file.hpp"
 #include "support/cli_runner.hpp"
 #include "support/fixtures.hpp"
+#include "support/zoo.hpp"
 
 namespace orthomech {
 namespace {
@@ -228,6 +231,67 @@ TEST(Render, SceneTransformIsTheDocumentedOne) {
   }
   EXPECT_EQ(revolutes, 4);
   EXPECT_GT(drivers, 0) << "the driven joint A0 is marked";
+}
+
+// Every joint, load and body kind (tests/support/zoo.hpp, drawn at its unassembled design q):
+// a symbol of each kind, and every format draws it.
+TEST(Render, ZooHasASymbolOfEveryKindInEveryFormat) {
+  const Model model = parse_mechanism(test::kZooYaml, "zoo");
+  RenderOptions options;
+  options.labels = true;
+  options.driver = model.find_joint("J8");  // a prismatic driver: the double arrow
+  const Scene scene = build_scene(model, model.design_q(), options);
+  std::map<Role, int> count;
+  for (const Primitive& p : scene.primitives) ++count[p.role];
+  EXPECT_EQ(count[Role::revolute], 2);  // J1, J7
+  EXPECT_GT(count[Role::prismatic], 0);
+  EXPECT_GT(count[Role::pin_in_slot], 0);
+  EXPECT_GT(count[Role::fixed], 0);
+  EXPECT_GT(count[Role::distance], 0);
+  EXPECT_GT(count[Role::spring_damper], 0);
+  EXPECT_GT(count[Role::ground], 0);
+  EXPECT_GT(count[Role::driver], 0);
+  EXPECT_GT(count[Role::label], 0);
+  EXPECT_GT(count[Role::scale_bar], 0);
+  EXPECT_EQ(count[Role::body], 6);  // a: plate (3 points); b, c: bars (2 primitives each); p: disc
+  for (const ImageFormat f : {ImageFormat::svg, ImageFormat::png, ImageFormat::pdf})
+    EXPECT_GT(draw_image(scene, f).size(), 100u);
+}
+
+// Pitch circles of a gear pair on the ground: pivots 90 mm apart. Rolling without slip gives
+// r1 ω1 = −r2 ω2 for external gears (k = ω2/ω1 = −r1/r2) and r1 ω1 = r2 ω2 for internal ones
+// (k = r1/r2), with r1 + r2 (external) or r2 − r1 (internal, gear 2 the ring) equal to the
+// centre distance.
+TEST(Render, GearPitchCirclesRollOnEachOther) {
+  for (const double k : {-2.0, 0.25}) {
+    const std::string text = R"(orthomech: 1
+name: gears
+units: {length: mm}
+ground:
+  points: {O1: [0, 0], O2: [90, 0]}
+bodies:
+  - {name: g1, mass: 1, inertia: 1, pose: [0, 0, 0], points: {O: [0, 0]}}
+  - {name: g2, mass: 1, inertia: 1, pose: [90, 0, 0], points: {O: [0, 0]}}
+joints:
+  - {name: P1, type: revolute, connects: [ground.O1, g1.O]}
+  - {name: P2, type: revolute, connects: [ground.O2, g2.O]}
+  - {name: mesh, type: gear, bodies: [g1, g2], ratio: )" +
+                             std::to_string(k) + "}\n";
+    const Model model = parse_mechanism(text, "gears");
+    const Scene scene = build_scene(model, model.design_q(), RenderOptions{});
+    std::vector<std::pair<Vec2, double>> circles;  // centre (mm), radius (mm)
+    for (const Primitive& p : scene.primitives)
+      if (p.role == Role::gear)
+        if (const auto* c = std::get_if<Circle>(&p.shape))
+          circles.emplace_back(c->centre.model * 1e3, c->radius_model * 1e3);
+    ASSERT_EQ(circles.size(), 2u) << "k = " << k;
+    constexpr double kTol = 1e-9;  // mm: a division and a product
+    const double r1 = circles[0].second, r2 = circles[1].second;
+    EXPECT_NEAR((circles[0].first - Vec2(0, 0)).norm(), 0.0, kTol);
+    EXPECT_NEAR((circles[1].first - Vec2(90, 0)).norm(), 0.0, kTol);
+    EXPECT_NEAR(r1 / r2, std::abs(k), kTol);
+    EXPECT_NEAR(k < 0 ? r1 + r2 : r2 - r1, 90.0, kTol) << "k = " << k;
+  }
 }
 
 // ---- SVG parsed as XML -------------------------------------------------------------------------
