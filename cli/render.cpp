@@ -20,6 +20,7 @@ struct RenderCliOptions {
   std::string out;
   std::string position;
   std::string input;
+  std::vector<std::string> traces;
   bool labels = false;
   int width = 800;
   int height = 600;
@@ -44,6 +45,21 @@ int run_render(const RenderCliOptions& opt) {
   options.height = opt.height;
   options.labels = opt.labels;
   options.driver = pose.driver;
+  int code = kOk;
+  if (!opt.traces.empty()) {
+    TraceResult traced = trace_points(model, opt.traces, pose.driver);
+    if (traced.status == TraceStatus::bad_request) bad(traced.message);
+    if (traced.status == TraceStatus::failed) {
+      spdlog::error("{}: {}", model.file, traced.message);
+      return kNumerical;
+    }
+    if (traced.status == TraceStatus::partial) {
+      // Drawn, but only up to where the sweep stopped: exit 1, as `cycle`.
+      spdlog::warn("{}: the traces stop where the sweep stopped: {}", model.file, traced.message);
+      code = kCheckFailed;
+    }
+    options.traces = std::move(traced.traces);
+  }
   const Scene scene = build_scene(model, pose.q, options);
   try {
     write_image(scene, *format, opt.out);
@@ -52,7 +68,7 @@ int run_render(const RenderCliOptions& opt) {
     return kBadInput;
   }
   spdlog::info("wrote {}", opt.out);
-  return kOk;
+  return code;
 }
 
 }  // namespace
@@ -71,6 +87,9 @@ void register_render(CLI::App& app, const GlobalOptions& globals, int& exit_code
                   "draw with the driver's joint at this value (30deg, 0.5rad, 12mm; a bare number "
                   "is in the file's units)")
       ->excludes(position);
+  cmd->add_option("--trace", opt->traces,
+                  "BODY.POINT: draw the path of this point over the driver's cycle (as `cycle` "
+                  "sweeps it); repeatable");
   cmd->add_flag("--labels", opt->labels, "names of bodies, joints and points");
   cmd->add_option("--width", opt->width, "image width (px; pt in a PDF)")
       ->check(CLI::Range(200, 10000));

@@ -13,6 +13,7 @@
 #include <stdexcept>
 
 #include "orthomech/analysis/assembly.hpp"
+#include "orthomech/analysis/cycle.hpp"
 #include "orthomech/io/mechanism_writer.hpp"
 #include "orthomech/io/units.hpp"
 #include "orthomech/model/free_system.hpp"
@@ -30,6 +31,10 @@ constexpr Rgba kDriverRed{0.85, 0.1, 0.1, 1.0};
 constexpr Rgba kSliderFill{0.82, 0.87, 0.95, 1.0};
 constexpr Rgba kGearGreen{0.1, 0.55, 0.25, 1.0};
 constexpr Rgba kSpringBlue{0.15, 0.35, 0.75, 1.0};
+// Trace colours, cycled: saturated, unlike the pastel bodies.
+constexpr Rgba kTrace[] = {
+    {0.75, 0.0, 0.55, 1.0}, {0.0, 0.55, 0.6, 1.0}, {0.9, 0.45, 0.0, 1.0}, {0.35, 0.2, 0.8, 1.0}};
+constexpr double kTraceWidth = 3.0;
 // Body colours, cycled: pastel fills with a darker edge of the same hue.
 constexpr Rgba kBodyFill[] = {{0.55, 0.68, 0.88, 0.6}, {0.62, 0.82, 0.62, 0.6},
                               {0.92, 0.66, 0.55, 0.6}, {0.78, 0.66, 0.88, 0.6},
@@ -136,6 +141,7 @@ class SceneBuilder {
     for (size_t b = 0; b < model_.bodies.size(); ++b) add_body(static_cast<int>(b));
     for (const Load& l : model_.loads)
       if (const auto* s = std::get_if<SpringDamper>(&l.kind)) add_spring(l.name, *s);
+    add_traces();
     for (size_t j = 0; j < model_.joints.size(); ++j) add_joint(static_cast<int>(j));
     add_points();
     if (options_.driver >= 0 && options_.driver < static_cast<int>(model_.joints.size()))
@@ -275,6 +281,16 @@ class SceneBuilder {
     plate.style = filled(fill, edge, 2.0);
     plate.style.round = true;
     add(Role::body, body.name, plate);
+  }
+
+  void add_traces() {
+    for (size_t k = 0; k < options_.traces.size(); ++k) {
+      const PointTrace& t = options_.traces[k];
+      Path path;
+      for (const Vec2& p : t.path) path.points.push_back(at(p));
+      path.style = stroke_only(kTrace[k % std::size(kTrace)], kTraceWidth, true);
+      add(Role::trace, t.point, path);
+    }
   }
 
   void add_revolute_symbol(Role role, const std::string& name, const Vec2& p) {
@@ -773,6 +789,68 @@ std::string draw_image(const Scene& scene, ImageFormat format) {
 
 void write_image(const Scene& scene, ImageFormat format, const std::string& path) {
   write_file_atomically(path, draw_image(scene, format));
+}
+
+TraceResult trace_points(const Model& model, const std::vector<std::string>& points, int driver) {
+  TraceResult result;
+  // The points: "body.point" of a moving body (PointRef: s from the centre of mass).
+  std::vector<PointRef> refs;
+  for (const std::string& name : points) {
+    const auto dot = name.find('.');
+    const int b = dot == std::string::npos ? -2 : model.find_body(name.substr(0, dot));
+    const std::string point = dot == std::string::npos ? "" : name.substr(dot + 1);
+    if (b < 0) {
+      result.status = TraceStatus::bad_request;
+      result.message = "--trace: '" + name + "' is not body.point of a moving body";
+      return result;
+    }
+    const Body& body = model.bodies[static_cast<size_t>(b)];
+    const auto it = std::find_if(body.points.begin(), body.points.end(),
+                                 [&](const auto& p) { return p.first == point; });
+    if (it == body.points.end() && point != "origin") {
+      std::string known;
+      for (const auto& p : body.points) known += (known.empty() ? "" : ", ") + p.first;
+      result.status = TraceStatus::bad_request;
+      result.message = "--trace: body '" + body.name + "' has no point '" + point + "' (it has " +
+                       (known.empty() ? std::string("origin") : known) + ")";
+      return result;
+    }
+    PointRef ref;
+    ref.body = b;
+    ref.s = (it == body.points.end() ? Vec2::Zero() : it->second) - body.com_local;
+    ref.label = name;
+    refs.push_back(ref);
+  }
+  const auto d = std::find_if(model.drivers.begin(), model.drivers.end(),
+                              [&](const Driver& x) { return x.joint == driver; });
+  if (d == model.drivers.end()) {
+    result.status = TraceStatus::bad_request;
+    result.message = "--trace needs a driver and the file has none";
+    return result;
+  }
+  CycleOptions options;
+  options.driver = *d;
+  options.steps = model.analysis.steps;
+  const CycleResult cycle = run_cycle(model, options);
+  if (cycle.status == CycleStatus::failed || cycle.status == CycleStatus::invalid_request ||
+      cycle.points.size() == 0) {
+    result.status = TraceStatus::failed;
+    result.message = "the cycle cannot be swept: " + cycle.message;
+    return result;
+  }
+  for (const PointRef& ref : refs) {
+    PointTrace t;
+    t.point = ref.label;
+    for (const auto& p : cycle.points) {
+      t.input.push_back(p.input);
+      t.path.push_back(point_kinematics(model, ref, VecX(p.q), nullptr).r);
+    }
+    result.traces.push_back(std::move(t));
+  }
+  result.status =
+      cycle.status == CycleStatus::completed ? TraceStatus::completed : TraceStatus::partial;
+  result.message = cycle.message;
+  return result;
 }
 
 PoseResult assemble_pose(const Model& model, const RenderPose& pose) {

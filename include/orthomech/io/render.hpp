@@ -45,6 +45,7 @@ enum class Role {
   distance,
   spring_damper,
   point,
+  trace,
   driver,
   label,
   scale_bar,
@@ -102,13 +103,21 @@ struct ViewTransform {
   }
 };
 
+// The path of a point over a cycle (`render --trace`).
+struct PointTrace {
+  std::string point;          // "body.point" as given
+  std::vector<double> input;  // the driver's input at each position (rad or m)
+  std::vector<Vec2> path;     // world position of the point at each position, m
+};
+
 // The look of a render (sizes in px).
 struct RenderOptions {
-  int width = 800, height = 600;  // image size, px (SVG px, PDF pt)
-  bool labels = false;            // names of bodies, joints and points
-  double margin = 40.0;           // px on every side, room for symbols and labels
-  double legend = 40.0;           // px strip at the bottom for the scale bar
-  int driver = -1;                // joint index to mark as driven (−1: none)
+  int width = 800, height = 600;   // image size, px (SVG px, PDF pt)
+  bool labels = false;             // names of bodies, joints and points
+  double margin = 40.0;            // px on every side, room for symbols and labels
+  double legend = 40.0;            // px strip at the bottom for the scale bar
+  int driver = -1;                 // joint index to mark as driven (−1: none)
+  std::vector<PointTrace> traces;  // paths drawn (and fitted in the view) over the bodies
 };
 
 // Revolute symbol: a filled circle of radius kJointRadius − kJointRing/2 in kJointFill with a ring
@@ -118,6 +127,9 @@ inline constexpr double kJointRing = 3.0;    // px
 inline constexpr Rgba kJointFill{1.0, 0.85, 0.3, 1.0};
 inline constexpr Rgba kJointInk{0.1, 0.1, 0.1, 1.0};
 inline constexpr Rgba kBackground{1.0, 1.0, 1.0, 1.0};
+// The first trace (--trace) is a round-capped kTraceWidth px line in this colour.
+inline constexpr Rgba kFirstTraceColour{0.75, 0.0, 0.55, 1.0};
+inline constexpr double kTraceWidth = 3.0;  // px
 
 struct Scene {
   std::vector<Primitive> primitives;
@@ -163,5 +175,24 @@ struct PoseResult {
 // the design position, the inputs locked): the design position itself when both fields are
 // empty. Numerical trouble is data (cannot_assemble), never an exception.
 [[nodiscard]] PoseResult assemble_pose(const Model& model, const RenderPose& pose);
+
+// ---- coupler curves ----------------------------------------------------------------------------
+enum class TraceStatus {
+  completed,    // the whole cycle
+  partial,      // the sweep stopped early (a dead point): the paths up to there
+  failed,       // the sweep failed (message says why); no paths
+  bad_request,  // a point name is not "body.point" of a moving body
+};
+struct TraceResult {
+  TraceStatus status = TraceStatus::failed;
+  std::string message;
+  std::vector<PointTrace> traces;
+};
+// The paths of the named points ("body.point"; "body.origin" is the body frame's origin) over
+// the cycle of the driver (`cycle`'s sweep, analysis/cycle.hpp run_cycle: a full turn of a
+// constant-speed revolute, one period of a harmonic law, from the design position, the file's
+// `analysis: steps`). Numerical trouble is data, never an exception.
+[[nodiscard]] TraceResult trace_points(const Model& model, const std::vector<std::string>& points,
+                                       int driver);
 
 }  // namespace orthomech

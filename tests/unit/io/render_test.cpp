@@ -20,6 +20,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <memory>
 #include <numbers>
@@ -364,6 +365,104 @@ TEST(Render, PdfStartsWithItsSignature) {
   const std::string text = test::read_text(out);
   EXPECT_EQ(text.substr(0, 5), "%PDF-");
   EXPECT_NE(text.find("%%EOF"), std::string::npos);
+}
+
+// ---- coupler curves (--trace) ------------------------------------------------------------------
+// The traced path of the coupler point is the closed-form coupler curve at each input of the
+// sweep (the sweep's positions are solved to ~1e-12 m).
+constexpr double kTraceTolerance = 1e-9;  // m
+
+TEST(RenderTrace, CouplerPointPathIsTheClosedFormCurve) {
+  const Model model = test::load_bundled("crank-rocker");
+  const PoseResult pose = assemble_pose(model, RenderPose{});
+  ASSERT_EQ(pose.status, PoseStatus::ok);
+  const TraceResult traced = trace_points(model, {"coupler.P", "crank.A"}, pose.driver);
+  ASSERT_EQ(traced.status, TraceStatus::completed) << traced.message;
+  ASSERT_EQ(traced.traces.size(), 2u);
+  const PointTrace& p = traced.traces[0];
+  ASSERT_GE(p.path.size(), 360u);  // analysis: steps 360, a full turn
+  for (size_t k = 0; k < p.path.size(); ++k) {
+    const FourBarPose closed = crank_rocker_at(p.input[k] * 180.0 / std::numbers::pi);
+    EXPECT_LT((p.path[k] - 1e-3 * closed.P).norm(), kTraceTolerance) << "input " << p.input[k];
+    EXPECT_LT((traced.traces[1].path[k] - 1e-3 * closed.A).norm(), kTraceTolerance);
+  }
+  const TraceResult bad = trace_points(model, {"coupler.Q"}, pose.driver);
+  EXPECT_EQ(bad.status, TraceStatus::bad_request);
+  EXPECT_EQ(bad.message, "--trace: body 'coupler' has no point 'Q' (it has A, B, P)");
+}
+
+// The PNG of `render --trace coupler.P` has the trace's colour on the closed-form curve, the view
+// fitted to the curve as well (the documented box includes the traced paths).
+TEST(RenderTrace, PngShowsTheCurveAtItsClosedFormPixels) {
+  TempDir dir;
+  const std::string out = (dir.path / "trace.png").string();
+  const CliResult r =
+      run_cli({"render", bundled("crank-rocker"), "--trace", "coupler.P", "--out", out});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const Png png(out);
+  ASSERT_NE(png.data, nullptr);
+  // The box: the design position (crank 60°) and the curve sampled finely (1°: the drawn chords
+  // of 360 steps deviate from the curve by < 0.01 mm, far below a pixel).
+  FourBarPose box = crank_rocker_at(60.0);
+  Vec2 lo = box.P, hi = box.P;
+  for (int deg = 0; deg < 360; ++deg) {
+    const Vec2 P = crank_rocker_at(deg).P;
+    lo = lo.cwiseMin(P);
+    hi = hi.cwiseMax(P);
+  }
+  for (const Vec2& v : {box.A0, box.B0, box.A, box.B}) {
+    lo = lo.cwiseMin(v);
+    hi = hi.cwiseMax(v);
+  }
+  const RenderOptions defaults;
+  const double area_w = 800 - 2.0 * defaults.margin,
+               area_h = 600 - 2.0 * defaults.margin - defaults.legend;
+  ExpectedView view;
+  view.scale = std::min(area_w / (hi.x() - lo.x()), area_h / (hi.y() - lo.y()));
+  view.centre = 0.5 * (lo + hi);
+  view.centre_px = Vec2(400.0, defaults.margin + 0.5 * area_h);
+  int checked = 0;
+  for (int deg = 0; deg < 360; deg += 15) {
+    const Vec2 c = view.pixel(crank_rocker_at(deg).P);
+    // Skip samples near what is drawn over the trace (joints, the point dot, labels: none).
+    bool covered = false;
+    for (const Vec2& j : {box.A0, box.B0, box.A, box.B, box.P})
+      covered = covered || (view.pixel(j) - c).norm() < 3.0 * kJointRadius;
+    if (covered) continue;
+    ++checked;
+    EXPECT_TRUE(same_colour(png.at(c), kFirstTraceColour))
+        << "crank " << deg << " deg: pixel (" << c.x() << ", " << c.y() << ") is "
+        << str(png.at(c));
+  }
+  EXPECT_GE(checked, 12);
+}
+
+// Driven from the rocker at constant speed the crank-rocker stops at a dead point (crank and
+// coupler collinear, its comment block): the picture is drawn with the traces up to there, exit 1.
+TEST(RenderTrace, SweepStoppedAtADeadPointDrawsThePartAndExitsOne) {
+  TempDir dir;
+  std::string text = test::read_text(bundled("crank-rocker"));
+  const std::string from = "{name: motor, joint: A0, speed: 300 rpm}";
+  ASSERT_NE(text.find(from), std::string::npos);
+  text.replace(text.find(from), from.size(), "{name: motor, joint: B0, speed: 10 rpm}");
+  const fs::path file = dir.path / "rocker-driven.yaml";
+  std::ofstream(file) << text;
+  const std::string out = (dir.path / "x.png").string();
+  const CliResult r = run_cli({"render", file.string(), "--trace", "coupler.P", "--out", out});
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_NE(r.err.find("the traces stop where the sweep stopped"), std::string::npos) << r.err;
+  EXPECT_TRUE(fs::exists(out));
+}
+
+TEST(RenderTrace, UnknownPointIsBadInput) {
+  TempDir dir;
+  const std::string out = (dir.path / "x.svg").string();
+  const CliResult r =
+      run_cli({"render", bundled("crank-rocker"), "--trace", "coupler", "--out", out});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("--trace: 'coupler' is not body.point of a moving body"), std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(out));
 }
 
 // ---- errors ----------------------------------------------------------------------------------
