@@ -64,9 +64,11 @@ int run_render(const RenderCliOptions& opt) {
   try {
     write_image(scene, *format, opt.out);
   } catch (const std::runtime_error& e) {  // e.g. no such directory, no permission
+    release_render_caches();
     spdlog::error("{}", e.what());
     return kBadInput;
   }
+  release_render_caches();  // nothing left for a leak checker at exit
   spdlog::info("wrote {}", opt.out);
   return code;
 }

@@ -3,6 +3,7 @@
 #include <cairo-pdf.h>
 #include <cairo-svg.h>
 #include <cairo.h>
+#include <fontconfig/fontconfig.h>
 
 #include <algorithm>
 #include <cctype>
@@ -789,6 +790,11 @@ std::string draw_image(const Scene& scene, ImageFormat format) {
 
 void write_image(const Scene& scene, ImageFormat format, const std::string& path) {
   write_file_atomically(path, draw_image(scene, format));
+}
+
+void release_render_caches() {
+  cairo_debug_reset_static_data();
+  FcFini();
 }
 
 TraceResult trace_points(const Model& model, const std::vector<std::string>& points, int driver) {

@@ -159,6 +159,12 @@ enum class ImageFormat { svg, png, pdf };
 // std::runtime_error when the file cannot be written.
 void write_image(const Scene& scene, ImageFormat format, const std::string& path);
 
+// Frees the process-wide caches of Cairo and fontconfig (fonts loaded for text), which
+// otherwise live until the process ends and which LeakSanitizer reports as leaks. Call it only
+// when no drawing is in progress and no Scene is being drawn on another thread (the CLI calls it
+// once, after writing the image); a later draw_image loads them again.
+void release_render_caches();
+
 // ---- the position to draw -------------------------------------------------------------------
 struct RenderPose {
   std::string position;  // a design position of the file (its inputs are locked), or

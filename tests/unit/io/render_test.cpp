@@ -257,6 +257,9 @@ TEST(Render, ZooHasASymbolOfEveryKindInEveryFormat) {
   EXPECT_EQ(count[Role::body], 6);  // a: plate (3 points); b, c: bars (2 primitives each); p: disc
   for (const ImageFormat f : {ImageFormat::svg, ImageFormat::png, ImageFormat::pdf})
     EXPECT_GT(draw_image(scene, f).size(), 100u);
+  release_render_caches();  // the sanitizer build checks leaks at exit
+  EXPECT_GT(draw_image(scene, ImageFormat::png).size(), 100u) << "drawing again after a release";
+  release_render_caches();
 }
 
 // Pitch circles of a gear pair on the ground: pivots 90 mm apart. Rolling without slip gives
