@@ -263,6 +263,8 @@ class SceneBuilder {
       add(Role::body, body.name, c);
       return;
     }
+    // Three or more collinear points have a hull of two: a bar between the extreme ones.
+    if (pts.size() > 2 && convex_hull(pts).size() < 3) pts = convex_hull(pts);
     if (pts.size() == 2) {
       // A bar: a wide stroke with round caps, edged by a wider one underneath.
       Path under, over;

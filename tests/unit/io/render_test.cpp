@@ -262,6 +262,23 @@ TEST(Render, ZooHasASymbolOfEveryKindInEveryFormat) {
   release_render_caches();
 }
 
+// Three collinear points (the triple crank's coupler: pins at 0, 100, 200 mm on its x axis) make
+// a bar between the extreme ones, not a flat plate.
+TEST(Render, CollinearPointsMakeABar) {
+  const Model model = test::load_bundled("triple-crank");
+  const Scene scene = build_scene(model, model.design_q(), RenderOptions{});
+  int paths = 0;
+  for (const Primitive& p : scene.primitives)
+    if (p.role == Role::body && p.element == "coupler") {
+      const auto* path = std::get_if<Path>(&p.shape);
+      ASSERT_NE(path, nullptr);
+      ASSERT_EQ(path->points.size(), 2u);
+      EXPECT_NEAR((path->points[0].model - path->points[1].model).norm(), 0.2, 1e-12);  // m
+      ++paths;
+    }
+  EXPECT_EQ(paths, 2);  // the bar and its edge
+}
+
 // Pitch circles of a gear pair on the ground: pivots 90 mm apart. Rolling without slip gives
 // r1 ω1 = −r2 ω2 for external gears (k = ω2/ω1 = −r1/r2) and r1 ω1 = r2 ω2 for internal ones
 // (k = r1/r2), with r1 + r2 (external) or r2 − r1 (internal, gear 2 the ring) equal to the
