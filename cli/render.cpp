@@ -10,6 +10,7 @@
 
 #include "commands.hpp"
 #include "common.hpp"
+#include "orthomech/io/mechanism_writer.hpp"
 
 namespace orthomech::cli {
 
@@ -22,6 +23,8 @@ struct RenderCliOptions {
   std::string input;
   std::vector<std::string> traces;
   bool labels = false;
+  bool animate = false;
+  double duration = 4.0;
   int width = 800;
   int height = 600;
 };
@@ -60,6 +63,30 @@ int run_render(const RenderCliOptions& opt) {
     }
     options.traces = std::move(traced.traces);
   }
+  if (opt.animate) {
+    if (*format != ImageFormat::svg) bad("--animate writes an SVG: give --out NAME.svg");
+    const CyclePositions sweep = sweep_positions(model, pose.driver);
+    if (sweep.status == TraceStatus::bad_request) bad(sweep.message);
+    if (sweep.status == TraceStatus::failed) {
+      spdlog::error("{}: {}", model.file, sweep.message);
+      return kNumerical;
+    }
+    if (sweep.status == TraceStatus::partial) {
+      spdlog::warn("{}: the animation stops where the sweep stopped: {}", model.file,
+                   sweep.message);
+      code = kCheckFailed;
+    }
+    try {
+      write_file_atomically(opt.out, animated_svg(model, sweep.q, options, opt.duration));
+    } catch (const std::runtime_error& e) {
+      release_render_caches();
+      spdlog::error("{}", e.what());
+      return kBadInput;
+    }
+    release_render_caches();
+    spdlog::info("wrote {} ({} frames)", opt.out, sweep.q.size());
+    return code;
+  }
   const Scene scene = build_scene(model, pose.q, options);
   try {
     write_image(scene, *format, opt.out);
@@ -92,6 +119,10 @@ void register_render(CLI::App& app, const GlobalOptions& globals, int& exit_code
   cmd->add_option("--trace", opt->traces,
                   "BODY.POINT: draw the path of this point over the driver's cycle (as `cycle` "
                   "sweeps it); repeatable");
+  cmd->add_flag("--animate", opt->animate,
+                "an SVG that plays the driver's cycle by itself, one frame per position");
+  cmd->add_option("--duration", opt->duration, "seconds of one loop of --animate (default 4)")
+      ->check(finite_range(0.0, 3600.0, true));
   cmd->add_flag("--labels", opt->labels, "names of bodies, joints and points");
   cmd->add_option("--width", opt->width, "image width (px; pt in a PDF)")
       ->check(CLI::Range(200, 10000));

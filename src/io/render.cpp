@@ -150,7 +150,7 @@ class SceneBuilder {
     if (options_.labels) add_labels();
     Scene scene;
     const double unit = length_unit_si(model_.units.length);
-    scene.view = fit_view(prims_, options_, 100.0 / unit);
+    scene.view = options_.view ? *options_.view : fit_view(prims_, options_, 100.0 / unit);
     add_scale_bar(scene.view, unit);
     scene.primitives = std::move(prims_);
     return scene;
@@ -829,11 +829,31 @@ TraceResult trace_points(const Model& model, const std::vector<std::string>& poi
     ref.label = name;
     refs.push_back(ref);
   }
+  const CyclePositions sweep = sweep_positions(model, driver);
+  if (sweep.status == TraceStatus::failed || sweep.status == TraceStatus::bad_request) {
+    result.status = sweep.status;
+    result.message = sweep.message;
+    return result;
+  }
+  for (const PointRef& ref : refs) {
+    PointTrace t;
+    t.point = ref.label;
+    t.input = sweep.input;
+    for (const VecX& q : sweep.q) t.path.push_back(point_kinematics(model, ref, q, nullptr).r);
+    result.traces.push_back(std::move(t));
+  }
+  result.status = sweep.status;
+  result.message = sweep.message;
+  return result;
+}
+
+CyclePositions sweep_positions(const Model& model, int driver) {
+  CyclePositions result;
   const auto d = std::find_if(model.drivers.begin(), model.drivers.end(),
                               [&](const Driver& x) { return x.joint == driver; });
   if (d == model.drivers.end()) {
     result.status = TraceStatus::bad_request;
-    result.message = "--trace needs a driver and the file has none";
+    result.message = "--trace and --animate need a driver and the file has none";
     return result;
   }
   CycleOptions options;
@@ -846,19 +866,90 @@ TraceResult trace_points(const Model& model, const std::vector<std::string>& poi
     result.message = "the cycle cannot be swept: " + cycle.message;
     return result;
   }
-  for (const PointRef& ref : refs) {
-    PointTrace t;
-    t.point = ref.label;
-    for (const auto& p : cycle.points) {
-      t.input.push_back(p.input);
-      t.path.push_back(point_kinematics(model, ref, VecX(p.q), nullptr).r);
-    }
-    result.traces.push_back(std::move(t));
+  for (const auto& p : cycle.points) {
+    result.q.emplace_back(p.q);
+    result.input.push_back(p.input);
   }
   result.status =
       cycle.status == CycleStatus::completed ? TraceStatus::completed : TraceStatus::partial;
   result.message = cycle.message;
   return result;
+}
+
+// Every `id="x"`, `href="#x"` and `url(#x)` of one frame's SVG prefixed with `prefix`.
+static std::string prefix_ids(const std::string& svg, const std::string& prefix) {
+  std::string out;
+  out.reserve(svg.size() + svg.size() / 8);
+  static const std::string keys[] = {"id=\"", "href=\"#", "url(#"};
+  size_t i = 0;
+  while (i < svg.size()) {
+    bool matched = false;
+    for (const std::string& k : keys)
+      if (svg.compare(i, k.size(), k) == 0) {
+        out += k + prefix;
+        i += k.size();
+        matched = true;
+        break;
+      }
+    if (!matched) out += svg[i++];
+  }
+  return out;
+}
+
+std::string animated_svg(const Model& model, const std::vector<VecX>& frames,
+                         const RenderOptions& options, double duration) {
+  if (frames.empty()) throw std::invalid_argument("animated_svg: no frames");
+  // One view for every frame: fitted to the primitives of all of them.
+  std::vector<Primitive> all;
+  for (const VecX& q : frames) {
+    const Scene scene = build_scene(model, q, options);
+    for (const Primitive& p : scene.primitives) all.push_back(p);
+  }
+  RenderOptions fixed = options;
+  fixed.view = fit_view(all, options, 100.0 / length_unit_si(model.units.length));
+  const size_t n = frames.size();
+  char head[256];
+  std::snprintf(head, sizeof head,
+                "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<svg "
+                "xmlns=\"http://www.w3.org/2000/svg\" xmlns:xlink=\"http://www.w3.org/1999/xlink\" "
+                "width=\"%dpx\" height=\"%dpx\" viewBox=\"0 0 %d %d\" version=\"1.1\">\n",
+                options.width, options.height, options.width, options.height);
+  std::string out = head;
+  for (size_t k = 0; k < n; ++k) {
+    const std::string svg = draw_image(build_scene(model, frames[k], fixed), ImageFormat::svg);
+    // The frame's content: between the end of the <svg …> start tag and </svg>.
+    const size_t open = svg.find("<svg");
+    const size_t body = svg.find('>', open) + 1;
+    const size_t close = svg.rfind("</svg>");
+    const std::string id = "f" + std::to_string(k) + "-";
+    // Shown during [k/n, (k+1)/n) of the loop (discrete key times; the first and last frames
+    // have two key times only, so that they stay increasing).
+    std::string values, times;
+    const auto t = [&](size_t j) {
+      char b[32];
+      std::snprintf(b, sizeof b, "%.9g", static_cast<double>(j) / static_cast<double>(n));
+      return std::string(b);
+    };
+    if (n == 1) {
+      values = "inline", times = "0";
+    } else if (k == 0) {
+      values = "inline;none", times = "0;" + t(1);
+    } else if (k + 1 == n) {
+      values = "none;inline", times = "0;" + t(k);
+    } else {
+      values = "none;inline;none", times = "0;" + t(k) + ";" + t(k + 1);
+    }
+    char dur[32];
+    std::snprintf(dur, sizeof dur, "%.9gs", duration);
+    out += "<g id=\"frame-" + std::to_string(k) + "\" display=\"" + (k == 0 ? "inline" : "none") +
+           "\">\n<animate attributeName=\"display\" calcMode=\"discrete\" "
+           "repeatCount=\"indefinite\" dur=\"" +
+           dur + "\" values=\"" + values + "\" keyTimes=\"" + times + "\"/>\n";
+    out += prefix_ids(svg.substr(body, close - body), id);
+    out += "</g>\n";
+  }
+  out += "</svg>\n";
+  return out;
 }
 
 PoseResult assemble_pose(const Model& model, const RenderPose& pose) {

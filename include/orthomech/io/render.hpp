@@ -112,12 +112,13 @@ struct PointTrace {
 
 // The look of a render (sizes in px).
 struct RenderOptions {
-  int width = 800, height = 600;   // image size, px (SVG px, PDF pt)
-  bool labels = false;             // names of bodies, joints and points
-  double margin = 40.0;            // px on every side, room for symbols and labels
-  double legend = 40.0;            // px strip at the bottom for the scale bar
-  int driver = -1;                 // joint index to mark as driven (−1: none)
-  std::vector<PointTrace> traces;  // paths drawn (and fitted in the view) over the bodies
+  int width = 800, height = 600;      // image size, px (SVG px, PDF pt)
+  bool labels = false;                // names of bodies, joints and points
+  double margin = 40.0;               // px on every side, room for symbols and labels
+  double legend = 40.0;               // px strip at the bottom for the scale bar
+  int driver = -1;                    // joint index to mark as driven (−1: none)
+  std::vector<PointTrace> traces;     // paths drawn (and fitted in the view) over the bodies
+  std::optional<ViewTransform> view;  // this view instead of fit_view (frames of an animation)
 };
 
 // Revolute symbol: a filled circle of radius kJointRadius − kJointRing/2 in kJointFill with a ring
@@ -200,5 +201,22 @@ struct TraceResult {
 // `analysis: steps`). Numerical trouble is data, never an exception.
 [[nodiscard]] TraceResult trace_points(const Model& model, const std::vector<std::string>& points,
                                        int driver);
+
+// ---- animation -------------------------------------------------------------------------------
+// The positions of the driver's cycle (run_cycle, as trace_points): q and the input at each.
+struct CyclePositions {
+  TraceStatus status = TraceStatus::failed;  // completed, partial or failed (message)
+  std::string message;
+  std::vector<VecX> q;
+  std::vector<double> input;
+};
+[[nodiscard]] CyclePositions sweep_positions(const Model& model, int driver);
+
+// An SVG that plays by itself (SMIL): one frame per position, each a group `<g id="frame-K">`
+// (K = 0, 1, …) shown during [K/N, (K+1)/N) of a loop of `duration` seconds, every frame drawn by
+// draw_image in one view fitted to all positions (and the traces), the traces in every frame.
+// Element ids of each frame are prefixed `fK-` so that frames do not collide.
+[[nodiscard]] std::string animated_svg(const Model& model, const std::vector<VecX>& frames,
+                                       const RenderOptions& options, double duration);
 
 }  // namespace orthomech

@@ -485,6 +485,96 @@ TEST(RenderTrace, UnknownPointIsBadInput) {
   EXPECT_FALSE(fs::exists(out));
 }
 
+// ---- animation (--animate) ---------------------------------------------------------------------
+// Frames of the animated SVG: groups frame-K; in each, the revolute symbols' paths in joint order
+// (A0, A, B, B0). Cairo writes a circle of radius r about c starting at c + (r, 0): "M x y C …".
+struct AnimationFrames {
+  std::vector<std::vector<Vec2>> joints;  // per frame, the centres of the revolute symbols
+  int animates = 0;                       // <animate> elements
+  int depth = 0, frame_depth = -1;
+};
+void XMLCALL animation_start(void* data, const XML_Char* name, const XML_Char** attributes) {
+  auto* f = static_cast<AnimationFrames*>(data);
+  ++f->depth;
+  const std::string element = name;
+  std::string id, style, d;
+  for (int k = 0; attributes[k]; k += 2) {
+    const std::string key = attributes[k];
+    if (key == "id") id = attributes[k + 1];
+    if (key == "style") style = attributes[k + 1];
+    if (key == "d") d = attributes[k + 1];
+  }
+  if (element == "g" && id.rfind("frame-", 0) == 0) {
+    EXPECT_EQ(id, "frame-" + std::to_string(f->joints.size()));
+    f->joints.emplace_back();
+    f->frame_depth = f->depth;
+  }
+  if (element == "animate") ++f->animates;
+  if (element == "path" && f->frame_depth > 0) {
+    const auto fill = style_fill(style);
+    if (fill && same_colour(Rgba{fill->r, fill->g, fill->b, 1.0}, kJointFill)) {
+      double x = 0.0, y = 0.0;
+      EXPECT_EQ(std::sscanf(d.c_str(), "M %lf %lf", &x, &y), 2) << d;
+      f->joints.back().emplace_back(x - kJointRadius, y);
+    }
+  }
+}
+void XMLCALL animation_end(void* data, const XML_Char*) {
+  auto* f = static_cast<AnimationFrames*>(data);
+  if (f->depth == f->frame_depth) f->frame_depth = -1;
+  --f->depth;
+}
+
+// One frame per position of the cycle (analysis: steps 360, from the design crank angle 60° in
+// 1° steps: the sweep of a constant-speed crank), and in frame k every joint at the closed-form
+// position of crank 60° + k°, through the documented transform fitted to all frames.
+TEST(RenderAnimation, OneFramePerPositionWithTheJointsAtTheClosedForm) {
+  TempDir dir;
+  const std::string out = (dir.path / "anim.svg").string();
+  const CliResult r = run_cli({"render", bundled("crank-rocker"), "--animate", "--out", out});
+  ASSERT_EQ(r.status, 0) << r.err;
+  AnimationFrames frames;
+  std::unique_ptr<std::remove_pointer_t<XML_Parser>, decltype(&XML_ParserFree)> parser(
+      XML_ParserCreate(nullptr), XML_ParserFree);
+  XML_SetUserData(parser.get(), &frames);
+  XML_SetElementHandler(parser.get(), animation_start, animation_end);
+  const std::string text = test::read_text(out);
+  ASSERT_EQ(XML_Parse(parser.get(), text.data(), static_cast<int>(text.size()), 1), XML_STATUS_OK)
+      << XML_ErrorString(XML_GetErrorCode(parser.get()));
+  const CliResult png =
+      run_cli({"render", bundled("crank-rocker"), "--animate", "--out", out + ".png"});
+  EXPECT_EQ(png.status, 2);
+  EXPECT_NE(png.err.find("--animate writes an SVG"), std::string::npos) << png.err;
+  constexpr int kSteps = 360;  // analysis: steps of the file
+  ASSERT_EQ(static_cast<int>(frames.joints.size()), kSteps);
+  EXPECT_EQ(frames.animates, kSteps);
+  // The view: the box of every frame's points (the design crank 60° + k°, k = 0 … 359).
+  Vec2 lo = Vec2::Constant(1e300), hi = -lo;
+  for (int k = 0; k < kSteps; ++k) {
+    const FourBarPose p = crank_rocker_at(60.0 + k);
+    for (const Vec2& v : {p.A0, p.B0, p.A, p.B, p.P}) {
+      lo = lo.cwiseMin(v);
+      hi = hi.cwiseMax(v);
+    }
+  }
+  const RenderOptions defaults;
+  const double area_w = 800 - 2.0 * defaults.margin,
+               area_h = 600 - 2.0 * defaults.margin - defaults.legend;
+  ExpectedView view;
+  view.scale = std::min(area_w / (hi.x() - lo.x()), area_h / (hi.y() - lo.y()));
+  view.centre = 0.5 * (lo + hi);
+  view.centre_px = Vec2(400.0, defaults.margin + 0.5 * area_h);
+  constexpr double kSvgPrecision = 0.01;  // px: Cairo writes coordinates to 1/256 px
+  for (int k = 0; k < kSteps; ++k) {
+    const FourBarPose p = crank_rocker_at(60.0 + k);
+    ASSERT_EQ(frames.joints[k].size(), 4u) << "frame " << k;
+    const Vec2 expected[] = {p.A0, p.A, p.B, p.B0};
+    for (int j = 0; j < 4; ++j)
+      EXPECT_LT((frames.joints[k][j] - view.pixel(expected[j])).norm(), kSvgPrecision)
+          << "frame " << k << " joint " << j;
+  }
+}
+
 // ---- errors ----------------------------------------------------------------------------------
 TEST(RenderCli, UnknownImageTypeIsBadInput) {
   TempDir dir;
