@@ -236,7 +236,8 @@ class SceneBuilder {
     const Rgba edge = kBodyEdge[static_cast<size_t>(b) % std::size(kBodyEdge)];
     std::vector<Vec2> pts;
     if (!body.outline.empty()) {
-      // The outline as given (a polyline; closed when its last vertex repeats the first).
+      // The outline as given: a filled polygon over three or more vertices (a last vertex that
+      // repeats the first is dropped), else a bar.
       for (const Vec2& p : body.outline) pts.push_back(body_point(model_, b, p, q_));
       const bool closed = pts.size() >= 3 && (pts.front() - pts.back()).norm() <= kSamePlace;
       if (closed) pts.pop_back();
