@@ -18,4 +18,6 @@ void register_validate(CLI::App& app, const GlobalOptions& globals, int& exit_co
 void register_simulate(CLI::App& app, const GlobalOptions& globals, int& exit_code);
 // `orthomech crosscheck FILE [--samples N]`: dual vs primal (cli/crosscheck.cpp).
 void register_crosscheck(CLI::App& app, const GlobalOptions& globals, int& exit_code);
+// `orthomech render FILE --out X.svg|.png|.pdf`: a drawing of the mechanism (cli/render.cpp).
+void register_render(CLI::App& app, const GlobalOptions& globals, int& exit_code);
 }  // namespace orthomech::cli

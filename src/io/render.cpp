@@ -1,0 +1,1019 @@
+#include "orthomech/io/render.hpp"
+
+#include <cairo-pdf.h>
+#include <cairo-svg.h>
+#include <cairo.h>
+#include <fontconfig/fontconfig.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <memory>
+#include <numbers>
+#include <stdexcept>
+
+#include "orthomech/analysis/assembly.hpp"
+#include "orthomech/analysis/cycle.hpp"
+#include "orthomech/io/mechanism_writer.hpp"
+#include "orthomech/io/units.hpp"
+#include "orthomech/model/free_system.hpp"
+
+namespace orthomech {
+
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+// ---- colours and sizes (px) --------------------------------------------------------------------
+constexpr Rgba kInk{0.1, 0.1, 0.1, 1.0};
+constexpr Rgba kGroundFill{0.85, 0.85, 0.85, 1.0};
+constexpr Rgba kDriverRed{0.85, 0.1, 0.1, 1.0};
+constexpr Rgba kSliderFill{0.82, 0.87, 0.95, 1.0};
+constexpr Rgba kGearGreen{0.1, 0.55, 0.25, 1.0};
+constexpr Rgba kSpringBlue{0.15, 0.35, 0.75, 1.0};
+// Trace colours, cycled: saturated, unlike the pastel bodies.
+constexpr Rgba kTrace[] = {
+    {0.75, 0.0, 0.55, 1.0}, {0.0, 0.55, 0.6, 1.0}, {0.9, 0.45, 0.0, 1.0}, {0.35, 0.2, 0.8, 1.0}};
+constexpr double kTraceWidth = 3.0;
+// Body colours, cycled: pastel fills with a darker edge of the same hue.
+constexpr Rgba kBodyFill[] = {{0.55, 0.68, 0.88, 0.6}, {0.62, 0.82, 0.62, 0.6},
+                              {0.92, 0.66, 0.55, 0.6}, {0.78, 0.66, 0.88, 0.6},
+                              {0.88, 0.80, 0.50, 0.6}, {0.55, 0.82, 0.82, 0.6}};
+constexpr Rgba kBodyEdge[] = {{0.20, 0.30, 0.55, 1.0}, {0.20, 0.45, 0.20, 1.0},
+                              {0.60, 0.30, 0.20, 1.0}, {0.40, 0.25, 0.55, 1.0},
+                              {0.55, 0.45, 0.10, 1.0}, {0.15, 0.45, 0.45, 1.0}};
+constexpr double kBarWidth = 10.0;        // a two-point body
+constexpr double kGroundTriangle = 20.0;  // height of the pivot support
+constexpr double kHatch = 6.0;            // length of a hatch stroke
+constexpr double kSliderLength = 30.0, kSliderHeight = 16.0;
+constexpr double kSlotWidth = 12.0;
+constexpr double kPointRadius = 2.5;
+constexpr double kDriverRadius = 15.0;
+constexpr double kLabelSize = 11.0;
+// Two drawn points closer than this (m) are the same place (a named point at a joint).
+constexpr double kSamePlace = 1e-9;
+
+Vertex at(const Vec2& model, const Vec2& px = Vec2::Zero()) { return Vertex{model, px, false}; }
+Vertex screen(double x, double y) { return Vertex{Vec2::Zero(), Vec2(x, y), true}; }
+
+// A model direction as a unit vector in pixel axes (y down), and a perpendicular to it.
+Vec2 px_dir(const Vec2& d) {
+  const double n = d.norm();
+  return n > 0.0 ? Vec2(d.x() / n, -d.y() / n) : Vec2(1.0, 0.0);
+}
+Vec2 px_perp(const Vec2& d_px) { return Vec2(-d_px.y(), d_px.x()); }
+
+Style stroke_only(const Rgba& c, double width, bool round = false) {
+  Style s;
+  s.stroke = c;
+  s.line_width = width;
+  s.round = round;
+  return s;
+}
+Style filled(const Rgba& fill, const Rgba& edge, double width) {
+  Style s;
+  s.fill = fill;
+  s.stroke = edge;
+  s.line_width = width;
+  return s;
+}
+
+// World position of a body-frame point p of body b at q: r_P = r_c + R(φ)(p − c), c the centre of
+// mass in the body frame (the same map as PointRef's, whose s is measured from c).
+Vec2 body_point(const Model& model, int b, const Vec2& p, const VecX& q) {
+  const Body& body = model.bodies[static_cast<size_t>(b)];
+  PointRef ref;
+  ref.body = b;
+  ref.s = p - body.com_local;
+  return point_kinematics(model, ref, q, nullptr).r;
+}
+Vec2 world(const Model& model, const PointRef& p, const VecX& q) {
+  return point_kinematics(model, p, q, nullptr).r;
+}
+// A body-frame direction in the world.
+Vec2 world_direction(const Model& model, int b, const Vec2& d, const VecX& q) {
+  if (b == kGround) return d;
+  const Body& body = model.bodies[static_cast<size_t>(b)];
+  if (body.kind != BodyKind::rigid) return d;
+  return rotation(q(body.q_offset + 2)) * d;
+}
+
+// Convex hull (Andrew's monotone chain), counter-clockwise, without repeated points.
+std::vector<Vec2> convex_hull(std::vector<Vec2> p) {
+  std::sort(p.begin(), p.end(), [](const Vec2& a, const Vec2& b) {
+    return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y());
+  });
+  if (p.size() < 3) return p;
+  const auto cross = [](const Vec2& o, const Vec2& a, const Vec2& b) {
+    return (a - o).x() * (b - o).y() - (a - o).y() * (b - o).x();
+  };
+  std::vector<Vec2> h(2 * p.size());
+  size_t k = 0;
+  for (size_t i = 0; i < p.size(); ++i) {
+    while (k >= 2 && cross(h[k - 2], h[k - 1], p[i]) <= 0.0) --k;
+    h[k++] = p[i];
+  }
+  for (size_t i = p.size() - 1, t = k + 1; i-- > 0;) {
+    while (k >= t && cross(h[k - 2], h[k - 1], p[i]) <= 0.0) --k;
+    h[k++] = p[i];
+  }
+  h.resize(k - 1);
+  return h;
+}
+
+double length_unit_si(const std::string& name) {
+  if (name == "mm") return 1e-3;
+  if (name == "cm") return 1e-2;
+  if (name == "in") return 0.0254;
+  if (name == "ft") return 0.3048;
+  return 1.0;  // "m"
+}
+double angle_unit_si(const std::string& name) { return name == "deg" ? kPi / 180.0 : 1.0; }
+
+class SceneBuilder {
+ public:
+  SceneBuilder(const Model& model, const VecX& q, const RenderOptions& options)
+      : model_(model), q_(q), options_(options) {}
+
+  Scene build() {
+    collect_ground_points();
+    add_ground();
+    for (size_t b = 0; b < model_.bodies.size(); ++b) add_body(static_cast<int>(b));
+    for (const Load& l : model_.loads)
+      if (const auto* s = std::get_if<SpringDamper>(&l.kind)) add_spring(l.name, *s);
+    add_traces();
+    for (size_t j = 0; j < model_.joints.size(); ++j) add_joint(static_cast<int>(j));
+    add_points();
+    if (options_.driver >= 0 && options_.driver < static_cast<int>(model_.joints.size()))
+      add_driver(options_.driver);
+    if (options_.labels) add_labels();
+    Scene scene;
+    const double unit = length_unit_si(model_.units.length);
+    scene.view = options_.view ? *options_.view : fit_view(prims_, options_, 100.0 / unit);
+    add_scale_bar(scene.view, unit);
+    scene.primitives = std::move(prims_);
+    return scene;
+  }
+
+ private:
+  const Model& model_;
+  const VecX& q_;
+  const RenderOptions& options_;
+  std::vector<Primitive> prims_;
+  std::vector<std::pair<std::string, Vec2>> ground_points_;  // label, world
+  std::vector<std::pair<std::string, Vec2>> joint_places_;   // joint name, world
+
+  void add(Role role, const std::string& element, Shape shape) {
+    prims_.push_back(Primitive{role, element, std::move(shape)});
+  }
+
+  // Ground points are those joints and springs attach to (the model keeps no other).
+  void collect_ground_points() {
+    auto take = [&](const PointRef& p) {
+      if (p.body != kGround) return;
+      for (const auto& g : ground_points_)
+        if ((g.second - p.s).norm() <= kSamePlace) return;
+      ground_points_.emplace_back(p.label, p.s);
+    };
+    for (const Joint& j : model_.joints)
+      std::visit(
+          [&](const auto& k) {
+            if constexpr (requires { k.pi; }) {
+              take(k.pi);
+              take(k.pj);
+            }
+          },
+          j.kind);
+    for (const Load& l : model_.loads)
+      if (const auto* s = std::get_if<SpringDamper>(&l.kind)) {
+        take(s->pi);
+        take(s->pj);
+      }
+  }
+
+  // A pivot support at each ground point: a triangle below it on a hatched base line.
+  void add_ground() {
+    const double h = kGroundTriangle, w = 0.8 * kGroundTriangle;
+    for (const auto& [label, p] : ground_points_) {
+      Path tri;
+      tri.points = {at(p), at(p, Vec2(-w, h)), at(p, Vec2(w, h))};
+      tri.closed = true;
+      tri.style = filled(kGroundFill, kInk, 1.5);
+      add(Role::ground, label, tri);
+      Path base;
+      base.points = {at(p, Vec2(-1.6 * w, h)), at(p, Vec2(1.6 * w, h))};
+      base.style = stroke_only(kInk, 1.5);
+      add(Role::ground, label, base);
+      for (int k = 0; k < 5; ++k) {
+        const double x = -1.6 * w + (k + 0.5) * (3.2 * w / 5.0);
+        Path hatch;
+        hatch.points = {at(p, Vec2(x + 0.5 * kHatch, h)),
+                        at(p, Vec2(x - 0.5 * kHatch, h + kHatch))};
+        hatch.style = stroke_only(kInk, 1.0);
+        add(Role::ground, label, hatch);
+      }
+    }
+  }
+
+  // Hatching on one side of a ground guide from a to b (model points).
+  void add_ground_hatch(const std::string& element, const Vec2& a, const Vec2& b) {
+    const Vec2 d = px_dir(b - a), n = px_perp(d);
+    constexpr int kStrokes = 9;
+    for (int k = 0; k <= kStrokes; ++k) {
+      const Vec2 p = a + (b - a) * (static_cast<double>(k) / kStrokes);
+      Path hatch;
+      hatch.points = {at(p, 3.0 * n), at(p, 3.0 * n + kHatch * (n - d) / std::sqrt(2.0))};
+      hatch.style = stroke_only(kInk, 1.0);
+      add(Role::ground, element, hatch);
+    }
+  }
+
+  void add_body(int b) {
+    const Body& body = model_.bodies[static_cast<size_t>(b)];
+    const Rgba fill = kBodyFill[static_cast<size_t>(b) % std::size(kBodyFill)];
+    const Rgba edge = kBodyEdge[static_cast<size_t>(b) % std::size(kBodyEdge)];
+    std::vector<Vec2> pts;
+    if (!body.outline.empty()) {
+      // The outline as given: a filled polygon over three or more vertices (a last vertex that
+      // repeats the first is dropped), else a bar.
+      for (const Vec2& p : body.outline) pts.push_back(body_point(model_, b, p, q_));
+      const bool closed = pts.size() >= 3 && (pts.front() - pts.back()).norm() <= kSamePlace;
+      if (closed) pts.pop_back();
+      Path path;
+      for (const Vec2& p : pts) path.points.push_back(at(p));
+      path.closed = closed || pts.size() >= 3;
+      path.style = pts.size() >= 3 ? filled(fill, edge, 2.0) : stroke_only(edge, kBarWidth, true);
+      path.style.round = true;
+      add(Role::body, body.name, path);
+      return;
+    }
+    for (const auto& [name, p] : body.points) {
+      const Vec2 w = body_point(model_, b, p, q_);
+      if (std::none_of(pts.begin(), pts.end(),
+                       [&](const Vec2& x) { return (x - w).norm() <= kSamePlace; }))
+        pts.push_back(w);
+    }
+    if (pts.size() <= 1) {
+      // A particle or a body with one point: a disc at its centre of mass.
+      Circle c;
+      c.centre = at(Vec2(q_(body.q_offset), q_(body.q_offset + 1)));
+      c.radius_px = 8.0;
+      c.style = filled(fill, edge, 2.0);
+      c.style.fill->a = 1.0;
+      add(Role::body, body.name, c);
+      return;
+    }
+    // Three or more collinear points have a hull of two: a bar between the extreme ones.
+    if (pts.size() > 2 && convex_hull(pts).size() < 3) pts = convex_hull(pts);
+    if (pts.size() == 2) {
+      // A bar: a wide stroke with round caps, edged by a wider one underneath.
+      Path under, over;
+      under.points = over.points = {at(pts[0]), at(pts[1])};
+      under.style = stroke_only(edge, kBarWidth + 3.0, true);
+      Rgba solid = fill;
+      solid.a = 1.0;
+      over.style = stroke_only(solid, kBarWidth, true);
+      add(Role::body, body.name, under);
+      add(Role::body, body.name, over);
+      return;
+    }
+    // A plate over three or more points: their convex hull.
+    Path plate;
+    for (const Vec2& p : convex_hull(pts)) plate.points.push_back(at(p));
+    plate.closed = true;
+    plate.style = filled(fill, edge, 2.0);
+    plate.style.round = true;
+    add(Role::body, body.name, plate);
+  }
+
+  void add_traces() {
+    for (size_t k = 0; k < options_.traces.size(); ++k) {
+      const PointTrace& t = options_.traces[k];
+      Path path;
+      for (const Vec2& p : t.path) path.points.push_back(at(p));
+      path.style = stroke_only(kTrace[k % std::size(kTrace)], kTraceWidth, true);
+      add(Role::trace, t.point, path);
+    }
+  }
+
+  void add_revolute_symbol(Role role, const std::string& name, const Vec2& p) {
+    Circle c;
+    c.centre = at(p);
+    c.radius_px = kJointRadius;
+    c.style = filled(kJointFill, kJointInk, kJointRing);
+    add(role, name, c);
+  }
+
+  void add_joint(int j) {
+    const Joint& joint = model_.joints[static_cast<size_t>(j)];
+    std::visit(
+        [&](const auto& k) {
+          using K = std::decay_t<decltype(k)>;
+          if constexpr (std::is_same_v<K, Revolute>) {
+            const Vec2 p = world(model_, k.pi, q_);
+            joint_places_.emplace_back(joint.name, p);
+            add_revolute_symbol(Role::revolute, joint.name, p);
+          } else if constexpr (std::is_same_v<K, Prismatic>) {
+            add_prismatic(joint.name, k);
+          } else if constexpr (std::is_same_v<K, PinInSlot>) {
+            add_pin_in_slot(joint.name, k);
+          } else if constexpr (std::is_same_v<K, GearPair>) {
+            add_gear(joint.name, k);
+          } else if constexpr (std::is_same_v<K, Fixed>) {
+            const Vec2 p = world(model_, k.pi, q_);
+            joint_places_.emplace_back(joint.name, p);
+            Path sq;
+            const double s = 5.0;
+            sq.points = {at(p, Vec2(-s, -s)), at(p, Vec2(s, -s)), at(p, Vec2(s, s)),
+                         at(p, Vec2(-s, s))};
+            sq.closed = true;
+            sq.style = filled(kInk, kInk, 1.0);
+            add(Role::fixed, joint.name, sq);
+          } else if constexpr (std::is_same_v<K, Distance>) {
+            const Vec2 a = world(model_, k.pi, q_), b = world(model_, k.pj, q_);
+            joint_places_.emplace_back(joint.name, 0.5 * (a + b));
+            Path rod;
+            rod.points = {at(a), at(b)};
+            rod.style = stroke_only(kInk, 2.0, true);
+            add(Role::distance, joint.name, rod);
+            for (const Vec2& e : {a, b}) {
+              Circle c;
+              c.centre = at(e);
+              c.radius_px = 4.0;
+              c.style = filled(kBackground, kInk, 1.5);
+              add(Role::distance, joint.name, c);
+            }
+          }
+        },
+        joint.kind);
+  }
+
+  // Slider block on its guide: the guide is the line through Pi (body i) along the axis, drawn
+  // over Pi and the block's place; the block is centred on Pj.
+  void add_prismatic(const std::string& name, const Prismatic& k) {
+    const Vec2 pi = world(model_, k.pi, q_), pj = world(model_, k.pj, q_);
+    const Vec2 axis = world_direction(model_, k.pi.body, k.axis_local, q_).normalized();
+    joint_places_.emplace_back(name, pj);
+    const double t = axis.dot(pj - pi);
+    const Vec2 a = pi + std::min(0.0, t) * axis, b = pi + std::max(0.0, t) * axis;
+    const Vec2 d = px_dir(axis), n = px_perp(d);
+    const double ext = 0.5 * kSliderLength + 12.0;
+    Path guide;
+    guide.points = {at(a, -ext * d), at(b, ext * d)};
+    guide.style = stroke_only(kInk, 2.0);
+    add(Role::prismatic, name, guide);
+    if (k.pi.body == kGround) {
+      // The guide's end points in the model, for the hatching (a little beyond the block's travel).
+      add_ground_hatch(name, a, b);
+      Path ends;
+      ends.points = {at(a, -ext * d + 3.0 * n), at(a, -ext * d + (3.0 + kHatch) * n)};
+      ends.style = stroke_only(kInk, 1.0);
+      add(Role::ground, name, ends);
+    }
+    Path block;
+    const Vec2 hl = 0.5 * kSliderLength * d, hw = 0.5 * kSliderHeight * n;
+    block.points = {at(pj, -hl - hw), at(pj, hl - hw), at(pj, hl + hw), at(pj, -hl + hw)};
+    block.closed = true;
+    block.style = filled(kSliderFill, kInk, 2.0);
+    add(Role::prismatic, name, block);
+  }
+
+  // The slot (a hollow stadium along the axis of body i through Pi) and the pin Pj in it.
+  void add_pin_in_slot(const std::string& name, const PinInSlot& k) {
+    const Vec2 pi = world(model_, k.pi, q_), pj = world(model_, k.pj, q_);
+    const Vec2 axis = world_direction(model_, k.pi.body, k.axis_local, q_).normalized();
+    joint_places_.emplace_back(name, pj);
+    const double t = axis.dot(pj - pi);
+    const Vec2 a = pi + std::min(0.0, t) * axis, b = pi + std::max(0.0, t) * axis;
+    const Vec2 d = px_dir(axis);
+    Path outer, inner;
+    outer.points = inner.points = {at(a, -kSlotWidth * d), at(b, kSlotWidth * d)};
+    outer.style = stroke_only(kInk, kSlotWidth + 3.0, true);
+    inner.style = stroke_only(kBackground, kSlotWidth, true);
+    add(Role::pin_in_slot, name, outer);
+    add(Role::pin_in_slot, name, inner);
+    Circle pin;
+    pin.centre = at(pj);
+    pin.radius_px = 0.5 * kSlotWidth - 1.5;
+    pin.style = filled(kJointInk, kJointInk, 1.0);
+    add(Role::pin_in_slot, name, pin);
+  }
+
+  // Pitch circles of a gear pair: the gear centres are the pivots of the gears on the carrier
+  // (their revolute joints), the centre distance splits in the ratio |k| = r_i / r_j
+  // (external gears for k < 0, internal for k > 0).
+  void add_gear(const std::string& name, const GearPair& k) {
+    auto pivot = [&](int body) -> std::optional<Vec2> {
+      for (const Joint& j : model_.joints)
+        if (const auto* r = std::get_if<Revolute>(&j.kind))
+          if ((r->pi.body == body && r->pj.body == k.carrier) ||
+              (r->pj.body == body && r->pi.body == k.carrier))
+            return world(model_, r->pi, q_);
+      return std::nullopt;
+    };
+    const auto ci = pivot(k.bi), cj = pivot(k.bj);
+    if (!ci || !cj) return;  // no pivots on the carrier: nothing to place the circles on
+    const double dist = (*cj - *ci).norm(), ratio = std::abs(k.ratio);
+    double rj = 0.0;
+    if (k.ratio < 0.0)
+      rj = dist / (1.0 + ratio);
+    else if (std::abs(1.0 - ratio) > 1e-12)
+      rj = dist / std::abs(1.0 - ratio);
+    const double ri = ratio * rj;
+    joint_places_.emplace_back(name, *ci + (ri / std::max(dist, 1e-300)) * (*cj - *ci));
+    for (const auto& [c, r] : {std::pair{*ci, ri}, std::pair{*cj, rj}}) {
+      if (!(r > 0.0)) continue;
+      Circle pitch;
+      pitch.centre = at(c);
+      pitch.radius_model = r;
+      pitch.style = stroke_only(kGearGreen, 1.5);
+      add(Role::gear, name, pitch);
+    }
+  }
+
+  // A spring (zig-zag) and a dashpot side by side between the two points; only the spring when
+  // there is no damping and only the dashpot when there is no stiffness.
+  void add_spring(const std::string& name, const SpringDamper& s) {
+    const Vec2 a = world(model_, s.pi, q_), b = world(model_, s.pj, q_);
+    const bool spring = s.stiffness != 0.0 || s.damping == 0.0, damper = s.damping != 0.0;
+    const Vec2 d = px_dir(b - a), n = px_perp(d);
+    const double side = spring && damper ? 9.0 : 0.0;
+    auto lerp = [&](double t) { return a + t * (b - a); };
+    const Style ink = stroke_only(kSpringBlue, 1.5);
+    Path lead_a, lead_b;
+    lead_a.points = {at(a), at(lerp(0.15))};
+    lead_b.points = {at(lerp(0.85)), at(b)};
+    lead_a.style = lead_b.style = ink;
+    add(Role::spring_damper, name, lead_a);
+    add(Role::spring_damper, name, lead_b);
+    if (spring && damper) {
+      for (double t : {0.15, 0.85}) {
+        Path bar;
+        bar.points = {at(lerp(t), -side * n), at(lerp(t), side * n)};
+        bar.style = ink;
+        add(Role::spring_damper, name, bar);
+      }
+    }
+    if (spring) {
+      Path zig;
+      const Vec2 off = -side * n;
+      zig.points.push_back(at(lerp(0.15), off));
+      constexpr int kTeeth = 8;
+      for (int k = 0; k < kTeeth; ++k) {
+        const double t = 0.2 + 0.6 * (k + 0.5) / kTeeth;
+        zig.points.push_back(at(lerp(t), off + (k % 2 == 0 ? 6.0 : -6.0) * n));
+      }
+      zig.points.push_back(at(lerp(0.85), off));
+      zig.style = ink;
+      add(Role::spring_damper, name, zig);
+    }
+    if (damper) {
+      const Vec2 off = side * n;
+      Path rod_a, cylinder, piston, rod_b;
+      rod_a.points = {at(lerp(0.15), off), at(lerp(0.35), off)};
+      cylinder.points = {at(lerp(0.65), off + 7.0 * n), at(lerp(0.35), off + 7.0 * n),
+                         at(lerp(0.35), off - 7.0 * n), at(lerp(0.65), off - 7.0 * n)};
+      piston.points = {at(lerp(0.55), off + 5.0 * n), at(lerp(0.55), off - 5.0 * n)};
+      rod_b.points = {at(lerp(0.55), off), at(lerp(0.85), off)};
+      rod_a.style = cylinder.style = rod_b.style = ink;
+      piston.style = stroke_only(kSpringBlue, 3.0);
+      for (Path* p : {&rod_a, &cylinder, &piston, &rod_b}) add(Role::spring_damper, name, *p);
+    }
+  }
+
+  [[nodiscard]] bool at_joint(const Vec2& p) const {
+    return std::any_of(joint_places_.begin(), joint_places_.end(),
+                       [&](const auto& j) { return (j.second - p).norm() <= kSamePlace; });
+  }
+
+  // Named body points that are not at a joint (e.g. a coupler point): small dots.
+  void add_points() {
+    for (size_t b = 0; b < model_.bodies.size(); ++b) {
+      const Body& body = model_.bodies[b];
+      for (const auto& [name, p] : body.points) {
+        const Vec2 w = body_point(model_, static_cast<int>(b), p, q_);
+        if (at_joint(w)) continue;
+        Circle c;
+        c.centre = at(w);
+        c.radius_px = kPointRadius;
+        c.style = filled(kInk, kInk, 1.0);
+        add(Role::point, body.name + "." + name, c);
+      }
+    }
+  }
+
+  // The driver: a curved arrow round a revolute joint, a double arrow along a prismatic one, a
+  // ring otherwise.
+  void add_driver(int j) {
+    const Joint& joint = model_.joints[static_cast<size_t>(j)];
+    const Style red = stroke_only(kDriverRed, 2.0, true);
+    if (const auto* r = std::get_if<Revolute>(&joint.kind)) {
+      const Vec2 c = world(model_, r->pi, q_);
+      Path arc;
+      constexpr int kSegments = 40;
+      const double a0 = 0.25 * kPi, a1 = 1.75 * kPi;  // px angles, counter-clockwise on screen
+      for (int k = 0; k <= kSegments; ++k) {
+        const double t = a0 + (a1 - a0) * k / kSegments;
+        arc.points.push_back(at(c, kDriverRadius * Vec2(std::cos(t), -std::sin(t))));
+      }
+      arc.style = red;
+      add(Role::driver, joint.name, arc);
+      // Arrow head at the end of the arc, along its tangent.
+      const Vec2 tip = kDriverRadius * Vec2(std::cos(a1), -std::sin(a1));
+      const Vec2 tangent(-std::sin(a1), -std::cos(a1));
+      const Vec2 normal(std::cos(a1), -std::sin(a1));
+      Path head;
+      head.points = {at(c, tip - 7.0 * tangent + 4.0 * normal), at(c, tip),
+                     at(c, tip - 7.0 * tangent - 4.0 * normal)};
+      head.style = red;
+      add(Role::driver, joint.name, head);
+      return;
+    }
+    if (const auto* p = std::get_if<Prismatic>(&joint.kind)) {
+      const Vec2 pj = world(model_, p->pj, q_);
+      const Vec2 d = px_dir(world_direction(model_, p->pi.body, p->axis_local, q_));
+      const Vec2 n = px_perp(d), o = -(0.5 * kSliderHeight + 8.0) * n;
+      Path shaft;
+      shaft.points = {at(pj, o - 20.0 * d), at(pj, o + 20.0 * d)};
+      shaft.style = red;
+      add(Role::driver, joint.name, shaft);
+      for (double sgn : {-1.0, 1.0}) {
+        Path head;
+        const Vec2 tip = o + sgn * 20.0 * d;
+        head.points = {at(pj, tip - sgn * 6.0 * d + 4.0 * n), at(pj, tip),
+                       at(pj, tip - sgn * 6.0 * d - 4.0 * n)};
+        head.style = red;
+        add(Role::driver, joint.name, head);
+      }
+      return;
+    }
+    for (const auto& [name, place] : joint_places_)
+      if (name == joint.name) {
+        Circle ring;
+        ring.centre = at(place);
+        ring.radius_px = kDriverRadius;
+        ring.style = stroke_only(kDriverRed, 2.0);
+        add(Role::driver, joint.name, ring);
+      }
+  }
+
+  void add_text(const std::string& element, const Vertex& v, const std::string& text) {
+    add(Role::label, element, Text{v, text, kLabelSize, kInk});
+  }
+
+  void add_labels() {
+    // Bodies: at the centroid of their drawn points, their name.
+    for (size_t b = 0; b < model_.bodies.size(); ++b) {
+      const Body& body = model_.bodies[b];
+      Vec2 c = Vec2::Zero();
+      int count = 0;
+      for (const auto& [name, p] : body.points) {
+        c += body_point(model_, static_cast<int>(b), p, q_);
+        ++count;
+      }
+      if (count == 0)
+        c = Vec2(q_(body.q_offset), q_(body.q_offset + 1));
+      else
+        c /= count;
+      add_text(body.name, at(c, Vec2(4.0, 14.0)), body.name);
+    }
+    // Joints: beside their symbol.
+    for (const auto& [name, p] : joint_places_)
+      add_text(name, at(p, Vec2(kJointRadius + 3.0, -kJointRadius - 3.0)), name);
+    // Points not at a joint: "body.point".
+    for (size_t b = 0; b < model_.bodies.size(); ++b)
+      for (const auto& [name, p] : model_.bodies[b].points) {
+        const Vec2 w = body_point(model_, static_cast<int>(b), p, q_);
+        if (at_joint(w)) continue;
+        const std::string label = model_.bodies[b].name + "." + name;
+        add_text(label, at(w, Vec2(5.0, -5.0)), label);
+      }
+  }
+
+  // A bar of a round length (1, 2 or 5 × 10^k file units) near a quarter of the area's width,
+  // bottom left, in the legend strip.
+  void add_scale_bar(const ViewTransform& view, double unit_si) {
+    const double area = view.width - 2.0 * options_.margin;
+    const double target = 0.25 * area / (view.scale * unit_si);  // file units
+    if (!(target > 0.0) || !std::isfinite(target)) return;
+    const double decade = std::pow(10.0, std::floor(std::log10(target)));
+    double len = decade;
+    for (double m : {2.0, 5.0})
+      if (m * decade <= target) len = m * decade;
+    const double px = len * unit_si * view.scale;
+    const double x0 = options_.margin, y = view.height - 0.5 * options_.legend;
+    Path bar;
+    bar.points = {screen(x0, y), screen(x0 + px, y)};
+    bar.style = stroke_only(kInk, 2.0);
+    add(Role::scale_bar, "", bar);
+    for (double x : {x0, x0 + px}) {
+      Path tick;
+      tick.points = {screen(x, y - 5.0), screen(x, y + 5.0)};
+      tick.style = stroke_only(kInk, 2.0);
+      add(Role::scale_bar, "", tick);
+    }
+    char text[64];
+    std::snprintf(text, sizeof text, "%g %s", len, model_.units.length.c_str());
+    add(Role::scale_bar, "", Text{screen(x0 + px + 8.0, y + 4.0), text, kLabelSize, kInk});
+  }
+};
+
+// ---- Cairo
+// ---------------------------------------------------------------------------------------
+struct SurfaceDeleter {
+  void operator()(cairo_surface_t* s) const { cairo_surface_destroy(s); }
+};
+struct ContextDeleter {
+  void operator()(cairo_t* c) const { cairo_destroy(c); }
+};
+using SurfacePtr = std::unique_ptr<cairo_surface_t, SurfaceDeleter>;
+using ContextPtr = std::unique_ptr<cairo_t, ContextDeleter>;
+
+cairo_status_t append_bytes(void* closure, const unsigned char* data, unsigned int length) {
+  static_cast<std::string*>(closure)->append(reinterpret_cast<const char*>(data), length);
+  return CAIRO_STATUS_SUCCESS;
+}
+
+void set_colour(cairo_t* cr, const Rgba& c) { cairo_set_source_rgba(cr, c.r, c.g, c.b, c.a); }
+
+void fill_and_stroke(cairo_t* cr, const Style& style) {
+  if (style.fill) {
+    set_colour(cr, *style.fill);
+    if (style.stroke)
+      cairo_fill_preserve(cr);
+    else
+      cairo_fill(cr);
+  }
+  if (style.stroke) {
+    set_colour(cr, *style.stroke);
+    cairo_set_line_width(cr, style.line_width);
+    cairo_set_line_cap(cr, style.round ? CAIRO_LINE_CAP_ROUND : CAIRO_LINE_CAP_BUTT);
+    cairo_set_line_join(cr, style.round ? CAIRO_LINE_JOIN_ROUND : CAIRO_LINE_JOIN_MITER);
+    cairo_stroke(cr);
+  }
+  cairo_new_path(cr);
+}
+
+// The one drawing routine of every surface.
+void draw(cairo_t* cr, const Scene& scene) {
+  set_colour(cr, scene.background);
+  cairo_paint(cr);
+  cairo_select_font_face(cr, "DejaVu Sans", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
+  const ViewTransform& view = scene.view;
+  for (const Primitive& prim : scene.primitives) {
+    std::visit(
+        [&](const auto& s) {
+          using S = std::decay_t<decltype(s)>;
+          if constexpr (std::is_same_v<S, Path>) {
+            if (s.points.empty()) return;
+            for (size_t k = 0; k < s.points.size(); ++k) {
+              const Vec2 p = view.to_pixels(s.points[k]);
+              if (k == 0)
+                cairo_move_to(cr, p.x(), p.y());
+              else
+                cairo_line_to(cr, p.x(), p.y());
+            }
+            if (s.closed) cairo_close_path(cr);
+            Style style = s.style;
+            if (!s.closed) style.fill.reset();
+            fill_and_stroke(cr, style);
+          } else if constexpr (std::is_same_v<S, Circle>) {
+            const Vec2 c = view.to_pixels(s.centre);
+            const double r = s.radius_px + view.scale * s.radius_model;
+            cairo_new_sub_path(cr);
+            cairo_arc(cr, c.x(), c.y(), r, 0.0, 2.0 * kPi);
+            cairo_close_path(cr);
+            fill_and_stroke(cr, s.style);
+          } else {
+            const Vec2 p = view.to_pixels(s.at);
+            set_colour(cr, s.colour);
+            cairo_set_font_size(cr, s.size);
+            cairo_move_to(cr, p.x(), p.y());
+            cairo_show_text(cr, s.text.c_str());
+            cairo_new_path(cr);
+          }
+        },
+        prim.shape);
+  }
+}
+
+void check(cairo_status_t status, const char* what) {
+  if (status != CAIRO_STATUS_SUCCESS)
+    throw std::runtime_error(std::string("render: ") + what + ": " +
+                             cairo_status_to_string(status));
+}
+
+}  // namespace
+
+ViewTransform fit_view(const std::vector<Primitive>& primitives, const RenderOptions& options,
+                       double fallback_scale) {
+  // Bounding box of the model parts of every vertex (circles: ± their model radius).
+  Vec2 lo = Vec2::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  auto take = [&](const Vertex& v, double r) {
+    if (v.screen) return;
+    lo = lo.cwiseMin(v.model - Vec2::Constant(r));
+    hi = hi.cwiseMax(v.model + Vec2::Constant(r));
+  };
+  for (const Primitive& p : primitives) {
+    if (const auto* path = std::get_if<Path>(&p.shape))
+      for (const Vertex& v : path->points) take(v, 0.0);
+    else if (const auto* c = std::get_if<Circle>(&p.shape))
+      take(c->centre, c->radius_model);
+  }
+  ViewTransform view;
+  view.width = options.width;
+  view.height = options.height;
+  const double area_w = options.width - 2.0 * options.margin;
+  const double area_h = options.height - 2.0 * options.margin - options.legend;
+  view.centre_px = Vec2(0.5 * options.width, options.margin + 0.5 * area_h);
+  if (!(lo.x() <= hi.x())) {  // nothing to draw
+    view.scale = fallback_scale;
+    return view;
+  }
+  view.centre = 0.5 * (lo + hi);
+  const Vec2 box = hi - lo;
+  double scale = std::numeric_limits<double>::infinity();
+  if (box.x() > 0.0) scale = std::min(scale, area_w / box.x());
+  if (box.y() > 0.0) scale = std::min(scale, area_h / box.y());
+  view.scale = std::isfinite(scale) ? scale : fallback_scale;
+  return view;
+}
+
+Scene build_scene(const Model& model, const VecX& q, const RenderOptions& options) {
+  if (q.size() != model.nq) throw std::invalid_argument("build_scene: q has the wrong size");
+  if (options.width <= 0 || options.height <= 0 || options.width - 2.0 * options.margin <= 0.0 ||
+      options.height - 2.0 * options.margin - options.legend <= 0.0)
+    throw std::invalid_argument("build_scene: the image is smaller than its margins");
+  return SceneBuilder(model, q, options).build();
+}
+
+std::optional<ImageFormat> image_format_of(const std::string& path) {
+  const auto dot = path.find_last_of('.');
+  const auto slash = path.find_last_of('/');
+  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return std::nullopt;
+  std::string ext = path.substr(dot + 1);
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (ext == "svg") return ImageFormat::svg;
+  if (ext == "png") return ImageFormat::png;
+  if (ext == "pdf") return ImageFormat::pdf;
+  return std::nullopt;
+}
+
+std::string draw_image(const Scene& scene, ImageFormat format) {
+  std::string bytes;
+  const double w = scene.view.width, h = scene.view.height;
+  SurfacePtr surface;
+  switch (format) {
+    case ImageFormat::png:
+      surface.reset(
+          cairo_image_surface_create(CAIRO_FORMAT_ARGB32, scene.view.width, scene.view.height));
+      break;
+    case ImageFormat::svg:
+      surface.reset(cairo_svg_surface_create_for_stream(append_bytes, &bytes, w, h));
+      cairo_svg_surface_set_document_unit(surface.get(), CAIRO_SVG_UNIT_PX);
+      break;
+    case ImageFormat::pdf:
+      surface.reset(cairo_pdf_surface_create_for_stream(append_bytes, &bytes, w, h));
+      break;
+  }
+  check(cairo_surface_status(surface.get()), "cannot create the surface");
+  {
+    const ContextPtr cr(cairo_create(surface.get()));
+    draw(cr.get(), scene);
+    check(cairo_status(cr.get()), "drawing failed");
+  }
+  if (format == ImageFormat::png)
+    check(cairo_surface_write_to_png_stream(surface.get(), append_bytes, &bytes),
+          "cannot encode the PNG");
+  cairo_surface_finish(surface.get());
+  check(cairo_surface_status(surface.get()), "cannot finish the image");
+  return bytes;
+}
+
+void write_image(const Scene& scene, ImageFormat format, const std::string& path) {
+  write_file_atomically(path, draw_image(scene, format));
+}
+
+void release_render_caches() {
+  cairo_debug_reset_static_data();
+  FcFini();
+}
+
+TraceResult trace_points(const Model& model, const std::vector<std::string>& points, int driver) {
+  TraceResult result;
+  // The points: "body.point" of a moving body (PointRef: s from the centre of mass).
+  std::vector<PointRef> refs;
+  for (const std::string& name : points) {
+    const auto dot = name.find('.');
+    const int b = dot == std::string::npos ? -2 : model.find_body(name.substr(0, dot));
+    const std::string point = dot == std::string::npos ? "" : name.substr(dot + 1);
+    if (b < 0) {
+      result.status = TraceStatus::bad_request;
+      result.message = "--trace: '" + name + "' is not body.point of a moving body";
+      return result;
+    }
+    const Body& body = model.bodies[static_cast<size_t>(b)];
+    const auto it = std::find_if(body.points.begin(), body.points.end(),
+                                 [&](const auto& p) { return p.first == point; });
+    if (it == body.points.end() && point != "origin") {
+      std::string known;
+      for (const auto& p : body.points) known += (known.empty() ? "" : ", ") + p.first;
+      result.status = TraceStatus::bad_request;
+      result.message = "--trace: body '" + body.name + "' has no point '" + point + "' (it has " +
+                       (known.empty() ? std::string("origin") : known) + ")";
+      return result;
+    }
+    PointRef ref;
+    ref.body = b;
+    ref.s = (it == body.points.end() ? Vec2::Zero() : it->second) - body.com_local;
+    ref.label = name;
+    refs.push_back(ref);
+  }
+  const CyclePositions sweep = sweep_positions(model, driver);
+  if (sweep.status == TraceStatus::failed || sweep.status == TraceStatus::bad_request) {
+    result.status = sweep.status;
+    result.message = sweep.message;
+    return result;
+  }
+  for (const PointRef& ref : refs) {
+    PointTrace t;
+    t.point = ref.label;
+    t.input = sweep.input;
+    for (const VecX& q : sweep.q) t.path.push_back(point_kinematics(model, ref, q, nullptr).r);
+    result.traces.push_back(std::move(t));
+  }
+  result.status = sweep.status;
+  result.message = sweep.message;
+  return result;
+}
+
+CyclePositions sweep_positions(const Model& model, int driver) {
+  CyclePositions result;
+  const auto d = std::find_if(model.drivers.begin(), model.drivers.end(),
+                              [&](const Driver& x) { return x.joint == driver; });
+  if (d == model.drivers.end()) {
+    result.status = TraceStatus::bad_request;
+    result.message = "--trace and --animate need a driver and the file has none";
+    return result;
+  }
+  CycleOptions options;
+  options.driver = *d;
+  options.steps = model.analysis.steps;
+  const CycleResult cycle = run_cycle(model, options);
+  if (cycle.status == CycleStatus::failed || cycle.status == CycleStatus::invalid_request ||
+      cycle.points.size() == 0) {
+    result.status = TraceStatus::failed;
+    result.message = "the cycle cannot be swept: " + cycle.message;
+    return result;
+  }
+  for (const auto& p : cycle.points) {
+    result.q.emplace_back(p.q);
+    result.input.push_back(p.input);
+  }
+  result.status =
+      cycle.status == CycleStatus::completed ? TraceStatus::completed : TraceStatus::partial;
+  result.message = cycle.message;
+  return result;
+}
+
+// Every `id="x"`, `href="#x"` and `url(#x)` of one frame's SVG prefixed with `prefix`.
+static std::string prefix_ids(const std::string& svg, const std::string& prefix) {
+  std::string out;
+  out.reserve(svg.size() + svg.size() / 8);
+  static const std::string keys[] = {"id=\"", "href=\"#", "url(#"};
+  size_t i = 0;
+  while (i < svg.size()) {
+    bool matched = false;
+    for (const std::string& k : keys)
+      if (svg.compare(i, k.size(), k) == 0) {
+        out += k + prefix;
+        i += k.size();
+        matched = true;
+        break;
+      }
+    if (!matched) out += svg[i++];
+  }
+  return out;
+}
+
+std::string animated_svg(const Model& model, const std::vector<VecX>& frames,
+                         const RenderOptions& options, double duration) {
+  if (frames.empty()) throw std::invalid_argument("animated_svg: no frames");
+  // One view for every frame: fitted to the primitives of all of them.
+  std::vector<Primitive> all;
+  for (const VecX& q : frames) {
+    const Scene scene = build_scene(model, q, options);
+    for (const Primitive& p : scene.primitives) all.push_back(p);
+  }
+  RenderOptions fixed = options;
+  fixed.view = fit_view(all, options, 100.0 / length_unit_si(model.units.length));
+  const size_t n = frames.size();
+  char head[256];
+  std::snprintf(head, sizeof head,
+                "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<svg "
+                "xmlns=\"http://www.w3.org/2000/svg\" xmlns:xlink=\"http://www.w3.org/1999/xlink\" "
+                "width=\"%dpx\" height=\"%dpx\" viewBox=\"0 0 %d %d\" version=\"1.1\">\n",
+                options.width, options.height, options.width, options.height);
+  std::string out = head;
+  for (size_t k = 0; k < n; ++k) {
+    const std::string svg = draw_image(build_scene(model, frames[k], fixed), ImageFormat::svg);
+    // The frame's content: between the end of the <svg …> start tag and </svg>.
+    const size_t open = svg.find("<svg");
+    const size_t body = svg.find('>', open) + 1;
+    const size_t close = svg.rfind("</svg>");
+    const std::string id = "f" + std::to_string(k) + "-";
+    // Shown during [k/n, (k+1)/n) of the loop (discrete key times; the first and last frames
+    // have two key times only, so that they stay increasing).
+    std::string values, times;
+    const auto t = [&](size_t j) {
+      char b[32];
+      std::snprintf(b, sizeof b, "%.9g", static_cast<double>(j) / static_cast<double>(n));
+      return std::string(b);
+    };
+    if (n == 1) {
+      values = "inline", times = "0";
+    } else if (k == 0) {
+      values = "inline;none", times = "0;" + t(1);
+    } else if (k + 1 == n) {
+      values = "none;inline", times = "0;" + t(k);
+    } else {
+      values = "none;inline;none", times = "0;" + t(k) + ";" + t(k + 1);
+    }
+    char dur[32];
+    std::snprintf(dur, sizeof dur, "%.9gs", duration);
+    out += "<g id=\"frame-" + std::to_string(k) + "\" display=\"" + (k == 0 ? "inline" : "none") +
+           "\">\n<animate attributeName=\"display\" calcMode=\"discrete\" "
+           "repeatCount=\"indefinite\" dur=\"" +
+           dur + "\" values=\"" + values + "\" keyTimes=\"" + times + "\"/>\n";
+    out += prefix_ids(svg.substr(body, close - body), id);
+    out += "</g>\n";
+  }
+  out += "</svg>\n";
+  return out;
+}
+
+PoseResult assemble_pose(const Model& model, const RenderPose& pose) {
+  PoseResult result;
+  // The driver: the analysis' driver, else the first one.
+  for (const Driver& d : model.drivers)
+    if (d.name == model.analysis.driver) result.driver = d.joint;
+  if (result.driver < 0 && !model.drivers.empty()) result.driver = model.drivers.front().joint;
+
+  AssemblyOptions options;
+  std::string where = "the design position";
+  if (!pose.position.empty() && !pose.input.empty()) {
+    result.status = PoseStatus::bad_request;
+    result.message = "--position and --input are exclusive";
+    return result;
+  }
+  if (!pose.position.empty()) {
+    const auto it = std::find_if(model.design_positions.begin(), model.design_positions.end(),
+                                 [&](const DesignPosition& p) { return p.name == pose.position; });
+    if (it == model.design_positions.end()) {
+      std::string known;
+      for (const DesignPosition& p : model.design_positions)
+        known += (known.empty() ? "" : ", ") + p.name;
+      result.status = PoseStatus::bad_request;
+      result.message = "design position '" + pose.position + "' is not defined" +
+                       (known.empty() ? " (the file has none)" : " (the file has " + known + ")");
+      return result;
+    }
+    for (const auto& [joint, value] : it->inputs) options.locks.push_back({joint, value});
+    where = "design position '" + pose.position + "'";
+  }
+  if (!pose.input.empty()) {
+    if (result.driver < 0) {
+      result.status = PoseStatus::bad_request;
+      result.message = "--input needs a driver and the file has none";
+      return result;
+    }
+    const Joint& joint = model.joints[static_cast<size_t>(result.driver)];
+    const bool angular = std::holds_alternative<Revolute>(joint.kind);
+    double value = 0.0;
+    try {
+      value = parse_position(
+          pose.input, angular,
+          angular ? angle_unit_si(model.units.angle) : length_unit_si(model.units.length));
+    } catch (const std::invalid_argument& e) {
+      result.status = PoseStatus::bad_request;
+      result.message = std::string("--input: ") + e.what();
+      return result;
+    }
+    options.locks.push_back({result.driver, value});
+    where = "joint '" + joint.name + "' at " + format_input(value, angular);
+  }
+  const AssemblyResult res = assemble(model, model.design_q(), options);
+  if (res.status != AssemblyStatus::assembled && res.status != AssemblyStatus::unchanged) {
+    result.status = PoseStatus::cannot_assemble;
+    result.message = "cannot assemble " + where + ": " + res.message;
+    result.q = res.q;
+    return result;
+  }
+  result.status = PoseStatus::ok;
+  result.q = res.q;
+  return result;
+}
+
+}  // namespace orthomech

@@ -1,0 +1,627 @@
+// `orthomech render` (issue 14; io/render.hpp, cli/render.cpp).
+//
+// Oracle of the drawing: the crank-rocker (30/80/60 mm on a 70 mm ground, coupler point P =
+// [40, 20] in the coupler frame, open assembly) is solved here in closed form at crank 0° and 90°
+// (circle–circle intersection), mapped to pixels by the transform documented in io/render.hpp and
+// docs/cli.md (box of the drawn model points, margins, uniform scale, centred), and the PNG that
+// the command wrote is read back with Cairo: at every joint's pixel the centre must have the
+// revolute symbol's fill and the ring its ink. SVG output is parsed as XML (expat) and its
+// revolute symbols counted against the revolute joints of the file; PDF output starts with %PDF.
+// Errors: unknown image type, unknown design position (exit 2), an input that cannot assemble
+// (exit 3, with the reason), no file left behind.
+#include "orthomech/io/render.hpp"
+
+#include <cairo.h>
+#include <expat.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include "orthomech/io/mechanism_file.hpp"
+#include "support/cli_runner.hpp"
+#include "support/fixtures.hpp"
+#include "support/zoo.hpp"
+
+namespace orthomech {
+namespace {
+
+namespace fs = std::filesystem;
+using test::CliResult;
+using test::run_cli;
+
+std::string bundled(const std::string& name) {
+  return std::string(ORTHOMECH_SOURCE_DIR) + "/mechanisms/" + name + ".yaml";
+}
+
+struct TempDir {
+  fs::path path;
+  TempDir() {
+    static int counter = 0;
+    path = fs::temp_directory_path() /
+           ("orthomech_render_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
+    fs::create_directories(path);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path, ec);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+};
+
+// ---- the crank-rocker in closed form (mm), independent of the library ------------------------
+struct FourBarPose {
+  Vec2 A0, B0, A, B, P;
+};
+// Links of mechanisms/crank-rocker.yaml (its comment block): ground d, crank a, coupler b, rocker
+// c.
+constexpr double kGroundLength = 70.0, kCrank = 30.0, kCoupler = 80.0, kRocker = 60.0;
+const Vec2 kCouplerPoint(40.0, 20.0);  // P in the coupler frame (x from A to B)
+
+// B is the intersection of the circles |B − A| = b and |B − B0| = c on the open circuit (B to the
+// left of the line A → B0, as in the file's design pose).
+FourBarPose crank_rocker_at(double crank_deg) {
+  FourBarPose p;
+  p.A0 = Vec2(0.0, 0.0);
+  p.B0 = Vec2(kGroundLength, 0.0);
+  const double t = crank_deg * std::numbers::pi / 180.0;
+  p.A = kCrank * Vec2(std::cos(t), std::sin(t));
+  const Vec2 AB0 = p.B0 - p.A;
+  const double e = AB0.norm();
+  // Along A → B0 the foot of B lies at x = (b² − c² + e²) / (2e); B is h to the left of it.
+  const double x = (kCoupler * kCoupler - kRocker * kRocker + e * e) / (2.0 * e);
+  const double h = std::sqrt(kCoupler * kCoupler - x * x);
+  const Vec2 u = AB0 / e, left(-u.y(), u.x());
+  p.B = p.A + x * u + h * left;
+  const Vec2 ex = (p.B - p.A) / kCoupler, ey(-ex.y(), ex.x());
+  p.P = p.A + kCouplerPoint.x() * ex + kCouplerPoint.y() * ey;
+  return p;
+}
+
+// The documented transform (docs/cli.md, "render"): the box of the drawn model points (here the
+// five points; the coupler outline is A–P–B), the drawing area inside the margins and above the
+// legend strip, one scale, centred. Works in mm: the pixels do not depend on the length unit.
+struct ExpectedView {
+  double scale;  // px per mm
+  Vec2 centre, centre_px;
+  [[nodiscard]] Vec2 pixel(const Vec2& p) const {
+    return Vec2(centre_px.x() + scale * (p.x() - centre.x()),
+                centre_px.y() - scale * (p.y() - centre.y()));
+  }
+};
+ExpectedView expected_view(const FourBarPose& p, int width, int height) {
+  const RenderOptions defaults;  // the documented margins: 40 px, legend 40 px
+  Vec2 lo = p.A0, hi = p.A0;
+  for (const Vec2& v : {p.B0, p.A, p.B, p.P}) {
+    lo = lo.cwiseMin(v);
+    hi = hi.cwiseMax(v);
+  }
+  const double area_w = width - 2.0 * defaults.margin;
+  const double area_h = height - 2.0 * defaults.margin - defaults.legend;
+  ExpectedView v;
+  v.scale = std::min(area_w / (hi.x() - lo.x()), area_h / (hi.y() - lo.y()));
+  v.centre = 0.5 * (lo + hi);
+  v.centre_px = Vec2(0.5 * width, defaults.margin + 0.5 * area_h);
+  return v;
+}
+
+// ---- reading a PNG back with Cairo -------------------------------------------------------------
+struct Png {
+  std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)> surface{nullptr,
+                                                                             cairo_surface_destroy};
+  int width = 0, height = 0, stride = 0;
+  const unsigned char* data = nullptr;
+  explicit Png(const std::string& path) {
+    surface.reset(cairo_image_surface_create_from_png(path.c_str()));
+    if (cairo_surface_status(surface.get()) != CAIRO_STATUS_SUCCESS) return;
+    cairo_surface_flush(surface.get());
+    width = cairo_image_surface_get_width(surface.get());
+    height = cairo_image_surface_get_height(surface.get());
+    stride = cairo_image_surface_get_stride(surface.get());
+    data = cairo_image_surface_get_data(surface.get());
+  }
+  // Colour of the pixel containing the point (x, y) (pixel (i, j) covers [i, i+1) × [j, j+1)),
+  // 0…1; the image is opaque, so Cairo's premultiplied ARGB32 is the colour itself.
+  [[nodiscard]] Rgba at(const Vec2& p) const {
+    const int i = static_cast<int>(std::floor(p.x())), j = static_cast<int>(std::floor(p.y()));
+    if (i < 0 || j < 0 || i >= width || j >= height) return Rgba{-1, -1, -1, -1};
+    uint32_t v = 0;
+    std::memcpy(&v, data + static_cast<size_t>(j) * stride + static_cast<size_t>(i) * 4, 4);
+    return Rgba{((v >> 16) & 0xff) / 255.0, ((v >> 8) & 0xff) / 255.0, (v & 0xff) / 255.0,
+                ((v >> 24) & 0xff) / 255.0};
+  }
+};
+
+// 8-bit quantisation of the colour (1/255) plus a margin for antialiasing leaking into a pixel
+// that lies wholly inside the shape: 3/255.
+constexpr double kColourTolerance = 3.0 / 255.0;
+bool same_colour(const Rgba& a, const Rgba& b) {
+  return std::abs(a.r - b.r) <= kColourTolerance && std::abs(a.g - b.g) <= kColourTolerance &&
+         std::abs(a.b - b.b) <= kColourTolerance && std::abs(a.a - b.a) <= kColourTolerance;
+}
+std::string str(const Rgba& c) {
+  char s[80];
+  std::snprintf(s, sizeof s, "rgba(%.3f, %.3f, %.3f, %.3f)", c.r, c.g, c.b, c.a);
+  return s;
+}
+
+// The revolute symbol at pixel c: fill at the centre (the filled disc reaches kJointRadius −
+// kJointRing/2 = 5.5 px, so every pixel within 1.2 px of the centre is wholly inside it) and ink
+// on the ring, sampled in four directions at kJointRadius (the ring spans ±1.5 px around it, so
+// the sampled pixel, within 0.71 px of the sample point, is wholly on the ring). A joint drawn
+// more than about 1.5 px from c fails one of the ring samples.
+void expect_joint_at(const Png& png, const Vec2& c, const std::string& name) {
+  EXPECT_TRUE(same_colour(png.at(c), kJointFill)) << "joint " << name << " centre pixel (" << c.x()
+                                                  << ", " << c.y() << ") is " << str(png.at(c));
+  for (const Vec2& d : {Vec2(1, 0), Vec2(-1, 0), Vec2(0, 1), Vec2(0, -1)}) {
+    const Vec2 p = c + kJointRadius * d;
+    EXPECT_TRUE(same_colour(png.at(p), kJointInk)) << "joint " << name << " ring pixel (" << p.x()
+                                                   << ", " << p.y() << ") is " << str(png.at(p));
+  }
+}
+
+class RenderCrankRocker : public ::testing::TestWithParam<double> {};
+
+TEST_P(RenderCrankRocker, PngJointsAtTheClosedFormPixels) {
+  const double crank = GetParam();
+  TempDir dir;
+  const std::string out = (dir.path / "crank-rocker.png").string();
+  // A bare --input number is in the file's angle unit (deg).
+  const CliResult r =
+      run_cli({"render", bundled("crank-rocker"), "--input", std::to_string(crank), "--out", out});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const Png png(out);
+  ASSERT_NE(png.data, nullptr) << "cannot read " << out;
+  ASSERT_EQ(png.width, 800);
+  ASSERT_EQ(png.height, 600);
+  const FourBarPose pose = crank_rocker_at(crank);
+  const ExpectedView view = expected_view(pose, 800, 600);
+  expect_joint_at(png, view.pixel(pose.A0), "A0");
+  expect_joint_at(png, view.pixel(pose.A), "A");
+  expect_joint_at(png, view.pixel(pose.B), "B");
+  expect_joint_at(png, view.pixel(pose.B0), "B0");
+  // And the coupler point P (not a joint) is a dark dot, not a joint symbol.
+  EXPECT_FALSE(same_colour(png.at(view.pixel(pose.P)), kJointFill));
+}
+
+INSTANTIATE_TEST_SUITE_P(CrankAngles, RenderCrankRocker, ::testing::Values(0.0, 90.0));
+
+// The same through a design position: p2 locks the crank at 150°.
+TEST(Render, PngAtADesignPosition) {
+  TempDir dir;
+  const std::string out = (dir.path / "p2.png").string();
+  const CliResult r =
+      run_cli({"render", bundled("crank-rocker"), "--position", "p2", "--out", out});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const Png png(out);
+  ASSERT_NE(png.data, nullptr);
+  const FourBarPose pose = crank_rocker_at(150.0);
+  const ExpectedView view = expected_view(pose, 800, 600);
+  expect_joint_at(png, view.pixel(pose.A), "A");
+  expect_joint_at(png, view.pixel(pose.B), "B");
+}
+
+// The library's transform is the documented one (the same box, scale and centre as above; the
+// model is in metres, the closed form in mm).
+TEST(Render, SceneTransformIsTheDocumentedOne) {
+  const Model model = test::load_bundled("crank-rocker");
+  const PoseResult pose = assemble_pose(model, RenderPose{"", "90deg"});
+  ASSERT_EQ(pose.status, PoseStatus::ok) << pose.message;
+  RenderOptions options;
+  options.driver = pose.driver;
+  const Scene scene = build_scene(model, pose.q, options);
+  const ExpectedView expected = expected_view(crank_rocker_at(90.0), 800, 600);
+  constexpr double kRelative = 1e-9;  // the closed form and the assembly agree to ~1e-12 mm
+  EXPECT_NEAR(scene.view.scale * 1e-3, expected.scale, kRelative * expected.scale);
+  EXPECT_NEAR(scene.view.centre.x() * 1e3, expected.centre.x(), 1e-6);
+  EXPECT_NEAR(scene.view.centre.y() * 1e3, expected.centre.y(), 1e-6);
+  int revolutes = 0, drivers = 0;
+  for (const Primitive& p : scene.primitives) {
+    revolutes += p.role == Role::revolute;
+    drivers += p.role == Role::driver && p.element == "A0";
+  }
+  EXPECT_EQ(revolutes, 4);
+  EXPECT_GT(drivers, 0) << "the driven joint A0 is marked";
+}
+
+// Every joint, load and body kind (tests/support/zoo.hpp, drawn at its unassembled design q):
+// a symbol of each kind, and every format draws it.
+TEST(Render, ZooHasASymbolOfEveryKindInEveryFormat) {
+  const Model model = parse_mechanism(test::kZooYaml, "zoo");
+  RenderOptions options;
+  options.labels = true;
+  options.driver = model.find_joint("J8");  // a prismatic driver: the double arrow
+  const Scene scene = build_scene(model, model.design_q(), options);
+  std::map<Role, int> count;
+  for (const Primitive& p : scene.primitives) ++count[p.role];
+  EXPECT_EQ(count[Role::revolute], 2);  // J1, J7
+  EXPECT_GT(count[Role::prismatic], 0);
+  EXPECT_GT(count[Role::pin_in_slot], 0);
+  EXPECT_GT(count[Role::fixed], 0);
+  EXPECT_GT(count[Role::distance], 0);
+  EXPECT_GT(count[Role::spring_damper], 0);
+  EXPECT_GT(count[Role::ground], 0);
+  EXPECT_GT(count[Role::driver], 0);
+  EXPECT_GT(count[Role::label], 0);
+  EXPECT_GT(count[Role::scale_bar], 0);
+  EXPECT_EQ(count[Role::body], 6);  // a: plate (3 points); b, c: bars (2 primitives each); p: disc
+  for (const ImageFormat f : {ImageFormat::svg, ImageFormat::png, ImageFormat::pdf})
+    EXPECT_GT(draw_image(scene, f).size(), 100u);
+  release_render_caches();  // the sanitizer build checks leaks at exit
+  EXPECT_GT(draw_image(scene, ImageFormat::png).size(), 100u) << "drawing again after a release";
+  release_render_caches();
+}
+
+// Three collinear points (the triple crank's coupler: pins at 0, 100, 200 mm on its x axis) make
+// a bar between the extreme ones, not a flat plate.
+TEST(Render, CollinearPointsMakeABar) {
+  const Model model = test::load_bundled("triple-crank");
+  const Scene scene = build_scene(model, model.design_q(), RenderOptions{});
+  int paths = 0;
+  for (const Primitive& p : scene.primitives)
+    if (p.role == Role::body && p.element == "coupler") {
+      const auto* path = std::get_if<Path>(&p.shape);
+      ASSERT_NE(path, nullptr);
+      ASSERT_EQ(path->points.size(), 2u);
+      EXPECT_NEAR((path->points[0].model - path->points[1].model).norm(), 0.2, 1e-12);  // m
+      ++paths;
+    }
+  EXPECT_EQ(paths, 2);  // the bar and its edge
+}
+
+// Pitch circles of a gear pair on the ground: pivots 90 mm apart. Rolling without slip gives
+// r1 ω1 = −r2 ω2 for external gears (k = ω2/ω1 = −r1/r2) and r1 ω1 = r2 ω2 for internal ones
+// (k = r1/r2), with r1 + r2 (external) or r2 − r1 (internal, gear 2 the ring) equal to the
+// centre distance.
+TEST(Render, GearPitchCirclesRollOnEachOther) {
+  for (const double k : {-2.0, 0.25}) {
+    const std::string text = R"(orthomech: 1
+name: gears
+units: {length: mm}
+ground:
+  points: {O1: [0, 0], O2: [90, 0]}
+bodies:
+  - {name: g1, mass: 1, inertia: 1, pose: [0, 0, 0], points: {O: [0, 0]}}
+  - {name: g2, mass: 1, inertia: 1, pose: [90, 0, 0], points: {O: [0, 0]}}
+joints:
+  - {name: P1, type: revolute, connects: [ground.O1, g1.O]}
+  - {name: P2, type: revolute, connects: [ground.O2, g2.O]}
+  - {name: mesh, type: gear, bodies: [g1, g2], ratio: )" +
+                             std::to_string(k) + "}\n";
+    const Model model = parse_mechanism(text, "gears");
+    const Scene scene = build_scene(model, model.design_q(), RenderOptions{});
+    std::vector<std::pair<Vec2, double>> circles;  // centre (mm), radius (mm)
+    for (const Primitive& p : scene.primitives)
+      if (p.role == Role::gear)
+        if (const auto* c = std::get_if<Circle>(&p.shape))
+          circles.emplace_back(c->centre.model * 1e3, c->radius_model * 1e3);
+    ASSERT_EQ(circles.size(), 2u) << "k = " << k;
+    constexpr double kTol = 1e-9;  // mm: a division and a product
+    const double r1 = circles[0].second, r2 = circles[1].second;
+    EXPECT_NEAR((circles[0].first - Vec2(0, 0)).norm(), 0.0, kTol);
+    EXPECT_NEAR((circles[1].first - Vec2(90, 0)).norm(), 0.0, kTol);
+    EXPECT_NEAR(r1 / r2, std::abs(k), kTol);
+    EXPECT_NEAR(k < 0 ? r1 + r2 : r2 - r1, 90.0, kTol) << "k = " << k;
+  }
+}
+
+// ---- SVG parsed as XML -------------------------------------------------------------------------
+struct SvgCount {
+  int elements = 0;
+  int joint_fills = 0;  // <path> elements filled with the revolute symbol's colour
+  bool svg_root = false;
+};
+
+// "fill:rgb(100%,85%,30%)" (Cairo's SVG style syntax) → the colour, if present.
+std::optional<Rgba> style_fill(const std::string& style) {
+  const auto k = style.find("fill:rgb(");
+  if (k == std::string::npos) return std::nullopt;
+  Rgba c;
+  if (std::sscanf(style.c_str() + k, "fill:rgb(%lf%%,%lf%%,%lf%%)", &c.r, &c.g, &c.b) != 3)
+    return std::nullopt;
+  c.r /= 100.0;
+  c.g /= 100.0;
+  c.b /= 100.0;
+  return c;
+}
+
+void XMLCALL start_element(void* data, const XML_Char* name, const XML_Char** attributes) {
+  auto* count = static_cast<SvgCount*>(data);
+  if (count->elements++ == 0) count->svg_root = std::string(name) == "svg";
+  if (std::string(name) != "path") return;
+  for (int k = 0; attributes[k]; k += 2)
+    if (std::string(attributes[k]) == "style")
+      if (const auto fill = style_fill(attributes[k + 1])) {
+        Rgba f = *fill;
+        f.a = 1.0;
+        count->joint_fills += same_colour(f, kJointFill);
+      }
+}
+void XMLCALL end_element(void*, const XML_Char*) {}
+
+SvgCount parse_svg(const std::string& text, std::string& error) {
+  SvgCount count;
+  std::unique_ptr<std::remove_pointer_t<XML_Parser>, decltype(&XML_ParserFree)> parser(
+      XML_ParserCreate(nullptr), XML_ParserFree);
+  XML_SetUserData(parser.get(), &count);
+  XML_SetElementHandler(parser.get(), start_element, end_element);
+  if (XML_Parse(parser.get(), text.data(), static_cast<int>(text.size()), 1) != XML_STATUS_OK)
+    error = XML_ErrorString(XML_GetErrorCode(parser.get()));
+  return count;
+}
+
+// The expected number of revolute symbols is the number of revolute joints in each file's
+// comment block: crank-rocker 4, Andrews' squeezer 10, slider-crank 3 (+ the prismatic slide).
+TEST(Render, SvgIsXmlWithOneSymbolPerRevolute) {
+  TempDir dir;
+  for (const auto& [name, revolutes] : std::vector<std::pair<std::string, int>>{
+           {"crank-rocker", 4}, {"andrews-squeezer", 10}, {"slider-crank", 3}}) {
+    const std::string out = (dir.path / (name + ".svg")).string();
+    const CliResult r = run_cli({"render", bundled(name), "--labels", "--out", out});
+    ASSERT_EQ(r.status, 0) << name << ": " << r.err;
+    std::string error;
+    const SvgCount count = parse_svg(test::read_text(out), error);
+    EXPECT_EQ(error, "") << name << ": not well-formed XML";
+    EXPECT_TRUE(count.svg_root) << name;
+    EXPECT_EQ(count.joint_fills, revolutes) << name;
+  }
+}
+
+TEST(Render, PdfStartsWithItsSignature) {
+  TempDir dir;
+  const std::string out = (dir.path / "slider-crank.PDF").string();  // the extension in any case
+  const CliResult r = run_cli({"render", bundled("slider-crank"), "--out", out});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::string text = test::read_text(out);
+  EXPECT_EQ(text.substr(0, 5), "%PDF-");
+  EXPECT_NE(text.find("%%EOF"), std::string::npos);
+}
+
+// ---- coupler curves (--trace) ------------------------------------------------------------------
+// The traced path of the coupler point is the closed-form coupler curve at each input of the
+// sweep (the sweep's positions are solved to ~1e-12 m).
+constexpr double kTraceTolerance = 1e-9;  // m
+
+TEST(RenderTrace, CouplerPointPathIsTheClosedFormCurve) {
+  const Model model = test::load_bundled("crank-rocker");
+  const PoseResult pose = assemble_pose(model, RenderPose{});
+  ASSERT_EQ(pose.status, PoseStatus::ok);
+  const TraceResult traced = trace_points(model, {"coupler.P", "crank.A"}, pose.driver);
+  ASSERT_EQ(traced.status, TraceStatus::completed) << traced.message;
+  ASSERT_EQ(traced.traces.size(), 2u);
+  const PointTrace& p = traced.traces[0];
+  ASSERT_GE(p.path.size(), 360u);  // analysis: steps 360, a full turn
+  for (size_t k = 0; k < p.path.size(); ++k) {
+    const FourBarPose closed = crank_rocker_at(p.input[k] * 180.0 / std::numbers::pi);
+    EXPECT_LT((p.path[k] - 1e-3 * closed.P).norm(), kTraceTolerance) << "input " << p.input[k];
+    EXPECT_LT((traced.traces[1].path[k] - 1e-3 * closed.A).norm(), kTraceTolerance);
+  }
+  const TraceResult bad = trace_points(model, {"coupler.Q"}, pose.driver);
+  EXPECT_EQ(bad.status, TraceStatus::bad_request);
+  EXPECT_EQ(bad.message, "--trace: body 'coupler' has no point 'Q' (it has A, B, P)");
+}
+
+// The PNG of `render --trace coupler.P` has the trace's colour on the closed-form curve, the view
+// fitted to the curve as well (the documented box includes the traced paths).
+TEST(RenderTrace, PngShowsTheCurveAtItsClosedFormPixels) {
+  TempDir dir;
+  const std::string out = (dir.path / "trace.png").string();
+  const CliResult r =
+      run_cli({"render", bundled("crank-rocker"), "--trace", "coupler.P", "--out", out});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const Png png(out);
+  ASSERT_NE(png.data, nullptr);
+  // The box: the design position (crank 60°) and the curve sampled finely (1°: the drawn chords
+  // of 360 steps deviate from the curve by < 0.01 mm, far below a pixel).
+  FourBarPose box = crank_rocker_at(60.0);
+  Vec2 lo = box.P, hi = box.P;
+  for (int deg = 0; deg < 360; ++deg) {
+    const Vec2 P = crank_rocker_at(deg).P;
+    lo = lo.cwiseMin(P);
+    hi = hi.cwiseMax(P);
+  }
+  for (const Vec2& v : {box.A0, box.B0, box.A, box.B}) {
+    lo = lo.cwiseMin(v);
+    hi = hi.cwiseMax(v);
+  }
+  const RenderOptions defaults;
+  const double area_w = 800 - 2.0 * defaults.margin,
+               area_h = 600 - 2.0 * defaults.margin - defaults.legend;
+  ExpectedView view;
+  view.scale = std::min(area_w / (hi.x() - lo.x()), area_h / (hi.y() - lo.y()));
+  view.centre = 0.5 * (lo + hi);
+  view.centre_px = Vec2(400.0, defaults.margin + 0.5 * area_h);
+  int checked = 0;
+  for (int deg = 0; deg < 360; deg += 15) {
+    const Vec2 c = view.pixel(crank_rocker_at(deg).P);
+    // Skip samples near what is drawn over the trace (joints, the point dot, labels: none).
+    bool covered = false;
+    for (const Vec2& j : {box.A0, box.B0, box.A, box.B, box.P})
+      covered = covered || (view.pixel(j) - c).norm() < 3.0 * kJointRadius;
+    if (covered) continue;
+    ++checked;
+    EXPECT_TRUE(same_colour(png.at(c), kFirstTraceColour))
+        << "crank " << deg << " deg: pixel (" << c.x() << ", " << c.y() << ") is "
+        << str(png.at(c));
+  }
+  EXPECT_GE(checked, 12);
+}
+
+// Driven from the rocker at constant speed the crank-rocker stops at a dead point (crank and
+// coupler collinear, its comment block): the picture is drawn with the traces up to there, exit 1.
+TEST(RenderTrace, SweepStoppedAtADeadPointDrawsThePartAndExitsOne) {
+  TempDir dir;
+  std::string text = test::read_text(bundled("crank-rocker"));
+  const std::string from = "{name: motor, joint: A0, speed: 300 rpm}";
+  ASSERT_NE(text.find(from), std::string::npos);
+  text.replace(text.find(from), from.size(), "{name: motor, joint: B0, speed: 10 rpm}");
+  const fs::path file = dir.path / "rocker-driven.yaml";
+  std::ofstream(file) << text;
+  const std::string out = (dir.path / "x.png").string();
+  const CliResult r = run_cli({"render", file.string(), "--trace", "coupler.P", "--out", out});
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_NE(r.err.find("the traces stop where the sweep stopped"), std::string::npos) << r.err;
+  EXPECT_TRUE(fs::exists(out));
+}
+
+TEST(RenderTrace, UnknownPointIsBadInput) {
+  TempDir dir;
+  const std::string out = (dir.path / "x.svg").string();
+  const CliResult r =
+      run_cli({"render", bundled("crank-rocker"), "--trace", "coupler", "--out", out});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("--trace: 'coupler' is not body.point of a moving body"), std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+// ---- animation (--animate) ---------------------------------------------------------------------
+// Frames of the animated SVG: groups frame-K; in each, the revolute symbols' paths in joint order
+// (A0, A, B, B0). Cairo writes a circle of radius r about c starting at c + (r, 0): "M x y C …".
+struct AnimationFrames {
+  std::vector<std::vector<Vec2>> joints;  // per frame, the centres of the revolute symbols
+  int animates = 0;                       // <animate> elements
+  int depth = 0, frame_depth = -1;
+};
+void XMLCALL animation_start(void* data, const XML_Char* name, const XML_Char** attributes) {
+  auto* f = static_cast<AnimationFrames*>(data);
+  ++f->depth;
+  const std::string element = name;
+  std::string id, style, d;
+  for (int k = 0; attributes[k]; k += 2) {
+    const std::string key = attributes[k];
+    if (key == "id") id = attributes[k + 1];
+    if (key == "style") style = attributes[k + 1];
+    if (key == "d") d = attributes[k + 1];
+  }
+  if (element == "g" && id.rfind("frame-", 0) == 0) {
+    EXPECT_EQ(id, "frame-" + std::to_string(f->joints.size()));
+    f->joints.emplace_back();
+    f->frame_depth = f->depth;
+  }
+  if (element == "animate") ++f->animates;
+  if (element == "path" && f->frame_depth > 0) {
+    const auto fill = style_fill(style);
+    if (fill && same_colour(Rgba{fill->r, fill->g, fill->b, 1.0}, kJointFill)) {
+      double x = 0.0, y = 0.0;
+      EXPECT_EQ(std::sscanf(d.c_str(), "M %lf %lf", &x, &y), 2) << d;
+      f->joints.back().emplace_back(x - kJointRadius, y);
+    }
+  }
+}
+void XMLCALL animation_end(void* data, const XML_Char*) {
+  auto* f = static_cast<AnimationFrames*>(data);
+  if (f->depth == f->frame_depth) f->frame_depth = -1;
+  --f->depth;
+}
+
+// One frame per position of the cycle (analysis: steps 360, from the design crank angle 60° in
+// 1° steps: the sweep of a constant-speed crank), and in frame k every joint at the closed-form
+// position of crank 60° + k°, through the documented transform fitted to all frames.
+TEST(RenderAnimation, OneFramePerPositionWithTheJointsAtTheClosedForm) {
+  TempDir dir;
+  const std::string out = (dir.path / "anim.svg").string();
+  const CliResult r = run_cli({"render", bundled("crank-rocker"), "--animate", "--out", out});
+  ASSERT_EQ(r.status, 0) << r.err;
+  AnimationFrames frames;
+  std::unique_ptr<std::remove_pointer_t<XML_Parser>, decltype(&XML_ParserFree)> parser(
+      XML_ParserCreate(nullptr), XML_ParserFree);
+  XML_SetUserData(parser.get(), &frames);
+  XML_SetElementHandler(parser.get(), animation_start, animation_end);
+  const std::string text = test::read_text(out);
+  ASSERT_EQ(XML_Parse(parser.get(), text.data(), static_cast<int>(text.size()), 1), XML_STATUS_OK)
+      << XML_ErrorString(XML_GetErrorCode(parser.get()));
+  const CliResult png =
+      run_cli({"render", bundled("crank-rocker"), "--animate", "--out", out + ".png"});
+  EXPECT_EQ(png.status, 2);
+  EXPECT_NE(png.err.find("--animate writes an SVG"), std::string::npos) << png.err;
+  constexpr int kSteps = 360;  // analysis: steps of the file
+  ASSERT_EQ(static_cast<int>(frames.joints.size()), kSteps);
+  EXPECT_EQ(frames.animates, kSteps);
+  // The view: the box of every frame's points (the design crank 60° + k°, k = 0 … 359).
+  Vec2 lo = Vec2::Constant(1e300), hi = -lo;
+  for (int k = 0; k < kSteps; ++k) {
+    const FourBarPose p = crank_rocker_at(60.0 + k);
+    for (const Vec2& v : {p.A0, p.B0, p.A, p.B, p.P}) {
+      lo = lo.cwiseMin(v);
+      hi = hi.cwiseMax(v);
+    }
+  }
+  const RenderOptions defaults;
+  const double area_w = 800 - 2.0 * defaults.margin,
+               area_h = 600 - 2.0 * defaults.margin - defaults.legend;
+  ExpectedView view;
+  view.scale = std::min(area_w / (hi.x() - lo.x()), area_h / (hi.y() - lo.y()));
+  view.centre = 0.5 * (lo + hi);
+  view.centre_px = Vec2(400.0, defaults.margin + 0.5 * area_h);
+  constexpr double kSvgPrecision = 0.01;  // px: Cairo writes coordinates to 1/256 px
+  for (int k = 0; k < kSteps; ++k) {
+    const FourBarPose p = crank_rocker_at(60.0 + k);
+    ASSERT_EQ(frames.joints[k].size(), 4u) << "frame " << k;
+    const Vec2 expected[] = {p.A0, p.A, p.B, p.B0};
+    for (int j = 0; j < 4; ++j)
+      EXPECT_LT((frames.joints[k][j] - view.pixel(expected[j])).norm(), kSvgPrecision)
+          << "frame " << k << " joint " << j;
+  }
+}
+
+// ---- errors ----------------------------------------------------------------------------------
+TEST(RenderCli, UnknownImageTypeIsBadInput) {
+  TempDir dir;
+  const std::string out = (dir.path / "x.jpg").string();
+  const CliResult r = run_cli({"render", bundled("crank-rocker"), "--out", out});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("unknown image type"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(".svg, .png or .pdf"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+TEST(RenderCli, UnknownDesignPositionIsBadInput) {
+  TempDir dir;
+  const std::string out = (dir.path / "x.png").string();
+  const CliResult r =
+      run_cli({"render", bundled("crank-rocker"), "--position", "p9", "--out", out});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("design position 'p9' is not defined (the file has p1, p2, p3)"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+// The double rocker's input reaches ±77.608916° only (its comment block): at 120° it cannot close.
+TEST(RenderCli, InputThatCannotAssembleIsANumericalFailure) {
+  TempDir dir;
+  const std::string out = (dir.path / "x.svg").string();
+  const CliResult r =
+      run_cli({"render", bundled("double-rocker"), "--input", "120deg", "--out", out});
+  EXPECT_EQ(r.status, 3);
+  EXPECT_NE(r.err.find("cannot assemble joint 'A0' at 120 deg"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+TEST(RenderCli, PositionAndInputAreExclusiveAndOutIsRequired) {
+  TempDir dir;
+  const std::string out = (dir.path / "x.png").string();
+  EXPECT_EQ(run_cli({"render", bundled("crank-rocker"), "--position", "p1", "--input", "10",
+                     "--out", out})
+                .status,
+            2);
+  EXPECT_EQ(run_cli({"render", bundled("crank-rocker")}).status, 2);
+  const CliResult bad_unit =
+      run_cli({"render", bundled("crank-rocker"), "--input", "10mm", "--out", out});
+  EXPECT_EQ(bad_unit.status, 2) << bad_unit.err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+}  // namespace
+}  // namespace orthomech
