@@ -567,11 +567,11 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
                                : 0.0;
       if (distance <= kStartMoveTolerance * size && angle <= kStartTurnTolerance) continue;
       result.start_moves.push_back({b.name, distance, angle});
-      char text[160];
-      std::snprintf(text, sizeof text, "%.6g mm and %.6g deg", distance * 1e3,
-                    angle * 180.0 / std::numbers::pi);
+      // In the file's declared units (a model built in code: SI).
+      const UnitSystem units = unit_system(model.units);
       result.warnings.push_back("the design position does not close as drawn: body '" + b.name +
-                                "' moved by " + text + " to close the joints");
+                                "' moved by " + format_input(distance, false, units) + " and " +
+                                format_input(angle, true, units) + " to close the joints");
     }
   }
   const Mobility mob = compute_mobility(model, state.q);

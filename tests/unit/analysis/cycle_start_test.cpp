@@ -107,6 +107,13 @@ TEST(CycleStart, TheDesignPositionKeepsTheDrivenJointAsDrawn) {
   ASSERT_EQ(r.warnings.size(), 2u);
   EXPECT_NE(r.warnings[0].find("body 'coupler' moved by"), std::string::npos) << r.warnings[0];
   EXPECT_NE(r.warnings[0].find("2 deg"), std::string::npos) << r.warnings[0];
+  // In the file's declared units: the same model declared in SI says radians (2° = 0.034907 rad).
+  Model si = model;
+  si.units = DeclaredUnits{};
+  const CycleResult r_si = run_cycle(si, o);
+  ASSERT_EQ(r_si.warnings.size(), 2u);
+  EXPECT_NE(r_si.warnings[0].find("0.034907 rad"), std::string::npos) << r_si.warnings[0];
+  EXPECT_EQ(r_si.warnings[0].find("deg"), std::string::npos) << r_si.warnings[0];
   // The file as drawn closes: nothing is said.
   const CycleResult clean = run_cycle(test::load_bundled("crank-rocker"), o);
   EXPECT_TRUE(clean.warnings.empty());
