@@ -44,4 +44,20 @@ CliResult run_cli(const std::vector<std::string>& args) {
   return r;
 }
 
+std::string bundled_file(const std::string& name) {
+  return std::string(ORTHOMECH_SOURCE_DIR) + "/mechanisms/" + name + ".yaml";
+}
+
+TempDir::TempDir(const std::string& prefix, bool create) {
+  static int counter = 0;
+  path = fs::temp_directory_path() /
+         (prefix + std::to_string(::getpid()) + "_" + std::to_string(counter++));
+  if (create) fs::create_directories(path);
+}
+
+TempDir::~TempDir() {
+  std::error_code ec;
+  fs::remove_all(path, ec);
+}
+
 }  // namespace orthomech::test

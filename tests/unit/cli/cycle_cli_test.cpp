@@ -25,22 +25,11 @@ namespace fs = std::filesystem;
 using test::CliResult;
 using test::run_cli;
 
-std::string bundled(const std::string& name) {
-  return std::string(ORTHOMECH_SOURCE_DIR) + "/mechanisms/" + name + ".yaml";
-}
+std::string bundled(const std::string& name) { return test::bundled_file(name); }
 
-// A fresh output directory, removed at the end of the test.
-struct TempDir {
-  fs::path path;
-  TempDir() {
-    static int counter = 0;
-    path = fs::temp_directory_path() /
-           ("orthomech_cycle_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
+// A fresh output directory (test::TempDir), removed at the end of the test.
+struct TempDir : test::TempDir {
+  TempDir() : test::TempDir("orthomech_cycle_", false) {}
 };
 
 std::vector<std::string> split(const std::string& line) {

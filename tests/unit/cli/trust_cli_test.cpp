@@ -39,25 +39,14 @@ using test::run_cli;
 
 constexpr double kDeg = std::numbers::pi / 180.0;
 
-std::string bundled(const std::string& name) {
-  return std::string(ORTHOMECH_SOURCE_DIR) + "/mechanisms/" + name + ".yaml";
-}
+std::string bundled(const std::string& name) { return test::bundled_file(name); }
 std::string units_data(const std::string& name) {
   return std::string(ORTHOMECH_SOURCE_DIR) + "/tests/data/units/" + name + ".yaml";
 }
 
-struct TempDir {
-  fs::path path;
-  TempDir() {
-    static int counter = 0;
-    path = fs::temp_directory_path() /
-           ("orthomech_trust_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
-    fs::create_directories(path);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
+// A fresh output directory (test::TempDir), removed at the end of the test.
+struct TempDir : test::TempDir {
+  TempDir() : test::TempDir("orthomech_trust_") {}
 };
 
 // A copy of `file` with `from` replaced by `to` (once), written into dir.

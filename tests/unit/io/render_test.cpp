@@ -39,24 +39,11 @@ namespace fs = std::filesystem;
 using test::CliResult;
 using test::run_cli;
 
-std::string bundled(const std::string& name) {
-  return std::string(ORTHOMECH_SOURCE_DIR) + "/mechanisms/" + name + ".yaml";
-}
+std::string bundled(const std::string& name) { return test::bundled_file(name); }
 
-struct TempDir {
-  fs::path path;
-  TempDir() {
-    static int counter = 0;
-    path = fs::temp_directory_path() /
-           ("orthomech_render_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
-    fs::create_directories(path);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
+// A fresh output directory (test::TempDir), removed at the end of the test.
+struct TempDir : test::TempDir {
+  TempDir() : test::TempDir("orthomech_render_") {}
 };
 
 // ---- the crank-rocker in closed form (mm), independent of the library ------------------------
