@@ -249,7 +249,7 @@ struct Model {
   AnalysisDefaults analysis;
   DeclaredUnits units;                // as declared by the file (SI when built in code)
   std::vector<std::string> warnings;  // "file:line:col: warning: element: message", from loading
-  InitialConditions initial;  // initial velocities of simulate (may be empty: at rest)
+  InitialConditions initial;          // initial velocities of simulate (may be empty: at rest)
   // Set by make_general_model (model/general_system.hpp): a free system given by functions,
   // with M(q), instead of bodies, joints and loads (which are then empty).
   std::shared_ptr<const GeneralSystem> general;
