@@ -4,6 +4,7 @@
 // (no crash, no exit 4) with no NaN or inf printed; every number option refuses NaN, inf and
 // out-of-range values with exit 2 naming the option, before any work (no hang).
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <filesystem>
@@ -48,6 +49,10 @@ const std::vector<std::vector<std::string>> kCommands = {
     {"crosscheck", "--samples", "3", "--t-end", "0.05"},
     {"simulate", "--t-end", "0.05"},
     {"validate", "--starts", "2"},
+    {"render", "--out",
+     (std::filesystem::temp_directory_path() /
+      ("orthomech_robustness_" + std::to_string(::getpid()) + ".svg"))
+         .string()},
 };
 
 std::vector<std::string> with_file(std::vector<std::string> command, const std::string& file) {
@@ -61,7 +66,7 @@ std::string describe(const std::vector<std::string>& args) {
   return s;
 }
 
-// Every broken file, through the commands in turn (file k through command k mod 6; `info` on
+// Every broken file, through the commands in turn (file k through command k mod 7; `info` on
 // every file is Data/InvalidFile.CliInfo…): exit 2, the `# expect:` message's place
 // (file:line:column) at the start of stderr, nothing on stdout. Every command reads its file
 // through the same cli::load, so one command per file covers the reader; the rotation checks that
