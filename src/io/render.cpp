@@ -350,14 +350,24 @@ class SceneBuilder {
         joint.kind);
   }
 
+  // A guide along body i's axis through Pi and the point Pj on it (prismatic, pin-in-slot): Pj,
+  // the world axis, and the span [a, b] of the axis line from Pi to Pj's foot.
+  struct GuideSpan {
+    Vec2 pj, axis, a, b;
+  };
+  template <class Kind>
+  [[nodiscard]] GuideSpan guide_span(const Kind& k) const {
+    const Vec2 pi = world(model_, k.pi, q_), pj = world(model_, k.pj, q_);
+    const Vec2 axis = world_direction(model_, k.pi.body, k.axis_local, q_).normalized();
+    const double t = axis.dot(pj - pi);
+    return {pj, axis, pi + std::min(0.0, t) * axis, pi + std::max(0.0, t) * axis};
+  }
+
   // Slider block on its guide: the guide is the line through Pi (body i) along the axis, drawn
   // over Pi and the block's place; the block is centred on Pj.
   void add_prismatic(const std::string& name, const Prismatic& k) {
-    const Vec2 pi = world(model_, k.pi, q_), pj = world(model_, k.pj, q_);
-    const Vec2 axis = world_direction(model_, k.pi.body, k.axis_local, q_).normalized();
+    const auto [pj, axis, a, b] = guide_span(k);
     joint_places_.emplace_back(name, pj);
-    const double t = axis.dot(pj - pi);
-    const Vec2 a = pi + std::min(0.0, t) * axis, b = pi + std::max(0.0, t) * axis;
     const Vec2 d = px_dir(axis), n = px_perp(d);
     const double ext = 0.5 * kSliderLength + 12.0;
     Path guide;
@@ -382,11 +392,8 @@ class SceneBuilder {
 
   // The slot (a hollow stadium along the axis of body i through Pi) and the pin Pj in it.
   void add_pin_in_slot(const std::string& name, const PinInSlot& k) {
-    const Vec2 pi = world(model_, k.pi, q_), pj = world(model_, k.pj, q_);
-    const Vec2 axis = world_direction(model_, k.pi.body, k.axis_local, q_).normalized();
+    const auto [pj, axis, a, b] = guide_span(k);
     joint_places_.emplace_back(name, pj);
-    const double t = axis.dot(pj - pi);
-    const Vec2 a = pi + std::min(0.0, t) * axis, b = pi + std::max(0.0, t) * axis;
     const Vec2 d = px_dir(axis);
     Path outer, inner;
     outer.points = inner.points = {at(a, -kSlotWidth * d), at(b, kSlotWidth * d)};

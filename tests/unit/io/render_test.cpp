@@ -86,13 +86,9 @@ struct ExpectedView {
                 centre_px.y() - scale * (p.y() - centre.y()));
   }
 };
-ExpectedView expected_view(const FourBarPose& p, int width, int height) {
+// The documented transform for a model bounding box [lo, hi] on a width × height image.
+ExpectedView expected_view(const Vec2& lo, const Vec2& hi, int width, int height) {
   const RenderOptions defaults;  // the documented margins: 40 px, legend 40 px
-  Vec2 lo = p.A0, hi = p.A0;
-  for (const Vec2& v : {p.B0, p.A, p.B, p.P}) {
-    lo = lo.cwiseMin(v);
-    hi = hi.cwiseMax(v);
-  }
   const double area_w = width - 2.0 * defaults.margin;
   const double area_h = height - 2.0 * defaults.margin - defaults.legend;
   ExpectedView v;
@@ -100,6 +96,14 @@ ExpectedView expected_view(const FourBarPose& p, int width, int height) {
   v.centre = 0.5 * (lo + hi);
   v.centre_px = Vec2(0.5 * width, defaults.margin + 0.5 * area_h);
   return v;
+}
+ExpectedView expected_view(const FourBarPose& p, int width, int height) {
+  Vec2 lo = p.A0, hi = p.A0;
+  for (const Vec2& v : {p.B0, p.A, p.B, p.P}) {
+    lo = lo.cwiseMin(v);
+    hi = hi.cwiseMax(v);
+  }
+  return expected_view(lo, hi, width, height);
 }
 
 // ---- reading a PNG back with Cairo -------------------------------------------------------------
@@ -421,13 +425,7 @@ TEST(RenderTrace, PngShowsTheCurveAtItsClosedFormPixels) {
     lo = lo.cwiseMin(v);
     hi = hi.cwiseMax(v);
   }
-  const RenderOptions defaults;
-  const double area_w = 800 - 2.0 * defaults.margin,
-               area_h = 600 - 2.0 * defaults.margin - defaults.legend;
-  ExpectedView view;
-  view.scale = std::min(area_w / (hi.x() - lo.x()), area_h / (hi.y() - lo.y()));
-  view.centre = 0.5 * (lo + hi);
-  view.centre_px = Vec2(400.0, defaults.margin + 0.5 * area_h);
+  const ExpectedView view = expected_view(lo, hi, 800, 600);
   int checked = 0;
   for (int deg = 0; deg < 360; deg += 15) {
     const Vec2 c = view.pixel(crank_rocker_at(deg).P);
@@ -544,13 +542,7 @@ TEST(RenderAnimation, OneFramePerPositionWithTheJointsAtTheClosedForm) {
       hi = hi.cwiseMax(v);
     }
   }
-  const RenderOptions defaults;
-  const double area_w = 800 - 2.0 * defaults.margin,
-               area_h = 600 - 2.0 * defaults.margin - defaults.legend;
-  ExpectedView view;
-  view.scale = std::min(area_w / (hi.x() - lo.x()), area_h / (hi.y() - lo.y()));
-  view.centre = 0.5 * (lo + hi);
-  view.centre_px = Vec2(400.0, defaults.margin + 0.5 * area_h);
+  const ExpectedView view = expected_view(lo, hi, 800, 600);
   constexpr double kSvgPrecision = 0.01;  // px: Cairo writes coordinates to 1/256 px
   for (int k = 0; k < kSteps; ++k) {
     const FourBarPose p = crank_rocker_at(60.0 + k);
