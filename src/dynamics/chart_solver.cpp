@@ -3,6 +3,7 @@
 #include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 #include "orthomech/constraints/joints.hpp"
@@ -158,7 +159,7 @@ double ChartSolver::polish_positions(VecX& q, MatX& Et, VecX& f, VecX& dq, int i
   return residual;
 }
 
-double ChartSolver::estimate_sigma_min(const VecX& col_scale, VecX& w) {
+double ChartSolver::estimate_sigma_min(const VecX& col_scale, VecX& w, VecX* left) {
   if (r_ == 0) return std::numeric_limits<double>::infinity();
   if (w.size() != r_ || !(w.norm() > 0.0) || !w.allFinite()) {
     w.resize(r_);  // a start with no structure (set-up or after a breakdown)
@@ -180,7 +181,8 @@ double ChartSolver::estimate_sigma_min(const VecX& col_scale, VecX& w) {
     const double ny = sw_.norm();
     if (!(ny > 0.0) || !std::isfinite(ny)) return 0.0;
     sigma = 1.0 / ny;
-    if (sparse_) {  // z = S⁻¹ B⁻¹ y
+    if (left && it + 1 == kIterations) *left = sw_ / ny;  // ŷ: B̃ (B̃⁻¹ y) = y
+    if (sparse_) {                                        // z = S⁻¹ B⁻¹ y
       xd_ = slu_.solve(sw_);
       sw_ = xd_;
     } else {
@@ -207,8 +209,11 @@ SolveResult ChartSolver::correct_positions(VecX& q, MatX& Et, VecX& f, VecX& dq,
     result.iterations = it;
     if (!std::isfinite(result.residual) || (it >= kMaxIterations && result.residual > tolerance)) {
       result.status = SolveStatus::not_converged;
-      result.message = "the position corrector did not converge (residual " +
-                       std::to_string(result.residual) + ")";
+      char buf[96];
+      std::snprintf(buf, sizeof buf,
+                    "the position corrector did not converge (residual %.3g, tolerance %.3g)",
+                    result.residual, tolerance);
+      result.message = buf;
       return result;
     }
     if (!reuse && !factor(Et)) {

@@ -60,7 +60,11 @@ class ChartSolver {
   // between calls). Returns 1/‖B̃⁻ᵀ ŵ‖ for the unit iterate ŵ, an upper bound of σ_min that
   // converges to it. Near a change point σ_min → 0 linearly in the distance to it (E loses
   // rank there, so does every chart block). Allocation-free on the dense path.
-  [[nodiscard]] double estimate_sigma_min(const VecX& col_scale, VecX& w);
+  // With `left` given, it receives the unit left singular vector estimate ŷ (size rank, indexed
+  // by the chart's rows) paired with the returned w (right, indexed by D, not normalised):
+  // B̃ w = c ŷ with c > 0, so that dσ_min/dt ≈ ŷᵀ (dB̃/dt) ŵ (first-order perturbation of a simple
+  // singular value [Stewart & Sun 1990, §IV.2]; used by simulate's change-point monitor).
+  [[nodiscard]] double estimate_sigma_min(const VecX& col_scale, VecX& w, VecX* left = nullptr);
   [[nodiscard]] const Chart& chart() const { return chart_; }
   void set_chart(const Chart& c);
   [[nodiscard]] int rank() const { return r_; }

@@ -119,6 +119,11 @@ constexpr int kMaxApproaches = 60;
 constexpr double kMinimumAboveZero = 0.5;
 // (C2') a V of σ̂ through 0 across two steps: the third σ̂ within this fraction of the V's.
 constexpr double kVShapeTolerance = 1.0;
+// (C2'') a change point inside one step: the tangents of σ̂ at its ends meet below this fraction
+// of the smaller end value (≈ 0 at a change point, where σ̂ ≈ a |t − t*|; ≈ the minimum at a
+// regular minimum that the step resolves). Undone at most kMaxCrossingRewinds times in a row.
+constexpr double kCrossingVertex = 0.5;
+constexpr int kMaxCrossingRewinds = 30;
 // Passage checks (C6). Velocity jump: the quadrature velocity at the landing is admissible up
 // to the step's truncation and rounding error; a landing on another branch removes the
 // velocity's component normal to that branch's tangent (8e-2 relative on the N = 40 bar with
@@ -607,7 +612,7 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
   // unannounced (C2') is undone back to the last state before it.
   struct SavedState {
     bool valid = false;
-    double t = 0.0, sigma = 0.0;
+    double t = 0.0, sigma = 0.0, rate = 0.0;  // σ̂ and dσ̂/dt in `chart`
     VecX x;
     Chart chart;
   } saved_older, saved_prev;
@@ -622,6 +627,79 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
   const auto chart_quality = [&]() {
     if (model.nc == 0 || rank == 0) return std::numeric_limits<double>::infinity();
     return dyn.cs_.estimate_sigma_min(dyn.ws_.free.A_sqrt, sigma_w) / sigma_ref;
+  };
+  // (C1) σ̂ and its rate dσ̂/dt at (q, u) in the current chart (factorised at q): the rate of a
+  // simple singular value is ŷᵀ (dB̃/dt) ŵ with its unit singular vectors [Stewart & Sun 1990,
+  // §IV.2], and (dEᵀ/dt) x = H(u, x) is the constraints' second derivative, bilinear in (u, x);
+  // H(y, y) = Dᵀy is the constraint rate (compute_constraint_rate), so by polarisation
+  // H(u, x) = (D(u + x)ᵀ(u + x) − D(u − x)ᵀ(u − x))/4 (x scaled to |u| against cancellation).
+  // Allocation-free after the first call.
+  VecX sigma_left, rate_x = VecX::Zero(n), rate_plus;
+  State rate_state(model);
+  ConstraintWorkspace rate_ws(model);
+  const auto chart_quality_rate = [&](const VecX& qq, const VecX& uu, double& rate) {
+    rate = 0.0;
+    if (model.nc == 0 || rank == 0) return std::numeric_limits<double>::infinity();
+    const double sigma =
+        dyn.cs_.estimate_sigma_min(dyn.ws_.free.A_sqrt, sigma_w, &sigma_left) / sigma_ref;
+    const double wn = sigma_w.norm(), un = uu.norm();
+    if (!(sigma > 0.0) || !(wn > 0.0) || !std::isfinite(wn) || !(un > 0.0)) return sigma;
+    const Chart& c = dyn.cs_.chart();
+    rate_x.setZero();
+    for (int k = 0; k < rank; ++k) {
+      const int d = c.dependent[static_cast<size_t>(k)];
+      rate_x(d) = dyn.ws_.free.A_sqrt(d) * sigma_w(k) / wn;  // x = S_D ŵ
+    }
+    const double alpha = un / rate_x.norm();
+    rate_state.q = qq;
+    rate_state.u = uu + alpha * rate_x;
+    compute_constraint_rate(model, rate_state, rate_ws);
+    rate_plus = rate_ws.Dtu;
+    rate_state.u = uu - alpha * rate_x;
+    compute_constraint_rate(model, rate_state, rate_ws);
+    double d = 0.0;
+    for (int i = 0; i < rank; ++i) {
+      const int row = c.rows[static_cast<size_t>(i)];
+      d += sigma_left(i) * (rate_plus(row) - rate_ws.Dtu(row));
+    }
+    rate = 0.25 * d / (alpha * sigma_ref);
+    return sigma;
+  };
+
+  // (C2'') A change point inside the step just taken (from saved_prev, in the same chart): σ̂
+  // fell at the start and rises at the end, and the two tangents σ̂₀ + σ̂'₀ τ and
+  // σ̂₁ + σ̂'₁ (τ − h) meet at or near 0 (below kCrossingVertex of the smaller end value; a
+  // regular minimum that the steps resolve has its tangents meet near the minimum). Whatever
+  // the step's length and whatever the chart did before: the step is undone and the point
+  // approached from the step's start, with t* at the tangents' vertex. Returns true when the
+  // step must be undone (request set) or the run stopped (stop_message set).
+  std::string stop_message;
+  int crossing_rewinds = 0;
+  double last_crossing_t_star = -std::numeric_limits<double>::infinity();
+  const auto crossed_within_step = [&](double t, double s1, double d1) {
+    if (!monitor_armed || !saved_prev.valid || !(saved_prev.rate < 0.0) || !(d1 > 0.0))
+      return false;
+    const Chart& c = dyn.cs_.chart();
+    if (saved_prev.chart.independent != c.independent || saved_prev.chart.rows != c.rows)
+      return false;
+    const double h = t - saved_prev.t, s0 = saved_prev.sigma, d0 = saved_prev.rate;
+    if (!(h > 0.0)) return false;
+    const double tau = std::clamp((s0 - s1 + d1 * h) / (d1 - d0), 0.0, h);
+    const double vertex = std::max(s0 + d0 * tau, s1 + d1 * (tau - h));
+    if (!(vertex < kCrossingVertex * std::min(s0, s1))) return false;
+    last_crossing_t_star = saved_prev.t + tau;
+    if (++crossing_rewinds > kMaxCrossingRewinds) {
+      char buf[160];
+      std::snprintf(buf, sizeof buf,
+                    "the steps keep crossing the change point at t ≈ %.9g s (undone %d times)",
+                    last_crossing_t_star, kMaxCrossingRewinds);
+      stop_message = buf;
+      return true;
+    }
+    rewind_to = 1;
+    request = {true, last_crossing_t_star, s0};
+    last_rewind_t_star = last_crossing_t_star;
+    return true;
   };
 
   detail::OdeProblem problem;
@@ -664,7 +742,6 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
   };
   problem.output = [&](double t, const VecX& y) { emit(t, y); };
 
-  std::string stop_message;
   problem.accept = [&](double t, VecX& y) {
     auto qy = y.head(nq);
     MatX& Et = dyn.ws_.constraints.Et;
@@ -718,9 +795,15 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
     dyn.compute_F();
     dyn.mass_at(q);
     dyn.state_.q = q;
+    if (primal) dyn.state_.u.noalias() = dyn.ws_.free.A * y.segment(nq, n);
+    // (C2'') σ̂ and its rate at the step's end in the step's chart (the block is factorised at
+    // the corrected q): a change point inside the step, whatever the step's length, is undone
+    // before anything else looks at the step's end (its velocity check included).
+    double rate_end = 0.0;
+    const double sigma_end = chart_quality_rate(q, primal ? dyn.state_.u : u_step, rate_end);
+    if (!chart_changed && crossed_within_step(t, sigma_end, rate_end)) return false;
     if (primal) {
       // Momenta: p ← M α u, the mass-orthogonal projection (eq. (44): α = I − A π).
-      dyn.state_.u.noalias() = dyn.ws_.free.A * y.segment(nq, n);
       dyn.compute_H();
       const VecX vv = project_velocity(dyn, dyn.state_.u);
       dyn.state_.u.noalias() = dyn.F_ * vv;
@@ -804,8 +887,10 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
     t_last_accept = t;
     // Change-point monitor: stop the segment when a change point is within reach of the next
     // steps (C2) or close enough to be passed (C3); the driver below approaches or passes it.
-    const double sigma = chart_quality();
-    if (chart_changed) monitor.valid = false;  // σ̂ of another chart block: no trend
+    // σ̂ and its rate in the chart the next step uses (another block after a switch).
+    double rate = rate_end;
+    const double sigma = chart_changed ? chart_quality_rate(q, dyn.state_.u, rate) : sigma_end;
+    if (chart_changed) monitor.valid = false;  // σ̂ of another chart block: no secant trend
     bool stop = false;
     // A falling σ̂ that bottoms out above 0 (C1'): the parabola through the last three values.
     bool minimum_above_zero = false;
@@ -820,10 +905,19 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
         minimum_above_zero = p_min > kMinimumAboveZero * sigma;
       }
     }
-    if (monitor_quiet && monitor.valid && sigma > monitor.sigma) monitor_quiet = false;
-    if (monitor_armed && !monitor_quiet && !minimum_above_zero && monitor.valid &&
-        sigma < monitor.sigma && sigma < kWatchQuality) {
-      const double t_star = t + sigma * (t - monitor.t) / (monitor.sigma - sigma);  // (C1)
+    if (monitor_quiet && (rate > 0.0 || (monitor.valid && sigma > monitor.sigma)))
+      monitor_quiet = false;
+    // (C1) t* from a falling σ̂: the secant through the last two values in this chart and the
+    // tangent t − σ̂/σ̂'. Far from the point σ̂ is concave as it falls (~|sin θ| on the
+    // N-four-bar) and both are late, the secant more: the earlier is taken. A rising σ̂ (σ̂' > 0)
+    // has no point ahead, whatever the secant says.
+    const bool secant_falling = monitor.valid && sigma < monitor.sigma;
+    const bool falling = rate < 0.0 || (rate == 0.0 && secant_falling);
+    if (monitor_armed && !monitor_quiet && !minimum_above_zero && falling &&
+        sigma < kWatchQuality) {
+      double t_star = std::numeric_limits<double>::infinity();
+      if (secant_falling) t_star = t + sigma * (t - monitor.t) / (monitor.sigma - sigma);  // (C1)
+      if (rate < 0.0) t_star = std::min(t_star, t - sigma / rate);
       if (sigma <= pass_quality || t_star - t < kReachSteps * h_last) {
         request = {true, t_star, sigma};
         stop = true;
@@ -852,10 +946,12 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
         stop = true;
       }
     }
+    if (t > last_crossing_t_star) crossing_rewinds = 0;
     saved_older = saved_prev;
     saved_prev.valid = true;
     saved_prev.t = t;
     saved_prev.sigma = sigma;
+    saved_prev.rate = rate;
     saved_prev.x = y;
     saved_prev.chart = dyn.cs_.chart();
     monitor = {true, t, sigma};
@@ -870,6 +966,12 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
     have_energy0 = true;
     result.energy_scale =
         std::abs(kinetic_energy(model, dyn.state_)) + std::abs(potential_energy(model, q));
+    // σ̂ and its rate at the start ((C2'') checks the first step too).
+    saved_prev.valid = true;
+    saved_prev.t = T0;
+    saved_prev.sigma = chart_quality_rate(q, dyn.state_.u, saved_prev.rate);
+    saved_prev.x = x;
+    saved_prev.chart = dyn.cs_.chart();
   }
 
   detail::OdeOptions base;
@@ -1070,7 +1172,8 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
     const double ub2 = mnorm2(B.u, B.u), ua2 = mnorm2(A.u, A.u);
     const double cosine = ua2 > 0.0 && ub2 > 0.0 ? mnorm2(A.u, B.u) / std::sqrt(ua2 * ub2) : 1.0;
     (void)chart_quality();  // one more inverse-iteration pair: σ̂ at the landing converged
-    const double sigma_b = chart_quality();
+    double rate_b = 0.0;
+    const double sigma_b = chart_quality_rate(B.q, B.u, rate_b);
     const ChangePointPassage pass{t_star, t_a, t_b, sigma_a, sigma_b, jump, cosine, it};
     char buf[200];
     std::snprintf(buf, sizeof buf,
@@ -1101,6 +1204,14 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
     t_now = t_b;
     t_last_accept = t_b;
     result.passages.push_back(pass);
+    saved_older.valid = false;  // the next step starts from the landing ((C2''))
+    saved_prev.valid = true;
+    saved_prev.t = t_b;
+    saved_prev.sigma = sigma_b;
+    saved_prev.rate = rate_b;
+    saved_prev.x = x;
+    saved_prev.chart = dyn.cs_.chart();
+    crossing_rewinds = 0;
     // Energy balance at the landing, as after every step.
     dyn.state_.q = B.q;
     dyn.state_.u = B.u;
@@ -1146,7 +1257,9 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
           result.samples.pop_back();
         while (next_out > 0 && grid_time(next_out - 1) > t_now + grid_slack) --next_out;
         monitor = {true, back.t, back.sigma};
-        saved_older.valid = saved_prev.valid = false;
+        const SavedState start = back;  // the state the next step starts from ((C2''))
+        saved_older.valid = false;
+        saved_prev = start;
         ++result.rewinds;
       }
       if (rq.t_star >= T1 - end_slack) {  // the change point lies beyond the end: finish
@@ -1177,7 +1290,7 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
           break;
         }
         monitor.valid = false;
-        saved_older.valid = saved_prev.valid = false;
+        saved_older.valid = false;  // saved_prev: the landing
         approaches = 0;
         pass_quality = std::min(kPassQuality, 2.0 * pass_quality);
         continue;
