@@ -36,6 +36,9 @@ struct OdeProblem {
   // Called at every output time t0 + k·dt_out ≤ t_end with the (interpolated) state. The state
   // at an output time that coincides with the end of a step is the corrected one.
   std::function<void(double t, const VecX& x)> output;
+  // Optional: after every accepted step, the longest next step the problem allows (+∞ for no
+  // limit); e.g. simulate's chart monitor ahead of a chart's singularity.
+  std::function<double()> step_limit;
 };
 
 struct OdeOptions {

@@ -89,6 +89,9 @@ constexpr double kSpreadLimit = 4.0;
 // left uncorrected (its residual is the integrator's local error) rather than risk a jump to
 // another branch; counted in SimulateResult::uncorrected_steps.
 constexpr double kMaxCorrectionGain = 1e4;
+// A step ends at most this fraction of the way to the chart's singularity extrapolated from the
+// spread (1/spread linear in t next to it).
+constexpr double kChartStepFraction = 0.5;
 
 // Change points (docs/theory.md, "Change points"; (C1)–(C6) there). σ̂ is the chart quality,
 // σ_min of the chart's dependent block in the mass metric relative to the largest mass-scaled
@@ -133,6 +136,9 @@ constexpr int kMaxCrossingRewinds = 30;
 // Where the passage's own rounding noise is larger (the corrector stalls above 1e-10: 4e-10 on
 // the triple-crank), the bound is 10× that noise, up to kPassageJumpCeiling.
 constexpr double kPassageJumpCeiling = 1e-7;
+// A velocity jump above this is a landing on another branch (1e-2 … 1 measured), below it (and
+// above the bound) an accurate-enough passage was not achieved: the messages tell them apart.
+constexpr double kBranchJump = 1e-3;
 [[nodiscard]] double passage_velocity_jump_bound(double rtol) {
   return std::clamp(0.1 * rtol, 1e-9, kPassageJumpCeiling);
 }
@@ -613,6 +619,7 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
   struct SavedState {
     bool valid = false;
     double t = 0.0, sigma = 0.0, rate = 0.0;  // σ̂ and dσ̂/dt in `chart`
+    double spread = 0.0;                      // the chart's spread (dual form; 0: unknown)
     VecX x;
     Chart chart;
   } saved_older, saved_prev;
@@ -742,6 +749,9 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
   };
   problem.output = [&](double t, const VecX& y) { emit(t, y); };
 
+  double spread_now = 0.0;  // the chart's spread after the last acceptance (dual form)
+  double next_step_limit = std::numeric_limits<double>::infinity();
+  problem.step_limit = [&] { return next_step_limit; };
   problem.accept = [&](double t, VecX& y) {
     auto qy = y.head(nq);
     MatX& Et = dyn.ws_.constraints.Et;
@@ -842,6 +852,7 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
       // Chart monitor: re-select when F's mass-scaled entries grow; switch if the new chart is
       // clearly better (hysteresis 2), re-expressing v from u = F v.
       const double spread = dyn.chart_spread();
+
       if (spread > spread_limit) {
         const Chart old = dyn.cs_.chart();
         const VecX u = dyn.F_ * y.segment(nq, na);
@@ -873,6 +884,19 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
       dyn.state_.u.noalias() = dyn.F_ * y.segment(nq, na);
       dyn.chart_q_ = q;  // Eᵀ, the factors and F are those at the corrected q
       dyn.chart_ready_ = true;
+      // Ahead of the chart's own singularity (its block singular, F unbounded, E regular: the
+      // spread ~ 1/(t_s − t)): 1/spread is linear in t there, so two values in this chart give
+      // t_s, and the next step ends at most half-way to it (the monitor above switches charts
+      // at a step end; a step that ran into the singularity would have integrated, and been
+      // corrected, where F is ill-conditioned: on the N = 40 bar one Bulirsch–Stoer step at
+      // rtol 1e-8 lost 5e-7 of the energy that way).
+      spread_now = chart_changed ? dyn.chart_spread() : spread;
+      next_step_limit = std::numeric_limits<double>::infinity();
+      if (!chart_changed && saved_prev.valid && saved_prev.spread > 0.0 && t > saved_prev.t &&
+          saved_prev.chart.independent == dyn.cs_.chart().independent) {
+        const double slope = (1.0 / spread_now - 1.0 / saved_prev.spread) / (t - saved_prev.t);
+        if (slope < 0.0) next_step_limit = kChartStepFraction * (1.0 / spread_now) / -slope;
+      }
     }
     // Energy balance T + V − W at the corrected state.
     const double T = kinetic_energy(model, dyn.state_);
@@ -952,6 +976,7 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
     saved_prev.t = t;
     saved_prev.sigma = sigma;
     saved_prev.rate = rate;
+    saved_prev.spread = spread_now;
     saved_prev.x = y;
     saved_prev.chart = dyn.cs_.chart();
     monitor = {true, t, sigma};
@@ -970,6 +995,7 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
     saved_prev.valid = true;
     saved_prev.t = T0;
     saved_prev.sigma = chart_quality_rate(q, dyn.state_.u, saved_prev.rate);
+    saved_prev.spread = primal ? 0.0 : dyn.chart_spread();
     saved_prev.x = x;
     saved_prev.chart = dyn.cs_.chart();
   }
@@ -994,7 +1020,7 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
       detail::OdeOptions oo = base;
       oo.t0 = t_now;
       if (max_dt > 0.0) oo.max_dt = oo.max_dt > 0.0 ? std::min(oo.max_dt, max_dt) : max_dt;
-      oo.dt_init = h_last > 0.0 ? h_last : 0.0;
+      oo.dt_init = h_last > 0.0 ? std::min(h_last, next_step_limit) : 0.0;
       const bool on_grid =
           std::abs(t_now - grid_time(next_out)) <= grid_slack ||
           (next_out > 0 && std::abs(t_now - grid_time(next_out - 1)) <= grid_slack);
@@ -1184,8 +1210,16 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
     // where it stalled) when that is larger, never above kPassageJumpCeiling.
     const double jump_bound = std::min(
         kPassageJumpCeiling, std::max(passage_velocity_jump_bound(options.rtol), 10.0 * change));
-    if (!(jump <= jump_bound) || !(cosine > 0.0)) {
+    if (!(cosine > 0.0) || !(jump <= kBranchJump)) {
       why = "the passage would change the velocity discontinuously, leaving the motion's branch" +
+            std::string(buf);
+      return false;
+    }
+    if (!(jump <= jump_bound)) {  // on the branch, but not as accurate as the steps around it
+      char bound[64];
+      std::snprintf(bound, sizeof bound, "%.3g", jump_bound);
+      why = "the passage is less accurate than the bound " + std::string(bound) +
+            " on its velocity jump (rtol/10 within [1e-9, 1e-7], or 10× its corrector's noise)" +
             std::string(buf);
       return false;
     }
@@ -1209,6 +1243,8 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
     saved_prev.t = t_b;
     saved_prev.sigma = sigma_b;
     saved_prev.rate = rate_b;
+    saved_prev.spread = 0.0;  // no trend across the passage
+    next_step_limit = std::numeric_limits<double>::infinity();
     saved_prev.x = x;
     saved_prev.chart = dyn.cs_.chart();
     crossing_rewinds = 0;
@@ -1227,7 +1263,7 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
     return std::string(buf);
   };
 
-  std::string failure;
+  std::string failure, first_passage_why;
   SimulateStatus failure_status = SimulateStatus::failed_step;
   int approaches = 0;
   try {
@@ -1260,6 +1296,7 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
         const SavedState start = back;  // the state the next step starts from ((C2''))
         saved_older.valid = false;
         saved_prev = start;
+        next_step_limit = std::numeric_limits<double>::infinity();
         ++result.rewinds;
       }
       if (rq.t_star >= T1 - end_slack) {  // the change point lies beyond the end: finish
@@ -1279,6 +1316,9 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
         const double t_from = t_now;
         if (!pass_change_point(rq.t_star, rq.sigma, why)) {
           dyn.chart_ready_ = false;  // the attempt moved the chart's factors elsewhere
+          // The first attempt's reason is kept for the message: the later ones, closer to the
+          // point, are dominated by rounding noise (ε/σ̂²) rather than the step's truncation.
+          if (first_passage_why.empty()) first_passage_why = why;
           if (rq.sigma / 4.0 >= kPassQualityFloor) {  // try again from closer
             pass_quality = rq.sigma / 4.0;
             request = {true, rq.t_star, rq.sigma};
@@ -1286,9 +1326,11 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
             continue;
           }
           failure = "cannot pass " + change_point_name(rq.t_star) +
-                    " from t = " + std::to_string(t_from) + " s: " + why;
+                    " from t = " + std::to_string(t_from) + " s: " + why +
+                    (first_passage_why != why ? "; first attempt: " + first_passage_why : "");
           break;
         }
+        first_passage_why.clear();
         monitor.valid = false;
         saved_older.valid = false;  // saved_prev: the landing
         approaches = 0;

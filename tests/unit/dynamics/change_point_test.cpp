@@ -1,7 +1,8 @@
 // Change points in `simulate` (issue 10; docs/theory.md, "Change points", (C1)–(C6)): the dual
 // form passes every change point of the IFToMM A02 N-four-bar on the branch of the incoming
-// motion, at every rtol from 1e-6 to 1e-12 and with both integrators; the primal form stops at
-// the first one; a passage forced onto a wrong branch and a start on a change point are refused.
+// motion, at every rtol from 1e-6 to 1e-12 and with dopri5, rkf78 and bulirsch-stoer; the primal
+// form stops at the first one; a passage forced onto a wrong branch and a start on a change point
+// are refused.
 //
 // Oracle: the exact one-degree-of-freedom reduction of the parallelogram branch (every link at
 // the same angle θ, every coupler translating with the link tips), with its inertia and
@@ -204,11 +205,13 @@ std::vector<Case> matrix(int N, double t_end, std::vector<double> rtols,
 }
 const std::vector<double> kAllRtols = {1e-6, 1e-8, 1e-10, 1e-12};
 const std::vector<Integrator> kBoth = {Integrator::dopri5, Integrator::rkf78};
+const std::vector<Integrator> kThree = {Integrator::dopri5, Integrator::rkf78,
+                                        Integrator::bulirsch_stoer};
 
 // N = 2 (10 s) and N = 10 (20 s): every rtol, both integrators.
-INSTANTIATE_TEST_SUITE_P(N2, NFourBar, testing::ValuesIn(matrix(2, 10.0, kAllRtols, kBoth)),
+INSTANTIATE_TEST_SUITE_P(N2, NFourBar, testing::ValuesIn(matrix(2, 10.0, kAllRtols, kThree)),
                          case_name);
-INSTANTIATE_TEST_SUITE_P(N10, NFourBar, testing::ValuesIn(matrix(10, 20.0, kAllRtols, kBoth)),
+INSTANTIATE_TEST_SUITE_P(N10, NFourBar, testing::ValuesIn(matrix(10, 20.0, kAllRtols, kThree)),
                          case_name);
 // N = 40 (20 s, ~1–2 s of CPU each): two tolerances here, the full matrix below.
 INSTANTIATE_TEST_SUITE_P(N40, NFourBar,
@@ -216,7 +219,7 @@ INSTANTIATE_TEST_SUITE_P(N40, NFourBar,
                                          Case{40, 20.0, 1e-10, Integrator::rkf78}),
                          case_name);
 
-// The whole N = 40 matrix (8 runs, ~20 s of CPU): run with ORTHOMECH_LONG_TESTS=1, e.g.
+// The whole N = 40 matrix (12 runs, ~50 s of CPU): run with ORTHOMECH_LONG_TESTS=1, e.g.
 //   ORTHOMECH_LONG_TESTS=1 build/tests/orthomech_tests --gtest_filter='N40Matrix/*'
 class NFourBarLong : public testing::TestWithParam<Case> {};
 TEST_P(NFourBarLong, DualPassesEveryChangePoint_AgainstExactReduction) {
@@ -225,7 +228,7 @@ TEST_P(NFourBarLong, DualPassesEveryChangePoint_AgainstExactReduction) {
   run_case(GetParam());
 }
 INSTANTIATE_TEST_SUITE_P(N40Matrix, NFourBarLong,
-                         testing::ValuesIn(matrix(40, 20.0, kAllRtols, kBoth)), case_name);
+                         testing::ValuesIn(matrix(40, 20.0, kAllRtols, kThree)), case_name);
 
 // Never a motion off the branch reported as completed, whatever the step length (issue 10):
 // Bulirsch–Stoer at rtol 1e-6 takes steps of up to ~0.3 s on the N = 40 bar, longer than the
@@ -308,9 +311,12 @@ INSTANTIATE_TEST_SUITE_P(N40, PrimalAtChangePoint,
 // at 60° so that it swings through both change points for 5 s. Never a silently wrong motion:
 // a run that completes is still on its branch (every crank at the same angle, the coupler
 // translating) with its energy conserved; a run that cannot prove a passage stops, names the
-// change point, and its final state (at the stop time) is on the branch too. Known problem
-// (docs/theory.md): the passages' rounding noise on this small mechanism often exceeds the jump
-// bound at rtol ≤ 1e-8, so only rtol 1e-6 is required to complete (both integrators).
+// change point, and its final state (at the stop time) is on the branch too. Known limitation
+// (docs/theory.md): at rtol ≤ 1e-8 the passage's velocity jump from σ̂ = 1e-3 (its truncation
+// error, ~3e-9) exceeds the bound rtol/10 ≥ 1e-9 and the attempts closer to the point are
+// dominated by rounding noise (ε/σ̂²), so those runs are refused for accuracy (exit 3, on the
+// branch); only rtol 1e-6 is required to complete. Ordinary steps next to the point no longer
+// stop on a position residual stalled by rounding (1.03e-12 … 4.2e-12 m against 1e-12 before).
 TEST(ChangePoints, TripleCrank_RedundantMechanism_NeverLeavesItsBranch) {
   const Model model = test::load_bundled("triple-crank");
   for (double rtol : {1e-6, 1e-8, 1e-10, 1e-12}) {
@@ -331,8 +337,7 @@ TEST(ChangePoints, TripleCrank_RedundantMechanism_NeverLeavesItsBranch) {
       if (r.status == SimulateStatus::completed) {
         EXPECT_LT(r.energy_max_drift, 1e-4 * r.energy_scale) << where;
       } else {
-        EXPECT_TRUE(r.message.find("change point") != std::string::npos ||
-                    r.message.find("position correction failed") != std::string::npos)
+        EXPECT_NE(r.message.find("cannot pass the change point"), std::string::npos)
             << where << ": " << r.message;
       }
       const double c1 = body_angle(model, model.find_body("crank1"), r.final.q);
