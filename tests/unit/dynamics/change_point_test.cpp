@@ -312,10 +312,10 @@ INSTANTIATE_TEST_SUITE_P(N40, PrimalAtChangePoint,
 // a run that completes is still on its branch (every crank at the same angle, the coupler
 // translating) with its energy conserved; a run that cannot prove a passage stops, names the
 // change point, and its final state (at the stop time) is on the branch too. Known limitation
-// (docs/theory.md): at rtol ≤ 1e-8 the passage's velocity jump from σ̂ = 1e-3 (its truncation
-// error, ~3e-9) exceeds the bound rtol/10 ≥ 1e-9 and the attempts closer to the point are
-// dominated by rounding noise (ε/σ̂²), so those runs are refused for accuracy (exit 3, on the
-// branch); only rtol 1e-6 is required to complete. Ordinary steps next to the point no longer
+// (docs/theory.md): at rtol ≤ 1e-8 the passage's velocity jump from σ̂ = 1e-3 (rounding noise,
+// ~3e-9) exceeds the bound rtol/10 ≥ 1e-9 and the attempts closer to the point are noisier
+// (ε/σ̂²), so those runs are refused for accuracy (exit 3, on the branch); only rtol 1e-6 is
+// required to complete. Ordinary steps next to the point no longer
 // stop on a position residual stalled by rounding (1.03e-12 … 4.2e-12 m against 1e-12 before).
 TEST(ChangePoints, TripleCrank_RedundantMechanism_NeverLeavesItsBranch) {
   const Model model = test::load_bundled("triple-crank");
