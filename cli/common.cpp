@@ -88,6 +88,26 @@ UnitSystem resolve_units(const Model& model, const std::string& choice) {
   }
 }
 
+std::vector<double> coordinates_out(const Model& model, const VecX& v, const UnitSystem& units,
+                                    bool rates) {
+  const OutputUnit length = output_unit(rates ? Dimension::velocity : Dimension::length, units);
+  const OutputUnit angle =
+      output_unit(rates ? Dimension::angular_velocity : Dimension::angle, units);
+  std::vector<double> out(v.data(), v.data() + v.size());
+  for (const Body& b : model.bodies) {
+    const int offset = rates ? b.u_offset : b.q_offset;
+    for (int k = 0; k < (rates ? b.nu() : b.nq()); ++k) {
+      double& x = out[static_cast<size_t>(offset + k)];
+      x = (k < 2 ? length : angle).from_si(x);
+    }
+  }
+  return out;
+}
+
+OutputUnit mass_metric_unit(const UnitSystem& units) {
+  return {"sqrt(" + units.mass + ")*" + units.length, std::sqrt(units.mass_si) * units.length_si};
+}
+
 nlohmann::json units_json(const UnitSystem& u) {
   nlohmann::json j;
   const std::pair<const char*, Dimension> kinds[] = {

@@ -4,6 +4,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "orthomech/io/units.hpp"
 #include "orthomech/model/model.hpp"
@@ -53,6 +54,13 @@ void setup_logging(const GlobalOptions& options, const LogFlags& flags);
 void add_units_option(CLI::App* cmd, std::string& choice);
 // The chosen output units of a loaded model.
 [[nodiscard]] UnitSystem resolve_units(const Model& model, const std::string& choice);
+// Body coordinates q (centre of mass x, y and angle per body) or velocities u (vx, vy, ω; with
+// `rates`) in the output units: length (per time), angle (per time).
+[[nodiscard]] std::vector<double> coordinates_out(const Model& model, const VecX& v,
+                                                  const UnitSystem& units, bool rates = false);
+// The unit of the mass-metric distance √((q − q₀)ᵀ M (q − q₀)): √mass·length, e.g.
+// "sqrt(kg)*mm".
+[[nodiscard]] OutputUnit mass_metric_unit(const UnitSystem& units);
 // The `units` object of every JSON document: the unit name of each kind of quantity.
 [[nodiscard]] nlohmann::json units_json(const UnitSystem& units);
 

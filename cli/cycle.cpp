@@ -131,7 +131,9 @@ Driver resolve_driver(const Model& model, const CycleCliOptions& opt) {
 std::string speed_text(const Driver& d, bool angular, const UnitSystem& u) {
   if (d.profile == Profile::harmonic)
     return "harmonic, amplitude " + format_input(d.amplitude, angular, u) + " about " +
-           format_input(d.initial, angular, u) + ", " + fmt(d.frequency) + " Hz";
+           format_input(d.initial, angular, u) + ", " +
+           fmt(output_unit(Dimension::frequency, u).from_si(d.frequency)) + " " +
+           output_unit(Dimension::frequency, u).name;
   if (d.profile == Profile::polynomial) return "polynomial";
   const OutputUnit v = output_unit(angular ? Dimension::angular_velocity : Dimension::velocity, u);
   return angular ? "constant speed " + fmt(d.speed * 60.0 / (2.0 * std::numbers::pi)) + " rpm (" +

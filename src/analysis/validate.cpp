@@ -724,6 +724,8 @@ bool ValidationReport::pass() const {
 
 ValidationReport validate_design_positions(const Model& model, const ValidateOptions& opt) {
   ValidationReport rep;
+  // Messages quote values in the file's declared units (a model built in code: SI).
+  const UnitSystem file_units = unit_system(model.units);
   const double L = length_scale(model);
   const VecX q_design = model.design_q();
   std::mt19937 gen(opt.seed);
@@ -767,9 +769,10 @@ ValidationReport validate_design_positions(const Model& model, const ValidateOpt
       for (const LimitBlock& b : pr.limit_blocks) {
         const Joint& jt = model.joints[static_cast<size_t>(b.joint)];
         const bool rev = std::holds_alternative<Revolute>(jt.kind);
-        pr.failures.push_back("joint '" + jt.name + "' would need " + format_input(b.needed, rev) +
-                              ", outside its limits [" + format_input(jt.limits->x(), rev) + ", " +
-                              format_input(jt.limits->y(), rev) + "]");
+        pr.failures.push_back("joint '" + jt.name + "' would need " +
+                              format_input(b.needed, rev, file_units) + ", outside its limits [" +
+                              format_input(jt.limits->x(), rev, file_units) + ", " +
+                              format_input(jt.limits->y(), rev, file_units) + "]");
       }
       pr.failures.push_back("does not assemble: " + a.message);
       rep.positions.push_back(std::move(pr));
@@ -821,8 +824,9 @@ ValidationReport validate_design_positions(const Model& model, const ValidateOpt
       pr.target_error = target_error(pr.q);
       pr.target_met = *pr.target_error <= t.tolerance;
       if (!pr.target_met)
-        pr.failures.push_back("target missed by " + fmt(*pr.target_error * 1e3) +
-                              " mm (tolerance " + fmt(t.tolerance * 1e3) + " mm)");
+        pr.failures.push_back(
+            "target missed by " + format_quantity(*pr.target_error, Dimension::length, file_units) +
+            " (tolerance " + format_quantity(t.tolerance, Dimension::length, file_units) + ")");
       if (t.angle) {
         // Angle targets: the body angle of the target point's body, within
         // tolerance / L (rad): the tolerance at the mechanism's size (docs/theory.md).
@@ -830,9 +834,10 @@ ValidationReport validate_design_positions(const Model& model, const ValidateOpt
         const double tol_angle = t.tolerance / L;
         if (*pr.target_angle_error > tol_angle) {
           pr.target_met = false;
-          pr.failures.push_back("target angle missed by " +
-                                fmt(*pr.target_angle_error * 180.0 / kPi) + " deg (tolerance " +
-                                fmt(tol_angle * 180.0 / kPi) + " deg)");
+          pr.failures.push_back(
+              "target angle missed by " +
+              format_quantity(*pr.target_angle_error, Dimension::angle, file_units) +
+              " (tolerance " + format_quantity(tol_angle, Dimension::angle, file_units) + ")");
         }
       }
     }
@@ -871,10 +876,11 @@ ValidationReport validate_design_positions(const Model& model, const ValidateOpt
       fb.transmission = transmission_angle(model, l, pr.q);
       fb.ok = std::min(fb.transmission, kPi - fb.transmission) >= opt.min_transmission;
       if (!fb.ok)
-        pr.failures.push_back("transmission angle " + fmt(fb.transmission * 180.0 / kPi) +
-                              " deg in loop " + fb.joints + " (needs " +
-                              fmt(opt.min_transmission * 180.0 / kPi) + "..." +
-                              fmt(180.0 - opt.min_transmission * 180.0 / kPi) + " deg)");
+        pr.failures.push_back(
+            "transmission angle " + format_quantity(fb.transmission, Dimension::angle, file_units) +
+            " in loop " + fb.joints + " (needs " +
+            format_quantity(opt.min_transmission, Dimension::angle, file_units) + " ... " +
+            format_quantity(kPi - opt.min_transmission, Dimension::angle, file_units) + ")");
       pr.four_bars.push_back(fb);
     }
     for (const SliderCrankLoop& l : slider_cranks) {
@@ -884,9 +890,10 @@ ValidationReport validate_design_positions(const Model& model, const ValidateOpt
       sc.pressure = pressure_angle(model, l, pr.q);
       sc.ok = sc.pressure <= kPi / 2.0 - opt.min_transmission;
       if (!sc.ok)
-        pr.failures.push_back("pressure angle " + fmt(sc.pressure * 180.0 / kPi) +
-                              " deg in slider-crank loop " + sc.joints + " (needs at most " +
-                              fmt(90.0 - opt.min_transmission * 180.0 / kPi) + " deg)");
+        pr.failures.push_back(
+            "pressure angle " + format_quantity(sc.pressure, Dimension::angle, file_units) +
+            " in slider-crank loop " + sc.joints + " (needs at most " +
+            format_quantity(kPi / 2.0 - opt.min_transmission, Dimension::angle, file_units) + ")");
       pr.slider_cranks.push_back(sc);
     }
   }
@@ -944,7 +951,7 @@ ValidationReport validate_design_positions(const Model& model, const ValidateOpt
         where[k] = 0.0;
         for (const SingularPoint& sp : circuits.back().singular)
           rep.singular_points.push_back(sp.kind + " of input '" + rep.input + "' at " +
-                                        format_input(sp.s, is_revolute(model, input)) +
+                                        format_input(sp.s, is_revolute(model, input), file_units) +
                                         " on circuit " + std::to_string(pr.circuit));
       }
       if (pr.circuit < 0) continue;

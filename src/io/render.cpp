@@ -1009,7 +1009,8 @@ PoseResult assemble_pose(const Model& model, const RenderPose& pose) {
       return result;
     }
     options.locks.push_back({result.driver, value});
-    where = "joint '" + joint.name + "' at " + format_input(value, angular);
+    where =
+        "joint '" + joint.name + "' at " + format_input(value, angular, unit_system(model.units));
   }
   const AssemblyResult res = assemble(model, model.design_q(), options);
   if (res.status != AssemblyStatus::assembled && res.status != AssemblyStatus::unchanged) {
