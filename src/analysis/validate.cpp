@@ -8,6 +8,7 @@
 #include <functional>
 #include <map>
 #include <numbers>
+#include <optional>
 #include <random>
 #include <set>
 #include <sstream>
@@ -666,13 +667,52 @@ double pressure_angle(const Model& model, const SliderCrankLoop& l, const VecX& 
   return std::atan2(std::abs(u.x() * axis.y() - u.y() * axis.x()), std::abs(u.dot(axis)));
 }
 
+namespace {
+
+// The design's assembly mode at the locks, limits ignored: the design pose is closed (no lock),
+// then the locked coordinates are moved from their values there to the locked ones in steps of
+// at most 2° (revolute) or 2 % of the mechanism's size (prismatic), each step projected from the
+// previous position (mass-metric Gauss–Newton). Small steps keep the mode of the design (the same
+// branch, as `cycle` follows it); a projection of the design pose straight onto the locks may
+// land on another mode. Empty when a step does not converge (a dead point in between).
+std::optional<VecX> continue_to_locks(const Model& model, const VecX& q_guess,
+                                      const std::vector<JointLock>& locks) {
+  VecX q = q_guess;
+  if (!project_with_locks(model, q, {}, 1e-12, 60)) return std::nullopt;
+  const double L = length_scale(model);
+  std::vector<double> from, to;
+  double steps = 1.0;
+  for (const JointLock& l : locks) {
+    const bool rev = is_revolute(model, l.joint);
+    const double s = joint_coordinate(model, l.joint, q);
+    // A revolute lock is matched modulo 2π nearest the design (as `assemble` does).
+    const double target = rev ? l.value + kTwoPi * std::round((s - l.value) / kTwoPi) : l.value;
+    from.push_back(s);
+    to.push_back(target);
+    steps = std::max(steps, std::ceil(std::abs(target - s) / (rev ? 2.0 * kPi / 180.0 : 0.02 * L)));
+  }
+  const int n = static_cast<int>(std::min(steps, 1000.0));
+  std::vector<JointLock> at = locks;
+  for (int k = 1; k <= n; ++k) {
+    for (size_t i = 0; i < locks.size(); ++i)
+      at[i].value = from[i] + (to[i] - from[i]) * static_cast<double>(k) / n;
+    if (!project_with_locks(model, q, at, 1e-12, 60)) return std::nullopt;
+  }
+  return q;
+}
+
+}  // namespace
+
 std::vector<LimitBlock> find_limit_blocks(const Model& model, const VecX& q_guess,
                                           const AssemblyOptions& options) {
   std::vector<LimitBlock> out;
   if (!options.use_limits) return out;
   AssemblyOptions free = options;
   free.use_limits = false;
-  const AssemblyResult a = assemble(model, q_guess, free);
+  // On the design's assembly mode when the continuation reaches the locks; otherwise the
+  // mass-metric projection of the design pose.
+  const std::optional<VecX> on_branch = continue_to_locks(model, q_guess, options.locks);
+  const AssemblyResult a = assemble(model, on_branch ? *on_branch : q_guess, free);
   if (a.status != AssemblyStatus::assembled && a.status != AssemblyStatus::unchanged) return out;
   for (size_t j = 0; j < model.joints.size(); ++j)
     if (outside_limits(model, static_cast<int>(j), a.q))
