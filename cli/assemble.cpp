@@ -18,6 +18,7 @@
 #include "orthomech/analysis/assembly.hpp"
 #include "orthomech/analysis/validate.hpp"
 #include "orthomech/io/mechanism_writer.hpp"
+#include "orthomech/io/noise.hpp"
 #include "orthomech/io/units.hpp"
 #include "orthomech/model/measures.hpp"
 
@@ -165,6 +166,16 @@ int run_assemble(const AssembleOptions& opt) {
     spdlog::info("wrote {}", written);
   }
 
+  // How far the bodies moved, rounding noise as 0 (a crank turning about its frame's origin):
+  // against the largest coordinate of the mechanism (io/noise.hpp).
+  NoiseFloor noise;
+  for (const Body& b : model.bodies)
+    for (int k = 0; k < 2; ++k) {
+      noise.see(Dimension::length, q0(b.q_offset + k));
+      noise.see(Dimension::length, res.q(b.q_offset + k));
+    }
+  auto moved = [&](double v) { return length_u.from_si(noise.clean(Dimension::length, v)); };
+  auto turned = [&](double v) { return angle_u.from_si(noise.clean(Dimension::angle, v)); };
   std::ostringstream out;
   if (opt.json) {
     nlohmann::json j;
@@ -188,8 +199,8 @@ int run_assemble(const AssembleOptions& opt) {
     nlohmann::json bodies = nlohmann::json::array();
     for (const BodyMove& b : res.bodies)
       bodies.push_back({{"name", b.body},
-                        {"translation", length_u.from_si(b.translation)},
-                        {"rotation", angle_u.from_si(b.rotation)}});
+                        {"translation", moved(b.translation)},
+                        {"rotation", turned(b.rotation)}});
     j["bodies"] = bodies;
     auto joints_json = [&](const std::vector<JointResidual>& list) {
       nlohmann::json a = nlohmann::json::array();
@@ -284,14 +295,14 @@ int run_assemble(const AssembleOptions& opt) {
     char line[96];
     {
       const int w = width_of("body", body_names);
-      const std::string moved = "moved [" + length_u.name + "]";
-      const std::string turned = "turned [" + angle_u.name + "]";
-      const int wm = std::max(14, static_cast<int>(moved.size()));
-      out << "\n  " << pad("body", w) << "  " << pad(moved, wm) << "  " << turned << "\n";
+      const std::string moved_head = "moved [" + length_u.name + "]";
+      const std::string turned_head = "turned [" + angle_u.name + "]";
+      const int wm = std::max(14, static_cast<int>(moved_head.size()));
+      out << "\n  " << pad("body", w) << "  " << pad(moved_head, wm) << "  " << turned_head << "\n";
       for (const BodyMove& b : res.bodies) {
-        std::snprintf(line, sizeof line, "%.6g", length_u.from_si(b.translation));
-        out << "  " << pad(b.body, w) << "  " << pad(line, wm) << "  "
-            << fmt(angle_u.from_si(b.rotation)) << "\n";
+        std::snprintf(line, sizeof line, "%.6g", moved(b.translation));
+        out << "  " << pad(b.body, w) << "  " << pad(line, wm) << "  " << fmt(turned(b.rotation))
+            << "\n";
       }
     }
     {

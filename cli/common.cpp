@@ -9,6 +9,7 @@
 #include <cstdlib>
 
 #include "orthomech/io/mechanism_file.hpp"
+#include "orthomech/io/noise.hpp"
 #include "orthomech/io/units.hpp"
 
 namespace orthomech::cli {
@@ -93,12 +94,21 @@ std::vector<double> coordinates_out(const Model& model, const VecX& v, const Uni
   const OutputUnit length = output_unit(rates ? Dimension::velocity : Dimension::length, units);
   const OutputUnit angle =
       output_unit(rates ? Dimension::angular_velocity : Dimension::angle, units);
+  const Dimension dims[] = {rates ? Dimension::velocity : Dimension::length,
+                            rates ? Dimension::angular_velocity : Dimension::angle};
+  // Rounding noise (a slider's y on a horizontal guide) as 0: io/noise.hpp.
+  NoiseFloor noise;
+  for (const Body& b : model.bodies) {
+    const int offset = rates ? b.u_offset : b.q_offset;
+    for (int k = 0; k < (rates ? b.nu() : b.nq()); ++k)
+      noise.see(dims[k < 2 ? 0 : 1], v(offset + k));
+  }
   std::vector<double> out(v.data(), v.data() + v.size());
   for (const Body& b : model.bodies) {
     const int offset = rates ? b.u_offset : b.q_offset;
     for (int k = 0; k < (rates ? b.nu() : b.nq()); ++k) {
       double& x = out[static_cast<size_t>(offset + k)];
-      x = (k < 2 ? length : angle).from_si(x);
+      x = (k < 2 ? length : angle).from_si(noise.clean(dims[k < 2 ? 0 : 1], x));
     }
   }
   return out;

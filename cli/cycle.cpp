@@ -169,7 +169,14 @@ int run_in_directory(const std::filesystem::path& dir, const std::string& progra
 // Every position: input, time, measures, body poses and named points, velocities and
 // accelerations of the bodies, drive, reactions and energies, in the output units.
 nlohmann::json positions_json(const Model& model, const CycleResult& r, bool angular,
-                              const UnitSystem& u) {
+                              const UnitSystem& u, const NoiseFloor& noise) {
+  // Rounding noise of a dimension as 0 (io/noise.hpp).
+  auto out = [&](const OutputUnit& unit, Dimension d, double v) {
+    return unit.from_si(noise.clean(d, v));
+  };
+  const Dimension v_dim[] = {Dimension::velocity, Dimension::velocity, Dimension::angular_velocity};
+  const Dimension a_dim[] = {Dimension::acceleration, Dimension::acceleration,
+                             Dimension::angular_acceleration};
   const OutputUnit input_u = output_unit(angular ? Dimension::angle : Dimension::length, u);
   const OutputUnit time_u = output_unit(Dimension::time, u);
   const OutputUnit drive_u = output_unit(angular ? Dimension::moment : Dimension::force, u);
@@ -196,21 +203,24 @@ nlohmann::json positions_json(const Model& model, const CycleResult& r, bool ang
     j["bridged"] = p.bridge >= 0;
     nlohmann::json m = nlohmann::json::object();
     for (size_t i = 0; i < model.measures.size(); ++i)
-      m[model.measures[i].name] = measure_u[i].from_si(p.measures[i]);
+      m[model.measures[i].name] =
+          out(measure_u[i], dimension_of(model.measures[i].unit), p.measures[i]);
     j["measures"] = m;
     // Pose of every body's frame ([x, y, angle]; a particle [x, y]) and every named point.
     compute_output_positions(model, VecX(p.q), pose);
     nlohmann::json poses = nlohmann::json::object(), points = nlohmann::json::object();
     size_t k = 0;
     for (const Body& b : model.bodies) {
-      std::vector<double> v = {length_u.from_si(pose[k]), length_u.from_si(pose[k + 1])};
+      std::vector<double> v = {out(length_u, Dimension::length, pose[k]),
+                               out(length_u, Dimension::length, pose[k + 1])};
       k += 2;
-      if (b.kind == BodyKind::rigid) v.push_back(angle_u.from_si(pose[k++]));
+      if (b.kind == BodyKind::rigid) v.push_back(out(angle_u, Dimension::angle, pose[k++]));
       poses[b.name] = v;
     }
     for (const Body& b : model.bodies)
       for (const auto& [name, local] : b.points) {
-        points[b.name + "." + name] = {length_u.from_si(pose[k]), length_u.from_si(pose[k + 1])};
+        points[b.name + "." + name] = {out(length_u, Dimension::length, pose[k]),
+                                       out(length_u, Dimension::length, pose[k + 1])};
         k += 2;
       }
     j["poses"] = poses;
@@ -220,18 +230,19 @@ nlohmann::json positions_json(const Model& model, const CycleResult& r, bool ang
     for (const Body& b : model.bodies) {
       std::vector<double> v, a;
       for (int i = 0; i < b.nu(); ++i) {
-        v.push_back(vel[i].from_si(p.u(b.u_offset + i)));
-        a.push_back(acc[i].from_si(p.udot(b.u_offset + i)));
+        v.push_back(out(vel[i], v_dim[i], p.u(b.u_offset + i)));
+        a.push_back(out(acc[i], a_dim[i], p.udot(b.u_offset + i)));
       }
       bodies[b.name] = {{"velocity", v}, {"acceleration", a}};
     }
     j["bodies"] = bodies;
     if (drive_reported(p)) {  // not at a change point that could not be bridged
-      j["drive"] = drive_u.from_si(p.drive);
+      j["drive"] = out(drive_u, angular ? Dimension::moment : Dimension::force, p.drive);
       nlohmann::json rc = nlohmann::json::object();
       for (size_t i = 0; i < r.components.size(); ++i)
         if (component_reported(r, p, i))
-          rc[r.components[i].name] = component_u[i].from_si(p.reactions[i]);
+          rc[r.components[i].name] =
+              out(component_u[i], dimension_of(r.components[i].unit), p.reactions[i]);
       j["reactions"] = rc;
     }
     nlohmann::json outside = nlohmann::json::array();
@@ -381,6 +392,7 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
                  (plotted ? ", drive.svg, drive.png, reactions.svg, reactions.png" : "");
   }
 
+  const NoiseFloor noise = cycle_noise_floor(model, r, magnitudes, angular);
   std::ostringstream out;
   if (opt.json) {
     auto extreme = [&](const SeriesExtreme& e, const OutputUnit& u) {
@@ -438,16 +450,22 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
     }
     j["bridges"] = bridges;
     // peaks: the drive, every reaction magnitude and every reaction component.
+    // A component zero by construction (a frictionless slide's axial force) is 0, not the
+    // rounding noise of the solve (io/noise.hpp).
     nlohmann::json peaks;
     for (const auto* list : {&summary, &component_summary})
       for (const SeriesSummary& s : *list) {
         const OutputUnit u = unit_of(s.unit);
-        peaks[s.name] = {{"peak", u.from_si(s.peak)},
+        const Dimension d = dimension_of(s.unit);
+        SeriesExtreme max = s.max, min = s.min;
+        max.value = noise.clean(d, max.value);
+        min.value = noise.clean(d, min.value);
+        peaks[s.name] = {{"peak", u.from_si(noise.clean(d, s.peak))},
                          {"input", input_u.from_si(s.peak_input)},
                          {"time", time_u.from_si(s.peak_time)},
-                         {"rms", u.from_si(s.rms)},
-                         {"max", extreme(s.max, u)},
-                         {"min", extreme(s.min, u)},
+                         {"rms", u.from_si(noise.clean(d, s.rms))},
+                         {"max", extreme(max, u)},
+                         {"min", extreme(min, u)},
                          {"unit", u.name},
                          {"determinate", s.determinate},
                          {"diverges", s.diverges}};
@@ -517,7 +535,7 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
                         {"unit", u.name}});
     }
     j["limits"] = limits;
-    if (opt.positions) j["points"] = positions_json(model, r, angular, U);
+    if (opt.positions) j["points"] = positions_json(model, r, angular, U, noise);
     out << j.dump(2) << '\n';
   } else {
     out << "mechanism       " << model.name << "  (" << model.file << ")\n";
@@ -580,9 +598,12 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
       if (s.samples == 0) continue;
       const OutputUnit u = unit_of(s.unit);
       std::snprintf(line, sizeof line, "%-*s  %-*s %12.5g %14s %12.5g %14s %12.5g%s\n", nw,
-                    s.name.c_str(), uw, u.name.c_str(), u.from_si(s.max.value),
-                    format_input(wrapped(s.max.input), angular, U).c_str(), u.from_si(s.min.value),
-                    format_input(wrapped(s.min.input), angular, U).c_str(), u.from_si(s.rms),
+                    s.name.c_str(), uw, u.name.c_str(),
+                    u.from_si(noise.clean(dimension_of(s.unit), s.max.value)),
+                    format_input(wrapped(s.max.input), angular, U).c_str(),
+                    u.from_si(noise.clean(dimension_of(s.unit), s.min.value)),
+                    format_input(wrapped(s.min.input), angular, U).c_str(),
+                    u.from_si(noise.clean(dimension_of(s.unit), s.rms)),
                     s.determinate ? ""
                     : s.diverges  ? "   indeterminate (minimum norm), diverges at a change point"
                                   : "   indeterminate (minimum norm)");

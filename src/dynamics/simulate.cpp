@@ -12,6 +12,7 @@
 
 #include "chart_solver.hpp"
 #include "integrator.hpp"
+#include "orthomech/analysis/assembly.hpp"
 #include "orthomech/analysis/mobility.hpp"
 #include "orthomech/constraints/joints.hpp"
 #include "orthomech/dynamics/equations.hpp"
@@ -665,6 +666,21 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
   problem.output = [&](double t, const VecX& y) { emit(t, y); };
 
   std::string stop_message;
+  // Rows of f that are angles (joint components "angle", "ratio"): the residual by kind.
+  std::vector<char> angular_row(static_cast<size_t>(model.nc), 0);
+  for (const Joint& j : model.joints) {
+    const auto names = j.component_names();
+    for (int k = 0; k < j.rows(); ++k)
+      angular_row[static_cast<size_t>(j.row_offset + k)] =
+          is_angular_row(names[static_cast<size_t>(k)]) ? 1 : 0;
+  }
+  const auto note_residual = [&](const VecX& res) {
+    for (Eigen::Index r = 0; r < res.size(); ++r) {
+      double& to = angular_row[static_cast<size_t>(r)] ? result.max_residual_angle
+                                                       : result.max_residual_length;
+      to = std::max(to, std::abs(res(r)));
+    }
+  };
   problem.accept = [&](double t, VecX& y) {
     auto qy = y.head(nq);
     MatX& Et = dyn.ws_.constraints.Et;
@@ -674,9 +690,11 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
     q = qy;
     dyn.mass_at(q);
     compute_constraint_residual_and_jacobian(model, q, f, Et);
-    if (f.size())
+    if (f.size()) {
       result.max_constraint_residual =
           std::max(result.max_constraint_residual, f.cwiseAbs().maxCoeff());
+      note_residual(f);
+    }
     if (primal) {
       // Invariant J = Eᵀ A p, eq. (105), before the projection.
       dyn.state_.q = q;
@@ -1231,6 +1249,11 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
   result.energy_initial = energy0;
   result.energy_final = result.final.kinetic + result.final.potential - result.final.work;
   result.max_constraint_residual = std::max(result.max_constraint_residual, result.final.residual);
+  if (model.nc) {
+    VecX f_final(model.nc);
+    compute_constraint_residual(model, result.final.q, f_final);
+    note_residual(f_final);
+  }
   if (!primal)
     for (const auto& smp : result.samples)
       result.max_velocity_residual = std::max(result.max_velocity_residual, smp.velocity_residual);

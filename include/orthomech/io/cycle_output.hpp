@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "orthomech/analysis/cycle.hpp"
+#include "orthomech/io/noise.hpp"
 #include "orthomech/io/units.hpp"
 #include "orthomech/model/model.hpp"
 
@@ -22,6 +23,13 @@ struct PositionColumn {
 [[nodiscard]] std::vector<PositionColumn> position_columns(const Model& model);
 // Their values at q (SI), in position_columns order; out is resized.
 void compute_output_positions(const Model& model, const VecX& q, std::vector<double>& out);
+
+// The scale of every dimension over the rows of the cycle's CSV (inputs, times, measures,
+// positions, velocities, accelerations, drive, reaction components and magnitudes, SI): the CSV
+// and the JSON write a value at rounding noise for its dimension as 0 (io/noise.hpp).
+[[nodiscard]] NoiseFloor cycle_noise_floor(const Model& model, const CycleResult& result,
+                                           const std::vector<ReactionMagnitude>& magnitudes,
+                                           bool angular);
 
 struct CycleColumns {
   int input_display = 1;             // 1-based CSV column of the input
