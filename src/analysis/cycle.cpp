@@ -8,6 +8,7 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "orthomech/analysis/assembly.hpp"
 #include "orthomech/analysis/mobility.hpp"
 #include "orthomech/analysis/positions.hpp"
 #include "orthomech/constraints/joints.hpp"
@@ -555,8 +556,10 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
                        angular, file_units));
   }
   if (assembly.status != SolveStatus::converged) {
+    const ResidualSplit left = split_residual(model, state.q);
     result.message = "the design position does not assemble (residual " +
-                     std::to_string(assembly.residual) + ")";
+                     format_quantity(left.length, Dimension::length, file_units) + ", " +
+                     format_quantity(left.angle, Dimension::angle, file_units) + ")";
     return result;
   }
   {

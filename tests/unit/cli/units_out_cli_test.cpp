@@ -197,6 +197,15 @@ TEST(UnitsOut, CannotCloseGapsInTheFileUnits) {
   const CliResult rm = run_cli({"assemble", m});
   EXPECT_EQ(rm.status, 3);
   EXPECT_NE(rm.err.find("total gap 4 m "), std::string::npos) << rm.err;
+  // cycle: the residual left by the failed projection in the file's units, lengths and angles
+  // (a four-bar of revolutes has no angular row: 0 rad).
+  const std::string driven = write(dir, "short-driven.yaml",
+                                   four_bar("{length: mm, angle: rad}", 1000) +
+                                       "drivers:\n  - {name: motor, joint: A0, speed: 60 rpm}\n");
+  const CliResult c = run_cli({"cycle", driven});
+  EXPECT_EQ(c.status, 3);
+  EXPECT_NE(c.err.find("does not assemble (residual "), std::string::npos) << c.err;
+  EXPECT_NE(c.err.find(" mm, 0 rad)"), std::string::npos) << c.err;
 }
 
 // A harmonic driver's frequency is in 1/(the file's time unit): "Hz" for seconds. The
