@@ -324,6 +324,10 @@ TEST(Trust, InfoValidateAssembleSimulateCrosscheckOutputsInTheFileUnits) {
       EXPECT_EQ(p["singular_distance"].is_null(), q["singular_distance"].is_null());
       expect_rel(p["max_translation"].get<double>() * 1e-3, q["max_translation"].get<double>(),
                  kSolverRel, "moved");
+      // The mass-metric distance in sqrt(kg)*mm against sqrt(kg)*m (the same kg).
+      EXPECT_EQ(p["distance_unit"], "sqrt(kg)*mm");
+      EXPECT_NEAR(p["distance"].get<double>() * 1e-3, q["distance"].get<double>(),
+                  kSolverRel * std::max(1.0, q["distance"].get<double>()));
     }
   }
   // assemble: the lock is read in the file's units (bare 90 = 90° in the deg file).
