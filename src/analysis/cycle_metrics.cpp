@@ -163,6 +163,11 @@ CycleMetrics compute_cycle_metrics(const Model& model, const CycleResult& r,
       span += h;
     }
     pw.mean = span > 0.0 ? work / span : 0.0;
+    // A sum of N terms carries up to N times the rounding noise of one: a mean within N·256 ε of
+    // the peak is 0 (the mean power of a conservative mechanism over a full cycle, ∮ P dt = ΔV =
+    // 0, comes out as 1e-13 of the peak otherwise; io/noise.hpp).
+    if (std::abs(pw.mean) <= kNoiseRelative * static_cast<double>(segments) * pw.peak)
+      pw.mean = 0.0;
     // E(t) = ∫ (P − P̄) dt at every position; ΔE = max − min.
     double E = 0.0;
     pw.energy_max = pw.energy_min = {0.0, r.points[reg[0]].input, r.points[reg[0]].time};

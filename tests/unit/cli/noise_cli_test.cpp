@@ -105,6 +105,10 @@ TEST(Noise, NoRangeForAConstantOrFullyTurningMeasure) {
       EXPECT_NEAR(s["range"].get<double>(), 100.0, 1e-3) << s["name"];
     }
   }
+  // Only gravity does work on the triple-crank: over a full turn ∮ P dt = ΔV = 0, so the mean
+  // drive power is 0 (not its rounding noise, 1e-13 of the peak).
+  EXPECT_EQ(j["power"]["mean"].get<double>(), 0.0);
+  EXPECT_GT(j["power"]["peak"].get<double>(), 1000.0);  // 0.1349 N*m * 300 rpm in N*mm/s
   const CliResult t = run_cli({"cycle", test::bundled_file("triple-crank")});
   EXPECT_EQ(t.out.find("range  coupler_angle"), std::string::npos) << t.out;
   EXPECT_NE(t.out.find("range  coupler_x"), std::string::npos) << t.out;
