@@ -16,6 +16,7 @@
 #include "orthomech/analysis/mobility.hpp"
 #include "orthomech/constraints/joints.hpp"
 #include "orthomech/dynamics/equations.hpp"
+#include "orthomech/io/units.hpp"
 #include "orthomech/model/free_system.hpp"
 #include "orthomech/model/general_system.hpp"
 #include "orthomech/model/loads.hpp"
@@ -61,6 +62,15 @@ bool parse_integrator(const std::string& name, Integrator& out) {
     }
   return false;
 }
+
+namespace {
+
+// A time for a message, in the file's declared time unit (a model built in code: s).
+std::string time_text(const Model& model, double t) {
+  return format_quantity(t, Dimension::time, unit_system(model.units), 9);
+}
+
+}  // namespace
 
 namespace {
 
@@ -298,7 +308,7 @@ class Dynamics {
         compute_constraint_jacobian(model_, state_.q, ws_.constraints.Et);
         if (pr.status == SolveStatus::singular || !cs_.factor(ws_.constraints.Et))
           throw SingularEvaluation{"the chart's dependent block is singular at t = " +
-                                   std::to_string(t) + " (a change point: E loses rank)"};
+                                   time_text(model_, t) + " (a change point: E loses rank)"};
       }
       compute_F();
       chart_ready_ = false;
@@ -311,7 +321,7 @@ class Dynamics {
                                                ws_.constraints.Et, rotations_.data());
       if (!cs_.factor(ws_.constraints.Et))
         throw SingularEvaluation{"the chart's dependent block is singular at t = " +
-                                 std::to_string(t) + " (a change point: E loses rank)"};
+                                 time_text(model_, t) + " (a change point: E loses rank)"};
       compute_F();
       chart_q_ = state_.q;
       chart_ready_ = true;
@@ -372,7 +382,7 @@ class Dynamics {
       Gs_ = Es_ * ws_.free.A_diag.asDiagonal() * Es_.transpose();  // eq. (42)
       Gs_ldlt_.compute(Gs_);
       if (Gs_ldlt_.info() != Eigen::Success || Gs_ldlt_.vectorD().minCoeff() <= 0.0)
-        throw SingularEvaluation{"G = EᵀAE is singular at t = " + std::to_string(state_.t)};
+        throw SingularEvaluation{"G = EᵀAE is singular at t = " + time_text(model_, state_.t)};
       sparse_G_ = true;
       return;
     }
@@ -384,7 +394,7 @@ class Dynamics {
     constexpr double kSingularG = 1e-12;  // as in projection/primal.cpp
     if (G_llt_.info() != Eigen::Success ||
         !(Ld.minCoeff() * Ld.minCoeff() > kSingularG * Ld.maxCoeff() * Ld.maxCoeff()))
-      throw SingularEvaluation{"G = EᵀAE is singular at t = " + std::to_string(state_.t) +
+      throw SingularEvaluation{"G = EᵀAE is singular at t = " + time_text(model_, state_.t) +
                                " (redundant constraints or a change point)"};
   }
   void solve_G(const VecX& b, VecX& x) {
@@ -729,7 +739,8 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
       chart_changed = true;
     }
     if (corr.status != SolveStatus::converged) {
-      stop_message = "position correction failed at t = " + std::to_string(t) + ": " + corr.message;
+      stop_message =
+          "position correction failed at t = " + time_text(model, t) + ": " + corr.message;
       return false;
     }
     qy = q;
@@ -766,7 +777,7 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
         const double uu = u_step.dot(dyn.ws_.free.M * u_step);
         const double jump = uu > 0.0 ? std::sqrt(du.dot(dyn.ws_.free.M * du) / uu) : 0.0;
         if (jump > kStepVelocityJump) {
-          stop_message = "the step to t = " + std::to_string(t) +
+          stop_message = "the step to t = " + time_text(model, t) +
                          " s left the motion's branch (its velocity changes by " +
                          std::to_string(jump) +
                          " relative when made admissible): a change point was crossed within "
@@ -1129,9 +1140,7 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
   };
 
   const auto change_point_name = [&](double t_star) {
-    char buf[96];
-    std::snprintf(buf, sizeof buf, "the change point at t ≈ %.9g s", t_star);
-    return std::string(buf);
+    return "the change point at t ≈ " + time_text(model, t_star);
   };
 
   std::string failure;
@@ -1177,7 +1186,7 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
           failure = change_point_name(rq.t_star) +
                     " is ahead (E loses rank there, G = EᵀAE is singular): the primal form stops "
                     "at t = " +
-                    std::to_string(t_now) + " s; the dual form passes it";
+                    time_text(model, t_now) + "; the dual form passes it";
           break;
         }
         std::string why;
@@ -1191,7 +1200,7 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
             continue;
           }
           failure = "cannot pass " + change_point_name(rq.t_star) +
-                    " from t = " + std::to_string(t_from) + " s: " + why;
+                    " from t = " + time_text(model, t_from) + ": " + why;
           break;
         }
         monitor.valid = false;
