@@ -206,6 +206,11 @@ TEST(UnitsOut, CannotCloseGapsInTheFileUnits) {
   EXPECT_EQ(c.status, 3);
   EXPECT_NE(c.err.find("does not assemble (residual "), std::string::npos) << c.err;
   EXPECT_NE(c.err.find(" mm, 0 rad)"), std::string::npos) << c.err;
+  // info warns with the residual in the same units and still reports (exit 0).
+  const CliResult i = run_cli({"info", mm});
+  EXPECT_EQ(i.status, 0) << i.err;
+  EXPECT_NE(i.err.find("does not assemble ("), std::string::npos) << i.err;
+  EXPECT_NE(i.err.find(" mm, 0 rad); mobility"), std::string::npos) << i.err;
 }
 
 // A harmonic driver's frequency is in 1/(the file's time unit): "Hz" for seconds. The
