@@ -1130,18 +1130,22 @@ YAML::Node list_item(const YAML::Node& list, const std::string& segment) {
 // Writes one change into the document (a path of map keys and list item names or indices; a
 // one-segment path names a parameter when the file declares it). A new key may be added at the
 // last segment only, so that a typo in the middle of a path is an error, not a silent no-op.
-SetNodes apply_change(YAML::Node& root, const FileChange& change, const std::string& origin) {
-  SetNodes written{origin + ": --set " + change.path + "=" + change.value, {}};
+//
+// With `read` given, nothing is written: the text of the single value at the path goes to *read.
+SetNodes apply_change(YAML::Node& root, const FileChange& change, const std::string& origin,
+                      std::string* read = nullptr) {
+  SetNodes written{
+      origin + (read ? ": " + change.path : ": --set " + change.path + "=" + change.value), {}};
   const auto fail = [&](const std::string& element, const std::string& message) {
     throw InputError({written.label, 0, 0}, element, message);
   };
   YAML::Node value;
   try {
-    value = YAML::Load(change.value);
+    if (!read) value = YAML::Load(change.value);
   } catch (const YAML::Exception& e) {
     fail(change.path, "the value is not valid YAML: " + e.msg);
   }
-  if (!value.IsDefined() || value.IsNull()) fail(change.path, "the value is empty");
+  if (!read && (!value.IsDefined() || value.IsNull())) fail(change.path, "the value is empty");
   if (!root.IsMap()) fail("file", "the file holds no mapping to change");
 
   std::vector<std::string> segments;
@@ -1166,7 +1170,7 @@ SetNodes apply_change(YAML::Node& root, const FileChange& change, const std::str
       fail(here, "'" + at + "' is a single value: it has no '" + segment + "'");
     YAML::Node child = current.IsMap() ? current[segment] : list_item(current, segment);
     if (current.IsMap()) {
-      if (!child && last) {
+      if (!child && last && !read) {
         node[segment] = value;
         for (const auto& kv : current)  // the new key too: the reader checks it like any key
           if (kv.first.IsScalar() && kv.first.Scalar() == segment)
@@ -1180,6 +1184,11 @@ SetNodes apply_change(YAML::Node& root, const FileChange& change, const std::str
     } else if (!child) {
       fail(here,
            "no item named '" + segment + "' in '" + at + "' (names: " + names_in(current) + ")");
+    }
+    if (last && read) {
+      if (!child.IsScalar()) fail(here, "'" + here + "' is not a single value");
+      *read = child.Scalar();
+      return written;
     }
     if (last) {
       child = value;
@@ -1216,6 +1225,19 @@ Model parse_text(const std::string& text, const std::string& origin,
 }
 
 }  // namespace
+
+std::string file_value(const std::string& text, const std::string& origin,
+                       const std::string& path) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    throw InputError({origin, e.mark.line + 1, e.mark.column + 1}, "YAML", e.msg);
+  }
+  std::string value;
+  (void)apply_change(root, {path, ""}, origin, &value);
+  return value;
+}
 
 FileChange parse_file_change(const std::string& text) {
   const auto eq = text.find('=');

@@ -19,6 +19,11 @@ struct FileChange {
 // "PATH=VALUE" split at the first '='. Throws std::invalid_argument when either side is empty.
 [[nodiscard]] FileChange parse_file_change(const std::string& text);
 
+// The text of the single value at `path` (as for a FileChange) of a mechanism file's text, as
+// written there ("30", "a/2"). Throws InputError naming origin and path.
+[[nodiscard]] std::string file_value(const std::string& text, const std::string& origin,
+                                     const std::string& path);
+
 // Reads and validates a mechanism file, with `changes` applied in order. Throws InputError.
 [[nodiscard]] Model load_mechanism(const std::string& path,
                                    const std::vector<FileChange>& changes = {});
