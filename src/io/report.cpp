@@ -98,7 +98,7 @@ constexpr const char* kScript = R"JS(
   var frames = Array.prototype.slice.call(mechanism.querySelectorAll('g[id^="frame-"]'));
   var colours = ['#1f5fbf', '#d2691e', '#2e8b57', '#8b3fbf', '#c0392b', '#16a085', '#7f8c8d',
                  '#b8860b'];
-  var W = 560, H = 230, ML = 72, MR = 16, MT = 30, MB = 40;
+  var W = 520, H = 230, ML = 72, MR = 16, MT = 30, MB = 40;
 
   function fmt(v) {
     if (v === null || v === undefined) return 'not reported';

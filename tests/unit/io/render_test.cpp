@@ -693,6 +693,21 @@ TEST(CycleAnimate, OneFramePerPositionWithTheTraceDrawingAlong) {
   EXPECT_FALSE(fs::exists(out + ".png"));
 }
 
+// A sweep that stops at a dead point (the double-rocker driven from a rocker, its README): the
+// animation has the positions up to there, one frame each, and the exit status is cycle's (1).
+TEST(CycleAnimate, SweepStoppedAtADeadPointAnimatesThePositionsBefore) {
+  TempDir dir;
+  const std::string out = (dir.path / "dead.svg").string();
+  const CliResult r =
+      run_cli({"cycle", bundled("double-rocker"), "--speed", "10rpm", "--animate", out, "--json"});
+  EXPECT_EQ(r.status, 1) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["status"], "stopped_at_dead_point");
+  const AnimationFrames frames = parse_animation(test::read_text(out));
+  EXPECT_GT(frames.joints.size(), 10u);
+  EXPECT_EQ(frames.joints.size(), j["positions"].get<size_t>());
+}
+
 // ---- errors ----------------------------------------------------------------------------------
 TEST(RenderCli, UnknownImageTypeIsBadInput) {
   TempDir dir;
