@@ -37,7 +37,8 @@ namespace {
 
 struct CycleCliOptions {
   std::string file;
-  std::string driver;  // joint (or driver) name
+  std::vector<std::string> sets;  // --set PATH=VALUE
+  std::string driver;             // joint (or driver) name
   std::string speed;
   std::string from, to;
   int steps = 0;  // 0: the file's analysis.steps
@@ -313,7 +314,7 @@ std::vector<ReportPlot> report_plots(const CycleResult& r,
 }
 
 int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) {
-  const Model model = load(opt.file);
+  const Model model = load(opt.file, opt.sets);
   const UnitSystem U = resolve_units(model, opt.units);
   const UnitSystem file_units = unit_system(model.units);
   if (!opt.animate.empty() && image_format_of(opt.animate) != ImageFormat::svg)
@@ -787,6 +788,7 @@ void register_cycle(CLI::App& app, const GlobalOptions& globals, int& exit_code)
       "driven sweep over one cycle: drive torque/force and every joint's reaction per position; "
       "peaks and RMS; dead points; CSV and plots");
   cmd->add_option("file", opt->file, "mechanism file (YAML)")->required();
+  add_set_option(cmd, opt->sets);
   cmd->add_option("--driver", opt->driver,
                   "driven joint (default: the file's analysis.driver, else its first driver)");
   cmd->add_option("--speed", opt->speed,
