@@ -105,7 +105,7 @@ void compute_output_positions(const Model& model, const VecX& q, std::vector<dou
 CycleColumns write_cycle_csv(const std::filesystem::path& file, const Model& model,
                              const CycleResult& result,
                              const std::vector<ReactionMagnitude>& magnitudes, bool angular,
-                             const UnitSystem& units) {
+                             const UnitSystem& units, const std::vector<ExtraColumn>& extra) {
   CycleColumns cols;
   std::ostringstream out;
   int col = 0;
@@ -157,9 +157,18 @@ CycleColumns write_cycle_csv(const std::filesystem::path& file, const Model& mod
     cols.magnitudes.push_back(c);
     (qm == Dimension::force ? cols.forces : cols.moments).push_back(c);
   }
-  out << ",limits\n";
+  out << ",limits";
+  std::vector<OutputUnit> extra_units;
+  for (const ExtraColumn& c : extra) {
+    if (c.values.size() != result.points.size())
+      throw std::invalid_argument("write_cycle_csv: column " + c.name + " has the wrong size");
+    extra_units.push_back(output_unit(c.dimension, units));
+    out << ',' << field(c.name + " [" + extra_units.back().name + "]");
+  }
+  out << '\n';
   std::vector<double> pose;
-  for (const DrivenPointView& p : result.points) {
+  for (size_t row = 0; row < result.points.size(); ++row) {
+    const DrivenPointView p = result.points[row];
     out << number(input_unit.from_si(p.input)) << ',' << number(time_unit.from_si(p.time));
     for (size_t i = 0; i < p.measures.size(); ++i)
       out << ',' << number(measure_units[i].from_si(p.measures[i]));
@@ -189,7 +198,10 @@ CycleColumns write_cycle_csv(const std::filesystem::path& file, const Model& mod
     for (size_t j = 0; j < model.joints.size(); ++j)
       if (outside_limits(model, static_cast<int>(j), VecX(p.q)))
         outside += (outside.empty() ? "" : " ") + model.joints[j].name;
-    out << ',' << field(outside) << '\n';
+    out << ',' << field(outside);
+    for (size_t i = 0; i < extra.size(); ++i)
+      out << ',' << number(extra_units[i].from_si(extra[i].values[row]));
+    out << '\n';
   }
   write_file_atomically(file, out.str());
   return cols;
