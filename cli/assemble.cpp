@@ -28,6 +28,7 @@ namespace {
 
 struct AssembleOptions {
   std::string file;
+  std::vector<std::string> sets;  // --set PATH=VALUE
   bool json = false;
   std::vector<std::string> locks;
   std::vector<std::string> velocities;
@@ -101,7 +102,7 @@ void parse_velocity(const Model& model, const std::string& text, VecX& u0) {
 }
 
 int run_assemble(const AssembleOptions& opt) {
-  const Model model = load(opt.file);
+  const Model model = load(opt.file, opt.sets);
   const UnitSystem U = resolve_units(model, opt.units);
   const OutputUnit length_u = output_unit(Dimension::length, U);
   const OutputUnit angle_u = output_unit(Dimension::angle, U);
@@ -129,6 +130,9 @@ int run_assemble(const AssembleOptions& opt) {
 
   namespace fs = std::filesystem;
   std::string write_to = opt.write;
+  if (!opt.sets.empty() && (opt.in_place || !write_to.empty()))
+    bad("--set cannot be combined with --write or --in-place: they write the file as it is on "
+        "disk; change the file itself to keep a change");
   if (opt.in_place) {
     if (!write_to.empty()) bad("--in-place and --write are exclusive");
     write_to = opt.file;
@@ -368,6 +372,7 @@ void register_assemble(CLI::App& app, const GlobalOptions& globals, int& exit_co
       "project the design position onto the constraints (Ipopt, mass metric), with locked "
       "inputs and joint limits; initial velocities u = alpha u0");
   cmd->add_option("file", opt->file, "mechanism file (YAML)")->required();
+  add_set_option(cmd, opt->sets);
   cmd->add_flag("--json", opt->json, "one JSON document on stdout");
   cmd->add_option("--lock", opt->locks,
                   "JOINT=VALUE: lock a revolute/prismatic joint (30deg, 12mm; a bare number is in "

@@ -68,9 +68,25 @@ double parse_number(const std::string& text, const std::string& option) {
   return v;
 }
 
-Model load(const std::string& path) {
+void add_set_option(CLI::App* cmd, std::vector<std::string>& sets) {
+  cmd->add_option("--set", sets,
+                  "change a value of the file before reading it: PATH=VALUE in the file's units, "
+                  "e.g. loads.spring.stiffness=4000 or a parameter L=120 (repeatable)")
+      ->allow_extra_args(false)
+      ->type_name("PATH=VALUE");
+}
+
+Model load(const std::string& path, const std::vector<std::string>& sets) {
   spdlog::debug("reading {}", path);
-  Model model = load_mechanism(path);
+  std::vector<FileChange> changes;
+  for (const std::string& set : sets) {
+    try {
+      changes.push_back(parse_file_change(set));
+    } catch (const std::invalid_argument& e) {
+      throw CLI::ValidationError("--set", e.what());
+    }
+  }
+  Model model = load_mechanism(path, changes);
   for (const std::string& w : model.warnings) spdlog::warn("{}", w);
   return model;
 }

@@ -45,9 +45,13 @@ void setup_logging(const GlobalOptions& options, const LogFlags& flags);
 // is a number, finite and within the limits of Quantity::general. Throws CLI::ValidationError
 // naming `option` otherwise.
 [[nodiscard]] double parse_number(const std::string& text, const std::string& option);
-// Loads a mechanism; on failure throws InputError (main maps it to exit code 2). The file's
-// warnings (Model::warnings) go to the log.
-[[nodiscard]] Model load(const std::string& path);
+// `--set PATH=VALUE` (repeatable) of a subcommand: changes of the mechanism file, applied in
+// order before it is read (docs/cli.md "Changing the file from the command line").
+void add_set_option(CLI::App* cmd, std::vector<std::string>& sets);
+// Loads a mechanism with the `--set` changes; on failure throws InputError (main maps it to exit
+// code 2; a problem with a change names the --set). The file's warnings (Model::warnings) go to
+// the log.
+[[nodiscard]] Model load(const std::string& path, const std::vector<std::string>& sets = {});
 
 // `--units file|si` of a subcommand (docs/cli.md "Units"): outputs in the file's declared units
 // (default) or in SI.

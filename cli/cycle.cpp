@@ -17,6 +17,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <sstream>
@@ -26,6 +27,8 @@
 #include "orthomech/analysis/cycle_metrics.hpp"
 #include "orthomech/error.hpp"
 #include "orthomech/io/cycle_output.hpp"
+#include "orthomech/io/render.hpp"
+#include "orthomech/io/report.hpp"
 #include "orthomech/io/units.hpp"
 
 namespace orthomech::cli {
@@ -34,7 +37,8 @@ namespace {
 
 struct CycleCliOptions {
   std::string file;
-  std::string driver;  // joint (or driver) name
+  std::vector<std::string> sets;  // --set PATH=VALUE
+  std::string driver;             // joint (or driver) name
   std::string speed;
   std::string from, to;
   int steps = 0;  // 0: the file's analysis.steps
@@ -44,7 +48,11 @@ struct CycleCliOptions {
   bool quiet = false, verbose = false;
   bool reverse = false;
   std::string units = "file";
-  double speed_fluctuation = 0.0;  // C_s for the flywheel inertia (0: not asked)
+  double speed_fluctuation = 0.0;   // C_s for the flywheel inertia (0: not asked)
+  std::vector<std::string> traces;  // --trace BODY.POINT
+  std::string animate;              // --animate FILE.svg
+  std::string report;               // --report FILE.html
+  double duration = 4.0;            // s per loop of the animation
 };
 
 std::string fmt(double v, int precision = 4) {
@@ -257,10 +265,76 @@ nlohmann::json positions_json(const Model& model, const CycleResult& r, bool ang
   return pts;
 }
 
+// The positions of the sweep as vectors (SI): for the traces and the frames of the pictures.
+struct SweepPositions {
+  std::vector<VecX> q;
+  std::vector<double> input;
+};
+SweepPositions sweep_positions_of(const CycleResult& r) {
+  SweepPositions s;
+  s.q.reserve(r.points.size());
+  s.input.reserve(r.points.size());
+  for (const DrivenPointView& p : r.points) {
+    s.q.emplace_back(p.q);
+    s.input.push_back(p.input);
+  }
+  return s;
+}
+
+// The traces' columns of cycle.csv: "trace coupler.P.x", "trace coupler.P.y".
+std::vector<ExtraColumn> trace_columns(const std::vector<PointTrace>& traces) {
+  std::vector<ExtraColumn> cols;
+  for (const PointTrace& t : traces) {
+    ExtraColumn x{"trace " + t.point + ".x", Dimension::length, {}};
+    ExtraColumn y{"trace " + t.point + ".y", Dimension::length, {}};
+    for (const Vec2& p : t.path) {
+      x.values.push_back(p.x());
+      y.values.push_back(p.y());
+    }
+    cols.push_back(std::move(x));
+    cols.push_back(std::move(y));
+  }
+  return cols;
+}
+
+// The report's plots (output units): the drive, the reaction force magnitudes and the reaction
+// moment magnitudes versus the input; a value that is not reported is left out (null).
+std::vector<ReportPlot> report_plots(const CycleResult& r,
+                                     const std::vector<ReactionMagnitude>& magnitudes, bool angular,
+                                     const UnitSystem& u) {
+  std::vector<ReportPlot> plots;
+  const OutputUnit drive_u = output_unit(angular ? Dimension::moment : Dimension::force, u);
+  ReportPlot drive{"drive", angular ? "drive torque" : "drive force", drive_u.name, {}};
+  ReportSeries d{"drive", {}};
+  for (const DrivenPointView& p : r.points)
+    d.values.push_back(drive_reported(p) ? std::optional(drive_u.from_si(p.drive)) : std::nullopt);
+  drive.series.push_back(std::move(d));
+  plots.push_back(std::move(drive));
+  ReportPlot forces{"forces", "reaction forces", output_unit(Dimension::force, u).name, {}};
+  ReportPlot moments{"moments", "reaction moments", output_unit(Dimension::moment, u).name, {}};
+  for (const ReactionMagnitude& m : magnitudes) {
+    const Dimension dim = dimension_of(m.unit);
+    const OutputUnit mu = output_unit(dim, u);
+    ReportSeries s{m.name, {}};
+    for (const DrivenPointView& p : r.points)
+      s.values.push_back(magnitude_reported(r, p, m) ? std::optional(mu.from_si(magnitude_at(p, m)))
+                                                     : std::nullopt);
+    (dim == Dimension::force ? forces : moments).series.push_back(std::move(s));
+  }
+  if (!forces.series.empty()) plots.push_back(std::move(forces));
+  if (!moments.series.empty()) plots.push_back(std::move(moments));
+  return plots;
+}
+
 int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) {
-  const Model model = load(opt.file);
+  const Model model = load(opt.file, opt.sets);
   const UnitSystem U = resolve_units(model, opt.units);
   const UnitSystem file_units = unit_system(model.units);
+  if (!opt.animate.empty() && image_format_of(opt.animate) != ImageFormat::svg)
+    throw CLI::ValidationError("--animate", "the animation is an SVG: give a NAME.svg");
+  const TracePoints trace_request = resolve_trace_points(model, opt.traces);
+  if (trace_request.status == TraceStatus::bad_request)
+    throw InputError({"command line", 0, 0}, "option", trace_request.message);
   CycleOptions co;
   co.driver = resolve_driver(model, opt);
   const bool angular = is_angular(model, co.driver.joint);
@@ -352,6 +426,12 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
     return w > 2.0 * std::numbers::pi - 1e-9 ? 0.0 : w;
   };
 
+  // The traced points over the cycle's own positions.
+  const SweepPositions sweep = sweep_positions_of(r);
+  const std::vector<PointTrace> traces =
+      trace_paths(model, trace_request.points, sweep.q, sweep.input);
+  const OutputUnit length_u = output_unit(Dimension::length, U);
+
   // Files first: a failure to write is reported before anything goes to stdout.
   std::string files_note;
   if (!opt.out.empty()) {
@@ -360,8 +440,8 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
     std::filesystem::create_directories(dir, ec);
     if (ec) throw CLI::ValidationError("--out", "cannot create " + opt.out + ": " + ec.message());
     try {
-      const CycleColumns cols =
-          write_cycle_csv(dir / "cycle.csv", model, r, magnitudes, angular, U);
+      const CycleColumns cols = write_cycle_csv(dir / "cycle.csv", model, r, magnitudes, angular, U,
+                                                trace_columns(traces));
       write_cycle_gnuplot(dir / "cycle.gp", "cycle.csv", model, r, magnitudes, cols, angular, U,
                           speed_text(co.driver, angular, U));
     } catch (const std::runtime_error& e) {
@@ -393,7 +473,7 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
   }
 
   const NoiseFloor noise = cycle_noise_floor(model, r, magnitudes, angular);
-  std::ostringstream out;
+  std::ostringstream out, json_out;
   if (opt.json) {
     auto extreme = [&](const SeriesExtreme& e, const OutputUnit& u) {
       return nlohmann::json{{"value", u.from_si(e.value)},
@@ -536,8 +616,24 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
     }
     j["limits"] = limits;
     if (opt.positions) j["points"] = positions_json(model, r, angular, U, noise);
-    out << j.dump(2) << '\n';
-  } else {
+    nlohmann::json traced = nlohmann::json::array();
+    for (const PointTrace& t : traces) {
+      nlohmann::json e = {{"point", t.point}, {"unit", length_u.name}};
+      std::vector<double> in, x, y;
+      for (size_t k = 0; k < t.path.size(); ++k) {
+        in.push_back(input_u.from_si(t.input[k]));
+        x.push_back(length_u.from_si(t.path[k].x()));
+        y.push_back(length_u.from_si(t.path[k].y()));
+      }
+      e["input"] = in;
+      e["x"] = x;
+      e["y"] = y;
+      traced.push_back(e);
+    }
+    j["traces"] = traced;
+    json_out << j.dump(2) << '\n';
+  }
+  {  // the terminal summary (also the report's)
     out << "mechanism       " << model.name << "  (" << model.file << ")\n";
     out << "driver          joint '" << joint.name << "' (" << joint.type_name() << "), "
         << speed_text(co.driver, angular, U) << "\n";
@@ -644,6 +740,16 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
       if (st.time_ratio) out << ", time ratio forward/return " << fmt(*st.time_ratio, 6);
       out << "\n";
     }
+    for (const PointTrace& t : traces) {
+      Vec2 lo = Vec2::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+      for (const Vec2& p : t.path) {
+        lo = lo.cwiseMin(p);
+        hi = hi.cwiseMax(p);
+      }
+      out << "trace  " << t.point << ": x " << fmt(length_u.from_si(lo.x()), 7) << " ... "
+          << fmt(length_u.from_si(hi.x()), 7) << ", y " << fmt(length_u.from_si(lo.y()), 7)
+          << " ... " << fmt(length_u.from_si(hi.y()), 7) << " " << length_u.name << "\n";
+    }
     bool any = false;
     for (size_t i = 0; i < r.components.size(); ++i) {
       if (r.determinate[i]) continue;
@@ -659,7 +765,38 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
            "body's, or the second's when the first is the ground). Signed max and min of every "
            "component: --json.\n";
   }
-  std::cout << out.str();  // all at once
+  // The pictures: one animation of the cycle's positions (render's animated_svg), in the report
+  // too.
+  if (!opt.animate.empty() || !opt.report.empty()) {
+    RenderOptions ro;
+    ro.driver = co.driver.joint;
+    ro.traces = traces;
+    std::string animation;
+    try {
+      animation = animated_svg(model, sweep.q, ro, opt.duration);
+      if (!opt.animate.empty()) {
+        write_file_atomically(opt.animate, animation);
+        spdlog::info("wrote {} ({} frames)", opt.animate, sweep.q.size());
+      }
+      if (!opt.report.empty()) {
+        CycleReport report;
+        report.title = model.name;
+        report.summary = out.str();
+        report.input_label = "input [" + input_u.name + "]";
+        for (const double s : sweep.input) report.input.push_back(input_u.from_si(s));
+        report.plots = report_plots(r, magnitudes, angular, U);
+        report.animation = std::move(animation);
+        report.duration = opt.duration;
+        write_file_atomically(opt.report, cycle_report_html(report));
+        spdlog::info("wrote {} ({} positions)", opt.report, sweep.q.size());
+      }
+    } catch (const std::runtime_error& e) {
+      release_render_caches();
+      throw CLI::ValidationError(opt.report.empty() ? "--animate" : "--report", e.what());
+    }
+    release_render_caches();
+  }
+  std::cout << (opt.json ? json_out.str() : out.str());  // all at once
   return r.status == CycleStatus::completed               ? kOk
          : r.status == CycleStatus::stopped_at_dead_point ? kCheckFailed
                                                           : kNumerical;
@@ -674,6 +811,7 @@ void register_cycle(CLI::App& app, const GlobalOptions& globals, int& exit_code)
       "driven sweep over one cycle: drive torque/force and every joint's reaction per position; "
       "peaks and RMS; dead points; CSV and plots");
   cmd->add_option("file", opt->file, "mechanism file (YAML)")->required();
+  add_set_option(cmd, opt->sets);
   cmd->add_option("--driver", opt->driver,
                   "driven joint (default: the file's analysis.driver, else its first driver)");
   cmd->add_option("--speed", opt->speed,
@@ -698,6 +836,17 @@ void register_cycle(CLI::App& app, const GlobalOptions& globals, int& exit_code)
       ->check(CLI::PositiveNumber);
   add_units_option(cmd, opt->units);
   cmd->add_option("--out", opt->out, "directory for cycle.csv, cycle.gp and the plots");
+  cmd->add_option("--trace", opt->traces,
+                  "BODY.POINT: the path of this point over the cycle (CSV columns, JSON "
+                  "\"traces\", drawn in --animate and --report); repeatable");
+  cmd->add_option("--animate", opt->animate,
+                  "FILE.svg: an SVG that plays the cycle by itself, one frame per position");
+  cmd->add_option("--report", opt->report,
+                  "FILE.html: one self-contained page (offline): the summary, the drive and "
+                  "reaction plots and the animation with a slider");
+  cmd->add_option("--duration", opt->duration,
+                  "seconds of one loop of the animation (--animate, --report; default 4)")
+      ->check(finite_range(0.0, 3600.0, true));
   cmd->add_flag("-q,--quiet", opt->quiet, "no progress and only errors on stderr");
   cmd->add_flag("-v,--verbose", opt->verbose, "debug messages on stderr (also before the command)");
   cmd->callback([opt, &globals, &exit_code] {

@@ -23,6 +23,7 @@ namespace {
 
 struct InfoOptions {
   std::string file;
+  std::vector<std::string> sets;  // --set PATH=VALUE
   bool json = false;
   std::string units = "file";
 };
@@ -35,7 +36,7 @@ std::string fmt_double(double v) {
 }
 
 int run_info(const InfoOptions& opt) {
-  const Model model = load(opt.file);
+  const Model model = load(opt.file, opt.sets);
   VecX q = model.design_q();
   const VecX q_design = q;
   const SolveResult assembly = project_positions(model, q);
@@ -148,6 +149,7 @@ void register_info(CLI::App& app, const GlobalOptions& globals, int& exit_code) 
                          "bodies, joints, coordinates, constraints, rank of E, DOF, Grübler count, "
                          "redundant equations");
   cmd->add_option("file", opt->file, "mechanism file (YAML)")->required();
+  add_set_option(cmd, opt->sets);
   cmd->add_flag("--json", opt->json, "one JSON document on stdout");
   add_units_option(cmd, opt->units);
   auto log = std::make_shared<LogFlags>();

@@ -26,6 +26,7 @@ namespace {
 
 struct SimulateCliOptions {
   std::string file;
+  std::vector<std::string> sets;  // --set PATH=VALUE
   double t_end = 1.0;
   double rtol = 1e-8, atol = 1e-10, dt_out = 0.0, max_step = 0.0;
   std::string form = "dual";
@@ -225,7 +226,7 @@ nlohmann::json sample_json(const Model& model, const SimulateResult& res, const 
 }
 
 int run_simulate(const SimulateCliOptions& opt) {
-  const Model model = load(opt.file);
+  const Model model = load(opt.file, opt.sets);
   const UnitSystem system = resolve_units(model, opt.units);
   const double file_time = unit_system(model.units).time_si;  // bare times: the file's unit
   SimulateOptions so;
@@ -337,6 +338,7 @@ void register_simulate(CLI::App& app, const GlobalOptions& globals, int& exit_co
   CLI::App* cmd = app.add_subcommand(
       "simulate", "forward dynamics: time histories of measures, reactions, energy, residuals");
   cmd->add_option("file", opt->file, "mechanism file (YAML)")->required();
+  add_set_option(cmd, opt->sets);
   cmd->add_option("--t-end", opt->t_end, "end time, in the file's time unit")
       ->required()
       ->check(finite_range(0.0, kMaxGeneral, true));

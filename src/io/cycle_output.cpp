@@ -150,7 +150,7 @@ void compute_output_positions(const Model& model, const VecX& q, std::vector<dou
 CycleColumns write_cycle_csv(const std::filesystem::path& file, const Model& model,
                              const CycleResult& result,
                              const std::vector<ReactionMagnitude>& magnitudes, bool angular,
-                             const UnitSystem& units) {
+                             const UnitSystem& units, const std::vector<ExtraColumn>& extra) {
   CycleColumns cols;
   std::ostringstream out;
   int col = 0;
@@ -202,12 +202,21 @@ CycleColumns write_cycle_csv(const std::filesystem::path& file, const Model& mod
     cols.magnitudes.push_back(c);
     (qm == Dimension::force ? cols.forces : cols.moments).push_back(c);
   }
-  out << ",limits\n";
+  out << ",limits";
+  std::vector<OutputUnit> extra_units;
+  for (const ExtraColumn& c : extra) {
+    if (c.values.size() != result.points.size())
+      throw std::invalid_argument("write_cycle_csv: column " + c.name + " has the wrong size");
+    extra_units.push_back(output_unit(c.dimension, units));
+    out << ',' << field(c.name + " [" + extra_units.back().name + "]");
+  }
+  out << '\n';
   const NoiseFloor noise = cycle_noise_floor(model, result, magnitudes, angular);
   std::array<OutputUnit, kDimensions> unit_of;
   for (size_t d = 0; d < kDimensions; ++d)
     unit_of[d] = output_unit(static_cast<Dimension>(d), units);
-  for (const DrivenPointView& p : result.points) {
+  for (size_t row = 0; row < result.points.size(); ++row) {
+    const DrivenPointView p = result.points[row];
     bool first = true;
     for_each_cell(model, result, magnitudes, angular, p, [&](Dimension d, double v, bool reported) {
       if (!first) out << ',';
@@ -218,7 +227,10 @@ CycleColumns write_cycle_csv(const std::filesystem::path& file, const Model& mod
     for (size_t j = 0; j < model.joints.size(); ++j)
       if (outside_limits(model, static_cast<int>(j), VecX(p.q)))
         outside += (outside.empty() ? "" : " ") + model.joints[j].name;
-    out << ',' << field(outside) << '\n';
+    out << ',' << field(outside);
+    for (size_t i = 0; i < extra.size(); ++i)
+      out << ',' << number(extra_units[i].from_si(extra[i].values[row]));
+    out << '\n';
   }
   write_file_atomically(file, out.str());
   return cols;
