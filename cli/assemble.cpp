@@ -18,6 +18,7 @@
 #include "orthomech/analysis/assembly.hpp"
 #include "orthomech/analysis/validate.hpp"
 #include "orthomech/io/mechanism_writer.hpp"
+#include "orthomech/io/noise.hpp"
 #include "orthomech/io/units.hpp"
 #include "orthomech/model/measures.hpp"
 
@@ -27,6 +28,7 @@ namespace {
 
 struct AssembleOptions {
   std::string file;
+  std::vector<std::string> sets;  // --set PATH=VALUE
   bool json = false;
   std::vector<std::string> locks;
   std::vector<std::string> velocities;
@@ -100,11 +102,12 @@ void parse_velocity(const Model& model, const std::string& text, VecX& u0) {
 }
 
 int run_assemble(const AssembleOptions& opt) {
-  const Model model = load(opt.file);
+  const Model model = load(opt.file, opt.sets);
   const UnitSystem U = resolve_units(model, opt.units);
   const OutputUnit length_u = output_unit(Dimension::length, U);
   const OutputUnit angle_u = output_unit(Dimension::angle, U);
   const OutputUnit energy_u = output_unit(Dimension::moment, U);
+  const OutputUnit distance_u = mass_metric_unit(U);
   auto joint_unit = [&](int joint) {
     return std::holds_alternative<Revolute>(model.joints[static_cast<size_t>(joint)].kind)
                ? angle_u
@@ -127,6 +130,9 @@ int run_assemble(const AssembleOptions& opt) {
 
   namespace fs = std::filesystem;
   std::string write_to = opt.write;
+  if (!opt.sets.empty() && (opt.in_place || !write_to.empty()))
+    bad("--set cannot be combined with --write or --in-place: they write the file as it is on "
+        "disk; change the file itself to keep a change");
   if (opt.in_place) {
     if (!write_to.empty()) bad("--in-place and --write are exclusive");
     write_to = opt.file;
@@ -164,6 +170,16 @@ int run_assemble(const AssembleOptions& opt) {
     spdlog::info("wrote {}", written);
   }
 
+  // How far the bodies moved, rounding noise as 0 (a crank turning about its frame's origin):
+  // against the largest coordinate of the mechanism (io/noise.hpp).
+  NoiseFloor noise;
+  for (const Body& b : model.bodies)
+    for (int k = 0; k < 2; ++k) {
+      noise.see(Dimension::length, q0(b.q_offset + k));
+      noise.see(Dimension::length, res.q(b.q_offset + k));
+    }
+  auto moved = [&](double v) { return length_u.from_si(noise.clean(Dimension::length, v)); };
+  auto turned = [&](double v) { return angle_u.from_si(noise.clean(Dimension::angle, v)); };
   std::ostringstream out;
   if (opt.json) {
     nlohmann::json j;
@@ -174,8 +190,10 @@ int run_assemble(const AssembleOptions& opt) {
     j["message"] = res.message;
     j["solver_status"] = res.solver_status;
     j["iterations"] = res.iterations;
-    j["residual"] = res.residual;
-    j["distance"] = res.distance;
+    j["residual_length"] = length_u.from_si(res.residual_length);
+    j["residual_angle"] = angle_u.from_si(res.residual_angle);
+    j["distance"] = distance_u.from_si(res.distance);
+    j["distance_unit"] = distance_u.name;
     nlohmann::json locks = nlohmann::json::array();
     for (const JointLock& l : options.locks)
       locks.push_back({{"joint", model.joints[static_cast<size_t>(l.joint)].name},
@@ -185,8 +203,8 @@ int run_assemble(const AssembleOptions& opt) {
     nlohmann::json bodies = nlohmann::json::array();
     for (const BodyMove& b : res.bodies)
       bodies.push_back({{"name", b.body},
-                        {"translation", length_u.from_si(b.translation)},
-                        {"rotation", angle_u.from_si(b.rotation)}});
+                        {"translation", moved(b.translation)},
+                        {"rotation", turned(b.rotation)}});
     j["bodies"] = bodies;
     auto joints_json = [&](const std::vector<JointResidual>& list) {
       nlohmann::json a = nlohmann::json::array();
@@ -194,9 +212,17 @@ int run_assemble(const AssembleOptions& opt) {
         const int ji = model.find_joint(r.joint);
         const auto names = model.joints[static_cast<size_t>(ji)].component_names();
         nlohmann::json rows;
-        for (size_t k = 0; k < r.rows.size(); ++k) rows[names[k]] = r.rows[k];
+        double max_length = 0.0, max_angle = 0.0;  // output units
+        for (size_t k = 0; k < r.rows.size(); ++k) {
+          const bool angular = is_angular_row(names[k]);
+          const double v = (angular ? angle_u : length_u).from_si(r.rows[k]);
+          rows[names[k]] = v;
+          double& to = angular ? max_angle : max_length;
+          to = std::max(to, std::abs(v));
+        }
         a.push_back({{"name", r.joint},
-                     {"residual", r.residual},
+                     {"residual_length", max_length},
+                     {"residual_angle", max_angle},
                      {"gap", length_u.from_si(r.gap)},
                      {"rows", rows}});
       }
@@ -211,9 +237,9 @@ int run_assemble(const AssembleOptions& opt) {
                                      evaluate_measure(model, m, res.q, &vel.u, nullptr)))
                                : nlohmann::json(nullptr);
     j["measures"] = measures;
-    j["q"] = std::vector<double>(res.q.data(), res.q.data() + res.q.size());
+    j["q"] = coordinates_out(model, res.q, U);
     if (ok)
-      j["velocities"] = {{"u", std::vector<double>(vel.u.data(), vel.u.data() + vel.u.size())},
+      j["velocities"] = {{"u", coordinates_out(model, vel.u, U, true)},
                          {"kinetic_initial", energy_u.from_si(vel.kinetic_initial)},
                          {"kinetic", energy_u.from_si(vel.kinetic)},
                          {"kinetic_removed", energy_u.from_si(vel.kinetic_removed)}};
@@ -228,7 +254,7 @@ int run_assemble(const AssembleOptions& opt) {
     }
     j["limit_blocks"] = lb;
     j["gaps"] = joints_json(res.gaps);
-    j["total_gap"] = res.total_gap;
+    j["total_gap"] = length_u.from_si(res.total_gap);
     j["written"] = written.empty() ? nlohmann::json(nullptr) : nlohmann::json(written);
     out << j.dump(2) << '\n';
   } else {
@@ -245,32 +271,75 @@ int run_assemble(const AssembleOptions& opt) {
           << ", outside its limits [" << format_input(jt.limits->x(), rev, U) << ", "
           << format_input(jt.limits->y(), rev, U) << "]\n";
     }
-    out << "residual    " << fmt(res.residual, 3) << "   (max |f|, locks, limits; m or rad)\n";
-    out << "distance    " << fmt(res.distance, 4) << "   (mass metric, sqrt(kg)*m)\n";
+    out << "residual    " << fmt(length_u.from_si(res.residual_length), 3) << " " << length_u.name
+        << ", " << fmt(angle_u.from_si(res.residual_angle), 3) << " " << angle_u.name
+        << "   (max |f|, locks, limits: length rows, angle rows)\n";
+    out << "distance    " << fmt(distance_u.from_si(res.distance), 4) << " " << distance_u.name
+        << "   (mass metric)\n";
     for (const JointLock& l : options.locks)
       out << "lock        " << model.joints[static_cast<size_t>(l.joint)].name << " = "
           << fmt(joint_unit(l.joint).from_si(l.value), 10) << " " << joint_unit(l.joint).name
           << "\n";
-    out << "\nbody          moved [" << length_u.name << "]   turned [" << angle_u.name << "]\n";
-    for (const BodyMove& b : res.bodies) {
-      char line[160];
-      std::snprintf(line, sizeof line, "  %-12s %10.4f %12.5f\n", b.body.c_str(),
-                    length_u.from_si(b.translation), angle_u.from_si(b.rotation));
-      out << line;
+    // Columns as wide as their longest entry (body, joint and measure names, headers).
+    auto width_of = [](const std::string& header, const auto& names) {
+      size_t w = header.size();
+      for (const std::string& n : names) w = std::max(w, n.size());
+      return static_cast<int>(w);
+    };
+    std::vector<std::string> body_names, joint_names, measure_names;
+    for (const BodyMove& b : res.bodies) body_names.push_back(b.body);
+    for (const JointResidual& r : res.joints) joint_names.push_back(r.joint);
+    for (const Measure& m : model.measures)
+      if (m.derivative <= 1) measure_names.push_back(m.name);
+    auto pad = [](const std::string& text, int width) {
+      return text +
+             std::string(static_cast<size_t>(std::max(0, width - static_cast<int>(text.size()))),
+                         ' ');
+    };
+    char line[96];
+    {
+      const int w = width_of("body", body_names);
+      const std::string moved_head = "moved [" + length_u.name + "]";
+      const std::string turned_head = "turned [" + angle_u.name + "]";
+      const int wm = std::max(14, static_cast<int>(moved_head.size()));
+      out << "\n  " << pad("body", w) << "  " << pad(moved_head, wm) << "  " << turned_head << "\n";
+      for (const BodyMove& b : res.bodies) {
+        std::snprintf(line, sizeof line, "%.6g", moved(b.translation));
+        out << "  " << pad(b.body, w) << "  " << pad(line, wm) << "  " << fmt(turned(b.rotation))
+            << "\n";
+      }
     }
-    out << "\njoint         residual\n";
-    for (const JointResidual& r : res.joints) {
-      char line[160];
-      std::snprintf(line, sizeof line, "  %-12s %10.3g\n", r.joint.c_str(), r.residual);
-      out << line;
+    {
+      const int w = width_of("joint", joint_names);
+      const std::string lh = "residual [" + length_u.name + "]";
+      const std::string ah = "residual [" + angle_u.name + "]";
+      const int wl = std::max(14, static_cast<int>(lh.size()));
+      out << "\n  " << pad("joint", w) << "  " << pad(lh, wl) << "  " << ah << "\n";
+      for (const JointResidual& r : res.joints) {
+        const auto names =
+            model.joints[static_cast<size_t>(model.find_joint(r.joint))].component_names();
+        double max_length = 0.0, max_angle = 0.0;
+        bool has_length = false, has_angle = false;
+        for (size_t k = 0; k < r.rows.size(); ++k) {
+          const bool angular = is_angular_row(names[k]);
+          (angular ? has_angle : has_length) = true;
+          double& to = angular ? max_angle : max_length;
+          to = std::max(to, std::abs((angular ? angle_u : length_u).from_si(r.rows[k])));
+        }
+        char lv[32] = "-", av[32] = "-";
+        if (has_length) std::snprintf(lv, sizeof lv, "%.3g", max_length);
+        if (has_angle) std::snprintf(av, sizeof av, "%.3g", max_angle);
+        out << "  " << pad(r.joint, w) << "  " << pad(lv, wl) << "  " << av << "\n";
+      }
     }
     if (ok) {
-      if (!model.measures.empty()) out << "\nmeasure       value\n";
+      const int w = width_of("measure", measure_names);
+      if (!measure_names.empty()) out << "\n  " << pad("measure", w) << "  value\n";
       for (const Measure& m : model.measures) {
         if (m.derivative > 1) continue;
-        out << "  " << m.name << "  "
-            << fmt(measure_unit(m).from_si(evaluate_measure(model, m, res.q, &vel.u, nullptr)), 10)
-            << " " << measure_unit(m).name << "\n";
+        const OutputUnit u = measure_unit(m);
+        const double v = u.from_si(evaluate_measure(model, m, res.q, &vel.u, nullptr));
+        out << "  " << pad(m.name, w) << "  " << fmt(v, 10) << " " << u.name << "\n";
       }
       out << "\nvelocities  u = alpha u0: kinetic energy "
           << fmt(energy_u.from_si(vel.kinetic_initial)) << " " << energy_u.name << " -> "
@@ -303,6 +372,7 @@ void register_assemble(CLI::App& app, const GlobalOptions& globals, int& exit_co
       "project the design position onto the constraints (Ipopt, mass metric), with locked "
       "inputs and joint limits; initial velocities u = alpha u0");
   cmd->add_option("file", opt->file, "mechanism file (YAML)")->required();
+  add_set_option(cmd, opt->sets);
   cmd->add_flag("--json", opt->json, "one JSON document on stdout");
   cmd->add_option("--lock", opt->locks,
                   "JOINT=VALUE: lock a revolute/prismatic joint (30deg, 12mm; a bare number is in "

@@ -20,4 +20,6 @@ void register_simulate(CLI::App& app, const GlobalOptions& globals, int& exit_co
 void register_crosscheck(CLI::App& app, const GlobalOptions& globals, int& exit_code);
 // `orthomech render FILE --out X.svg|.png|.pdf`: a drawing of the mechanism (cli/render.cpp).
 void register_render(CLI::App& app, const GlobalOptions& globals, int& exit_code);
+// `sweep`: a design study of many variants (sweep.cpp).
+void register_sweep(CLI::App& app, const GlobalOptions& globals, int& exit_code);
 }  // namespace orthomech::cli

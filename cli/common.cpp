@@ -9,6 +9,7 @@
 #include <cstdlib>
 
 #include "orthomech/io/mechanism_file.hpp"
+#include "orthomech/io/noise.hpp"
 #include "orthomech/io/units.hpp"
 
 namespace orthomech::cli {
@@ -67,9 +68,25 @@ double parse_number(const std::string& text, const std::string& option) {
   return v;
 }
 
-Model load(const std::string& path) {
+void add_set_option(CLI::App* cmd, std::vector<std::string>& sets) {
+  cmd->add_option("--set", sets,
+                  "change a value of the file before reading it: PATH=VALUE in the file's units, "
+                  "e.g. loads.spring.stiffness=4000 or a parameter L=120 (repeatable)")
+      ->allow_extra_args(false)
+      ->type_name("PATH=VALUE");
+}
+
+Model load(const std::string& path, const std::vector<std::string>& sets) {
   spdlog::debug("reading {}", path);
-  Model model = load_mechanism(path);
+  std::vector<FileChange> changes;
+  for (const std::string& set : sets) {
+    try {
+      changes.push_back(parse_file_change(set));
+    } catch (const std::invalid_argument& e) {
+      throw CLI::ValidationError("--set", e.what());
+    }
+  }
+  Model model = load_mechanism(path, changes);
   for (const std::string& w : model.warnings) spdlog::warn("{}", w);
   return model;
 }
@@ -86,6 +103,35 @@ UnitSystem resolve_units(const Model& model, const std::string& choice) {
   } catch (const std::invalid_argument& e) {
     throw CLI::ValidationError("--units", e.what());
   }
+}
+
+std::vector<double> coordinates_out(const Model& model, const VecX& v, const UnitSystem& units,
+                                    bool rates) {
+  const OutputUnit length = output_unit(rates ? Dimension::velocity : Dimension::length, units);
+  const OutputUnit angle =
+      output_unit(rates ? Dimension::angular_velocity : Dimension::angle, units);
+  const Dimension dims[] = {rates ? Dimension::velocity : Dimension::length,
+                            rates ? Dimension::angular_velocity : Dimension::angle};
+  // Rounding noise (a slider's y on a horizontal guide) as 0: io/noise.hpp.
+  NoiseFloor noise;
+  for (const Body& b : model.bodies) {
+    const int offset = rates ? b.u_offset : b.q_offset;
+    for (int k = 0; k < (rates ? b.nu() : b.nq()); ++k)
+      noise.see(dims[k < 2 ? 0 : 1], v(offset + k));
+  }
+  std::vector<double> out(v.data(), v.data() + v.size());
+  for (const Body& b : model.bodies) {
+    const int offset = rates ? b.u_offset : b.q_offset;
+    for (int k = 0; k < (rates ? b.nu() : b.nq()); ++k) {
+      double& x = out[static_cast<size_t>(offset + k)];
+      x = (k < 2 ? length : angle).from_si(noise.clean(dims[k < 2 ? 0 : 1], x));
+    }
+  }
+  return out;
+}
+
+OutputUnit mass_metric_unit(const UnitSystem& units) {
+  return {"sqrt(" + units.mass + ")*" + units.length, std::sqrt(units.mass_si) * units.length_si};
 }
 
 nlohmann::json units_json(const UnitSystem& u) {

@@ -4,6 +4,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "orthomech/io/units.hpp"
 #include "orthomech/model/model.hpp"
@@ -44,15 +45,26 @@ void setup_logging(const GlobalOptions& options, const LogFlags& flags);
 // is a number, finite and within the limits of Quantity::general. Throws CLI::ValidationError
 // naming `option` otherwise.
 [[nodiscard]] double parse_number(const std::string& text, const std::string& option);
-// Loads a mechanism; on failure throws InputError (main maps it to exit code 2). The file's
-// warnings (Model::warnings) go to the log.
-[[nodiscard]] Model load(const std::string& path);
+// `--set PATH=VALUE` (repeatable) of a subcommand: changes of the mechanism file, applied in
+// order before it is read (docs/cli.md "Changing the file from the command line").
+void add_set_option(CLI::App* cmd, std::vector<std::string>& sets);
+// Loads a mechanism with the `--set` changes; on failure throws InputError (main maps it to exit
+// code 2; a problem with a change names the --set). The file's warnings (Model::warnings) go to
+// the log.
+[[nodiscard]] Model load(const std::string& path, const std::vector<std::string>& sets = {});
 
 // `--units file|si` of a subcommand (docs/cli.md "Units"): outputs in the file's declared units
 // (default) or in SI.
 void add_units_option(CLI::App* cmd, std::string& choice);
 // The chosen output units of a loaded model.
 [[nodiscard]] UnitSystem resolve_units(const Model& model, const std::string& choice);
+// Body coordinates q (centre of mass x, y and angle per body) or velocities u (vx, vy, ω; with
+// `rates`) in the output units: length (per time), angle (per time).
+[[nodiscard]] std::vector<double> coordinates_out(const Model& model, const VecX& v,
+                                                  const UnitSystem& units, bool rates = false);
+// The unit of the mass-metric distance √((q − q₀)ᵀ M (q − q₀)): √mass·length, e.g.
+// "sqrt(kg)*mm".
+[[nodiscard]] OutputUnit mass_metric_unit(const UnitSystem& units);
 // The `units` object of every JSON document: the unit name of each kind of quantity.
 [[nodiscard]] nlohmann::json units_json(const UnitSystem& units);
 

@@ -18,6 +18,7 @@ namespace {
 
 struct CrosscheckCliOptions {
   std::string file;
+  std::vector<std::string> sets;  // --set PATH=VALUE
   int samples = 10;
   double t_end = 0.2;
   double tolerance = 1e-8;
@@ -27,7 +28,7 @@ struct CrosscheckCliOptions {
 };
 
 int run_crosscheck_cmd(const CrosscheckCliOptions& opt) {
-  const Model model = load(opt.file);
+  const Model model = load(opt.file, opt.sets);
   const UnitSystem U = resolve_units(model, opt.units);
   const OutputUnit time_u = output_unit(Dimension::time, U);
   CrosscheckOptions co;
@@ -89,6 +90,7 @@ void register_crosscheck(CLI::App& app, const GlobalOptions& globals, int& exit_
   CLI::App* cmd = app.add_subcommand(
       "crosscheck", "dual versus primal form at states along a motion, and the paper's identities");
   cmd->add_option("file", opt->file, "mechanism file (YAML)")->required();
+  add_set_option(cmd, opt->sets);
   cmd->add_option("--samples", opt->samples, "number of states (default 10)")
       ->check(CLI::Range(1, 100000));
   cmd->add_option("--t-end", opt->t_end,

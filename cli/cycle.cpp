@@ -17,6 +17,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <sstream>
@@ -26,6 +27,8 @@
 #include "orthomech/analysis/cycle_metrics.hpp"
 #include "orthomech/error.hpp"
 #include "orthomech/io/cycle_output.hpp"
+#include "orthomech/io/render.hpp"
+#include "orthomech/io/report.hpp"
 #include "orthomech/io/units.hpp"
 
 namespace orthomech::cli {
@@ -34,7 +37,8 @@ namespace {
 
 struct CycleCliOptions {
   std::string file;
-  std::string driver;  // joint (or driver) name
+  std::vector<std::string> sets;  // --set PATH=VALUE
+  std::string driver;             // joint (or driver) name
   std::string speed;
   std::string from, to;
   int steps = 0;  // 0: the file's analysis.steps
@@ -44,7 +48,11 @@ struct CycleCliOptions {
   bool quiet = false, verbose = false;
   bool reverse = false;
   std::string units = "file";
-  double speed_fluctuation = 0.0;  // C_s for the flywheel inertia (0: not asked)
+  double speed_fluctuation = 0.0;   // C_s for the flywheel inertia (0: not asked)
+  std::vector<std::string> traces;  // --trace BODY.POINT
+  std::string animate;              // --animate FILE.svg
+  std::string report;               // --report FILE.html
+  double duration = 4.0;            // s per loop of the animation
 };
 
 std::string fmt(double v, int precision = 4) {
@@ -131,7 +139,9 @@ Driver resolve_driver(const Model& model, const CycleCliOptions& opt) {
 std::string speed_text(const Driver& d, bool angular, const UnitSystem& u) {
   if (d.profile == Profile::harmonic)
     return "harmonic, amplitude " + format_input(d.amplitude, angular, u) + " about " +
-           format_input(d.initial, angular, u) + ", " + fmt(d.frequency) + " Hz";
+           format_input(d.initial, angular, u) + ", " +
+           fmt(output_unit(Dimension::frequency, u).from_si(d.frequency)) + " " +
+           output_unit(Dimension::frequency, u).name;
   if (d.profile == Profile::polynomial) return "polynomial";
   const OutputUnit v = output_unit(angular ? Dimension::angular_velocity : Dimension::velocity, u);
   return angular ? "constant speed " + fmt(d.speed * 60.0 / (2.0 * std::numbers::pi)) + " rpm (" +
@@ -167,7 +177,14 @@ int run_in_directory(const std::filesystem::path& dir, const std::string& progra
 // Every position: input, time, measures, body poses and named points, velocities and
 // accelerations of the bodies, drive, reactions and energies, in the output units.
 nlohmann::json positions_json(const Model& model, const CycleResult& r, bool angular,
-                              const UnitSystem& u) {
+                              const UnitSystem& u, const NoiseFloor& noise) {
+  // Rounding noise of a dimension as 0 (io/noise.hpp).
+  auto out = [&](const OutputUnit& unit, Dimension d, double v) {
+    return unit.from_si(noise.clean(d, v));
+  };
+  const Dimension v_dim[] = {Dimension::velocity, Dimension::velocity, Dimension::angular_velocity};
+  const Dimension a_dim[] = {Dimension::acceleration, Dimension::acceleration,
+                             Dimension::angular_acceleration};
   const OutputUnit input_u = output_unit(angular ? Dimension::angle : Dimension::length, u);
   const OutputUnit time_u = output_unit(Dimension::time, u);
   const OutputUnit drive_u = output_unit(angular ? Dimension::moment : Dimension::force, u);
@@ -194,21 +211,24 @@ nlohmann::json positions_json(const Model& model, const CycleResult& r, bool ang
     j["bridged"] = p.bridge >= 0;
     nlohmann::json m = nlohmann::json::object();
     for (size_t i = 0; i < model.measures.size(); ++i)
-      m[model.measures[i].name] = measure_u[i].from_si(p.measures[i]);
+      m[model.measures[i].name] =
+          out(measure_u[i], dimension_of(model.measures[i].unit), p.measures[i]);
     j["measures"] = m;
     // Pose of every body's frame ([x, y, angle]; a particle [x, y]) and every named point.
     compute_output_positions(model, VecX(p.q), pose);
     nlohmann::json poses = nlohmann::json::object(), points = nlohmann::json::object();
     size_t k = 0;
     for (const Body& b : model.bodies) {
-      std::vector<double> v = {length_u.from_si(pose[k]), length_u.from_si(pose[k + 1])};
+      std::vector<double> v = {out(length_u, Dimension::length, pose[k]),
+                               out(length_u, Dimension::length, pose[k + 1])};
       k += 2;
-      if (b.kind == BodyKind::rigid) v.push_back(angle_u.from_si(pose[k++]));
+      if (b.kind == BodyKind::rigid) v.push_back(out(angle_u, Dimension::angle, pose[k++]));
       poses[b.name] = v;
     }
     for (const Body& b : model.bodies)
       for (const auto& [name, local] : b.points) {
-        points[b.name + "." + name] = {length_u.from_si(pose[k]), length_u.from_si(pose[k + 1])};
+        points[b.name + "." + name] = {out(length_u, Dimension::length, pose[k]),
+                                       out(length_u, Dimension::length, pose[k + 1])};
         k += 2;
       }
     j["poses"] = poses;
@@ -218,18 +238,19 @@ nlohmann::json positions_json(const Model& model, const CycleResult& r, bool ang
     for (const Body& b : model.bodies) {
       std::vector<double> v, a;
       for (int i = 0; i < b.nu(); ++i) {
-        v.push_back(vel[i].from_si(p.u(b.u_offset + i)));
-        a.push_back(acc[i].from_si(p.udot(b.u_offset + i)));
+        v.push_back(out(vel[i], v_dim[i], p.u(b.u_offset + i)));
+        a.push_back(out(acc[i], a_dim[i], p.udot(b.u_offset + i)));
       }
       bodies[b.name] = {{"velocity", v}, {"acceleration", a}};
     }
     j["bodies"] = bodies;
     if (drive_reported(p)) {  // not at a change point that could not be bridged
-      j["drive"] = drive_u.from_si(p.drive);
+      j["drive"] = out(drive_u, angular ? Dimension::moment : Dimension::force, p.drive);
       nlohmann::json rc = nlohmann::json::object();
       for (size_t i = 0; i < r.components.size(); ++i)
         if (component_reported(r, p, i))
-          rc[r.components[i].name] = component_u[i].from_si(p.reactions[i]);
+          rc[r.components[i].name] =
+              out(component_u[i], dimension_of(r.components[i].unit), p.reactions[i]);
       j["reactions"] = rc;
     }
     nlohmann::json outside = nlohmann::json::array();
@@ -244,10 +265,76 @@ nlohmann::json positions_json(const Model& model, const CycleResult& r, bool ang
   return pts;
 }
 
+// The positions of the sweep as vectors (SI): for the traces and the frames of the pictures.
+struct SweepPositions {
+  std::vector<VecX> q;
+  std::vector<double> input;
+};
+SweepPositions sweep_positions_of(const CycleResult& r) {
+  SweepPositions s;
+  s.q.reserve(r.points.size());
+  s.input.reserve(r.points.size());
+  for (const DrivenPointView& p : r.points) {
+    s.q.emplace_back(p.q);
+    s.input.push_back(p.input);
+  }
+  return s;
+}
+
+// The traces' columns of cycle.csv: "trace coupler.P.x", "trace coupler.P.y".
+std::vector<ExtraColumn> trace_columns(const std::vector<PointTrace>& traces) {
+  std::vector<ExtraColumn> cols;
+  for (const PointTrace& t : traces) {
+    ExtraColumn x{"trace " + t.point + ".x", Dimension::length, {}};
+    ExtraColumn y{"trace " + t.point + ".y", Dimension::length, {}};
+    for (const Vec2& p : t.path) {
+      x.values.push_back(p.x());
+      y.values.push_back(p.y());
+    }
+    cols.push_back(std::move(x));
+    cols.push_back(std::move(y));
+  }
+  return cols;
+}
+
+// The report's plots (output units): the drive, the reaction force magnitudes and the reaction
+// moment magnitudes versus the input; a value that is not reported is left out (null).
+std::vector<ReportPlot> report_plots(const CycleResult& r,
+                                     const std::vector<ReactionMagnitude>& magnitudes, bool angular,
+                                     const UnitSystem& u) {
+  std::vector<ReportPlot> plots;
+  const OutputUnit drive_u = output_unit(angular ? Dimension::moment : Dimension::force, u);
+  ReportPlot drive{"drive", angular ? "drive torque" : "drive force", drive_u.name, {}};
+  ReportSeries d{"drive", {}};
+  for (const DrivenPointView& p : r.points)
+    d.values.push_back(drive_reported(p) ? std::optional(drive_u.from_si(p.drive)) : std::nullopt);
+  drive.series.push_back(std::move(d));
+  plots.push_back(std::move(drive));
+  ReportPlot forces{"forces", "reaction forces", output_unit(Dimension::force, u).name, {}};
+  ReportPlot moments{"moments", "reaction moments", output_unit(Dimension::moment, u).name, {}};
+  for (const ReactionMagnitude& m : magnitudes) {
+    const Dimension dim = dimension_of(m.unit);
+    const OutputUnit mu = output_unit(dim, u);
+    ReportSeries s{m.name, {}};
+    for (const DrivenPointView& p : r.points)
+      s.values.push_back(magnitude_reported(r, p, m) ? std::optional(mu.from_si(magnitude_at(p, m)))
+                                                     : std::nullopt);
+    (dim == Dimension::force ? forces : moments).series.push_back(std::move(s));
+  }
+  if (!forces.series.empty()) plots.push_back(std::move(forces));
+  if (!moments.series.empty()) plots.push_back(std::move(moments));
+  return plots;
+}
+
 int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) {
-  const Model model = load(opt.file);
+  const Model model = load(opt.file, opt.sets);
   const UnitSystem U = resolve_units(model, opt.units);
   const UnitSystem file_units = unit_system(model.units);
+  if (!opt.animate.empty() && image_format_of(opt.animate) != ImageFormat::svg)
+    throw CLI::ValidationError("--animate", "the animation is an SVG: give a NAME.svg");
+  const TracePoints trace_request = resolve_trace_points(model, opt.traces);
+  if (trace_request.status == TraceStatus::bad_request)
+    throw InputError({"command line", 0, 0}, "option", trace_request.message);
   CycleOptions co;
   co.driver = resolve_driver(model, opt);
   const bool angular = is_angular(model, co.driver.joint);
@@ -339,6 +426,12 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
     return w > 2.0 * std::numbers::pi - 1e-9 ? 0.0 : w;
   };
 
+  // The traced points over the cycle's own positions.
+  const SweepPositions sweep = sweep_positions_of(r);
+  const std::vector<PointTrace> traces =
+      trace_paths(model, trace_request.points, sweep.q, sweep.input);
+  const OutputUnit length_u = output_unit(Dimension::length, U);
+
   // Files first: a failure to write is reported before anything goes to stdout.
   std::string files_note;
   if (!opt.out.empty()) {
@@ -347,8 +440,8 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
     std::filesystem::create_directories(dir, ec);
     if (ec) throw CLI::ValidationError("--out", "cannot create " + opt.out + ": " + ec.message());
     try {
-      const CycleColumns cols =
-          write_cycle_csv(dir / "cycle.csv", model, r, magnitudes, angular, U);
+      const CycleColumns cols = write_cycle_csv(dir / "cycle.csv", model, r, magnitudes, angular, U,
+                                                trace_columns(traces));
       write_cycle_gnuplot(dir / "cycle.gp", "cycle.csv", model, r, magnitudes, cols, angular, U,
                           speed_text(co.driver, angular, U));
     } catch (const std::runtime_error& e) {
@@ -379,7 +472,8 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
                  (plotted ? ", drive.svg, drive.png, reactions.svg, reactions.png" : "");
   }
 
-  std::ostringstream out;
+  const NoiseFloor noise = cycle_noise_floor(model, r, magnitudes, angular);
+  std::ostringstream out, json_out;
   if (opt.json) {
     auto extreme = [&](const SeriesExtreme& e, const OutputUnit& u) {
       return nlohmann::json{{"value", u.from_si(e.value)},
@@ -436,16 +530,22 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
     }
     j["bridges"] = bridges;
     // peaks: the drive, every reaction magnitude and every reaction component.
+    // A component zero by construction (a frictionless slide's axial force) is 0, not the
+    // rounding noise of the solve (io/noise.hpp).
     nlohmann::json peaks;
     for (const auto* list : {&summary, &component_summary})
       for (const SeriesSummary& s : *list) {
         const OutputUnit u = unit_of(s.unit);
-        peaks[s.name] = {{"peak", u.from_si(s.peak)},
+        const Dimension d = dimension_of(s.unit);
+        SeriesExtreme max = s.max, min = s.min;
+        max.value = noise.clean(d, max.value);
+        min.value = noise.clean(d, min.value);
+        peaks[s.name] = {{"peak", u.from_si(noise.clean(d, s.peak))},
                          {"input", input_u.from_si(s.peak_input)},
                          {"time", time_u.from_si(s.peak_time)},
-                         {"rms", u.from_si(s.rms)},
-                         {"max", extreme(s.max, u)},
-                         {"min", extreme(s.min, u)},
+                         {"rms", u.from_si(noise.clean(d, s.rms))},
+                         {"max", extreme(max, u)},
+                         {"min", extreme(min, u)},
                          {"unit", u.name},
                          {"determinate", s.determinate},
                          {"diverges", s.diverges}};
@@ -515,9 +615,25 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
                         {"unit", u.name}});
     }
     j["limits"] = limits;
-    if (opt.positions) j["points"] = positions_json(model, r, angular, U);
-    out << j.dump(2) << '\n';
-  } else {
+    if (opt.positions) j["points"] = positions_json(model, r, angular, U, noise);
+    nlohmann::json traced = nlohmann::json::array();
+    for (const PointTrace& t : traces) {
+      nlohmann::json e = {{"point", t.point}, {"unit", length_u.name}};
+      std::vector<double> in, x, y;
+      for (size_t k = 0; k < t.path.size(); ++k) {
+        in.push_back(input_u.from_si(t.input[k]));
+        x.push_back(length_u.from_si(t.path[k].x()));
+        y.push_back(length_u.from_si(t.path[k].y()));
+      }
+      e["input"] = in;
+      e["x"] = x;
+      e["y"] = y;
+      traced.push_back(e);
+    }
+    j["traces"] = traced;
+    json_out << j.dump(2) << '\n';
+  }
+  {  // the terminal summary (also the report's)
     out << "mechanism       " << model.name << "  (" << model.file << ")\n";
     out << "driver          joint '" << joint.name << "' (" << joint.type_name() << "), "
         << speed_text(co.driver, angular, U) << "\n";
@@ -578,9 +694,12 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
       if (s.samples == 0) continue;
       const OutputUnit u = unit_of(s.unit);
       std::snprintf(line, sizeof line, "%-*s  %-*s %12.5g %14s %12.5g %14s %12.5g%s\n", nw,
-                    s.name.c_str(), uw, u.name.c_str(), u.from_si(s.max.value),
-                    format_input(wrapped(s.max.input), angular, U).c_str(), u.from_si(s.min.value),
-                    format_input(wrapped(s.min.input), angular, U).c_str(), u.from_si(s.rms),
+                    s.name.c_str(), uw, u.name.c_str(),
+                    u.from_si(noise.clean(dimension_of(s.unit), s.max.value)),
+                    format_input(wrapped(s.max.input), angular, U).c_str(),
+                    u.from_si(noise.clean(dimension_of(s.unit), s.min.value)),
+                    format_input(wrapped(s.min.input), angular, U).c_str(),
+                    u.from_si(noise.clean(dimension_of(s.unit), s.rms)),
                     s.determinate ? ""
                     : s.diverges  ? "   indeterminate (minimum norm), diverges at a change point"
                                   : "   indeterminate (minimum norm)");
@@ -621,6 +740,16 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
       if (st.time_ratio) out << ", time ratio forward/return " << fmt(*st.time_ratio, 6);
       out << "\n";
     }
+    for (const PointTrace& t : traces) {
+      Vec2 lo = Vec2::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+      for (const Vec2& p : t.path) {
+        lo = lo.cwiseMin(p);
+        hi = hi.cwiseMax(p);
+      }
+      out << "trace  " << t.point << ": x " << fmt(length_u.from_si(lo.x()), 7) << " ... "
+          << fmt(length_u.from_si(hi.x()), 7) << ", y " << fmt(length_u.from_si(lo.y()), 7)
+          << " ... " << fmt(length_u.from_si(hi.y()), 7) << " " << length_u.name << "\n";
+    }
     bool any = false;
     for (size_t i = 0; i < r.components.size(); ++i) {
       if (r.determinate[i]) continue;
@@ -636,7 +765,38 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
            "body's, or the second's when the first is the ground). Signed max and min of every "
            "component: --json.\n";
   }
-  std::cout << out.str();  // all at once
+  // The pictures: one animation of the cycle's positions (render's animated_svg), in the report
+  // too.
+  if (!opt.animate.empty() || !opt.report.empty()) {
+    RenderOptions ro;
+    ro.driver = co.driver.joint;
+    ro.traces = traces;
+    std::string animation;
+    try {
+      animation = animated_svg(model, sweep.q, ro, opt.duration);
+      if (!opt.animate.empty()) {
+        write_file_atomically(opt.animate, animation);
+        spdlog::info("wrote {} ({} frames)", opt.animate, sweep.q.size());
+      }
+      if (!opt.report.empty()) {
+        CycleReport report;
+        report.title = model.name;
+        report.summary = out.str();
+        report.input_label = "input [" + input_u.name + "]";
+        for (const double s : sweep.input) report.input.push_back(input_u.from_si(s));
+        report.plots = report_plots(r, magnitudes, angular, U);
+        report.animation = std::move(animation);
+        report.duration = opt.duration;
+        write_file_atomically(opt.report, cycle_report_html(report));
+        spdlog::info("wrote {} ({} positions)", opt.report, sweep.q.size());
+      }
+    } catch (const std::runtime_error& e) {
+      release_render_caches();
+      throw CLI::ValidationError(opt.report.empty() ? "--animate" : "--report", e.what());
+    }
+    release_render_caches();
+  }
+  std::cout << (opt.json ? json_out.str() : out.str());  // all at once
   return r.status == CycleStatus::completed               ? kOk
          : r.status == CycleStatus::stopped_at_dead_point ? kCheckFailed
                                                           : kNumerical;
@@ -651,6 +811,7 @@ void register_cycle(CLI::App& app, const GlobalOptions& globals, int& exit_code)
       "driven sweep over one cycle: drive torque/force and every joint's reaction per position; "
       "peaks and RMS; dead points; CSV and plots");
   cmd->add_option("file", opt->file, "mechanism file (YAML)")->required();
+  add_set_option(cmd, opt->sets);
   cmd->add_option("--driver", opt->driver,
                   "driven joint (default: the file's analysis.driver, else its first driver)");
   cmd->add_option("--speed", opt->speed,
@@ -675,6 +836,17 @@ void register_cycle(CLI::App& app, const GlobalOptions& globals, int& exit_code)
       ->check(CLI::PositiveNumber);
   add_units_option(cmd, opt->units);
   cmd->add_option("--out", opt->out, "directory for cycle.csv, cycle.gp and the plots");
+  cmd->add_option("--trace", opt->traces,
+                  "BODY.POINT: the path of this point over the cycle (CSV columns, JSON "
+                  "\"traces\", drawn in --animate and --report); repeatable");
+  cmd->add_option("--animate", opt->animate,
+                  "FILE.svg: an SVG that plays the cycle by itself, one frame per position");
+  cmd->add_option("--report", opt->report,
+                  "FILE.html: one self-contained page (offline): the summary, the drive and "
+                  "reaction plots and the animation with a slider");
+  cmd->add_option("--duration", opt->duration,
+                  "seconds of one loop of the animation (--animate, --report; default 4)")
+      ->check(finite_range(0.0, 3600.0, true));
   cmd->add_flag("-q,--quiet", opt->quiet, "no progress and only errors on stderr");
   cmd->add_flag("-v,--verbose", opt->verbose, "debug messages on stderr (also before the command)");
   cmd->callback([opt, &globals, &exit_code] {

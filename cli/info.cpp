@@ -13,6 +13,7 @@
 
 #include "commands.hpp"
 #include "common.hpp"
+#include "orthomech/analysis/assembly.hpp"
 #include "orthomech/analysis/mobility.hpp"
 #include "orthomech/analysis/positions.hpp"
 
@@ -22,6 +23,7 @@ namespace {
 
 struct InfoOptions {
   std::string file;
+  std::vector<std::string> sets;  // --set PATH=VALUE
   bool json = false;
   std::string units = "file";
 };
@@ -34,23 +36,28 @@ std::string fmt_double(double v) {
 }
 
 int run_info(const InfoOptions& opt) {
-  const Model model = load(opt.file);
+  const Model model = load(opt.file, opt.sets);
   VecX q = model.design_q();
   const VecX q_design = q;
   const SolveResult assembly = project_positions(model, q);
-  if (assembly.status != SolveStatus::converged) {
-    spdlog::warn(
-        "{}: the design position does not assemble ({}; residual {:.3g}); "
-        "mobility is reported at the design position as given",
-        model.file, to_string(assembly.status), assembly.residual);
-    q = q_design;
-  }
-  const double moved = (q - q_design).cwiseAbs().maxCoeff();
-  const Mobility mob = compute_mobility(model, q);
-  // How far the projection moved the bodies, in the output units: translation and rotation.
+  // How far the projection moved the bodies and what is left of f, in the output units: lengths
+  // (translation, length rows of f) and angles (rotation, angular rows).
   const UnitSystem U = resolve_units(model, opt.units);
   const OutputUnit length_u = output_unit(Dimension::length, U);
   const OutputUnit angle_u = output_unit(Dimension::angle, U);
+  const ResidualSplit residual = split_residual(model, q);
+  auto residual_text = [&] {
+    return fmt_double(length_u.from_si(residual.length)) + " " + length_u.name + ", " +
+           fmt_double(angle_u.from_si(residual.angle)) + " " + angle_u.name;
+  };
+  if (assembly.status != SolveStatus::converged) {
+    spdlog::warn(
+        "{}: the design position does not assemble ({}; residual {}); "
+        "mobility is reported at the design position as given",
+        model.file, to_string(assembly.status), residual_text());
+    q = q_design;
+  }
+  const Mobility mob = compute_mobility(model, q);
   const OutputUnit mass_u = output_unit(Dimension::mass, U);
   const OutputUnit inertia_u = output_unit(Dimension::inertia, U);
   double moved_length = 0.0, moved_angle = 0.0;
@@ -78,8 +85,8 @@ int run_info(const InfoOptions& opt) {
     j["smallest_pivot"] = mob.smallest_pivot;
     j["assembly"] = {{"status", to_string(assembly.status)},
                      {"iterations", assembly.iterations},
-                     {"residual", assembly.residual},
-                     {"max_coordinate_change", moved},
+                     {"residual_length", length_u.from_si(residual.length)},
+                     {"residual_angle", angle_u.from_si(residual.angle)},
                      {"max_translation", length_u.from_si(moved_length)},
                      {"max_rotation", angle_u.from_si(moved_angle)}};
     nlohmann::json bodies = nlohmann::json::array();
@@ -115,7 +122,7 @@ int run_info(const InfoOptions& opt) {
         << assembly.iterations << " iterations, bodies moved up to "
         << fmt_double(length_u.from_si(moved_length)) << " " << length_u.name
         << " and turned up to " << fmt_double(angle_u.from_si(moved_angle)) << " " << angle_u.name
-        << ", residual " << fmt_double(assembly.residual) << "\n\n";
+        << ", residual " << residual_text() << "\n\n";
     out << "joints\n";
     for (const Joint& jt : model.joints) {
       out << "  " << jt.name << "  " << jt.type_name() << "  (";
@@ -142,6 +149,7 @@ void register_info(CLI::App& app, const GlobalOptions& globals, int& exit_code) 
                          "bodies, joints, coordinates, constraints, rank of E, DOF, Grübler count, "
                          "redundant equations");
   cmd->add_option("file", opt->file, "mechanism file (YAML)")->required();
+  add_set_option(cmd, opt->sets);
   cmd->add_flag("--json", opt->json, "one JSON document on stdout");
   add_units_option(cmd, opt->units);
   auto log = std::make_shared<LogFlags>();

@@ -25,6 +25,7 @@ int main(int argc, char** argv) {
   register_simulate(app, globals, exit_code);
   register_crosscheck(app, globals, exit_code);
   register_render(app, globals, exit_code);
+  register_sweep(app, globals, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

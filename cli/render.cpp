@@ -18,6 +18,7 @@ namespace {
 
 struct RenderCliOptions {
   std::string file;
+  std::vector<std::string> sets;  // --set PATH=VALUE
   std::string out;
   std::string position;
   std::string input;
@@ -36,7 +37,7 @@ struct RenderCliOptions {
 int run_render(const RenderCliOptions& opt) {
   const auto format = image_format_of(opt.out);
   if (!format) bad("--out: unknown image type '" + opt.out + "' (use .svg, .png or .pdf)");
-  const Model model = load(opt.file);
+  const Model model = load(opt.file, opt.sets);
   const PoseResult pose = assemble_pose(model, RenderPose{opt.position, opt.input});
   if (pose.status == PoseStatus::bad_request) bad(pose.message);
   if (pose.status == PoseStatus::cannot_assemble) {
@@ -109,6 +110,7 @@ void register_render(CLI::App& app, const GlobalOptions& globals, int& exit_code
       "draw the mechanism (SVG, PNG or PDF by the extension of --out) at its design position, "
       "a design position of the file or a driver input");
   cmd->add_option("file", opt->file, "mechanism file (YAML)")->required();
+  add_set_option(cmd, opt->sets);
   cmd->add_option("--out,-o", opt->out, "image file: .svg, .png or .pdf")->required();
   auto* position =
       cmd->add_option("--position", opt->position, "draw at this design position of the file");

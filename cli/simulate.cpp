@@ -15,7 +15,9 @@
 
 #include "commands.hpp"
 #include "common.hpp"
+#include "orthomech/analysis/assembly.hpp"
 #include "orthomech/io/cycle_output.hpp"
+#include "orthomech/io/noise.hpp"
 #include "orthomech/io/units.hpp"
 
 namespace orthomech::cli {
@@ -24,6 +26,7 @@ namespace {
 
 struct SimulateCliOptions {
   std::string file;
+  std::vector<std::string> sets;  // --set PATH=VALUE
   double t_end = 1.0;
   double rtol = 1e-8, atol = 1e-10, dt_out = 0.0, max_step = 0.0;
   std::string form = "dual";
@@ -52,6 +55,38 @@ struct SimulateUnits {
     for (const auto& c : res.components) components.push_back(output_unit(dimension_of(c.unit), u));
     for (const PositionColumn& c : position_columns)
       positions.push_back(output_unit(c.dimension, u));
+    angle = output_unit(Dimension::angle, u);
+    // The scale of every dimension over the samples: rounding noise is written as 0
+    // (io/noise.hpp; a slider's y on a horizontal guide, a frictionless slide's axial force).
+    std::vector<double> pose;
+    for (const SimulationSample& s : res.samples) {
+      for (size_t k = 0; k < s.measures.size(); ++k)
+        noise.see(dimension_of(model.measures[k].unit), s.measures[k]);
+      for (size_t k = 0; k < s.reactions.size() && k < res.components.size(); ++k)
+        noise.see(dimension_of(res.components[k].unit), s.reactions[k]);
+      compute_output_positions(model, s.q, pose);
+      for (size_t k = 0; k < pose.size(); ++k) noise.see(position_columns[k].dimension, pose[k]);
+      for (const double e : {s.kinetic, s.potential, s.work}) noise.see(Dimension::moment, e);
+    }
+    for (const Measure& m : model.measures) measure_dims.push_back(dimension_of(m.unit));
+    for (const auto& c : res.components) component_dims.push_back(dimension_of(c.unit));
+  }
+  OutputUnit angle;
+  NoiseFloor noise;
+  std::vector<Dimension> measure_dims, component_dims;
+  // SI values to output values, rounding noise as 0: measure k, reaction component k, position
+  // column k, an energy.
+  [[nodiscard]] double measure(size_t k, double v) const {
+    return measures[k].from_si(noise.clean(measure_dims[k], v));
+  }
+  [[nodiscard]] double component(size_t k, double v) const {
+    return components[k].from_si(noise.clean(component_dims[k], v));
+  }
+  [[nodiscard]] double position(size_t k, double v) const {
+    return positions[k].from_si(noise.clean(position_columns[k].dimension, v));
+  }
+  [[nodiscard]] double energy_of(double v) const {
+    return energy.from_si(noise.clean(Dimension::moment, v));
   }
 };
 
@@ -99,19 +134,19 @@ void write_csv(const std::filesystem::path& dir, const Model& model, const Simul
     out << "," << res.components[k].name << " [" << U.components[k].name << "]";
   const std::string e = " [" + U.energy.name + "]";
   out << ",kinetic" << e << ",potential" << e << ",work" << e << ",energy" << e
-      << ",residual [m or rad]\n";
+      << ",residual_length [" << U.length.name << "],residual_angle [" << U.angle.name << "]\n";
   std::vector<double> pose;
   for (const SimulationSample& s : res.samples) {
     out << U.time.from_si(s.t);
-    for (size_t k = 0; k < s.measures.size(); ++k)
-      out << "," << U.measures[k].from_si(s.measures[k]);
+    for (size_t k = 0; k < s.measures.size(); ++k) out << "," << U.measure(k, s.measures[k]);
     compute_output_positions(model, s.q, pose);
-    for (size_t k = 0; k < pose.size(); ++k) out << "," << U.positions[k].from_si(pose[k]);
+    for (size_t k = 0; k < pose.size(); ++k) out << "," << U.position(k, pose[k]);
     for (size_t k = 0; k < res.components.size(); ++k)
-      out << "," << (k < s.reactions.size() ? U.components[k].from_si(s.reactions[k]) : 0.0);
-    out << "," << U.energy.from_si(s.kinetic) << "," << U.energy.from_si(s.potential) << ","
-        << U.energy.from_si(s.work) << "," << U.energy.from_si(s.kinetic + s.potential - s.work)
-        << "," << s.residual << "\n";
+      out << "," << (k < s.reactions.size() ? U.component(k, s.reactions[k]) : 0.0);
+    const ResidualSplit r = split_residual(model, s.q);
+    out << "," << U.energy_of(s.kinetic) << "," << U.energy_of(s.potential) << ","
+        << U.energy_of(s.work) << "," << U.energy_of(s.kinetic + s.potential - s.work) << ","
+        << U.length.from_si(r.length) << "," << U.angle.from_si(r.angle) << "\n";
   }
   std::ofstream sw(dir / "chart_switches.csv");
   sw << "t [" << U.time.name << "],from,to\n";
@@ -139,24 +174,28 @@ nlohmann::json series_json(const Model& model, const SimulateResult& res, const 
   nlohmann::json m = nlohmann::json::object();
   for (size_t k = 0; k < model.measures.size(); ++k)
     m[model.measures[k].name] =
-        column([&, k](const SimulationSample& s) { return U.measures[k].from_si(s.measures[k]); });
+        column([&, k](const SimulationSample& s) { return U.measure(k, s.measures[k]); });
   j["measures"] = m;
   nlohmann::json r = nlohmann::json::object();
   for (size_t k = 0; k < res.components.size(); ++k)
     r[res.components[k].name] = column([&, k](const SimulationSample& s) {
-      return k < s.reactions.size() ? U.components[k].from_si(s.reactions[k]) : std::nan("");
+      return k < s.reactions.size() ? U.component(k, s.reactions[k]) : std::nan("");
     });
   j["reactions"] = r;
-  j["kinetic"] = column([&](const SimulationSample& s) { return U.energy.from_si(s.kinetic); });
-  j["potential"] = column([&](const SimulationSample& s) { return U.energy.from_si(s.potential); });
-  j["work"] = column([&](const SimulationSample& s) { return U.energy.from_si(s.work); });
-  j["residual"] = column([](const SimulationSample& s) { return s.residual; });
+  j["kinetic"] = column([&](const SimulationSample& s) { return U.energy_of(s.kinetic); });
+  j["potential"] = column([&](const SimulationSample& s) { return U.energy_of(s.potential); });
+  j["work"] = column([&](const SimulationSample& s) { return U.energy_of(s.work); });
+  j["residual_length"] = column([&](const SimulationSample& s) {
+    return U.length.from_si(split_residual(model, s.q).length);
+  });
+  j["residual_angle"] = column(
+      [&](const SimulationSample& s) { return U.angle.from_si(split_residual(model, s.q).angle); });
   if (positions) {
     std::vector<std::vector<double>> cols(U.position_columns.size());
     std::vector<double> pose;
     for (const SimulationSample& s : res.samples) {
       compute_output_positions(model, s.q, pose);
-      for (size_t k = 0; k < pose.size(); ++k) cols[k].push_back(U.positions[k].from_si(pose[k]));
+      for (size_t k = 0; k < pose.size(); ++k) cols[k].push_back(U.position(k, pose[k]));
     }
     nlohmann::json p = nlohmann::json::object();
     for (size_t k = 0; k < cols.size(); ++k) p[U.position_columns[k].name] = cols[k];
@@ -171,21 +210,23 @@ nlohmann::json sample_json(const Model& model, const SimulateResult& res, const 
   j["t"] = U.time.from_si(s.t);
   nlohmann::json m = nlohmann::json::object();
   for (size_t k = 0; k < model.measures.size(); ++k)
-    m[model.measures[k].name] = U.measures[k].from_si(s.measures[k]);
+    m[model.measures[k].name] = U.measure(k, s.measures[k]);
   j["measures"] = m;
   nlohmann::json r = nlohmann::json::object();
   for (size_t k = 0; k < s.reactions.size() && k < res.components.size(); ++k)
-    r[res.components[k].name] = U.components[k].from_si(s.reactions[k]);
+    r[res.components[k].name] = U.component(k, s.reactions[k]);
   j["reactions"] = r;
-  j["kinetic"] = U.energy.from_si(s.kinetic);
-  j["potential"] = U.energy.from_si(s.potential);
-  j["work"] = U.energy.from_si(s.work);
-  j["residual"] = s.residual;
+  j["kinetic"] = U.energy_of(s.kinetic);
+  j["potential"] = U.energy_of(s.potential);
+  j["work"] = U.energy_of(s.work);
+  const ResidualSplit split = split_residual(model, s.q);
+  j["residual_length"] = U.length.from_si(split.length);
+  j["residual_angle"] = U.angle.from_si(split.angle);
   return j;
 }
 
 int run_simulate(const SimulateCliOptions& opt) {
-  const Model model = load(opt.file);
+  const Model model = load(opt.file, opt.sets);
   const UnitSystem system = resolve_units(model, opt.units);
   const double file_time = unit_system(model.units).time_si;  // bare times: the file's unit
   SimulateOptions so;
@@ -205,6 +246,10 @@ int run_simulate(const SimulateCliOptions& opt) {
     spdlog::info("initial velocity projection removed {:.6g} {} of kinetic energy",
                  U.energy.from_si(res.kinetic_removed), U.energy.name);
   if (!opt.out_dir.empty()) write_csv(opt.out_dir, model, res, U);
+  spdlog::info(
+      "{} chart switches: the dual form changed its independent velocities {} times (bookkeeping "
+      "of the method; the results do not depend on it)",
+      model.file, res.chart_switches.size());
 
   std::ostringstream out;
   const bool ok = res.status == SimulateStatus::completed;
@@ -224,7 +269,8 @@ int run_simulate(const SimulateCliOptions& opt) {
                    {"final", U.energy.from_si(res.energy_final)},
                    {"max_drift", U.energy.from_si(res.energy_max_drift)},
                    {"relative_drift", rel_drift}};
-    j["max_constraint_residual"] = res.max_constraint_residual;
+    j["max_residual_length"] = U.length.from_si(res.max_residual_length);
+    j["max_residual_angle"] = U.angle.from_si(res.max_residual_angle);
     j["max_velocity_residual"] = res.max_velocity_residual;
     if (so.form == DynamicsForm::primal) j["max_invariant_J"] = res.max_invariant_J;
     j["kinetic_energy_removed"] = U.energy.from_si(res.kinetic_removed);
@@ -258,14 +304,15 @@ int run_simulate(const SimulateCliOptions& opt) {
     out << "steps       " << res.steps << " (" << res.evaluations << " evaluations";
     if (res.rejected_steps > 0) out << ", " << res.rejected_steps << " rejected";
     if (res.jacobians > 0) out << ", " << res.jacobians << " Jacobians";
-    out << "), " << res.chart_switches.size() << " chart switches, " << res.passages.size()
-        << " change points passed\n";
+    out << "), " << res.passages.size() << " change points passed\n";
     const std::string eu = " " + U.energy.name;
     out << "energy      initial " << g(U.energy.from_si(res.energy_initial)) << eu << ", final "
         << g(U.energy.from_si(res.energy_final)) << eu << ", max drift "
         << g(U.energy.from_si(res.energy_max_drift), 3) << eu << " (relative " << g(rel_drift, 3)
         << ")\n";
-    out << "residual    max |f| " << g(res.max_constraint_residual, 3) << " (m or rad)";
+    out << "residual    max |f| " << g(U.length.from_si(res.max_residual_length), 3) << " "
+        << U.length.name << " (length rows), " << g(U.angle.from_si(res.max_residual_angle), 3)
+        << " " << U.angle.name << " (angular rows)";
     if (so.form == DynamicsForm::primal) out << ", max |J| " << g(res.max_invariant_J, 3);
     out << "\n\n";
     out << "t [" << U.time.name << "]";
@@ -275,8 +322,8 @@ int run_simulate(const SimulateCliOptions& opt) {
     for (const SimulationSample& s : res.samples) {
       out << g(U.time.from_si(s.t), 6);
       for (size_t k = 0; k < s.measures.size(); ++k)
-        out << "\t" << g(U.measures[k].from_si(s.measures[k]), 8);
-      out << "\t" << g(U.energy.from_si(s.kinetic + s.potential - s.work), 8) << "\n";
+        out << "\t" << g(U.measure(k, s.measures[k]), 8);
+      out << "\t" << g(U.energy_of(s.kinetic + s.potential - s.work), 8) << "\n";
     }
   }
   std::cout << out.str();
@@ -291,6 +338,7 @@ void register_simulate(CLI::App& app, const GlobalOptions& globals, int& exit_co
   CLI::App* cmd = app.add_subcommand(
       "simulate", "forward dynamics: time histories of measures, reactions, energy, residuals");
   cmd->add_option("file", opt->file, "mechanism file (YAML)")->required();
+  add_set_option(cmd, opt->sets);
   cmd->add_option("--t-end", opt->t_end, "end time, in the file's time unit")
       ->required()
       ->check(finite_range(0.0, kMaxGeneral, true));

@@ -22,6 +22,7 @@ namespace {
 
 struct ValidateCliOptions {
   std::string file;
+  std::vector<std::string> sets;  // --set PATH=VALUE
   bool json = false;
   std::string min_transmission = "30deg";
   int starts = 24;
@@ -41,7 +42,7 @@ std::string cell(const std::optional<double>& v, double scale, const char* f = "
 }
 
 int run_validate(const ValidateCliOptions& opt) {
-  const Model model = load(opt.file);
+  const Model model = load(opt.file, opt.sets);
   const UnitSystem U = resolve_units(model, opt.units);
   ValidateOptions vo;
   try {  // a bare number is in the file's angle unit
@@ -112,7 +113,8 @@ int run_validate(const ValidateCliOptions& opt) {
                            {"failures", p.failures},
                            {"assembles", p.assembles},
                            {"assembly_status", to_string(p.assembly)},
-                           {"distance", p.distance},
+                           {"distance", mass_metric_unit(U).from_si(p.distance)},
+                           {"distance_unit", mass_metric_unit(U).name},
                            {"max_translation", length_u.from_si(p.max_translation)},
                            {"target_error", conv(p.target_error, length_u)},
                            {"target_angle_error", conv(p.target_angle_error, angle_u)},
@@ -215,6 +217,7 @@ void register_validate(CLI::App& app, const GlobalOptions& globals, int& exit_co
       "design positions report: assembly, target, DOF, singularity, transmission, Grashof, "
       "assembly modes, circuit/branch/order defects; exit 0 only when every position passes");
   cmd->add_option("file", opt->file, "mechanism file (YAML)")->required();
+  add_set_option(cmd, opt->sets);
   cmd->add_flag("--json", opt->json, "one JSON document on stdout");
   cmd->add_option("--min-transmission", opt->min_transmission,
                   "smallest acceptable transmission angle deviation from a straight line, e.g. "

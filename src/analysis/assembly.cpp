@@ -10,11 +10,16 @@
 #include "../solvers/ipopt_nlp.hpp"
 #include "orthomech/analysis/mobility.hpp"
 #include "orthomech/constraints/joints.hpp"
+#include "orthomech/io/units.hpp"
 #include "orthomech/model/free_system.hpp"
 #include "orthomech/model/measures.hpp"
 #include "orthomech/model/state.hpp"
 
 namespace orthomech {
+
+bool is_angular_row(const std::string& component) {
+  return component == "angle" || component == "ratio";
+}
 
 namespace {
 
@@ -28,10 +33,6 @@ struct CoordinateRow {
   bool linear = true;     // revolute: s = φ_j − φ_i is linear in q (zero Hessian)
   std::vector<int> cols;  // coordinates s depends on (for its Hessian)
 };
-
-bool is_angular_row(const std::string& component) {
-  return component == "angle" || component == "ratio";
-}
 
 std::vector<int> body_columns(const Model& model, int body) {
   std::vector<int> c;
@@ -138,6 +139,35 @@ double total_residual(const Model& model, const VecX& q, const std::vector<Coord
     r = std::max({r, c.lo - s, s - c.hi});
   }
   return std::isfinite(r) ? r : std::numeric_limits<double>::infinity();
+}
+
+// total_residual split by kind (m, rad).
+ResidualSplit split_residual(const Model& model, const VecX& q,
+                             const std::vector<CoordinateRow>& rows) {
+  ResidualSplit out;
+  VecX f(model.nc), d(model.n);
+  compute_constraint_residual(model, q, f);
+  std::vector<bool> angular(static_cast<size_t>(model.nc), false);
+  for (const Joint& j : model.joints) {
+    const auto names = j.component_names();
+    for (int k = 0; k < j.rows(); ++k)
+      angular[static_cast<size_t>(j.row_offset + k)] =
+          is_angular_row(names[static_cast<size_t>(k)]);
+  }
+  for (int r = 0; r < model.nc; ++r) {
+    double& to = angular[static_cast<size_t>(r)] ? out.angle : out.length;
+    to = std::max(to, std::abs(f(r)));
+  }
+  for (const CoordinateRow& c : rows) {
+    const double s = eval_coordinate(model, c, q, d);
+    const bool revolute =
+        std::holds_alternative<Revolute>(model.joints[static_cast<size_t>(c.joint)].kind);
+    double& to = revolute ? out.angle : out.length;
+    to = std::max({to, c.lo - s, s - c.hi});
+  }
+  if (!std::isfinite(out.length)) out.length = std::numeric_limits<double>::infinity();
+  if (!std::isfinite(out.angle)) out.angle = std::numeric_limits<double>::infinity();
+  return out;
 }
 
 std::vector<BodyMove> body_moves(const Model& model, const VecX& q0, const VecX& q) {
@@ -449,8 +479,10 @@ VelocityProjection project_velocities(const Model& model, const VecX& q, const V
   return v;
 }
 
-AssemblyResult assemble(const Model& model, const VecX& q0, const AssemblyOptions& options) {
-  if (q0.size() != model.nq) throw std::invalid_argument("assemble: q0 has the wrong size");
+namespace {
+
+AssemblyResult assemble_position(const Model& model, const VecX& q0,
+                                 const AssemblyOptions& options) {
   if (model.nq != model.n)
     throw std::invalid_argument("assemble: only free systems with q̇ = u (planar bodies)");
   AssemblyResult res;
@@ -551,22 +583,40 @@ AssemblyResult assemble(const Model& model, const VecX& q0, const AssemblyOption
     res.residual = total_residual(model, res.q, coords, f, d);
     res.bodies = body_moves(model, q0, res.q);
     res.joints = joint_residuals(model, res.q);
+    // In the file's declared units (a model built in code: SI).
+    const UnitSystem file_units = unit_system(model.units);
     msg << "the mechanism cannot close";
     if (!options.locks.empty()) msg << " with the locked inputs";
     msg << ": at the best least-squares pose";
     for (size_t k = 0; k < res.gaps.size(); ++k) {
       msg << (k ? "," : "") << " joint '" << res.gaps[k].joint << "' ";
       if (res.gaps[k].gap > 0.0)
-        msg << "gap " << res.gaps[k].gap * 1e3 << " mm";
+        msg << "gap " << format_quantity(res.gaps[k].gap, Dimension::length, file_units);
       else
-        msg << "residual " << res.gaps[k].residual << " rad";
+        msg << "residual " << format_quantity(res.gaps[k].residual, Dimension::angle, file_units);
     }
-    msg << "; total gap " << res.total_gap * 1e3 << " mm (loop through";
+    msg << "; total gap " << format_quantity(res.total_gap, Dimension::length, file_units)
+        << " (loop through";
     for (size_t k = 0; k < res.gaps.size(); ++k) msg << (k ? ", " : " ") << res.gaps[k].joint;
     msg << ")";
   }
   res.message = msg.str();
   return res;
+}
+
+}  // namespace
+
+AssemblyResult assemble(const Model& model, const VecX& q0, const AssemblyOptions& options) {
+  if (q0.size() != model.nq) throw std::invalid_argument("assemble: q0 has the wrong size");
+  AssemblyResult res = assemble_position(model, q0, options);
+  const ResidualSplit split = split_residual(model, res.q, coordinate_rows(model, q0, options));
+  res.residual_length = split.length;
+  res.residual_angle = split.angle;
+  return res;
+}
+
+ResidualSplit split_residual(const Model& model, const VecX& q, const AssemblyOptions& options) {
+  return split_residual(model, q, coordinate_rows(model, q, options));
 }
 
 }  // namespace orthomech

@@ -8,6 +8,7 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "orthomech/analysis/assembly.hpp"
 #include "orthomech/analysis/mobility.hpp"
 #include "orthomech/analysis/positions.hpp"
 #include "orthomech/constraints/joints.hpp"
@@ -482,6 +483,8 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
   const std::string& joint_name = model.joints[static_cast<size_t>(joint)].name;
   const bool angular =
       std::holds_alternative<Revolute>(model.joints[static_cast<size_t>(joint)].kind);
+  // Messages quote inputs in the file's declared units (a model built in code: SI).
+  const UnitSystem file_units = unit_system(model.units);
   const Driver& driver = options.driver;
   InputLaw law;
   law.profile = driver.profile;
@@ -547,13 +550,16 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
     if (assembly.status == SolveStatus::converged)
       result.warnings.push_back(
           "the design position closes only with driver joint '" + joint_name +
-          "' moved from its drawn " + format_input(hold.locked_value, angular) + " to " +
+          "' moved from its drawn " + format_input(hold.locked_value, angular, file_units) +
+          " to " +
           format_input(compute_scalar(model, JointCoordinate{joint}, state.q, nullptr).value,
-                       angular));
+                       angular, file_units));
   }
   if (assembly.status != SolveStatus::converged) {
+    const ResidualSplit left = split_residual(model, state.q);
     result.message = "the design position does not assemble (residual " +
-                     std::to_string(assembly.residual) + ")";
+                     format_quantity(left.length, Dimension::length, file_units) + ", " +
+                     format_quantity(left.angle, Dimension::angle, file_units) + ")";
     return result;
   }
   {
@@ -567,11 +573,10 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
                                : 0.0;
       if (distance <= kStartMoveTolerance * size && angle <= kStartTurnTolerance) continue;
       result.start_moves.push_back({b.name, distance, angle});
-      // In the file's declared units (a model built in code: SI).
-      const UnitSystem units = unit_system(model.units);
       result.warnings.push_back("the design position does not close as drawn: body '" + b.name +
-                                "' moved by " + format_input(distance, false, units) + " and " +
-                                format_input(angle, true, units) + " to close the joints");
+                                "' moved by " + format_input(distance, false, file_units) +
+                                " and " + format_input(angle, true, file_units) +
+                                " to close the joints");
     }
   }
   const Mobility mob = compute_mobility(model, state.q);
@@ -626,7 +631,8 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
     reach.bridge_change_points = false;  // only its last position (a converged one) is used
     const CycleResult path = run_cycle(model, reach);
     if (path.status != CycleStatus::completed || path.points.empty()) {
-      result.message = "cannot reach the start input " + format_input(start_target, angular) +
+      result.message = "cannot reach the start input " +
+                       format_input(start_target, angular, file_units) +
                        " from the design position along its branch: " + path.message;
       return result;
     }
@@ -772,7 +778,7 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
     good_tangent = start_tangent;
     result.singular_positions.push_back(
         {s0, 0.0,
-         "singular position (E loses rank) at input " + format_input(s0, angular) +
+         "singular position (E loses rank) at input " + format_input(s0, angular, file_units) +
              ": the start; passed, branch kept by continuity of the tangent"});
   }
   result.status = CycleStatus::completed;  // unless the loop below says otherwise
@@ -784,7 +790,7 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
       return;
     result.singular_positions.push_back({s_at, t_at,
                                          "singular position (E loses rank) at input " +
-                                             format_input(s_at, angular) +
+                                             format_input(s_at, angular, file_units) +
                                              ": passed, branch kept by continuity of the tangent"});
   };
 
@@ -884,7 +890,7 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
       }
       result.status = CycleStatus::failed;
       result.message = "the continuation cannot proceed at input " +
-                       format_input(sub.input, angular) +
+                       format_input(sub.input, angular, file_units) +
                        " (neither a dead point nor a singular position of E); the positions "
                        "before it are reported";
       break;
@@ -906,7 +912,7 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
     }
     const double s_dead = at_lo.input;
     std::string msg = "dead point of driver joint '" + joint_name + "' at input " +
-                      format_input(s_dead, angular) +
+                      format_input(s_dead, angular, file_units) +
                       ": the driver cannot move the mechanism past it";
     if (!(options.reverse_at_dead_point && constant)) {
       result.dead_points.push_back({s_dead, at_lo.time, msg});

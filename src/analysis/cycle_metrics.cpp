@@ -5,6 +5,7 @@
 #include <numbers>
 
 #include "orthomech/analysis/validate.hpp"
+#include "orthomech/io/noise.hpp"
 #include "orthomech/model/measures.hpp"
 
 namespace orthomech {
@@ -162,6 +163,11 @@ CycleMetrics compute_cycle_metrics(const Model& model, const CycleResult& r,
       span += h;
     }
     pw.mean = span > 0.0 ? work / span : 0.0;
+    // A sum of N terms carries up to N times the rounding noise of one: a mean within N·256 ε of
+    // the peak is 0 (the mean power of a conservative mechanism over a full cycle, ∮ P dt = ΔV =
+    // 0, comes out as 1e-13 of the peak otherwise; io/noise.hpp).
+    if (std::abs(pw.mean) <= kNoiseRelative * static_cast<double>(segments) * pw.peak)
+      pw.mean = 0.0;
     // E(t) = ∫ (P − P̄) dt at every position; ΔE = max − min.
     double E = 0.0;
     pw.energy_max = pw.energy_min = {0.0, r.points[reg[0]].input, r.points[reg[0]].time};
@@ -185,6 +191,30 @@ CycleMetrics compute_cycle_metrics(const Model& model, const CycleResult& r,
   }
 
   // ---- strokes: prismatic joints and position measures --------------------------------------
+  // A series constant up to rounding noise (a translating coupler's angle, 1e-13 deg) has no
+  // stroke and no time ratio: its range is at most kNoiseRelative of the largest value of its
+  // dimension over the positions (every length or angle coordinate, every measure).
+  NoiseFloor noise;
+  for (const DrivenPointView& p : r.points) {
+    for (const Body& b : model.bodies)
+      for (int k = 0; k < b.nq(); ++k)
+        noise.see(k < 2 ? Dimension::length : Dimension::angle, p.q(b.q_offset + k));
+    for (size_t i = 0; i < p.measures.size(); ++i)
+      noise.see(dimension_of(model.measures[i].unit), p.measures[i]);
+  }
+  // An angle that turns fully over the sweep (a crank's, sampled over 359° of 360°) has no
+  // stroke either: its extremes are the ends of the sweep, not turning points.
+  auto turns_fully = [&](const std::string& unit, const std::vector<double>& v) {
+    if (dimension_of(unit) != Dimension::angle || v.size() < 3) return false;
+    const auto [lo, hi] = std::minmax_element(v.begin(), v.end());
+    return *hi - *lo >= 2.0 * std::numbers::pi * (1.0 - 1.5 / static_cast<double>(v.size()));
+  };
+  auto add_stroke = [&](StrokeMetric s) {
+    const Dimension d = dimension_of(s.unit);
+    noise.see(d, s.min.value);
+    noise.see(d, s.max.value);
+    if (noise.clean(d, s.range) != 0.0) out.strokes.push_back(std::move(s));
+  };
   std::vector<double> y(n);
   for (size_t j = 0; j < model.joints.size(); ++j) {
     if (!std::holds_alternative<Prismatic>(model.joints[j].kind)) continue;
@@ -198,7 +228,7 @@ CycleMetrics compute_cycle_metrics(const Model& model, const CycleResult& r,
       y[k] =
           compute_scalar(model, JointCoordinate{static_cast<int>(j)}, VecX(r.points[k].q), nullptr)
               .value;
-    out.strokes.push_back(stroke(r, model.joints[j].name, "m", y, cyclic, period));
+    add_stroke(stroke(r, model.joints[j].name, "m", y, cyclic, period));
   }
   for (size_t i = 0; i < model.measures.size(); ++i) {
     const Measure& m = model.measures[i];
@@ -206,7 +236,8 @@ CycleMetrics compute_cycle_metrics(const Model& model, const CycleResult& r,
     if (const auto* jc = std::get_if<JointCoordinate>(&m.kind))
       if (jc->joint == opt.driver_joint) continue;  // the input itself
     for (size_t k = 0; k < n; ++k) y[k] = r.points[k].measures[i];
-    out.strokes.push_back(stroke(r, m.name, m.unit, y, cyclic, period));
+    if (turns_fully(m.unit, y)) continue;
+    add_stroke(stroke(r, m.name, m.unit, y, cyclic, period));
   }
   // Named points that no joint uses (tracer points: a coupler point, a foot) and no measure
   // reports: the range of their x and y.
@@ -242,7 +273,7 @@ CycleMetrics compute_cycle_metrics(const Model& model, const CycleResult& r,
         for (size_t k = 0; k < n; ++k)
           y[k] =
               compute_scalar(model, PointCoordinate{ref, axis}, VecX(r.points[k].q), nullptr).value;
-        out.strokes.push_back(
+        add_stroke(
             stroke(r, body.name + "." + name + (axis == 0 ? ".x" : ".y"), "m", y, cyclic, period));
       }
     }

@@ -8,6 +8,7 @@
 #include <functional>
 #include <map>
 #include <numbers>
+#include <optional>
 #include <random>
 #include <set>
 #include <sstream>
@@ -666,13 +667,52 @@ double pressure_angle(const Model& model, const SliderCrankLoop& l, const VecX& 
   return std::atan2(std::abs(u.x() * axis.y() - u.y() * axis.x()), std::abs(u.dot(axis)));
 }
 
+namespace {
+
+// The design's assembly mode at the locks, limits ignored: the design pose is closed (no lock),
+// then the locked coordinates are moved from their values there to the locked ones in steps of
+// at most 2° (revolute) or 2 % of the mechanism's size (prismatic), each step projected from the
+// previous position (mass-metric Gauss–Newton). Small steps keep the mode of the design (the same
+// branch, as `cycle` follows it); a projection of the design pose straight onto the locks may
+// land on another mode. Empty when a step does not converge (a dead point in between).
+std::optional<VecX> continue_to_locks(const Model& model, const VecX& q_guess,
+                                      const std::vector<JointLock>& locks) {
+  VecX q = q_guess;
+  if (!project_with_locks(model, q, {}, 1e-12, 60)) return std::nullopt;
+  const double L = length_scale(model);
+  std::vector<double> from, to;
+  double steps = 1.0;
+  for (const JointLock& l : locks) {
+    const bool rev = is_revolute(model, l.joint);
+    const double s = joint_coordinate(model, l.joint, q);
+    // A revolute lock is matched modulo 2π nearest the design (as `assemble` does).
+    const double target = rev ? l.value + kTwoPi * std::round((s - l.value) / kTwoPi) : l.value;
+    from.push_back(s);
+    to.push_back(target);
+    steps = std::max(steps, std::ceil(std::abs(target - s) / (rev ? 2.0 * kPi / 180.0 : 0.02 * L)));
+  }
+  const int n = static_cast<int>(std::min(steps, 1000.0));
+  std::vector<JointLock> at = locks;
+  for (int k = 1; k <= n; ++k) {
+    for (size_t i = 0; i < locks.size(); ++i)
+      at[i].value = from[i] + (to[i] - from[i]) * static_cast<double>(k) / n;
+    if (!project_with_locks(model, q, at, 1e-12, 60)) return std::nullopt;
+  }
+  return q;
+}
+
+}  // namespace
+
 std::vector<LimitBlock> find_limit_blocks(const Model& model, const VecX& q_guess,
                                           const AssemblyOptions& options) {
   std::vector<LimitBlock> out;
   if (!options.use_limits) return out;
   AssemblyOptions free = options;
   free.use_limits = false;
-  const AssemblyResult a = assemble(model, q_guess, free);
+  // On the design's assembly mode when the continuation reaches the locks; otherwise the
+  // mass-metric projection of the design pose.
+  const std::optional<VecX> on_branch = continue_to_locks(model, q_guess, options.locks);
+  const AssemblyResult a = assemble(model, on_branch ? *on_branch : q_guess, free);
   if (a.status != AssemblyStatus::assembled && a.status != AssemblyStatus::unchanged) return out;
   for (size_t j = 0; j < model.joints.size(); ++j)
     if (outside_limits(model, static_cast<int>(j), a.q))
@@ -724,6 +764,8 @@ bool ValidationReport::pass() const {
 
 ValidationReport validate_design_positions(const Model& model, const ValidateOptions& opt) {
   ValidationReport rep;
+  // Messages quote values in the file's declared units (a model built in code: SI).
+  const UnitSystem file_units = unit_system(model.units);
   const double L = length_scale(model);
   const VecX q_design = model.design_q();
   std::mt19937 gen(opt.seed);
@@ -767,9 +809,10 @@ ValidationReport validate_design_positions(const Model& model, const ValidateOpt
       for (const LimitBlock& b : pr.limit_blocks) {
         const Joint& jt = model.joints[static_cast<size_t>(b.joint)];
         const bool rev = std::holds_alternative<Revolute>(jt.kind);
-        pr.failures.push_back("joint '" + jt.name + "' would need " + format_input(b.needed, rev) +
-                              ", outside its limits [" + format_input(jt.limits->x(), rev) + ", " +
-                              format_input(jt.limits->y(), rev) + "]");
+        pr.failures.push_back("joint '" + jt.name + "' would need " +
+                              format_input(b.needed, rev, file_units) + ", outside its limits [" +
+                              format_input(jt.limits->x(), rev, file_units) + ", " +
+                              format_input(jt.limits->y(), rev, file_units) + "]");
       }
       pr.failures.push_back("does not assemble: " + a.message);
       rep.positions.push_back(std::move(pr));
@@ -821,8 +864,9 @@ ValidationReport validate_design_positions(const Model& model, const ValidateOpt
       pr.target_error = target_error(pr.q);
       pr.target_met = *pr.target_error <= t.tolerance;
       if (!pr.target_met)
-        pr.failures.push_back("target missed by " + fmt(*pr.target_error * 1e3) +
-                              " mm (tolerance " + fmt(t.tolerance * 1e3) + " mm)");
+        pr.failures.push_back(
+            "target missed by " + format_quantity(*pr.target_error, Dimension::length, file_units) +
+            " (tolerance " + format_quantity(t.tolerance, Dimension::length, file_units) + ")");
       if (t.angle) {
         // Angle targets: the body angle of the target point's body, within
         // tolerance / L (rad): the tolerance at the mechanism's size (docs/theory.md).
@@ -830,9 +874,10 @@ ValidationReport validate_design_positions(const Model& model, const ValidateOpt
         const double tol_angle = t.tolerance / L;
         if (*pr.target_angle_error > tol_angle) {
           pr.target_met = false;
-          pr.failures.push_back("target angle missed by " +
-                                fmt(*pr.target_angle_error * 180.0 / kPi) + " deg (tolerance " +
-                                fmt(tol_angle * 180.0 / kPi) + " deg)");
+          pr.failures.push_back(
+              "target angle missed by " +
+              format_quantity(*pr.target_angle_error, Dimension::angle, file_units) +
+              " (tolerance " + format_quantity(tol_angle, Dimension::angle, file_units) + ")");
         }
       }
     }
@@ -871,10 +916,11 @@ ValidationReport validate_design_positions(const Model& model, const ValidateOpt
       fb.transmission = transmission_angle(model, l, pr.q);
       fb.ok = std::min(fb.transmission, kPi - fb.transmission) >= opt.min_transmission;
       if (!fb.ok)
-        pr.failures.push_back("transmission angle " + fmt(fb.transmission * 180.0 / kPi) +
-                              " deg in loop " + fb.joints + " (needs " +
-                              fmt(opt.min_transmission * 180.0 / kPi) + "..." +
-                              fmt(180.0 - opt.min_transmission * 180.0 / kPi) + " deg)");
+        pr.failures.push_back(
+            "transmission angle " + format_quantity(fb.transmission, Dimension::angle, file_units) +
+            " in loop " + fb.joints + " (needs " +
+            format_quantity(opt.min_transmission, Dimension::angle, file_units) + " ... " +
+            format_quantity(kPi - opt.min_transmission, Dimension::angle, file_units) + ")");
       pr.four_bars.push_back(fb);
     }
     for (const SliderCrankLoop& l : slider_cranks) {
@@ -884,9 +930,10 @@ ValidationReport validate_design_positions(const Model& model, const ValidateOpt
       sc.pressure = pressure_angle(model, l, pr.q);
       sc.ok = sc.pressure <= kPi / 2.0 - opt.min_transmission;
       if (!sc.ok)
-        pr.failures.push_back("pressure angle " + fmt(sc.pressure * 180.0 / kPi) +
-                              " deg in slider-crank loop " + sc.joints + " (needs at most " +
-                              fmt(90.0 - opt.min_transmission * 180.0 / kPi) + " deg)");
+        pr.failures.push_back(
+            "pressure angle " + format_quantity(sc.pressure, Dimension::angle, file_units) +
+            " in slider-crank loop " + sc.joints + " (needs at most " +
+            format_quantity(kPi / 2.0 - opt.min_transmission, Dimension::angle, file_units) + ")");
       pr.slider_cranks.push_back(sc);
     }
   }
@@ -944,7 +991,7 @@ ValidationReport validate_design_positions(const Model& model, const ValidateOpt
         where[k] = 0.0;
         for (const SingularPoint& sp : circuits.back().singular)
           rep.singular_points.push_back(sp.kind + " of input '" + rep.input + "' at " +
-                                        format_input(sp.s, is_revolute(model, input)) +
+                                        format_input(sp.s, is_revolute(model, input), file_units) +
                                         " on circuit " + std::to_string(pr.circuit));
       }
       if (pr.circuit < 0) continue;

@@ -12,9 +12,11 @@
 
 #include "chart_solver.hpp"
 #include "integrator.hpp"
+#include "orthomech/analysis/assembly.hpp"
 #include "orthomech/analysis/mobility.hpp"
 #include "orthomech/constraints/joints.hpp"
 #include "orthomech/dynamics/equations.hpp"
+#include "orthomech/io/units.hpp"
 #include "orthomech/model/free_system.hpp"
 #include "orthomech/model/general_system.hpp"
 #include "orthomech/model/loads.hpp"
@@ -60,6 +62,15 @@ bool parse_integrator(const std::string& name, Integrator& out) {
     }
   return false;
 }
+
+namespace {
+
+// A time for a message, in the file's declared time unit (a model built in code: s).
+std::string time_text(const Model& model, double t) {
+  return format_quantity(t, Dimension::time, unit_system(model.units), 9);
+}
+
+}  // namespace
 
 namespace {
 
@@ -308,7 +319,7 @@ class Dynamics {
         compute_constraint_jacobian(model_, state_.q, ws_.constraints.Et);
         if (pr.status == SolveStatus::singular || !cs_.factor(ws_.constraints.Et))
           throw SingularEvaluation{"the chart's dependent block is singular at t = " +
-                                   std::to_string(t) + " (a change point: E loses rank)"};
+                                   time_text(model_, t) + " (a change point: E loses rank)"};
       }
       compute_F();
       chart_ready_ = false;
@@ -321,7 +332,7 @@ class Dynamics {
                                                ws_.constraints.Et, rotations_.data());
       if (!cs_.factor(ws_.constraints.Et))
         throw SingularEvaluation{"the chart's dependent block is singular at t = " +
-                                 std::to_string(t) + " (a change point: E loses rank)"};
+                                 time_text(model_, t) + " (a change point: E loses rank)"};
       compute_F();
       chart_q_ = state_.q;
       chart_ready_ = true;
@@ -382,7 +393,7 @@ class Dynamics {
       Gs_ = Es_ * ws_.free.A_diag.asDiagonal() * Es_.transpose();  // eq. (42)
       Gs_ldlt_.compute(Gs_);
       if (Gs_ldlt_.info() != Eigen::Success || Gs_ldlt_.vectorD().minCoeff() <= 0.0)
-        throw SingularEvaluation{"G = EᵀAE is singular at t = " + std::to_string(state_.t)};
+        throw SingularEvaluation{"G = EᵀAE is singular at t = " + time_text(model_, state_.t)};
       sparse_G_ = true;
       return;
     }
@@ -394,7 +405,7 @@ class Dynamics {
     constexpr double kSingularG = 1e-12;  // as in projection/primal.cpp
     if (G_llt_.info() != Eigen::Success ||
         !(Ld.minCoeff() * Ld.minCoeff() > kSingularG * Ld.maxCoeff() * Ld.maxCoeff()))
-      throw SingularEvaluation{"G = EᵀAE is singular at t = " + std::to_string(state_.t) +
+      throw SingularEvaluation{"G = EᵀAE is singular at t = " + time_text(model_, state_.t) +
                                " (redundant constraints or a change point)"};
   }
   void solve_G(const VecX& b, VecX& x) {
@@ -752,6 +763,22 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
   double spread_now = 0.0;  // the chart's spread after the last acceptance (dual form)
   double next_step_limit = std::numeric_limits<double>::infinity();
   problem.step_limit = [&] { return next_step_limit; };
+  std::string stop_message;
+  // Rows of f that are angles (joint components "angle", "ratio"): the residual by kind.
+  std::vector<char> angular_row(static_cast<size_t>(model.nc), 0);
+  for (const Joint& j : model.joints) {
+    const auto names = j.component_names();
+    for (int k = 0; k < j.rows(); ++k)
+      angular_row[static_cast<size_t>(j.row_offset + k)] =
+          is_angular_row(names[static_cast<size_t>(k)]) ? 1 : 0;
+  }
+  const auto note_residual = [&](const VecX& res) {
+    for (Eigen::Index r = 0; r < res.size(); ++r) {
+      double& to = angular_row[static_cast<size_t>(r)] ? result.max_residual_angle
+                                                       : result.max_residual_length;
+      to = std::max(to, std::abs(res(r)));
+    }
+  };
   problem.accept = [&](double t, VecX& y) {
     auto qy = y.head(nq);
     MatX& Et = dyn.ws_.constraints.Et;
@@ -761,9 +788,11 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
     q = qy;
     dyn.mass_at(q);
     compute_constraint_residual_and_jacobian(model, q, f, Et);
-    if (f.size())
+    if (f.size()) {
       result.max_constraint_residual =
           std::max(result.max_constraint_residual, f.cwiseAbs().maxCoeff());
+      note_residual(f);
+    }
     if (primal) {
       // Invariant J = Eᵀ A p, eq. (105), before the projection.
       dyn.state_.q = q;
@@ -798,7 +827,8 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
       chart_changed = true;
     }
     if (corr.status != SolveStatus::converged) {
-      stop_message = "position correction failed at t = " + std::to_string(t) + ": " + corr.message;
+      stop_message =
+          "position correction failed at t = " + time_text(model, t) + ": " + corr.message;
       return false;
     }
     qy = q;
@@ -841,7 +871,7 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
         const double uu = u_step.dot(dyn.ws_.free.M * u_step);
         const double jump = uu > 0.0 ? std::sqrt(du.dot(dyn.ws_.free.M * du) / uu) : 0.0;
         if (jump > kStepVelocityJump) {
-          stop_message = "the step to t = " + std::to_string(t) +
+          stop_message = "the step to t = " + time_text(model, t) +
                          " s left the motion's branch (its velocity changes by " +
                          std::to_string(jump) +
                          " relative when made admissible): a change point was crossed within "
@@ -1258,9 +1288,7 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
   };
 
   const auto change_point_name = [&](double t_star) {
-    char buf[96];
-    std::snprintf(buf, sizeof buf, "the change point at t ≈ %.9g s", t_star);
-    return std::string(buf);
+    return "the change point at t ≈ " + time_text(model, t_star);
   };
 
   std::string failure, first_passage_why;
@@ -1309,7 +1337,7 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
           failure = change_point_name(rq.t_star) +
                     " is ahead (E loses rank there, G = EᵀAE is singular): the primal form stops "
                     "at t = " +
-                    std::to_string(t_now) + " s; the dual form passes it";
+                    time_text(model, t_now) + "; the dual form passes it";
           break;
         }
         std::string why;
@@ -1326,7 +1354,7 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
             continue;
           }
           failure = "cannot pass " + change_point_name(rq.t_star) +
-                    " from t = " + std::to_string(t_from) + " s: " + why +
+                    " from t = " + time_text(model, t_from) + ": " + why +
                     (first_passage_why != why ? "; first attempt: " + first_passage_why : "");
           break;
         }
@@ -1386,6 +1414,11 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
   result.energy_initial = energy0;
   result.energy_final = result.final.kinetic + result.final.potential - result.final.work;
   result.max_constraint_residual = std::max(result.max_constraint_residual, result.final.residual);
+  if (model.nc) {
+    VecX f_final(model.nc);
+    compute_constraint_residual(model, result.final.q, f_final);
+    note_residual(f_final);
+  }
   if (!primal)
     for (const auto& smp : result.samples)
       result.max_velocity_residual = std::max(result.max_velocity_residual, smp.velocity_residual);

@@ -1,6 +1,7 @@
 #include "orthomech/io/cycle_output.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -11,6 +12,7 @@
 #include <stdexcept>
 
 #include "orthomech/analysis/cycle_metrics.hpp"
+#include "orthomech/io/noise.hpp"
 
 namespace orthomech {
 
@@ -28,6 +30,39 @@ std::string field(const std::string& s) {
   std::string out = "\"";
   for (const char c : s) out += c == '"' ? std::string("\"\"") : std::string(1, c);
   return out + "\"";
+}
+
+constexpr size_t kDimensions = static_cast<size_t>(Dimension::frequency) + 1;
+
+// Every cell of the CSV row of p after the limits-free columns, in CSV order, with its dimension
+// and SI value: emit(dimension, value, reported); `reported` false leaves the cell empty (an
+// unbridged change point; a component that diverges towards the change point a bridged position
+// is next to).
+template <class Emit>
+void for_each_cell(const Model& model, const CycleResult& result,
+                   const std::vector<ReactionMagnitude>& magnitudes, bool angular,
+                   const DrivenPointView& p, Emit&& emit) {
+  static const Dimension v_dim[] = {Dimension::velocity, Dimension::velocity,
+                                    Dimension::angular_velocity};
+  static const Dimension a_dim[] = {Dimension::acceleration, Dimension::acceleration,
+                                    Dimension::angular_acceleration};
+  std::vector<double> pose;
+  emit(angular ? Dimension::angle : Dimension::length, p.input, true);
+  emit(Dimension::time, p.time, true);
+  for (size_t i = 0; i < p.measures.size(); ++i)
+    emit(dimension_of(model.measures[i].unit), p.measures[i], true);
+  const std::vector<PositionColumn> columns = position_columns(model);
+  compute_output_positions(model, VecX(p.q), pose);
+  for (size_t i = 0; i < pose.size(); ++i) emit(columns[i].dimension, pose[i], true);
+  for (const Body& b : model.bodies) {
+    for (int i = 0; i < b.nu(); ++i) emit(v_dim[i], p.u(b.u_offset + i), true);
+    for (int i = 0; i < b.nu(); ++i) emit(a_dim[i], p.udot(b.u_offset + i), true);
+  }
+  emit(angular ? Dimension::moment : Dimension::force, p.drive, drive_reported(p));
+  for (size_t i = 0; i < p.reactions.size(); ++i)
+    emit(dimension_of(result.components[i].unit), p.reactions[i], component_reported(result, p, i));
+  for (const ReactionMagnitude& m : magnitudes)
+    emit(dimension_of(m.unit), magnitude_at(p, m), magnitude_reported(result, p, m));
 }
 
 // A gnuplot single-quoted string.
@@ -56,6 +91,16 @@ void write_file_atomically(const std::filesystem::path& file, const std::string&
     std::filesystem::remove(tmp, ec);
     throw std::runtime_error("cannot write " + file.string() + ": " + ec.message());
   }
+}
+
+NoiseFloor cycle_noise_floor(const Model& model, const CycleResult& result,
+                             const std::vector<ReactionMagnitude>& magnitudes, bool angular) {
+  NoiseFloor noise;
+  for (const DrivenPointView& p : result.points)
+    for_each_cell(model, result, magnitudes, angular, p, [&](Dimension d, double v, bool reported) {
+      if (reported) noise.see(d, v);
+    });
+  return noise;
 }
 
 std::vector<PositionColumn> position_columns(const Model& model) {
@@ -105,7 +150,7 @@ void compute_output_positions(const Model& model, const VecX& q, std::vector<dou
 CycleColumns write_cycle_csv(const std::filesystem::path& file, const Model& model,
                              const CycleResult& result,
                              const std::vector<ReactionMagnitude>& magnitudes, bool angular,
-                             const UnitSystem& units) {
+                             const UnitSystem& units, const std::vector<ExtraColumn>& extra) {
   CycleColumns cols;
   std::ostringstream out;
   int col = 0;
@@ -157,39 +202,35 @@ CycleColumns write_cycle_csv(const std::filesystem::path& file, const Model& mod
     cols.magnitudes.push_back(c);
     (qm == Dimension::force ? cols.forces : cols.moments).push_back(c);
   }
-  out << ",limits\n";
-  std::vector<double> pose;
-  for (const DrivenPointView& p : result.points) {
-    out << number(input_unit.from_si(p.input)) << ',' << number(time_unit.from_si(p.time));
-    for (size_t i = 0; i < p.measures.size(); ++i)
-      out << ',' << number(measure_units[i].from_si(p.measures[i]));
-    compute_output_positions(model, VecX(p.q), pose);
-    for (size_t i = 0; i < pose.size(); ++i)
-      out << ',' << number(position_units[i].from_si(pose[i]));
-    for (const Body& b : model.bodies) {
-      for (int i = 0; i < b.nu(); ++i) out << ',' << number(v_unit[i].from_si(p.u(b.u_offset + i)));
-      for (int i = 0; i < b.nu(); ++i)
-        out << ',' << number(a_unit[i].from_si(p.udot(b.u_offset + i)));
-    }
-    // Empty cells where a value is not reported (an unbridged change point; a component that
-    // diverges towards the change point a bridged position is next to).
-    out << ',';
-    if (drive_reported(p)) out << number(drive_unit.from_si(p.drive));
-    for (size_t i = 0; i < p.reactions.size(); ++i) {
-      out << ',';
-      if (component_reported(result, p, i))
-        out << number(component_units[i].from_si(p.reactions[i]));
-    }
-    for (size_t i = 0; i < magnitudes.size(); ++i) {
-      out << ',';
-      if (magnitude_reported(result, p, magnitudes[i]))
-        out << number(magnitude_units[i].from_si(magnitude_at(p, magnitudes[i])));
-    }
+  out << ",limits";
+  std::vector<OutputUnit> extra_units;
+  for (const ExtraColumn& c : extra) {
+    if (c.values.size() != result.points.size())
+      throw std::invalid_argument("write_cycle_csv: column " + c.name + " has the wrong size");
+    extra_units.push_back(output_unit(c.dimension, units));
+    out << ',' << field(c.name + " [" + extra_units.back().name + "]");
+  }
+  out << '\n';
+  const NoiseFloor noise = cycle_noise_floor(model, result, magnitudes, angular);
+  std::array<OutputUnit, kDimensions> unit_of;
+  for (size_t d = 0; d < kDimensions; ++d)
+    unit_of[d] = output_unit(static_cast<Dimension>(d), units);
+  for (size_t row = 0; row < result.points.size(); ++row) {
+    const DrivenPointView p = result.points[row];
+    bool first = true;
+    for_each_cell(model, result, magnitudes, angular, p, [&](Dimension d, double v, bool reported) {
+      if (!first) out << ',';
+      first = false;
+      if (reported) out << number(unit_of[static_cast<size_t>(d)].from_si(noise.clean(d, v)));
+    });
     std::string outside;
     for (size_t j = 0; j < model.joints.size(); ++j)
       if (outside_limits(model, static_cast<int>(j), VecX(p.q)))
         outside += (outside.empty() ? "" : " ") + model.joints[j].name;
-    out << ',' << field(outside) << '\n';
+    out << ',' << field(outside);
+    for (size_t i = 0; i < extra.size(); ++i)
+      out << ',' << number(extra_units[i].from_si(extra[i].values[row]));
+    out << '\n';
   }
   write_file_atomically(file, out.str());
   return cols;

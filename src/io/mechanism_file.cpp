@@ -11,6 +11,7 @@
 #include <set>
 #include <sstream>
 
+#include "expressions.hpp"
 #include "orthomech/constraints/joints.hpp"
 #include "orthomech/io/units.hpp"
 #include "orthomech/model/free_system.hpp"
@@ -25,6 +26,16 @@ constexpr size_t kMaxBodies = 1000;      // the dense rank of E (info) stays wit
 constexpr size_t kMaxCoefficients = 16;  // a polynomial driver of degree 15 at most
 constexpr size_t kMaxListItems = 10000;  // joints, loads, measures, drivers, design positions
 
+// Expressions longer than this are refused (a number is at most kMaxNumberLength characters).
+constexpr size_t kMaxExpressionLength = 256;
+
+// The nodes that one `--set PATH=VALUE` wrote into the document, and the label that names it
+// in messages ("crank.yaml: --set loads.spring.stiffness=abc").
+struct SetNodes {
+  std::string label;
+  std::vector<YAML::Node> nodes;
+};
+
 struct Units {
   double length = 1.0, angle = 1.0, mass = 1.0, time = 1.0, force = 1.0;
 };
@@ -32,12 +43,16 @@ struct Units {
 // Reads one file; `file` names it in every message.
 class Reader {
  public:
-  explicit Reader(std::string file) : file_(std::move(file)) {}
+  explicit Reader(std::string file, std::vector<SetNodes> sets = {})
+      : file_(std::move(file)), sets_(std::move(sets)) {}
 
   Model read(const YAML::Node& root);
 
  private:
   std::string file_;
+  std::vector<SetNodes> sets_;
+  detail::Expressions expressions_;
+  bool in_parameters_ = false;  // reading `parameters:` (an expression may use those above)
   Units units_;
   Model model_;
   std::vector<std::pair<std::string, Vec2>> ground_points_;
@@ -45,7 +60,11 @@ class Reader {
   // ---- error helpers --------------------------------------------------------------------------
   // A node without a place (the empty document, a key that is missing) is a whole-file matter:
   // reported at 1:1.
+  // A node that a `--set` wrote is reported at that `--set`.
   [[nodiscard]] SourceLocation loc(const YAML::Node& node) const {
+    for (const SetNodes& set : sets_)
+      for (const YAML::Node& written : set.nodes)
+        if (written.is(node)) return {set.label, 0, 0};
     const YAML::Mark m = node.Mark();
     if (m.is_null()) return {file_, 1, 1};
     return {file_, m.line + 1, m.column + 1};
@@ -81,7 +100,8 @@ class Reader {
     return child;
   }
   // A number: a plain (unquoted, untagged or !!int/!!float-tagged) YAML scalar of at most
-  // kMaxNumberLength characters, finite and within the limits of `quantity` after scaling to SI.
+  // kMaxNumberLength characters, or an expression of the file's parameters (docs/file-format.md
+  // "Parameters"), finite and within the limits of `quantity` after scaling to SI.
   double number(const YAML::Node& node, const std::string& element, const std::string& field,
                 double scale = 1.0, Quantity quantity = Quantity::general) const {
     if (!node.IsScalar()) fail(node, element, "field '" + field + "' must be a number");
@@ -90,16 +110,14 @@ class Reader {
       fail(node, element,
            "field '" + field + "' must be a number, not a quoted or tagged string (got '" +
                clip(node.Scalar()) + "')");
-    if (node.Scalar().size() > kMaxNumberLength)
+    const bool expressions = !expressions_.parameters().empty();
+    const size_t longest = expressions ? kMaxExpressionLength : kMaxNumberLength;
+    if (node.Scalar().size() > longest)
       fail(node, element,
-           "field '" + field + "' must be a number of at most " + std::to_string(kMaxNumberLength) +
-               " characters");
+           "field '" + field + "' must be a " + (expressions ? "number or expression" : "number") +
+               " of at most " + std::to_string(longest) + " characters");
     double v = 0.0;
-    try {
-      v = node.as<double>();
-    } catch (const YAML::Exception&) {
-      fail(node, element, "field '" + field + "' must be a number, got '" + node.Scalar() + "'");
-    }
+    if (!YAML::convert<double>::decode(node, v)) v = expression(node, element, field);
     if (!std::isfinite(v) || !std::isfinite(v * scale))
       fail(node, element, "field '" + field + "' must be finite, got '" + node.Scalar() + "'");
     if (quantity == Quantity::mass || quantity == Quantity::inertia) {
@@ -112,6 +130,29 @@ class Reader {
     if (!problem.empty())
       fail(node, element, "field '" + field + "' " + problem + ", got '" + node.Scalar() + "'");
     return v * scale;
+  }
+  // A field that is not a plain number: an expression of the parameters, or an error naming the
+  // field ("must be a number, got 'heavy'" when the file declares no parameters).
+  double expression(const YAML::Node& node, const std::string& element,
+                    const std::string& field) const {
+    const std::string& text = node.Scalar();
+    const bool word = !text.empty() && std::all_of(text.begin(), text.end(), [](char c) {
+      return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '.' || c == '-' ||
+             c == '+';
+    });
+    if (expressions_.parameters().empty() && word && !in_parameters_)
+      fail(node, element, "field '" + field + "' must be a number, got '" + clip(text) + "'");
+    try {
+      return expressions_.evaluate(text);
+    } catch (const detail::UnknownName& e) {
+      if (in_parameters_)
+        fail(node, element,
+             "'" + e.name + "' is not a parameter declared above this one (a parameter may use " +
+                 "only those before it)");
+      fail(node, element, "field '" + field + "': " + e.what());
+    } catch (const std::invalid_argument& e) {
+      fail(node, element, "field '" + field + "': " + e.what());
+    }
   }
   // At most 40 characters of a text, for a message.
   static std::string clip(const std::string& text) {
@@ -277,9 +318,33 @@ class Reader {
     return body == kGround ? 0.0 : model_.bodies[static_cast<size_t>(body)].design_pose.z();
   }
   double speed_value(const YAML::Node& node, const std::string& element, bool angular) const;
+  double speed_text(const std::string& text, bool angular) const;
+  void read_parameters(const YAML::Node& node);
   Table table(const YAML::Node& node, const std::string& element) const;
   ActiveWhile active_while(const YAML::Node& node, const std::string& element) const;
 };
+
+// ---- parameters --------------------------------------------------------------------------------
+// parameters: {NAME: VALUE, …}: named design variables in the file's units; a value is a number or
+// an expression of the parameters above it. Any number of the file may be an expression of them.
+void Reader::read_parameters(const YAML::Node& node) {
+  if (!node || node.IsNull()) return;
+  if (!node.IsMap()) fail(node, "parameters", "expected a mapping name: value");
+  if (node.size() > kMaxListItems)
+    fail(node, "parameters", "at most " + std::to_string(kMaxListItems) + " parameters");
+  for (const auto& kv : node) {
+    const std::string name = scalar(kv.first, "parameters", "a parameter name");
+    const std::string element = "parameter '" + name + "'";
+    in_parameters_ = true;
+    const double value = number(kv.second, element, "value");
+    in_parameters_ = false;
+    try {
+      expressions_.define(name, value);
+    } catch (const std::invalid_argument& e) {
+      fail(kv.first, "parameters", e.what());
+    }
+  }
+}
 
 // ---- units -------------------------------------------------------------------------------------
 void Reader::read_units(const YAML::Node& node) {
@@ -736,11 +801,25 @@ void Reader::read_measures(const YAML::Node& root) {
   }
 }
 
+// A speed or rate: a number (the file's units), a number with its unit ('300 rpm'), or an
+// expression of the parameters (the file's units).
+double Reader::speed_text(const std::string& text, bool angular) const {
+  const double bare = (angular ? units_.angle : units_.length) / units_.time;
+  try {
+    return parse_speed(text, angular, bare);
+  } catch (const std::invalid_argument&) {
+    if (expressions_.parameters().empty() || text.size() > kMaxExpressionLength) throw;
+    const double v = expressions_.evaluate(text) * bare;
+    if (!std::isfinite(v)) throw std::invalid_argument("'" + text + "' is not finite");
+    if (v == 0.0) throw std::invalid_argument("the speed must not be zero");
+    return v;
+  }
+}
+
 double Reader::speed_value(const YAML::Node& node, const std::string& element, bool angular) const {
   if (!node.IsScalar()) fail(node, element, "speed must be a number or a string like '300 rpm'");
   try {
-    return parse_speed(node.Scalar(), angular,
-                       (angular ? units_.angle : units_.length) / units_.time);
+    return speed_text(node.Scalar(), angular);
   } catch (const std::invalid_argument& e) {
     fail(node, element, e.what());
   }
@@ -909,8 +988,7 @@ void Reader::read_initial(const YAML::Node& node) {
     InitialRateSpec spec;
     spec.measure = m;
     try {
-      spec.rate = parse_speed(kv.second.Scalar(), angular,
-                              (angular ? units_.angle : units_.length) / units_.time);
+      spec.rate = speed_text(kv.second.Scalar(), angular);
     } catch (const std::invalid_argument& e) {
       // parse_speed speaks of a joint's speed; here it is a measure's rate.
       std::string message = e.what();
@@ -938,7 +1016,8 @@ Model Reader::read(const YAML::Node& root) {
     fail(root, "file", "expected a mapping at the top level (orthomech: 1, bodies: ...)");
   expect_map(root, "file",
              {"orthomech", "name", "description", "units", "ground", "bodies", "joints", "loads",
-              "measures", "drivers", "design_positions", "analysis", "nonholonomic", "initial"});
+              "measures", "drivers", "design_positions", "analysis", "nonholonomic", "initial",
+              "parameters"});
   const YAML::Node version = require(root, "orthomech", "file");
   if (version.IsScalar() && version.Tag() != "?")
     fail(version, "file",
@@ -962,6 +1041,7 @@ Model Reader::read(const YAML::Node& root) {
     model_.name = file_.substr(slash == std::string::npos ? 0 : slash + 1);
   }
   model_.description = text_field("description");
+  read_parameters(root["parameters"]);
   read_units(root["units"]);
   read_ground(root["ground"]);
   read_bodies(root);
@@ -1010,7 +1090,119 @@ SourceLocation unclosed_bracket(const std::string& text, const std::string& orig
   return open.empty() ? SourceLocation{origin, 0, 0} : open.back().second;
 }
 
-Model parse_text(const std::string& text, const std::string& origin) {
+// ---- --set PATH=VALUE
+// ------------------------------------------------------------------------------ Every node of
+// `value` (the value and all it holds), to name the `--set` in messages.
+void collect_nodes(const YAML::Node& value, std::vector<YAML::Node>& out) {
+  out.push_back(value);
+  if (value.IsSequence())
+    for (const auto& item : value) collect_nodes(item, out);
+  else if (value.IsMap())
+    for (const auto& kv : value) collect_nodes(kv.second, out);
+}
+
+std::string names_in(const YAML::Node& node) {
+  std::string names;
+  const auto add = [&](const std::string& name) { names += (names.empty() ? "" : ", ") + name; };
+  if (node.IsMap()) {
+    for (const auto& kv : node)
+      if (kv.first.IsScalar()) add(kv.first.Scalar());
+  } else if (node.IsSequence()) {
+    for (const auto& item : node)
+      if (item.IsMap() && item["name"] && item["name"].IsScalar()) add(item["name"].Scalar());
+  }
+  return names.empty() ? std::string("none") : names;
+}
+
+// The item of a list named `segment` (its `name`), or at index `segment`; a null node if none.
+YAML::Node list_item(const YAML::Node& list, const std::string& segment) {
+  for (const auto& item : list)
+    if (item.IsMap() && item["name"] && item["name"].IsScalar() && item["name"].Scalar() == segment)
+      return item;
+  if (!segment.empty() && segment.size() <= 6 &&
+      std::all_of(segment.begin(), segment.end(), [](char c) { return c >= '0' && c <= '9'; })) {
+    const size_t index = std::stoul(segment);
+    if (index < list.size()) return list[index];
+  }
+  return YAML::Node(YAML::NodeType::Undefined);
+}
+
+// Writes one change into the document (a path of map keys and list item names or indices; a
+// one-segment path names a parameter when the file declares it). A new key may be added at the
+// last segment only, so that a typo in the middle of a path is an error, not a silent no-op.
+//
+// With `read` given, nothing is written: the text of the single value at the path goes to *read.
+SetNodes apply_change(YAML::Node& root, const FileChange& change, const std::string& origin,
+                      std::string* read = nullptr) {
+  SetNodes written{
+      origin + (read ? ": " + change.path : ": --set " + change.path + "=" + change.value), {}};
+  const auto fail = [&](const std::string& element, const std::string& message) {
+    throw InputError({written.label, 0, 0}, element, message);
+  };
+  YAML::Node value;
+  try {
+    if (!read) value = YAML::Load(change.value);
+  } catch (const YAML::Exception& e) {
+    fail(change.path, "the value is not valid YAML: " + e.msg);
+  }
+  if (!read && (!value.IsDefined() || value.IsNull())) fail(change.path, "the value is empty");
+  if (!root.IsMap()) fail("file", "the file holds no mapping to change");
+
+  std::vector<std::string> segments;
+  std::stringstream path(change.path);
+  for (std::string segment; std::getline(path, segment, '.');) segments.push_back(segment);
+  if (segments.empty() || change.path.back() == '.' ||
+      std::any_of(segments.begin(), segments.end(), [](const auto& g) { return g.empty(); }))
+    fail(change.path, "the path has an empty segment (write it as bodies.crank.mass)");
+  const YAML::Node& top = root;
+  if (segments.size() == 1 && !top[segments[0]] && top["parameters"] && top["parameters"].IsMap() &&
+      top["parameters"][segments[0]])
+    segments.insert(segments.begin(), "parameters");
+
+  YAML::Node node = root;
+  std::string at;
+  for (size_t i = 0; i < segments.size(); ++i) {
+    const std::string& segment = segments[i];
+    const bool last = i + 1 == segments.size();
+    const std::string here = at.empty() ? segment : at + "." + segment;
+    const YAML::Node& current = node;
+    if (!current.IsMap() && !current.IsSequence())
+      fail(here, "'" + at + "' is a single value: it has no '" + segment + "'");
+    YAML::Node child = current.IsMap() ? current[segment] : list_item(current, segment);
+    if (current.IsMap()) {
+      if (!child && last && !read) {
+        node[segment] = value;
+        for (const auto& kv : current)  // the new key too: the reader checks it like any key
+          if (kv.first.IsScalar() && kv.first.Scalar() == segment)
+            written.nodes.push_back(kv.first);
+        collect_nodes(value, written.nodes);
+        return written;
+      }
+      if (!child)
+        fail(here, "no key '" + segment + "' in " + (at.empty() ? "the file" : "'" + at + "'") +
+                       " (keys: " + names_in(current) + ")");
+    } else if (!child) {
+      fail(here,
+           "no item named '" + segment + "' in '" + at + "' (names: " + names_in(current) + ")");
+    }
+    if (last && read) {
+      if (!child.IsScalar()) fail(here, "'" + here + "' is not a single value");
+      *read = child.Scalar();
+      return written;
+    }
+    if (last) {
+      child = value;
+      collect_nodes(child, written.nodes);
+      return written;
+    }
+    node.reset(child);
+    at = here;
+  }
+  return written;
+}
+
+Model parse_text(const std::string& text, const std::string& origin,
+                 const std::vector<FileChange>& changes) {
   YAML::Node root;
   try {
     root = YAML::Load(text);
@@ -1022,7 +1214,9 @@ Model parse_text(const std::string& text, const std::string& origin) {
     throw InputError({origin, e.mark.line + 1, e.mark.column + 1}, "YAML", e.msg);
   }
   try {
-    return Reader(origin).read(root);
+    std::vector<SetNodes> sets;
+    for (const FileChange& change : changes) sets.push_back(apply_change(root, change, origin));
+    return Reader(origin, std::move(sets)).read(root);
   } catch (const YAML::Exception& e) {  // anything yaml-cpp still throws: report, do not crash
     throw InputError(
         {origin, e.mark.is_null() ? 1 : e.mark.line + 1, e.mark.is_null() ? 1 : e.mark.column + 1},
@@ -1032,7 +1226,28 @@ Model parse_text(const std::string& text, const std::string& origin) {
 
 }  // namespace
 
-Model load_mechanism(const std::string& path) {
+std::string file_value(const std::string& text, const std::string& origin,
+                       const std::string& path) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    throw InputError({origin, e.mark.line + 1, e.mark.column + 1}, "YAML", e.msg);
+  }
+  std::string value;
+  (void)apply_change(root, {path, ""}, origin, &value);
+  return value;
+}
+
+FileChange parse_file_change(const std::string& text) {
+  const auto eq = text.find('=');
+  if (eq == std::string::npos || eq == 0 || eq + 1 == text.size())
+    throw std::invalid_argument("'" + text +
+                                "' must be PATH=VALUE (for example loads.spring.stiffness=4000)");
+  return {text.substr(0, eq), text.substr(eq + 1)};
+}
+
+Model load_mechanism(const std::string& path, const std::vector<FileChange>& changes) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec))
     throw InputError({path, 0, 0}, "file",
@@ -1042,11 +1257,12 @@ Model load_mechanism(const std::string& path) {
   std::ostringstream text;
   text << in.rdbuf();
   if (!in && !in.eof()) throw InputError({path, 0, 0}, "file", "cannot open the file: read error");
-  return parse_text(text.str(), path);
+  return parse_text(text.str(), path, changes);
 }
 
-Model parse_mechanism(const std::string& text, const std::string& origin) {
-  return parse_text(text, origin);
+Model parse_mechanism(const std::string& text, const std::string& origin,
+                      const std::vector<FileChange>& changes) {
+  return parse_text(text, origin, changes);
 }
 
 }  // namespace orthomech

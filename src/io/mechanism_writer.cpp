@@ -9,6 +9,8 @@
 #include <cerrno>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <map>
@@ -18,6 +20,7 @@
 
 #include "orthomech/error.hpp"
 #include "orthomech/io/mechanism_file.hpp"
+#include "orthomech/io/noise.hpp"
 
 namespace orthomech {
 
@@ -41,9 +44,14 @@ double unit_factor(const YAML::Node& units, const std::string& key, const std::s
   throw InputError({origin, 0, 0}, "units", "unknown " + key + " unit '" + u + "'");
 }
 
-std::string shortest_exact(double v) {
+// A pose number as written: rounded to 15 significant digits (the 16th and 17th of an assembled
+// pose are rounding noise: 29.999999999999996 is written 30), in its shortest form.
+std::string written_number(double v) {
+  char rounded[32];
+  std::snprintf(rounded, sizeof rounded, "%.15g", v);
+  const double w = std::strtod(rounded, nullptr);
   char buf[64];
-  const auto r = std::to_chars(buf, buf + sizeof buf, v);  // shortest round-trip form
+  const auto r = std::to_chars(buf, buf + sizeof buf, w == 0.0 ? 0.0 : w);  // never "-0"
   return std::string(buf, r.ptr);
 }
 
@@ -70,9 +78,10 @@ void count_uses(const YAML::Node& node, std::map<int, int>& uses, int depth = 0)
 
 // The written text must re-read as the model with the new design poses: the same elements, the
 // same masses, inertias, centres of mass and points (bit for bit: their text is unchanged), and
-// every body frame within kRoundTrip of the one asked for. The written numbers are the shortest
-// text that reads back as the value in file units; reading multiplies by the unit factor once:
-// a few ulps, far below 1e-12 (m or rad) for the limits of docs/file-format.md (|x| <= 1e6).
+// every body frame within kRoundTrip of the one asked for. The written numbers are the value in
+// file units rounded to 15 significant digits (5e-16 relative) and rounding noise as 0 (2.6e-13
+// of the mechanism's size, 1.8e-13 rad); reading multiplies by the unit factor once: a few ulps.
+// All of it far below 1e-12 (m or rad) for the limits of docs/file-format.md (|x| <= 1e6).
 constexpr double kRoundTrip = 1e-12;
 
 void verify_written(const std::string& written, const std::string& origin, const Model& model,
@@ -136,6 +145,15 @@ std::string replace_design_poses(const std::string& file_text, const std::string
   const YAML::Node bodies = root["bodies"];
   if (!bodies || !bodies.IsSequence() || bodies.size() != model.bodies.size())
     throw InputError({origin, 0, 0}, "file", "the bodies in the file do not match the model");
+  // Rounding noise of the assembled pose (a slider's y on a horizontal guide, 1e-18 m; the frame
+  // origin of a crank turning about it) is written as 0 (io/noise.hpp): lengths against the
+  // largest coordinate of the mechanism, angles against half a turn.
+  NoiseFloor noise;
+  for (const Body& body : model.bodies) {
+    noise.see(Dimension::length, q(body.q_offset));
+    noise.see(Dimension::length, q(body.q_offset + 1));
+    noise.see(Dimension::length, body.com_local.norm());
+  }
   std::vector<Edit> edits;
   for (size_t b = 0; b < model.bodies.size(); ++b) {
     const Body& body = model.bodies[b];
@@ -149,9 +167,10 @@ std::string replace_design_poses(const std::string& file_text, const std::string
     const double c = std::cos(phi), s = std::sin(phi);
     const Vec2 com_world(c * body.com_local.x() - s * body.com_local.y(),
                          s * body.com_local.x() + c * body.com_local.y());
-    const Vec2 r(q(body.q_offset) - com_world.x(), q(body.q_offset + 1) - com_world.y());
+    const Vec2 r(noise.clean(Dimension::length, q(body.q_offset) - com_world.x()),
+                 noise.clean(Dimension::length, q(body.q_offset + 1) - com_world.y()));
     std::vector<double> values = {r.x() / length, r.y() / length};
-    if (body.kind == BodyKind::rigid) values.push_back(phi / angle);
+    if (body.kind == BodyKind::rigid) values.push_back(noise.clean(Dimension::angle, phi) / angle);
     frames.emplace_back(r.x(), r.y(), phi);
     if (pose.size() != values.size())
       throw InputError({origin, 0, 0}, "body '" + body.name + "'", "pose has the wrong size");
@@ -170,7 +189,7 @@ std::string replace_design_poses(const std::string& file_text, const std::string
                          "--write edits numbers in place and would change the other uses too: "
                          "write this pose out in full");
       const size_t begin = static_cast<size_t>(m.pos);
-      edits.push_back({begin, begin + scalar.size(), shortest_exact(values[k])});
+      edits.push_back({begin, begin + scalar.size(), written_number(values[k])});
     }
   }
   std::sort(edits.begin(), edits.end(),

@@ -808,10 +808,9 @@ void release_render_caches() {
   FcFini();
 }
 
-TraceResult trace_points(const Model& model, const std::vector<std::string>& points, int driver) {
-  TraceResult result;
+TracePoints resolve_trace_points(const Model& model, const std::vector<std::string>& points) {
+  TracePoints result;
   // The points: "body.point" of a moving body (PointRef: s from the centre of mass).
-  std::vector<PointRef> refs;
   for (const std::string& name : points) {
     const auto dot = name.find('.');
     const int b = dot == std::string::npos ? -2 : model.find_body(name.substr(0, dot));
@@ -819,6 +818,7 @@ TraceResult trace_points(const Model& model, const std::vector<std::string>& poi
     if (b < 0) {
       result.status = TraceStatus::bad_request;
       result.message = "--trace: '" + name + "' is not body.point of a moving body";
+      result.points.clear();
       return result;
     }
     const Body& body = model.bodies[static_cast<size_t>(b)];
@@ -830,13 +830,39 @@ TraceResult trace_points(const Model& model, const std::vector<std::string>& poi
       result.status = TraceStatus::bad_request;
       result.message = "--trace: body '" + body.name + "' has no point '" + point + "' (it has " +
                        (known.empty() ? std::string("origin") : known) + ")";
+      result.points.clear();
       return result;
     }
     PointRef ref;
     ref.body = b;
     ref.s = (it == body.points.end() ? Vec2::Zero() : it->second) - body.com_local;
     ref.label = name;
-    refs.push_back(ref);
+    result.points.push_back(ref);
+  }
+  return result;
+}
+
+std::vector<PointTrace> trace_paths(const Model& model, const std::vector<PointRef>& points,
+                                    const std::vector<VecX>& q, const std::vector<double>& input) {
+  std::vector<PointTrace> traces;
+  for (const PointRef& ref : points) {
+    PointTrace t;
+    t.point = ref.label;
+    t.input = input;
+    t.path.reserve(q.size());
+    for (const VecX& qk : q) t.path.push_back(point_kinematics(model, ref, qk, nullptr).r);
+    traces.push_back(std::move(t));
+  }
+  return traces;
+}
+
+TraceResult trace_points(const Model& model, const std::vector<std::string>& points, int driver) {
+  TraceResult result;
+  const TracePoints refs = resolve_trace_points(model, points);
+  if (refs.status == TraceStatus::bad_request) {
+    result.status = refs.status;
+    result.message = refs.message;
+    return result;
   }
   const CyclePositions sweep = sweep_positions(model, driver);
   if (sweep.status == TraceStatus::failed || sweep.status == TraceStatus::bad_request) {
@@ -844,13 +870,7 @@ TraceResult trace_points(const Model& model, const std::vector<std::string>& poi
     result.message = sweep.message;
     return result;
   }
-  for (const PointRef& ref : refs) {
-    PointTrace t;
-    t.point = ref.label;
-    t.input = sweep.input;
-    for (const VecX& q : sweep.q) t.path.push_back(point_kinematics(model, ref, q, nullptr).r);
-    result.traces.push_back(std::move(t));
-  }
+  result.traces = trace_paths(model, refs.points, sweep.q, sweep.input);
   result.status = sweep.status;
   result.message = sweep.message;
   return result;
@@ -905,17 +925,23 @@ static std::string prefix_ids(const std::string& svg, const std::string& prefix)
   return out;
 }
 
-std::string animated_svg(const Model& model, const std::vector<VecX>& frames,
-                         const RenderOptions& options, double duration) {
-  if (frames.empty()) throw std::invalid_argument("animated_svg: no frames");
-  // One view for every frame: fitted to the primitives of all of them.
+ViewTransform animation_view(const Model& model, const std::vector<VecX>& frames,
+                             const RenderOptions& options) {
+  // Fitted to the primitives of every frame (each with the whole traces).
   std::vector<Primitive> all;
   for (const VecX& q : frames) {
     const Scene scene = build_scene(model, q, options);
     for (const Primitive& p : scene.primitives) all.push_back(p);
   }
+  return fit_view(all, options, 100.0 / length_unit_si(model.units.length));
+}
+
+std::string animated_svg(const Model& model, const std::vector<VecX>& frames,
+                         const RenderOptions& options, double duration) {
+  if (frames.empty()) throw std::invalid_argument("animated_svg: no frames");
+  // One view for every frame.
   RenderOptions fixed = options;
-  fixed.view = fit_view(all, options, 100.0 / length_unit_si(model.units.length));
+  fixed.view = animation_view(model, frames, options);
   const size_t n = frames.size();
   char head[256];
   std::snprintf(head, sizeof head,
@@ -925,6 +951,11 @@ std::string animated_svg(const Model& model, const std::vector<VecX>& frames,
                 options.width, options.height, options.width, options.height);
   std::string out = head;
   for (size_t k = 0; k < n; ++k) {
+    // The traces drawn along: up to this frame's position.
+    for (size_t t = 0; t < fixed.traces.size(); ++t)
+      if (options.traces[t].path.size() == n)
+        fixed.traces[t].path.assign(options.traces[t].path.begin(),
+                                    options.traces[t].path.begin() + static_cast<long>(k) + 1);
     const std::string svg = draw_image(build_scene(model, frames[k], fixed), ImageFormat::svg);
     // The frame's content: between the end of the <svg …> start tag and </svg>.
     const size_t open = svg.find("<svg");
@@ -1009,7 +1040,8 @@ PoseResult assemble_pose(const Model& model, const RenderPose& pose) {
       return result;
     }
     options.locks.push_back({result.driver, value});
-    where = "joint '" + joint.name + "' at " + format_input(value, angular);
+    where =
+        "joint '" + joint.name + "' at " + format_input(value, angular, unit_system(model.units));
   }
   const AssemblyResult res = assemble(model, model.design_q(), options);
   if (res.status != AssemblyStatus::assembled && res.status != AssemblyStatus::unchanged) {

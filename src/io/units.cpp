@@ -167,8 +167,8 @@ OutputUnit output_unit(Dimension q, const UnitSystem& u) {
       return {F + "*" + L + "/" + T, u.force_si * u.length_si / u.time_si};
     case Dimension::inertia:
       return {u.mass + "*" + L + "^2", u.mass_si * u.length_si * u.length_si};
-    case Dimension::frequency:
-      return {"1/" + T, 1.0 / u.time_si};
+    case Dimension::frequency:  // Hz when the time unit is the second
+      return {T == "s" ? std::string("Hz") : "1/" + T, 1.0 / u.time_si};
   }
   return {"1", 1.0};
 }
@@ -203,11 +203,12 @@ std::string format_input(double value, bool angular, const UnitSystem& units) {
   return buf;
 }
 
-std::string format_input(double value, bool angular) {
-  double v = std::round((angular ? value * 180.0 / std::numbers::pi : value * 1e3) * 1e6) / 1e6;
+std::string format_quantity(double value, Dimension q, const UnitSystem& units, int precision) {
+  const OutputUnit unit = output_unit(q, units);
+  double v = unit.from_si(value);
   if (v == 0.0) v = 0.0;  // no "-0"
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.10g %s", v, angular ? "deg" : "mm");
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*g %s", precision, v, unit.name.c_str());
   return buf;
 }
 

@@ -63,6 +63,9 @@ struct AssemblyResult {
   std::string solver_status;  // Ipopt's return status ("" when Ipopt was not needed)
   int iterations = 0;         // Ipopt iterations (+ Newton polish steps)
   double residual = 0.0;      // max |f_k| and lock violation at q (m, rad)
+  // The same split by kind: the length rows of f and the locks/limits of prismatic joints (m);
+  // the angular rows (angle, gear ratio) and the locks/limits of revolutes (rad).
+  double residual_length = 0.0, residual_angle = 0.0;
   VecX q;  // assembled position (the guess when unchanged; the best least-squares pose when
            // cannot_close; the solver's last iterate otherwise). bodies/joints/residual are at q.
   double distance = 0.0;  // √((q − q₀)ᵀ W (q − q₀)), the mass-metric distance (√kg·m)
@@ -79,6 +82,17 @@ struct AssemblyResult {
 // solver callback (a bug) is rethrown after the solve.
 [[nodiscard]] AssemblyResult assemble(const Model& model, const VecX& q0,
                                       const AssemblyOptions& options = {});
+
+// Max |f_k| over the length rows of f (m) and over its angular rows (rad, joint components
+// "angle" and "ratio"), with the violations of `options`' locks and limits (prismatic: m,
+// revolute: rad) at q.
+struct ResidualSplit {
+  double length = 0.0, angle = 0.0;
+};
+[[nodiscard]] ResidualSplit split_residual(const Model& model, const VecX& q,
+                                           const AssemblyOptions& options = {{}, false});
+// Whether a joint component (Joint::component_names) is an angular row of f (rad).
+[[nodiscard]] bool is_angular_row(const std::string& component);
 
 // Per-joint residuals at q (names, max |f_k|, gap).
 [[nodiscard]] std::vector<JointResidual> joint_residuals(const Model& model, const VecX& q);

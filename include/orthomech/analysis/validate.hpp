@@ -156,7 +156,8 @@ struct ValidationReport {
   [[nodiscard]] bool pass() const;
 };
 
-// Which joint limits keep `options` from assembling: assembles again without the limits and
+// Which joint limits keep `options` from assembling: assembles again without the limits, on the
+// assembly mode of the design pose q_guess (the locks reached from it by continuation), and
 // returns the joints whose coordinate then lies outside them (empty when it does not assemble
 // either, or every limit is kept).
 [[nodiscard]] std::vector<LimitBlock> find_limit_blocks(const Model& model, const VecX& q_guess,

@@ -122,8 +122,10 @@ struct SimulateResult {
   double energy_max_drift = 0.0;         // max |E(t) − E(0)| over the accepted steps (J)
   double energy_scale = 0.0;             // max (|T| + |V| + |W|) (J): for relative drifts
   double max_constraint_residual = 0.0;  // max |f| over the accepted steps before correction
-  double max_velocity_residual = 0.0;    // max |Eᵀ u| (dual: after the step; primal: |J|)
-  double max_invariant_J = 0.0;          // primal: max |J|, eq. (105), before projection
+  // The same split by kind of row: length rows (m) and angular rows, "angle"/"ratio" (rad).
+  double max_residual_length = 0.0, max_residual_angle = 0.0;
+  double max_velocity_residual = 0.0;  // max |Eᵀ u| (dual: after the step; primal: |J|)
+  double max_invariant_J = 0.0;        // primal: max |J|, eq. (105), before projection
   long steps = 0;
   long uncorrected_steps = 0;  // steps left uncorrected next to a change point
   long rewinds = 0;            // steps undone because they crossed a change point unannounced

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "orthomech/analysis/cycle.hpp"
+#include "orthomech/io/noise.hpp"
 #include "orthomech/io/units.hpp"
 #include "orthomech/model/model.hpp"
 
@@ -23,6 +24,13 @@ struct PositionColumn {
 // Their values at q (SI), in position_columns order; out is resized.
 void compute_output_positions(const Model& model, const VecX& q, std::vector<double>& out);
 
+// The scale of every dimension over the rows of the cycle's CSV (inputs, times, measures,
+// positions, velocities, accelerations, drive, reaction components and magnitudes, SI): the CSV
+// and the JSON write a value at rounding noise for its dimension as 0 (io/noise.hpp).
+[[nodiscard]] NoiseFloor cycle_noise_floor(const Model& model, const CycleResult& result,
+                                           const std::vector<ReactionMagnitude>& magnitudes,
+                                           bool angular);
+
 struct CycleColumns {
   int input_display = 1;             // 1-based CSV column of the input
   int drive = 0;                     // 1-based CSV column of the drive
@@ -30,17 +38,26 @@ struct CycleColumns {
   std::vector<int> forces, moments;  // the magnitudes' columns that are forces, moments
 };
 
+// Columns added at the end of cycle.csv (`cycle --trace`: "trace coupler.P.x"): a name, its
+// dimension and one SI value per position of the sweep.
+struct ExtraColumn {
+  std::string name;
+  Dimension dimension = Dimension::length;
+  std::vector<double> values;
+};
+
 // One row per position, every quantity in `units` (units in the header: "drive [N*mm]"):
 // input, time, every measure, every body's pose and named point, every body's velocity and
-// acceleration, the drive, every reaction component, every reaction magnitude, and `limits`
-// (the joints outside their limits there, space-separated; empty inside). Cells that are not
+// acceleration, the drive, every reaction component, every reaction magnitude, `limits`
+// (the joints outside their limits there, space-separated; empty inside) and the `extra`
+// columns. Cells that are not
 // reported are empty (drive_reported, component_reported: an unbridged singular position, a
 // component diverging next to a bridged change point). Written atomically
 // (temporary file, then rename). Throws std::runtime_error naming the file on failure.
 CycleColumns write_cycle_csv(const std::filesystem::path& file, const Model& model,
                              const CycleResult& result,
                              const std::vector<ReactionMagnitude>& magnitudes, bool angular,
-                             const UnitSystem& units);
+                             const UnitSystem& units, const std::vector<ExtraColumn>& extra = {});
 
 // A gnuplot script, next to the CSV, that writes drive.svg, drive.png, reactions.svg and
 // reactions.png in its own directory (forces and moments on separate axes; dead and singular

@@ -3,14 +3,32 @@
 // yaml-cpp into a validated Model (SI inside). Every problem is one InputError naming
 // file:line:column and the element; nothing is half-built.
 #include <string>
+#include <vector>
 
 #include "orthomech/model/model.hpp"
 
 namespace orthomech {
 
-// Reads and validates a mechanism file. Throws InputError.
-[[nodiscard]] Model load_mechanism(const std::string& path);
+// One `--set PATH=VALUE` (docs/cli.md "Changing the file from the command line"): the value, in
+// the file's units and YAML syntax, replaces the element at PATH before the file is read, and is
+// validated exactly as the file is (a problem names the --set).
+struct FileChange {
+  std::string path;   // map keys and list item names (or indices) joined by '.'; or a parameter
+  std::string value;  // YAML text: 4000, [90, 0], 600rpm, 2*L
+};
+// "PATH=VALUE" split at the first '='. Throws std::invalid_argument when either side is empty.
+[[nodiscard]] FileChange parse_file_change(const std::string& text);
+
+// The text of the single value at `path` (as for a FileChange) of a mechanism file's text, as
+// written there ("30", "a/2"). Throws InputError naming origin and path.
+[[nodiscard]] std::string file_value(const std::string& text, const std::string& origin,
+                                     const std::string& path);
+
+// Reads and validates a mechanism file, with `changes` applied in order. Throws InputError.
+[[nodiscard]] Model load_mechanism(const std::string& path,
+                                   const std::vector<FileChange>& changes = {});
 // The same from text (`origin` is used as the file name in messages).
-[[nodiscard]] Model parse_mechanism(const std::string& text, const std::string& origin);
+[[nodiscard]] Model parse_mechanism(const std::string& text, const std::string& origin,
+                                    const std::vector<FileChange>& changes = {});
 
 }  // namespace orthomech

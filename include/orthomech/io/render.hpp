@@ -201,6 +201,21 @@ struct TraceResult {
 // `analysis: steps`). Numerical trouble is data, never an exception.
 [[nodiscard]] TraceResult trace_points(const Model& model, const std::vector<std::string>& points,
                                        int driver);
+// The two steps of trace_points, for a caller that has the positions already (`cycle --trace`:
+// the cycle's own positions). resolve_trace_points: the named points as PointRef (s from the
+// centre of mass, label the name as given), or status bad_request with the message (traces
+// empty). trace_paths: the world path of each point at the positions q (inputs alongside).
+struct TracePoints {
+  TraceStatus status = TraceStatus::completed;  // completed or bad_request
+  std::string message;
+  std::vector<PointRef> points;
+};
+[[nodiscard]] TracePoints resolve_trace_points(const Model& model,
+                                               const std::vector<std::string>& points);
+[[nodiscard]] std::vector<PointTrace> trace_paths(const Model& model,
+                                                  const std::vector<PointRef>& points,
+                                                  const std::vector<VecX>& q,
+                                                  const std::vector<double>& input);
 
 // ---- animation -------------------------------------------------------------------------------
 // The positions of the driver's cycle (run_cycle, as trace_points): q and the input at each.
@@ -212,10 +227,14 @@ struct CyclePositions {
 };
 [[nodiscard]] CyclePositions sweep_positions(const Model& model, int driver);
 
+// The one view of an animation: fit_view over the primitives of every frame (and the traces).
+[[nodiscard]] ViewTransform animation_view(const Model& model, const std::vector<VecX>& frames,
+                                           const RenderOptions& options);
 // An SVG that plays by itself (SMIL): one frame per position, each a group `<g id="frame-K">`
 // (K = 0, 1, …) shown during [K/N, (K+1)/N) of a loop of `duration` seconds, every frame drawn by
-// draw_image in one view fitted to all positions (and the traces), the traces in every frame.
-// Element ids of each frame are prefixed `fK-` so that frames do not collide.
+// draw_image in animation_view. The traces draw along: a trace with one point per frame shows its
+// first K + 1 points in frame K (any other trace is whole in every frame). Element ids of each
+// frame are prefixed `fK-` so that frames do not collide.
 [[nodiscard]] std::string animated_svg(const Model& model, const std::vector<VecX>& frames,
                                        const RenderOptions& options, double duration);
 

@@ -52,8 +52,12 @@ struct OutputUnit {
 // "rad/s^2", "N", "N*m", "J", "W", "kg", "kg*m^2", "s"); Dimension::none for anything else.
 [[nodiscard]] Dimension dimension_of(const std::string& si_unit);
 // A value and its unit for people, in `units`: "90 deg", "12.5 mm" (input rounded to 1e-6 of the
-// unit, never "-0").
+// unit, never "-0"). Library messages use the file's declared units (unit_system(model.units)).
 [[nodiscard]] std::string format_input(double value, bool angular, const UnitSystem& units);
+// A quantity (SI) with its unit in `units`, `precision` significant digits: "0.5 mm",
+// "2.5e-07 deg" (never "-0").
+[[nodiscard]] std::string format_quantity(double value, Dimension q, const UnitSystem& units,
+                                          int precision = 4);
 // ---- limits of every number entering the tool (docs/file-format.md "Limits") -------------------
 // The same limits apply to a number from a mechanism file and from the command line; they are
 // checked in SI, after the unit conversion. They are wide enough for any real linkage and narrow
@@ -93,10 +97,5 @@ inline constexpr std::size_t kMaxNumberLength = 64;
 // number is multiplied by `bare_factor`. Throws std::invalid_argument (also when out of the limits
 // of Quantity::angle or Quantity::length).
 [[nodiscard]] double parse_position(const std::string& text, bool angular, double bare_factor);
-
-// An input position for people (library messages): degrees (angular) or millimetres, rounded to
-// 1e-6 of the unit
-// ("77.608916 deg", never "5e-14 deg").
-[[nodiscard]] std::string format_input(double value, bool angular);
 
 }  // namespace orthomech

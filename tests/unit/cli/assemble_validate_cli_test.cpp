@@ -74,7 +74,8 @@ TEST(AssembleCli, Json_StatusAndMeasures_LockedCrank) {
   // In the file's angle unit (deg): the locked value itself.
   EXPECT_EQ(j["units"]["angle"], "deg");
   EXPECT_NEAR(j["measures"]["crank_angle"].get<double>(), 53.13010235415598, 1e-10);
-  EXPECT_LE(j["residual"].get<double>(), 1e-12);
+  EXPECT_LE(j["residual_length"].get<double>(), 1e-12);  // m
+  EXPECT_LE(j["residual_angle"].get<double>(), 1e-10);   // deg
   EXPECT_EQ(j["bodies"].size(), 3u);
   EXPECT_EQ(j["joints"].size(), 4u);
   EXPECT_TRUE(j["velocities"].contains("kinetic_removed"));
@@ -87,7 +88,7 @@ TEST(AssembleCli, CannotClose_Exit3_NamesJointsAndGap) {
   EXPECT_EQ(r.status, 3);
   EXPECT_NE(r.err.find("cannot close"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("joint 'B0'"), std::string::npos) << r.err;
-  EXPECT_NE(r.err.find("total gap 4000 mm"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("total gap 4 m"), std::string::npos) << r.err;  // the file's unit (m)
   const auto rj = run_cli({"assemble", file, "--json"});
   EXPECT_EQ(rj.status, 3);
   const auto j = nlohmann::json::parse(rj.out);

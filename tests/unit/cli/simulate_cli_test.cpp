@@ -30,14 +30,16 @@ TEST(SimulateCli, AndrewsJsonHasTheDocumentedKeys) {
   EXPECT_TRUE(j["energy"].contains("initial"));
   EXPECT_TRUE(j["energy"].contains("final"));
   EXPECT_LT(j["energy"]["max_drift"].get<double>(), 1e-8);
-  EXPECT_LT(j["max_constraint_residual"].get<double>(), 1e-9);
+  // Andrews is in m/rad: the residual of the length rows in m; it has no angular row.
+  EXPECT_LT(j["max_residual_length"].get<double>(), 1e-9);
+  EXPECT_EQ(j["max_residual_angle"].get<double>(), 0.0);
   // Time histories as columns: t = 0, 0.0003, …, 0.03, and every measure, reaction component
   // and energy over the same times; the last entry is the final state.
   const auto& s = j["samples"];
   ASSERT_EQ(s["t"].size(), 101u);
   EXPECT_NEAR(s["t"][100].get<double>(), 0.03, 1e-15);
   EXPECT_NEAR(s["t"][1].get<double>(), 0.0003, 1e-15);
-  for (const char* key : {"kinetic", "potential", "work", "residual"})
+  for (const char* key : {"kinetic", "potential", "work", "residual_length", "residual_angle"})
     EXPECT_EQ(s[key].size(), 101u);
   ASSERT_EQ(s["measures"].size(), j["final"]["measures"].size());
   for (const auto& [name, column] : s["measures"].items()) {

@@ -324,6 +324,10 @@ TEST(Trust, InfoValidateAssembleSimulateCrosscheckOutputsInTheFileUnits) {
       EXPECT_EQ(p["singular_distance"].is_null(), q["singular_distance"].is_null());
       expect_rel(p["max_translation"].get<double>() * 1e-3, q["max_translation"].get<double>(),
                  kSolverRel, "moved");
+      // The mass-metric distance in sqrt(kg)*mm against sqrt(kg)*m (the same kg).
+      EXPECT_EQ(p["distance_unit"], "sqrt(kg)*mm");
+      EXPECT_NEAR(p["distance"].get<double>() * 1e-3, q["distance"].get<double>(),
+                  kSolverRel * std::max(1.0, q["distance"].get<double>()));
     }
   }
   // assemble: the lock is read in the file's units (bare 90 = 90° in the deg file).
@@ -384,9 +388,10 @@ TEST(Trust, SimulatePositionsAndCsvUnits) {
 
 TEST(Trust, ValidateAndAssembleNameTheLimitThatKeepsItOpen) {
   // Rocker limits [60°, 130°]: at crank 270° the mechanism closes only with the rocker outside
-  // them. The value the tool says the rocker would need must be one of the two closed-form
-  // rocker angles there: with d = B0 − A (A the crank pin), ψ = arg d ± acos((b² − |d|² − c²) /
-  // (2 c |d|)).
+  // them. The value the tool says the rocker would need is the closed-form rocker angle on the
+  // design's assembly mode: with d = B0 − A (A the crank pin), ψ = arg d ± acos((b² − |d|² −
+  // c²) / (2 c |d|)); the design is the open assembly (B above the ground line A0 B0, as the
+  // file says), so the root with sin ψ > 0 (132.36°, not −85.96° of the crossed mode).
   TempDir dir;
   const std::string limited =
       variant(dir, bundled("crank-rocker"), "limited.yaml",
@@ -395,12 +400,10 @@ TEST(Trust, ValidateAndAssembleNameTheLimitThatKeepsItOpen) {
   const double a = 30, b = 80, c = 60, g = 70, th = 270 * kDeg;
   const double dx = g - a * std::cos(th), dy = -a * std::sin(th), D = std::hypot(dx, dy);
   const double base = std::atan2(dy, dx), half = std::acos((b * b - D * D - c * c) / (2 * c * D));
-  auto matches = [&](double deg) {
-    for (const double psi : {base + half, base - half}) {
-      const double diff = std::remainder(deg * kDeg - psi, 2 * std::numbers::pi);
-      if (std::abs(diff) < 1e-6) return true;
-    }
-    return false;
+  const double psi = std::sin(base + half) > 0.0 ? base + half : base - half;
+  ASSERT_GT(std::sin(psi), 0.0);
+  auto on_design_mode = [&](double deg) {
+    return std::abs(std::remainder(deg * kDeg - psi, 2 * std::numbers::pi)) < 1e-6;
   };
   const CliResult r = run_cli({"assemble", limited, "--lock", "A0=270", "--json"});
   EXPECT_EQ(r.status, 3);
@@ -408,18 +411,33 @@ TEST(Trust, ValidateAndAssembleNameTheLimitThatKeepsItOpen) {
   ASSERT_EQ(j["limit_blocks"].size(), 1u);
   EXPECT_EQ(j["limit_blocks"][0]["joint"], "B0");
   const double needed = j["limit_blocks"][0]["needed"].get<double>();
-  EXPECT_TRUE(matches(needed)) << needed;
+  EXPECT_TRUE(on_design_mode(needed)) << needed << " deg, expected " << psi / kDeg;
   EXPECT_TRUE(needed < 60 || needed > 130) << needed;
   EXPECT_NE(r.err.find("joint 'B0' would need"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("outside its limits [60 deg, 130 deg]"), std::string::npos) << r.err;
-  // validate: position p3 (crank 270°) fails, naming the limit.
+  // validate: position p3 (crank 270°) fails, naming the limit and the same value.
   const CliResult v = run_cli({"validate", limited, "--json"});
   EXPECT_EQ(v.status, 1);
   const json vj = json::parse(v.out);
   const json& p3 = vj["positions"][2];
   ASSERT_EQ(p3["limit_blocks"].size(), 1u);
-  EXPECT_TRUE(matches(p3["limit_blocks"][0]["needed"].get<double>()));
+  EXPECT_TRUE(on_design_mode(p3["limit_blocks"][0]["needed"].get<double>()))
+      << p3["limit_blocks"][0]["needed"];
   EXPECT_NE(p3["failures"][0].get<std::string>().find("joint 'B0' would need"), std::string::npos);
+  // The same in the SI twin: the library's message in the file's units (rad), the value on the
+  // design's mode too.
+  const std::string limited_si = variant(
+      dir, units_data("crank-rocker-si"), "limited-si.yaml", "  connects: [ground.B0, rocker.B0]",
+      "  connects: [ground.B0, rocker.B0]\n  limits: [1.0471975511965976, "
+      "2.2689280275926285]");
+  const json vs = run_json({"validate", limited_si, "--json"}, 1);
+  const std::string failure = vs["positions"][2]["failures"][0].get<std::string>();
+  const std::string lead = "joint 'B0' would need ";
+  ASSERT_EQ(failure.rfind(lead, 0), 0u) << failure;
+  EXPECT_NEAR(std::stod(failure.substr(lead.size())), psi, 1e-6) << failure;
+  EXPECT_NE(failure.find(" rad, outside its limits [1.047198 rad, 2.268928 rad]"),
+            std::string::npos)
+      << failure;
 }
 
 TEST(Trust, ValidateGivesSliderCrankLoopsTheirPressureAngle) {

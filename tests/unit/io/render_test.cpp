@@ -16,6 +16,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -23,7 +24,9 @@
 #include <fstream>
 #include <map>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <numbers>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -313,18 +316,20 @@ struct SvgCount {
   bool svg_root = false;
 };
 
-// "fill:rgb(100%,85%,30%)" (Cairo's SVG style syntax) → the colour, if present.
-std::optional<Rgba> style_fill(const std::string& style) {
-  const auto k = style.find("fill:rgb(");
-  if (k == std::string::npos) return std::nullopt;
+// "fill:rgb(100%,85%,30%)" or "stroke:rgb(…)" (Cairo's SVG style syntax) → the colour, if present.
+std::optional<Rgba> style_colour(const std::string& style, const std::string& property) {
+  const std::string key = property + ":rgb(";
+  const auto k = style.find(key);
+  if (k == std::string::npos || (k > 0 && style[k - 1] != ';')) return std::nullopt;
   Rgba c;
-  if (std::sscanf(style.c_str() + k, "fill:rgb(%lf%%,%lf%%,%lf%%)", &c.r, &c.g, &c.b) != 3)
+  if (std::sscanf(style.c_str() + k + key.size(), "%lf%%,%lf%%,%lf%%)", &c.r, &c.g, &c.b) != 3)
     return std::nullopt;
   c.r /= 100.0;
   c.g /= 100.0;
   c.b /= 100.0;
   return c;
 }
+std::optional<Rgba> style_fill(const std::string& style) { return style_colour(style, "fill"); }
 
 void XMLCALL start_element(void* data, const XML_Char* name, const XML_Char** attributes) {
   auto* count = static_cast<SvgCount*>(data);
@@ -475,6 +480,7 @@ TEST(RenderTrace, UnknownPointIsBadInput) {
 // (A0, A, B, B0). Cairo writes a circle of radius r about c starting at c + (r, 0): "M x y C …".
 struct AnimationFrames {
   std::vector<std::vector<Vec2>> joints;  // per frame, the centres of the revolute symbols
+  std::vector<std::vector<Vec2>> trace;   // per frame, the vertices of the first trace's path
   int animates = 0;                       // <animate> elements
   int depth = 0, frame_depth = -1;
 };
@@ -492,6 +498,7 @@ void XMLCALL animation_start(void* data, const XML_Char* name, const XML_Char** 
   if (element == "g" && id.rfind("frame-", 0) == 0) {
     EXPECT_EQ(id, "frame-" + std::to_string(f->joints.size()));
     f->joints.emplace_back();
+    f->trace.emplace_back();
     f->frame_depth = f->depth;
   }
   if (element == "animate") ++f->animates;
@@ -501,6 +508,14 @@ void XMLCALL animation_start(void* data, const XML_Char* name, const XML_Char** 
       double x = 0.0, y = 0.0;
       EXPECT_EQ(std::sscanf(d.c_str(), "M %lf %lf", &x, &y), 2) << d;
       f->joints.back().emplace_back(x - kJointRadius, y);
+    }
+    // The first trace: "M x y L x y …" stroked in its colour.
+    const auto stroke = style_colour(style, "stroke");
+    if (stroke && same_colour(Rgba{stroke->r, stroke->g, stroke->b, 1.0}, kFirstTraceColour)) {
+      std::istringstream in(d);
+      std::string op;
+      double x = 0.0, y = 0.0;
+      while (in >> op >> x >> y) f->trace.back().emplace_back(x, y);
     }
   }
 }
@@ -552,6 +567,145 @@ TEST(RenderAnimation, OneFramePerPositionWithTheJointsAtTheClosedForm) {
       EXPECT_LT((frames.joints[k][j] - view.pixel(expected[j])).norm(), kSvgPrecision)
           << "frame " << k << " joint " << j;
   }
+}
+
+AnimationFrames parse_animation(const std::string& text) {
+  AnimationFrames frames;
+  std::unique_ptr<std::remove_pointer_t<XML_Parser>, decltype(&XML_ParserFree)> parser(
+      XML_ParserCreate(nullptr), XML_ParserFree);
+  XML_SetUserData(parser.get(), &frames);
+  XML_SetElementHandler(parser.get(), animation_start, animation_end);
+  EXPECT_EQ(XML_Parse(parser.get(), text.data(), static_cast<int>(text.size()), 1), XML_STATUS_OK)
+      << XML_ErrorString(XML_GetErrorCode(parser.get()));
+  return frames;
+}
+
+// ---- cycle --trace, --animate ------------------------------------------------------------------
+// `cycle --trace`: the path of the coupler point P and the crank pin A over the cycle's own
+// positions, in the JSON ("traces") and in cycle.csv ("trace coupler.P.x [mm]"), is the
+// closed-form position at each input of the sweep, in the file's units (mm, the input in deg).
+constexpr double kTraceToleranceMm = 1e-6;  // the positions are solved to ~1e-12 m
+
+TEST(CycleTrace, JsonAndCsvHoldTheClosedFormPaths) {
+  TempDir dir;
+  const CliResult r = run_cli({"cycle", bundled("crank-rocker"), "--trace", "coupler.P", "--trace",
+                               "crank.A", "--json", "--out", dir.path.string()});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  const size_t n = j.at("positions");
+  ASSERT_EQ(n, 360u);  // analysis: steps 360
+  ASSERT_EQ(j.at("traces").size(), 2u);
+  for (size_t t = 0; t < 2; ++t) {
+    const nlohmann::json& trace = j["traces"][t];
+    EXPECT_EQ(trace.at("point"), t == 0 ? "coupler.P" : "crank.A");
+    EXPECT_EQ(trace.at("unit"), "mm");
+    ASSERT_EQ(trace.at("x").size(), n);
+    for (size_t k = 0; k < n; ++k) {
+      const double input = trace["input"][k];
+      EXPECT_NEAR(input, 60.0 + static_cast<double>(k), 1e-9);  // from the design crank 60°
+      const FourBarPose closed = crank_rocker_at(input);
+      const Vec2 expected = t == 0 ? closed.P : closed.A;
+      EXPECT_NEAR(trace["x"][k].get<double>(), expected.x(), kTraceToleranceMm) << k;
+      EXPECT_NEAR(trace["y"][k].get<double>(), expected.y(), kTraceToleranceMm) << k;
+    }
+  }
+  // cycle.csv: the same path in the columns named after the point.
+  std::istringstream csv(test::read_text(dir.path / "cycle.csv"));
+  std::string line;
+  ASSERT_TRUE(std::getline(csv, line));
+  std::vector<std::string> header;
+  for (std::istringstream h(line); std::getline(h, line, ',');) header.push_back(line);
+  const auto column = [&](const std::string& name) {
+    const auto it = std::find(header.begin(), header.end(), name);
+    EXPECT_NE(it, header.end()) << name;
+    return static_cast<size_t>(it - header.begin());
+  };
+  const size_t input = column("input [deg]"), px = column("trace coupler.P.x [mm]"),
+               py = column("trace coupler.P.y [mm]");
+  size_t rows = 0;
+  while (std::getline(csv, line)) {
+    std::vector<std::string> cells;
+    for (std::istringstream c(line); std::getline(c, line, ',');) cells.push_back(line);
+    ASSERT_GT(cells.size(), std::max({input, px, py}));
+    const FourBarPose closed = crank_rocker_at(std::stod(cells[input]));
+    EXPECT_NEAR(std::stod(cells[px]), closed.P.x(), kTraceToleranceMm) << "row " << rows;
+    EXPECT_NEAR(std::stod(cells[py]), closed.P.y(), kTraceToleranceMm) << "row " << rows;
+    ++rows;
+  }
+  EXPECT_EQ(rows, n);
+  // The text summary names the trace's extent; --units si gives metres.
+  const CliResult si = run_cli(
+      {"cycle", bundled("crank-rocker"), "--trace", "coupler.P", "--json", "--units", "si"});
+  ASSERT_EQ(si.status, 0) << si.err;
+  const nlohmann::json js = nlohmann::json::parse(si.out);
+  EXPECT_EQ(js["traces"][0]["unit"], "m");
+  EXPECT_NEAR(js["traces"][0]["x"][0].get<double>(), 1e-3 * crank_rocker_at(60.0).P.x(), 1e-9);
+}
+
+TEST(CycleTrace, UnknownPointIsBadInput) {
+  const CliResult r = run_cli({"cycle", bundled("crank-rocker"), "--trace", "coupler.Q"});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("--trace: body 'coupler' has no point 'Q' (it has A, B, P)"),
+            std::string::npos)
+      << r.err;
+  EXPECT_TRUE(r.out.empty());
+}
+
+// `cycle --animate`: one frame per position of the cycle (--steps 36: crank 60° + 10° k), the
+// joints of frame k at the closed form through the view fitted to every frame, and the trace
+// drawn along: in frame k the coupler point's path has k + 1 vertices, the last at P(60° + 10° k).
+TEST(CycleAnimate, OneFramePerPositionWithTheTraceDrawingAlong) {
+  TempDir dir;
+  const std::string out = (dir.path / "cycle.svg").string();
+  constexpr int kSteps = 36;
+  const CliResult r = run_cli({"cycle", bundled("crank-rocker"), "--steps", std::to_string(kSteps),
+                               "--trace", "coupler.P", "--animate", out});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const AnimationFrames frames = parse_animation(test::read_text(out));
+  ASSERT_EQ(static_cast<int>(frames.joints.size()), kSteps);
+  EXPECT_EQ(frames.animates, kSteps);
+  Vec2 lo = Vec2::Constant(1e300), hi = -lo;
+  for (int k = 0; k < kSteps; ++k) {
+    const FourBarPose p = crank_rocker_at(60.0 + 10.0 * k);
+    for (const Vec2& v : {p.A0, p.B0, p.A, p.B, p.P}) {
+      lo = lo.cwiseMin(v);
+      hi = hi.cwiseMax(v);
+    }
+  }
+  const ExpectedView view = expected_view(lo, hi, 800, 600);
+  constexpr double kSvgPrecision = 0.01;  // px
+  for (int k = 0; k < kSteps; ++k) {
+    const FourBarPose p = crank_rocker_at(60.0 + 10.0 * k);
+    ASSERT_EQ(frames.joints[k].size(), 4u) << "frame " << k;
+    const Vec2 expected[] = {p.A0, p.A, p.B, p.B0};
+    for (int j = 0; j < 4; ++j)
+      EXPECT_LT((frames.joints[k][j] - view.pixel(expected[j])).norm(), kSvgPrecision)
+          << "frame " << k << " joint " << j;
+    if (k == 0) continue;  // one vertex: nothing to stroke
+    ASSERT_EQ(static_cast<int>(frames.trace[k].size()), k + 1) << "frame " << k;
+    EXPECT_LT((frames.trace[k].back() - view.pixel(p.P)).norm(), kSvgPrecision) << "frame " << k;
+    EXPECT_LT((frames.trace[k].front() - view.pixel(crank_rocker_at(60.0).P)).norm(),
+              kSvgPrecision);
+  }
+  // Not an SVG: exit 2, nothing written.
+  const CliResult png = run_cli({"cycle", bundled("crank-rocker"), "--animate", out + ".png"});
+  EXPECT_EQ(png.status, 2);
+  EXPECT_FALSE(fs::exists(out + ".png"));
+}
+
+// A sweep that stops at a dead point (the double-rocker driven from a rocker, its README): the
+// animation has the positions up to there, one frame each, and the exit status is cycle's (1).
+TEST(CycleAnimate, SweepStoppedAtADeadPointAnimatesThePositionsBefore) {
+  TempDir dir;
+  const std::string out = (dir.path / "dead.svg").string();
+  const CliResult r =
+      run_cli({"cycle", bundled("double-rocker"), "--speed", "10rpm", "--animate", out, "--json"});
+  EXPECT_EQ(r.status, 1) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["status"], "stopped_at_dead_point");
+  const AnimationFrames frames = parse_animation(test::read_text(out));
+  EXPECT_GT(frames.joints.size(), 10u);
+  EXPECT_EQ(frames.joints.size(), j["positions"].get<size_t>());
 }
 
 // ---- errors ----------------------------------------------------------------------------------

@@ -1,0 +1,278 @@
+// `orthomech sweep FILE --study STUDY --out DIR`: a design study (docs/cli.md "sweep"): every
+// variant of the study swept through its cycle on every core (OpenMP), one SQLite row per variant
+// committed as it finishes (`--resume` continues a killed study), the CSV in variant order, and a
+// summary: the best variants of a grid, or the quantiles and sensitivities of a Monte Carlo study.
+#include <spdlog/spdlog.h>
+
+#include <CLI/CLI.hpp>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "commands.hpp"
+#include "common.hpp"
+#include "orthomech/io/cycle_output.hpp"
+#include "orthomech/io/mechanism_file.hpp"
+#include "orthomech/io/study_db.hpp"
+#include "orthomech/study/study.hpp"
+
+namespace orthomech::cli {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct SweepCliOptions {
+  std::string file, study, out;
+  int jobs = 0;
+  bool resume = false, json = false;
+};
+
+std::string read_file(const std::string& path, const std::string& what) {
+  std::error_code ec;
+  if (!fs::is_regular_file(path, ec))
+    throw InputError({path, 0, 0}, what, "cannot open the file: no such file");
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+nlohmann::json number_or_null(double v) {
+  return std::isnan(v) ? nlohmann::json() : nlohmann::json(v);
+}
+
+// The summary: counts by status; per metric the nominal value and, for Monte Carlo, the
+// statistics and sensitivities; for a grid, the best variants.
+nlohmann::json summarize(const Study& study, const StudyDatabase& db,
+                         const VariantResult& nominal) {
+  const std::vector<StudyDatabase::Row> rows = db.rows();
+  nlohmann::json j;
+  j["study"] = study.kind == StudyKind::grid ? "grid" : "monte-carlo";
+  j["variants"] = rows.size();
+  std::map<std::string, long> counts;
+  for (const auto& r : rows) ++counts[r.status];
+  j["status"] = counts;
+  j["parameters"] = db.parameters();
+  nlohmann::json nominal_j = nlohmann::json::object();
+  for (const auto& [name, value] : nominal.metrics) nominal_j[name] = number_or_null(value);
+  j["nominal"] = nominal_j;
+  // Metrics only of variants whose cycle completed (a stopped sweep's peaks are partial).
+  std::vector<std::vector<double>> values;
+  for (const auto& r : rows) values.push_back(r.values);
+  const auto metric_column = [&](size_t m) {
+    std::vector<double> y;
+    for (const auto& r : rows) y.push_back(r.status == "completed" ? r.metrics[m] : std::nan(""));
+    return y;
+  };
+  if (study.kind == StudyKind::monte_carlo) {
+    nlohmann::json metrics = nlohmann::json::array();
+    for (size_t m = 0; m < db.metrics().size(); ++m) {
+      const MetricStatistics s = metric_statistics(db.metrics()[m], values, metric_column(m));
+      nlohmann::json e = {{"metric", s.metric}, {"n", s.n}};
+      if (s.n > 0) {
+        e["mean"] = s.mean;
+        e["std"] = s.stddev;
+        e["min"] = s.min;
+        e["q05"] = s.q05;
+        e["q50"] = s.q50;
+        e["q95"] = s.q95;
+        e["max"] = s.max;
+      }
+      nlohmann::json sens = nlohmann::json::object();
+      for (size_t p = 0; p < s.sensitivity.size(); ++p)
+        if (s.sensitivity[p])
+          sens[db.parameters()[p]] = {{"coefficient", s.sensitivity[p]->coefficient},
+                                      {"std_error", s.sensitivity[p]->std_error},
+                                      {"ci95", {s.sensitivity[p]->low, s.sensitivity[p]->high}}};
+      e["sensitivity"] = sens;
+      metrics.push_back(e);
+    }
+    j["metrics"] = metrics;
+  } else {
+    const auto& names = db.metrics();
+    const auto it = std::find(names.begin(), names.end(), study.best_metric);
+    nlohmann::json best = nlohmann::json::array();
+    if (it != names.end()) {
+      const size_t m = static_cast<size_t>(it - names.begin());
+      std::vector<const StudyDatabase::Row*> ranked;
+      for (const auto& r : rows)
+        if (r.status == "completed" && !std::isnan(r.metrics[m])) ranked.push_back(&r);
+      std::stable_sort(ranked.begin(), ranked.end(), [&](const auto* a, const auto* b) {
+        return study.best_largest ? a->metrics[m] > b->metrics[m] : a->metrics[m] < b->metrics[m];
+      });
+      for (size_t k = 0; k < ranked.size() && k < static_cast<size_t>(study.best_count); ++k) {
+        nlohmann::json e = {{"variant", ranked[k]->index},
+                            {study.best_metric, ranked[k]->metrics[m]}};
+        for (size_t p = 0; p < db.parameters().size(); ++p)
+          e[db.parameters()[p]] = ranked[k]->values[p];
+        best.push_back(e);
+      }
+    }
+    j["best"] = {{"metric", study.best_metric},
+                 {"order", study.best_largest ? "max" : "min"},
+                 {"variants", best}};
+  }
+  return j;
+}
+
+std::string fixed(double v) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.6g", v);
+  return buffer;
+}
+
+void print_summary(const nlohmann::json& j, const fs::path& out) {
+  std::ostringstream o;
+  o << "study       " << j["study"].get<std::string>() << ", " << j["variants"].get<long>()
+    << " variants:";
+  for (const auto& [status, n] : j["status"].items()) o << " " << n.get<long>() << " " << status;
+  o << "\noutput      " << (out / "study.sqlite").string() << ", "
+    << (out / "variants.csv").string() << ", " << (out / "summary.json").string() << "\n";
+  if (j.contains("metrics")) {
+    o << "metrics of the completed variants, in the file's units:\n";
+    char line[256];
+    std::snprintf(line, sizeof line, "  %-16s %12s %12s %12s %12s %12s %12s\n", "metric", "nominal",
+                  "mean", "std", "q05", "q50", "q95");
+    o << line;
+    for (const auto& m : j["metrics"]) {
+      const std::string name = m["metric"];
+      const auto value = [&](const nlohmann::json& v) {
+        return v.is_number() ? fixed(v.get<double>()) : std::string("-");
+      };
+      std::snprintf(line, sizeof line, "  %-16s %12s %12s %12s %12s %12s %12s\n", name.c_str(),
+                    value(j["nominal"].value(name, nlohmann::json())).c_str(),
+                    value(m.value("mean", nlohmann::json())).c_str(),
+                    value(m.value("std", nlohmann::json())).c_str(),
+                    value(m.value("q05", nlohmann::json())).c_str(),
+                    value(m.value("q50", nlohmann::json())).c_str(),
+                    value(m.value("q95", nlohmann::json())).c_str());
+      o << line;
+    }
+    o << "sensitivities (metric change per unit of the parameter, least squares; 95 % interval):\n";
+    for (const auto& m : j["metrics"])
+      for (const auto& [parameter, s] : m["sensitivity"].items())
+        o << "  " << m["metric"].get<std::string>() << " / " << parameter << "  "
+          << fixed(s["coefficient"].get<double>()) << "  [" << fixed(s["ci95"][0].get<double>())
+          << ", " << fixed(s["ci95"][1].get<double>()) << "]\n";
+  } else {
+    const auto& best = j["best"];
+    o << "best by " << best["metric"].get<std::string>() << " (" << best["order"].get<std::string>()
+      << "):\n";
+    for (const auto& v : best["variants"]) {
+      o << "  variant " << v["variant"].get<long>() << ":";
+      for (const auto& [k, x] : v.items())
+        if (k != "variant") o << "  " << k << " = " << fixed(x.get<double>());
+      o << "\n";
+    }
+  }
+  std::cout << o.str();
+}
+
+int run_sweep_command(const SweepCliOptions& opt) {
+  const std::string mechanism = read_file(opt.file, "file");
+  {  // the nominal file must be valid: its errors are the file's, with their line
+    const Model model = load(opt.file);
+    (void)model;
+  }
+  const Study study = load_study(opt.study, mechanism, opt.file);
+  const std::string study_text = read_file(opt.study, "study");
+
+  // The nominal design fixes the metric columns.
+  Study nominal_study = study;
+  nominal_study.parameters.clear();
+  const VariantResult nominal = evaluate_variant(mechanism, opt.file, nominal_study, -1, {});
+  if (nominal.metrics.empty()) {
+    spdlog::error("{}: the nominal design cannot be swept ({}): {}", opt.file, nominal.status,
+                  nominal.message);
+    return kNumerical;
+  }
+  std::vector<std::string> parameters, metrics;
+  for (const auto& p : study.parameters) parameters.push_back(p.name);
+  for (const auto& [name, value] : nominal.metrics) metrics.push_back(name);
+  for (const std::string& p : parameters)
+    if (p == "variant" || p == "status" || p == "message" ||
+        std::find(metrics.begin(), metrics.end(), p) != metrics.end())
+      throw CLI::ValidationError("--study", "parameter name '" + p +
+                                                "' is also a column of the results: give it a "
+                                                "'name'");
+
+  const fs::path out = opt.out;
+  std::error_code ec;
+  fs::create_directories(out, ec);
+  if (ec) {
+    spdlog::error("{}: cannot create the directory: {}", opt.out, ec.message());
+    return kBadInput;
+  }
+  std::unique_ptr<StudyDatabase> db;
+  try {
+    db = std::make_unique<StudyDatabase>(out / "study.sqlite", opt.resume,
+                                         std::vector<std::pair<std::string, std::string>>{
+                                             {"mechanism", mechanism}, {"study", study_text}},
+                                         parameters, metrics);
+  } catch (const std::runtime_error& e) {
+    spdlog::error("{}", e.what());
+    return kBadInput;
+  }
+  const long total = variant_count(study);
+  std::vector<long> stored = db->stored();
+  std::vector<long> pending;
+  size_t s = 0;
+  for (long i = 0; i < total; ++i) {
+    while (s < stored.size() && stored[s] < i) ++s;
+    if (s < stored.size() && stored[s] == i) continue;
+    pending.push_back(i);
+  }
+  spdlog::info("{}: {} variants, {} stored, {} to compute", opt.study, total, stored.size(),
+               pending.size());
+  long finished = 0;
+  run_variants(mechanism, opt.file, study, pending, opt.jobs, [&](const VariantResult& r) {
+    db->insert(r);
+    ++finished;
+    if (r.status != "completed") spdlog::debug("variant {}: {}: {}", r.index, r.status, r.message);
+  });
+  spdlog::info("computed {} variants", finished);
+
+  const nlohmann::json summary = summarize(study, *db, nominal);
+  try {
+    write_file_atomically(out / "variants.csv", study_csv(*db));
+    write_file_atomically(out / "summary.json", summary.dump(2) + "\n");
+  } catch (const std::runtime_error& e) {
+    spdlog::error("{}", e.what());
+    return kBadInput;
+  }
+  if (opt.json)
+    std::cout << summary.dump(2) << "\n";
+  else
+    print_summary(summary, out);
+  return kOk;
+}
+
+}  // namespace
+
+void register_sweep(CLI::App& app, const GlobalOptions& globals, int& exit_code) {
+  auto opt = std::make_shared<SweepCliOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "sweep", "a design study: many variants of the file (grid or Monte Carlo), every core");
+  cmd->add_option("file", opt->file, "mechanism file (YAML)")->required();
+  cmd->add_option("--study", opt->study, "study file (YAML, docs/cli.md \"sweep\")")->required();
+  cmd->add_option("--out,-o", opt->out, "directory of study.sqlite, variants.csv and summary.json")
+      ->required();
+  cmd->add_option("--jobs,-j", opt->jobs, "threads (default: every core)")
+      ->check(CLI::Range(0, 4096));
+  cmd->add_flag("--resume", opt->resume,
+                "continue the study stored in --out (computes only the variants not stored)");
+  cmd->add_flag("--json", opt->json, "the summary as one JSON document on stdout");
+  auto log = std::make_shared<LogFlags>();
+  add_log_flags(cmd, *log);
+  cmd->callback([opt, log, &globals, &exit_code] {
+    setup_logging(globals, *log);
+    exit_code = run_sweep_command(*opt);
+  });
+}
+
+}  // namespace orthomech::cli

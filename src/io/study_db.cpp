@@ -1,0 +1,202 @@
+#include "orthomech/io/study_db.hpp"
+
+#include <sqlite3.h>
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace orthomech {
+
+namespace {
+
+std::string quoted(const std::string& name) {  // an SQL identifier
+  std::string q = "\"";
+  for (const char c : name) q += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return q + "\"";
+}
+
+// Column names: the parameters prefixed "p:" would be ugly for pandas; parameters and metrics
+// keep their names, and clashes with the fixed columns are refused by the caller's uniqueness.
+}  // namespace
+
+struct StudyDatabase::Impl {
+  sqlite3* db = nullptr;
+  sqlite3_stmt* insert = nullptr;
+  std::string file;
+
+  [[noreturn]] void fail(const std::string& what) const {
+    throw std::runtime_error(file + ": " + what + ": " + (db ? sqlite3_errmsg(db) : "no database"));
+  }
+  void exec(const std::string& sql) const {
+    char* error = nullptr;
+    if (sqlite3_exec(db, sql.c_str(), nullptr, nullptr, &error) != SQLITE_OK) {
+      const std::string message = error ? error : "unknown error";
+      sqlite3_free(error);
+      throw std::runtime_error(file + ": " + message);
+    }
+  }
+  sqlite3_stmt* prepare(const std::string& sql) const {
+    sqlite3_stmt* stmt = nullptr;
+    if (sqlite3_prepare_v2(db, sql.c_str(), -1, &stmt, nullptr) != SQLITE_OK) fail("SQL " + sql);
+    return stmt;
+  }
+  ~Impl() {
+    if (insert) sqlite3_finalize(insert);
+    if (db) sqlite3_close(db);
+  }
+};
+
+StudyDatabase::StudyDatabase(const std::filesystem::path& file, bool resume,
+                             const std::vector<std::pair<std::string, std::string>>& identity,
+                             const std::vector<std::string>& parameters,
+                             const std::vector<std::string>& metrics)
+    : impl_(std::make_unique<Impl>()), parameters_(parameters), metrics_(metrics) {
+  impl_->file = file.string();
+  std::error_code ec;
+  const bool existed = std::filesystem::exists(file, ec);
+  if (existed && !resume)
+    throw std::runtime_error(impl_->file +
+                             ": exists: continue that study with --resume, or give another --out");
+  if (sqlite3_open_v2(impl_->file.c_str(), &impl_->db, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE,
+                      nullptr) != SQLITE_OK)
+    impl_->fail("cannot open");
+  sqlite3_busy_timeout(impl_->db, 10000);
+  // Each insert is its own transaction, in the write-ahead log once it returns: a killed study
+  // keeps every variant stored before the kill (a half-written one is rolled back). NORMAL does not
+  // wait for the disk at every commit (a power cut may lose the last few; a kill loses none).
+  impl_->exec("PRAGMA journal_mode = WAL");
+  impl_->exec("PRAGMA synchronous = NORMAL");
+  std::string columns = "variant INTEGER PRIMARY KEY";
+  for (const auto& p : parameters) columns += ", " + quoted(p) + " REAL";
+  columns += ", status TEXT NOT NULL, message TEXT";
+  for (const auto& m : metrics) columns += ", " + quoted(m) + " REAL";
+  impl_->exec("BEGIN");
+  impl_->exec("CREATE TABLE IF NOT EXISTS study (key TEXT PRIMARY KEY, value TEXT NOT NULL)");
+  impl_->exec("CREATE TABLE IF NOT EXISTS variants (" + columns + ")");
+  // What the study is: stored on creation, compared on resume.
+  sqlite3_stmt* read = impl_->prepare("SELECT key, value FROM study ORDER BY key");
+  std::vector<std::pair<std::string, std::string>> stored;
+  while (sqlite3_step(read) == SQLITE_ROW)
+    stored.emplace_back(reinterpret_cast<const char*>(sqlite3_column_text(read, 0)),
+                        reinterpret_cast<const char*>(sqlite3_column_text(read, 1)));
+  sqlite3_finalize(read);
+  auto expected = identity;
+  expected.emplace_back("columns", columns);
+  std::sort(expected.begin(), expected.end());
+  if (stored.empty()) {
+    sqlite3_stmt* put = impl_->prepare("INSERT INTO study (key, value) VALUES (?, ?)");
+    for (const auto& [k, v] : expected) {
+      sqlite3_bind_text(put, 1, k.c_str(), -1, SQLITE_TRANSIENT);
+      sqlite3_bind_text(put, 2, v.c_str(), -1, SQLITE_TRANSIENT);
+      if (sqlite3_step(put) != SQLITE_DONE) impl_->fail("cannot store the study");
+      sqlite3_reset(put);
+    }
+    sqlite3_finalize(put);
+  } else if (stored != expected) {
+    std::string differ;
+    for (const auto& [k, v] : expected) {
+      const auto it =
+          std::find_if(stored.begin(), stored.end(), [&](const auto& s) { return s.first == k; });
+      if (it == stored.end() || it->second != v) differ += (differ.empty() ? "" : ", ") + k;
+    }
+    impl_->exec("ROLLBACK");
+    throw std::runtime_error(
+        impl_->file + ": holds another study (" +
+        (differ.empty() ? std::string("other keys") : differ) +
+        " differ): --resume continues only the same study; give another --out");
+  }
+  impl_->exec("COMMIT");
+  std::string sql = "INSERT INTO variants VALUES (?";
+  for (size_t i = 0; i < parameters.size() + 2 + metrics.size(); ++i) sql += ", ?";
+  impl_->insert = impl_->prepare(sql + ")");
+}
+
+StudyDatabase::~StudyDatabase() = default;
+
+std::vector<long> StudyDatabase::stored() const {
+  sqlite3_stmt* q = impl_->prepare("SELECT variant FROM variants ORDER BY variant");
+  std::vector<long> out;
+  while (sqlite3_step(q) == SQLITE_ROW)
+    out.push_back(static_cast<long>(sqlite3_column_int64(q, 0)));
+  sqlite3_finalize(q);
+  return out;
+}
+
+void StudyDatabase::insert(const VariantResult& r) {
+  sqlite3_stmt* s = impl_->insert;
+  int k = 1;
+  sqlite3_bind_int64(s, k++, r.index);
+  for (size_t j = 0; j < parameters_.size(); ++j) sqlite3_bind_double(s, k++, r.values.at(j));
+  sqlite3_bind_text(s, k++, r.status.c_str(), -1, SQLITE_TRANSIENT);
+  sqlite3_bind_text(s, k++, r.message.c_str(), -1, SQLITE_TRANSIENT);
+  for (const std::string& m : metrics_) {
+    double v = std::numeric_limits<double>::quiet_NaN();
+    for (const auto& [name, value] : r.metrics)
+      if (name == m) v = value;
+    if (std::isnan(v))
+      sqlite3_bind_null(s, k++);
+    else
+      sqlite3_bind_double(s, k++, v);
+  }
+  const int rc = sqlite3_step(s);
+  sqlite3_reset(s);
+  sqlite3_clear_bindings(s);
+  if (rc != SQLITE_DONE) impl_->fail("cannot store variant " + std::to_string(r.index));
+}
+
+std::vector<StudyDatabase::Row> StudyDatabase::rows() const {
+  sqlite3_stmt* q = impl_->prepare("SELECT * FROM variants ORDER BY variant");
+  std::vector<Row> out;
+  const auto number = [&](int column) {
+    return sqlite3_column_type(q, column) == SQLITE_NULL ? std::numeric_limits<double>::quiet_NaN()
+                                                         : sqlite3_column_double(q, column);
+  };
+  while (sqlite3_step(q) == SQLITE_ROW) {
+    Row row;
+    int c = 0;
+    row.index = static_cast<long>(sqlite3_column_int64(q, c++));
+    for (size_t j = 0; j < parameters_.size(); ++j) row.values.push_back(number(c++));
+    const auto text = [&](int column) {
+      const unsigned char* t = sqlite3_column_text(q, column);
+      return t ? std::string(reinterpret_cast<const char*>(t)) : std::string();
+    };
+    row.status = text(c++);
+    row.message = text(c++);
+    for (size_t m = 0; m < metrics_.size(); ++m) row.metrics.push_back(number(c++));
+    out.push_back(std::move(row));
+  }
+  sqlite3_finalize(q);
+  return out;
+}
+
+std::string study_csv(const StudyDatabase& db) {
+  const auto cell = [](const std::string& text) {
+    if (text.find_first_of(",\"\n") == std::string::npos) return text;
+    std::string q = "\"";
+    for (const char c : text) q += c == '"' ? std::string("\"\"") : std::string(1, c);
+    return q + "\"";
+  };
+  const auto number = [](double v) { return std::isnan(v) ? std::string() : value_text(v); };
+  std::string out = "variant";
+  const auto add = [&out](const std::string& text) {  // one cell after a comma
+    out += ',';
+    out += text;
+  };
+  for (const auto& p : db.parameters()) add(cell(p));
+  add("status");
+  for (const auto& m : db.metrics()) add(cell(m));
+  add("message");
+  out += '\n';
+  for (const StudyDatabase::Row& r : db.rows()) {
+    out += std::to_string(r.index);
+    for (double v : r.values) add(number(v));
+    add(cell(r.status));
+    for (double v : r.metrics) add(number(v));
+    add(cell(r.message));
+    out += '\n';
+  }
+  return out;
+}
+
+}  // namespace orthomech

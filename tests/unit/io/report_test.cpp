@@ -1,0 +1,105 @@
+// `cycle --report FILE.html` (issue 14; io/report.hpp) without a browser: the page is one
+// self-contained file (nothing it would fetch: no src, no link, no URL but the SVG namespaces),
+// with one animation frame per position and the plotted drive and reaction magnitudes equal to
+// `cycle --json --positions` of the same sweep, in the same units. The page running in a browser:
+// tests/unit/browser/report_browser_test.cpp.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <utility>
+
+#include "support/cli_runner.hpp"
+
+namespace orthomech {
+namespace {
+
+using test::CliResult;
+using test::run_cli;
+
+size_t count(const std::string& text, const std::string& what) {
+  size_t n = 0;
+  for (size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
+
+TEST(CycleReport, OneSelfContainedPageWithThePlottedValuesOfTheCycle) {
+  test::TempDir dir("orthomech_report_");
+  const std::string html = (dir.path / "report.html").string();
+  constexpr int kSteps = 12;
+  const CliResult r = run_cli({"cycle", test::bundled_file("slider-crank"), "--steps",
+                               std::to_string(kSteps), "--report", html, "--json", "--positions"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json cycle = nlohmann::json::parse(r.out);
+  const std::string page = test::read_text(html);
+  ASSERT_FALSE(page.empty());
+  // Nothing to fetch.
+  EXPECT_EQ(count(page, " src="), 0u);
+  EXPECT_EQ(count(page, "<link"), 0u);
+  EXPECT_EQ(count(page, "@import"), 0u);
+  EXPECT_EQ(count(page, "http"), count(page, "http://www.w3.org/2000/svg") +
+                                     count(page, "http://www.w3.org/1999/xlink"));
+  EXPECT_EQ(count(page, "<g id=\"frame-"), static_cast<size_t>(kSteps));
+  // The summary is the terminal's, as is.
+  const CliResult text =
+      run_cli({"cycle", test::bundled_file("slider-crank"), "--steps", std::to_string(kSteps)});
+  ASSERT_EQ(text.status, 0);
+  const std::string pre = "<pre id=\"summary\">";
+  const size_t from = page.find(pre), to = page.find("</pre>", from);
+  ASSERT_NE(from, std::string::npos);
+  std::string summary = page.substr(from + pre.size(), to - from - pre.size());
+  for (const auto& [entity, c] : {std::pair<std::string, std::string>{"&lt;", "<"},
+                                  {"&gt;", ">"},
+                                  {"&quot;", "\""},
+                                  {"&amp;", "&"}})
+    for (size_t at = summary.find(entity); at != std::string::npos;
+         at = summary.find(entity, at + 1))
+      summary.replace(at, entity.size(), c);
+  EXPECT_EQ(summary, text.out);
+  // The plotted data.
+  const std::string open = "<script type=\"application/json\" id=\"report-data\">";
+  const size_t begin = page.find(open);
+  ASSERT_NE(begin, std::string::npos);
+  const size_t end = page.find("</script>", begin);
+  const nlohmann::json data =
+      nlohmann::json::parse(page.substr(begin + open.size(), end - begin - open.size()));
+  ASSERT_EQ(data["input"].size(), static_cast<size_t>(kSteps));
+  EXPECT_EQ(data["input_label"], "input [deg]");
+  const nlohmann::json& points = cycle["points"];
+  ASSERT_EQ(data["plots"].size(), 3u) << "drive, reaction forces, the slide's moment";
+  EXPECT_EQ(data["plots"][2]["series"][0]["name"], "slide.|M|");
+  EXPECT_EQ(data["plots"][2]["unit"], "N*mm");
+  EXPECT_EQ(data["plots"][0]["unit"], cycle["driver"]["drive_unit"]);
+  for (int k = 0; k < kSteps; ++k) {
+    const double input = points[k]["input"], drive = points[k]["drive"];
+    EXPECT_NEAR(data["input"][k].get<double>(), input, 1e-9);
+    EXPECT_NEAR(data["plots"][0]["series"][0]["values"][k].get<double>(), drive,
+                1e-12 * (1.0 + std::abs(drive)));
+  }
+  // A reaction magnitude: |F| of joint A from its components.
+  const nlohmann::json& forces = data["plots"][1];
+  EXPECT_EQ(forces["unit"], "N");
+  bool found = false;
+  for (const nlohmann::json& s : forces["series"]) {
+    if (s["name"] != "A.|F|") continue;
+    found = true;
+    for (int k = 0; k < kSteps; ++k) {
+      const double fx = points[k]["reactions"]["A.Fx"], fy = points[k]["reactions"]["A.Fy"];
+      EXPECT_NEAR(s["values"][k].get<double>(), std::hypot(fx, fy), 1e-9 * std::hypot(fx, fy));
+    }
+  }
+  EXPECT_TRUE(found);
+}
+
+TEST(CycleReport, UnwritableFileIsBadInputWithNothingOnStdout) {
+  const CliResult r = run_cli({"cycle", test::bundled_file("slider-crank"), "--steps", "6",
+                               "--report", "/nonexistent/dir/report.html"});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("--report"), std::string::npos) << r.err;
+  EXPECT_TRUE(r.out.empty());
+}
+
+}  // namespace
+}  // namespace orthomech
