@@ -11,6 +11,7 @@
 #include <fstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <sstream>
 
 #include "commands.hpp"
@@ -18,6 +19,7 @@
 #include "orthomech/io/cycle_output.hpp"
 #include "orthomech/io/mechanism_file.hpp"
 #include "orthomech/io/study_db.hpp"
+#include "orthomech/study/distributed.hpp"
 #include "orthomech/study/study.hpp"
 
 namespace orthomech::cli {
@@ -173,7 +175,38 @@ void print_summary(const nlohmann::json& j, const fs::path& out) {
   std::cout << o.str();
 }
 
+// Under mpirun: rank 0 releases the other ranks with "stop" when it returns before the study
+// starts (it alone reports why), then finalises MPI.
+struct MpiStartGuard {
+  MpiSession* mpi = nullptr;
+  bool started = false;
+  ~MpiStartGuard() {
+    if (mpi && !started) {
+      (void)broadcast_start(false);
+      mpi->finish();
+    }
+  }
+};
+
+// Ranks other than 0: wait for rank 0's go, then evaluate the variants it hands out; no output.
+int serve_sweep(const SweepCliOptions& opt, MpiSession& mpi) {
+  if (!broadcast_start(false)) {
+    mpi.finish();
+    return kOk;
+  }
+  const std::string mechanism = read_file(opt.file, "file");
+  const Study study = load_study(opt.study, mechanism, opt.file);
+  serve_variants(mechanism, opt.file, study);
+  mpi.finish();
+  return kOk;
+}
+
 int run_sweep_command(const SweepCliOptions& opt) {
+  std::optional<MpiSession> mpi;
+  if (mpi_launched()) mpi.emplace();
+  if (mpi && mpi->rank() != 0) return serve_sweep(opt, *mpi);
+  MpiStartGuard guard{mpi ? &*mpi : nullptr};
+
   const std::string mechanism = read_file(opt.file, "file");
   {  // the nominal file must be valid: its errors are the file's, with their line
     const Model model = load(opt.file);
@@ -230,11 +263,24 @@ int run_sweep_command(const SweepCliOptions& opt) {
   spdlog::info("{}: {} variants, {} stored, {} to compute", opt.study, total, stored.size(),
                pending.size());
   long finished = 0;
-  run_variants(mechanism, opt.file, study, pending, opt.jobs, [&](const VariantResult& r) {
+  const auto store = [&](const VariantResult& r) {
     db->insert(r);
     ++finished;
     if (r.status != "completed") spdlog::debug("variant {}: {}: {}", r.index, r.status, r.message);
-  });
+  };
+  if (mpi) {
+    spdlog::info("{} MPI ranks: rank 0 stores, {} evaluate", mpi->size(), mpi->size() - 1);
+    guard.started = broadcast_start(true);
+    try {
+      coordinate_variants(pending, store);
+    } catch (...) {
+      mpi->finish();  // every rank was released
+      throw;
+    }
+    mpi->finish();
+  } else {
+    run_variants(mechanism, opt.file, study, pending, opt.jobs, store);
+  }
   spdlog::info("computed {} variants", finished);
 
   const nlohmann::json summary = summarize(study, *db, nominal);

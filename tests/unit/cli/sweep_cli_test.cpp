@@ -117,6 +117,36 @@ TEST(SweepCli, OneAndTwoThreadsGiveIdenticalFiles) {
   EXPECT_EQ(csv(a).size(), 13u);
 }
 
+// mpirun -n 2 and -n 3 (rank 0 stores, the others evaluate what they are handed) write the files
+// of one process. Open MPI comes from scripts/setup; a missing mpirun is a failure, not a skip.
+TEST(SweepCli, MpirunGivesTheFilesOfOneProcess) {
+  ASSERT_EQ(std::system("command -v mpirun > /dev/null 2>&1"), 0)
+      << "mpirun is not installed: scripts/setup installs Open MPI (openmpi-bin, libopenmpi-dev)";
+  Dir dir;
+  const std::string mech = test::bundled_file("crank-rocker");
+  const std::string study = dir.write("mc.yaml", monte_carlo(20, "0.05", "0.1"));
+  const auto one = run_cli({"sweep", mech, "--study", study, "--out", dir.file("one"), "-j", "1"});
+  ASSERT_EQ(one.status, 0) << one.err;
+  for (const char* ranks : {"2", "3"}) {
+    SCOPED_TRACE(ranks);
+    const std::string out = dir.file(std::string("mpi") + ranks);
+    const std::string command =
+        "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
+        "OMPI_MCA_rmaps_base_oversubscribe=1 "
+        "mpirun -n " +
+        std::string(ranks) + " '" + std::string(ORTHOMECH_CLI) + "' sweep '" + mech +
+        "' --study '" + study + "' --out '" + out + "' -v > '" + out + ".log' 2>&1";
+    const int status = std::system(command.c_str());
+    const std::string log = test::read_text(out + ".log");
+    ASSERT_EQ(status, 0) << log;
+    EXPECT_NE(log.find(std::string(ranks) + " MPI ranks"), std::string::npos) << log;
+    EXPECT_EQ(test::read_text(fs::path(out) / "variants.csv"),
+              test::read_text(dir.path / "one" / "variants.csv"));
+    EXPECT_EQ(test::read_text(fs::path(out) / "summary.json"),
+              test::read_text(dir.path / "one" / "summary.json"));
+  }
+}
+
 TEST(SweepCli, AKilledStudyResumedGivesTheUninterruptedFile) {
   Dir dir;
   const std::string mech = test::bundled_file("crank-rocker");
