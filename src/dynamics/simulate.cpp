@@ -763,7 +763,6 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
   double spread_now = 0.0;  // the chart's spread after the last acceptance (dual form)
   double next_step_limit = std::numeric_limits<double>::infinity();
   problem.step_limit = [&] { return next_step_limit; };
-  std::string stop_message;
   // Rows of f that are angles (joint components "angle", "ratio"): the residual by kind.
   std::vector<char> angular_row(static_cast<size_t>(model.nc), 0);
   for (const Joint& j : model.joints) {
