@@ -89,7 +89,7 @@ void coordinate_variants(const std::vector<long>& pending,
     PMPI_Get_count(&status, MPI_CHAR, &length);
     std::string text(static_cast<size_t>(length), '\0');
     PMPI_Recv(text.data(), length, MPI_CHAR, status.MPI_SOURCE, kResultTag, MPI_COMM_WORLD,
-             MPI_STATUS_IGNORE);
+              MPI_STATUS_IGNORE);
     if (!text.empty() && !failure) {
       try {
         done(unpack(text));
@@ -109,7 +109,7 @@ void serve_variants(const std::string& mechanism, const std::string& origin, con
   std::string message;  // empty: ready for the first variant
   for (;;) {
     PMPI_Send(message.data(), static_cast<int>(message.size()), MPI_CHAR, 0, kResultTag,
-             MPI_COMM_WORLD);
+              MPI_COMM_WORLD);
     long index = -1;
     PMPI_Recv(&index, 1, MPI_LONG, 0, kIndexTag, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
     if (index < 0) return;
