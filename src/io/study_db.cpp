@@ -95,10 +95,11 @@ StudyDatabase::StudyDatabase(const std::filesystem::path& file, bool resume,
     sqlite3_finalize(put);
   } else if (stored != expected) {
     std::string differ;
-    for (const auto& [k, v] : expected) {
-      const auto it =
-          std::find_if(stored.begin(), stored.end(), [&](const auto& s) { return s.first == k; });
-      if (it == stored.end() || it->second != v) differ += (differ.empty() ? "" : ", ") + k;
+    for (const auto& entry : expected) {  // (not a structured binding: clang 14 cannot capture one)
+      const auto it = std::find_if(stored.begin(), stored.end(),
+                                   [&](const auto& s) { return s.first == entry.first; });
+      if (it == stored.end() || it->second != entry.second)
+        differ += (differ.empty() ? "" : ", ") + entry.first;
     }
     impl_->exec("ROLLBACK");
     throw std::runtime_error(
