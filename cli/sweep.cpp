@@ -195,7 +195,7 @@ int serve_sweep(const SweepCliOptions& opt, MpiSession& mpi) {
     return kOk;
   }
   const std::string mechanism = read_file(opt.file, "file");
-  const Study study = load_study(opt.study, mechanism, opt.file);
+  const Study study = parse_study(read_file(opt.study, "study"), opt.study, mechanism, opt.file);
   serve_variants(mechanism, opt.file, study);
   mpi.finish();
   return kOk;
@@ -212,8 +212,8 @@ int run_sweep_command(const SweepCliOptions& opt) {
     const Model model = load(opt.file);
     (void)model;
   }
-  const Study study = load_study(opt.study, mechanism, opt.file);
   const std::string study_text = read_file(opt.study, "study");
+  const Study study = parse_study(study_text, opt.study, mechanism, opt.file);
 
   // The nominal design fixes the metric columns.
   Study nominal_study = study;

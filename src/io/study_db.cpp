@@ -16,8 +16,6 @@ std::string quoted(const std::string& name) {  // an SQL identifier
   return q + "\"";
 }
 
-// Column names: the parameters prefixed "p:" would be ugly for pandas; parameters and metrics
-// keep their names, and clashes with the fixed columns are refused by the caller's uniqueness.
 }  // namespace
 
 struct StudyDatabase::Impl {

@@ -1,5 +1,6 @@
 #include "orthomech/study/study.hpp"
 
+#include <omp.h>
 #include <yaml-cpp/yaml.h>
 
 #include <Eigen/LU>
@@ -43,7 +44,6 @@ class StudyReader {
     if (!root.IsMap()) fail(root, "study", "expected a mapping (study: grid, parameters: ...)");
     expect_keys(root, "study", {"study", "samples", "seed", "steps", "parameters", "best"});
     Study s;
-    s.file = file_;
     const YAML::Node kind = require(root, "study", "study");
     const std::string k = kind.IsScalar() ? kind.Scalar() : "";
     if (k == "grid")
@@ -392,7 +392,7 @@ void run_variants(const std::string& mechanism, const std::string& origin, const
                   const std::function<void(const VariantResult&)>& done) {
   std::exception_ptr failure;
   const long n = static_cast<long>(pending.size());
-  const int threads = jobs > 0 ? jobs : 0;
+  const int threads = jobs > 0 ? jobs : omp_get_max_threads();  // 0: every core
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads) if (threads != 1)
   for (long k = 0; k < n; ++k) {
     bool stop = false;

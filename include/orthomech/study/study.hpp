@@ -25,7 +25,6 @@ struct StudyParameter {
 };
 
 struct Study {
-  std::string file;  // the study file (messages)
   StudyKind kind = StudyKind::grid;
   long samples = 0;        // Monte Carlo: number of variants
   std::uint64_t seed = 1;  // Monte Carlo
