@@ -28,6 +28,7 @@
 #include "orthomech/io/render.hpp"
 #include "support/cli_runner.hpp"
 #include "support/fixtures.hpp"
+#include "support/png_image.hpp"
 #include "support/webdriver.hpp"
 
 namespace orthomech {
@@ -192,36 +193,11 @@ TEST(ReportBrowser, PlaysAndTheSliderPutsTheCrankAtEachInput) {
 }
 
 // ---- the screenshot -----------------------------------------------------------------------------
-struct Image {
-  std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)> surface{nullptr,
-                                                                             cairo_surface_destroy};
-  int width = 0, height = 0, stride = 0;
-  const unsigned char* data = nullptr;
-  explicit Image(const std::string& png) {
-    struct Reader {
-      const std::string* bytes;
-      size_t at = 0;
-    } reader{&png};
-    surface.reset(cairo_image_surface_create_from_png_stream(
-        [](void* closure, unsigned char* out, unsigned int length) {
-          auto* r = static_cast<Reader*>(closure);
-          if (r->at + length > r->bytes->size()) return CAIRO_STATUS_READ_ERROR;
-          std::memcpy(out, r->bytes->data() + r->at, length);
-          r->at += length;
-          return CAIRO_STATUS_SUCCESS;
-        },
-        &reader));
-    if (cairo_surface_status(surface.get()) != CAIRO_STATUS_SUCCESS) return;
-    cairo_surface_flush(surface.get());
-    width = cairo_image_surface_get_width(surface.get());
-    height = cairo_image_surface_get_height(surface.get());
-    stride = cairo_image_surface_get_stride(surface.get());
-    data = cairo_image_surface_get_data(surface.get());
-  }
+struct Image : test::PngImage {
+  explicit Image(const std::string& png) : test::PngImage(from_bytes(png)) {}
   // 0–255 per channel (the images are opaque: premultiplied = plain).
   [[nodiscard]] std::array<int, 3> rgb(int i, int j) const {
-    uint32_t v = 0;
-    std::memcpy(&v, data + static_cast<size_t>(j) * stride + static_cast<size_t>(i) * 4, 4);
+    const uint32_t v = argb(i, j);
     return {static_cast<int>((v >> 16) & 0xff), static_cast<int>((v >> 8) & 0xff),
             static_cast<int>(v & 0xff)};
   }

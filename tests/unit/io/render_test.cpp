@@ -33,6 +33,7 @@
 #include "orthomech/io/mechanism_file.hpp"
 #include "support/cli_runner.hpp"
 #include "support/fixtures.hpp"
+#include "support/png_image.hpp"
 #include "support/zoo.hpp"
 
 namespace orthomech {
@@ -110,27 +111,14 @@ ExpectedView expected_view(const FourBarPose& p, int width, int height) {
 }
 
 // ---- reading a PNG back with Cairo -------------------------------------------------------------
-struct Png {
-  std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)> surface{nullptr,
-                                                                             cairo_surface_destroy};
-  int width = 0, height = 0, stride = 0;
-  const unsigned char* data = nullptr;
-  explicit Png(const std::string& path) {
-    surface.reset(cairo_image_surface_create_from_png(path.c_str()));
-    if (cairo_surface_status(surface.get()) != CAIRO_STATUS_SUCCESS) return;
-    cairo_surface_flush(surface.get());
-    width = cairo_image_surface_get_width(surface.get());
-    height = cairo_image_surface_get_height(surface.get());
-    stride = cairo_image_surface_get_stride(surface.get());
-    data = cairo_image_surface_get_data(surface.get());
-  }
+struct Png : test::PngImage {
+  explicit Png(const std::string& path) : test::PngImage(from_file(path)) {}
   // Colour of the pixel containing the point (x, y) (pixel (i, j) covers [i, i+1) × [j, j+1)),
   // 0…1; the image is opaque, so Cairo's premultiplied ARGB32 is the colour itself.
   [[nodiscard]] Rgba at(const Vec2& p) const {
     const int i = static_cast<int>(std::floor(p.x())), j = static_cast<int>(std::floor(p.y()));
     if (i < 0 || j < 0 || i >= width || j >= height) return Rgba{-1, -1, -1, -1};
-    uint32_t v = 0;
-    std::memcpy(&v, data + static_cast<size_t>(j) * stride + static_cast<size_t>(i) * 4, 4);
+    const uint32_t v = argb(i, j);
     return Rgba{((v >> 16) & 0xff) / 255.0, ((v >> 8) & 0xff) / 255.0, (v & 0xff) / 255.0,
                 ((v >> 24) & 0xff) / 255.0};
   }
