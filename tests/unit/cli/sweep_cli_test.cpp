@@ -200,6 +200,82 @@ TEST(SweepCli, ZeroSpreadGivesTheNominalDesign) {
             c["peaks"]["drive"]["peak"].get<double>());
 }
 
+// The metric blocks (`metrics:`): the validate and assemble columns of a variant equal standalone
+// `validate --set` and `assemble --set` runs of the same values; a loop that cannot close
+// (a − d = 250 − 70 > b + c = 80 + 60: no crank angle closes it) is a row with its status,
+// assemble.ok 0 and validate.pass 0, never the end of the study; the nominal design's deviation
+// is 0; -j 1 and -j 2 give the same files.
+TEST(SweepCli, CheckColumnsEqualStandaloneValidateAndAssembleRuns) {
+  Dir dir;
+  const std::string mech = test::bundled_file("crank-rocker");
+  const std::string study = dir.write("checks.yaml", R"(study: grid
+steps: 36
+parameters:
+  - {name: crank, path: bodies.crank.points.A.0, values: [30, 31, 250]}
+metrics: {cycle: true, validate: true, assemble: true, deviation: [coupler.P]}
+)");
+  const auto one =
+      run_cli({"sweep", mech, "--study", study, "--out", dir.file("one"), "-j", "1", "--json"});
+  ASSERT_EQ(one.status, 0) << one.err;
+  const auto two =
+      run_cli({"sweep", mech, "--study", study, "--out", dir.file("two"), "-j", "2", "--json"});
+  ASSERT_EQ(two.status, 0) << two.err;
+  const std::string text = test::read_text(dir.path / "one" / "variants.csv");
+  EXPECT_EQ(text, test::read_text(dir.path / "two" / "variants.csv"));
+  EXPECT_EQ(one.out, two.out);
+  const auto rows = csv(text);
+  ASSERT_EQ(rows.size(), 4u);
+  const auto summary = nlohmann::json::parse(one.out);
+  EXPECT_EQ(summary["nominal"]["deviation.coupler.P.max"].get<double>(), 0.0);
+  EXPECT_EQ(summary["nominal"]["validate.pass"].get<double>(), 1.0);
+  EXPECT_EQ(summary["nominal"]["assemble.ok"].get<double>(), 1.0);
+
+  // Row 3, crank 250: a row with its status; nothing of the cycle, the checks fail.
+  EXPECT_EQ(column(rows, 3, "crank"), "250");
+  EXPECT_EQ(column(rows, 3, "status"), "failed");
+  EXPECT_NE(column(rows, 3, "message").find("does not assemble"), std::string::npos);
+  EXPECT_EQ(column(rows, 3, "drive.peak"), "");
+  EXPECT_EQ(column(rows, 3, "deviation.coupler.P.max"), "");
+  EXPECT_EQ(column(rows, 3, "assemble.ok"), "0");
+  EXPECT_EQ(column(rows, 3, "assemble.distance"), "");
+  EXPECT_EQ(column(rows, 3, "validate.pass"), "0");
+  EXPECT_EQ(column(rows, 3, "validate.p1.assembles"), "0");
+
+  // Rows 2 and 3 against the standalone commands.
+  for (const size_t row : {size_t{2}, size_t{3}}) {
+    const std::string set = "bodies.crank.points.A.0=" + column(rows, row, "crank");
+    SCOPED_TRACE(set);
+    const auto v = run_cli({"validate", mech, "--set", set, "--json"});
+    ASSERT_TRUE(v.status == 0 || v.status == 1) << v.err;
+    const auto vj = nlohmann::json::parse(v.out);
+    EXPECT_EQ(column(rows, row, "validate.pass"), vj["pass"].get<bool>() ? "1" : "0");
+    for (const auto& p : vj["positions"]) {
+      const std::string name = p["name"];
+      EXPECT_EQ(column(rows, row, "validate." + name + ".assembles"),
+                p["assembles"].get<bool>() ? "1" : "0");
+      if (p["assembles"].get<bool>()) {
+        EXPECT_EQ(column(rows, row, "validate." + name + ".target"),
+                  p["target_met"].get<bool>() ? "1" : "0");
+        bool transmission = true;
+        for (const auto& f : p["four_bars"]) transmission = transmission && f["ok"].get<bool>();
+        EXPECT_EQ(column(rows, row, "validate." + name + ".transmission"),
+                  transmission ? "1" : "0");
+      }
+    }
+    const auto a = run_cli({"assemble", mech, "--set", set, "--json"});
+    const auto aj = nlohmann::json::parse(a.out);
+    const bool ok = a.status == 0;
+    EXPECT_EQ(column(rows, row, "assemble.ok"), ok ? "1" : "0");
+    if (ok) {
+      EXPECT_EQ(std::stod(column(rows, row, "assemble.distance")), aj["distance"].get<double>());
+    }
+  }
+  // Crank 31: moved from the file's closed pose, the targets missed (a check that can fail).
+  EXPECT_EQ(column(rows, 2, "validate.pass"), "0");
+  EXPECT_GT(std::stod(column(rows, 2, "assemble.distance")), 0.0);
+  EXPECT_GT(std::stod(column(rows, 2, "deviation.coupler.P.max")), 0.1);
+}
+
 TEST(SweepCli, BadStudiesAndOutputsAreExitTwo) {
   Dir dir;
   const std::string mech = test::bundled_file("crank-rocker");
