@@ -604,7 +604,11 @@ VariantResult evaluate_variant(const std::string& mechanism, const std::string& 
       }
       const CycleOptions co = study_cycle_options(model, *driver, study);
       const CycleResult c = run_cycle(model, co);
-      r.status = c.status == CycleStatus::invalid_request ? "invalid" : to_string(c.status);
+      // The names of `cycle --json`'s status (docs/cli.md), one word each.
+      r.status = c.status == CycleStatus::completed               ? "completed"
+                 : c.status == CycleStatus::stopped_at_dead_point ? "stopped_at_dead_point"
+                 : c.status == CycleStatus::invalid_request       ? "invalid"
+                                                                  : "failed";
       r.message = c.message;
       r.positions = static_cast<long>(c.points.size());
       if (want.cycle && !c.points.empty()) cycle_metrics(model, c, driver->joint, r.metrics);

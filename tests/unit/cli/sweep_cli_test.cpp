@@ -147,6 +147,39 @@ TEST(SweepCli, MpirunGivesTheFilesOfOneProcess) {
   }
 }
 
+// The metric blocks under mpirun: each rank computes the nominal paths once; the files are
+// those of one process.
+TEST(SweepCli, MpirunGivesTheFilesOfOneProcessWithEveryMetricBlock) {
+  ASSERT_EQ(std::system("command -v mpirun > /dev/null 2>&1"), 0)
+      << "mpirun is not installed: scripts/setup installs Open MPI (openmpi-bin, libopenmpi-dev)";
+  Dir dir;
+  const std::string mech = test::bundled_file("crank-rocker");
+  const std::string study = dir.write("all.yaml", R"(study: monte-carlo
+samples: 8
+seed: 4
+steps: 36
+parameters:
+  - {name: crank, path: bodies.crank.points.A.0, normal: {sigma: 0.3}}
+  - {name: ground, path: ground.points.B0.0, uniform: {tolerance: 0.5}}
+metrics: {cycle: true, validate: true, assemble: true, deviation: [coupler.P, rocker.B]}
+)");
+  const auto one = run_cli({"sweep", mech, "--study", study, "--out", dir.file("one"), "-j", "1"});
+  ASSERT_EQ(one.status, 0) << one.err;
+  const std::string out = dir.file("mpi");
+  const std::string command =
+      "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
+      "OMPI_MCA_rmaps_base_oversubscribe=1 mpirun -n 2 '" +
+      std::string(ORTHOMECH_CLI) + "' sweep '" + mech + "' --study '" + study + "' --out '" + out +
+      "' > '" + out + ".log' 2>&1";
+  ASSERT_EQ(std::system(command.c_str()), 0) << test::read_text(out + ".log");
+  const std::string csv_one = test::read_text(dir.path / "one" / "variants.csv");
+  EXPECT_EQ(test::read_text(fs::path(out) / "variants.csv"), csv_one);
+  EXPECT_EQ(test::read_text(fs::path(out) / "summary.json"),
+            test::read_text(dir.path / "one" / "summary.json"));
+  EXPECT_NE(csv_one.find("deviation.rocker.B.rms"), std::string::npos);
+  EXPECT_NE(csv_one.find("validate.p3.target"), std::string::npos);
+}
+
 TEST(SweepCli, AKilledStudyResumedGivesTheUninterruptedFile) {
   Dir dir;
   const std::string mech = test::bundled_file("crank-rocker");
@@ -274,6 +307,49 @@ metrics: {cycle: true, validate: true, assemble: true, deviation: [coupler.P]}
   EXPECT_EQ(column(rows, 2, "validate.pass"), "0");
   EXPECT_GT(std::stod(column(rows, 2, "assemble.distance")), 0.0);
   EXPECT_GT(std::stod(column(rows, 2, "deviation.coupler.P.max")), 0.1);
+}
+
+// The summary of a Monte Carlo study counts the checks (assemble.*, validate.*) of every variant
+// that has them — a variant that cannot close is part of the yield — and the cycle's metrics of
+// the completed variants only. Oracle: the loop closes at some crank angle iff a − d ≤ b + c
+// (a − 70 ≤ 140), read off each row's crank length.
+TEST(SweepCli, MonteCarloSummaryCountsTheChecksOfEveryVariant) {
+  Dir dir;
+  const std::string mech = test::bundled_file("crank-rocker");
+  const std::string study = dir.write("mc.yaml", R"(study: monte-carlo
+samples: 16
+seed: 3
+steps: 36
+parameters:
+  - {name: crank, path: bodies.crank.points.A.0, uniform: {mean: 200, tolerance: 60}}
+metrics: {cycle: true, assemble: true}
+)");
+  const auto r =
+      run_cli({"sweep", mech, "--study", study, "--out", dir.file("out"), "--json", "-j", "2"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto rows = csv(test::read_text(dir.path / "out" / "variants.csv"));
+  ASSERT_EQ(rows.size(), 17u);
+  long closes = 0, completed = 0;
+  for (size_t row = 1; row < rows.size(); ++row) {
+    const double a = std::stod(column(rows, row, "crank"));
+    const bool c = a - 70.0 <= 140.0;
+    closes += c ? 1 : 0;
+    completed += column(rows, row, "status") == "completed" ? 1 : 0;
+    EXPECT_EQ(column(rows, row, "assemble.ok"), c ? "1" : "0") << "crank " << a;
+  }
+  ASSERT_GT(closes, 0);   // the draws reach both sides of a − d = b + c
+  ASSERT_LT(closes, 16);  // (the test could not tell the two counts apart otherwise)
+  const auto summary = nlohmann::json::parse(r.out);
+  for (const auto& m : summary["metrics"]) {
+    if (m["metric"] == "assemble.ok") {
+      EXPECT_EQ(m["n"].get<long>(), 16);
+      EXPECT_DOUBLE_EQ(m["mean"].get<double>(), double(closes) / 16.0);
+    }
+    if (m["metric"] == "drive.peak") {
+      EXPECT_EQ(m["n"].get<long>(), completed);
+    }
+  }
+  EXPECT_LT(completed, 16);  // a non-Grashof crank does not turn: its cycle is not completed
 }
 
 TEST(SweepCli, BadStudiesAndOutputsAreExitTwo) {
