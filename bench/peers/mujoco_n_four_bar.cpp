@@ -36,7 +36,10 @@ std::string model_xml(int N, double dt, bool rk4, bool tight) {
   const double I = 1.0 / 12.0, tiny = 1e-9;  // rod 1 m, 1 kg about its centre; the axial axis
   x << "<mujoco model='n-four-bar'>\n"
     << "  <option timestep='" << dt << "' integrator='" << (rk4 ? "RK4" : "Euler")
-    << "' gravity='0 0 -9.81'><flag contact='disable'/></option>\n  <worldbody>\n";
+    << "' gravity='0 0 -9.81'><flag contact='disable'/></option>\n"
+    // Room for every constraint row (3 per connect): MuJoCo's default njmax (1000) would drop
+    // the rows beyond it from N = 334 on, with only a warning.
+    << "  <size njmax='" << 3 * N + 100 << "'/>\n  <worldbody>\n";
   for (int k = 0; k <= N; ++k) {
     x << "    <body name='link" << k << "' pos='" << k << " 0 0'>\n"
       << "      <joint name='O" << k << "' type='hinge' axis='0 1 0'/>\n"

@@ -10,8 +10,9 @@ Prints two Markdown tables: the work-precision table at N = 40 to t = 20 s (erro
 end against the reduction, the largest loop-closure gap, CPU time per simulated second) and the
 growth of the CPU time per simulated second with N at one setting per tool. A peer whose binary
 was not built (its package missing) is left out with a note. orthomech's rows time the whole
-`orthomech simulate` process (user + sys, getrusage of the child); the peers time their integration loop
-(process CPU clock), so orthomech's numbers include parsing and setup (a few ms).
+`orthomech simulate` process (user + sys, getrusage of the child); the peers time their
+integration loop (process CPU clock), so orthomech's numbers include parsing and setup (a few
+ms). Each row is one run.
 """
 import argparse
 import json
@@ -66,8 +67,8 @@ def orthomech_row(build, n, t_end, integrator, rtol, tmp):
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
     j = json.loads(r.stdout)
-    ref = [float(x) for x in run([os.path.join(build, "bench", "peers", "peer_reference_n_four_bar"),
-                                   str(n), str(j["final"]["t"])]).split()]
+    reference = os.path.join(build, "bench", "peers", "peer_reference_n_four_bar")
+    ref = [float(x) for x in run([reference, str(n), str(j["final"]["t"])]).split()]
     m = j["final"]["measures"]
     err = math.hypot(m["B0_x"] - ref[0], m["B0_y"] - ref[1])
     return {"tool": "orthomech", "setting": f"{integrator} rtol {rtol:g}", "N": n,
@@ -78,24 +79,27 @@ def orthomech_row(build, n, t_end, integrator, rtol, tmp):
 
 def mujoco_row(build, n, t_end, dt, method, sol):
     exe = os.path.join(build, "bench", "peers", "peer_mujoco_n_four_bar")
-    f = parse_line(run([exe, str(n), str(t_end), str(dt), method, sol]))
+    lines = run([exe, str(n), str(t_end), str(dt), method, sol]).splitlines()
+    f = parse_line([x for x in lines if x.startswith("mujoco ")][-1])  # not MuJoCo's warnings
     return {"tool": "MuJoCo " + f["raw"].split()[1], "setting": f"{method} dt {dt:g} {sol}",
             "N": n, "t": float(f["t"]), "cpu_per_s": float(f["cpu_per_s"]),
             "err": float(f["err"]), "gap": float(f["gap"]), "note": ""}
 
 
-def simbody_row(build, n, t_end, acc, method, cap):
+def simbody_row(build, n, t_end, acc, method, cap, closure="plane"):
     exe = os.path.join(build, "bench", "peers", "peer_simbody_n_four_bar")
+    name = f"{method} accuracy {acc:g}" + (", Ball" if closure == "ball" else "")
     # The program checks its CPU cap every 0.01 s of simulated time; an integrator stuck on
     # tiny steps inside one interval is stopped here (wall clock: 4 × the cap).
     try:
-        f = parse_line(run([exe, str(n), str(t_end), str(acc), method, str(cap)], 4 * cap))
+        f = parse_line(run([exe, str(n), str(t_end), str(acc), method, str(cap), closure],
+                           4 * cap))
     except subprocess.TimeoutExpired:
-        return {"tool": "Simbody 3.7", "setting": f"{method} accuracy {acc:g}", "N": n,
-                "t": float("nan"), "cpu_per_s": float("nan"), "err": float("nan"),
+        return {"tool": "Simbody 3.7", "setting": name, "N": n, "t": float("nan"),
+                "cpu_per_s": float("nan"), "err": float("nan"),
                 "gap": float("nan"), "note": f"stopped after {4 * cap:g} s wall, no result"}
-    return {"tool": "Simbody 3.7", "setting": f"{method} accuracy {acc:g}", "N": n,
-            "t": float(f["t"]), "cpu_per_s": float(f["cpu_per_s"]), "err": float(f["err"]),
+    return {"tool": "Simbody 3.7", "setting": name, "N": n, "t": float(f["t"]),
+            "cpu_per_s": float(f["cpu_per_s"]), "err": float(f["err"]),
             "gap": float(f["gap"]), "note": f.get("stop", "") + f" ({f['steps']} steps)"}
 
 
@@ -137,6 +141,7 @@ def main():
         if have_simbody:
             for acc in (1e-4, 1e-6, 1e-8):
                 row(simbody_row(a.build, n40, t40, acc, "rkm", a.cap))
+            row(simbody_row(a.build, n40, t40, 1e-6, "rkm", a.cap, "ball"))
             row(simbody_row(a.build, n40, t40, 1e-6, "cpodes", a.cap))
         for integrator, rtol in (("dopri5", 1e-7), ("dopri5", 1e-9), ("rkf78", 1e-8),
                                  ("rkf78", 1e-10)):
@@ -144,7 +149,7 @@ def main():
         t_g = 2.0 if a.quick else 5.0
         print(f"\n## Growth with N: CPU s per simulated s, t = 0 … {t_g:g} s\n")
         header()
-        for n in ((2, 10) if a.quick else (2, 10, 40, 100)):
+        for n in ((2, 10) if a.quick else (2, 10, 40, 100, 400)):
             if have_mujoco:
                 row(mujoco_row(a.build, n, t_g, 1e-3, "euler", "tight"))
             if have_simbody:

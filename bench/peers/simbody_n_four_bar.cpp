@@ -6,7 +6,9 @@
 // constraint tolerance set to ACC. Prints one line: N, the setting, CPU time per simulated second,
 // |B0 − exact| at t_end (m; nfourbar_reference.hpp), the largest loop gap seen (sampled every
 // 0.01 s), or where and why the integration stopped. CPU time is capped at CPU_CAP seconds.
-//   usage: peer_simbody_n_four_bar N T_END ACC rkm|rkf|rk3|cpodes [CPU_CAP]
+// With `ball` the loops are closed by Constraint::Ball instead (three equations, the one along z
+// redundant: Simbody's least-squares projection has to cope with it).
+//   usage: peer_simbody_n_four_bar N T_END ACC rkm|rkf|rk3|cpodes [CPU_CAP [plane|ball]]
 #include <Simbody.h>
 
 #include <algorithm>
@@ -42,13 +44,15 @@ MassProperties rod(const Vec3& axis) {
 
 int main(int argc, char** argv) {
   if (argc < 5) {
-    std::fprintf(stderr, "usage: %s N T_END ACC rkm|rkf|rk3|cpodes [CPU_CAP]\n", argv[0]);
+    std::fprintf(stderr, "usage: %s N T_END ACC rkm|rkf|rk3|cpodes [CPU_CAP [plane|ball]]\n",
+                 argv[0]);
     return 2;
   }
   const int N = std::atoi(argv[1]);
   const double t_end = std::atof(argv[2]), accuracy = std::atof(argv[3]);
   const std::string method = argv[4];
   const double cap = argc > 5 ? std::atof(argv[5]) : 120.0;
+  const bool ball = argc > 6 && std::string(argv[6]) == "ball";
 
   MultibodySystem system;
   SimbodyMatterSubsystem matter(system);
@@ -62,8 +66,12 @@ int main(int argc, char** argv) {
       couplers.emplace_back(links.back(), Transform(Vec3(0, 1, 0)), coupler_body, Transform());
   }
   for (int k = 0; k < N; ++k) {
-    Constraint::PointInPlane(links[k + 1], UnitVec3(XAxis), 0.0, couplers[k], Vec3(1, 0, 0));
-    Constraint::PointInPlane(links[k + 1], UnitVec3(YAxis), 1.0, couplers[k], Vec3(1, 0, 0));
+    if (ball) {
+      Constraint::Ball(couplers[k], Vec3(1, 0, 0), links[k + 1], Vec3(0, 1, 0));
+    } else {
+      Constraint::PointInPlane(links[k + 1], UnitVec3(XAxis), 0.0, couplers[k], Vec3(1, 0, 0));
+      Constraint::PointInPlane(links[k + 1], UnitVec3(YAxis), 1.0, couplers[k], Vec3(1, 0, 0));
+    }
   }
   State state = system.realizeTopology();
   // The benchmark's initial velocity: every link at −1 rad/s about z (B0 moves at x' = 1 m/s),
@@ -129,8 +137,9 @@ int main(int argc, char** argv) {
       first = stop.substr(u, stop.find('\n', u) - u);  // "Unable to advance time past 2.68212."
     if (stop.rfind("integrator failure", 0) == 0) first = "integrator failure: " + first;
   }
-  std::printf("simbody %s N=%d acc=%g %s t=%g cpu_per_s=%.4g err=%.2e gap=%.1e steps=%d%s%s\n",
-              "3.7", N, accuracy, method.c_str(), t, cpu / std::max(t, 1e-12), err, max_gap,
-              integ->getNumStepsTaken(), stop.empty() ? "" : " STOP: ", first.c_str());
+  std::printf("simbody %s%s N=%d acc=%g %s t=%g cpu_per_s=%.4g err=%.2e gap=%.1e steps=%d%s%s\n",
+              "3.7", ball ? " ball" : "", N, accuracy, method.c_str(), t, cpu / std::max(t, 1e-12),
+              err, max_gap, integ->getNumStepsTaken(),
+              stop.empty() ? "" : " STOP: ", first.c_str());
   return 0;
 }
