@@ -1,12 +1,13 @@
 #!/usr/bin/env bash
 # ctest Package.Consumer: `cmake --install` into a temporary prefix, then the installed package as
 # a user sees it: the layout (GNUInstallDirs), examples/cpp built with find_package(orthomech)
-# and with pkg-config, its peak drive against the installed CLI's JSON, and the installed Python
-# module. Usage: consumer_test.sh BUILD_DIR SOURCE_DIR PYTHON
+# and with pkg-config (shared and static), its peak drive against the installed CLI's JSON, and
+# the installed Python module. Usage: consumer_test.sh BUILD_DIR SOURCE_DIR PYTHON
 set -euo pipefail
 build=$1 source=$2 python=$3
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
+# A fixed folder in the build tree (ccache hits from one run to the next; left for inspection).
+tmp=$build/tests/package/consumer
+rm -rf "$tmp" && mkdir -p "$tmp"
 prefix=$tmp/prefix
 cmake --install "$build" --prefix "$prefix" > /dev/null
 version=$(sed -n 's/^#define ORTHOMECH_VERSION "\(.*\)"$/\1/p' "$prefix/include/orthomech/version.hpp")
@@ -63,9 +64,19 @@ compiler=(c++)
 command -v ccache > /dev/null && compiler=(ccache c++)
 # shellcheck disable=SC2046
 "${compiler[@]}" -std=c++20 -O2 -DMECHANISMS_DIR="\"$prefix/share/orthomech/mechanisms\"" \
-  "$source/examples/cpp/peak_drive.cpp" -o "$tmp/peak_drive_pc" \
-  $(pkg-config --cflags --libs orthomech)
+  -c "$source/examples/cpp/peak_drive.cpp" -o "$tmp/peak_drive.o" $(pkg-config --cflags orthomech)
+# shellcheck disable=SC2046
+c++ "$tmp/peak_drive.o" -o "$tmp/peak_drive_pc" $(pkg-config --libs orthomech)
 check "pkg-config" "$(LD_LIBRARY_PATH=$prefix/lib "$tmp/peak_drive_pc" "$mechanism")"
+# Static: liborthomech.a and its private dependencies (Requires.private, pkg-config --static).
+# shellcheck disable=SC2046
+c++ "$tmp/peak_drive.o" -o "$tmp/peak_drive_static" -L"$prefix/lib" -Wl,-Bstatic -lorthomech \
+  -Wl,-Bdynamic $(pkg-config --static --libs orthomech | sed 's/-lorthomech//')
+if ldd "$tmp/peak_drive_static" | grep -q liborthomech; then
+  echo "peak_drive_static loads liborthomech.so" >&2
+  exit 1
+fi
+check "pkg-config --static" "$("$tmp/peak_drive_static" "$mechanism")"
 
 # The installed Python module (its RPATH finds the installed liborthomech).
 cd "$tmp"

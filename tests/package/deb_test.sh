@@ -20,8 +20,8 @@ done
 recommends=$(sed -n 's/^ Recommends: //p' deb-info.txt)
 echo "Recommends: $recommends"
 grep -q "python3-numpy" <<< "$recommends" || { echo "no python3-numpy in Recommends" >&2; exit 1; }
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
+tmp=$build/tests/package/deb
+rm -rf "$tmp" && mkdir -p "$tmp"
 dpkg-deb -x "$deb" "$tmp/root"
 usr=$tmp/root/usr
 export LD_LIBRARY_PATH=$usr/lib
