@@ -278,6 +278,19 @@ def crosscheck(mechanism, **options):
     return _run("crosscheck", mechanism, options)
 
 
+def _with_cli_help(function):
+    """The subcommand's `--help` (its options) under the function's own docstring."""
+    code, out, _ = _core.run([function.__name__, "--help"])
+    if code == 0 and out:
+        function.__doc__ = f"{function.__doc__}\n\nThe command line's help (options as keywords):\n\n{out}"
+    return function
+
+
+for _f in (info, cycle, simulate, assemble, validate, crosscheck):
+    _with_cli_help(_f)
+del _f
+
+
 # ---- JSON to NumPy and back --------------------------------------------------------------------
 
 

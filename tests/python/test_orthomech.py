@@ -229,3 +229,9 @@ def test_sweep_example_writes_png(tmp_path):
     peaks = dict(re.findall(r"crank\s+([\d.]+) mm: peak drive (\S+)", p.stdout))
     nominal = cli_json("cycle", CRANK_ROCKER, "--json", "--steps", "36")["peaks"]["drive"]["peak"]
     assert float(peaks["30.00"]) == pytest.approx(nominal, rel=1e-5)  # printed to 6 digits
+
+
+def test_docstrings_list_the_commands_options():
+    assert "--t-end" in orthomech.simulate.__doc__
+    assert "--steps" in orthomech.cycle.__doc__
+    assert "forward dynamics" in orthomech.simulate.__doc__
