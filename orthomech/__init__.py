@@ -12,8 +12,10 @@ is NaN)::
 
 A mechanism is a file path, YAML text, or a :class:`Mechanism` from :func:`load`. Options are the
 subcommand's command-line options (docs/cli.md) as keywords: ``t_end=2`` is ``--t-end=2``, a
-``True`` flag is given, ``False``/``None`` left out, a list repeats the option, and ``set`` also
-takes a dict (``set={"L": 120}`` is ``--set L=120``).
+``True`` flag is given, ``False``/``None`` left out, a list repeats the option, ``set`` also
+takes a dict (``set={"L": 120}`` is ``--set L=120``), and a Python keyword takes a trailing
+underscore (``from_="90deg"`` is ``--from=90deg``). Each function's docstring ends with its
+command's ``--help``. Calls run one at a time (the global interpreter lock is held).
 
 Errors are exceptions named after the CLI's exit codes: :class:`InputError` (2: bad file or
 option; ``file``, ``line``, ``column`` of the problem), :class:`CheckFailed` (1: an analysis ran

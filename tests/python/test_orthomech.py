@@ -235,3 +235,10 @@ def test_docstrings_list_the_commands_options():
     assert "--t-end" in orthomech.simulate.__doc__
     assert "--steps" in orthomech.cycle.__doc__
     assert "forward dynamics" in orthomech.simulate.__doc__
+
+
+def test_keyword_options():
+    # from_ (a Python keyword) is --from; a negative number stays one argument.
+    doc = cli_json("cycle", CRANK_ROCKER, "--json", "--from", "-30", "--to", "30", "--steps", "12")
+    r = orthomech.cycle(CRANK_ROCKER, from_=-30, to=30, steps=12)
+    assert orthomech.to_json(r) == doc
