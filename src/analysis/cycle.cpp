@@ -230,6 +230,9 @@ void compute_reactions(const Model& model, const VecX& q, const Eigen::Ref<const
             out.push_back(normal);
           } else if constexpr (std::is_same_v<T, GearPair>) {
             out.push_back(lambda(r));
+          } else if constexpr (std::is_same_v<T, SpatialJoint>) {
+            throw std::logic_error(
+                "compute_reactions: spatial joint (cycle refuses spatial models)");
           } else {  // Distance: force on the first body = −λ d / L; tension along e = d/|d|
             const Vec2 d = point_kinematics(model, k.pj, q, none, rotations).r -
                            point_kinematics(model, k.pi, q, none, rotations).r;

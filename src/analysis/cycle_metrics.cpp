@@ -246,7 +246,9 @@ CycleMetrics compute_cycle_metrics(const Model& model, const CycleResult& r,
       const PointRef* refs[2] = {nullptr, nullptr};
       std::visit(
           [&](const auto& k) {
-            if constexpr (requires { k.pi; }) refs[0] = &k.pi, refs[1] = &k.pj;
+            using T = std::decay_t<decltype(k)>;
+            if constexpr (requires { k.pi; } && !std::is_same_v<T, SpatialJoint>)
+              refs[0] = &k.pi, refs[1] = &k.pj;
           },
           j.kind);
       for (const PointRef* ref : refs)

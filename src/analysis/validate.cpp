@@ -60,7 +60,7 @@ double length_scale(const Model& model) {
     std::visit(
         [&](const auto& k) {
           using K = std::decay_t<decltype(k)>;
-          if constexpr (!std::is_same_v<K, GearPair>) {
+          if constexpr (!std::is_same_v<K, GearPair> && !std::is_same_v<K, SpatialJoint>) {
             visit(k.pi);
             visit(k.pj);
           }

@@ -3,6 +3,7 @@
 #include <array>
 
 #include "../model/dot_row.hpp"
+#include "orthomech/constraints/spatial_joints.hpp"
 #include "orthomech/model/free_system.hpp"
 #include "orthomech/model/general_system.hpp"
 
@@ -75,6 +76,11 @@ struct JointEvaluator {
   }
 
   void operator()(const PinInSlot& j) { point_on_line(j.pi, j.pj, j.axis_local, 0); }
+
+  // Spatial joints: rows from the primitives (constraints/spatial_joints.hpp).
+  void operator()(const SpatialJoint& j) {
+    evaluate_spatial_joint(model, j, q, u, r, f, Et, Dt, Dtu);
+  }
 
   // Gear pair: f = (φ_j − φ_c) − k (φ_i − φ_c) − c0; Eᵀ constant, Dᵀ = 0.
   void operator()(const GearPair& j) {

@@ -180,7 +180,8 @@ class SceneBuilder {
     for (const Joint& j : model_.joints)
       std::visit(
           [&](const auto& k) {
-            if constexpr (requires { k.pi; }) {
+            if constexpr (requires { k.pi; } &&
+                          !std::is_same_v<std::decay_t<decltype(k)>, SpatialJoint>) {
               take(k.pi);
               take(k.pj);
             }

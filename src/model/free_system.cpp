@@ -3,6 +3,7 @@
 #include <Eigen/Cholesky>
 
 #include "orthomech/model/general_system.hpp"
+#include "orthomech/model/spatial.hpp"
 
 namespace orthomech {
 
@@ -17,6 +18,10 @@ void compute_mass_matrix(const Model& model, const VecX& q, MatX& M) {
     M(o, o) = b.mass;  // eq. (4): T = ½ m |v|² + ½ J φ̇²
     M(o + 1, o + 1) = b.mass;
     if (b.kind == BodyKind::rigid) M(o + 2, o + 2) = b.inertia;
+    if (b.kind == BodyKind::spatial) {  // eq. (4): T = ½ m vᵀv + ½ ωᵀJω, M_b = diag(m I₃, J)
+      M(o + 2, o + 2) = b.mass;
+      M.block<3, 3>(o + 3, o + 3) = b.spatial.inertia;
+    }
   }
 }
 
@@ -33,6 +38,10 @@ void compute_inverse_mass_matrix(const Model& model, const VecX& q, MatX& A) {
     A(o, o) = 1.0 / b.mass;  // eq. (6): block-diagonal inverse
     A(o + 1, o + 1) = 1.0 / b.mass;
     if (b.kind == BodyKind::rigid) A(o + 2, o + 2) = 1.0 / b.inertia;
+    if (b.kind == BodyKind::spatial) {  // A_b = diag(I₃/m, J⁻¹)
+      A(o + 2, o + 2) = 1.0 / b.mass;
+      A.block<3, 3>(o + 3, o + 3) = b.spatial.inertia.inverse();
+    }
   }
 }
 
@@ -51,9 +60,59 @@ void integrate_positions(const Model& model, VecX& q, const VecX& du, double h) 
     q += h * du;  // q̇ = u
     return;
   }
-  // Planar bodies: B̃ = I and nq == n, eq. (1).
-  for (const Body& b : model.bodies)
+  for (const Body& b : model.bodies) {
+    if (b.kind == BodyKind::spatial) {
+      // q ⊕ h·du: r += h v; e ← e ⊗ exp(½ h ω), renormalised (spatial.md §6.3). Exact for a
+      // constant body-frame ω, so q ⊕ t·u is a motion with u̇ = 0.
+      q.segment<3>(b.q_offset) += h * du.segment<3>(b.u_offset);
+      const Quat e = quaternion_multiply(q.segment<4>(b.q_offset + 3),
+                                         quaternion_exp(h * du.segment<3>(b.u_offset + 3)));
+      q.segment<4>(b.q_offset + 3) = e / e.norm();
+      continue;
+    }
+    // Planar bodies: B̃ = I and nq == n, eq. (1).
     for (int k = 0; k < b.nq(); ++k) q(b.q_offset + k) += h * du(b.u_offset + k);
+  }
+}
+
+void difference_positions(const Model& model, const VecX& q1, const VecX& q0, VecX& du) {
+  if (model.general) {
+    du = q1 - q0;
+    return;
+  }
+  for (const Body& b : model.bodies) {
+    if (b.kind == BodyKind::spatial) {  // e₁ = e₀ ⊗ exp(½ θ): θ = log(e₀* ⊗ e₁)
+      du.segment<3>(b.u_offset) = q1.segment<3>(b.q_offset) - q0.segment<3>(b.q_offset);
+      Quat conj = q0.segment<4>(b.q_offset + 3);
+      conj.tail<3>() = -conj.tail<3>();
+      du.segment<3>(b.u_offset + 3) =
+          quaternion_log(quaternion_multiply(conj, q1.segment<4>(b.q_offset + 3)));
+      continue;
+    }
+    for (int k = 0; k < b.nq(); ++k) du(b.u_offset + k) = q1(b.q_offset + k) - q0(b.q_offset + k);
+  }
+}
+
+void compute_coordinate_rates(const Model& model, const VecX& q, const VecX& u, VecX& qdot) {
+  if (model.general) {
+    qdot = u;
+    return;
+  }
+  for (const Body& b : model.bodies) {
+    if (b.kind == BodyKind::spatial) {  // eq. (19): q̇ = B̃u, ṙ = v, ė = ½ G(e)ᵀ ω (S2)
+      qdot.segment<3>(b.q_offset) = u.segment<3>(b.u_offset);
+      qdot.segment<4>(b.q_offset + 3) = 0.5 *
+                                        quaternion_G(q.segment<4>(b.q_offset + 3)).transpose() *
+                                        u.segment<3>(b.u_offset + 3);
+      continue;
+    }
+    for (int k = 0; k < b.nq(); ++k) qdot(b.q_offset + k) = u(b.u_offset + k);
+  }
+}
+
+void normalize_coordinates(const Model& model, VecX& q) {
+  for (const Body& b : model.bodies)
+    if (b.kind == BodyKind::spatial) q.segment<4>(b.q_offset + 3).normalize();
 }
 
 double kinetic_energy(const Model& model, const State& state) {
@@ -66,6 +125,10 @@ double kinetic_energy(const Model& model, const State& state) {
   for (const Body& b : model.bodies) {
     const int o = b.u_offset;
     T += 0.5 * b.mass * (state.u(o) * state.u(o) + state.u(o + 1) * state.u(o + 1));
+    if (b.kind == BodyKind::spatial) {
+      const Vec3 w = state.u.segment<3>(o + 3);
+      T += 0.5 * b.mass * state.u(o + 2) * state.u(o + 2) + 0.5 * w.dot(b.spatial.inertia * w);
+    }
     if (b.kind == BodyKind::rigid) T += 0.5 * b.inertia * state.u(o + 2) * state.u(o + 2);
   }
   return T;

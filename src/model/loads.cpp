@@ -4,9 +4,11 @@
 #include <cmath>
 #include <numbers>
 
+#include "orthomech/constraints/spatial_joints.hpp"
 #include "orthomech/model/free_system.hpp"
 #include "orthomech/model/general_system.hpp"
 #include "orthomech/model/measures.hpp"
+#include "orthomech/model/spatial.hpp"
 
 namespace orthomech {
 
@@ -46,6 +48,38 @@ Stretch stretch(const Model& model, const SpringDamper& s, const State& st) {
   x.e = x.L > 0.0 ? Vec2(d / x.L) : Vec2::UnitX();
   x.Ldot = x.e.dot(x.kj.v - x.ki.v);
   return x;
+}
+
+// Spatial spring-damper: length, rate, unit vector from Pi to Pj and the two points.
+struct SpatialStretch {
+  double L, Ldot;
+  Vec3 e;
+  SpatialFrame ki, kj;
+  SpatialPoint pi, pj;
+};
+SpatialStretch stretch(const Model& model, const SpatialSpringDamper& s, const State& st) {
+  SpatialStretch x;
+  x.ki = spatial_frame(model, s.pi.body, st.q, &st.u);
+  x.kj = spatial_frame(model, s.pj.body, st.q, &st.u);
+  x.pi = spatial_point(x.ki, s.pi.s);
+  x.pj = spatial_point(x.kj, s.pj.s);
+  const Vec3 d = x.pj.r - x.pi.r;
+  x.L = d.norm();
+  x.e = x.L > 0.0 ? Vec3(d / x.L) : Vec3::UnitX();
+  x.Ldot = x.e.dot(x.pj.v - x.pi.v);
+  return x;
+}
+
+// The rotary spring's angle θ and rate of a spatial joint.
+SpatialScalar joint_angle(const Model& model, const JointSpringDamper& l, const State& st) {
+  const auto& joint = std::get<SpatialJoint>(model.joints[static_cast<size_t>(l.joint)].kind);
+  return spatial_joint_coordinate(model, joint, st.q, &st.u);
+}
+
+// A world force F at ρ from the centre of mass (or a world moment n, with F = 0): Q = (F, Rᵀ(ρ×F
+// + n)), eq. (8) with δq̃ = (δr, δπ) (spatial.md §1.4).
+void add_wrench(const SpatialFrame& k, const Vec3& F, const Vec3& moment, VecX& Q) {
+  add_spatial_row(k, F, moment, 1.0, Q);
 }
 
 void add_angle(const Model& model, int body, double value, VecX& Q) {
@@ -95,9 +129,39 @@ void add_load(const Model& model, const Load& load, const State& st, VecX& Q) {
           const double moment = l.stiffness * (th - l.free_angle) + l.damping * w;
           add_angle(model, l.bj, -moment, Q);
           add_angle(model, l.bi, moment, Q);
+        } else if constexpr (std::is_same_v<T, SpatialGravity>) {
+          for (const Body& b : model.bodies) Q.segment<3>(b.u_offset) += b.mass * l.g;
+        } else if constexpr (std::is_same_v<T, SpatialPointForce>) {
+          const SpatialFrame k = spatial_frame(model, l.at.body, st.q, nullptr);
+          const SpatialPoint p = spatial_point(k, l.at.s);
+          Vec3 F = l.force * table_factor(model, l.table, st.q);
+          if (l.body_fixed) F = k.R * F;
+          add_wrench(k, F, p.rho.cross(F), Q);
+        } else if constexpr (std::is_same_v<T, SpatialTorque>) {
+          const SpatialFrame k = spatial_frame(model, l.body, st.q, nullptr);
+          Vec3 n = l.torque * table_factor(model, l.table, st.q);
+          if (l.body_fixed) n = k.R * n;
+          add_wrench(k, Vec3::Zero(), n, Q);
+        } else if constexpr (std::is_same_v<T, SpatialSpringDamper>) {
+          const SpatialStretch x = stretch(model, l, st);
+          const double tension = l.stiffness * (x.L - l.free_length) + l.damping * x.Ldot;
+          add_wrench(x.ki, tension * x.e, x.pi.rho.cross(tension * x.e), Q);
+          add_wrench(x.kj, -tension * x.e, x.pj.rho.cross(-tension * x.e), Q);
+        } else if constexpr (std::is_same_v<T, JointSpringDamper>) {
+          const SpatialScalar th = joint_angle(model, l, st);
+          const double moment = l.stiffness * (th.value - l.free_angle) + l.damping * th.rate();
+          th.add_row(Q, -moment);  // Q = −moment ∂θ/∂u
         }
       },
       load.kind);
+}
+
+void add_velocity_terms(const Model& model, const State& state, VecX& Q) {
+  for (const Body& b : model.bodies) {
+    if (b.kind != BodyKind::spatial) continue;
+    const Vec3 w = state.u.segment<3>(b.u_offset + 3);
+    Q.segment<3>(b.u_offset + 3) -= w.cross(b.spatial.inertia * w);  // eq. (16): −C p u (S5)
+  }
 }
 
 void compute_applied_forces(const Model& model, const State& state, VecX& Q) {
@@ -107,6 +171,7 @@ void compute_applied_forces(const Model& model, const State& state, VecX& Q) {
   }
   Q.setZero();
   for (const Load& load : model.loads) add_load(model, load, state, Q);
+  add_velocity_terms(model, state, Q);
 }
 
 double potential_energy(const Model& model, const VecX& q) {
@@ -124,6 +189,17 @@ double potential_energy(const Model& model, const VecX& q) {
     } else if (const auto* r = std::get_if<RotarySpringDamper>(&load.kind)) {
       const double th = body_angle(model, r->bj, q) - body_angle(model, r->bi, q) - r->free_angle;
       V += 0.5 * r->stiffness * th * th;
+    } else if (const auto* sg = std::get_if<SpatialGravity>(&load.kind)) {
+      for (const Body& b : model.bodies) V -= b.mass * sg->g.dot(q.segment<3>(b.q_offset));
+    } else if (const auto* ss = std::get_if<SpatialSpringDamper>(&load.kind)) {
+      const Vec3 d = spatial_point(spatial_frame(model, ss->pj.body, q, none), ss->pj.s).r -
+                     spatial_point(spatial_frame(model, ss->pi.body, q, none), ss->pi.s).r;
+      const double dl = d.norm() - ss->free_length;
+      V += 0.5 * ss->stiffness * dl * dl;
+    } else if (const auto* js = std::get_if<JointSpringDamper>(&load.kind)) {
+      const auto& joint = std::get<SpatialJoint>(model.joints[static_cast<size_t>(js->joint)].kind);
+      const double th = spatial_joint_coordinate(model, joint, q, none).value - js->free_angle;
+      V += 0.5 * js->stiffness * th * th;
     }
   }
   return V;
@@ -139,6 +215,12 @@ double dissipated_power(const Model& model, const State& st) {
       const double w =
           body_angular_velocity(model, r->bj, st.u) - body_angular_velocity(model, r->bi, st.u);
       P += r->damping * w * w;
+    } else if (const auto* ss = std::get_if<SpatialSpringDamper>(&load.kind)) {
+      const SpatialStretch x = stretch(model, *ss, st);
+      P += ss->damping * x.Ldot * x.Ldot;
+    } else if (const auto* js = std::get_if<JointSpringDamper>(&load.kind)) {
+      const double w = joint_angle(model, *js, st).rate();
+      P += js->damping * w * w;
     }
   }
   return P;

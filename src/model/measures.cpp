@@ -1,9 +1,13 @@
 #include "orthomech/model/measures.hpp"
 
+#include <array>
+#include <cmath>
 #include <stdexcept>
 
 #include "dot_row.hpp"
+#include "orthomech/constraints/spatial_joints.hpp"
 #include "orthomech/model/free_system.hpp"
+#include "orthomech/model/spatial.hpp"
 
 namespace orthomech {
 
@@ -81,8 +85,70 @@ struct Evaluator {
     return s;
   }
 
+  ScalarKinematics spatial(const SpatialScalar& x) const {
+    if (d) x.add_row(*d);
+    return {x.value, x.rate(), x.convective()};
+  }
+
+  // World x, y or z of a spatial point: g = c, h = ρ × c, ḣ = (w × ρ) × c.
+  ScalarKinematics operator()(const SpatialPointCoordinate& m) const {
+    SpatialScalar x;
+    x.frame[0] = spatial_frame(model, m.point.body, q, u);
+    const SpatialPoint p = spatial_point(x.frame[0], m.point.s);
+    const Vec3 c = Vec3::Unit(m.axis);
+    x.value = c.dot(p.r);
+    x.g[0] = c;
+    x.h[0] = p.rho.cross(c);
+    x.hdot[0] = x.frame[0].w.cross(p.rho).cross(c);
+    return spatial(x);
+  }
+
+  // |d|, d = r_Pj − r_Pi: e = d/|d|, ė = (ḋ − e (e·ḋ))/|d|; body j: g = e, h = ρ_j × e (−, ρ_i
+  // for i). Coincident points: the one-sided limit along ḋ, as the planar measure.
+  ScalarKinematics operator()(const SpatialPointDistance& m) const {
+    SpatialScalar x;
+    x.frame = {spatial_frame(model, m.pi.body, q, u), spatial_frame(model, m.pj.body, q, u)};
+    const std::array<SpatialPoint, 2> p{spatial_point(x.frame[0], m.pi.s),
+                                        spatial_point(x.frame[1], m.pj.s)};
+    const Vec3 dv = p[1].r - p[0].r, dd = p[1].v - p[0].v;
+    x.value = dv.norm();
+    const bool coincident = !(x.value > 0.0);
+    const Vec3 e = !coincident       ? Vec3(dv / x.value)
+                   : dd.norm() > 0.0 ? Vec3(dd.normalized())
+                                     : Vec3::UnitX();
+    const Vec3 edot = coincident ? Vec3::Zero() : Vec3((dd - e * e.dot(dd)) / x.value);
+    for (size_t b = 0; b < 2; ++b) {
+      const double sign = b == 0 ? -1.0 : 1.0;
+      const Vec3& rho = p[b].rho;
+      x.g[b] = sign * e;
+      x.h[b] = sign * rho.cross(e);
+      x.gdot[b] = sign * edot;
+      x.hdot[b] = sign * (x.frame[b].w.cross(rho).cross(e) + rho.cross(edot));
+    }
+    return spatial(x);
+  }
+
+  // Angle between a_i (fixed in i) and a_j (fixed in j): θ = atan2(|c|, a_i·a_j), c = a_i × a_j;
+  // θ̇ = (w_i − w_j)·k with k = −c/|c| (undefined where the vectors are parallel).
+  ScalarKinematics operator()(const VectorAngle& m) const {
+    SpatialScalar x;
+    x.frame = {spatial_frame(model, m.bi, q, u), spatial_frame(model, m.bj, q, u)};
+    const Vec3 ai = x.frame[0].R * m.ai, aj = x.frame[1].R * m.aj;
+    const Vec3 c = ai.cross(aj);
+    const double sn = c.norm();
+    x.value = std::atan2(sn, ai.dot(aj));
+    const Vec3 cdot = x.frame[0].w.cross(ai).cross(aj) + ai.cross(x.frame[1].w.cross(aj));
+    const Vec3 k = sn > 0.0 ? Vec3(-c / sn) : Vec3::Zero();
+    const Vec3 kdot = sn > 0.0 ? Vec3(-(cdot - c * c.dot(cdot) / (sn * sn)) / sn) : Vec3::Zero();
+    x.h = {k, -k};
+    x.hdot = {kdot, -kdot};
+    return spatial(x);
+  }
+
   ScalarKinematics operator()(const JointCoordinate& m) const {
     const Joint& joint = model.joints[static_cast<size_t>(m.joint)];
+    if (const auto* sj = std::get_if<SpatialJoint>(&joint.kind))
+      return spatial(spatial_joint_coordinate(model, *sj, q, u));
     if (const auto* r = std::get_if<Revolute>(&joint.kind))
       return angle_difference(r->pi.body, r->pj.body);
     if (const auto* p = std::get_if<Prismatic>(&joint.kind)) {

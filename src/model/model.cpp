@@ -2,7 +2,9 @@
 
 #include <stdexcept>
 
+#include "orthomech/constraints/spatial_joints.hpp"
 #include "orthomech/model/general_system.hpp"
+#include "orthomech/model/spatial.hpp"
 
 namespace orthomech {
 
@@ -12,18 +14,26 @@ int Joint::rows() const {
         using T = std::decay_t<decltype(j)>;
         if constexpr (std::is_same_v<T, Revolute> || std::is_same_v<T, Prismatic>) return 2;
         if constexpr (std::is_same_v<T, Fixed>) return 3;
+        if constexpr (std::is_same_v<T, SpatialJoint>) return spatial_joint_spec(j.type).rows;
         return 1;  // PinInSlot, GearPair, Distance
       },
       kind);
 }
 
 std::string Joint::type_name() const {
+  if (const auto* s = std::get_if<SpatialJoint>(&kind)) return spatial_joint_spec(s->type).type;
   static const char* names[] = {"revolute",    "prismatic", "fixed",
                                 "pin-in-slot", "gear",      "distance"};
   return names[kind.index()];
 }
 
 std::vector<std::string> Joint::component_names() const {
+  if (const auto* s = std::get_if<SpatialJoint>(&kind)) {
+    const SpatialJointSpec& spec = spatial_joint_spec(s->type);
+    std::vector<std::string> names;
+    for (int k = 0; k < spec.rows; ++k) names.emplace_back(spec.row[static_cast<size_t>(k)].name);
+    return names;
+  }
   switch (kind.index()) {
     case 0:
       return {"x", "y"};
@@ -63,6 +73,13 @@ VecX Model::design_q() const {
   if (general) return general->q0;
   VecX q(nq);
   for (const Body& b : bodies) {
+    if (b.kind == BodyKind::spatial) {  // q = (r, e): the centre of mass and the orientation
+      const Quat e = b.spatial.design_orientation.normalized();
+      q.segment<3>(b.q_offset) =
+          b.spatial.design_position + rotation_matrix(e) * b.spatial.com_local;
+      q.segment<4>(b.q_offset + 3) = e;
+      continue;
+    }
     const double phi = b.design_pose.z();
     const double c = std::cos(phi), s = std::sin(phi);
     const Vec2 com(b.design_pose.x() + c * b.com_local.x() - s * b.com_local.y(),
@@ -102,6 +119,10 @@ void finalize_model(Model& model) {
   }
   int q_off = 0, u_off = 0;
   for (Body& b : model.bodies) {
+    if ((b.kind == BodyKind::spatial) != (model.dimension == 3))
+      throw std::invalid_argument("finalize_model: body '" + b.name +
+                                  "' does not match the model's dimension (all planar or all "
+                                  "spatial)");
     b.q_offset = q_off;
     b.u_offset = u_off;
     q_off += b.nq();
@@ -130,11 +151,18 @@ void finalize_model(Model& model) {
     std::visit(
         [&](const auto& k) {
           using T = std::decay_t<decltype(k)>;
-          if constexpr (std::is_same_v<T, GearPair>) {
+          if constexpr (std::is_same_v<T, SpatialJoint>) {
+            if (model.dimension != 3)
+              throw std::invalid_argument("finalize_model: spatial joint in a planar model");
+            check_body(k.pi.body);
+            check_body(k.pj.body);
+          } else if constexpr (std::is_same_v<T, GearPair>) {
             check_body(k.bi);
             check_body(k.bj);
             check_body(k.carrier);
           } else {
+            if (model.dimension != 2)
+              throw std::invalid_argument("finalize_model: planar joint in a spatial model");
             check_body(k.pi.body);
             check_body(k.pj.body);
           }

@@ -18,8 +18,18 @@ void compute_inverse_mass_matrix(const Model& model, const VecX& q, MatX& A);
 // Ṁ = dM/dt along u (zero for bodies in absolute coordinates).
 void compute_mass_matrix_rate(const Model& model, const VecX& q, const VecX& u, MatX& Mdot);
 [[nodiscard]] bool mass_matrix_is_constant(const Model& model);
-// q ← q ⊕ h·B̃(q)·du: moves the coordinates along a velocity (exact for planar bodies).
+// q ← q ⊕ h·du: moves the coordinates along a velocity (exact for planar bodies; the exponential
+// map for spatial bodies' quaternions, renormalised). Every change of q by a velocity-sized
+// vector goes through this (nq ≠ n for spatial bodies).
 void integrate_positions(const Model& model, VecX& q, const VecX& du, double h);
+// du with q0 ⊕ du = q1 (the inverse of integrate_positions with h = 1; for quaternions the
+// shorter rotation). du has size n.
+void difference_positions(const Model& model, const VecX& q1, const VecX& q0, VecX& du);
+// q̇ = B̃(q) u, eq. (19) (size nq).
+void compute_coordinate_rates(const Model& model, const VecX& q, const VecX& u, VecX& qdot);
+// Renormalises every spatial body's quaternion (|e| = 1 is a first integral of q̇ = B̃u; this
+// removes round-off and truncation drift). No-op for planar models.
+void normalize_coordinates(const Model& model, VecX& q);
 // Kinetic energy T = ½ uᵀ M u, eq. (4).
 [[nodiscard]] double kinetic_energy(const Model& model, const State& state);
 

@@ -1,6 +1,8 @@
 #pragma once
 // Loads: generalized forces Q(q, u, t) of the free system, eq. (8): δW = Qᵀ δq̃.
-// For planar bodies Q̂ = Q (no nonholonomic term, eq. (16), and ∂T/∂q = 0, eq. (11)).
+// For planar bodies Q̂ = Q (no nonholonomic term, eq. (16), and ∂T/∂q = 0, eq. (11)); spatial
+// bodies add the velocity term of eq. (16), −ω × Jω in their rotation rows (spatial.md (S5)),
+// which does no work (ωᵀ(ω × Jω) = 0), kept apart from the loads (add_velocity_terms).
 #include "orthomech/model/model.hpp"
 #include "orthomech/model/state.hpp"
 
@@ -8,6 +10,8 @@ namespace orthomech {
 
 // Q̂ (size n), eq. (15)–(17): the sum of every load in the model. Allocation-free.
 void compute_applied_forces(const Model& model, const State& state, VecX& Q);
+// The velocity term of eq. (16) of every spatial body, −C p u = (0, −ω × Jω) (accumulated).
+void add_velocity_terms(const Model& model, const State& state, VecX& Q);
 // Q of one load (accumulated into Q).
 void add_load(const Model& model, const Load& load, const State& state, VecX& Q);
 // Potential energy of the conservative loads (gravity, springs); 0 for the others.

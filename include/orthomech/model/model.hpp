@@ -8,8 +8,12 @@
 //     M = diag(m, m, J_c);
 //   - planar particle:   q = (x, y), u = q̇, M = diag(m, m).
 // Interfaces never assume nq == n or a constant M (a Model can also hold a general system with
-// M(q), model/general_system.hpp; spatial bodies come next);
-// see model/free_system.hpp.
+// M(q), model/general_system.hpp);
+//   - spatial rigid body: q = (r, e), r the world position of the centre of mass and e a unit
+//     quaternion (scalar first), u = (v, ω) with v = ṙ and ω the body-frame angular velocity,
+//     q̇ = B̃u with B̃ = blockdiag(I₃, ½G(e)ᵀ), M = diag(m I₃, J) (spatial.md §1; nq 7, n 6).
+// A model is all planar (dimension 2) or all spatial (dimension 3).
+// See model/free_system.hpp and model/spatial.hpp.
 #include <Eigen/Core>
 #include <memory>
 #include <optional>
@@ -25,10 +29,21 @@ using Vec2 = Eigen::Vector2d;
 using Vec3 = Eigen::Vector3d;
 using VecX = Eigen::VectorXd;
 using MatX = Eigen::MatrixXd;
+using Mat3 = Eigen::Matrix3d;
+using Quat = Eigen::Vector4d;  // quaternion (e0, e1, e2, e3), scalar first, Hamilton product
 
 inline constexpr int kGround = -1;  // body index of the ground (fixed frame = world frame)
 
-enum class BodyKind { rigid, particle };
+enum class BodyKind { rigid, particle, spatial };
+
+// What a spatial body (BodyKind::spatial) adds: its frame, inertia and points in three dimensions.
+struct SpatialBodyData {
+  Mat3 inertia = Mat3::Identity();      // kg·m², about the centre of mass, body axes (symmetric)
+  Vec3 com_local = Vec3::Zero();        // centre of mass in the body frame, m
+  Vec3 design_position = Vec3::Zero();  // body frame origin in world at the design position, m
+  Quat design_orientation{1, 0, 0, 0};  // body frame in world at the design position (unit)
+  std::vector<std::pair<std::string, Vec3>> points;  // named points, body frame, m
+};
 
 struct Body {
   std::string name;
@@ -42,8 +57,13 @@ struct Body {
   int q_offset = 0;                                  // first coordinate of this body in q
   int u_offset = 0;                                  // first velocity parameter of this body in u
   SourceLocation where;
-  [[nodiscard]] int nq() const { return kind == BodyKind::rigid ? 3 : 2; }
-  [[nodiscard]] int nu() const { return kind == BodyKind::rigid ? 3 : 2; }
+  SpatialBodyData spatial;  // BodyKind::spatial only (the planar fields above are then unused)
+  [[nodiscard]] int nq() const {
+    return kind == BodyKind::spatial ? 7 : kind == BodyKind::rigid ? 3 : 2;
+  }
+  [[nodiscard]] int nu() const {
+    return kind == BodyKind::spatial ? 6 : kind == BodyKind::rigid ? 3 : 2;
+  }
 };
 
 // A point fixed on a body (or on the ground). s is measured from the centre of mass, in the body
@@ -52,6 +72,14 @@ struct PointRef {
   int body = kGround;
   Vec2 s = Vec2::Zero();
   std::string label;  // "body.point" as written by the user
+};
+
+// A point fixed on a spatial body (or the ground): s from the centre of mass, body frame (for the
+// ground: the world position).
+struct SpatialPointRef {
+  int body = kGround;
+  Vec3 s = Vec3::Zero();
+  std::string label;
 };
 
 // ---- Joints (design §3). Each supplies f (eq. (20)), Eᵀ (eq. (23)) and Dᵀ (eq. (76)). ----------
@@ -82,7 +110,38 @@ struct Distance {  // rows: length.  f = (|r_Pj − r_Pi|² − L²) / (2L): a m
   PointRef pi, pj;
   double length = 1.0;
 };
-using JointKind = std::variant<Revolute, Prismatic, Fixed, PinInSlot, GearPair, Distance>;
+// Spatial joints (spatial.md §2.4): every type is a list of rows built from the primitives of
+// constraints/spatial_joints.hpp (point components, dot-1, dot-2, distance, twist angle); the
+// table of rows per type is defined there, in one place. Body i is the first of `connects`.
+enum class SpatialJointType {
+  spherical,
+  revolute,
+  cylindrical,
+  prismatic,
+  fixed,
+  universal,
+  planar,
+  point_on_line,
+  point_on_plane,
+  distance,
+  screw
+};
+struct SpatialJoint {
+  SpatialJointType type = SpatialJointType::spherical;
+  SpatialPointRef pi, pj;
+  // The joint frame (columns f, g, h; h the axis) in body i's frame and in body j's frame: the
+  // same world frame at the design position (spatial.md §2.5). Universal: pin 1 = f of frame_i,
+  // pin 2 = g of frame_j.
+  Mat3 frame_i = Mat3::Identity();
+  Mat3 frame_j = Mat3::Identity();
+  // Reference direction of body j for the joint angle (revolute, cylindrical, screw): the angle is
+  // the (P5) twist angle of ref_j about h_i from f_i (0 when ref_j lies along f_i).
+  Vec3 ref_j = Vec3::UnitX();
+  double pitch = 0.0;   // screw: axial advance per turn, m
+  double length = 0.0;  // distance: m
+};
+using JointKind =
+    std::variant<Revolute, Prismatic, Fixed, PinInSlot, GearPair, Distance, SpatialJoint>;
 
 struct Joint {
   std::string name;
@@ -149,7 +208,33 @@ struct RotarySpringDamper {  // moment T = k (φ_j − φ_i − θ0) + c (φ̇_j
   int bi = kGround, bj = kGround;
   double stiffness = 0.0, free_angle = 0.0, damping = 0.0;
 };
-using LoadKind = std::variant<Gravity, PointForce, Torque, SpringDamper, RotarySpringDamper>;
+// Spatial loads (spatial.md §1.4, §5): Q = (F_world, n_body) per body.
+struct SpatialGravity {
+  Vec3 g = Vec3(0.0, 0.0, -9.81);
+};
+struct SpatialPointForce {  // force at a point, world or body-fixed components, × table factor
+  SpatialPointRef at;
+  Vec3 force = Vec3::Zero();
+  bool body_fixed = false;
+  Table table;
+};
+struct SpatialTorque {  // pure moment on a body, world or body-fixed components, × table factor
+  int body = kGround;
+  Vec3 torque = Vec3::Zero();
+  bool body_fixed = false;
+  Table table;
+};
+struct SpatialSpringDamper {  // tension T = k (L − L0) + c L̇ between two points
+  SpatialPointRef pi, pj;
+  double stiffness = 0.0, free_length = 0.0, damping = 0.0;
+};
+struct JointSpringDamper {  // moment k (θ − θ0) + c θ̇ on a spatial revolute's angle θ
+  int joint = -1;
+  double stiffness = 0.0, free_angle = 0.0, damping = 0.0;
+};
+using LoadKind =
+    std::variant<Gravity, PointForce, Torque, SpringDamper, RotarySpringDamper, SpatialGravity,
+                 SpatialPointForce, SpatialTorque, SpatialSpringDamper, JointSpringDamper>;
 struct Load {
   std::string name;
   LoadKind kind;
@@ -171,7 +256,19 @@ struct PointDistance {
 struct BodyAngle {  // φ_j − φ_i (absolute body angle when bi is the ground)
   int bi = kGround, bj = kGround;
 };
-using MeasureKind = std::variant<JointCoordinate, PointCoordinate, PointDistance, BodyAngle>;
+struct SpatialPointCoordinate {  // world x, y or z of a point
+  SpatialPointRef point;
+  int axis = 0;
+};
+struct SpatialPointDistance {
+  SpatialPointRef pi, pj;
+};
+struct VectorAngle {  // angle between a vector fixed in body i and one fixed in body j, [0, π]
+  int bi = kGround, bj = kGround;
+  Vec3 ai = Vec3::UnitX(), aj = Vec3::UnitX();  // unit, in each body's frame
+};
+using MeasureKind = std::variant<JointCoordinate, PointCoordinate, PointDistance, BodyAngle,
+                                 SpatialPointCoordinate, SpatialPointDistance, VectorAngle>;
 struct Measure {
   std::string name;
   MeasureKind kind;
@@ -253,9 +350,10 @@ struct Model {
   // Set by make_general_model (model/general_system.hpp): a free system given by functions,
   // with M(q), instead of bodies, joints and loads (which are then empty).
   std::shared_ptr<const GeneralSystem> general;
-  int nq = 0;  // number of coordinates
-  int n = 0;   // number of velocity parameters (free system DOF), eq. (25)
-  int nc = 0;  // number of constraint equations (rows of Eᵀ), eq. (22)
+  int dimension = 2;  // 2: planar bodies and joints; 3: spatial bodies and joints
+  int nq = 0;         // number of coordinates
+  int n = 0;          // number of velocity parameters (free system DOF), eq. (25)
+  int nc = 0;         // number of constraint equations (rows of Eᵀ), eq. (22)
 
   [[nodiscard]] std::string body_name(int b) const {
     return b == kGround ? std::string("ground") : bodies[static_cast<size_t>(b)].name;
