@@ -10,6 +10,7 @@ against the length (Agg: a PNG, no display needed).
 
 import argparse
 import os
+import sys
 
 import matplotlib
 
@@ -17,11 +18,15 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-import orthomech  # noqa: E402
+root = os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
+try:
+    import orthomech
+except ImportError:  # run in the repository without PYTHONPATH: the package at its top
+    sys.path.insert(0, root)
+    import orthomech
 
 # %% The mechanism and the sweep
 parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-root = os.path.join(os.path.dirname(os.path.abspath(__file__)), os.pardir, os.pardir)
 parser.add_argument("--file", default=os.path.join(root, "mechanisms", "crank-rocker.yaml"))
 parser.add_argument("--out", default="sweep_link_length.png")
 parser.add_argument("--points", type=int, default=11, help="crank lengths in the sweep")

@@ -218,11 +218,32 @@ def test_warnings_go_to_stderr(capsys):
 # ---- The example script ---------------------------------------------------------------------
 
 
+def source_tree_env():
+    """The environment of a user in the repository: no PYTHONPATH; the package's code is
+    orthomech/ at the top, its compiled part in this build (ORTHOMECH_BUILD_DIR)."""
+    env = dict(os.environ)
+    env.pop("PYTHONPATH", None)
+    compiled = os.path.abspath(orthomech._core.__file__)  # BUILD/python/orthomech/_orthomech*.so
+    env["ORTHOMECH_BUILD_DIR"] = os.path.dirname(os.path.dirname(os.path.dirname(compiled)))
+    return env
+
+
+def test_done_when_command_in_the_repository():
+    code = ("import orthomech; print(orthomech.__file__); "
+            "print(repr(orthomech.cycle('mechanisms/crank-rocker.yaml')['peaks']['drive']['peak']))")
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=SOURCE,
+                       env=source_tree_env())
+    assert p.returncode == 0, p.stderr
+    file, peak = p.stdout.split()
+    assert os.path.samefile(file, os.path.join(SOURCE, "orthomech", "__init__.py"))
+    assert float(peak) == cli_json("cycle", CRANK_ROCKER, "--json")["peaks"]["drive"]["peak"]
+
+
 def test_sweep_example_writes_png(tmp_path):
     out = tmp_path / "sweep.png"
     script = os.path.join(SOURCE, "examples", "python", "sweep_link_length.py")
     p = subprocess.run([sys.executable, script, "--points", "5", "--steps", "36", "--out", str(out)],
-                       capture_output=True, text=True, cwd=tmp_path)
+                       capture_output=True, text=True, cwd=tmp_path, env=source_tree_env())
     assert p.returncode == 0, p.stderr
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     # Its variant at the drawn length (30 mm, the middle of 24..36) is the nominal mechanism.
