@@ -1,0 +1,341 @@
+// The spatial file format (`dimension: 3`, docs/file-format.md "Spatial mechanisms"): the model
+// the reader builds is checked against an independent computation written here (rotation
+// matrices by explicit formulas, points and joint frames from the file's numbers, the RSSR
+// closed form of spatial.md (M1)), and every bundled spatial mechanism against its stated
+// mobility (spatial.md §4).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <string>
+
+#include "orthomech/analysis/mobility.hpp"
+#include "orthomech/analysis/positions.hpp"
+#include "orthomech/constraints/joints.hpp"
+#include "orthomech/io/mechanism_file.hpp"
+#include "orthomech/model/measures.hpp"
+#include "orthomech/model/spatial.hpp"
+#include "support/cli_runner.hpp"
+#include "support/fixtures.hpp"
+
+namespace orthomech {
+namespace {
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+Mat3 rx(double a) {
+  Mat3 R;
+  R << 1, 0, 0, 0, std::cos(a), -std::sin(a), 0, std::sin(a), std::cos(a);
+  return R;
+}
+Mat3 ry(double a) {
+  Mat3 R;
+  R << std::cos(a), 0, std::sin(a), 0, 1, 0, -std::sin(a), 0, std::cos(a);
+  return R;
+}
+Mat3 rz(double a) {
+  Mat3 R;
+  R << std::cos(a), -std::sin(a), 0, std::sin(a), std::cos(a), 0, 0, 0, 1;
+  return R;
+}
+
+// The rotation whose body x, z axes are given in world (x kept, z made perpendicular to it).
+Mat3 from_x_z(const Vec3& x_in, const Vec3& z_in) {
+  const Vec3 x = x_in.normalized();
+  const Vec3 z = (z_in - z_in.dot(x) * x).normalized();
+  Mat3 R;
+  R.col(0) = x;
+  R.col(1) = z.cross(x);
+  R.col(2) = z;
+  return R;
+}
+
+Mat3 design_R(const Model& m, const std::string& body) {
+  return rotation_matrix(
+      m.bodies[static_cast<size_t>(m.find_body(body))].spatial.design_orientation);
+}
+const SpatialJoint& spatial_joint(const Model& m, const std::string& name) {
+  return std::get<SpatialJoint>(m.joints[static_cast<size_t>(m.find_joint(name))].kind);
+}
+double measure(const Model& m, const std::string& name, const VecX& q) {
+  return evaluate_measure(m, m.measures[static_cast<size_t>(m.find_measure(name))], q, nullptr,
+                          nullptr);
+}
+double max_residual(const Model& m, const VecX& q) {
+  VecX f(m.nc);
+  compute_constraint_residual(m, q, f);
+  return f.cwiseAbs().maxCoeff();
+}
+
+// RSSR closed form (spatial.md (M1)), SI: φ(θ) on the branch of the file.
+double rssr_phi(double theta) {
+  const double r1 = 0.1, r2 = 0.2, p = 0.3, h = 0.2, L = 0.42;
+  const double P = -2 * r1 * r2 * std::sin(theta), Q = 2 * h * r2;
+  const double S = p * p + r1 * r1 + r2 * r2 + h * h - L * L - 2 * p * r1 * std::cos(theta);
+  return std::atan2(Q, P) + std::acos(-S / std::hypot(P, Q));
+}
+
+// ---- RSSR (mechanisms/rssr.yaml = spatial.md §5) ----------------------------------------------
+TEST(SpatialFile, RssrBodiesPointsAndFramesMatchAnIndependentComputation) {
+  const Model m = load_mechanism(test::source_path("mechanisms/rssr.yaml"));
+  ASSERT_EQ(m.dimension, 3);
+  ASSERT_EQ(m.bodies.size(), 3u);
+  for (const Body& b : m.bodies) EXPECT_EQ(b.kind, BodyKind::spatial);
+  // Poses: crank about z by 30°; coupler, rocker from their {x, z} axes; positions in m.
+  const Mat3 Rc = rz(30 * kDeg);
+  const Mat3 Rcp =
+      from_x_z(Vec3(0.50808919, -0.56096537, 0.65357725), Vec3(0, -0.75882256, -0.65129742));
+  const Mat3 Rr = from_x_z(Vec3(0, -0.92802728, 0.37251223), Vec3(1, 0, 0));
+  EXPECT_LT((design_R(m, "crank") - Rc).norm(), 1e-14);
+  EXPECT_LT((design_R(m, "coupler") - Rcp).norm(), 1e-14);
+  EXPECT_LT((design_R(m, "rocker") - Rr).norm(), 1e-14);
+  const auto& coupler = m.bodies[1].spatial;
+  EXPECT_LT((coupler.design_position - Vec3(0.08660254037844386, 0.05, 0)).norm(), 1e-16);
+  EXPECT_LT((coupler.com_local - Vec3(0.21, 0, 0)).norm(), 1e-16);
+  // Inertia kg·mm² → kg·m².
+  EXPECT_NEAR(coupler.inertia(1, 1), 7350e-6, 1e-18);
+  EXPECT_NEAR(coupler.inertia(0, 0), 1e-6, 1e-20);
+  EXPECT_EQ(coupler.inertia(0, 1), 0.0);
+  // Point offsets from the com: coupler.B = (420, 0, 0) mm − com (210, 0, 0) mm.
+  const SpatialJoint& B = spatial_joint(m, "B");
+  EXPECT_EQ(B.type, SpatialJointType::universal);
+  EXPECT_LT((B.pi.s - Vec3(0.21, 0, 0)).norm(), 1e-16);
+  EXPECT_LT((B.pj.s - Vec3(0.1, 0, 0)).norm(), 1e-16);  // rocker.B (200) − com (100)
+  // Universal: pin 1 = coupler z in the coupler's frame; pin 2 = rocker z in the rocker's frame.
+  EXPECT_LT((B.frame_i.col(0) - Vec3::UnitZ()).norm(), 1e-7);
+  EXPECT_LT((B.frame_j.col(1) - Vec3::UnitZ()).norm(), 1e-7);
+  // One world frame at the design pose in both bodies.
+  EXPECT_LT((Rcp * B.frame_i - Rr * B.frame_j).norm(), 1e-14);
+  // Crank revolute A0 (ground first): f = world x, h = world z; in the crank: Rcᵀ A.
+  const SpatialJoint& A0 = spatial_joint(m, "A0");
+  EXPECT_LT((A0.frame_i - Mat3::Identity()).norm(), 1e-15);
+  EXPECT_LT((A0.frame_j - Rc.transpose()).norm(), 1e-15);
+  EXPECT_LT((A0.ref_j - Vec3::UnitX()).norm(), 1e-15);  // crank x, least aligned with z
+  EXPECT_LT((A0.pi.s - Vec3::Zero()).norm(), 1e-16);
+  EXPECT_LT((A0.pj.s - Vec3(-0.05, 0, 0)).norm(), 1e-16);  // crank.O − com
+  // Rocker revolute B0 (axis world x): f = world y (x is the axis), g = z, h = x.
+  const SpatialJoint& B0 = spatial_joint(m, "B0");
+  Mat3 A;
+  A << Vec3::UnitY(), Vec3::UnitZ(), Vec3::UnitX();
+  EXPECT_LT((B0.frame_i - A).norm(), 1e-15);
+  EXPECT_LT((B0.frame_j - Rr.transpose() * A).norm(), 1e-14);
+  EXPECT_LT((B0.ref_j - Vec3::UnitX()).norm(), 1e-14);  // rocker x: least aligned with rocker z
+}
+
+TEST(SpatialFile, RssrClosesAtTheDesignPoseAndItsJointMeasuresReadTheClosedFormAngles) {
+  const Model m = load_mechanism(test::source_path("mechanisms/rssr.yaml"));
+  const VecX q = m.design_q();
+  // 8-digit orientation axes: the coupler end B is off by ~420 mm × 1e-8.
+  EXPECT_LT(max_residual(m, q), 2e-8);
+  EXPECT_NEAR(measure(m, "crank_angle", q), 30 * kDeg, 1e-14);
+  EXPECT_NEAR(measure(m, "rocker_angle", q), 158.12936317866155 * kDeg, 1e-7);
+  // Closed to rounding with the crank held at 30°: the rocker angle is (M1)'s to 1e-10 rad.
+  VecX qa = q;
+  PositionOptions hold;
+  hold.locked_joint = m.find_joint("A0");
+  hold.locked_value = 30 * kDeg;
+  ASSERT_EQ(project_positions(m, qa, hold).status, SolveStatus::converged);
+  EXPECT_NEAR(measure(m, "rocker_angle", qa), rssr_phi(30 * kDeg), 1e-10);
+  EXPECT_NEAR(rssr_phi(30 * kDeg), 158.12936317866155 * kDeg, 1e-12);
+}
+
+// ---- every bundled spatial mechanism ----------------------------------------------------------
+struct Expected {
+  const char* file;
+  double residual;  // max |f| at the design pose, SI
+  int dof, redundant, rank;
+};
+
+TEST(SpatialFile, BundledMechanismsCloseAndHaveTheirMobility) {
+  const Expected cases[] = {
+      {"rssr.yaml", 2e-8, 1, 0, 17},
+      {"bennett.yaml", 1e-14, 1, 3, 17},
+      {"bricard.yaml", 1e-15, 1, 1, 29},
+      {"hooke-joint.yaml", 1e-15, 1, 3, 11},
+      {"spatial-slider-crank.yaml", 1e-15, 1, 0, 17},
+      {"heavy-top.yaml", 1e-15, 3, 0, 3},
+      {"crank-rocker-3d.yaml", 1e-14, 1, 3, 17},
+  };
+  for (const Expected& e : cases) {
+    SCOPED_TRACE(e.file);
+    const Model m = load_mechanism(test::source_path(std::string("mechanisms/") + e.file));
+    EXPECT_EQ(m.dimension, 3);
+    EXPECT_TRUE(m.warnings.empty()) << m.warnings.front();
+    VecX q = m.design_q();
+    EXPECT_LT(max_residual(m, q), e.residual);
+    ASSERT_EQ(project_positions(m, q).status, SolveStatus::converged);
+    const Mobility mob = compute_mobility(m, q);
+    EXPECT_EQ(mob.dof, e.dof);
+    EXPECT_EQ(mob.rank, e.rank);
+    EXPECT_EQ(static_cast<int>(mob.redundant.size()), e.redundant);
+    EXPECT_EQ(mob.grubler, m.n - m.nc);
+  }
+}
+
+// The files' joint measures read the angles their headers state (spatial.md §4).
+TEST(SpatialFile, BundledMechanismsMeasuresReadTheirDesignAngles) {
+  {
+    const Model m = load_mechanism(test::source_path("mechanisms/bennett.yaml"));
+    const VecX q = m.design_q();
+    EXPECT_NEAR(measure(m, "theta1", q), 75 * kDeg, 1e-14);
+    EXPECT_NEAR(measure(m, "theta2", q), 148.6240189537 * kDeg, 1e-11);
+    // Bennett's closure tan(θ1/2) tan(θ2/2) = sin 45°/sin 15°.
+    EXPECT_NEAR(std::tan(measure(m, "theta1", q) / 2) * std::tan(measure(m, "theta2", q) / 2),
+                std::sin(45 * kDeg) / std::sin(15 * kDeg), 1e-12);
+  }
+  {
+    const Model m = load_mechanism(test::source_path("mechanisms/spatial-slider-crank.yaml"));
+    const VecX q = m.design_q();
+    EXPECT_NEAR(measure(m, "crank_angle", q), 90 * kDeg, 1e-14);
+    EXPECT_NEAR(measure(m, "slider_x", q), 0.2, 1e-15);  // (M2) at φ = 90°
+  }
+  {
+    const Model m = load_mechanism(test::source_path("mechanisms/hooke-joint.yaml"));
+    const VecX q = m.design_q();
+    EXPECT_NEAR(measure(m, "theta1", q), 0.0, 1e-15);
+    EXPECT_NEAR(measure(m, "theta2", q), 0.0, 1e-15);
+  }
+  {
+    const Model m = load_mechanism(test::source_path("mechanisms/crank-rocker-3d.yaml"));
+    const VecX q = m.design_q();
+    EXPECT_NEAR(measure(m, "crank_angle", q), 60 * kDeg, 1e-14);
+    EXPECT_NEAR(measure(m, "rocker_angle", q), 71.79755360961532 * kDeg, 1e-14);
+  }
+  {
+    const Model m = load_mechanism(test::source_path("mechanisms/heavy-top.yaml"));
+    EXPECT_NEAR(measure(m, "nutation", m.design_q()), 30 * kDeg, 1e-15);
+  }
+}
+
+TEST(SpatialFile, InfoJsonWorksOnEveryBundledSpatialMechanism) {
+  for (const char* f : {"rssr", "bennett", "bricard", "hooke-joint", "spatial-slider-crank",
+                        "heavy-top", "crank-rocker-3d"}) {
+    const auto r = test::run_cli(
+        {"info", test::source_path(std::string("mechanisms/") + f + ".yaml"), "--json"});
+    ASSERT_EQ(r.status, 0) << f << "\n" << r.err;
+    EXPECT_NE(r.out.find("\"dimension\": 3"), std::string::npos) << f;
+    EXPECT_NE(r.out.find("\"type\": \"spatial\""), std::string::npos) << f;
+  }
+}
+
+// ---- the forms of the format, against explicit formulas ----------------------------------------
+const char* kForms = R"(orthomech: 1
+dimension: 3
+units: {length: m, angle: deg}
+ground:
+  points: {O: [0, 0, 0]}
+bodies:
+  - name: aa
+    mass: 1
+    inertia: [0.3, 0.25, 0.12, 0.02, -0.01, 0.03]
+    com: [0.1, 0.2, 0.3]
+    pose: {position: [1, 2, 3], orientation: {axis: [1, 2, 2], angle: 50}}
+    points: {P: [0.5, 0, 0]}
+  - name: eu
+    mass: 1
+    inertia: [1, 1, 1]
+    pose: {position: [0, 0, 0], orientation: {euler: [30, -20, 70], sequence: zyx}}
+  - name: qu
+    mass: 1
+    inertia: [1, 1, 1]
+    pose: {position: [0, 0, 0], orientation: {quaternion: [2, 1, 0, -1]}}
+  - name: yz
+    mass: 1
+    inertia: [1, 1, 1]
+    pose: {position: [0, 0, 0], orientation: {y: [0, 2, 0], z: [1, 0, 1]}}
+  - name: ze
+    mass: 1
+    inertia: [1, 1, 1]
+    pose: {position: [0, 0, 0], orientation: {euler: [40, 60, -10], sequence: zxz}}
+joints:
+  - {name: R, type: revolute, connects: [ground.O, aa.P], axis: [0, 1, 1]}
+  - {name: S, type: screw, connects: [aa.P, eu.origin], axis: [1, 0, 0], ref: [1, 1, 0], pitch: 0.01}
+)";
+
+TEST(SpatialFile, OrientationFormsAndInertiaMatchExplicitFormulas) {
+  const Model m = parse_mechanism(kForms, "forms.yaml");
+  ASSERT_EQ(m.dimension, 3);
+  // Axis–angle: Rodrigues R = I + sin a K + (1 − cos a) K².
+  const Vec3 n = Vec3(1, 2, 2) / 3.0;
+  const Mat3 K = skew(n);
+  const double a = 50 * kDeg;
+  EXPECT_LT(
+      (design_R(m, "aa") - (Mat3::Identity() + std::sin(a) * K + (1 - std::cos(a)) * K * K)).norm(),
+      1e-15);
+  // Intrinsic z-y-x: R = Rz(a1) Ry(a2) Rx(a3); z-x-z: Rz Rx Rz.
+  EXPECT_LT((design_R(m, "eu") - rz(30 * kDeg) * ry(-20 * kDeg) * rx(70 * kDeg)).norm(), 1e-15);
+  EXPECT_LT((design_R(m, "ze") - rz(40 * kDeg) * rx(60 * kDeg) * rz(-10 * kDeg)).norm(), 1e-15);
+  // Quaternion (2, 1, 0, −1)/√6: the usual (e0² − εᵀε) I + 2εεᵀ + 2e0 ε̃.
+  const double e0 = 2 / std::sqrt(6.0);
+  const Vec3 eps = Vec3(1, 0, -1) / std::sqrt(6.0);
+  EXPECT_LT((design_R(m, "qu") - ((e0 * e0 - eps.dot(eps)) * Mat3::Identity() +
+                                  2 * eps * eps.transpose() + 2 * e0 * skew(eps)))
+                .norm(),
+            1e-15);
+  // Two axes, y first (kept), z made perpendicular, x = y × z.
+  Mat3 Ryz;
+  Ryz.col(1) = Vec3::UnitY();
+  Ryz.col(2) = Vec3(1, 0, 1).normalized();
+  Ryz.col(0) = Ryz.col(1).cross(Ryz.col(2));
+  EXPECT_LT((design_R(m, "yz") - Ryz).norm(), 1e-15);
+  // Six inertia values: the tensor J with J_xy = 0.02 etc. (tensor components).
+  Mat3 J;
+  J << 0.3, 0.02, -0.01, 0.02, 0.25, 0.03, -0.01, 0.03, 0.12;
+  EXPECT_EQ(m.bodies[0].spatial.inertia, J);
+  // The centre of mass of aa in world: position + R com.
+  const VecX q = m.design_q();
+  EXPECT_LT((q.segment<3>(0) - (Vec3(1, 2, 3) + design_R(m, "aa") * Vec3(0.1, 0.2, 0.3))).norm(),
+            1e-15);
+  // The screw's ref [1, 1, 0] is projected perpendicular to the axis [1, 0, 0]: f = y in aa's
+  // frame; the pitch is stored per turn.
+  const SpatialJoint& S = spatial_joint(m, "S");
+  EXPECT_LT((S.frame_i.col(0) - Vec3::UnitY()).norm(), 1e-15);
+  EXPECT_LT((S.frame_i.col(2) - Vec3::UnitX()).norm(), 1e-15);
+  EXPECT_EQ(S.pitch, 0.01);
+  // The revolute's default ref: the ground axis least aligned with (0, 1, 1)/√2 is x.
+  const SpatialJoint& R = spatial_joint(m, "R");
+  EXPECT_LT((R.frame_i.col(0) - Vec3::UnitX()).norm(), 1e-15);
+  EXPECT_LT((R.frame_i.col(2) - Vec3(0, 1, 1).normalized()).norm(), 1e-15);
+  // The revolute's points do not coincide (aa.P is not at the origin): a warning, with its place.
+  ASSERT_EQ(m.warnings.size(), 2u);  // R: points apart; S: eu.origin off the screw axis
+  EXPECT_NE(m.warnings[0].find("forms.yaml:30:"), std::string::npos) << m.warnings[0];
+  EXPECT_NE(m.warnings[0].find("joint 'R': its points are"), std::string::npos) << m.warnings[0];
+}
+
+// Parameters, units and `--set` work in dimension 3 as in the planar format.
+TEST(SpatialFile, ParametersAndSetApply) {
+  const std::string text = R"(orthomech: 1
+dimension: 3
+parameters: {L: 200}
+units: {length: mm, angle: deg}
+ground:
+  points: {O: [0, 0, 0]}
+bodies:
+  - name: rod
+    mass: 1
+    inertia: [10, 1000, 1000]
+    com: [L/2, 0, 0]
+    pose: {position: [0, 0, 0]}
+    points: {O: [0, 0, 0], E: [L, 0, 0]}
+joints:
+  - {name: S, type: spherical, connects: [ground.O, rod.O]}
+)";
+  const Model m = parse_mechanism(text, "p.yaml", {{"L", "300"}});
+  EXPECT_NEAR(m.bodies[0].spatial.com_local.x(), 0.15, 1e-16);
+  EXPECT_NEAR(m.bodies[0].spatial.inertia(1, 1), 1e-3, 1e-18);
+  EXPECT_EQ(m.nc, 3);
+}
+
+// A planar file reads as before: `dimension: 2` is the default and changes nothing.
+TEST(SpatialFile, DimensionTwoIsThePlanarFormat) {
+  const std::string path = test::source_path("mechanisms/crank-rocker.yaml");
+  const Model a = load_mechanism(path);
+  const Model b = load_mechanism(path, {{"dimension", "2"}});
+  EXPECT_EQ(a.dimension, 2);
+  EXPECT_EQ(b.dimension, 2);
+  EXPECT_EQ(a.design_q(), b.design_q());
+  EXPECT_EQ(a.nc, b.nc);
+}
+
+}  // namespace
+}  // namespace orthomech
