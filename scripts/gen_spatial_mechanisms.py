@@ -241,7 +241,9 @@ def hooke():
 #   y × a2 = {v(pin2)} in world (in the plane of the shafts), the shaft 2 frame's x. Shafts: 1 kg slender rods of
 #   {L} m ending at the joint centre (frame origin at the far end, z along the shaft).
 #   The revolute of shaft 2 takes `ref: pin 2` on the ground side so that θ2 = 0 at θ1 = 0.
-# Closed form: ω2/ω1 = cos β / (1 − sin²β sin²θ1), tan θ2 = tan θ1 / cos β.
+# Closed form: tan θ2 = cos β tan θ1 (θ1, θ2 the joint measures), so ω2/ω1 = cos β / (1 − sin²β
+#   sin²θ1). (spatial.md §4.5 writes tan θ2 = tan θ1 / cos β: the same motion with the roles of
+#   the shafts exchanged; its ratio formula is the one here.)
 #   Extremes cos β = 0.866025403784 at θ1 = 0 and 1/cos β = 1.154700538379 at θ1 = 90°.
 # Facts tests rely on:
 #   - 2 moving bodies, 2 revolutes and a universal joint: n = 12, n_c = 5 + 5 + 4 = 14,

@@ -393,6 +393,90 @@ TEST(SpatialFile, RssrRockerAngleFollowsTheClosedFormAroundTheTurn) {
   }
 }
 
+// Velocities of the bundled files against their closed forms: u solves Eᵀu = 0 with the given
+// rates of measures (least squares on [Eᵀ; d_k] u = [0; rate_k], exact when consistent).
+VecX velocity_with_rates(const Model& m, const VecX& q,
+                         const std::vector<std::pair<std::string, double>>& rates) {
+  MatX Et(m.nc, m.n);
+  compute_constraint_jacobian(m, q, Et);
+  MatX A(m.nc + static_cast<int>(rates.size()), m.n);
+  VecX b = VecX::Zero(A.rows());
+  A.topRows(m.nc) = Et;
+  for (size_t k = 0; k < rates.size(); ++k) {
+    VecX d(m.n);
+    const Measure& me = m.measures[static_cast<size_t>(m.find_measure(rates[k].first))];
+    (void)compute_scalar(m, me.kind, q, nullptr, d);
+    A.row(m.nc + static_cast<int>(k)) = d.transpose();
+    b(m.nc + static_cast<int>(k)) = rates[k].second;
+  }
+  return A.completeOrthogonalDecomposition().solve(b);
+}
+double rate(const Model& m, const std::string& name, const VecX& q, const VecX& u) {
+  const Measure& me = m.measures[static_cast<size_t>(m.find_measure(name))];
+  return compute_scalar(m, me.kind, q, &u).rate;
+}
+
+TEST(SpatialFile, HookeJointVelocityRatioIsTheClosedForm) {
+  const Model m = load_mechanism(test::source_path("mechanisms/hooke-joint.yaml"));
+  const double beta = 30 * kDeg;
+  PositionOptions hold;
+  hold.locked_joint = m.find_joint("R1");
+  VecX q = m.design_q();
+  for (int degrees = 0; degrees <= 85; degrees += 5) {
+    const double t1 = degrees * kDeg;
+    hold.locked_value = t1;
+    ASSERT_EQ(project_positions(m, q, hold).status, SolveStatus::converged) << degrees;
+    // θ2 of pin 2 from its design direction: tan θ2 = cos β tan θ1, whose derivative is the
+    // ratio below (spatial.md §4.5 writes tan θ1/cos β: the relation with the shafts exchanged).
+    EXPECT_NEAR(std::tan(measure(m, "theta2", q)), std::cos(beta) * std::tan(t1), 1e-10) << degrees;
+    const VecX u = velocity_with_rates(m, q, {{"theta1", 1.0}});
+    const double ratio = std::cos(beta) / (1 - std::pow(std::sin(beta) * std::sin(t1), 2));
+    EXPECT_NEAR(rate(m, "theta2", q, u), ratio, 1e-10) << degrees;
+  }
+}
+
+// (M2): x_C(φ) over a crank turn, and ẋ_C = 0.24 m/s at φ = 90° with φ̇ = 6 rad/s (the file's
+// `initial` rate).
+TEST(SpatialFile, SpatialSliderCrankFollowsM2) {
+  const Model m = load_mechanism(test::source_path("mechanisms/spatial-slider-crank.yaml"));
+  const auto xc = [](double phi) {
+    return std::sqrt(0.09 - std::pow(0.1 + 0.08 * std::cos(phi), 2) -
+                     std::pow(0.12 + 0.08 * std::sin(phi), 2));
+  };
+  VecX q = m.design_q();
+  const VecX u0 = velocity_with_rates(m, q, {{"crank_angle", 6.0}});
+  EXPECT_NEAR(rate(m, "slider_x", q, u0), 0.24, 1e-12);
+  ASSERT_EQ(m.initial.rates.size(), 1u);
+  EXPECT_EQ(m.initial.rates[0].rate, 6.0);
+  PositionOptions hold;
+  hold.locked_joint = m.find_joint("A0");
+  for (int degrees = 95; degrees <= 175; degrees += 5) {
+    hold.locked_value = degrees * kDeg;
+    ASSERT_EQ(project_positions(m, q, hold).status, SolveStatus::converged) << degrees;
+    EXPECT_NEAR(measure(m, "slider_x", q), xc(degrees * kDeg), 1e-10) << degrees;
+  }
+}
+
+// heavy-top.yaml's `initial` rates give the slow steady precession of (M3): the body's world
+// angular velocity w = Ω z + (ω3 − Ω cos θ) axis, Ω (C ω3 − A_O Ω cos θ) = m g l.
+TEST(SpatialFile, HeavyTopInitialRatesAreTheSteadyPrecession) {
+  const Model m = load_mechanism(test::source_path("mechanisms/heavy-top.yaml"));
+  const double C = 0.004, AO = 0.002 + 0.01, w3 = 100, th = 30 * kDeg, mgl = 9.81 * 0.1;
+  const double Om =
+      (C * w3 - std::sqrt(C * C * w3 * w3 - 4 * AO * mgl * std::cos(th))) / (2 * AO * std::cos(th));
+  EXPECT_NEAR(Om * (C * w3 - AO * Om * std::cos(th)), mgl, 1e-12);
+  const Vec3 axis(std::sin(th), 0, std::cos(th));
+  const Vec3 w = Om * Vec3::UnitZ() + (w3 - Om * std::cos(th)) * axis;
+  std::vector<std::pair<std::string, double>> rates;
+  for (const InitialRateSpec& r : m.initial.rates)
+    rates.emplace_back(m.measures[static_cast<size_t>(r.measure)].name, r.rate);
+  ASSERT_EQ(rates.size(), 3u);
+  const VecX q = m.design_q();
+  const VecX u = velocity_with_rates(m, q, rates);
+  const Vec3 w_world = design_R(m, "top") * u.segment<3>(3);
+  EXPECT_LT((w_world - w).norm(), 1e-10 * w.norm());
+}
+
 // ---- the forms of the format, against explicit formulas ----------------------------------------
 const char* kForms = R"(orthomech: 1
 dimension: 3
