@@ -7,6 +7,7 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <nlohmann/json.hpp>
 #include <numbers>
 #include <string>
 
@@ -14,6 +15,7 @@
 #include "orthomech/analysis/positions.hpp"
 #include "orthomech/constraints/joints.hpp"
 #include "orthomech/io/mechanism_file.hpp"
+#include "orthomech/model/free_system.hpp"
 #include "orthomech/model/measures.hpp"
 #include "orthomech/model/spatial.hpp"
 #include "support/cli_runner.hpp"
@@ -209,13 +211,26 @@ TEST(SpatialFile, BundledMechanismsMeasuresReadTheirDesignAngles) {
 }
 
 TEST(SpatialFile, InfoJsonWorksOnEveryBundledSpatialMechanism) {
-  for (const char* f : {"rssr", "bennett", "bricard", "hooke-joint", "spatial-slider-crank",
-                        "heavy-top", "crank-rocker-3d"}) {
+  const std::pair<const char*, int> files[] = {{"rssr", 1},
+                                               {"bennett", 1},
+                                               {"bricard", 1},
+                                               {"hooke-joint", 1},
+                                               {"spatial-slider-crank", 1},
+                                               {"heavy-top", 3},
+                                               {"crank-rocker-3d", 1}};
+  for (const auto& [f, dof] : files) {
     const auto r = test::run_cli(
         {"info", test::source_path(std::string("mechanisms/") + f + ".yaml"), "--json"});
     ASSERT_EQ(r.status, 0) << f << "\n" << r.err;
-    EXPECT_NE(r.out.find("\"dimension\": 3"), std::string::npos) << f;
-    EXPECT_NE(r.out.find("\"type\": \"spatial\""), std::string::npos) << f;
+    const auto j = nlohmann::json::parse(r.out);
+    EXPECT_EQ(j["dimension"], 3) << f;
+    EXPECT_EQ(j["dof"], dof) << f;
+    EXPECT_EQ(j["assembly"]["status"], "converged") << f;
+    for (const auto& b : j["bodies"]) {
+      EXPECT_EQ(b["type"], "spatial") << f;
+      ASSERT_EQ(b["inertia"].size(), 3u) << f;
+      EXPECT_EQ(b["inertia"][0].size(), 3u) << f;
+    }
   }
 }
 
@@ -475,6 +490,65 @@ TEST(SpatialFile, HeavyTopInitialRatesAreTheSteadyPrecession) {
   const VecX u = velocity_with_rates(m, q, rates);
   const Vec3 w_world = design_R(m, "top") * u.segment<3>(3);
   EXPECT_LT((w_world - w).norm(), 1e-10 * w.norm());
+}
+
+// Bennett's closure tan(θ1/2) tan(θ2/2) = sin((β+α)/2)/sin((β−α)/2) at the angles of
+// spatial.md §4.2. The loop is closed by a minimum-norm Gauss–Newton written here (least squares
+// on all rows and the held crank: the redundant rows stay consistent), from the design pose.
+TEST(SpatialFile, BennettFollowsItsClosure) {
+  const Model m = load_mechanism(test::source_path("mechanisms/bennett.yaml"));
+  const MeasureKind crank = JointCoordinate{m.find_joint("J1")};
+  const std::pair<int, double> published[] = {
+      {20, 172.6144863489}, {75, 148.6240189537}, {140, 89.6773892272}};
+  for (const int step : {5, -5}) {
+    VecX q = m.design_q();
+    for (int degrees = 75 + step; degrees >= 10 && degrees <= 170; degrees += step) {
+      const double t1 = degrees * kDeg;
+      for (int it = 0; it < 30; ++it) {
+        MatX Et(m.nc, m.n), A(m.nc + 1, m.n);
+        VecX f(m.nc), b(m.nc + 1), d(m.n);
+        compute_constraint_residual(m, q, f);
+        compute_constraint_jacobian(m, q, Et);
+        const double s = compute_scalar(m, crank, q, nullptr, d).value;
+        A << Et, d.transpose();
+        b << f, s - t1;
+        if (b.cwiseAbs().maxCoeff() < 1e-14) break;
+        const VecX du = A.completeOrthogonalDecomposition().solve(b);
+        integrate_positions(m, q, du, -1.0);
+      }
+      EXPECT_LT(max_residual(m, q), 1e-13) << degrees;
+      EXPECT_NEAR(measure(m, "theta1", q), t1, 1e-13);
+      const double t2 = measure(m, "theta2", q);
+      EXPECT_NEAR(std::tan(t1 / 2) * std::tan(t2 / 2), std::sin(45 * kDeg) / std::sin(15 * kDeg),
+                  1e-9)
+          << degrees;
+      for (const auto& [a, expected] : published) {
+        if (a == degrees) {
+          EXPECT_NEAR(t2, expected * kDeg, 1e-11) << degrees;
+        }
+      }
+    }
+  }
+}
+
+// crank-rocker-3d.yaml moves as the planar crank-rocker.yaml: the rocker angle and the coupler
+// point at every crank angle (both models closed by the same Gauss–Newton, one planar and one
+// spatial).
+TEST(SpatialFile, CrankRocker3dMovesAsThePlanarFile) {
+  const Model s3 = load_mechanism(test::source_path("mechanisms/crank-rocker-3d.yaml"));
+  const Model s2 = load_mechanism(test::source_path("mechanisms/crank-rocker.yaml"));
+  VecX q3 = s3.design_q(), q2 = s2.design_q();
+  PositionOptions h3, h2;
+  h3.locked_joint = s3.find_joint("A0");
+  h2.locked_joint = s2.find_joint("A0");
+  for (int degrees = 65; degrees <= 175; degrees += 5) {
+    h3.locked_value = h2.locked_value = degrees * kDeg;
+    ASSERT_EQ(project_positions(s3, q3, h3).status, SolveStatus::converged) << degrees;
+    ASSERT_EQ(project_positions(s2, q2, h2).status, SolveStatus::converged) << degrees;
+    EXPECT_NEAR(measure(s3, "rocker_angle", q3), measure(s2, "rocker_angle", q2), 1e-11) << degrees;
+    EXPECT_NEAR(measure(s3, "P_x", q3), measure(s2, "P_x", q2), 1e-13) << degrees;
+    EXPECT_NEAR(measure(s3, "P_y", q3), measure(s2, "P_y", q2), 1e-13) << degrees;
+  }
 }
 
 // ---- the forms of the format, against explicit formulas ----------------------------------------
