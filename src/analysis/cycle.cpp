@@ -12,6 +12,7 @@
 #include "orthomech/analysis/mobility.hpp"
 #include "orthomech/analysis/positions.hpp"
 #include "orthomech/constraints/joints.hpp"
+#include "orthomech/constraints/spatial_joints.hpp"
 #include "orthomech/io/units.hpp"
 #include "orthomech/model/free_system.hpp"
 #include "orthomech/model/loads.hpp"
@@ -149,6 +150,13 @@ std::vector<ReactionComponent> reaction_components(const Model& model) {
     auto add = [&](const std::string& c, bool global, const char* unit) {
       out.push_back({joint.name + "." + c, ji, global, unit});
     };
+    if (std::holds_alternative<SpatialJoint>(joint.kind)) {  // spatial.md §2.6
+      for (const char* c : {"Fx", "Fy", "Fz"}) add(c, true, "N");
+      for (const char* c : {"Mx", "My", "Mz"}) add(c, true, "N*m");
+      for (const char* c : {"Ff", "Fg", "Fh"}) add(c, false, "N");
+      for (const char* c : {"Mf", "Mg", "Mh"}) add(c, false, "N*m");
+      continue;
+    }
     switch (joint.kind.index()) {
       case 0:  // revolute
         add("Fx", true, "N"), add("Fy", true, "N"), add("Fx_local", false, "N"),
@@ -231,8 +239,10 @@ void compute_reactions(const Model& model, const VecX& q, const Eigen::Ref<const
           } else if constexpr (std::is_same_v<T, GearPair>) {
             out.push_back(lambda(r));
           } else if constexpr (std::is_same_v<T, SpatialJoint>) {
-            throw std::logic_error(
-                "compute_reactions: spatial joint (cycle refuses spatial models)");
+            const SpatialWrench w =
+                spatial_joint_reaction(model, k, q, lambda.segment(r, joint.rows()));
+            for (const Vec3* v : {&w.force, &w.moment, &w.force_local, &w.moment_local})
+              for (int a = 0; a < 3; ++a) out.push_back((*v)(a));
           } else {  // Distance: force on the first body = −λ d / L; tension along e = d/|d|
             const Vec2 d = point_kinematics(model, k.pj, q, none, rotations).r -
                            point_kinematics(model, k.pi, q, none, rotations).r;

@@ -211,6 +211,31 @@ void evaluate_spatial_joint(const Model& model, const SpatialJoint& joint, const
   }
 }
 
+SpatialWrench spatial_joint_reaction(const Model& model, const SpatialJoint& joint, const VecX& q,
+                                     const Eigen::Ref<const VecX>& lambda) {
+  const JointKinematics x(model, joint, q, nullptr);
+  const SpatialJointSpec& spec = spatial_joint_spec(joint.type);
+  // The body whose share is taken: i, or j (negated) when i is the ground.
+  const size_t b = x.k[0].moving() ? 0 : 1;
+  const double sign = b == 0 ? 1.0 : -1.0;
+  Vec3 F = Vec3::Zero(), M_com = Vec3::Zero();  // world force, world moment about b's centre
+  for (int k = 0; k < spec.rows; ++k) {
+    const RowTerms t = row_terms(x, joint, spec.row[static_cast<size_t>(k)]);
+    F += lambda(k) * t.g[b];      // (R1): λ·row is the world force λ g_b on body b …
+    M_com += lambda(k) * t.h[b];  // … and the world moment λ h_b about its centre of mass
+  }
+  const bool about_pj = joint.type == SpatialJointType::point_on_line ||
+                        joint.type == SpatialJointType::point_on_plane ||
+                        joint.type == SpatialJointType::distance;
+  const Vec3 point = about_pj ? x.p[1].r : x.p[0].r;
+  SpatialWrench w;
+  w.force = sign * F;
+  w.moment = sign * (M_com + (x.k[b].r - point).cross(F));  // (S7)
+  w.force_local = x.Ai.transpose() * w.force;
+  w.moment_local = x.Ai.transpose() * w.moment;
+  return w;
+}
+
 SpatialScalar spatial_joint_coordinate(const Model& model, const SpatialJoint& joint, const VecX& q,
                                        const VecX* u) {
   const SpatialCoordinate kind = spatial_joint_spec(joint.type).coordinate;

@@ -93,7 +93,8 @@ void difference_positions(const Model& model, const VecX& q1, const VecX& q0, Ve
   }
 }
 
-void compute_coordinate_rates(const Model& model, const VecX& q, const VecX& u, VecX& qdot) {
+void compute_coordinate_rates(const Model& model, const Eigen::Ref<const VecX>& q, const VecX& u,
+                              Eigen::Ref<VecX> qdot) {
   if (model.general) {
     qdot = u;
     return;
@@ -110,7 +111,7 @@ void compute_coordinate_rates(const Model& model, const VecX& q, const VecX& u, 
   }
 }
 
-void normalize_coordinates(const Model& model, VecX& q) {
+void normalize_coordinates(const Model& model, Eigen::Ref<VecX> q) {
   for (const Body& b : model.bodies)
     if (b.kind == BodyKind::spatial) q.segment<4>(b.q_offset + 3).normalize();
 }

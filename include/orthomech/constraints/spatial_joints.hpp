@@ -62,4 +62,17 @@ void evaluate_spatial_joint(const Model& model, const SpatialJoint& joint, const
 [[nodiscard]] SpatialScalar spatial_joint_coordinate(const Model& model, const SpatialJoint& joint,
                                                      const VecX& q, const VecX* u);
 
+// The reaction of a spatial joint (spatial.md (S7)): the wrench that body j exerts on body i
+// through the joint's rows with multipliers λ (its rows only), F = (Eλ)_{v_i} and the moment about
+// the joint point, world components: about P_i, or about P_j for point-on-line, point-on-plane
+// and distance (where the moment vanishes). When body i is the ground, minus body j's share. Also
+// in the joint frame of body i at q (the fixed world frame when body i is the ground).
+struct SpatialWrench {
+  Vec3 force = Vec3::Zero(), moment = Vec3::Zero();              // world
+  Vec3 force_local = Vec3::Zero(), moment_local = Vec3::Zero();  // joint frame (f, g, h)
+};
+[[nodiscard]] SpatialWrench spatial_joint_reaction(const Model& model, const SpatialJoint& joint,
+                                                   const VecX& q,
+                                                   const Eigen::Ref<const VecX>& lambda);
+
 }  // namespace orthomech

@@ -26,10 +26,11 @@ void integrate_positions(const Model& model, VecX& q, const VecX& du, double h);
 // shorter rotation). du has size n.
 void difference_positions(const Model& model, const VecX& q1, const VecX& q0, VecX& du);
 // q̇ = B̃(q) u, eq. (19) (size nq).
-void compute_coordinate_rates(const Model& model, const VecX& q, const VecX& u, VecX& qdot);
+void compute_coordinate_rates(const Model& model, const Eigen::Ref<const VecX>& q, const VecX& u,
+                              Eigen::Ref<VecX> qdot);
 // Renormalises every spatial body's quaternion (|e| = 1 is a first integral of q̇ = B̃u; this
 // removes round-off and truncation drift). No-op for planar models.
-void normalize_coordinates(const Model& model, VecX& q);
+void normalize_coordinates(const Model& model, Eigen::Ref<VecX> q);
 // Kinetic energy T = ½ uᵀ M u, eq. (4).
 [[nodiscard]] double kinetic_energy(const Model& model, const State& state);
 

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <numbers>
 #include <random>
 
 #include "orthomech/constraints/joints.hpp"
@@ -187,6 +188,93 @@ TEST(SpatialJointCoordinate, AngleAndSlideAgainstKnownMotionsAndDifferences) {
     const VecX zero = VecX::Zero(m.n);
     EXPECT_NEAR(evaluate_measure(m, acc, s.q, &s.u, &zero),
                 (value_at(h2) - 2 * value_at(0) + value_at(-h2)) / (h2 * h2), 1e-5);
+  }
+}
+
+}  // namespace
+}  // namespace orthomech
+
+namespace orthomech {
+namespace {
+
+// Reactions (spatial.md §2.6, (S7)): for random multipliers at the assembled design position,
+// (1) the wrench equals body i's columns of Eλ (Eᵀ from the row writer) reduced to the joint
+// point, (2) the rows are self-equilibrated (body j gets the opposite wrench), and (3) each joint
+// transmits only what it should: the components of the table are zero.
+TEST(SpatialJointReaction, EqualsEλAndIsSelfEquilibratedAndHasTheJointsZeros) {
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> N(0.0, 1.0);
+  for (SpatialJointType t : kAll) {
+    const Model m = two_body_model(t, 0);
+    const auto& joint = std::get<SpatialJoint>(m.joints[0].kind);
+    const VecX q = m.design_q();
+    MatX Et(m.nc, m.n);
+    compute_constraint_jacobian(m, q, Et);
+    for (int draw = 0; draw < 5; ++draw) {
+      VecX lambda(m.nc);
+      for (int k = 0; k < m.nc; ++k) lambda(k) = N(rng);
+      const VecX El = Et.transpose() * lambda;
+      const SpatialWrench w = spatial_joint_reaction(m, joint, q, lambda);
+      std::array<Vec3, 2> F, M;  // world force and world moment about each centre of mass
+      std::array<Vec3, 2> r;
+      for (size_t b = 0; b < 2; ++b) {
+        const Body& body = m.bodies[b];
+        F[b] = El.segment<3>(body.u_offset);
+        M[b] = rotation_matrix(q.segment<4>(body.q_offset + 3)) * El.segment<3>(body.u_offset + 3);
+        r[b] = q.segment<3>(body.q_offset);
+      }
+      const std::string name = spatial_joint_spec(t).type;
+      const bool about_pj = t == SpatialJointType::point_on_line ||
+                            t == SpatialJointType::point_on_plane ||
+                            t == SpatialJointType::distance;
+      const SpatialFrame ki = spatial_frame(m, 0, q, nullptr), kj = spatial_frame(m, 1, q, nullptr);
+      const Vec3 P = about_pj ? spatial_point(kj, joint.pj.s).r : spatial_point(ki, joint.pi.s).r;
+      EXPECT_LT((w.force - F[0]).norm(), 1e-12) << name;
+      EXPECT_LT((w.moment - (M[0] + (r[0] - P).cross(F[0]))).norm(), 1e-12) << name;
+      EXPECT_LT((F[0] + F[1]).norm(), 1e-12) << name;
+      EXPECT_LT((M[0] + (r[0] - P).cross(F[0]) + M[1] + (r[1] - P).cross(F[1])).norm(), 1e-12)
+          << name;
+      // What the joint cannot transmit (joint frame f, g, h of body i).
+      const Vec3& Fl = w.force_local;
+      const Vec3& Ml = w.moment_local;
+      const double z = 1e-12;
+      switch (t) {
+        case SpatialJointType::spherical:
+          EXPECT_LT(Ml.norm(), z) << name;
+          break;
+        case SpatialJointType::revolute:
+          EXPECT_LT(std::abs(Ml.z()), z) << name;
+          break;
+        case SpatialJointType::cylindrical:
+          EXPECT_LT(std::abs(Fl.z()) + std::abs(Ml.z()), z) << name;
+          break;
+        case SpatialJointType::prismatic:
+          EXPECT_LT(std::abs(Fl.z()), z) << name;
+          break;
+        case SpatialJointType::universal:
+          EXPECT_LT(std::abs(Ml.x()), z) << name;
+          break;
+        case SpatialJointType::planar:
+          EXPECT_LT(std::abs(Fl.x()) + std::abs(Fl.y()) + std::abs(Ml.z()), z) << name;
+          break;
+        case SpatialJointType::point_on_line:
+          EXPECT_LT(std::abs(Fl.z()) + Ml.norm(), z) << name;
+          break;
+        case SpatialJointType::point_on_plane:
+          EXPECT_LT(std::abs(Fl.x()) + std::abs(Fl.y()) + Ml.norm(), z) << name;
+          break;
+        case SpatialJointType::distance: {
+          const Vec3 d = spatial_point(kj, joint.pj.s).r - spatial_point(ki, joint.pi.s).r;
+          EXPECT_LT(w.force.cross(d).norm() + Ml.norm(), z) << name;
+          break;
+        }
+        case SpatialJointType::screw:
+          EXPECT_LT(std::abs(Ml.z() + joint.pitch / (2 * std::numbers::pi) * Fl.z()), z) << name;
+          break;
+        case SpatialJointType::fixed:
+          break;
+      }
+    }
   }
 }
 
