@@ -551,6 +551,27 @@ TEST(SpatialFile, CrankRocker3dMovesAsThePlanarFile) {
   }
 }
 
+// End to end: `simulate` from heavy-top.yaml's own `initial` rates is the steady precession —
+// the nutation stays 30° and the centre of mass turns about z at Ω_slow (M3).
+TEST(SpatialFile, HeavyTopFileSimulatesTheSteadyPrecession) {
+  const auto r = test::run_cli({"simulate", test::source_path("mechanisms/heavy-top.yaml"),
+                                "--t-end", "1", "--rtol", "1e-10", "--json"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  const auto& t = j["samples"]["t"];
+  const auto& m = j["samples"]["measures"];
+  ASSERT_GT(t.size(), 10u);
+  const double C = 0.004, AO = 0.012, w3 = 100, th = 30 * kDeg, mgl = 9.81 * 0.1;
+  const double Om =
+      (C * w3 - std::sqrt(C * C * w3 * w3 - 4 * AO * mgl * std::cos(th))) / (2 * AO * std::cos(th));
+  for (size_t k = 0; k < t.size(); ++k) {
+    const double time = t[k].get<double>();
+    EXPECT_NEAR(m["nutation"][k].get<double>(), 30.0, 1e-7) << time;  // deg
+    const double angle = std::atan2(m["com_y"][k].get<double>(), m["com_x"][k].get<double>());
+    EXPECT_NEAR(std::remainder(angle - Om * time, 2 * std::numbers::pi), 0.0, 1e-9) << time;
+  }
+}
+
 // ---- the forms of the format, against explicit formulas ----------------------------------------
 const char* kForms = R"(orthomech: 1
 dimension: 3
