@@ -710,6 +710,7 @@ void Reader::read_initial(const YAML::Node& node) {
       // parse_speed speaks of a joint's speed; here it is a measure's rate.
       std::string message = e.what();
       const std::pair<std::string, std::string> rewrites[] = {
+          {"the speed must", "it must"},
           {"speed must", "it must"},
           {"unknown speed unit", "unknown unit"},
           {" for a revolute joint", " for the rate of an angle"},
