@@ -336,6 +336,7 @@ class Reader {
   std::vector<std::pair<std::string, Vec3>> points_map3(const YAML::Node& pts,
                                                         const std::string& element) const;
   Mat3 spatial_inertia(const YAML::Node& node, const std::string& element) const;
+  void check_inertia(const YAML::Node& node, const std::string& element, const Mat3& J) const;
   Quat orientation(const YAML::Node& node, const std::string& element) const;
   SpatialPointRef spatial_point_ref(const YAML::Node& node, const std::string& element) const;
   std::pair<SpatialPointRef, SpatialPointRef> spatial_connects(const YAML::Node& item,

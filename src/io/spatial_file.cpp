@@ -117,18 +117,32 @@ void Reader::add_warning(const YAML::Node& node, const std::string& element,
   model_.warnings.push_back(msg.str());
 }
 
-// inertia: [Jxx, Jyy, Jzz] (body axes principal) or [Jxx, Jyy, Jzz, Jxy, Jxz, Jyz]: the tensor
+// inertia: [Jxx, Jyy, Jzz] (body axes principal), [Jxx, Jyy, Jzz, Jxy, Jxz, Jyz] or
+// {xx, yy, zz, xy, xz, yz} (products default 0): the tensor
 // about the centre of mass in body axes, J_xy = −∫ x y dm (tensor components, not the "products
 // of inertia" ∫ x y dm of some CAD programs, which have the opposite sign).
 Mat3 Reader::spatial_inertia(const YAML::Node& node, const std::string& element) const {
   const double scale = units_.mass * units_.length * units_.length;
+  if (node.IsMap()) {  // {xx, yy, zz, xy, xz, yz}: the same tensor components by name
+    expect_map(node, element, {"xx", "yy", "zz", "xy", "xz", "yz"});
+    Mat3 J = Mat3::Zero();
+    const char* names[3][3] = {{"xx", "xy", "xz"}, {"xy", "yy", "yz"}, {"xz", "yz", "zz"}};
+    for (int a = 0; a < 3; ++a)
+      for (int b = a; b < 3; ++b)
+        J(a, b) = J(b, a) = a == b
+                                ? number_field(node, names[a][b], element, scale, Quantity::inertia)
+                                : optional_number(node, names[a][b], element, 0.0, scale);
+    check_inertia(node, element, J);
+    return J;
+  }
   if (node.IsScalar())
     fail(node, element,
-         "field 'inertia' is one number (the planar form): dimension 3 needs [Jxx, Jyy, Jzz] or "
-         "[Jxx, Jyy, Jzz, Jxy, Jxz, Jyz]");
+         "field 'inertia' is one number (the planar form): dimension 3 needs [Jxx, Jyy, Jzz], "
+         "[Jxx, Jyy, Jzz, Jxy, Jxz, Jyz] or {xx, yy, zz, xy, xz, yz}");
   if (!node.IsSequence() || (node.size() != 3 && node.size() != 6))
     fail(node, element,
-         "field 'inertia' must be a list [Jxx, Jyy, Jzz] or [Jxx, Jyy, Jzz, Jxy, Jxz, Jyz]");
+         "field 'inertia' must be [Jxx, Jyy, Jzz], [Jxx, Jyy, Jzz, Jxy, Jxz, Jyz] or "
+         "{xx, yy, zz, xy, xz, yz}");
   Vec3 d;
   for (int a = 0; a < 3; ++a)
     d(a) = number(node[static_cast<size_t>(a)], element, "inertia", scale, Quantity::inertia);
@@ -141,6 +155,13 @@ Mat3 Reader::spatial_inertia(const YAML::Node& node, const std::string& element)
     J(0, 2) = J(2, 0) = xz;
     J(1, 2) = J(2, 1) = yz;
   }
+  check_inertia(node, element, J);
+  return J;
+}
+
+void Reader::check_inertia(const YAML::Node& node, const std::string& element,
+                           const Mat3& J) const {
+  const double scale = units_.mass * units_.length * units_.length;
   const Eigen::SelfAdjointEigenSolver<Mat3> eig(J);
   const Vec3 p = eig.eigenvalues();  // ascending
   if (!(p(0) > 1e-12 * p(2))) fail(node, element, "the inertia tensor is not positive definite");
@@ -154,7 +175,6 @@ Mat3 Reader::spatial_inertia(const YAML::Node& node, const std::string& element)
            "two)";
     fail(node, element, msg.str());
   }
-  return J;
 }
 
 // orientation: {axis, angle} | two of {x, y, z} | {euler, sequence} | {quaternion}.

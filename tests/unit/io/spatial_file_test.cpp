@@ -587,7 +587,7 @@ bodies:
     points: {P: [0.5, 0, 0]}
   - name: eu
     mass: 1
-    inertia: [1, 1, 1]
+    inertia: {xx: 0.3, yy: 0.25, zz: 0.12, xy: 0.02, xz: -0.01, yz: 0.03}
     pose: {position: [0, 0, 0], orientation: {euler: [30, -20, 70], sequence: zyx}}
   - name: qu
     mass: 1
@@ -636,6 +636,7 @@ TEST(SpatialFile, OrientationFormsAndInertiaMatchExplicitFormulas) {
   Mat3 J;
   J << 0.3, 0.02, -0.01, 0.02, 0.25, 0.03, -0.01, 0.03, 0.12;
   EXPECT_EQ(m.bodies[0].spatial.inertia, J);
+  EXPECT_EQ(m.bodies[1].spatial.inertia, J);  // the same by name
   // The centre of mass of aa in world: position + R com.
   const VecX q = m.design_q();
   EXPECT_LT((q.segment<3>(0) - (Vec3(1, 2, 3) + design_R(m, "aa") * Vec3(0.1, 0.2, 0.3))).norm(),
