@@ -91,6 +91,14 @@ Model load(const std::string& path, const std::vector<std::string>& sets) {
   return model;
 }
 
+void require_planar(const Model& model, const std::string& command) {
+  if (model.dimension == 2) return;
+  throw InputError({model.file, 0, 0}, "dimension: 3",
+                   "'" + command +
+                       "' is not available for spatial mechanisms yet (info, assemble, simulate "
+                       "and crosscheck are)");
+}
+
 void add_units_option(CLI::App* cmd, std::string& choice) {
   cmd->add_option("--units", choice,
                   "units of every output: 'file' (the file's declared units, default) or 'si'")

@@ -53,6 +53,10 @@ void add_set_option(CLI::App* cmd, std::vector<std::string>& sets);
 // the log.
 [[nodiscard]] Model load(const std::string& path, const std::vector<std::string>& sets = {});
 
+// Commands not yet available on spatial mechanisms (dimension: 3) refuse them with exit code 2
+// (InputError naming the file and what works instead).
+void require_planar(const Model& model, const std::string& command);
+
 // `--units file|si` of a subcommand (docs/cli.md "Units"): outputs in the file's declared units
 // (default) or in SI.
 void add_units_option(CLI::App* cmd, std::string& choice);

@@ -328,6 +328,7 @@ std::vector<ReportPlot> report_plots(const CycleResult& r,
 
 int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) {
   const Model model = load(opt.file, opt.sets);
+  require_planar(model, "cycle");
   const UnitSystem U = resolve_units(model, opt.units);
   const UnitSystem file_units = unit_system(model.units);
   if (!opt.animate.empty() && image_format_of(opt.animate) != ImageFormat::svg)

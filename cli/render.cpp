@@ -38,6 +38,7 @@ int run_render(const RenderCliOptions& opt) {
   const auto format = image_format_of(opt.out);
   if (!format) bad("--out: unknown image type '" + opt.out + "' (use .svg, .png or .pdf)");
   const Model model = load(opt.file, opt.sets);
+  require_planar(model, "render");
   const PoseResult pose = assemble_pose(model, RenderPose{opt.position, opt.input});
   if (pose.status == PoseStatus::bad_request) bad(pose.message);
   if (pose.status == PoseStatus::cannot_assemble) {

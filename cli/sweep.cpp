@@ -63,12 +63,17 @@ nlohmann::json summarize(const Study& study, const StudyDatabase& db,
   nlohmann::json nominal_j = nlohmann::json::object();
   for (const auto& [name, value] : nominal.metrics) nominal_j[name] = number_or_null(value);
   j["nominal"] = nominal_j;
-  // Metrics only of variants whose cycle completed (a stopped sweep's peaks are partial).
+  // Metrics of the cycle only of variants whose cycle completed (a stopped sweep's peaks are
+  // partial); the checks of the design (validate.*, assemble.*) of every variant that has them
+  // (a variant that does not assemble is part of the yield).
   std::vector<std::vector<double>> values;
   for (const auto& r : rows) values.push_back(r.values);
   const auto metric_column = [&](size_t m) {
+    const std::string& name = db.metrics()[m];
+    const bool check = name.rfind("validate.", 0) == 0 || name.rfind("assemble.", 0) == 0;
     std::vector<double> y;
-    for (const auto& r : rows) y.push_back(r.status == "completed" ? r.metrics[m] : std::nan(""));
+    for (const auto& r : rows)
+      y.push_back(r.status == "completed" || check ? r.metrics[m] : std::nan(""));
     return y;
   };
   if (study.kind == StudyKind::monte_carlo) {
@@ -136,18 +141,21 @@ void print_summary(const nlohmann::json& j, const fs::path& out) {
   o << "\noutput      " << (out / "study.sqlite").string() << ", "
     << (out / "variants.csv").string() << ", " << (out / "summary.json").string() << "\n";
   if (j.contains("metrics")) {
-    o << "metrics of the completed variants, in the file's units:\n";
+    o << "metrics in the file's units (of the completed variants; checks of every variant):\n";
     char line[256];
-    std::snprintf(line, sizeof line, "  %-16s %12s %12s %12s %12s %12s %12s\n", "metric", "nominal",
-                  "mean", "std", "q05", "q50", "q95");
+    int width = 16;  // the longest metric name (validate.p1.transmission, …)
+    for (const auto& m : j["metrics"])
+      width = std::max(width, static_cast<int>(m["metric"].get<std::string>().size()));
+    std::snprintf(line, sizeof line, "  %-*s %12s %12s %12s %12s %12s %12s\n", width, "metric",
+                  "nominal", "mean", "std", "q05", "q50", "q95");
     o << line;
     for (const auto& m : j["metrics"]) {
       const std::string name = m["metric"];
       const auto value = [&](const nlohmann::json& v) {
         return v.is_number() ? fixed(v.get<double>()) : std::string("-");
       };
-      std::snprintf(line, sizeof line, "  %-16s %12s %12s %12s %12s %12s %12s\n", name.c_str(),
-                    value(j["nominal"].value(name, nlohmann::json())).c_str(),
+      std::snprintf(line, sizeof line, "  %-*s %12s %12s %12s %12s %12s %12s\n", width,
+                    name.c_str(), value(j["nominal"].value(name, nlohmann::json())).c_str(),
                     value(m.value("mean", nlohmann::json())).c_str(),
                     value(m.value("std", nlohmann::json())).c_str(),
                     value(m.value("q05", nlohmann::json())).c_str(),
@@ -195,7 +203,8 @@ int serve_sweep(const SweepCliOptions& opt, MpiSession& mpi) {
     return kOk;
   }
   const std::string mechanism = read_file(opt.file, "file");
-  const Study study = parse_study(read_file(opt.study, "study"), opt.study, mechanism, opt.file);
+  Study study = parse_study(read_file(opt.study, "study"), opt.study, mechanism, opt.file);
+  attach_nominal_paths(study, mechanism, opt.file);
   serve_variants(mechanism, opt.file, study);
   mpi.finish();
   return kOk;
@@ -210,16 +219,19 @@ int run_sweep_command(const SweepCliOptions& opt) {
   const std::string mechanism = read_file(opt.file, "file");
   {  // the nominal file must be valid: its errors are the file's, with their line
     const Model model = load(opt.file);
+    require_planar(model, "sweep");
     (void)model;
   }
   const std::string study_text = read_file(opt.study, "study");
-  const Study study = parse_study(study_text, opt.study, mechanism, opt.file);
+  Study study = parse_study(study_text, opt.study, mechanism, opt.file);
+  attach_nominal_paths(study, mechanism, opt.file);  // the deviations' reference, computed once
 
   // The nominal design fixes the metric columns.
   Study nominal_study = study;
   nominal_study.parameters.clear();
   const VariantResult nominal = evaluate_variant(mechanism, opt.file, nominal_study, -1, {});
-  if (nominal.metrics.empty()) {
+  const bool needs_cycle = study.metrics.cycle || !study.metrics.deviation.empty();
+  if (nominal.metrics.empty() || (needs_cycle && nominal.positions == 0)) {
     spdlog::error("{}: the nominal design cannot be swept ({}): {}", opt.file, nominal.status,
                   nominal.message);
     return kNumerical;

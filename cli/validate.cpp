@@ -43,6 +43,7 @@ std::string cell(const std::optional<double>& v, double scale, const char* f = "
 
 int run_validate(const ValidateCliOptions& opt) {
   const Model model = load(opt.file, opt.sets);
+  require_planar(model, "validate");
   const UnitSystem U = resolve_units(model, opt.units);
   ValidateOptions vo;
   try {  // a bare number is in the file's angle unit

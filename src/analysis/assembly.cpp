@@ -9,10 +9,12 @@
 
 #include "../solvers/ipopt_nlp.hpp"
 #include "orthomech/analysis/mobility.hpp"
+#include "orthomech/analysis/positions.hpp"
 #include "orthomech/constraints/joints.hpp"
 #include "orthomech/io/units.hpp"
 #include "orthomech/model/free_system.hpp"
 #include "orthomech/model/measures.hpp"
+#include "orthomech/model/spatial.hpp"
 #include "orthomech/model/state.hpp"
 
 namespace orthomech {
@@ -174,6 +176,21 @@ std::vector<BodyMove> body_moves(const Model& model, const VecX& q0, const VecX&
   std::vector<BodyMove> out;
   for (size_t b = 0; b < model.bodies.size(); ++b) {
     const Body& body = model.bodies[b];
+    if (body.kind == BodyKind::spatial) {  // |Δr| of the frame origin, rotation 2 acos|e·e₀|
+      const int bi = static_cast<int>(b);
+      const Vec3 o = -body.spatial.com_local;
+      BodyMove m;
+      m.body = body.name;
+      m.translation = (spatial_point(spatial_frame(model, bi, q, nullptr), o).r -
+                       spatial_point(spatial_frame(model, bi, q0, nullptr), o).r)
+                          .norm();
+      const double c = std::abs(q.segment<4>(body.q_offset + 3)
+                                    .normalized()
+                                    .dot(q0.segment<4>(body.q_offset + 3).normalized()));
+      m.rotation = 2.0 * std::acos(std::min(1.0, c));
+      out.push_back(m);
+      continue;
+    }
     const PointRef origin{static_cast<int>(b), -body.com_local, body.name};
     BodyMove m;
     m.body = body.name;
@@ -284,6 +301,74 @@ struct Problem {
       r = static_cast<int>(f_rows.size());
     }
     for (const CoordinateRow& c : coords) add_coordinate_hessian(model, c, q, lambda(r++), H, u);
+  }
+};
+
+// Spatial models (spatial.md §6.4, the local-coordinates option): the unknowns are x ∈ Rⁿ with
+// q(x) = q₀ ⊕ x, the velocity-space displacement from the guess (translation of each centre of
+// mass, rotation vector θ in body axes). (A1) becomes min ½ xᵀWx, f(q(x)) = 0 — the mass metric
+// of the planar problem, now exactly quadratic — with ∂f/∂x = Eᵀ(q(x)) blockdiag(I₃, J_r(θ))
+// (model/spatial.hpp: exp_right_jacobian). The Hessian is Ipopt's limited-memory approximation:
+// the planar exact Hessian (L2) needs B̃ = I. Valid while every |θ| < π (a body turned by less
+// than half a turn from its drawing).
+struct LocalProblem {
+  const Model& model;
+  VecX q0;
+  MatX W;
+  std::vector<int> f_rows;
+  bool least_squares = false;
+  mutable VecX f, q;
+  mutable MatX Et, EtJ;
+
+  LocalProblem(const Model& m, const VecX& q0_)
+      : model(m), q0(q0_), f(m.nc), q(m.nq), Et(m.nc, m.n), EtJ(m.nc, m.n) {}
+
+  const VecX& at(const VecX& x) const {
+    q = q0;
+    integrate_positions(model, q, x, 1.0);
+    return q;
+  }
+  // ∂f/∂x = Eᵀ(q(x)) · blockdiag(I₃, J_r(θ_b)) per body.
+  const MatX& jacobian(const VecX& x) const {
+    compute_constraint_jacobian(model, at(x), Et);
+    EtJ = Et;
+    for (const Body& b : model.bodies)
+      if (b.kind == BodyKind::spatial)
+        EtJ.middleCols<3>(b.u_offset + 3) =
+            Et.middleCols<3>(b.u_offset + 3) * exp_right_jacobian(x.segment<3>(b.u_offset + 3));
+    return EtJ;
+  }
+
+  solvers::DenseNlp nlp(const VecX& start) const {
+    solvers::DenseNlp p;
+    p.n = model.n;
+    p.m = least_squares ? 0 : static_cast<int>(f_rows.size());
+    p.x0 = start;
+    p.g_lower = VecX::Zero(p.m);
+    p.g_upper = VecX::Zero(p.m);
+    p.objective = [this](const VecX& x) {
+      if (!least_squares) return 0.5 * x.dot(W * x);
+      compute_constraint_residual(model, at(x), f);
+      return 0.5 * f.squaredNorm();
+    };
+    p.gradient = [this](const VecX& x, VecX& g) {
+      if (!least_squares) {
+        g.noalias() = W * x;
+        return;
+      }
+      compute_constraint_residual(model, at(x), f);
+      g.noalias() = jacobian(x).transpose() * f;
+    };
+    p.constraints = [this](const VecX& x, VecX& g) {
+      compute_constraint_residual(model, at(x), f);
+      for (size_t k = 0; k < f_rows.size(); ++k) g(static_cast<Eigen::Index>(k)) = f(f_rows[k]);
+    };
+    p.jacobian = [this](const VecX& x, MatX& J) {
+      const MatX& EJ = jacobian(x);
+      for (size_t k = 0; k < f_rows.size(); ++k)
+        J.row(static_cast<Eigen::Index>(k)) = EJ.row(f_rows[k]);
+    };
+    return p;  // no Hessian: limited-memory
   }
 };
 
@@ -439,11 +524,13 @@ bool project_with_locks(const Model& model, VecX& q, const std::vector<JointLock
     if (!dq.allFinite()) return false;
     // Backtracking on the max residual keeps wild starts (multi-start) from diverging.
     double step = 1.0;
-    VecX trial = q + dq;
+    VecX trial = q;
+    integrate_positions(model, trial, dq, step);  // q ⊕ Δu (nq ≠ n for spatial bodies)
     double rt = residual(trial);
     for (int k = 0; k < 8 && !(rt < r); ++k) {
       step *= 0.5;
-      trial = q + step * dq;
+      trial = q;
+      integrate_positions(model, trial, dq, step);
       rt = residual(trial);
     }
     if (!(rt < r)) return false;
@@ -481,10 +568,11 @@ VelocityProjection project_velocities(const Model& model, const VecX& q, const V
 
 namespace {
 
+AssemblyResult assemble_spatial(const Model& model, const VecX& q0, const AssemblyOptions& options);
+
 AssemblyResult assemble_position(const Model& model, const VecX& q0,
                                  const AssemblyOptions& options) {
-  if (model.nq != model.n)
-    throw std::invalid_argument("assemble: only free systems with q̇ = u (planar bodies)");
+  if (model.nq != model.n) return assemble_spatial(model, q0, options);
   AssemblyResult res;
   const std::vector<CoordinateRow> coords = coordinate_rows(model, q0, options);
   VecX f(model.nc), d(model.n);
@@ -599,6 +687,116 @@ AssemblyResult assemble_position(const Model& model, const VecX& q0,
         << " (loop through";
     for (size_t k = 0; k < res.gaps.size(); ++k) msg << (k ? ", " : " ") << res.gaps[k].joint;
     msg << ")";
+  }
+  res.message = msg.str();
+  return res;
+}
+
+// (A1) for spatial models in local coordinates (LocalProblem), then the mass-metric Gauss–Newton
+// projection (the position corrector, in u-space with ⊕) to the rounding level; (A2) in the same
+// coordinates when no pose closes.
+AssemblyResult assemble_spatial(const Model& model, const VecX& q0_in,
+                                const AssemblyOptions& options) {
+  bool any_limits = false;
+  for (const Joint& j : model.joints) any_limits = any_limits || j.limits.has_value();
+  if (!options.locks.empty() || (options.use_limits && any_limits))
+    throw std::invalid_argument(
+        "assemble: locks and limits on spatial joints are not available yet");
+  AssemblyResult res;
+  VecX q0 = q0_in;
+  normalize_coordinates(model, q0);
+  VecX f(model.nc), d(model.n);
+  const double tol = options.tolerance;
+  const std::vector<CoordinateRow> none;
+  const double r0 = total_residual(model, q0, none, f, d);
+  if (r0 <= tol) {
+    res.status = AssemblyStatus::unchanged;
+    res.message = "the design position already satisfies every joint";
+    res.q = q0;
+    res.residual = r0;
+    res.bodies = body_moves(model, q0, q0);
+    res.joints = joint_residuals(model, q0);
+    return res;
+  }
+  LocalProblem p(model, q0);
+  MatX M(model.n, model.n);
+  compute_mass_matrix(model, q0, M);
+  p.W = M / M.diagonal().maxCoeff();
+  // Independent rows at a cheap Gauss–Newton projection of the guess, which is also the start.
+  VecX q_start = q0;
+  const bool gn = project_with_locks(model, q_start, {}, tol, 30);
+  if (!gn) q_start = q0;
+  {
+    const Mobility mob = compute_mobility(model, q_start);
+    std::vector<bool> redundant(static_cast<size_t>(model.nc), false);
+    for (int r : mob.redundant_rows) redundant[static_cast<size_t>(r)] = true;
+    for (int r = 0; r < model.nc; ++r)
+      if (!redundant[static_cast<size_t>(r)]) p.f_rows.push_back(r);
+  }
+  VecX x_start(model.n);
+  difference_positions(model, q_start, q0, x_start);
+  solvers::IpoptSettings settings;
+  settings.max_iter = options.max_iterations;
+  settings.constr_viol_tol = std::max(tol, 1e-14);
+  const solvers::IpoptOutcome out = solvers::solve_with_ipopt(p.nlp(x_start), settings);
+  if (out.error) std::rethrow_exception(out.error);
+  res.solver_status = out.status;
+  res.iterations = out.iterations;
+  const VecX x = out.x.size() == model.n && out.x.allFinite() ? out.x : x_start;
+  VecX q = p.at(x);
+  // Feasibility to the rounding level with the one position corrector (optimality: Ipopt's).
+  PositionOptions popt;
+  popt.tolerance = tol;
+  const SolveResult polished = project_positions(model, q, popt);
+  res.iterations += polished.iterations;
+  res.residual = total_residual(model, q, none, f, d);
+  if (res.residual <= tol) {
+    res.status = AssemblyStatus::assembled;
+    res.q = q;
+    VecX dx(model.n);
+    difference_positions(model, q, q0, dx);
+    res.distance = std::sqrt(std::max(0.0, dx.dot(M * dx)));
+    res.bodies = body_moves(model, q0, q);
+    res.joints = joint_residuals(model, q);
+    std::ostringstream msg;
+    msg << "projected onto the constraints: Ipopt " << out.status << " in " << out.iterations
+        << " iterations (local coordinates, limited-memory Hessian), then " << polished.iterations
+        << " Gauss–Newton steps";
+    res.message = msg.str();
+    return res;
+  }
+  // No feasible pose: the least-squares pose says which joints cannot close.
+  p.least_squares = true;
+  const solvers::IpoptOutcome ls = solvers::solve_with_ipopt(p.nlp(x_start), settings);
+  if (ls.error) std::rethrow_exception(ls.error);
+  res.q_least_squares = p.at(ls.x.size() == model.n && ls.x.allFinite() ? ls.x : x);
+  const double gap_tol = std::max(1e3 * tol, 1e-9);
+  for (JointResidual& j : joint_residuals(model, res.q_least_squares))
+    if (j.residual > gap_tol) res.gaps.push_back(std::move(j));
+  std::sort(res.gaps.begin(), res.gaps.end(),
+            [](const JointResidual& a, const JointResidual& b) { return a.gap > b.gap; });
+  for (const JointResidual& j : res.gaps) res.total_gap += j.gap;
+  res.q = res.gaps.empty() ? q : res.q_least_squares;
+  res.residual = total_residual(model, res.q, none, f, d);
+  res.bodies = body_moves(model, q0, res.q);
+  res.joints = joint_residuals(model, res.q);
+  std::ostringstream msg;
+  if (res.gaps.empty()) {
+    res.status = AssemblyStatus::not_converged;
+    msg << "no assembled position found (" << out.status << "; residual " << res.residual
+        << "), although a least-squares pose closes every joint";
+  } else {
+    res.status = AssemblyStatus::cannot_close;
+    const UnitSystem file_units = unit_system(model.units);
+    msg << "the mechanism cannot close: at the best least-squares pose";
+    for (size_t k = 0; k < res.gaps.size(); ++k) {
+      msg << (k ? "," : "") << " joint '" << res.gaps[k].joint << "' ";
+      if (res.gaps[k].gap > 0.0)
+        msg << "gap " << format_quantity(res.gaps[k].gap, Dimension::length, file_units);
+      else
+        msg << "residual " << res.gaps[k].residual;
+    }
+    msg << "; total gap " << format_quantity(res.total_gap, Dimension::length, file_units);
   }
   res.message = msg.str();
   return res;

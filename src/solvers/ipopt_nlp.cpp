@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <limits>
+#include <mutex>
 
 #include "IpIpoptApplication.hpp"
 #include "IpSolveStatistics.hpp"
@@ -277,6 +278,12 @@ const char* to_string(IpoptOutcomeKind k) {
 }
 
 IpoptOutcome solve_with_ipopt(const DenseNlp& nlp, const IpoptSettings& settings) {
+  // One solve at a time in the process, from the application's creation to its destruction (which
+  // ends MUMPS): Debian's Ipopt factors with the sequential MUMPS, whose Fortran module state is
+  // process-wide; two solves on two threads (a design study's validate and assemble metrics on
+  // every core) corrupt it ("PB allocation in DMUMPS_LOAD_INIT").
+  static std::mutex mumps;
+  const std::lock_guard<std::mutex> one_at_a_time(mumps);
   IpoptOutcome out;
   out.x = nlp.x0;
   out.lambda = Eigen::VectorXd::Zero(nlp.m);

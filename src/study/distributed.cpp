@@ -32,8 +32,11 @@ constexpr int kResultTag = 1;  // worker → rank 0: a result (or an empty "read
 constexpr int kIndexTag = 2;   // rank 0 → worker: the next variant, −1 when there is none
 
 std::string pack(const VariantResult& r) {
-  nlohmann::json j = {
-      {"index", r.index}, {"values", r.values}, {"status", r.status}, {"message", r.message}};
+  nlohmann::json j = {{"index", r.index},
+                      {"values", r.values},
+                      {"status", r.status},
+                      {"message", r.message},
+                      {"positions", r.positions}};
   nlohmann::json metrics = nlohmann::json::array();
   for (const auto& [name, value] : r.metrics)  // NaN is not JSON: null
     metrics.push_back({name, std::isnan(value) ? nlohmann::json() : nlohmann::json(value)});
@@ -48,6 +51,7 @@ VariantResult unpack(const std::string& text) {
   r.values = j["values"].get<std::vector<double>>();
   r.status = j["status"].get<std::string>();
   r.message = j["message"].get<std::string>();
+  r.positions = j["positions"].get<long>();
   for (const auto& m : j["metrics"])
     r.metrics.emplace_back(m[0].get<std::string>(),
                            m[1].is_null() ? std::nan("") : m[1].get<double>());

@@ -15,14 +15,18 @@
 #include <exception>
 #include <fstream>
 #include <limits>
+#include <numbers>
 #include <set>
 #include <sstream>
 #include <variant>
 
+#include "orthomech/analysis/assembly.hpp"
 #include "orthomech/analysis/cycle.hpp"
 #include "orthomech/analysis/cycle_metrics.hpp"
+#include "orthomech/analysis/validate.hpp"
 #include "orthomech/error.hpp"
 #include "orthomech/io/mechanism_file.hpp"
+#include "orthomech/io/render.hpp"
 #include "orthomech/io/units.hpp"
 
 namespace orthomech {
@@ -42,7 +46,8 @@ class StudyReader {
 
   Study read(const YAML::Node& root) {
     if (!root.IsMap()) fail(root, "study", "expected a mapping (study: grid, parameters: ...)");
-    expect_keys(root, "study", {"study", "samples", "seed", "steps", "parameters", "best"});
+    expect_keys(root, "study",
+                {"study", "samples", "seed", "steps", "parameters", "best", "metrics"});
     Study s;
     const YAML::Node kind = require(root, "study", "study");
     const std::string k = kind.IsScalar() ? kind.Scalar() : "";
@@ -86,6 +91,7 @@ class StudyReader {
     }
     if (variant_count(s) > kMaxVariants)
       fail(params, "parameters", "the grid has more than 1e9 variants");
+    if (const YAML::Node m = root["metrics"]) s.metrics = metrics(m);
     return s;
   }
 
@@ -160,6 +166,47 @@ class StudyReader {
            "the file's value at '" + p.path + "' is '" + value +
                "', not a number: give the nominal value as 'mean'");
     return v;
+  }
+
+  bool flag(const YAML::Node& node, const std::string& field) const {
+    bool v = false;
+    if (!node.IsScalar() || !YAML::convert<bool>::decode(node, v))
+      fail(node, "metrics", "field '" + field + "' must be true or false");
+    return v;
+  }
+
+  // metrics: {cycle: true, validate: true, assemble: true, deviation: [coupler.P]}: the blocks
+  // listed true are computed (the others not); the deviation points must be points of moving
+  // bodies of the mechanism file.
+  StudyMetrics metrics(const YAML::Node& node) const {
+    expect_keys(node, "metrics", {"cycle", "validate", "assemble", "deviation"});
+    StudyMetrics m;
+    m.cycle = node["cycle"] && flag(node["cycle"], "cycle");
+    m.validate = node["validate"] && flag(node["validate"], "validate");
+    m.assemble = node["assemble"] && flag(node["assemble"], "assemble");
+    if (const YAML::Node d = node["deviation"]) {
+      if (d.IsScalar()) {
+        m.deviation.push_back(text(d, "metrics", "deviation"));
+      } else if (d.IsSequence() && d.size() > 0) {
+        for (const auto& p : d) m.deviation.push_back(text(p, "metrics", "deviation"));
+      } else {
+        fail(d, "metrics", "field 'deviation' must be a point body.point or a list of them");
+      }
+      std::set<std::string> seen;
+      for (const std::string& p : m.deviation)
+        if (!seen.insert(p).second) fail(d, "metrics", "deviation: point '" + p + "' listed twice");
+      const Model model = parse_mechanism(mechanism_, mechanism_origin_, {});
+      const TracePoints points = resolve_trace_points(model, m.deviation);
+      if (points.status == TraceStatus::bad_request) {
+        std::string message = points.message;
+        if (message.rfind("--trace: ", 0) == 0) message = message.substr(9);
+        fail(d, "metrics", "deviation: " + message + " in " + mechanism_origin_);
+      }
+    }
+    if (!m.cycle && !m.validate && !m.assemble && m.deviation.empty())
+      fail(node, "metrics",
+           "no metric block is on: set cycle, validate or assemble true, or list deviation points");
+    return m;
   }
 
   StudyParameter parameter(const YAML::Node& item, StudyKind kind) const {
@@ -277,6 +324,155 @@ void cycle_metrics(const Model& model, const CycleResult& c, int driver_joint,
   out.emplace_back("dead_points", static_cast<double>(c.dead_points.size()));
 }
 
+double flag(bool pass) { return pass ? 1.0 : 0.0; }
+
+// `validate`'s checks (analysis/validate.hpp, default ValidateOptions as `orthomech validate`):
+// 1 passes, 0 fails, NaN not checked. The columns depend only on the file's structure (its
+// design positions, targets and loops), so that every variant has the nominal design's columns:
+//   validate.pass                 the report passes (every position, no defect)
+//   validate.order/circuit/branch no order (positions ≥ 2 on one input) / circuit / branch defect
+//                                 (NaN when not traced: a position that does not assemble)
+//   validate.P.assembles          position P assembles
+//   validate.P.target             its target is met (positions with a target)
+//   validate.P.change_point       σ_min ≥ min_sigma (not at a change point)
+//   validate.P.dof                the inputs fix the position (DOF ≤ inputs)
+//   validate.P.dead_point         η ≥ min_sigma (not at a dead point of the inputs)
+//   validate.P.transmission       every four-bar loop's transmission angle within the bounds
+//   validate.P.pressure           every slider-crank loop's pressure angle within the bound
+void validate_metrics(const Model& model, std::vector<std::pair<std::string, double>>& out) {
+  const ValidateOptions options;
+  const ValidationReport rep = validate_design_positions(model, options);
+  const bool four_bars = !find_four_bar_loops(model, -1).empty();
+  const bool slider_cranks = !find_slider_crank_loops(model).empty();
+  out.emplace_back("validate.pass", flag(rep.pass()));
+  const bool ordered = !rep.input.empty() && model.design_positions.size() >= 2;
+  out.emplace_back("validate.order", ordered ? flag(!rep.order_defect) : kNaN);
+  out.emplace_back("validate.circuit", rep.circuits > 0 ? flag(!rep.circuit_defect) : kNaN);
+  out.emplace_back("validate.branch", rep.circuits > 0 ? flag(!rep.branch_defect) : kNaN);
+  for (size_t k = 0; k < model.design_positions.size(); ++k) {
+    const DesignPosition& dp = model.design_positions[k];
+    const PositionReport& p = rep.positions.at(k);
+    const std::string prefix = "validate." + dp.name + ".";
+    const bool a = p.assembles;
+    const size_t inputs = dp.inputs.size();
+    out.emplace_back(prefix + "assembles", flag(a));
+    if (dp.target) out.emplace_back(prefix + "target", a ? flag(p.target_met) : kNaN);
+    out.emplace_back(prefix + "change_point",
+                     a ? flag(p.singular.sigma_min >= options.min_sigma) : kNaN);
+    out.emplace_back(prefix + "dof", a ? flag(p.dof <= static_cast<int>(inputs)) : kNaN);
+    const bool eta = a && p.dof <= static_cast<int>(inputs) && p.singular.eta.has_value();
+    out.emplace_back(prefix + "dead_point",
+                     eta ? flag(*p.singular.eta >= options.min_sigma) : kNaN);
+    const auto all_ok = [](const auto& loops) {
+      return flag(std::all_of(loops.begin(), loops.end(), [](const auto& l) { return l.ok; }));
+    };
+    if (four_bars) out.emplace_back(prefix + "transmission", a ? all_ok(p.four_bars) : kNaN);
+    if (slider_cranks) out.emplace_back(prefix + "pressure", a ? all_ok(p.slider_cranks) : kNaN);
+  }
+}
+
+// `assemble`'s outcome for the design pose (analysis/assembly.hpp, default AssemblyOptions as
+// `orthomech assemble FILE`: no locks, the joint limits kept): assemble.ok 1 when it assembled
+// (or was closed already), assemble.distance the mass-metric distance √((q − q₀)ᵀ M (q − q₀))
+// from the drawn pose in √(mass unit)·(length unit) of the file (NaN when it did not assemble).
+void assemble_metrics(const Model& model, std::vector<std::pair<std::string, double>>& out) {
+  const UnitSystem U = unit_system(model.units);
+  const AssemblyResult a = assemble(model, model.design_q());
+  const bool ok = a.status == AssemblyStatus::assembled || a.status == AssemblyStatus::unchanged;
+  out.emplace_back("assemble.ok", flag(ok));
+  out.emplace_back("assemble.distance",
+                   ok ? a.distance / (std::sqrt(U.mass_si) * U.length_si) : kNaN);
+}
+
+// The traced paths of a cycle: the world position of each point at each position (m).
+struct Paths {
+  std::vector<double> input;
+  std::vector<std::vector<double>> x, y;
+};
+Paths cycle_paths(const Model& model, const CycleResult& c, const std::vector<std::string>& names) {
+  const TracePoints points = resolve_trace_points(model, names);
+  if (points.status == TraceStatus::bad_request) throw std::invalid_argument(points.message);
+  std::vector<VecX> q;
+  Paths p;
+  for (const DrivenPointView v : c.points) {
+    q.emplace_back(v.q);
+    p.input.push_back(v.input);
+  }
+  for (const PointTrace& t : trace_paths(model, points.points, q, p.input)) {
+    p.x.emplace_back();
+    p.y.emplace_back();
+    for (const Vec2& r : t.path) {
+      p.x.back().push_back(r.x());
+      p.y.back().push_back(r.y());
+    }
+  }
+  return p;
+}
+
+// The variant's inputs are the nominal's first positions (the same grid, to rounding; for a
+// revolute input, up to whole turns: a cycle started elsewhere may reach the start a turn on).
+bool same_inputs(const std::vector<double>& variant, const std::vector<double>& nominal,
+                 bool angular) {
+  if (variant.empty() || variant.size() > nominal.size()) return false;
+  const double turn = 2.0 * std::numbers::pi;
+  const double offset = angular ? turn * std::round((variant[0] - nominal[0]) / turn) : 0.0;
+  for (size_t k = 0; k < variant.size(); ++k)
+    if (std::abs(variant[k] - offset - nominal[k]) > 1e-9 * (1.0 + std::abs(nominal[k])))
+      return false;
+  return true;
+}
+
+// Deviation of each traced point's path from the nominal design's, at the same inputs s_k:
+//   e_k = |P(s_k) − P_nominal(s_k)|,  deviation.P.max = max_k e_k,
+//   deviation.P.rms = √(Σ_k e_k² / m)                                                        (S1)
+// over the m positions of the nominal's grid that the variant's cycle reached (all of them when
+// it completed), in the file's length unit. The variant's own cycle is used when its inputs are
+// the nominal's (a revolute's up to whole turns); else (its design position has another input) a
+// constant-speed driver is swept again from the nominal's start input (run_cycle's use_start:
+// reached along the branch); NaN when the grids still differ (e.g. a harmonic law changed).
+void deviation_metrics(const Model& model, const CycleResult& c, const CycleOptions& options,
+                       const NominalPaths& nominal, const std::vector<std::string>& names,
+                       std::vector<std::pair<std::string, double>>& out) {
+  const double length = unit_system(model.units).length_si;
+  const bool angular = std::holds_alternative<Revolute>(
+      model.joints[static_cast<size_t>(options.driver.joint)].kind);
+  std::vector<double> max(names.size(), kNaN), rms(names.size(), kNaN);
+  if (nominal.available && !c.points.empty()) {
+    Paths p = cycle_paths(model, c, names);
+    if (!same_inputs(p.input, nominal.input, angular) &&
+        options.driver.profile == Profile::constant_speed) {
+      CycleOptions again = options;
+      again.use_start = true;
+      again.start = nominal.input.front();
+      const CycleResult c2 = run_cycle(model, again);
+      p = c2.points.empty() ? Paths{} : cycle_paths(model, c2, names);
+    }
+    if (same_inputs(p.input, nominal.input, angular)) {
+      for (size_t j = 0; j < names.size(); ++j) {
+        double e_max = 0.0, e2 = 0.0;
+        for (size_t k = 0; k < p.input.size(); ++k) {
+          const double e = std::hypot(p.x[j][k] - nominal.x[j][k], p.y[j][k] - nominal.y[j][k]);
+          e_max = std::max(e_max, e);
+          e2 += e * e;
+        }
+        max[j] = e_max / length;                                                // (S1)
+        rms[j] = std::sqrt(e2 / static_cast<double>(p.input.size())) / length;  // (S1)
+      }
+    }
+  }
+  for (size_t j = 0; j < names.size(); ++j) {
+    out.emplace_back("deviation." + names[j] + ".max", max[j]);
+    out.emplace_back("deviation." + names[j] + ".rms", rms[j]);
+  }
+}
+
+CycleOptions study_cycle_options(const Model& model, const Driver& driver, const Study& study) {
+  CycleOptions co;
+  co.driver = driver;
+  co.steps = study.steps > 0 ? study.steps : model.analysis.steps;
+  return co;
+}
+
 }  // namespace
 
 Study parse_study(const std::string& text, const std::string& origin, const std::string& mechanism,
@@ -349,11 +545,42 @@ std::string value_text(double value) {
   return ec == std::errc() ? std::string(buffer, end) : std::string("nan");
 }
 
+NominalPaths nominal_paths(const std::string& mechanism, const std::string& origin,
+                           const Study& study) {
+  NominalPaths n;
+  try {
+    const Model model = parse_mechanism(mechanism, origin, {});
+    const Driver* driver = study_driver(model);
+    if (!driver) {
+      n.message = "the mechanism has no driver to sweep";
+      return n;
+    }
+    const CycleResult c = run_cycle(model, study_cycle_options(model, *driver, study));
+    n.message = c.message;
+    if (c.points.empty()) return n;
+    Paths p = cycle_paths(model, c, study.metrics.deviation);
+    n.input = std::move(p.input);
+    n.x = std::move(p.x);
+    n.y = std::move(p.y);
+    n.available = true;
+  } catch (const std::exception& e) {
+    n.available = false;
+    n.message = e.what();
+  }
+  return n;
+}
+
+void attach_nominal_paths(Study& study, const std::string& mechanism, const std::string& origin) {
+  if (study.metrics.deviation.empty()) return;
+  study.nominal = std::make_shared<const NominalPaths>(nominal_paths(mechanism, origin, study));
+}
+
 VariantResult evaluate_variant(const std::string& mechanism, const std::string& origin,
                                const Study& study, long index, const std::vector<double>& values) {
   VariantResult r;
   r.index = index;
   r.values = values;
+  const StudyMetrics& want = study.metrics;
   try {
     std::vector<FileChange> changes;
     for (size_t j = 0; j < study.parameters.size(); ++j)
@@ -366,19 +593,35 @@ VariantResult evaluate_variant(const std::string& mechanism, const std::string& 
       r.message = e.what();
       return r;
     }
-    const Driver* driver = study_driver(model);
-    if (!driver) {
-      r.status = "invalid";
-      r.message = "the mechanism has no driver to sweep";
-      return r;
+    r.status = "completed";
+    // The cycle block: the summary and the traced points' deviations.
+    if (want.cycle || !want.deviation.empty()) {
+      const Driver* driver = study_driver(model);
+      if (!driver) {
+        r.status = "invalid";
+        r.message = "the mechanism has no driver to sweep";
+        return r;
+      }
+      const CycleOptions co = study_cycle_options(model, *driver, study);
+      const CycleResult c = run_cycle(model, co);
+      // The names of `cycle --json`'s status (docs/cli.md), one word each.
+      r.status = c.status == CycleStatus::completed               ? "completed"
+                 : c.status == CycleStatus::stopped_at_dead_point ? "stopped_at_dead_point"
+                 : c.status == CycleStatus::invalid_request       ? "invalid"
+                                                                  : "failed";
+      r.message = c.message;
+      r.positions = static_cast<long>(c.points.size());
+      if (want.cycle && !c.points.empty()) cycle_metrics(model, c, driver->joint, r.metrics);
+      if (!want.deviation.empty()) {
+        const std::shared_ptr<const NominalPaths> nominal =
+            study.nominal
+                ? study.nominal
+                : std::make_shared<const NominalPaths>(nominal_paths(mechanism, origin, study));
+        deviation_metrics(model, c, co, *nominal, want.deviation, r.metrics);
+      }
     }
-    CycleOptions co;
-    co.driver = *driver;
-    co.steps = study.steps > 0 ? study.steps : model.analysis.steps;
-    const CycleResult c = run_cycle(model, co);
-    r.status = c.status == CycleStatus::invalid_request ? "invalid" : to_string(c.status);
-    r.message = c.message;
-    if (!c.points.empty()) cycle_metrics(model, c, driver->joint, r.metrics);
+    if (want.assemble) assemble_metrics(model, r.metrics);
+    if (want.validate) validate_metrics(model, r.metrics);
   } catch (const std::exception& e) {
     r.status = "failed";
     r.message = std::string("internal error: ") + e.what();

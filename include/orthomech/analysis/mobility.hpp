@@ -21,6 +21,14 @@ struct Mobility {
   double smallest_pivot = 0.0;         // smallest kept |R_kk|/|R_11| (distance from a rank drop)
   double largest_dropped = 0.0;        // largest dropped |R_kk|/|R_11| (0 if none)
   double tolerance = 0.0;
+  // Idle degrees of freedom (spatial.md §4.1, §6.5): a body held by two or more joints that can
+  // move while every other body is at rest, e.g. a coupler between two spherical joints spinning
+  // about the line through them. Each counts in `dof`.
+  struct Idle {
+    std::string body;
+    int count = 0;  // independent directions of that body's own motion
+  };
+  std::vector<Idle> idle;
 };
 
 [[nodiscard]] Mobility compute_mobility(const Model& model, const VecX& q,

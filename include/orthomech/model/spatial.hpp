@@ -70,6 +70,23 @@ using Mat34 = Eigen::Matrix<double, 3, 4>;
   return 2.0 * std::atan2(s, e(0)) / s * e.tail<3>();
 }
 
+// The right Jacobian of the exponential map: exp(θ + δθ) = exp(θ) ⊗ exp(J_r(θ) δθ) + O(δθ²), so
+// a body turned by exp(θ) from a reference has body-frame angular velocity ω = J_r(θ) θ̇;
+// J_r = I − (1 − cos a)/a² θ̃ + (a − sin a)/a³ θ̃², a = |θ| (series below a = 1e-6).
+[[nodiscard]] inline Mat3 exp_right_jacobian(const Vec3& theta) {
+  const double a = theta.norm();
+  const Mat3 T = skew(theta);
+  double c1, c2;
+  if (a < 1e-6) {
+    c1 = 0.5 - a * a / 24.0;
+    c2 = 1.0 / 6.0 - a * a / 120.0;
+  } else {
+    c1 = (1.0 - std::cos(a)) / (a * a);
+    c2 = (a - std::sin(a)) / (a * a * a);
+  }
+  return Mat3::Identity() - c1 * T + c2 * T * T;
+}
+
 // The frame of a body at (q, u): R, the centre of mass r, v and the world angular velocity w
 // (computed once per body and evaluation). The ground: R = I, r = v = w = 0.
 struct SpatialFrame {

@@ -1,10 +1,12 @@
 #pragma once
-// Design studies (docs/cli.md "sweep", docs/study-format.md): many variants of one mechanism file,
-// each a set of `--set` changes (FileChange), each swept through its cycle; per variant the cycle's
-// summary metrics in the file's units, and over the study the best variants (grid) or the
-// quantiles and sensitivities of every metric (Monte Carlo).
+// Design studies (docs/cli.md "sweep"): many variants of one mechanism file, each a set of `--set`
+// changes (FileChange); per variant the metric blocks the study asks for, in the file's units —
+// the cycle's summary, `validate`'s checks, `assemble`'s success and distance, the deviation of
+// traced points' paths from the nominal design's — and over the study the best variants (grid)
+// or the quantiles and sensitivities of every metric (Monte Carlo).
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <utility>
@@ -24,6 +26,24 @@ struct StudyParameter {
   double tolerance = 0.0;      // uniform: mean ± tolerance
 };
 
+// What is computed per variant (the study file's `metrics:`; absent: the cycle alone).
+struct StudyMetrics {
+  bool cycle = true;      // the cycle summary (drive, reactions, power, angles, dead points)
+  bool validate = false;  // validate_design_positions: one 0/1 column per check, and overall
+  bool assemble = false;  // assemble(design pose): success 0/1 and the mass-metric distance
+  std::vector<std::string> deviation;  // traced points "body.point" ("body.origin"): max and
+                                       // RMS distance from the nominal design's path
+};
+
+// The nominal design's traced paths (the file unchanged), computed once per study: the cycle's
+// input at each position (SI) and the world path of each StudyMetrics::deviation point (m).
+struct NominalPaths {
+  bool available = false;  // false: the nominal cycle gave no positions (message says why)
+  std::string message;
+  std::vector<double> input;
+  std::vector<std::vector<double>> x, y;  // per point, per position
+};
+
 struct Study {
   StudyKind kind = StudyKind::grid;
   long samples = 0;        // Monte Carlo: number of variants
@@ -33,6 +53,10 @@ struct Study {
   std::string best_metric = "drive.peak";  // grid summary: ranked by this metric
   bool best_largest = false;               // … smallest first unless `order: max`
   int best_count = 5;
+  StudyMetrics metrics;
+  // The nominal paths of the deviation metrics (attach_nominal_paths); when empty, each variant
+  // computes them itself (same values, twice the work).
+  std::shared_ptr<const NominalPaths> nominal;
 };
 
 // Reads a study file. The nominal values of `normal` and `uniform` laws without a `mean` are read
@@ -42,6 +66,13 @@ struct Study {
                                const std::string& mechanism_origin);
 [[nodiscard]] Study parse_study(const std::string& text, const std::string& origin,
                                 const std::string& mechanism, const std::string& mechanism_origin);
+
+// The nominal design's paths of the study's deviation points (run_cycle of the unchanged file,
+// the study's steps). Never throws for a numerical outcome (available = false, message).
+[[nodiscard]] NominalPaths nominal_paths(const std::string& mechanism, const std::string& origin,
+                                         const Study& study);
+// Computes them once into study.nominal when the study asks for deviations (else leaves it).
+void attach_nominal_paths(Study& study, const std::string& mechanism, const std::string& origin);
 
 // The number of variants: the product of the grid's value counts, or the samples.
 [[nodiscard]] long variant_count(const Study& study);
@@ -54,12 +85,14 @@ struct Study {
 
 // One variant's outcome: status "completed", "stopped_at_dead_point", "failed" (the cycle could
 // not be computed or stopped) or "invalid" (the changed file is not a valid mechanism); the
-// cycle's message; metrics by name in the file's units (NaN where there is none).
+// cycle's message; metrics by name in the file's units (NaN where there is none). Without a cycle
+// block (no cycle, no deviation) a valid file is "completed": failed checks are metrics (0).
 struct VariantResult {
   long index = 0;
   std::vector<double> values;
   std::string status, message;
   std::vector<std::pair<std::string, double>> metrics;
+  long positions = 0;  // positions of the variant's cycle (0: not run, or none computed)
 };
 
 // Evaluates one variant of the mechanism text (docs/cli.md "sweep": the metrics). `values` as

@@ -147,6 +147,39 @@ TEST(SweepCli, MpirunGivesTheFilesOfOneProcess) {
   }
 }
 
+// The metric blocks under mpirun: each rank computes the nominal paths once; the files are
+// those of one process.
+TEST(SweepCli, MpirunGivesTheFilesOfOneProcessWithEveryMetricBlock) {
+  ASSERT_EQ(std::system("command -v mpirun > /dev/null 2>&1"), 0)
+      << "mpirun is not installed: scripts/setup installs Open MPI (openmpi-bin, libopenmpi-dev)";
+  Dir dir;
+  const std::string mech = test::bundled_file("crank-rocker");
+  const std::string study = dir.write("all.yaml", R"(study: monte-carlo
+samples: 8
+seed: 4
+steps: 36
+parameters:
+  - {name: crank, path: bodies.crank.points.A.0, normal: {sigma: 0.3}}
+  - {name: ground, path: ground.points.B0.0, uniform: {tolerance: 0.5}}
+metrics: {cycle: true, validate: true, assemble: true, deviation: [coupler.P, rocker.B]}
+)");
+  const auto one = run_cli({"sweep", mech, "--study", study, "--out", dir.file("one"), "-j", "1"});
+  ASSERT_EQ(one.status, 0) << one.err;
+  const std::string out = dir.file("mpi");
+  const std::string command =
+      "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
+      "OMPI_MCA_rmaps_base_oversubscribe=1 mpirun -n 2 '" +
+      std::string(ORTHOMECH_CLI) + "' sweep '" + mech + "' --study '" + study + "' --out '" + out +
+      "' > '" + out + ".log' 2>&1";
+  ASSERT_EQ(std::system(command.c_str()), 0) << test::read_text(out + ".log");
+  const std::string csv_one = test::read_text(dir.path / "one" / "variants.csv");
+  EXPECT_EQ(test::read_text(fs::path(out) / "variants.csv"), csv_one);
+  EXPECT_EQ(test::read_text(fs::path(out) / "summary.json"),
+            test::read_text(dir.path / "one" / "summary.json"));
+  EXPECT_NE(csv_one.find("deviation.rocker.B.rms"), std::string::npos);
+  EXPECT_NE(csv_one.find("validate.p3.target"), std::string::npos);
+}
+
 TEST(SweepCli, AKilledStudyResumedGivesTheUninterruptedFile) {
   Dir dir;
   const std::string mech = test::bundled_file("crank-rocker");
@@ -198,6 +231,125 @@ TEST(SweepCli, ZeroSpreadGivesTheNominalDesign) {
   const auto summary = nlohmann::json::parse(r.out);
   EXPECT_EQ(summary["nominal"]["drive.peak"].get<double>(),
             c["peaks"]["drive"]["peak"].get<double>());
+}
+
+// The metric blocks (`metrics:`): the validate and assemble columns of a variant equal standalone
+// `validate --set` and `assemble --set` runs of the same values; a loop that cannot close
+// (a − d = 250 − 70 > b + c = 80 + 60: no crank angle closes it) is a row with its status,
+// assemble.ok 0 and validate.pass 0, never the end of the study; the nominal design's deviation
+// is 0; -j 1 and -j 2 give the same files.
+TEST(SweepCli, CheckColumnsEqualStandaloneValidateAndAssembleRuns) {
+  Dir dir;
+  const std::string mech = test::bundled_file("crank-rocker");
+  const std::string study = dir.write("checks.yaml", R"(study: grid
+steps: 36
+parameters:
+  - {name: crank, path: bodies.crank.points.A.0, values: [30, 31, 250]}
+metrics: {cycle: true, validate: true, assemble: true, deviation: [coupler.P]}
+)");
+  const auto one =
+      run_cli({"sweep", mech, "--study", study, "--out", dir.file("one"), "-j", "1", "--json"});
+  ASSERT_EQ(one.status, 0) << one.err;
+  const auto two =
+      run_cli({"sweep", mech, "--study", study, "--out", dir.file("two"), "-j", "2", "--json"});
+  ASSERT_EQ(two.status, 0) << two.err;
+  const std::string text = test::read_text(dir.path / "one" / "variants.csv");
+  EXPECT_EQ(text, test::read_text(dir.path / "two" / "variants.csv"));
+  EXPECT_EQ(one.out, two.out);
+  const auto rows = csv(text);
+  ASSERT_EQ(rows.size(), 4u);
+  const auto summary = nlohmann::json::parse(one.out);
+  EXPECT_EQ(summary["nominal"]["deviation.coupler.P.max"].get<double>(), 0.0);
+  EXPECT_EQ(summary["nominal"]["validate.pass"].get<double>(), 1.0);
+  EXPECT_EQ(summary["nominal"]["assemble.ok"].get<double>(), 1.0);
+
+  // Row 3, crank 250: a row with its status; nothing of the cycle, the checks fail.
+  EXPECT_EQ(column(rows, 3, "crank"), "250");
+  EXPECT_EQ(column(rows, 3, "status"), "failed");
+  EXPECT_NE(column(rows, 3, "message").find("does not assemble"), std::string::npos);
+  EXPECT_EQ(column(rows, 3, "drive.peak"), "");
+  EXPECT_EQ(column(rows, 3, "deviation.coupler.P.max"), "");
+  EXPECT_EQ(column(rows, 3, "assemble.ok"), "0");
+  EXPECT_EQ(column(rows, 3, "assemble.distance"), "");
+  EXPECT_EQ(column(rows, 3, "validate.pass"), "0");
+  EXPECT_EQ(column(rows, 3, "validate.p1.assembles"), "0");
+
+  // Rows 2 and 3 against the standalone commands.
+  for (const size_t row : {size_t{2}, size_t{3}}) {
+    const std::string set = "bodies.crank.points.A.0=" + column(rows, row, "crank");
+    SCOPED_TRACE(set);
+    const auto v = run_cli({"validate", mech, "--set", set, "--json"});
+    ASSERT_TRUE(v.status == 0 || v.status == 1) << v.err;
+    const auto vj = nlohmann::json::parse(v.out);
+    EXPECT_EQ(column(rows, row, "validate.pass"), vj["pass"].get<bool>() ? "1" : "0");
+    for (const auto& p : vj["positions"]) {
+      const std::string name = p["name"];
+      EXPECT_EQ(column(rows, row, "validate." + name + ".assembles"),
+                p["assembles"].get<bool>() ? "1" : "0");
+      if (p["assembles"].get<bool>()) {
+        EXPECT_EQ(column(rows, row, "validate." + name + ".target"),
+                  p["target_met"].get<bool>() ? "1" : "0");
+        bool transmission = true;
+        for (const auto& f : p["four_bars"]) transmission = transmission && f["ok"].get<bool>();
+        EXPECT_EQ(column(rows, row, "validate." + name + ".transmission"),
+                  transmission ? "1" : "0");
+      }
+    }
+    const auto a = run_cli({"assemble", mech, "--set", set, "--json"});
+    const auto aj = nlohmann::json::parse(a.out);
+    const bool ok = a.status == 0;
+    EXPECT_EQ(column(rows, row, "assemble.ok"), ok ? "1" : "0");
+    if (ok) {
+      EXPECT_EQ(std::stod(column(rows, row, "assemble.distance")), aj["distance"].get<double>());
+    }
+  }
+  // Crank 31: moved from the file's closed pose, the targets missed (a check that can fail).
+  EXPECT_EQ(column(rows, 2, "validate.pass"), "0");
+  EXPECT_GT(std::stod(column(rows, 2, "assemble.distance")), 0.0);
+  EXPECT_GT(std::stod(column(rows, 2, "deviation.coupler.P.max")), 0.1);
+}
+
+// The summary of a Monte Carlo study counts the checks (assemble.*, validate.*) of every variant
+// that has them — a variant that cannot close is part of the yield — and the cycle's metrics of
+// the completed variants only. Oracle: the loop closes at some crank angle iff a − d ≤ b + c
+// (a − 70 ≤ 140), read off each row's crank length.
+TEST(SweepCli, MonteCarloSummaryCountsTheChecksOfEveryVariant) {
+  Dir dir;
+  const std::string mech = test::bundled_file("crank-rocker");
+  const std::string study = dir.write("mc.yaml", R"(study: monte-carlo
+samples: 16
+seed: 3
+steps: 36
+parameters:
+  - {name: crank, path: bodies.crank.points.A.0, uniform: {mean: 200, tolerance: 60}}
+metrics: {cycle: true, assemble: true}
+)");
+  const auto r =
+      run_cli({"sweep", mech, "--study", study, "--out", dir.file("out"), "--json", "-j", "2"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto rows = csv(test::read_text(dir.path / "out" / "variants.csv"));
+  ASSERT_EQ(rows.size(), 17u);
+  long closes = 0, completed = 0;
+  for (size_t row = 1; row < rows.size(); ++row) {
+    const double a = std::stod(column(rows, row, "crank"));
+    const bool c = a - 70.0 <= 140.0;
+    closes += c ? 1 : 0;
+    completed += column(rows, row, "status") == "completed" ? 1 : 0;
+    EXPECT_EQ(column(rows, row, "assemble.ok"), c ? "1" : "0") << "crank " << a;
+  }
+  ASSERT_GT(closes, 0);   // the draws reach both sides of a − d = b + c
+  ASSERT_LT(closes, 16);  // (the test could not tell the two counts apart otherwise)
+  const auto summary = nlohmann::json::parse(r.out);
+  for (const auto& m : summary["metrics"]) {
+    if (m["metric"] == "assemble.ok") {
+      EXPECT_EQ(m["n"].get<long>(), 16);
+      EXPECT_DOUBLE_EQ(m["mean"].get<double>(), double(closes) / 16.0);
+    }
+    if (m["metric"] == "drive.peak") {
+      EXPECT_EQ(m["n"].get<long>(), completed);
+    }
+  }
+  EXPECT_LT(completed, 16);  // a non-Grashof crank does not turn: its cycle is not completed
 }
 
 TEST(SweepCli, BadStudiesAndOutputsAreExitTwo) {
