@@ -1,5 +1,6 @@
 #include "common.hpp"
 
+#include <spdlog/sinks/ostream_sink.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
@@ -14,8 +15,18 @@
 
 namespace orthomech::cli {
 
+namespace {
+std::ostream* log_stream = nullptr;
+}  // namespace
+
+void set_log_stream(std::ostream* stream) { log_stream = stream; }
+
 void setup_logging(const GlobalOptions& options) {
-  auto logger = spdlog::stderr_color_mt("orthomech");  // logs to stderr, results to stdout
+  spdlog::drop("orthomech");  // a second command line in the same process (the Python module)
+  auto logger = log_stream
+                    ? spdlog::synchronous_factory::create<spdlog::sinks::ostream_sink_mt>(
+                          "orthomech", *log_stream)
+                    : spdlog::stderr_color_mt("orthomech");  // logs to stderr, results to stdout
   logger->set_pattern("%^%l%$: %v");
   logger->set_level(options.quiet     ? spdlog::level::err
                     : options.verbose ? spdlog::level::debug
@@ -76,6 +87,20 @@ void add_set_option(CLI::App* cmd, std::vector<std::string>& sets) {
       ->type_name("PATH=VALUE");
 }
 
+namespace {
+struct MechanismText {
+  std::string origin, text;
+};
+MechanismText& mechanism_text() {
+  static MechanismText given;
+  return given;
+}
+}  // namespace
+
+void set_mechanism_text(const std::string& origin, const std::string& text) {
+  mechanism_text() = {origin, origin.empty() ? std::string() : text};
+}
+
 Model load(const std::string& path, const std::vector<std::string>& sets) {
   spdlog::debug("reading {}", path);
   std::vector<FileChange> changes;
@@ -86,7 +111,10 @@ Model load(const std::string& path, const std::vector<std::string>& sets) {
       throw CLI::ValidationError("--set", e.what());
     }
   }
-  Model model = load_mechanism(path, changes);
+  const MechanismText& given = mechanism_text();
+  Model model = !given.origin.empty() && given.origin == path
+                    ? parse_mechanism(given.text, path, changes)
+                    : load_mechanism(path, changes);
   for (const std::string& w : model.warnings) spdlog::warn("{}", w);
   return model;
 }

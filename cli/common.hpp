@@ -2,6 +2,7 @@
 // Shared by the subcommands: exit codes, loading with error reporting, logging set-up.
 // No math here (house style: cli/ holds no math).
 #include <CLI/CLI.hpp>
+#include <iosfwd>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -30,6 +31,9 @@ struct GlobalOptions {
 };
 
 void setup_logging(const GlobalOptions& options);
+// Logs go to `stream` (plain text) instead of stderr (colored on a terminal) from the next
+// setup_logging on; nullptr: stderr again. The Python module captures them so.
+void set_log_stream(std::ostream* stream);
 // `-q`/`--quiet` and `-v`/`--verbose` after the command too: a subcommand's own flags, merged
 // with the global ones (either place works).
 struct LogFlags {
@@ -52,6 +56,9 @@ void add_set_option(CLI::App* cmd, std::vector<std::string>& sets);
 // code 2; a problem with a change names the --set). The file's warnings (Model::warnings) go to
 // the log.
 [[nodiscard]] Model load(const std::string& path, const std::vector<std::string>& sets = {});
+// A mechanism given as text rather than a file (the Python module's YAML text): while set, `load`
+// of the file name `origin` reads `text` (messages name `origin`). An empty origin clears it.
+void set_mechanism_text(const std::string& origin, const std::string& text);
 
 // Commands not yet available on spatial mechanisms (dimension: 3) refuse them with exit code 2
 // (InputError naming the file and what works instead).

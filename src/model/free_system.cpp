@@ -102,9 +102,9 @@ void compute_coordinate_rates(const Model& model, const Eigen::Ref<const VecX>& 
   for (const Body& b : model.bodies) {
     if (b.kind == BodyKind::spatial) {  // eq. (19): q̇ = B̃u, ṙ = v, ė = ½ G(e)ᵀ ω (S2)
       qdot.segment<3>(b.q_offset) = u.segment<3>(b.u_offset);
-      qdot.segment<4>(b.q_offset + 3) = 0.5 *
-                                        quaternion_G(q.segment<4>(b.q_offset + 3)).transpose() *
-                                        u.segment<3>(b.u_offset + 3);
+      const Mat34 G = quaternion_G(q.segment<4>(b.q_offset + 3));
+      qdot.segment<4>(b.q_offset + 3) =
+          0.5 * G.transpose() * u.segment<3>(b.u_offset + 3);  // eq. (3)
       continue;
     }
     for (int k = 0; k < b.nq(); ++k) qdot(b.q_offset + k) = u(b.u_offset + k);

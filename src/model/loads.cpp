@@ -77,7 +77,8 @@ SpatialScalar joint_angle(const Model& model, const JointSpringDamper& l, const 
 }
 
 // A world force F at ρ from the centre of mass (or a world moment n, with F = 0): Q = (F, Rᵀ(ρ×F
-// + n)), eq. (8) with δq̃ = (δr, δπ) (spatial.md §1.4).
+// + n)), eq. (8) with δq̃ = B δq = (δr, δπ), δπ = 2G(e)δe the body-frame virtual rotation
+// (eq. (7), spatial.md §1.4).
 void add_wrench(const SpatialFrame& k, const Vec3& F, const Vec3& moment, VecX& Q) {
   add_spatial_row(k, F, moment, 1.0, Q);
 }
@@ -156,6 +157,11 @@ void add_load(const Model& model, const Load& load, const State& st, VecX& Q) {
       load.kind);
 }
 
+// Spatial bodies (spatial.md §1.3): T = ½ m vᵀv + ½ ωᵀJω does not depend on q, so
+// ∂T/∂q̃ = 0 (eq. (9)); the structure coefficients of the frame B̃ are
+// C^{3+c}_{3+a,3+b} = ε_abc and zero otherwise (eq. (10), checked against differences of B in
+// SpatialBody.EquationTenFromDifferencesOfBIsTheGyroscopicTerm), so the Euler–Lagrange equations,
+// eq. (13), become Euler's J ω̇ + ω × Jω = n and m v̇ = F.
 void add_velocity_terms(const Model& model, const State& state, VecX& Q) {
   for (const Body& b : model.bodies) {
     if (b.kind != BodyKind::spatial) continue;

@@ -17,6 +17,7 @@
 #include "orthomech/projection/dual.hpp"
 #include "orthomech/projection/primal.hpp"
 #include "support/fixtures.hpp"
+#include "support/spatial_fixtures.hpp"
 
 namespace {
 std::atomic<long> g_allocations{0};
@@ -157,6 +158,33 @@ long allocations_of_run(detail::OdeStepper stepper, long steps) {
   const long used = g_allocations.load() - before;
   EXPECT_TRUE(s.completed) << s.message;
   return used;
+}
+
+// Spatial models (issue 12 item 8): quaternion bodies, the spatial joint rows, the gyroscopic
+// term and the corrector's ⊕ allocate nothing either.
+TEST(NoAllocationSpatial, DualPrimalAndCorrectorAllocateNothingAfterSetUp) {
+  for (SpatialJointType type : {SpatialJointType::revolute, SpatialJointType::universal,
+                                SpatialJointType::screw, SpatialJointType::distance}) {
+    const Model model = testing::spatial::two_body_model(type, 0);
+    const VecX q = model.design_q();
+    const Mobility mob = compute_mobility(model, q);
+    Workspace ws(model, mob.rank);
+    State s(model);
+    s.q = q;
+    s.u = test::admissible_velocity(model, q, 7);
+    ASSERT_EQ(evaluate_dual(model, s, ws), ProjectionStatus::ok);
+    ASSERT_EQ(evaluate_primal(model, s, ws), ProjectionStatus::ok);
+    VecX q_work = q;
+    const long before = g_allocations.load();
+    for (int k = 0; k < 100; ++k) {
+      s.q(0) = q(0) + 1e-9 * k;
+      (void)evaluate_dual(model, s, ws);
+      (void)evaluate_primal(model, s, ws);
+      q_work = q;
+      (void)correct_positions_in_chart(model, q_work, ws);
+    }
+    EXPECT_EQ(g_allocations.load() - before, 0) << spatial_joint_spec(type).type;
+  }
 }
 
 TEST(NoAllocationIntegrators, RosenbrockStepsAllocateNothing) {

@@ -30,7 +30,8 @@ using Mat34 = Eigen::Matrix<double, 3, 4>;
   return Mat3::Identity() + (2.0 / e.squaredNorm()) * (e(0) * E + E * E);
 }
 
-// G(e) = [−ε, e₀I − ε̃]: ω = 2 G(e) ė (body frame), ė = ½ G(e)ᵀ ω.
+// G(e) = [−ε, e₀I − ε̃]: ω = 2 G(e) ė (body frame), ė = ½ G(e)ᵀ ω; u = B q̇ with
+// B = blockdiag(I₃, 2G(e)), eq. (2) (spatial.md (S3)).
 [[nodiscard]] inline Mat34 quaternion_G(const Quat& e) {
   Mat34 G;
   G.col(0) = -e.tail<3>();
