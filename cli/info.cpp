@@ -16,6 +16,7 @@
 #include "orthomech/analysis/assembly.hpp"
 #include "orthomech/analysis/mobility.hpp"
 #include "orthomech/analysis/positions.hpp"
+#include "orthomech/model/spatial.hpp"
 
 namespace orthomech::cli {
 
@@ -62,6 +63,15 @@ int run_info(const InfoOptions& opt) {
   const OutputUnit inertia_u = output_unit(Dimension::inertia, U);
   double moved_length = 0.0, moved_angle = 0.0;
   for (const Body& b : model.bodies) {
+    if (b.kind == BodyKind::spatial) {  // |Δr| and the rotation angle of e₀* ⊗ e
+      moved_length = std::max(moved_length,
+                              (q.segment<3>(b.q_offset) - q_design.segment<3>(b.q_offset)).norm());
+      Quat e0 = q_design.segment<4>(b.q_offset + 3);
+      e0.tail<3>() = -e0.tail<3>();
+      const Quat d = quaternion_multiply(e0, q.segment<4>(b.q_offset + 3));
+      moved_angle = std::max(moved_angle, 2.0 * std::atan2(d.tail<3>().norm(), std::abs(d(0))));
+      continue;
+    }
     moved_length =
         std::max(moved_length, (q.segment<2>(b.q_offset) - q_design.segment<2>(b.q_offset)).norm());
     if (b.kind == BodyKind::rigid)
@@ -90,11 +100,25 @@ int run_info(const InfoOptions& opt) {
                      {"max_translation", length_u.from_si(moved_length)},
                      {"max_rotation", angle_u.from_si(moved_angle)}};
     nlohmann::json bodies = nlohmann::json::array();
-    for (const Body& b : model.bodies)
+    for (const Body& b : model.bodies) {
+      if (b.kind == BodyKind::spatial) {  // the inertia tensor about the com, body axes (rows)
+        nlohmann::json J = nlohmann::json::array();
+        for (int r = 0; r < 3; ++r)
+          J.push_back({inertia_u.from_si(b.spatial.inertia(r, 0)),
+                       inertia_u.from_si(b.spatial.inertia(r, 1)),
+                       inertia_u.from_si(b.spatial.inertia(r, 2))});
+        bodies.push_back({{"name", b.name},
+                          {"type", "spatial"},
+                          {"mass", mass_u.from_si(b.mass)},
+                          {"inertia", J}});
+        continue;
+      }
       bodies.push_back({{"name", b.name},
                         {"type", b.kind == BodyKind::rigid ? "rigid" : "particle"},
                         {"mass", mass_u.from_si(b.mass)},
                         {"inertia", inertia_u.from_si(b.inertia)}});
+    }
+    if (model.dimension == 3) j["dimension"] = 3;  // planar output unchanged
     j["bodies"] = bodies;
     nlohmann::json joints = nlohmann::json::array();
     for (const Joint& jt : model.joints)

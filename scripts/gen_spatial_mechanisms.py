@@ -1,0 +1,503 @@
+#!/usr/bin/env python3
+"""Generate the bundled spatial mechanism files (dimension: 3) in mechanisms/ (standard library).
+
+    python3 scripts/gen_spatial_mechanisms.py
+
+Writes bennett.yaml, bricard.yaml, hooke-joint.yaml, spatial-slider-crank.yaml, heavy-top.yaml and
+crank-rocker-3d.yaml from the geometry of /work/shared/spatial.md §4 (and, for crank-rocker-3d,
+the planar mechanisms/crank-rocker.yaml). Design poses are computed here in closed form and
+printed at full double precision (repr), so every joint holds at the design pose to ~1e-15 m;
+the numbers quoted in each file's comment block are computed here too. rssr.yaml is the example
+of spatial.md §5, written by hand (8-digit orientation axes).
+"""
+import math
+import os
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+OUT = os.path.join(ROOT, "mechanisms")
+DEG = math.pi / 180.0
+
+
+# ---- small 3D algebra (tuples; matrices as tuples of rows) ------------------------------------
+def add(a, b):
+    return tuple(x + y for x, y in zip(a, b))
+
+
+def sub(a, b):
+    return tuple(x - y for x, y in zip(a, b))
+
+
+def mul(s, a):
+    return tuple(s * x for x in a)
+
+
+def dot(a, b):
+    return sum(x * y for x, y in zip(a, b))
+
+
+def cross(a, b):
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+
+
+def norm(a):
+    return math.sqrt(dot(a, a))
+
+
+def unit(a):
+    return mul(1.0 / norm(a), a)
+
+
+def mat_mul(A, B):
+    return tuple(tuple(sum(A[i][k] * B[k][j] for k in range(3)) for j in range(3)) for i in range(3))
+
+
+def mat_vec(A, v):
+    return tuple(dot(A[i], v) for i in range(3))
+
+
+def col(A, j):
+    return tuple(A[i][j] for i in range(3))
+
+
+def rot_x(t):
+    c, s = math.cos(t), math.sin(t)
+    return ((1, 0, 0), (0, c, -s), (0, s, c))
+
+
+def rot_z(t):
+    c, s = math.cos(t), math.sin(t)
+    return ((c, -s, 0), (s, c, 0), (0, 0, 1))
+
+
+IDENTITY = ((1, 0, 0), (0, 1, 0), (0, 0, 1))
+
+
+def v(a):
+    """A vector as a YAML flow list at full precision (integers printed plainly)."""
+    return "[" + ", ".join(num(x) for x in a) + "]"
+
+
+def num(x):
+    x = float(x)
+    if abs(x) < 1e-15:  # round-off of an exact zero (sin π, the Bennett loop's closure)
+        return "0"
+    if x == int(x) and abs(x) < 1e15:
+        return str(int(x))
+    return repr(x)
+
+
+def write(name, text):
+    with open(os.path.join(OUT, name), "w", encoding="utf-8") as f:
+        f.write(text)
+    print("wrote mechanisms/" + name)
+
+
+def rod_inertia(m, length, axis, radius=0.01):
+    """Uniform slender rod along body axis `axis` (0, 1, 2): m L²/12 across, m r²/2 along."""
+    J = [m * length * length / 12.0] * 3
+    J[axis] = m * radius * radius / 2.0
+    return J
+
+
+# ---- Bennett 4R (spatial.md §4.2) ----------------------------------------------------------------
+def bennett():
+    a, alpha, beta = 0.3, 30 * DEG, 60 * DEG
+    b = a * math.sin(beta) / math.sin(alpha)
+    K = math.sin((beta + alpha) / 2) / math.sin((beta - alpha) / 2)
+    th1 = 75 * DEG
+    th2 = 2 * math.atan(K / math.tan(th1 / 2))
+    th = [th1, th2, -th1, -th2]
+    links = [(a, alpha), (b, beta), (a, alpha), (b, beta)]
+    M = IDENTITY
+    p = (0.0, 0.0, 0.0)
+    frames = []  # (origin, rotation) of link k = 1..4 (after Rz(θ_k))
+    for k in range(4):
+        R = mat_mul(M, rot_z(th[k]))
+        frames.append((p, R))
+        p = add(p, mul(links[k][0], col(R, 0)))
+        M = mat_mul(R, rot_x(links[k][1]))
+    closure = max(norm(p), max(abs(M[i][j] - IDENTITY[i][j]) for i in range(3) for j in range(3)))
+    assert closure < 1e-14, closure
+    J4, R4 = frames[3]
+    z4 = col(R4, 2)
+    body = ""
+    for k in range(3):
+        o, R = frames[k]
+        L = links[k][0]
+        body += f"""  - name: link{k + 1}
+    mass: 1
+    inertia: {v(rod_inertia(1.0, L, 0))}
+    com: {v((L / 2, 0, 0))}
+    pose:
+      position: {v(o)}
+      orientation: {{x: {v(col(R, 0))}, z: {v(col(R, 2))}}}
+    points: {{J{k + 1}: [0, 0, 0], J{k + 2}: {v((L, 0, 0))}}}
+"""
+    sa, ca = math.sin(alpha), math.cos(alpha)
+    sb, cb = math.sin(beta), math.cos(beta)
+    text = f"""# bennett.yaml — Bennett 4R linkage: the overconstrained spatial four-bar (dimension: 3).
+#
+# Source: spatial.md §4.2 (DH chain, all twists positive). T = Π Rz(θ_i)·Tx(a_i)·Rx(α_i) over
+#   (a_i, α_i) = (a, α), (b, β), (a, α), (b, β) with a = 0.3 m, α = 30°, β = 60°,
+#   b = a sin β / sin α = {b!r} m (Bennett's condition a/sin α = b/sin β).
+#   Closure: θ3 = −θ1, θ4 = −θ2, tan(θ1/2) tan(θ2/2) = sin((β+α)/2)/sin((β−α)/2) = {K!r}.
+#   Link k's frame: origin at joint k, z its axis, x along the common normal to joint k + 1; the
+#   ground is link 4 (joints J1 at the origin, axis z, and J4). Links: 1 kg slender rods, com
+#   mid-length, J = m L²/12 across and m r²/2 (r = 10 mm) along.
+# Design pose: θ1 = 75°, θ2 = {th2 / DEG!r}° (closure of the DH loop {closure:.1e}),
+#   computed by scripts/gen_spatial_mechanisms.py.
+# Facts tests rely on:
+#   - 3 moving bodies, 4 revolutes: n = 18, n_c = 20, Grübler −2; rank 17: DOF 1, 3 redundant.
+#   - θ1 = 20°, 75°, 140° → θ2 = 172.6144863489°, 148.6240189537°, 89.6773892272°
+#     (measures theta1, theta2 read θ1 and θ2).
+orthomech: 1
+dimension: 3
+name: bennett
+description: "Bennett 4R linkage, a = 0.3 m, alpha = 30 deg, beta = 60 deg"
+units: {{length: m, angle: deg, mass: kg, time: s, force: N}}
+ground:
+  points: {{J1: [0, 0, 0], J4: {v(J4)}}}
+bodies:
+{body}joints:
+  - {{name: J1, type: revolute, connects: [ground.J1, link1.J1], axis: [0, 0, 1]}}
+  - {{name: J2, type: revolute, connects: [link1.J2, link2.J2], axis: {v((0, -sa, ca))}}}
+  - {{name: J3, type: revolute, connects: [link2.J3, link3.J3], axis: {v((0, -sb, cb))}}}
+  - {{name: J4, type: revolute, connects: [link3.J4, ground.J4], axis: {v((0, -sa, ca))}}}
+loads:
+  - {{name: weight, type: gravity}}
+measures:
+  - {{name: theta1, type: joint, joint: J1}}
+  - {{name: theta2, type: joint, joint: J2}}
+drivers:
+  - {{name: motor, joint: J1, speed: 60 rpm}}
+analysis: {{driver: motor, steps: 360}}
+"""
+    write("bennett.yaml", text)
+
+
+# ---- Bricard 6R (spatial.md §4.3) ----------------------------------------------------------------
+def bricard():
+    J = [(0, 0, 0), (1, 0, 0), (1, -1, 0), (1, -1, 1), (0, -1, 1), (0, 0, 1)]
+    axes = ["[0, 1, 0]", "[0, 0, 1]", "[1, 0, 0]", "[0, 1, 0]", "[0, 0, 1]", "[1, 0, 0]"]
+    body = ""
+    for k in range(5):
+        d = sub(J[k + 1], J[k])
+        along = [i for i in range(3) if d[i] != 0][0]
+        body += f"""  - name: rod{k + 1}
+    mass: 1
+    inertia: {v(rod_inertia(1.0, 1.0, along))}
+    com: {v(mul(0.5, d))}
+    pose: {{position: {v(J[k])}}}
+    points: {{J{k + 1}: [0, 0, 0], J{k + 2}: {v(d)}}}
+"""
+    joints = ""
+    for k in range(6):
+        first = "ground.J1" if k == 0 else f"rod{k}.J{k + 1}"
+        second = f"rod{k + 1}.J{k + 1}" if k < 5 else "ground.J6"
+        joints += (f"  - {{name: J{k + 1}, type: revolute, connects: [{first}, {second}], "
+                   f"axis: {axes[k]}}}\n")
+    text = f"""# bricard.yaml — Bricard 6R linkage (IFToMM A04 geometry; dimension: 3).
+#
+# Source: spatial.md §4.3. Joints (m) and axes: J1 (0,0,0) y; J2 (1,0,0) z; J3 (1,−1,0) x;
+#   J4 (1,−1,1) y; J5 (0,−1,1) z; J6 (0,0,1) x. Rods of 1 m and 1 kg between consecutive joints;
+#   the ground is the rod J6–J1 (assumed, spatial.md: not verified against the A04 files). Body
+#   frames parallel to the world at the design pose, origin at the rod's first joint; slender rods,
+#   J = m L²/12 across and m r²/2 (r = 10 mm) along. Gravity −y (A04).
+# Facts tests rely on:
+#   - 5 moving bodies, 6 revolutes: n = 30, n_c = 30, Grübler 0; rank 29: DOF 1, 1 redundant.
+#   - The design pose is the drawn one (every joint holds exactly).
+orthomech: 1
+dimension: 3
+name: bricard
+description: "Bricard 6R linkage, IFToMM A04 geometry, 1 m rods"
+units: {{length: m, angle: deg, mass: kg, time: s, force: N}}
+ground:
+  points: {{J1: [0, 0, 0], J6: [0, 0, 1]}}
+bodies:
+{body}joints:
+{joints}loads:
+  - {{name: weight, type: gravity, g: [0, -9.81, 0]}}
+measures:
+  - {{name: theta1, type: joint, joint: J1}}
+  - {{name: J4_x, type: point, point: rod3.J4, component: x}}
+  - {{name: J4_y, type: point, point: rod3.J4, component: y}}
+  - {{name: J4_z, type: point, point: rod3.J4, component: z}}
+"""
+    write("bricard.yaml", text)
+
+
+# ---- Hooke's joint (spatial.md §4.5) -------------------------------------------------------------
+def hooke():
+    beta = 30 * DEG
+    L = 0.2
+    a2 = (math.sin(beta), 0.0, math.cos(beta))
+    pin2 = (math.cos(beta), 0.0, -math.sin(beta))  # ⟂ a2 and ⟂ pin 1 = y, in the shafts' plane
+    o2 = mul(-L, a2)  # shaft 2's frame origin: L before the joint centre along −a2
+    text = f"""# hooke-joint.yaml — Hooke's (Cardan) joint between two shafts at 30° (dimension: 3).
+#
+# Source: spatial.md §4.5. Shaft 1 on a revolute about world z, shaft 2 on a revolute about
+#   a2 = (sin β, 0, cos β), β = 30°, both axes through the U-joint centre at the origin. Pin 1
+#   (on shaft 1) = y, perpendicular to the plane of the shafts at θ1 = 0; pin 2 (on shaft 2) =
+#   y × a2 = {v(pin2)} in world (in the plane of the shafts), the shaft 2 frame's x. Shafts: 1 kg slender rods of
+#   {L} m ending at the joint centre (frame origin at the far end, z along the shaft).
+#   The revolute of shaft 2 takes `ref: pin 2` on the ground side so that θ2 = 0 at θ1 = 0.
+# Closed form: tan θ2 = cos β tan θ1 (θ1, θ2 the joint measures), so ω2/ω1 = cos β / (1 − sin²β
+#   sin²θ1). (spatial.md §4.5 writes tan θ2 = tan θ1 / cos β: the same motion with the roles of
+#   the shafts exchanged; its ratio formula is the one here.)
+#   Extremes cos β = 0.866025403784 at θ1 = 0 and 1/cos β = 1.154700538379 at θ1 = 90°.
+# Facts tests rely on:
+#   - 2 moving bodies, 2 revolutes and a universal joint: n = 12, n_c = 5 + 5 + 4 = 14,
+#     Grübler −2; rank 11: DOF 1, 3 redundant (the revolute axes meet at the U-joint centre).
+orthomech: 1
+dimension: 3
+name: hooke-joint
+description: "Hooke's joint, shafts at 30 deg"
+units: {{length: m, angle: deg, mass: kg, time: s, force: N}}
+ground:
+  points: {{O: [0, 0, 0]}}
+bodies:
+  - name: shaft1
+    mass: 1
+    inertia: {v(rod_inertia(1.0, L, 2))}
+    com: {v((0, 0, L / 2))}
+    pose: {{position: {v((0, 0, -L))}}}
+    points: {{E: [0, 0, 0], C: {v((0, 0, L))}}}
+  - name: shaft2
+    mass: 1
+    inertia: {v(rod_inertia(1.0, L, 2))}
+    com: {v((0, 0, L / 2))}
+    pose:
+      position: {v(o2)}
+      orientation: {{z: {v(a2)}, x: {v(pin2)}}}
+    points: {{E: [0, 0, 0], C: {v((0, 0, L))}}}
+joints:
+  - {{name: R1, type: revolute, connects: [ground.O, shaft1.C], axis: [0, 0, 1]}}
+  - {{name: R2, type: revolute, connects: [ground.O, shaft2.C], axis: {v(a2)}, ref: {v(pin2)}}}
+  - {{name: U, type: universal, connects: [shaft1.C, shaft2.C], axes: [[0, 1, 0], [1, 0, 0]]}}
+measures:
+  - {{name: theta1, type: joint, joint: R1}}
+  - {{name: theta2, type: joint, joint: R2}}
+  - {{name: omega2, type: joint, joint: R2, derivative: 1}}
+drivers:
+  - {{name: motor, joint: R1, speed: 60 rpm}}
+analysis: {{driver: motor, steps: 360}}
+"""
+    write("hooke-joint.yaml", text)
+
+
+# ---- spatial slider-crank (spatial.md §4.4) --------------------------------------------------
+def slider_crank():
+    A0 = (0.0, 0.1, 0.12)
+    r, l = 0.08, 0.3
+    phi = 90 * DEG
+    B = add(A0, mul(r, (0, math.cos(phi), math.sin(phi))))
+    xc = math.sqrt(l * l - (0.1 + r * math.cos(phi)) ** 2 - (0.12 + r * math.sin(phi)) ** 2)
+    C = (xc, 0.0, 0.0)
+    d = unit(sub(C, B))
+    pin2 = unit(cross((0, 0, 1), d))
+    crank_x = (0.0, math.cos(phi), math.sin(phi))
+    rate = 6.0
+    xdot = (B[1] * r * math.sin(phi) - B[2] * r * math.cos(phi)) * rate / xc
+    text = f"""# spatial-slider-crank.yaml — spatial slider-crank (IFToMM data; dimension: 3).
+#
+# Source: spatial.md §4.4. Crank 0.08 m, 0.12 kg, about world x through A0 = (0, 0.1, 0.12) m;
+#   rod B–C 0.3 m, 0.5 kg; slider 2 kg on the world x axis. Spherical joint at the crank end B,
+#   universal joint at C (pin 1 = z on the slider, pin 2 on the rod ⟂ pin 1 and the rod: the rod
+#   frame's y), prismatic slider–ground along x. Crank and rod: slender rods (J = m L²/12 across,
+#   m r²/2 along, r = 10 mm); slider: a 2 kg block with J = diag(0.002, 0.004, 0.004) kg m²
+#   (assumed: spatial.md says the benchmark's inertias and pin directions are not verified; they
+#   change the dynamics, not the kinematics (M2)).
+# Closed form (M2): B = A0 + 0.08 (0, cos φ, sin φ), x_C = √(0.09 − (0.1 + 0.08 cos φ)² −
+#   (0.12 + 0.08 sin φ)²), ẋ_C = (B_y 0.08 sin φ − B_z 0.08 cos φ) φ̇ / x_C.
+# Design pose: φ = 90° (crank along +z): B = {v(B)}, x_C = {xc!r} m. Initial crank rate
+#   φ̇ = 6 rad/s about +x (`initial`), so ẋ_C = {xdot!r} m/s (the brief's initial conditions).
+# Facts tests rely on:
+#   - 3 moving bodies: n = 18, n_c = 5 + 3 + 4 + 5 = 17, Grübler 1, rank 17: DOF 1, no redundancy.
+#   - Measures crank_angle (φ, from world y about x: 90° at the design pose), slider_x (the
+#     prismatic slide = x_C), slider_v.
+orthomech: 1
+dimension: 3
+name: spatial-slider-crank
+description: "Spatial slider-crank: crank about x, spherical and universal rod ends, slider on x"
+units: {{length: m, angle: deg, mass: kg, time: s, force: N}}
+ground:
+  points: {{A0: {v(A0)}, O: [0, 0, 0]}}
+bodies:
+  - name: crank
+    mass: 0.12
+    inertia: {v(rod_inertia(0.12, r, 0))}
+    com: {v((r / 2, 0, 0))}
+    pose:
+      position: {v(A0)}
+      orientation: {{x: {v(crank_x)}, z: [1, 0, 0]}}
+    points: {{O: [0, 0, 0], B: {v((r, 0, 0))}}}
+  - name: rod
+    mass: 0.5
+    inertia: {v(rod_inertia(0.5, l, 0))}
+    com: {v((l / 2, 0, 0))}
+    pose:
+      position: {v(B)}
+      orientation: {{x: {v(d)}, y: {v(pin2)}}}
+    points: {{B: [0, 0, 0], C: {v((l, 0, 0))}}}
+  - name: slider
+    mass: 2
+    inertia: [0.002, 0.004, 0.004]
+    pose: {{position: {v(C)}}}
+    points: {{C: [0, 0, 0]}}
+joints:
+  - {{name: A0, type: revolute, connects: [ground.A0, crank.O], axis: [1, 0, 0]}}
+  - {{name: B, type: spherical, connects: [crank.B, rod.B]}}
+  - {{name: C, type: universal, connects: [slider.C, rod.C], axes: [[0, 0, 1], [0, 1, 0]]}}
+  - {{name: slide, type: prismatic, connects: [ground.O, slider.C], axis: [1, 0, 0]}}
+loads:
+  - {{name: weight, type: gravity}}
+measures:
+  - {{name: crank_angle, type: joint, joint: A0}}
+  - {{name: slider_x, type: joint, joint: slide}}
+  - {{name: slider_v, type: joint, joint: slide, derivative: 1}}
+drivers:
+  - {{name: motor, joint: A0, speed: 6 rad/s}}
+initial:
+  rates: {{crank_angle: 6 rad/s}}
+analysis: {{driver: motor, steps: 360}}
+"""
+    write("spatial-slider-crank.yaml", text)
+
+
+# ---- heavy symmetric top (spatial.md §4.6) ----------------------------------------------------
+def heavy_top():
+    m, l, A_cm, C = 1.0, 0.1, 0.002, 0.004
+    A_O = A_cm + m * l * l
+    g = 9.81
+    theta = 30 * DEG
+    w3 = 100.0
+    disc = C * C * w3 * w3 - 4 * A_O * m * g * l * math.cos(theta)
+    slow = (C * w3 - math.sqrt(disc)) / (2 * A_O * math.cos(theta))
+    fast = (C * w3 + math.sqrt(disc)) / (2 * A_O * math.cos(theta))
+    a = (math.sin(theta), 0.0, math.cos(theta))
+    bx = (math.cos(theta), 0.0, -math.sin(theta))
+    w = add(mul(slow, (0, 0, 1)), mul(w3 - slow * math.cos(theta), a))
+    com = mul(l, a)
+    P = add(mul(0.05, bx), mul(l, a))
+    Q = add(mul(0.05, (0, 1, 0)), mul(l, a))  # body y = world y at the design pose
+    v_com = cross(w, com)
+    v_P = cross(w, P)
+    v_Q = cross(w, Q)
+    text = f"""# heavy-top.yaml — heavy symmetric top on a spherical joint (dimension: 3).
+#
+# Source: spatial.md §4.6. m = 1 kg, centre of mass l = 0.1 m from the fixed tip along the
+#   symmetry axis (body z), A_cm = 0.002, C = 0.004 kg m² (A_O = A_cm + m l² = 0.012); the tip is
+#   a spherical joint to the ground at the origin; g = 9.81 m/s² along −z.
+# Steady precession (M3): Ω (C ω3 − A_O Ω cos θ) = m g l. At nutation θ = 30° (axis
+#   (sin θ, 0, cos θ), the pose below) and spin ω3 = w·axis = 100 rad/s:
+#   Ω_slow = {slow!r} rad/s, Ω_fast = {fast!r} rad/s.
+# Initial state (slow precession): w = Ω z + (ω3 − Ω cos θ) axis = {v(w)} rad/s (world).
+#   `initial` gives it as three measure rates that fix w (the top has 3 rotational DOF): com_y
+#   (v = w × l axis), P_y and Q_x (P, Q = 0.05 m along body x, y from the axis at the com's
+#   height; P_y carries the spin, Q_x the w_y component): v_com = {v(v_com)},
+#   v_P = {v(v_P)}, v_Q = {v(v_Q)} m/s. (Rates must be non-zero in `initial`, so
+#   com_x, whose rate is 0, cannot be given: these three determine w, det ≠ 0.)
+# Facts tests rely on:
+#   - 1 moving body, 1 spherical joint: n = 6, n_c = 3, rank 3: DOF 3, no redundancy.
+#   - Under `simulate` from `initial`: θ stays 30°, the axis precesses at Ω_slow about z.
+orthomech: 1
+dimension: 3
+name: heavy-top
+description: "Heavy symmetric top, l = 0.1 m, A = 0.002, C = 0.004 kg m2, nutation 30 deg"
+units: {{length: m, angle: deg, mass: kg, time: s, force: N}}
+ground:
+  points: {{O: [0, 0, 0]}}
+bodies:
+  - name: top
+    mass: 1
+    inertia: [0.002, 0.002, 0.004]
+    com: [0, 0, 0.1]
+    pose: {{position: [0, 0, 0], orientation: {{axis: [0, 1, 0], angle: 30}}}}
+    points: {{tip: [0, 0, 0], C: [0, 0, 0.1], P: [0.05, 0, 0.1], Q: [0, 0.05, 0.1]}}
+joints:
+  - {{name: tip, type: spherical, connects: [ground.O, top.tip]}}
+loads:
+  - {{name: weight, type: gravity, g: [0, 0, -9.81]}}
+measures:
+  - {{name: com_x, type: point, point: top.C, component: x}}
+  - {{name: com_y, type: point, point: top.C, component: y}}
+  - {{name: com_z, type: point, point: top.C, component: z}}
+  - {{name: P_y, type: point, point: top.P, component: y}}
+  - {{name: Q_x, type: point, point: top.Q, component: x}}
+  - {{name: nutation, type: angle, between: [{{body: top, vector: [0, 0, 1]}}, {{body: ground, vector: [0, 0, 1]}}]}}
+initial:
+  rates: {{com_y: {num(v_com[1])}, P_y: {num(v_P[1])}, Q_x: {num(v_Q[0])}}}
+"""
+    write("heavy-top.yaml", text)
+
+
+# ---- crank-rocker rebuilt with spatial bodies --------------------------------------------------
+def crank_rocker_3d():
+    # The planar file's numbers (mechanisms/crank-rocker.yaml, from scripts/gen_mechanisms.py).
+    bodies = [
+        ("crank", 0.03, 2.25, 30.0, (0.0, 0.0, 60.0), {"A0": (0, 0), "A": (30, 0)}),
+        ("coupler", 0.08, 42.6666666666667, 80.0,
+         (15.000000000000004, 25.980762113533157, 22.812053275345825),
+         {"A": (0, 0), "B": (80, 0), "P": (40, 20)}),
+        ("rocker", 0.06, 18.0, 60.0, (70.0, 0.0, 71.79755360961532), {"B0": (0, 0), "B": (60, 0)}),
+    ]
+    text_bodies = ""
+    for name, m, J, L, pose, pts in bodies:
+        axial = m * 3.0 ** 2 / 2.0  # a rod of radius 3 mm, kg mm²
+        points = ", ".join(f"{k}: [{num(p[0])}, {num(p[1])}, 0]" for k, p in pts.items())
+        text_bodies += f"""  - name: {name}
+    mass: {num(m)}
+    inertia: [{num(axial)}, {num(J)}, {num(J)}]
+    com: [{num(L / 2)}, 0, 0]
+    pose:
+      position: [{num(pose[0])}, {num(pose[1])}, 0]
+      orientation: {{axis: [0, 0, 1], angle: {num(pose[2])}}}
+    points: {{{points}}}
+"""
+    text = f"""# crank-rocker-3d.yaml — mechanisms/crank-rocker.yaml rebuilt with spatial bodies (dimension: 3).
+#
+# Source: the planar crank-rocker (ground 70, crank 30, coupler 80, rocker 60 mm; its numbers,
+#   poses and masses copied from mechanisms/crank-rocker.yaml), every body a spatial body in the
+#   plane z = 0 turned about z by its planar angle, every joint a spatial revolute about z.
+#   Inertia about z as planar (m L²/12); about x m r²/2 (r = 3 mm), about y as about z.
+# Facts tests rely on:
+#   - 3 moving bodies, 4 revolutes: n = 18, n_c = 20, Grübler −2; rank 17: DOF 1, 3 redundant
+#     (the planar loop's out-of-plane rows repeat each other).
+#   - The motion is the planar one: crank_angle 60° at the design pose, rocker_angle
+#     71.79755360961532°; rocker limit positions as in crank-rocker.yaml.
+orthomech: 1
+dimension: 3
+name: crank-rocker-3d
+description: "Grashof crank-rocker four-bar (30/80/60 mm on a 70 mm ground) with spatial bodies"
+units: {{length: mm, angle: deg, mass: kg, time: s, force: N}}
+ground:
+  points: {{A0: [0, 0, 0], B0: [70, 0, 0]}}
+bodies:
+{text_bodies}joints:
+  - {{name: A0, type: revolute, connects: [ground.A0, crank.A0], axis: [0, 0, 1]}}
+  - {{name: A, type: revolute, connects: [crank.A, coupler.A], axis: [0, 0, 1]}}
+  - {{name: B, type: revolute, connects: [coupler.B, rocker.B], axis: [0, 0, 1]}}
+  - {{name: B0, type: revolute, connects: [ground.B0, rocker.B0], axis: [0, 0, 1]}}
+loads:
+  - {{name: weight, type: gravity, g: [0, -9810, 0]}}   # mm/s², −y as the planar file
+measures:
+  - {{name: crank_angle, type: joint, joint: A0}}
+  - {{name: rocker_angle, type: joint, joint: B0}}
+  - {{name: P_x, type: point, point: coupler.P, component: x}}
+  - {{name: P_y, type: point, point: coupler.P, component: y}}
+drivers:
+  - {{name: motor, joint: A0, speed: 300 rpm}}
+design_positions:
+  - {{name: p1, inputs: {{A0: 60}}}}
+analysis: {{driver: motor, steps: 360}}
+"""
+    write("crank-rocker-3d.yaml", text)
+
+
+if __name__ == "__main__":
+    bennett()
+    bricard()
+    hooke()
+    slider_crank()
+    heavy_top()
+    crank_rocker_3d()
