@@ -91,6 +91,12 @@ int run_info(const InfoOptions& opt) {
     j["dof"] = mob.dof;
     j["grubler"] = mob.grubler;
     j["redundant"] = mob.redundant;
+    if (!mob.idle.empty()) {  // idle degrees of freedom (counted in dof); absent when none
+      nlohmann::json idle = nlohmann::json::array();
+      for (const Mobility::Idle& i : mob.idle)
+        idle.push_back({{"body", i.body}, {"count", i.count}});
+      j["idle"] = idle;
+    }
     j["rank_tolerance"] = mob.tolerance;
     j["smallest_pivot"] = mob.smallest_pivot;
     j["assembly"] = {{"status", to_string(assembly.status)},
@@ -142,6 +148,9 @@ int run_info(const InfoOptions& opt) {
     if (mob.redundant.empty()) out << "none";
     for (size_t k = 0; k < mob.redundant.size(); ++k) out << (k ? "; " : "") << mob.redundant[k];
     out << "\n";
+    for (const Mobility::Idle& i : mob.idle)
+      out << "idle          body '" << i.body << "' can move alone (" << i.count
+          << (i.count == 1 ? " direction" : " directions") << ", counted in the DOF)\n";
     out << "design pose   " << to_string(assembly.status) << " onto f(q) = 0 in "
         << assembly.iterations << " iterations, bodies moved up to "
         << fmt_double(length_u.from_si(moved_length)) << " " << length_u.name

@@ -13,6 +13,7 @@
 
 #include "orthomech/analysis/cycle_metrics.hpp"
 #include "orthomech/io/noise.hpp"
+#include "orthomech/model/spatial.hpp"
 
 namespace orthomech {
 
@@ -103,7 +104,47 @@ NoiseFloor cycle_noise_floor(const Model& model, const CycleResult& result,
   return noise;
 }
 
+namespace {
+
+// Spatial bodies: the frame's origin x, y, z and orientation quaternion e0…e3 (as `pose:` in the
+// file with `orientation: {quaternion: …}`), then every named point's x, y, z.
+std::vector<PositionColumn> spatial_position_columns(const Model& model) {
+  std::vector<PositionColumn> cols;
+  for (const Body& b : model.bodies) {
+    for (const char* c : {".x", ".y", ".z"}) cols.push_back({b.name + c, Dimension::length});
+    for (const char* c : {".e0", ".e1", ".e2", ".e3"})
+      cols.push_back({b.name + c, Dimension::none});
+  }
+  for (const Body& b : model.bodies)
+    for (const auto& [name, local] : b.spatial.points)
+      for (const char* c : {".x", ".y", ".z"})
+        cols.push_back({b.name + "." + name + c, Dimension::length});
+  return cols;
+}
+
+void spatial_output_positions(const Model& model, const VecX& q, std::vector<double>& out) {
+  out.clear();
+  for (const Body& b : model.bodies) {
+    const Quat e = q.segment<4>(b.q_offset + 3).normalized();
+    const Vec3 origin = q.segment<3>(b.q_offset) - rotation_matrix(e) * b.spatial.com_local;
+    for (int k = 0; k < 3; ++k) out.push_back(origin(k));
+    for (int k = 0; k < 4; ++k) out.push_back(e(k));
+  }
+  for (const Body& b : model.bodies) {
+    const Quat e = q.segment<4>(b.q_offset + 3).normalized();
+    const Mat3 R = rotation_matrix(e);
+    const Vec3 origin = q.segment<3>(b.q_offset) - R * b.spatial.com_local;
+    for (const auto& [name, local] : b.spatial.points) {
+      const Vec3 r = origin + R * local;
+      for (int k = 0; k < 3; ++k) out.push_back(r(k));
+    }
+  }
+}
+
+}  // namespace
+
 std::vector<PositionColumn> position_columns(const Model& model) {
+  if (model.dimension == 3) return spatial_position_columns(model);
   std::vector<PositionColumn> cols;
   for (const Body& b : model.bodies) {
     cols.push_back({b.name + ".x", Dimension::length});
@@ -119,6 +160,10 @@ std::vector<PositionColumn> position_columns(const Model& model) {
 }
 
 void compute_output_positions(const Model& model, const VecX& q, std::vector<double>& out) {
+  if (model.dimension == 3) {
+    spatial_output_positions(model, q, out);
+    return;
+  }
   out.clear();
   // The body frame: q holds the centre of mass r_c and the angle φ; the frame's origin is
   // r_o = r_c − R(φ) c, c the centre of mass in the body frame; a point p of the body is at
