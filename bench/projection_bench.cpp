@@ -64,6 +64,12 @@ BENCHMARK_CAPTURE(dual, andrews, std::string("andrews-squeezer"));
 BENCHMARK_CAPTURE(primal, andrews, std::string("andrews-squeezer"));
 BENCHMARK_CAPTURE(corrector, crank_rocker, std::string("crank-rocker"));
 BENCHMARK_CAPTURE(corrector, andrews, std::string("andrews-squeezer"));
+// Spatial models (issue 12 item 8): quaternion bodies, spatial joint rows, the gyroscopic term.
+BENCHMARK_CAPTURE(dual, rssr, std::string("rssr"));
+BENCHMARK_CAPTURE(primal, rssr, std::string("rssr"));
+BENCHMARK_CAPTURE(dual, bricard, std::string("bricard"));
+BENCHMARK_CAPTURE(corrector, rssr, std::string("rssr"));
+BENCHMARK_CAPTURE(corrector, bricard, std::string("bricard"));
 
 }  // namespace
 
