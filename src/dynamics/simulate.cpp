@@ -21,6 +21,7 @@
 #include "orthomech/model/general_system.hpp"
 #include "orthomech/model/loads.hpp"
 #include "orthomech/model/measures.hpp"
+#include "orthomech/model/spatial.hpp"
 #include "orthomech/projection/primal.hpp"
 
 namespace orthomech {
@@ -1136,6 +1137,32 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
     us = (D0 / h) * A.q + D1 * A.u + (D2 * h) * A.a + (D3 * h) * B.a + D4 * B.u + (D5 / h) * B.q;
   };
 
+  // Spatial bodies (nq ≠ n): the passage works in local coordinates x about the incoming
+  // position, q = q_a ⊕ x (the exponential map), whose rates are ẋ = u except for the rotation
+  // of a spatial body, θ̇ = J_r(θ)⁻¹ ω (model/spatial.hpp: exp_right_jacobian). For planar bodies
+  // x = q − q_a and ẋ = u, and the passage below keeps its planar arithmetic unchanged.
+  const bool local_passage = nq != n;
+  const auto local_rate = [&](const VecX& xx, const VecX& uu, bool to_x) {
+    VecX out = uu;
+    for (const Body& b : model.bodies)
+      if (b.kind == BodyKind::spatial) {
+        const Mat3 Jr = exp_right_jacobian(xx.segment<3>(b.u_offset + 3));
+        const Vec3 w = uu.segment<3>(b.u_offset + 3);
+        out.segment<3>(b.u_offset + 3) = to_x ? Vec3(Jr.lu().solve(w)) : Vec3(Jr * w);
+      }
+    return out;
+  };
+  // A branch state in local coordinates about q_a: q ← x, u ← ẋ, a ← ẍ (to first order in θ:
+  // ẍ ≈ J_r⁻¹ u̇, exact at x = 0).
+  const auto to_local = [&](const BranchState& S, const VecX& q_a) {
+    BranchState L = S;
+    L.q.resize(n);
+    difference_positions(model, S.q, q_a, L.q);
+    L.u = local_rate(L.q, S.u, true);
+    L.a = local_rate(L.q, S.a, true);
+    return L;
+  };
+
   // Outputs strictly inside a passage step (t_a, t_b): the quintic Hermite of the step in q and
   // u, u̇ linear (no equations are evaluated next to the point; no reactions: some multipliers
   // are indeterminate there).
@@ -1147,7 +1174,15 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
       const double to = grid_time(next_out);
       if (to > t_a + grid_slack && options.record_samples) {
         const double s = (to - t_a) / h;
-        quintic(s, h, A, B, qs, us);
+        if (local_passage) {  // the Hermite in x about q_a, mapped back: q = q_a ⊕ x, u = J ẋ
+          VecX xs, xd;
+          quintic(s, h, to_local(A, A.q), to_local(B, A.q), xs, xd);
+          qs = A.q;
+          integrate_positions(model, qs, xs, 1.0);
+          us = local_rate(xs, xd, false);
+        } else {
+          quintic(s, h, A, B, qs, us);
+        }
         dyn.state_.t = to;
         dyn.state_.q = qs;
         dyn.state_.u = us;
@@ -1170,10 +1205,6 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
   };
 
   const auto pass_change_point = [&](double t_star, double sigma_a, std::string& why) -> bool {
-    if (nq != n) {  // the passage's collocation step adds velocities to q (B̃ = I)
-      why = "passing a change point is not available for spatial mechanisms yet";
-      return false;
-    }
     const double t_a = t_now;
     double h = 2.0 * (t_star - t_a);
     if (t_a + h > T1) h = T1 - t_a;
@@ -1199,14 +1230,19 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
     VecX q_p, u_p;
     for (int i = 1; i < 4; ++i) {
       const double ch = c[i] * h;
-      q_p = A.q + ch * A.u + 0.5 * ch * ch * A.a;
+      if (local_passage) {
+        q_p = A.q;
+        integrate_positions(model, q_p, VecX(ch * A.u + 0.5 * ch * ch * A.a), 1.0);
+      } else {
+        q_p = A.q + ch * A.u + 0.5 * ch * ch * A.a;
+      }
       u_p = A.u + ch * A.a;
       if (i == 3 && options.passage_hook) options.passage_hook(t_b, q_p, u_p);
       if (!on_branch(t_a + ch, q_p, u_p, *st[i], why)) return false;
     }
     double change = std::numeric_limits<double>::infinity(), W_b = W_a, jump = 0.0;
     int it = 0;
-    std::vector<VecX> Qn(4), Un(4);
+    std::vector<VecX> Qn(4), Un(4), xdot(4);
     // Iterated to a change of u below kPassageConverged, or until it stalls at the rounding
     // noise (a change not halving); accepted below kPassageConvergence (C6).
     double previous_change = std::numeric_limits<double>::infinity();
@@ -1214,13 +1250,24 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
            !(change > 0.5 * previous_change)) {
       ++it;
       previous_change = change;
+      if (local_passage)  // the stages' rates ẋ_j in local coordinates about q_a
+        for (int j = 0; j < 4; ++j) {
+          VecX xj(n);
+          difference_positions(model, st[j]->q, A.q, xj);
+          xdot[static_cast<size_t>(j)] = local_rate(xj, st[j]->u, true);
+        }
       for (int i = 1; i < 4; ++i) {  // q_i = q_a + h Σ L_ij u_j, u_i = u_a + h Σ L_ij u̇_j
         Qn[static_cast<size_t>(i)] = A.q;
         Un[static_cast<size_t>(i)] = A.u;
+        VecX dx = VecX::Zero(local_passage ? n : 0);
         for (int j = 0; j < 4; ++j) {
-          Qn[static_cast<size_t>(i)] += (h * L[i][j]) * st[j]->u;
+          if (local_passage)
+            dx += (h * L[i][j]) * xdot[static_cast<size_t>(j)];  // q_i = q_a ⊕ h Σ L_ij ẋ_j
+          else
+            Qn[static_cast<size_t>(i)] += (h * L[i][j]) * st[j]->u;
           Un[static_cast<size_t>(i)] += (h * L[i][j]) * st[j]->a;
         }
+        if (local_passage) integrate_positions(model, Qn[static_cast<size_t>(i)], dx, 1.0);
       }
       W_b = W_a;
       for (int j = 0; j < 4; ++j) W_b += h * L[3][j] * st[j]->P;
