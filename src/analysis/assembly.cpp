@@ -568,6 +568,42 @@ VelocityProjection project_velocities(const Model& model, const VecX& q, const V
 
 namespace {
 
+// The guess already satisfies everything: returned bit for bit.
+AssemblyResult unchanged_result(const Model& model, const VecX& q0, double residual,
+                                const char* message) {
+  AssemblyResult res;
+  res.status = AssemblyStatus::unchanged;
+  res.message = message;
+  res.q = q0;
+  res.residual = residual;
+  res.bodies = body_moves(model, q0, q0);
+  res.joints = joint_residuals(model, q0);
+  return res;
+}
+
+// The rows of f that are independent at q (redundant ones would break Ipopt's constraint
+// qualification), from the rank-revealing factorisation of compute_mobility.
+std::vector<int> independent_rows(const Model& model, const VecX& q) {
+  const Mobility mob = compute_mobility(model, q);
+  std::vector<bool> redundant(static_cast<size_t>(model.nc), false);
+  for (int r : mob.redundant_rows) redundant[static_cast<size_t>(r)] = true;
+  std::vector<int> rows;
+  for (int r = 0; r < model.nc; ++r)
+    if (!redundant[static_cast<size_t>(r)]) rows.push_back(r);
+  return rows;
+}
+
+// The joints that do not close at the least-squares pose q_ls, largest gap first, and their
+// total gap.
+void collect_gaps(const Model& model, const VecX& q_ls, double tol, AssemblyResult& res) {
+  const double gap_tol = std::max(1e3 * tol, 1e-9);
+  for (JointResidual& j : joint_residuals(model, q_ls))
+    if (j.residual > gap_tol) res.gaps.push_back(std::move(j));
+  std::sort(res.gaps.begin(), res.gaps.end(),
+            [](const JointResidual& a, const JointResidual& b) { return a.gap > b.gap; });
+  for (const JointResidual& j : res.gaps) res.total_gap += j.gap;
+}
+
 AssemblyResult assemble_spatial(const Model& model, const VecX& q0, const AssemblyOptions& options);
 
 AssemblyResult assemble_position(const Model& model, const VecX& q0,
@@ -580,15 +616,9 @@ AssemblyResult assemble_position(const Model& model, const VecX& q0,
 
   // 1. Already assembled: return the guess bit-for-bit.
   const double r0 = total_residual(model, q0, coords, f, d);
-  if (r0 <= tol) {
-    res.status = AssemblyStatus::unchanged;
-    res.message = "the design position already satisfies every joint, lock and limit";
-    res.q = q0;
-    res.residual = r0;
-    res.bodies = body_moves(model, q0, q0);
-    res.joints = joint_residuals(model, q0);
-    return res;
-  }
+  if (r0 <= tol)
+    return unchanged_result(model, q0, r0,
+                            "the design position already satisfies every joint, lock and limit");
 
   Problem p(model, q0);
   MatX M(model.n, model.n);
@@ -602,13 +632,7 @@ AssemblyResult assemble_position(const Model& model, const VecX& q0,
   std::vector<JointLock> locks = options.locks;
   const bool gn = project_with_locks(model, q_start, locks, tol, 30);
   if (!gn) q_start = q0;
-  {
-    const Mobility mob = compute_mobility(model, gn ? q_start : q0);
-    std::vector<bool> redundant(static_cast<size_t>(model.nc), false);
-    for (int r : mob.redundant_rows) redundant[static_cast<size_t>(r)] = true;
-    for (int r = 0; r < model.nc; ++r)
-      if (!redundant[static_cast<size_t>(r)]) p.f_rows.push_back(r);
-  }
+  p.f_rows = independent_rows(model, gn ? q_start : q0);
 
   // 3. Ipopt on (A1), then Newton polish (L3).
   solvers::IpoptSettings settings;
@@ -648,12 +672,7 @@ AssemblyResult assemble_position(const Model& model, const VecX& q0,
   const solvers::IpoptOutcome ls = solvers::solve_with_ipopt(p.nlp(q_start), settings);
   if (ls.error) std::rethrow_exception(ls.error);
   res.q_least_squares = ls.x.size() == model.nq && ls.x.allFinite() ? ls.x : q;
-  const double gap_tol = std::max(1e3 * tol, 1e-9);
-  for (JointResidual& j : joint_residuals(model, res.q_least_squares))
-    if (j.residual > gap_tol) res.gaps.push_back(std::move(j));
-  std::sort(res.gaps.begin(), res.gaps.end(),
-            [](const JointResidual& a, const JointResidual& b) { return a.gap > b.gap; });
-  for (const JointResidual& j : res.gaps) res.total_gap += j.gap;
+  collect_gaps(model, res.q_least_squares, tol, res);
   std::ostringstream msg;
   msg.precision(4);
   if (res.gaps.empty()) {
@@ -709,15 +728,8 @@ AssemblyResult assemble_spatial(const Model& model, const VecX& q0_in,
   const double tol = options.tolerance;
   const std::vector<CoordinateRow> none;
   const double r0 = total_residual(model, q0, none, f, d);
-  if (r0 <= tol) {
-    res.status = AssemblyStatus::unchanged;
-    res.message = "the design position already satisfies every joint";
-    res.q = q0;
-    res.residual = r0;
-    res.bodies = body_moves(model, q0, q0);
-    res.joints = joint_residuals(model, q0);
-    return res;
-  }
+  if (r0 <= tol)
+    return unchanged_result(model, q0, r0, "the design position already satisfies every joint");
   LocalProblem p(model, q0);
   MatX M(model.n, model.n);
   compute_mass_matrix(model, q0, M);
@@ -726,13 +738,7 @@ AssemblyResult assemble_spatial(const Model& model, const VecX& q0_in,
   VecX q_start = q0;
   const bool gn = project_with_locks(model, q_start, {}, tol, 30);
   if (!gn) q_start = q0;
-  {
-    const Mobility mob = compute_mobility(model, q_start);
-    std::vector<bool> redundant(static_cast<size_t>(model.nc), false);
-    for (int r : mob.redundant_rows) redundant[static_cast<size_t>(r)] = true;
-    for (int r = 0; r < model.nc; ++r)
-      if (!redundant[static_cast<size_t>(r)]) p.f_rows.push_back(r);
-  }
+  p.f_rows = independent_rows(model, q_start);
   VecX x_start(model.n);
   difference_positions(model, q_start, q0, x_start);
   solvers::IpoptSettings settings;
@@ -770,12 +776,7 @@ AssemblyResult assemble_spatial(const Model& model, const VecX& q0_in,
   const solvers::IpoptOutcome ls = solvers::solve_with_ipopt(p.nlp(x_start), settings);
   if (ls.error) std::rethrow_exception(ls.error);
   res.q_least_squares = p.at(ls.x.size() == model.n && ls.x.allFinite() ? ls.x : x);
-  const double gap_tol = std::max(1e3 * tol, 1e-9);
-  for (JointResidual& j : joint_residuals(model, res.q_least_squares))
-    if (j.residual > gap_tol) res.gaps.push_back(std::move(j));
-  std::sort(res.gaps.begin(), res.gaps.end(),
-            [](const JointResidual& a, const JointResidual& b) { return a.gap > b.gap; });
-  for (const JointResidual& j : res.gaps) res.total_gap += j.gap;
+  collect_gaps(model, res.q_least_squares, tol, res);
   res.q = res.gaps.empty() ? q : res.q_least_squares;
   res.residual = total_residual(model, res.q, none, f, d);
   res.bodies = body_moves(model, q0, res.q);
