@@ -20,7 +20,10 @@
 namespace orthomech {
 
 bool is_angular_row(const std::string& component) {
-  return component == "angle" || component == "ratio";
+  // Planar: the angle and gear rows. Spatial: the dot-1 rows (f, g, twist, pins) are
+  // dimensionless, the sine of a small misalignment angle (spatial_joints.hpp).
+  return component == "angle" || component == "ratio" || component == "f" || component == "g" ||
+         component == "twist" || component == "pins";
 }
 
 namespace {

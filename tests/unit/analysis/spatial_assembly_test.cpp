@@ -103,3 +103,29 @@ TEST(SpatialAssembly, ARodLongerThanTheGapBetweenItsPivotsCannotClose) {
 
 }  // namespace
 }  // namespace orthomech
+
+namespace orthomech {
+namespace {
+
+// A revolute whose axis is tilted by δ about its point (the points still coincide) has an angular
+// residual of about δ and no length residual: the dot-1 rows are angles, not lengths.
+TEST(SpatialAssembly, TiltedRevoluteAxisIsAnAngularResidual) {
+  const Model m = testing::spatial::two_body_model(SpatialJointType::revolute, 1);
+  const auto& joint = std::get<SpatialJoint>(m.joints[0].kind);
+  const Body& b = m.bodies[1];
+  VecX q = m.design_q();
+  const Mat3 R = rotation_matrix(q.segment<4>(b.q_offset + 3));
+  const Vec3 tilt_world = joint.frame_i.col(0);  // perpendicular to the axis h
+  const double delta = 1e-3;
+  VecX du = VecX::Zero(m.n);
+  du.segment<3>(b.u_offset + 3) = delta * (R.transpose() * tilt_world);
+  const Vec3 P = q.segment<3>(b.q_offset) + R * joint.pj.s;
+  integrate_positions(m, q, du, 1.0);
+  q.segment<3>(b.q_offset) = P - rotation_matrix(q.segment<4>(b.q_offset + 3)) * joint.pj.s;
+  const ResidualSplit r = split_residual(m, q);
+  EXPECT_NEAR(r.angle, std::sin(delta), 1e-9);
+  EXPECT_LT(r.length, 1e-9);
+}
+
+}  // namespace
+}  // namespace orthomech
