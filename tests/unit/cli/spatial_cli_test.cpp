@@ -111,5 +111,23 @@ TEST(SpatialCli, CommandsNotYetSpatialRefuseWithExitTwo) {
   }
 }
 
+// assemble on a spatial file: locks and limits are not available yet: exit 2 naming the joint
+// (not an internal error), and --no-limits assembles.
+TEST(SpatialCli, AssembleRefusesSpatialLocksAndLimitsWithExitTwo) {
+  const std::string rssr = test::bundled_file("rssr");
+  const CliResult lim = run_cli({"assemble", rssr, "--set", "joints.A0.limits=[0, 90]"});
+  EXPECT_EQ(lim.status, 2) << lim.err;
+  EXPECT_NE(lim.err.find("joint 'A0': limits on spatial joints are not available"),
+            std::string::npos)
+      << lim.err;
+  const CliResult ok =
+      run_cli({"assemble", rssr, "--set", "joints.A0.limits=[0, 90]", "--no-limits", "--json"});
+  EXPECT_EQ(ok.status, 0) << ok.err;
+  const CliResult lock = run_cli({"assemble", rssr, "--lock", "A0=40"});
+  EXPECT_EQ(lock.status, 2) << lock.err;
+  EXPECT_NE(lock.err.find("locks on spatial joints are not available yet"), std::string::npos)
+      << lock.err;
+}
+
 }  // namespace
 }  // namespace orthomech
