@@ -141,6 +141,9 @@ int run_assemble(const AssembleOptions& opt) {
   if (!opt.sets.empty() && (opt.in_place || !write_to.empty()))
     bad("--set cannot be combined with --write or --in-place: they write the file as it is on "
         "disk; change the file itself to keep a change");
+  if (model.dimension == 3 && (opt.in_place || !write_to.empty()))
+    bad("--write and --in-place are not available for spatial mechanisms yet (the assembled "
+        "pose is in --json)");
   if (opt.in_place) {
     if (!write_to.empty()) bad("--in-place and --write are exclusive");
     write_to = opt.file;

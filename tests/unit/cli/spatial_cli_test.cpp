@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 
@@ -127,6 +128,12 @@ TEST(SpatialCli, AssembleRefusesSpatialLocksAndLimitsWithExitTwo) {
   EXPECT_EQ(lock.status, 2) << lock.err;
   EXPECT_NE(lock.err.find("locks on spatial joints are not available yet"), std::string::npos)
       << lock.err;
+  const test::TempDir dir("orthomech_spatial_write_");
+  const CliResult write = run_cli({"assemble", rssr, "--write", (dir.path / "out.yaml").string()});
+  EXPECT_EQ(write.status, 2) << write.err;
+  EXPECT_NE(write.err.find("not available for spatial mechanisms yet"), std::string::npos)
+      << write.err;
+  EXPECT_FALSE(std::filesystem::exists(dir.path / "out.yaml"));
 }
 
 }  // namespace
