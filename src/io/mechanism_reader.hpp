@@ -269,28 +269,40 @@ class Reader {
   }
   // "body.point" → PointRef (s measured from the centre of mass).
   PointRef point_ref(const YAML::Node& node, const std::string& element) const {
+    return point_reference<PointRef, Vec2>(
+        node, element, ground_points_,
+        [](const Body& b) -> const std::vector<std::pair<std::string, Vec2>>& { return b.points; },
+        [](const Body& b) { return b.com_local; });
+  }
+  // "body.point" → a point reference of either dimension: Ref (PointRef, SpatialPointRef) with
+  // s = the named point (or "origin") of the body's `points` minus its centre of mass; the ground's
+  // points are world positions.
+  template <typename Ref, typename Vec, typename PointsOf, typename ComOf>
+  Ref point_reference(const YAML::Node& node, const std::string& element,
+                      const std::vector<std::pair<std::string, Vec>>& ground, PointsOf points_of,
+                      ComOf com_of) const {
     if (!node.IsScalar()) fail(node, element, "expected a point 'body.point'");
     const std::string text = node.Scalar();
     const auto dot = text.find('.');
     if (dot == std::string::npos)
       fail(node, element, "expected a point 'body.point', got '" + text + "'");
     const std::string body = text.substr(0, dot), point = text.substr(dot + 1);
-    PointRef p;
+    Ref p;
     p.label = text;
     p.body = model_.find_body(body);
     if (p.body == -2) fail(node, element, "body '" + body + "' is not defined");
     const auto& points =
-        p.body == kGround ? ground_points_ : model_.bodies[static_cast<size_t>(p.body)].points;
+        p.body == kGround ? ground : points_of(model_.bodies[static_cast<size_t>(p.body)]);
     const auto it =
         std::find_if(points.begin(), points.end(), [&](const auto& e) { return e.first == point; });
-    Vec2 local = Vec2::Zero();
+    Vec local = Vec::Zero();
     if (it != points.end()) {
       local = it->second;
     } else if (point != "origin") {
       fail(node, element, "point '" + point + "' is not defined on body '" + body + "'");
     }
-    p.s = p.body == kGround ? local
-                            : Vec2(local - model_.bodies[static_cast<size_t>(p.body)].com_local);
+    p.s =
+        p.body == kGround ? local : Vec(local - com_of(model_.bodies[static_cast<size_t>(p.body)]));
     return p;
   }
   std::pair<PointRef, PointRef> connects(const YAML::Node& item, const std::string& element) const {

@@ -250,31 +250,12 @@ Quat Reader::orientation(const YAML::Node& node, const std::string& element) con
 
 SpatialPointRef Reader::spatial_point_ref(const YAML::Node& node,
                                           const std::string& element) const {
-  if (!node.IsScalar()) fail(node, element, "expected a point 'body.point'");
-  const std::string text = node.Scalar();
-  const auto dot = text.find('.');
-  if (dot == std::string::npos)
-    fail(node, element, "expected a point 'body.point', got '" + text + "'");
-  const std::string body = text.substr(0, dot), point = text.substr(dot + 1);
-  SpatialPointRef p;
-  p.label = text;
-  p.body = model_.find_body(body);
-  if (p.body == -2) fail(node, element, "body '" + body + "' is not defined");
-  const auto& points = p.body == kGround
-                           ? ground_points3_
-                           : model_.bodies[static_cast<size_t>(p.body)].spatial.points;
-  const auto it =
-      std::find_if(points.begin(), points.end(), [&](const auto& e) { return e.first == point; });
-  Vec3 local = Vec3::Zero();
-  if (it != points.end()) {
-    local = it->second;
-  } else if (point != "origin") {
-    fail(node, element, "point '" + point + "' is not defined on body '" + body + "'");
-  }
-  p.s = p.body == kGround
-            ? local
-            : Vec3(local - model_.bodies[static_cast<size_t>(p.body)].spatial.com_local);
-  return p;
+  return point_reference<SpatialPointRef, Vec3>(
+      node, element, ground_points3_,
+      [](const Body& b) -> const std::vector<std::pair<std::string, Vec3>>& {
+        return b.spatial.points;
+      },
+      [](const Body& b) { return b.spatial.com_local; });
 }
 
 std::pair<SpatialPointRef, SpatialPointRef> Reader::spatial_connects(
