@@ -201,9 +201,11 @@ TEST(SpatialValidate, RssrRockerInputDeadPointsAreExtremesOfM1) {
               1e-9);
 }
 
-// The assembly modes at the crank input 30°: every mode's rocker angle is one of the two roots
-// of (M1) (φ = atan2(Q, P) ± acos(−S/√(P² + Q²))), and both are found.
-TEST(SpatialValidate, RssrAssemblyModesAreTheRootsOfM1) {
+// The assembly modes at the crank input 30°: the rocker's two roots of (M1)
+// (φ = atan2(Q, P) ± acos(−S/√(P² + Q²)), both real: |S| < √(P² + Q²)) times the coupler turned a
+// half-turn about AB (the universal joint's pin rows hold both ways) = 4; the position itself is
+// on the file's root (+).
+TEST(SpatialValidate, RssrHasFourAssemblyModesAtACrankAngle) {
   Model m = test::load_bundled("rssr");
   const int A0 = m.find_joint("A0"), B0 = m.find_joint("B0");
   const double theta = 30.0 * kDeg;
@@ -216,8 +218,6 @@ TEST(SpatialValidate, RssrAssemblyModesAreTheRootsOfM1) {
   const ValidationReport rep = validate_design_positions(m, o);
   ASSERT_EQ(rep.positions.size(), 1u);
   const PositionReport& pr = rep.positions[0];
-  // Two rocker roots × the coupler turned a half-turn about AB (the universal joint's cross
-  // flipped: its pin rows hold both ways) = 4 modes.
   EXPECT_EQ(pr.modes, 4);
   EXPECT_NEAR(wrap(joint_coordinate(m, B0, pr.q) - root[0]), 0.0, 1e-9);
   // The two roots are distinct (the oracle's modes are not one).
@@ -263,6 +263,43 @@ TEST(SpatialValidate, IdleSpinIsReportedAndHeld) {
   Jd << J.Et, J.d;
   const VecX sd = scaled_singular_values(m, Jd);
   EXPECT_LT(sd(m.n - 1) / sd(0), 1e-8);
+}
+
+// ---- spatial slider-crank ----------------------------------------------------------------------
+
+// With the slide as the input, the dead points are the extremes of (M2) (spatial.md §4.4):
+// x_C² = 0.09 − |(0.1, 0.12) + 0.08 (cos φ, sin φ)|², extreme when the crank points along
+// ±(0.1, 0.12): x_C = √(0.09 − (|(0.1, 0.12)| ± 0.08)²). A prismatic (slide) input in metres.
+TEST(SpatialValidate, SliderCrankSlideInputDeadPointsFromM2) {
+  Model m = test::load_bundled("spatial-slider-crank");
+  const int slide = m.find_joint("slide"), A0 = m.find_joint("A0");
+  const double c = std::hypot(0.1, 0.12);
+  const double x_lo = std::sqrt(0.09 - (c + 0.08) * (c + 0.08));
+  const double x_hi = std::sqrt(0.09 - (c - 0.08) * (c - 0.08));
+  m.design_positions = {position("s1", slide, 0.2), position("s2", slide, 0.25),
+                        position("s3", slide, 0.15)};  // s3: below x_lo, cannot close
+  const ValidationReport rep = validate_design_positions(m);
+  ASSERT_EQ(rep.positions.size(), 3u);
+  EXPECT_FALSE(rep.input_angular);
+  EXPECT_FALSE(rep.positions[2].assembles);
+  EXPECT_FALSE(rep.pass());
+  EXPECT_EQ(rep.circuits, 0);  // not every position assembles: no trace
+  m.design_positions.pop_back();
+  const ValidationReport ok = validate_design_positions(m);
+  EXPECT_TRUE(ok.pass());
+  EXPECT_EQ(ok.circuits, 1);
+  ASSERT_EQ(ok.singular_points.size(), 2u);
+  for (const PositionReport& pr : ok.positions) {
+    ASSERT_TRUE(pr.assembles) << pr.assembly_message;
+    const double x = joint_coordinate(m, slide, pr.q);
+    // The crank angle φ there satisfies (M2): x_C(φ) = x.
+    const double phi = joint_coordinate(m, A0, pr.q);
+    const double by = 0.1 + 0.08 * std::cos(phi), bz = 0.12 + 0.08 * std::sin(phi);
+    EXPECT_NEAR(std::sqrt(0.09 - by * by - bz * bz), x, 1e-12) << pr.name;
+    ASSERT_TRUE(pr.singular_distance.has_value());
+    EXPECT_NEAR(*pr.singular_distance, std::min(x - x_lo, x_hi - x), 1e-10) << pr.name;
+    EXPECT_NEAR(*pr.singular_input, x - x_lo < x_hi - x ? x_lo : x_hi, 1e-10) << pr.name;
+  }
 }
 
 // ---- Bennett -----------------------------------------------------------------------------------
