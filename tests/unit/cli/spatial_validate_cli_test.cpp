@@ -34,6 +34,22 @@ TEST(SpatialValidateCli, EverySpatialFileRunsWithPlanarChecksNotApplicable) {
       EXPECT_GT(p["sigma_min"].get<double>(), 0.0) << name;
     }
   }
+  // The files' design positions (their comment blocks): DOF 1 at each, 3 redundant equations in
+  // the Bennett linkage and Hooke's joint (spatial.md §4.2, §4.5), none in the slider-crank.
+  for (const auto& [name, redundant] : {std::pair<const char*, size_t>{"bennett", 3},
+                                        {"hooke-joint", 3},
+                                        {"spatial-slider-crank", 0}}) {
+    const CliResult r = run_cli({"validate", test::bundled_file(name), "--json"});
+    ASSERT_EQ(r.status, 0) << name << ": " << r.err;
+    const json j = json::parse(r.out);
+    ASSERT_EQ(j["positions"].size(), 3u) << name;
+    EXPECT_EQ(j["circuits"], 1) << name;
+    for (const json& p : j["positions"]) {
+      EXPECT_EQ(p["dof"], 1) << name;
+      EXPECT_EQ(p["redundant"].size(), redundant) << name;
+      EXPECT_EQ(p["circuit"], 1) << name;
+    }
+  }
   // A planar file: the list is empty and the loops are arrays.
   const CliResult planar = run_cli({"validate", test::bundled_file("crank-rocker"), "--json"});
   ASSERT_EQ(planar.status, 0) << planar.err;
