@@ -95,7 +95,7 @@ std::vector<Vec3> joint_points_on(const Model& model, int b) {
 }
 
 // Max over coordinates of |Δ| (angles wrapped, lengths / L). Spatial bodies: |Δr| / L of the
-// centre of mass and the rotation angle 2·acos|e_a·e_b| between the two orientations; a body in
+// centre of mass and the angle of the rotation between the two orientations; a body in
 // `idle` (an idle degree of freedom) by the largest move of its joint points / L instead.
 double scaled_distance(const Model& model, const VecX& a, const VecX& b, double L,
                        const std::vector<int>& idle = {}) {
@@ -112,9 +112,12 @@ double scaled_distance(const Model& model, const VecX& a, const VecX& b, double 
         continue;
       }
       d = std::max(d, (a.segment<3>(body.q_offset) - b.segment<3>(body.q_offset)).norm() / L);
-      const Quat ea = a.segment<4>(body.q_offset + 3).normalized();
-      const Quat eb = b.segment<4>(body.q_offset + 3).normalized();
-      d = std::max(d, 2.0 * std::acos(std::min(1.0, std::abs(ea.dot(eb)))));
+      // The relative rotation δ = e_a* ⊗ e_b: angle 2·atan2(|vec δ|, |δ₀|) (= 2·acos|e_a·e_b|,
+      // accurate near 0).
+      Quat ea = a.segment<4>(body.q_offset + 3).normalized();
+      ea.tail<3>() = -ea.tail<3>();
+      const Quat delta = quaternion_multiply(ea, b.segment<4>(body.q_offset + 3).normalized());
+      d = std::max(d, 2.0 * std::atan2(delta.tail<3>().norm(), std::abs(delta(0))));
       continue;
     }
     d = std::max(d, std::abs(a(body.q_offset) - b(body.q_offset)) / L);
@@ -574,9 +577,10 @@ std::vector<VecX> assembly_modes(const Model& model, const std::vector<JointLock
 }
 
 // "+"/"−" per four-bar loop (the coupler–follower turn), then "/±": the sign of det [Eᵀ_R; d]
-// (R = `rows`, every row when empty) when it is square.
+// (R = `rows`, every row when empty) when it is square and `with_det`.
 std::string mode_signature(const Model& model, const VecX& q, const std::vector<FourBarLoop>& loops,
-                           const std::vector<int>& inputs, const std::vector<int>& rows) {
+                           const std::vector<int>& inputs, const std::vector<int>& rows,
+                           bool with_det) {
   std::string sig;
   for (const FourBarLoop& l : loops) {
     const Vec2 A = world(model, l.at[0], q);
@@ -588,7 +592,7 @@ std::string mode_signature(const Model& model, const VecX& q, const std::vector<
   MatX Et(model.nc, model.n);
   compute_constraint_jacobian(model, q, Et);
   const int nr = rows.empty() ? model.nc : static_cast<int>(rows.size());
-  if (nr + static_cast<int>(inputs.size()) == model.n) {
+  if (with_det && nr + static_cast<int>(inputs.size()) == model.n) {
     MatX J(model.n, model.n);
     for (int r = 0; r < nr; ++r) J.row(r) = Et.row(rows.empty() ? r : rows[static_cast<size_t>(r)]);
     VecX d(model.n);
@@ -1158,11 +1162,11 @@ ValidationReport validate_design_positions(const Model& model, const ValidateOpt
         if (std::find(mob.redundant_rows.begin(), mob.redundant_rows.end(), r) ==
             mob.redundant_rows.end())
           rows.push_back(r);
-      if (!idle_bodies.empty()) rows.assign(static_cast<size_t>(model.n), 0);  // never square
     }
     std::vector<std::pair<std::string, size_t>> order;
     for (size_t k = 0; k < modes.size(); ++k)
-      order.push_back({mode_signature(model, modes[k], loops, inputs, rows), k});
+      order.push_back(
+          {mode_signature(model, modes[k], loops, inputs, rows, idle_bodies.empty()), k});
     std::sort(order.begin(), order.end(), [&](const auto& x, const auto& y) {
       if (x.first != y.first) return x.first < y.first;
       const VecX& a1 = modes[x.second];
