@@ -901,8 +901,12 @@ namespace {
 // previous position (mass-metric Gauss–Newton). Small steps keep the mode of the design (the same
 // branch, as `cycle` follows it); a projection of the design pose straight onto the locks may
 // land on another mode. Empty when a step does not converge (a dead point in between).
+// With `secant`, each step is predicted along the previous one (q_k ⊕ (q_k ⊖ q_{k−1}), equal
+// input steps) before the projection: through a change point, where two branches cross, it
+// stays on the branch it came along (a projection from the previous position alone may turn onto
+// the other one).
 std::optional<VecX> continue_to_locks(const Model& model, const VecX& q_guess,
-                                      const std::vector<JointLock>& locks) {
+                                      const std::vector<JointLock>& locks, bool secant = false) {
   VecX q = q_guess;
   if (!project_locked(model, q, {}, 1e-12, 60)) return std::nullopt;
   const double L = length_scale(model);
@@ -919,10 +923,14 @@ std::optional<VecX> continue_to_locks(const Model& model, const VecX& q_guess,
   }
   const int n = static_cast<int>(std::min(steps, 1000.0));
   std::vector<JointLock> at = locks;
+  VecX q_prev = q;
   for (int k = 1; k <= n; ++k) {
     for (size_t i = 0; i < locks.size(); ++i)
       at[i].value = from[i] + (to[i] - from[i]) * static_cast<double>(k) / n;
+    const VecX q_last = q;
+    if (secant && k > 1) q = moved(model, q, difference(model, q, q_prev), 1.0);
     if (!project_locked(model, q, at, 1e-12, 60)) return std::nullopt;
+    q_prev = q_last;
   }
   return q;
 }
@@ -938,9 +946,10 @@ double spatial_limit_coordinate(const Model& model, int joint, const VecX& q) {
 
 // A spatial design position (spatial.md §6.3–6.4): (A1) without the inputs (assemble: Ipopt in
 // local coordinates, limits not applied), then the inputs reached by continuation from that
-// pose on its assembly mode (continue_to_locks: the mass-metric Gauss–Newton in velocity space,
-// q ⊕ δu), else by one projection onto the inputs. `assemble` takes no locks on spatial joints,
-// so this is the spatial counterpart of assemble(model, q_design, {locks}).
+// pose on its assembly mode and branch (continue_to_locks with the secant predictor: the
+// mass-metric Gauss–Newton in velocity space, q ⊕ δu), else by one projection onto the inputs.
+// `assemble` takes no locks on spatial joints, so this is the spatial counterpart of
+// assemble(model, q_design, {locks}).
 AssemblyResult assemble_spatial_at(const Model& model, const VecX& q_design,
                                    const std::vector<JointLock>& locks) {
   AssemblyOptions free;
@@ -956,7 +965,7 @@ AssemblyResult assemble_spatial_at(const Model& model, const VecX& q_design,
   }
   if (lock_residual <= 1e-12) return a;  // the design pose is at the inputs
   AssemblyResult r = a;
-  std::optional<VecX> q = continue_to_locks(model, a.q, locks);
+  std::optional<VecX> q = continue_to_locks(model, a.q, locks, true);
   std::string how = "continued from there to the inputs";
   if (!q) {
     VecX x = a.q;

@@ -17,6 +17,7 @@
 
 #include "orthomech/analysis/validate.hpp"
 #include "orthomech/constraints/joints.hpp"
+#include "orthomech/io/mechanism_file.hpp"
 #include "orthomech/model/free_system.hpp"
 #include "support/fixtures.hpp"
 
@@ -263,6 +264,117 @@ TEST(SpatialValidate, IdleSpinIsReportedAndHeld) {
   Jd << J.Et, J.d;
   const VecX sd = scaled_singular_values(m, Jd);
   EXPECT_LT(sd(m.n - 1) / sd(0), 1e-8);
+}
+
+// ---- the crank-rocker rebuilt with spatial bodies ----------------------------------------------
+
+// Driven from the rocker, the dead points of mechanisms/crank-rocker-3d.yaml are the rocker's
+// limit positions, crank and coupler collinear: |A0B| = b ± a, and the law of cosines in the
+// triangle A0 B0 B (d = 70, c = 60 mm) gives ψ = π − acos((d² + c² − |A0B|²)/(2dc)). The planar
+// file on the same inputs (a second implementation: planar bodies, 3 coordinates each) agrees.
+// DOF 1 with 3 redundant equations at every position (the planar loop's out-of-plane rows).
+TEST(SpatialValidate, CrankRocker3dRockerDeadPointsMatchThePlanarFile) {
+  Model m = test::load_bundled("crank-rocker-3d");
+  Model planar = test::load_bundled("crank-rocker");
+  const int B0 = m.find_joint("B0"), pB0 = planar.find_joint("B0");
+  const double d = 0.070, c = 0.060, a = 0.030, b = 0.080;
+  const double psi_ext = kPi - std::acos((d * d + c * c - (a + b) * (a + b)) / (2 * d * c));
+  const double psi_fold = kPi - std::acos((d * d + c * c - (b - a) * (b - a)) / (2 * d * c));
+  m.design_positions = {position("r80", B0, 80.0 * kDeg), position("r120", B0, 120.0 * kDeg)};
+  planar.design_positions = {position("r80", pB0, 80.0 * kDeg),
+                             position("r120", pB0, 120.0 * kDeg)};
+  const ValidationReport rep = validate_design_positions(m);
+  const ValidationReport prep = validate_design_positions(planar);
+  ASSERT_EQ(rep.positions.size(), 2u);
+  EXPECT_EQ(rep.circuits, 1);
+  EXPECT_EQ(rep.singular_points.size(), 2u);
+  for (size_t k = 0; k < 2; ++k) {
+    const PositionReport& pr = rep.positions[k];
+    ASSERT_TRUE(pr.assembles) << pr.assembly_message;
+    EXPECT_EQ(pr.dof, 1);
+    EXPECT_EQ(pr.redundant.size(), 3u);
+    const double psi = joint_coordinate(m, B0, pr.q);
+    const double nearest = std::abs(psi - psi_ext) < std::abs(psi - psi_fold) ? psi_ext : psi_fold;
+    ASSERT_TRUE(pr.singular_distance.has_value()) << pr.name;
+    EXPECT_NEAR(*pr.singular_distance, std::abs(psi - nearest), 1e-9) << pr.name;
+    EXPECT_NEAR(*pr.singular_input, nearest, 1e-9) << pr.name;
+    const PositionReport& pp = prep.positions[k];
+    ASSERT_TRUE(pp.singular_distance.has_value());
+    EXPECT_NEAR(*pr.singular_distance, *pp.singular_distance, 1e-9) << pr.name;
+    EXPECT_EQ(pr.branch, pp.branch) << pr.name;
+  }
+}
+
+// ---- a spatial parallelogram: change points -----------------------------------------------------
+
+// The parallelogram of validate_test.cpp (crank 1, coupler 3 on a 3 m ground, follower 1) built
+// with spatial bodies and revolutes about z: s + l = p + q, change points where all links are
+// collinear, at crank 0° and 180° (closed form), where σ_min of the (redundant: rank 17 of 20
+// rows) Eᵀ vanishes.
+std::string spatial_parallelogram(const std::string& positions) {
+  return R"(orthomech: 1
+dimension: 3
+units: {length: m, angle: deg}
+ground:
+  points: {A0: [0, 0, 0], B0: [3, 0, 0]}
+bodies:
+  - name: crank
+    mass: 1
+    inertia: [0.001, 0.1, 0.1]
+    com: [0.5, 0, 0]
+    pose: {position: [0, 0, 0], orientation: {axis: [0, 0, 1], angle: 30}}
+    points: {A0: [0, 0, 0], A: [1, 0, 0]}
+  - name: coupler
+    mass: 1
+    inertia: [0.001, 0.1, 0.1]
+    com: [1.5, 0, 0]
+    pose: {position: [0.8660254037844387, 0.5, 0]}
+    points: {A: [0, 0, 0], B: [3, 0, 0]}
+  - name: rocker
+    mass: 1
+    inertia: [0.001, 0.1, 0.1]
+    com: [0.5, 0, 0]
+    pose: {position: [3, 0, 0], orientation: {axis: [0, 0, 1], angle: 30}}
+    points: {B0: [0, 0, 0], B: [1, 0, 0]}
+joints:
+  - {name: A0, type: revolute, connects: [ground.A0, crank.A0], axis: [0, 0, 1]}
+  - {name: A, type: revolute, connects: [crank.A, coupler.A], axis: [0, 0, 1]}
+  - {name: B, type: revolute, connects: [coupler.B, rocker.B], axis: [0, 0, 1]}
+  - {name: B0, type: revolute, connects: [rocker.B0, ground.B0], axis: [0, 0, 1]}
+design_positions:
+)" + positions;
+}
+
+TEST(SpatialValidate, ParallelogramChangePointsDistanceAndBranchDefect) {
+  constexpr double kChangePointTol = 1e-7;  // σ_min is V-shaped there: NLopt locates it closely
+  {
+    const ValidationReport r = validate_design_positions(parse_mechanism(
+        spatial_parallelogram(
+            "  - {name: p1, inputs: {A0: 30}}\n  - {name: p2, inputs: {A0: 120}}\n"),
+        "spatial-para"));
+    ASSERT_EQ(r.positions.size(), 2u);
+    EXPECT_TRUE(r.pass()) << (r.positions[0].failures.empty() ? "" : r.positions[0].failures[0]);
+    EXPECT_EQ(r.generic_rank, 17);
+    for (const PositionReport& pr : r.positions) {
+      EXPECT_EQ(pr.dof, 1);
+      EXPECT_EQ(pr.redundant.size(), 3u);
+      EXPECT_EQ(pr.singular_kind, "change point");
+    }
+    ASSERT_TRUE(r.positions[0].singular_distance && r.positions[1].singular_distance);
+    EXPECT_NEAR(*r.positions[0].singular_distance, 30.0 * kDeg, kChangePointTol);
+    EXPECT_NEAR(*r.positions[1].singular_distance, 60.0 * kDeg, kChangePointTol);
+    EXPECT_NEAR(wrap(*r.positions[0].singular_input), 0.0, kChangePointTol);
+    EXPECT_NEAR(wrap(*r.positions[1].singular_input - kPi), 0.0, kChangePointTol);
+  }
+  {
+    const ValidationReport r = validate_design_positions(parse_mechanism(
+        spatial_parallelogram(
+            "  - {name: p1, inputs: {A0: 150}}\n  - {name: p2, inputs: {A0: 200}}\n"),
+        "spatial-para"));
+    EXPECT_TRUE(r.branch_defect);  // the change point at 180° lies between them
+    EXPECT_FALSE(r.circuit_defect);
+    EXPECT_FALSE(r.pass());
+  }
 }
 
 // ---- spatial slider-crank ----------------------------------------------------------------------
