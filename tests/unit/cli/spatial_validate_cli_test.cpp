@@ -102,6 +102,36 @@ TEST(SpatialValidateCli, SpatialJointLimitsNameTheJoint) {
   EXPECT_NEAR(b["needed"].get<double>(), 158.12936317866155, 1e-6);
 }
 
+// The RSSR with a spherical joint at B (an S–S coupler): an idle spin about AB (spatial.md §4.1),
+// DOF 2 with one idle, so the crank alone fixes the position (exit 0), and the report says so.
+TEST(SpatialValidateCli, IdleSpinIsReported) {
+  std::ifstream in(test::bundled_file("rssr"));
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string u =
+      "{name: B, type: universal, connects: [coupler.B, rocker.B], axes: [[0, 0, 1], [0, 0, 1]]}";
+  const size_t at = text.find(u);
+  ASSERT_NE(at, std::string::npos);
+  text.replace(at, u.size(), "{name: B, type: spherical, connects: [coupler.B, rocker.B]}");
+  const test::TempDir dir("orthomech_spatial_validate_");
+  const std::string file = (dir.path / "rssr-ss.yaml").string();
+  std::ofstream(file) << text;
+  const CliResult r = run_cli({"validate", file});
+  ASSERT_EQ(r.status, 0) << r.err << r.out;
+  EXPECT_NE(r.out.find("idle degrees of freedom at p30 (held at zero rate): body 'coupler' (1 "
+                       "direction)"),
+            std::string::npos)
+      << r.out;
+  const CliResult j = run_cli({"validate", file, "--json"});
+  ASSERT_EQ(j.status, 0) << j.err;
+  const json doc = json::parse(j.out);
+  const json& p = doc["positions"][0];
+  EXPECT_EQ(p["dof"], 2);
+  ASSERT_EQ(p["idle"].size(), 1u);
+  EXPECT_EQ(p["idle"][0]["body"], "coupler");
+  EXPECT_EQ(p["idle"][0]["count"], 1);
+  EXPECT_GT(p["transmission_index"].get<double>(), 1e-6);  // the spin held: not a dead point
+}
+
 // A target in a spatial file is refused by the reader: exit 2 with the file position.
 TEST(SpatialValidateCli, TargetInSpatialFileIsExitTwo) {
   std::ifstream in(test::bundled_file("rssr"));
