@@ -413,7 +413,10 @@ class Tracer {
       b.dsdl = dsdl(q, t);
       b.sigma = sigma(q);
       c.samples.push_back(b);
-      if (c.samples.size() > 8 && scaled_distance(m_, q, q_start, L_, idle_) < 1.01 * h) {
+      // A step moves every scaled component by at most h; the spatial distance takes norms of
+      // 3-vectors (a translation, a rotation angle): up to √3 h.
+      const double reach = (m_.dimension == 3 ? std::sqrt(3.0) : 1.0) * 1.01 * h;
+      if (c.samples.size() > 8 && scaled_distance(m_, q, q_start, L_, idle_) < reach) {
         // Back at the start: close the loop with the start itself.
         Sample e = c.samples.front();
         double dse = input_value(q_start) - input_value(q);
