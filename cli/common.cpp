@@ -123,8 +123,8 @@ void require_planar(const Model& model, const std::string& command) {
   if (model.dimension == 2) return;
   throw InputError({model.file, 0, 0}, "dimension: 3",
                    "'" + command +
-                       "' is not available for spatial mechanisms yet (info, assemble, simulate "
-                       "and crosscheck are)");
+                       "' is not available for spatial mechanisms yet (info, assemble, simulate, "
+                       "crosscheck, cycle and validate are)");
 }
 
 void add_units_option(CLI::App* cmd, std::string& choice) {

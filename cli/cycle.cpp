@@ -25,6 +25,7 @@
 #include "commands.hpp"
 #include "common.hpp"
 #include "orthomech/analysis/cycle_metrics.hpp"
+#include "orthomech/constraints/joints.hpp"
 #include "orthomech/error.hpp"
 #include "orthomech/io/cycle_output.hpp"
 #include "orthomech/io/render.hpp"
@@ -74,7 +75,7 @@ const char* profile_name(Profile p) {
 }
 
 bool is_angular(const Model& model, int joint) {
-  return std::holds_alternative<Revolute>(model.joints[static_cast<size_t>(joint)].kind);
+  return joint_coordinate_kind(model.joints[static_cast<size_t>(joint)]) == CoordinateKind::angle;
 }
 
 // The driver of the sweep: the file's (analysis.driver, else the first), changed by --driver and
@@ -96,10 +97,11 @@ Driver resolve_driver(const Model& model, const CycleCliOptions& opt) {
                                                  model.file + " (joints: " + names + ")");
     }
     const Joint& j = model.joints[static_cast<size_t>(joint)];
-    if (!std::holds_alternative<Revolute>(j.kind) && !std::holds_alternative<Prismatic>(j.kind))
+    if (joint_coordinate_kind(j) == CoordinateKind::none)
       throw CLI::ValidationError("--driver", "joint '" + j.name + "' is a " + j.type_name() +
-                                                 " joint; a driver needs a revolute or prismatic "
-                                                 "joint");
+                                                 " joint; a driver needs a joint with a "
+                                                 "coordinate (revolute, prismatic, cylindrical, "
+                                                 "screw)");
     const Driver* on_joint = nullptr;
     for (const Driver& d : model.drivers)
       if (d.joint == joint) on_joint = &d;
@@ -182,26 +184,21 @@ nlohmann::json positions_json(const Model& model, const CycleResult& r, bool ang
   auto out = [&](const OutputUnit& unit, Dimension d, double v) {
     return unit.from_si(noise.clean(d, v));
   };
-  const Dimension v_dim[] = {Dimension::velocity, Dimension::velocity, Dimension::angular_velocity};
-  const Dimension a_dim[] = {Dimension::acceleration, Dimension::acceleration,
-                             Dimension::angular_acceleration};
   const OutputUnit input_u = output_unit(angular ? Dimension::angle : Dimension::length, u);
   const OutputUnit time_u = output_unit(Dimension::time, u);
   const OutputUnit drive_u = output_unit(angular ? Dimension::moment : Dimension::force, u);
   const OutputUnit energy_u = output_unit(Dimension::moment, u);
   const OutputUnit length_u = output_unit(Dimension::length, u);
   const OutputUnit angle_u = output_unit(Dimension::angle, u);
-  const OutputUnit vel[] = {output_unit(Dimension::velocity, u),
-                            output_unit(Dimension::velocity, u),
-                            output_unit(Dimension::angular_velocity, u)};
-  const OutputUnit acc[] = {output_unit(Dimension::acceleration, u),
-                            output_unit(Dimension::acceleration, u),
-                            output_unit(Dimension::angular_acceleration, u)};
   std::vector<OutputUnit> measure_u, component_u;
   for (const Measure& m : model.measures) measure_u.push_back(output_unit(dimension_of(m.unit), u));
   for (const ReactionComponent& c : r.components)
     component_u.push_back(output_unit(dimension_of(c.unit), u));
   std::vector<double> pose;
+  // The poses' columns come first, then the named points' (position_columns).
+  const std::vector<PositionColumn> columns = position_columns(model);
+  size_t pose_columns = 0;
+  for (const Body& b : model.bodies) pose_columns += static_cast<size_t>(b.nq());
   nlohmann::json pts = nlohmann::json::array();
   for (const DrivenPointView& p : r.points) {
     nlohmann::json j;
@@ -214,23 +211,20 @@ nlohmann::json positions_json(const Model& model, const CycleResult& r, bool ang
       m[model.measures[i].name] =
           out(measure_u[i], dimension_of(model.measures[i].unit), p.measures[i]);
     j["measures"] = m;
-    // Pose of every body's frame ([x, y, angle]; a particle [x, y]) and every named point.
+    // Pose of every body's frame ([x, y, angle]; a particle [x, y]; a spatial body [x, y, z, e0,
+    // e1, e2, e3], its unit quaternion) and every named point ([x, y] or [x, y, z]), in
+    // position_columns order.
     compute_output_positions(model, VecX(p.q), pose);
     nlohmann::json poses = nlohmann::json::object(), points = nlohmann::json::object();
-    size_t k = 0;
-    for (const Body& b : model.bodies) {
-      std::vector<double> v = {out(length_u, Dimension::length, pose[k]),
-                               out(length_u, Dimension::length, pose[k + 1])};
-      k += 2;
-      if (b.kind == BodyKind::rigid) v.push_back(out(angle_u, Dimension::angle, pose[k++]));
-      poses[b.name] = v;
+    for (size_t c = 0; c < columns.size(); ++c) {
+      const std::string& name = columns[c].name;
+      const std::string owner = name.substr(0, name.rfind('.'));
+      const double v = columns[c].dimension == Dimension::none
+                           ? pose[c]
+                           : out(columns[c].dimension == Dimension::angle ? angle_u : length_u,
+                                 columns[c].dimension, pose[c]);
+      (c < pose_columns ? poses : points)[owner].push_back(v);
     }
-    for (const Body& b : model.bodies)
-      for (const auto& [name, local] : b.points) {
-        points[b.name + "." + name] = {out(length_u, Dimension::length, pose[k]),
-                                       out(length_u, Dimension::length, pose[k + 1])};
-        k += 2;
-      }
     j["poses"] = poses;
     j["named_points"] = points;
     // Velocities and accelerations of every body's centre of mass (and angular ones).
@@ -238,8 +232,11 @@ nlohmann::json positions_json(const Model& model, const CycleResult& r, bool ang
     for (const Body& b : model.bodies) {
       std::vector<double> v, a;
       for (int i = 0; i < b.nu(); ++i) {
-        v.push_back(out(vel[i], v_dim[i], p.u(b.u_offset + i)));
-        a.push_back(out(acc[i], a_dim[i], p.udot(b.u_offset + i)));
+        const VelocityComponent& c = velocity_component(b, i);
+        v.push_back(
+            out(output_unit(c.velocity_dimension, u), c.velocity_dimension, p.u(b.u_offset + i)));
+        a.push_back(out(output_unit(c.acceleration_dimension, u), c.acceleration_dimension,
+                        p.udot(b.u_offset + i)));
       }
       bodies[b.name] = {{"velocity", v}, {"acceleration", a}};
     }
@@ -328,11 +325,21 @@ std::vector<ReportPlot> report_plots(const CycleResult& r,
 
 int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) {
   const Model model = load(opt.file, opt.sets);
-  require_planar(model, "cycle");
   const UnitSystem U = resolve_units(model, opt.units);
   const UnitSystem file_units = unit_system(model.units);
   if (!opt.animate.empty() && image_format_of(opt.animate) != ImageFormat::svg)
     throw CLI::ValidationError("--animate", "the animation is an SVG: give a NAME.svg");
+  if (model.dimension == 3) {  // the pictures are planar drawings
+    const char* option = !opt.traces.empty()    ? "--trace"
+                         : !opt.animate.empty() ? "--animate"
+                         : !opt.report.empty()  ? "--report"
+                                                : nullptr;
+    if (option)
+      throw CLI::ValidationError(
+          option, std::string(option) +
+                      " is not available for spatial mechanisms yet (the named points' "
+                      "coordinates are columns of cycle.csv and of --json --positions)");
+  }
   const TracePoints trace_request = resolve_trace_points(model, opt.traces);
   if (trace_request.status == TraceStatus::bad_request)
     throw InputError({"command line", 0, 0}, "option", trace_request.message);

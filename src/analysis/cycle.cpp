@@ -1,5 +1,6 @@
 #include "orthomech/analysis/cycle.hpp"
 
+#include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -54,6 +55,16 @@ DrivenWorkspace::DrivenWorkspace(const Model& model, int rank)
       rotations(model.bodies.size()) {}
 
 // ---- stored positions -----------------------------------------------------------------------
+void DrivenPoints::unwrap_measure(std::size_t i) {
+  const std::size_t at =
+      static_cast<std::size_t>(n_tangent_ + n_q_ + 2 * n_u_ + n_lambda_) + n_reactions_ + i;
+  for (std::size_t k = 1; k < size(); ++k) {
+    const double before = values_[(k - 1) * stride_ + at];
+    double& value = values_[k * stride_ + at];
+    value = before + std::remainder(value - before, 2.0 * std::numbers::pi);
+  }
+}
+
 DrivenPointView DrivenPoints::operator[](std::size_t k) const {
   const Scalars& s = scalars_[k];
   const double* v = values_.data() + k * stride_;
@@ -356,6 +367,64 @@ bool compute_driven(const Model& model, int driver_joint, double sdot, double sd
   return true;
 }
 
+bool compute_multi_driven(const Model& model, const std::vector<int>& joints, const VecX& sdot,
+                          const VecX& sddot, State& state, Workspace& ws, DrivenWorkspace& w,
+                          MultiDrivenPoint& out) {
+  const Eigen::Index m = static_cast<Eigen::Index>(joints.size());
+  out.conditioning = 0.0;
+  state.u.setZero();
+  compute_free_system(model, state, ws);
+  compute_constraint_jacobian(model, state.q, ws.constraints.Et);
+  if (compute_basis(model, state, ws) != ProjectionStatus::ok) return false;
+  const MatX& F = ws.dual.F;
+  if (F.cols() != m) return false;
+  MatX Ds(m, model.n);
+  VecX row(model.n);
+  for (Eigen::Index i = 0; i < m; ++i) {
+    (void)compute_scalar(model, JointCoordinate{joints[static_cast<size_t>(i)]}, state.q, nullptr,
+                         row);
+    Ds.row(i) = row.transpose();
+  }
+  const MatX G = Ds * F;
+  const Eigen::JacobiSVD<MatX> svd(G);
+  const VecX sv = svd.singularValues();
+  out.conditioning = sv.size() && sv(0) > 0.0 ? sv(sv.size() - 1) / sv(0) : 0.0;
+  if (!(out.conditioning > 1e-12)) return false;  // the drivers cannot move the mechanism here
+  const Eigen::PartialPivLU<MatX> lu(G);
+  // (C1) velocities.
+  state.u.noalias() = F * lu.solve(sdot);
+  // Rate terms at (q, u).
+  compute_constraint_rate(model, state, ws.constraints);
+  compute_free_system(model, state, ws);
+  VecX ddot_u(m);
+  for (Eigen::Index i = 0; i < m; ++i)
+    ddot_u(i) = compute_scalar(model, JointCoordinate{joints[static_cast<size_t>(i)]}, state.q,
+                               &state.u, row)
+                    .ddot_u;
+  solve_chart(ws, ws.constraints.Dtu, w.Fdot_v);  // x_D = (E_RDᵀ)⁻¹ (Dᵀu)_R
+  w.Fdot_v = -w.Fdot_v;                           // Eᵀ w = −Dᵀ u
+  // (C2) accelerations.
+  const VecX vdot = lu.solve(sddot - ddot_u - Ds * w.Fdot_v);
+  out.udot = F * vdot + w.Fdot_v;
+  // (C3) the drivers' forces: Fᵀ R = Gᵀ τ.
+  if (ws.free.diagonal_mass)
+    w.R = ws.free.M_diag.cwiseProduct(out.udot);
+  else
+    w.R.noalias() = ws.free.M * out.udot;
+  if (!ws.free.constant_mass) w.R.noalias() += ws.free.Mdot * state.u;
+  w.R -= ws.free.Q;
+  out.drives = G.transpose().partialPivLu().solve(F.transpose() * w.R);
+  // (C4) reactions: E λ = R − D_sᵀ τ.
+  w.R.noalias() -= Ds.transpose() * out.drives;
+  out.lambda.resize(model.nc);
+  solve_multipliers(ws, w, out.lambda);
+  out.q = state.q;
+  out.u = state.u;
+  out.input_rates = sdot;
+  out.input_accelerations = sddot;
+  return true;
+}
+
 namespace {
 
 // The driver's input as a function of time, s(t), ṡ(t), s̈(t). A constant-speed law can be
@@ -392,12 +461,41 @@ struct InputLaw {
   }
 };
 
+// `value` unwrapped to the turn of `near` (a spatial joint angle is read in (−π, π]).
+double unwrap_near(double value, double near) {
+  return near + std::remainder(value - near, 2.0 * std::numbers::pi);
+}
+
+}  // namespace
+
+void driver_law(const Driver& driver, double s0, double t, double& s, double& sdot, double& sddot) {
+  InputLaw law;
+  law.profile = driver.profile;
+  law.s_ref = s0;
+  law.omega = driver.speed;
+  law.initial = driver.initial;
+  law.amplitude = driver.amplitude;
+  law.frequency = driver.frequency;
+  law.coefficients = &driver.coefficients;
+  law.at(t, s, sdot, sddot);
+}
+
+namespace {
+
 struct Sweep {
   const Model& model;
   int joint;
   Workspace& ws;
   DrivenWorkspace& w;
   bool jacobian_at_q = false;  // ws.constraints.Et holds Eᵀ at the q the corrector returned
+  VecX offset = VecX::Zero(model.n);  // q − q_ref for the linear lock
+  // The input's coordinate at q, on the turn of `near` where it is read modulo 2π.
+  [[nodiscard]] double input_at(const VecX& q, double near) const {
+    const double value = compute_scalar(model, JointCoordinate{joint}, q, nullptr).value;
+    return joint_coordinate_wraps(model.joints[static_cast<size_t>(joint)])
+               ? unwrap_near(value, near)
+               : value;
+  }
 
   // Newton on [f_R(q); s(q) − target] = 0 with Jacobian [E_Rᵀ; dᵀ] (the input locked), or, when
   // `row` is given, on [f_R(q); rowᵀ(q − q_ref) − target] (a linear lock, for the pseudo-arclength
@@ -422,8 +520,15 @@ struct Sweep {
       compute_constraint_residual_and_jacobian(model, q, ws.constraints.f, ws.constraints.Et,
                                                w.rotations.data());
       jacobian_at_q = true;
-      const double s =
-          row ? row->dot(q - *q_ref) : compute_scalar(model, input, q, nullptr, w.d).value;
+      double s = 0.0;
+      if (row) {
+        difference_positions(model, q, *q_ref, offset);
+        s = row->dot(offset);
+      } else {
+        s = compute_scalar(model, input, q, nullptr, w.d).value;
+        if (joint_coordinate_wraps(model.joints[static_cast<size_t>(joint)]))
+          s = unwrap_near(s, target);
+      }
       double res = std::max(std::abs(s - target), ws.constraints.f.cwiseAbs().maxCoeff());
       // The tolerance is a few ulps of the coordinates: next to a singular position a residual
       // of 1e-12 still leaves q 1e-10 off the branch along the nearly singular direction.
@@ -470,14 +575,45 @@ struct Sweep {
 // Predicted q at input s from a converged point p: q + τ Δs + ½ q'' Δs², with q'' = d²q/ds² =
 // (u̇ − τ s̈)/ṡ². The curvature term is used only where it is smaller than the tangent step (next
 // to a singular position u̇ is unreliable) and where ṡ ≠ 0.
-void predict(const DrivenPoint& p, double s, VecX& q) {
+// Size of the mechanism (the largest distance of a body's design position from the origin, at
+// least 1 mm): the scale of lengths for step control and start moves.
+double mechanism_size(const Model& model) {
+  double size = 1e-3;
+  for (const Body& b : model.bodies)
+    size = std::max(size, b.kind == BodyKind::spatial ? b.spatial.design_position.norm()
+                                                      : b.design_pose.head<2>().norm());
+  return size;
+}
+
+// Indices of the measures that read a spatial joint angle (modulo 2π): unwrapped by continuity
+// over the sweep.
+std::vector<size_t> wrapped_measures(const Model& model) {
+  std::vector<size_t> out;
+  for (size_t i = 0; i < model.measures.size(); ++i) {
+    const Measure& m = model.measures[i];
+    if (m.derivative != 0) continue;
+    if (const auto* c = std::get_if<JointCoordinate>(&m.kind))
+      if (joint_coordinate_wraps(model.joints[static_cast<size_t>(c->joint)])) out.push_back(i);
+  }
+  return out;
+}
+
+void unwrap_measures(CycleResult& result, const std::vector<size_t>& wrapped) {
+  for (const size_t i : wrapped) result.points.unwrap_measure(i);
+}
+
+// The step is taken in velocity space and applied through integrate_positions (q ⊕ step).
+void predict(const Model& model, const DrivenPoint& p, double s, VecX& step, VecX& q) {
   const double ds = s - p.input;
-  q = p.q + ds * p.tangent;
-  if (!(std::abs(p.input_rate) > 0.0)) return;
-  const double first = std::abs(ds) * p.tangent.cwiseAbs().maxCoeff();
-  const double c = 0.5 * ds * ds / (p.input_rate * p.input_rate);
-  const double second = c * (p.udot - p.input_acceleration * p.tangent).cwiseAbs().maxCoeff();
-  if (second <= first) q += c * (p.udot - p.input_acceleration * p.tangent);
+  step = ds * p.tangent;
+  if (std::abs(p.input_rate) > 0.0) {
+    const double first = std::abs(ds) * p.tangent.cwiseAbs().maxCoeff();
+    const double c = 0.5 * ds * ds / (p.input_rate * p.input_rate);
+    const double second = c * (p.udot - p.input_acceleration * p.tangent).cwiseAbs().maxCoeff();
+    if (second <= first) step += c * (p.udot - p.input_acceleration * p.tangent);
+  }
+  q = p.q;
+  integrate_positions(model, q, step, 1.0);
 }
 
 }  // namespace
@@ -495,7 +631,7 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
   }
   const std::string& joint_name = model.joints[static_cast<size_t>(joint)].name;
   const bool angular =
-      std::holds_alternative<Revolute>(model.joints[static_cast<size_t>(joint)].kind);
+      joint_coordinate_kind(model.joints[static_cast<size_t>(joint)]) == CoordinateKind::angle;
   // Messages quote inputs in the file's declared units (a model built in code: SI).
   const UnitSystem file_units = unit_system(model.units);
   const Driver& driver = options.driver;
@@ -576,14 +712,16 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
     return result;
   }
   {
-    double size = 1e-3;
-    for (const Body& b : model.bodies) size = std::max(size, b.design_pose.head<2>().norm());
+    const double size = mechanism_size(model);
+    VecX moved(model.n);
+    difference_positions(model, state.q, drawn, moved);
     for (const Body& b : model.bodies) {
-      const double distance =
-          (state.q.segment<2>(b.q_offset) - drawn.segment<2>(b.q_offset)).norm();
-      const double angle = b.kind == BodyKind::rigid
-                               ? std::abs(state.q(b.q_offset + 2) - drawn(b.q_offset + 2))
-                               : 0.0;
+      // Translation and rotation of the body (u-space: planar x, y, φ; spatial v, ω).
+      const int dim = b.kind == BodyKind::spatial ? 3 : 2;
+      const double distance = moved.segment(b.u_offset, dim).norm();
+      const double angle = b.kind == BodyKind::rigid     ? std::abs(moved(b.u_offset + 2))
+                           : b.kind == BodyKind::spatial ? moved.segment<3>(b.u_offset + 3).norm()
+                                                         : 0.0;
       if (distance <= kStartMoveTolerance * size && angle <= kStartTurnTolerance) continue;
       result.start_moves.push_back({b.name, distance, angle});
       result.warnings.push_back("the design position does not close as drawn: body '" + b.name +
@@ -685,11 +823,13 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
   // 1 rad. One internal step may move no coordinate by more than kMaxMove of its scale (5.7°, a
   // tenth of the size); longer grid steps are split into sub-steps that are not output.
   constexpr double kMaxMove = 0.1;
-  double size = 1e-3;
-  for (const Body& b : model.bodies) size = std::max(size, b.design_pose.head<2>().norm());
-  VecX scale = VecX::Constant(model.nq, size);
+  // (Of velocity components: the tangent is dq/ds in u-space, planar x, y, φ; spatial v, ω.)
+  VecX scale = VecX::Constant(model.n, mechanism_size(model));
   for (const Body& b : model.bodies)
-    if (b.kind == BodyKind::rigid) scale(b.q_offset + 2) = 1.0;
+    if (b.kind == BodyKind::rigid)
+      scale(b.u_offset + 2) = 1.0;
+    else if (b.kind == BodyKind::spatial)
+      scale.segment<3>(b.u_offset + 3).setConstant(1.0);
   auto move_size = [&](const VecX& tangent, double ds) {
     return (tangent.cwiseAbs().cwiseQuotient(scale)).maxCoeff() * std::abs(ds);
   };
@@ -703,7 +843,7 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
     state.q = q;
     state.t = t;
     if (!compute_driven(model, joint, sdot, sddot, state, ws, w, p, jacobian_current)) return false;
-    p.input = compute_scalar(model, input, state.q, nullptr).value;
+    p.input = sweep.input_at(state.q, s);
     p.time = t;
     p.chart_quality = ws.dual.quality;
     // Sign of det of the chart's block (LU: signs of U_kk and of the interchanges) and the chart
@@ -734,8 +874,10 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
   // a fold reverses it).
   auto same_branch = [](const VecX& a, const VecX& b) { return a.dot(b) > 0.0; };
   VecX trial(model.nq);  // predictor/corrector iterate, reused across positions
-  DrivenPoint anchor;    // the last converged point: the predictor starts from it
-  VecX good_tangent;     // of the last regular point: used next to a change point
+  const std::vector<size_t> wrapped = wrapped_measures(model);
+  VecX du(model.n);    // the predictor's step in velocity space
+  DrivenPoint anchor;  // the last converged point: the predictor starts from it
+  VecX good_tangent;   // of the last regular point: used next to a change point
   DrivenPoint point, probe, sub, check;
   // One continuation step from a converged point to time t: predictor, corrector with the input
   // locked, evaluation; false if it does not converge on the same branch or is too long. From a
@@ -746,10 +888,12 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
     const VecX& tangent = from.singular ? good_tangent : from.tangent;
     const double ds = target - from.input;
     if (move_size(tangent, ds) > kMaxMove) return false;
-    if (from.singular)
-      trial = from.q + ds * good_tangent;
-    else
-      predict(from, target, trial);
+    if (from.singular) {
+      trial = from.q;
+      integrate_positions(model, trial, good_tangent, ds);
+    } else {
+      predict(model, from, target, du, trial);
+    }
     // Corrections beyond twice the size of the tangent step would leave the branch.
     const double max_step = 2.0 * std::abs(ds) * tangent.cwiseAbs().maxCoeff() + 1e-12;
     return sweep.corrector(trial, target, max_step) &&
@@ -938,11 +1082,13 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
     // back, then drive the input the other way.
     VecX dir = at_lo.tangent * at_lo.input_rate;  // direction of motion dq/dt
     dir.normalize();
-    double arc = std::max((anchor.q - at_lo.q).norm(), 1e-9);
+    difference_positions(model, anchor.q, at_lo.q, du);
+    double arc = std::max(du.norm(), 1e-9);
     VecX q_cur = at_lo.q, q_pred(model.nq);
     bool passed = false;
     for (int attempt = 0; attempt < 40 && !passed; ++attempt) {
-      q_pred = q_cur + arc * dir;
+      q_pred = q_cur;
+      integrate_positions(model, q_pred, dir, arc);
       trial = q_pred;
       if (!sweep.corrector(trial, 0.0, 0.5 * arc, &dir, &q_pred)) {
         arc *= 0.5;
@@ -957,7 +1103,7 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
       }
       VecX f = ws.dual.F.col(0).normalized();
       if (f.dot(dir) < 0.0) f = -f;
-      const double s_new = compute_scalar(model, input, trial, nullptr).value;
+      const double s_new = sweep.input_at(trial, s_dead);
       q_cur = trial;
       dir = f;
       if ((s_new - s_dead) * law.omega < -options.dead_point_tolerance) passed = true;
@@ -975,7 +1121,7 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
     law.t_ref = at_lo.time;
     law.omega = -law.omega;
     // Re-anchor on the far side: its time on the reversed law, then resume on the time grid.
-    const double s_p = compute_scalar(model, input, q_cur, nullptr).value;
+    const double s_p = sweep.input_at(q_cur, s_dead);
     const double t_p = at_lo.time + (s_p - s_dead) / law.omega;
     if (!evaluate_at(q_cur, t_p, anchor)) {
       result.status = CycleStatus::failed;
@@ -1172,6 +1318,15 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
           if (a == 0 && side == first_side) first_inner = node;
         }
       }
+      // Wrapped angles (spatial joints) on one turn across the nodes.
+      const Eigen::Index measures_at =
+          reactions_at + static_cast<Eigen::Index>(result.components.size());
+      for (const size_t m : wrapped)
+        for (int i = 1; i < kNodes; ++i) {
+          const Eigen::Index at = measures_at + static_cast<Eigen::Index>(m);
+          node_values[static_cast<size_t>(i)](at) =
+              unwrap_near(node_values[static_cast<size_t>(i)](at), node_values[0](at));
+        }
       // Error estimate per value: the two inner nodes against the degree-6 interpolant through
       // the other seven.
       double l[kNodes];
@@ -1232,6 +1387,7 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
         law.at(t, bridged.input, bridged.input_rate, bridged.input_acceleration);
         interpolate(t, kAll, value);
         unpack(value, bridged);
+        normalize_coordinates(model, bridged.q);  // unit quaternions again
         bridged.chart_quality = p.chart_quality;
         bridged.chart_sign = p.chart_sign;
         bridged.chart_id = p.chart_id;
@@ -1249,6 +1405,7 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
       for (const double factor : {1.0, 0.5, 2.0, 4.0})  // the first with a consistent drive
         if (bridge_at(j, factor)) break;
   }
+  unwrap_measures(result, wrapped);
   result.chart_switches = ws.dual.switch_count;
   result.reversals = reversals;
   if (options.progress) options.progress(1.0);
@@ -1270,21 +1427,28 @@ std::vector<ReactionMagnitude> reaction_magnitudes(const CycleResult& result) {
   for (size_t i = 0; i < comps.size();) {
     const int joint = comps[i].joint;
     const std::string prefix = comps[i].name.substr(0, comps[i].name.rfind('.'));
+    // The force's magnitude from its world components (planar Fx, Fy; spatial Fx, Fy, Fz), a
+    // spatial joint's moment's from Mx, My, Mz; every other component on its own.
     ReactionMagnitude force{prefix + ".|F|", "N", joint, {}, true};
+    ReactionMagnitude moment{prefix + ".|M|", "N*m", joint, {}, true};
     std::vector<ReactionMagnitude> others;
     for (; i < comps.size() && comps[i].joint == joint; ++i) {
       if (!comps[i].global) continue;
       const std::string c = comps[i].name.substr(comps[i].name.rfind('.') + 1);
       const bool det = result.determinate.empty() || result.determinate[i];
-      if (c == "Fx" || c == "Fy") {
-        force.components.push_back(static_cast<int>(i));
-        force.determinate = force.determinate && det;
+      ReactionMagnitude* group = c == "Fx" || c == "Fy" || c == "Fz"   ? &force
+                                 : c == "Mx" || c == "My" || c == "Mz" ? &moment
+                                                                       : nullptr;
+      if (group) {
+        group->components.push_back(static_cast<int>(i));
+        group->determinate = group->determinate && det;
       } else {
         others.push_back(
             {prefix + ".|" + c + "|", comps[i].unit, joint, {static_cast<int>(i)}, det});
       }
     }
     if (!force.components.empty()) out.push_back(std::move(force));
+    if (!moment.components.empty()) out.push_back(std::move(moment));
     for (auto& o : others) out.push_back(std::move(o));
   }
   // A gear's reaction is its one (joint-frame) multiplier.

@@ -1,6 +1,8 @@
 #include "orthomech/analysis/positions.hpp"
 
 #include <Eigen/Cholesky>
+#include <cmath>
+#include <numbers>
 
 #include "orthomech/constraints/joints.hpp"
 #include "orthomech/model/free_system.hpp"
@@ -33,19 +35,27 @@ SolveResult project_positions(const Model& model, VecX& q, const PositionOptions
   Chart chart;
   ChartOptions chart_options;
   VecX du(model.n);
-  const bool locked = options.locked_joint >= 0;
-  VecX d(model.n);  // gradient of the held joint coordinate
+  std::vector<PositionOptions::Lock> locks = options.locks;
+  if (options.locked_joint >= 0)
+    locks.insert(locks.begin(), PositionOptions::Lock{options.locked_joint, options.locked_value});
+  const bool locked = !locks.empty();
+  const int nl = static_cast<int>(locks.size());
+  MatX d(nl, model.n);  // gradients of the held joint coordinates
+  VecX lock_residual(nl);
+  VecX row(model.n);
   double previous = std::numeric_limits<double>::infinity();
   int stalled = 0;
   for (int it = 0;; ++it) {
     compute_constraint_residual(model, q, f);
     result.residual = f.size() ? f.cwiseAbs().maxCoeff() : 0.0;
-    double lock_residual = 0.0;
-    if (locked) {
-      lock_residual =
-          compute_scalar(model, JointCoordinate{options.locked_joint}, q, nullptr, d).value -
-          options.locked_value;
-      result.residual = std::max(result.residual, std::abs(lock_residual));
+    for (int i = 0; i < nl; ++i) {
+      const PositionOptions::Lock& l = locks[static_cast<size_t>(i)];
+      double gap = compute_scalar(model, JointCoordinate{l.joint}, q, nullptr, row).value - l.value;
+      if (joint_coordinate_wraps(model.joints[static_cast<size_t>(l.joint)]))
+        gap = std::remainder(gap, 2.0 * std::numbers::pi);
+      lock_residual(i) = gap;
+      d.row(i) = row.transpose();
+      result.residual = std::max(result.residual, std::abs(gap));
     }
     result.iterations = it;
     if (!std::isfinite(result.residual)) {
@@ -72,16 +82,16 @@ SolveResult project_positions(const Model& model, VecX& q, const PositionOptions
       result.message = "constraint Jacobian is zero";
       return result;
     }
-    const int rows = locked ? r + 1 : r;
+    const int rows = r + nl;
     MatX Er(rows, model.n);
     VecX fr(rows);
     for (int i = 0; i < r; ++i) {
       Er.row(i) = Et.row(chart.rows[static_cast<size_t>(i)]);
       fr(i) = f(chart.rows[static_cast<size_t>(i)]);
     }
-    if (locked) {  // the held joint's row
-      Er.row(r) = d.transpose();
-      fr(r) = lock_residual;
+    if (locked) {  // the held joints' rows
+      Er.bottomRows(nl) = d;
+      fr.tail(nl) = lock_residual;
     }
     const MatX AEr = A * Er.transpose();
     const MatX Gr = Er * AEr;  // eq. (42) on the independent rows

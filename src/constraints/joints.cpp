@@ -285,4 +285,25 @@ void compute_constraints(const Model& model, const State& state, ConstraintWorks
   ws.Dtu.noalias() = ws.Dt * state.u;  // convective term Dᵀu, eq. (76)
 }
 
+CoordinateKind joint_coordinate_kind(const Joint& joint) {
+  if (const auto* s = std::get_if<SpatialJoint>(&joint.kind)) {
+    switch (spatial_joint_spec(s->type).coordinate) {
+      case SpatialCoordinate::angle:
+        return CoordinateKind::angle;
+      case SpatialCoordinate::slide:
+        return CoordinateKind::slide;
+      case SpatialCoordinate::none:
+        return CoordinateKind::none;
+    }
+  }
+  if (std::holds_alternative<Revolute>(joint.kind)) return CoordinateKind::angle;
+  if (std::holds_alternative<Prismatic>(joint.kind)) return CoordinateKind::slide;
+  return CoordinateKind::none;
+}
+
+bool joint_coordinate_wraps(const Joint& joint) {
+  return std::holds_alternative<SpatialJoint>(joint.kind) &&
+         joint_coordinate_kind(joint) == CoordinateKind::angle;
+}
+
 }  // namespace orthomech

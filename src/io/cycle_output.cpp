@@ -43,10 +43,6 @@ template <class Emit>
 void for_each_cell(const Model& model, const CycleResult& result,
                    const std::vector<ReactionMagnitude>& magnitudes, bool angular,
                    const DrivenPointView& p, Emit&& emit) {
-  static const Dimension v_dim[] = {Dimension::velocity, Dimension::velocity,
-                                    Dimension::angular_velocity};
-  static const Dimension a_dim[] = {Dimension::acceleration, Dimension::acceleration,
-                                    Dimension::angular_acceleration};
   std::vector<double> pose;
   emit(angular ? Dimension::angle : Dimension::length, p.input, true);
   emit(Dimension::time, p.time, true);
@@ -56,8 +52,10 @@ void for_each_cell(const Model& model, const CycleResult& result,
   compute_output_positions(model, VecX(p.q), pose);
   for (size_t i = 0; i < pose.size(); ++i) emit(columns[i].dimension, pose[i], true);
   for (const Body& b : model.bodies) {
-    for (int i = 0; i < b.nu(); ++i) emit(v_dim[i], p.u(b.u_offset + i), true);
-    for (int i = 0; i < b.nu(); ++i) emit(a_dim[i], p.udot(b.u_offset + i), true);
+    for (int i = 0; i < b.nu(); ++i)
+      emit(velocity_component(b, i).velocity_dimension, p.u(b.u_offset + i), true);
+    for (int i = 0; i < b.nu(); ++i)
+      emit(velocity_component(b, i).acceleration_dimension, p.udot(b.u_offset + i), true);
   }
   emit(angular ? Dimension::moment : Dimension::force, p.drive, drive_reported(p));
   for (size_t i = 0; i < p.reactions.size(); ++i)
@@ -143,6 +141,22 @@ void spatial_output_positions(const Model& model, const VecX& q, std::vector<dou
 
 }  // namespace
 
+const VelocityComponent& velocity_component(const Body& body, int i) {
+  using D = Dimension;
+  static const VelocityComponent kPlanar[] = {
+      {"vx", "ax", D::velocity, D::acceleration},
+      {"vy", "ay", D::velocity, D::acceleration},
+      {"omega", "alpha", D::angular_velocity, D::angular_acceleration}};
+  static const VelocityComponent kSpatial[] = {
+      {"vx", "ax", D::velocity, D::acceleration},
+      {"vy", "ay", D::velocity, D::acceleration},
+      {"vz", "az", D::velocity, D::acceleration},
+      {"wx", "alpha_x", D::angular_velocity, D::angular_acceleration},
+      {"wy", "alpha_y", D::angular_velocity, D::angular_acceleration},
+      {"wz", "alpha_z", D::angular_velocity, D::angular_acceleration}};
+  return (body.kind == BodyKind::spatial ? kSpatial : kPlanar)[i];
+}
+
 std::vector<PositionColumn> position_columns(const Model& model) {
   if (model.dimension == 3) return spatial_position_columns(model);
   std::vector<PositionColumn> cols;
@@ -221,17 +235,15 @@ CycleColumns write_cycle_csv(const std::filesystem::path& file, const Model& mod
   }
   // Velocity and acceleration of every body's centre of mass, and angular ones.
   // The columns follow u and u̇ of the body: (vx, vy[, ω]) then (ax, ay[, α]).
-  static const char* const kVelocity[] = {"vx", "vy", "omega"};
-  static const char* const kAcceleration[] = {"ax", "ay", "alpha"};
-  const OutputUnit v_unit[] = {output_unit(Dimension::velocity, units),
-                               output_unit(Dimension::velocity, units),
-                               output_unit(Dimension::angular_velocity, units)};
-  const OutputUnit a_unit[] = {output_unit(Dimension::acceleration, units),
-                               output_unit(Dimension::acceleration, units),
-                               output_unit(Dimension::angular_acceleration, units)};
   for (const Body& b : model.bodies) {
-    for (int i = 0; i < b.nu(); ++i) head(b.name + "." + kVelocity[i], v_unit[i]);
-    for (int i = 0; i < b.nu(); ++i) head(b.name + "." + kAcceleration[i], a_unit[i]);
+    for (int i = 0; i < b.nu(); ++i) {
+      const VelocityComponent& c = velocity_component(b, i);
+      head(b.name + "." + c.velocity, output_unit(c.velocity_dimension, units));
+    }
+    for (int i = 0; i < b.nu(); ++i) {
+      const VelocityComponent& c = velocity_component(b, i);
+      head(b.name + "." + c.acceleration, output_unit(c.acceleration_dimension, units));
+    }
   }
   cols.drive = head("drive", drive_unit);
   std::vector<OutputUnit> component_units;

@@ -134,6 +134,9 @@ class DrivenPoints {
   void push_back(const DrivenPoint& p);
   // Replaces position k by p (same vector sizes, else throws std::logic_error).
   void assign(std::size_t k, const DrivenPoint& p);
+  // Measure i, an angle read modulo 2π, made continuous over the positions in order (each value
+  // moved by whole turns to within π of the one before).
+  void unwrap_measure(std::size_t i);
 
   class const_iterator {
    public:
@@ -268,6 +271,34 @@ struct DrivenWorkspace {
   std::vector<Eigen::Matrix2d> rotations;
   DrivenWorkspace(const Model& model, int rank);
 };
+
+// A driver's input s(t), ṡ(t), s̈(t) (SI): constant speed s0 + ω t, harmonic initial + a sin(2π f
+// t), polynomial Σ c_k t^k.
+void driver_law(const Driver& driver, double s0, double t, double& s, double& sdot, double& sddot);
+
+// One position of a sweep with m drivers (analysis/multi_drive.hpp), SI.
+struct MultiDrivenPoint {
+  double time = 0.0;
+  VecX inputs, input_rates, input_accelerations;  // m: the driven joints' coordinates s(t)
+  VecX drives;                                    // m: each driver's torque (N·m) or force (N)
+  VecX q, u, udot, lambda;
+  std::vector<double> reactions;  // as CycleResult::components
+  std::vector<double> measures;   // as Model::measures
+  double kinetic = 0.0, potential = 0.0, dissipated = 0.0;
+  // Smallest singular value of D_s F over its largest (0 where the drivers cannot move the
+  // mechanism: a singular position of the drivers).
+  double conditioning = 0.0;
+};
+
+// (C1)–(C4) with m drivers: D_s (m × n, the rows of the driven joints' coordinates) replaces the
+// input row d. With F the basis of admissible velocities (n × m), G = D_s F:
+//   u = F G⁻¹ ṡ;   u̇ = F v̇ + w,  Eᵀ w = −Dᵀu,  G v̇ = s̈ − (Ḋ_s u) − D_s w;
+//   Fᵀ(M u̇ + Ṁu − Q̂) = Gᵀ τ  (the drivers' forces);   E λ = M u̇ + Ṁu − Q̂ − D_sᵀ τ.
+// state.q must be on f(q) = 0; F must have m columns (else false, with out.conditioning 0).
+// Returns false where G is singular (conditioning < 1e-12). Allocates (m-sized matrices).
+bool compute_multi_driven(const Model& model, const std::vector<int>& joints, const VecX& sdot,
+                          const VecX& sddot, State& state, Workspace& ws, DrivenWorkspace& dws,
+                          MultiDrivenPoint& out);
 
 // Velocities, accelerations, drive and multipliers at a position q on f(q) = 0 where the input
 // moves with rate sdot and acceleration sddot (C1)–(C4). Returns false at a dead point (dᵀF = 0).

@@ -34,4 +34,13 @@ void compute_constraint_rate(const Model& model, const State& state, ConstraintW
 // f, Eᵀ, Dᵀ and Dᵀu at a state. Allocation-free.
 void compute_constraints(const Model& model, const State& state, ConstraintWorkspace& ws);
 
+// The coordinate a joint has (its `joint` measure, drivers, limits, design inputs): an angle
+// (planar revolute; spatial revolute, cylindrical, screw), a slide (planar and spatial
+// prismatic) or none.
+enum class CoordinateKind { none, angle, slide };
+[[nodiscard]] CoordinateKind joint_coordinate_kind(const Joint& joint);
+// True when the joint's angle is read modulo 2π (a spatial twist angle in (−π, π]): callers
+// that follow it over a motion unwrap it by continuity. A planar revolute's angle is continuous.
+[[nodiscard]] bool joint_coordinate_wraps(const Joint& joint);
+
 }  // namespace orthomech

@@ -24,6 +24,17 @@ struct PositionColumn {
 // Their values at q (SI), in position_columns order; out is resized.
 void compute_output_positions(const Model& model, const VecX& q, std::vector<double>& out);
 
+// Component i of a body's velocity parameters u and of u̇: names and dimensions. Planar rigid
+// body: vx, vy, omega (ax, ay, alpha); particle: vx, vy; spatial body: vx, vy, vz of its centre
+// of mass (world) and wx, wy, wz of its angular velocity in its body frame (ax … az, alpha_x …
+// alpha_z).
+struct VelocityComponent {
+  const char* velocity;
+  const char* acceleration;
+  Dimension velocity_dimension, acceleration_dimension;
+};
+[[nodiscard]] const VelocityComponent& velocity_component(const Body& body, int i);
+
 // The scale of every dimension over the rows of the cycle's CSV (inputs, times, measures,
 // positions, velocities, accelerations, drive, reaction components and magnitudes, SI): the CSV
 // and the JSON write a value at rounding noise for its dimension as 0 (io/noise.hpp).

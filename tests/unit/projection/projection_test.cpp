@@ -154,7 +154,10 @@ TEST_P(Projection, Eq42_44_PrimalProjectionsEqualDualOnes) {
 // so q(t) stays on f = 0 and q̇(0) = u.
 VecX on_manifold(const Model& model, const VecX& q, const VecX& u, double t, Workspace& chart_ws) {
   VecX qt = q + t * u;
-  const SolveResult r = correct_positions_in_chart(model, qt, chart_ws, PositionOptions{1e-15, 50});
+  PositionOptions tight;
+  tight.tolerance = 1e-15;
+  tight.max_iterations = 50;
+  const SolveResult r = correct_positions_in_chart(model, qt, chart_ws, tight);
   EXPECT_NE(r.status, SolveStatus::singular);
   return qt;
 }
