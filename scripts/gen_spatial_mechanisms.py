@@ -3,10 +3,11 @@
 
     python3 scripts/gen_spatial_mechanisms.py
 
-Writes bennett.yaml, bricard.yaml, hooke-joint.yaml, spatial-slider-crank.yaml, heavy-top.yaml and
-crank-rocker-3d.yaml from the geometry of /work/shared/spatial.md §4 (and, for crank-rocker-3d,
-the planar mechanisms/crank-rocker.yaml). Design poses are computed here in closed form and
-printed at full double precision (repr), so every joint holds at the design pose to ~1e-15 m;
+Writes bennett.yaml, bricard.yaml, hooke-joint.yaml, spatial-slider-crank.yaml, heavy-top.yaml,
+crank-rocker-3d.yaml and double-wishbone.yaml from the geometry of /work/shared/spatial.md §4 (and,
+for crank-rocker-3d, the planar mechanisms/crank-rocker.yaml), and the test fixture
+tests/data/spatial/double-wishbone-parallelogram.yaml. Design poses are computed here in closed
+form and printed at full double precision (repr), so every joint holds at the design pose to ~1e-15 m;
 the numbers quoted in each file's comment block are computed here too. rssr.yaml is the example
 of spatial.md §5, written by hand (8-digit orientation axes).
 """
@@ -86,10 +87,12 @@ def num(x):
     return repr(x)
 
 
-def write(name, text):
-    with open(os.path.join(OUT, name), "w", encoding="utf-8") as f:
+def write(name, text, folder="mechanisms"):
+    path = os.path.join(ROOT, folder)
+    os.makedirs(path, exist_ok=True)
+    with open(os.path.join(path, name), "w", encoding="utf-8") as f:
         f.write(text)
-    print("wrote mechanisms/" + name)
+    print(f"wrote {folder}/{name}")
 
 
 def rod_inertia(m, length, axis, radius=0.01):
@@ -510,6 +513,227 @@ analysis: {{driver: motor, steps: 360}}
     write("crank-rocker-3d.yaml", text)
 
 
+# ---- double-wishbone suspension (spatial.md §4.8) ----------------------------------------------
+def rodrigues(th, a):
+    """exp(θ̃) a: rotation of a by |θ| about θ/|θ|."""
+    t = norm(th)
+    if t == 0.0:
+        return a
+    k = mul(1.0 / t, th)
+    c, s = math.cos(t), math.sin(t)
+    return add(add(mul(c, a), mul(s, cross(k, a))), mul(dot(k, a) * (1.0 - c), k))
+
+
+def solve4(F, x):
+    """Newton on F(x) = 0, x ∈ R⁴, central-difference Jacobian, Gaussian elimination."""
+    for _ in range(50):
+        f = F(x)
+        if max(abs(r) for r in f) < 1e-15:
+            break
+        h = 1e-7
+        A = [[0.0] * 5 for _ in range(4)]
+        for k in range(4):
+            xp, xm = list(x), list(x)
+            xp[k] += h
+            xm[k] -= h
+            fp, fm = F(xp), F(xm)
+            for i in range(4):
+                A[i][k] = (fp[i] - fm[i]) / (2 * h)
+        for i in range(4):
+            A[i][4] = -f[i]
+        for c in range(4):
+            p = max(range(c, 4), key=lambda r: abs(A[r][c]))
+            A[c], A[p] = A[p], A[c]
+            for r in range(c + 1, 4):
+                m = A[r][c] / A[c][c]
+                for k in range(c, 5):
+                    A[r][k] -= m * A[c][k]
+        dx = [0.0] * 4
+        for i in range(3, -1, -1):
+            dx[i] = (A[i][4] - sum(A[i][k] * dx[k] for k in range(i + 1, 4))) / A[i][i]
+        x = [a + b for a, b in zip(x, dx)]
+    return x, max(abs(r) for r in F(x))
+
+
+def wishbone_pose(G, psi, x0):
+    """The loop at lower-arm angle ψ: unknowns the upper-arm angle β and the upright's rotation
+    vector θ (from the design pose): LBJ(ψ) + R(θ)(UBJ − LBJ) = UBJ(β), |tie rod| = its length.
+    Returns (x, camber, toe, wheel-centre z, residual)."""
+    Ltr = norm(sub(G["TRo"], G["TRi"]))
+    La, Ua = unit(sub(G["LAf"], G["LAr"])), unit(sub(G["UAf"], G["UAr"]))
+    lbj = add(G["LAr"], rodrigues(mul(psi, La), sub(G["LBJ"], G["LAr"])))
+
+    def F(x):
+        ubj = add(G["UAr"], rodrigues(mul(x[0], Ua), sub(G["UBJ"], G["UAr"])))
+        r = sub(add(lbj, rodrigues(x[1:], sub(G["UBJ"], G["LBJ"]))), ubj)
+        t = sub(add(lbj, rodrigues(x[1:], sub(G["TRo"], G["LBJ"]))), G["TRi"])
+        return list(r) + [(dot(t, t) - Ltr * Ltr) / (2 * Ltr)]
+
+    x, res = solve4(F, x0)
+    s = rodrigues(x[1:], (0.0, 1.0, 0.0))
+    wc = add(lbj, rodrigues(x[1:], sub(G["WC"], G["LBJ"])))
+    return x, -math.asin(s[2]), math.atan2(s[0], s[1]), wc[2], res
+
+
+def wishbone_sweep(G, degrees):
+    """Continuation from the design pose (ψ = 0) in 1° steps to each angle of `degrees`."""
+    out = {}
+    for sign in (1, -1):
+        x = [0.0] * 4
+        for d in range(0, max(abs(a) for a in degrees) + 1):
+            x, camber, toe, z, res = wishbone_pose(G, sign * d * DEG, x)
+            assert res < 1e-14, res
+            if sign * d in degrees:
+                out[sign * d] = (x[0], camber, toe, z)
+    return out
+
+
+WISHBONE = {  # spatial.md §4.8, m: x forward, y outboard (left wheel), z up
+    "LAf": (0.15, 0.25, 0.15), "LAr": (-0.15, 0.25, 0.15), "LBJ": (0.0, 0.70, 0.12),
+    "UAf": (0.12, 0.35, 0.45), "UAr": (-0.12, 0.35, 0.45), "UBJ": (0.0, 0.66, 0.42),
+    "TRi": (-0.12, 0.28, 0.20), "TRo": (-0.12, 0.68, 0.18), "WC": (0.0, 0.75, 0.27),
+}
+# The exact special case (i) of §4.8: equal, parallel arms and a tie rod parallel to them.
+WISHBONE_PARALLELOGRAM = dict(WISHBONE)
+WISHBONE_PARALLELOGRAM.update({
+    "UAf": add(WISHBONE["LAf"], (0, 0, 0.3)), "UAr": add(WISHBONE["LAr"], (0, 0, 0.3)),
+    "UBJ": add(WISHBONE["LBJ"], (0, 0, 0.3)),
+    "TRi": (-0.12, 0.25, 0.20), "TRo": add((-0.12, 0.25, 0.20), sub(WISHBONE["LBJ"], (0, 0.25, 0.15))),
+})
+
+
+def point_masses_inertia(m, pts, extra):
+    """Inertia about the centroid of equal point masses m/len(pts) at pts, plus extra·m·I (so the
+    principal moments satisfy the triangle inequality strictly). Returns (com, [Jxx..Jyz])."""
+    c = mul(1.0 / len(pts), tuple(sum(p[i] for p in pts) for i in range(3)))
+    J = [[0.0] * 3 for _ in range(3)]
+    for p in pts:
+        r = sub(p, c)
+        for i in range(3):
+            for j in range(3):
+                J[i][j] += m / len(pts) * ((dot(r, r) if i == j else 0.0) - r[i] * r[j])
+    for i in range(3):
+        J[i][i] += extra * m
+    return c, [J[0][0], J[1][1], J[2][2], J[0][1], J[0][2], J[1][2]]
+
+
+def r12(a):
+    """A vector rounded to 12 decimals (differences of the §4.8 points print as 0.45, not
+    0.44999999999999996; the joints still hold to ~1e-16 m)."""
+    return tuple(round(x, 12) for x in a)
+
+
+def wishbone_text(G, name, title, header):
+    L0 = mul(0.5, add(G["LAf"], G["LAr"]))
+    U0 = mul(0.5, add(G["UAf"], G["UAr"]))
+    bodies = ""
+    for body, O, f, r, bj, m in (("lower_arm", L0, "LAf", "LAr", "LBJ", 3.0),
+                                  ("upper_arm", U0, "UAf", "UAr", "UBJ", 2.0)):
+        F, R, B = r12(sub(G[f], O)), r12(sub(G[r], O)), r12(sub(G[bj], O))
+        com, J = point_masses_inertia(m, [F, R, B], 1e-3)
+        com, J = r12(com), r12(J)
+        bodies += f"""  - name: {body}
+    mass: {num(m)}
+    inertia: {v(J)}
+    com: {v(com)}
+    pose: {{position: {v(O)}}}
+    points: {{O: [0, 0, 0], F: {v(F)}, R: {v(R)}, B: {v(B)}}}
+"""
+    W = G["WC"]
+    bodies += f"""  - name: upright
+    mass: 20
+    inertia: [0.6, 1.0, 0.6]                 # upright, hub and wheel; spin axis = body y
+    pose: {{position: {v(W)}}}
+    points:
+      W: [0, 0, 0]
+      L: {v(r12(sub(G["LBJ"], W)))}
+      U: {v(r12(sub(G["UBJ"], W)))}
+      T: {v(r12(sub(G["TRo"], W)))}
+"""
+    return f"""{header}orthomech: 1
+dimension: 3
+name: {name}
+description: "{title}"
+units: {{length: m, angle: deg, mass: kg, time: s, force: N}}
+ground:
+  points: {{LA: {v(L0)}, UA: {v(U0)}, TR: {v(G["TRi"])}}}
+bodies:
+{bodies}joints:
+  - {{name: LA, type: revolute, connects: [ground.LA, lower_arm.O], axis: {v(sub(G["LAf"], G["LAr"]))}}}
+  - {{name: UA, type: revolute, connects: [ground.UA, upper_arm.O], axis: {v(sub(G["UAf"], G["UAr"]))}}}
+  - {{name: LBJ, type: spherical, connects: [lower_arm.B, upright.L]}}
+  - {{name: UBJ, type: spherical, connects: [upper_arm.B, upright.U]}}
+  - {{name: tie_rod, type: distance, connects: [ground.TR, upright.T]}}
+loads:
+  - {{name: weight, type: gravity}}
+measures:
+  - {{name: psi, type: joint, joint: LA}}
+  - {{name: upper_arm_angle, type: joint, joint: UA}}
+  - {{name: camber, type: camber, body: upright, axis: [0, 1, 0]}}
+  - {{name: toe, type: toe, body: upright, axis: [0, 1, 0]}}
+  - {{name: wheel_z, type: point, point: upright.W, component: z}}
+  - {{name: camber_rate, type: camber, body: upright, axis: [0, 1, 0], derivative: 1}}
+  - {{name: toe_rate, type: toe, body: upright, axis: [0, 1, 0], derivative: 1}}
+drivers:
+  - {{name: travel, joint: LA, profile: harmonic, amplitude: 15, frequency: 1}}
+analysis: {{driver: travel, steps: 360}}
+"""
+
+
+def double_wishbone():
+    G = WISHBONE
+    sweep = wishbone_sweep(G, [-15, -10, -5, 5, 10, 15])
+
+    def row(d):
+        beta, camber, toe, z = sweep[d]
+        return (f"#     ψ = {d:+d}°: upper arm {beta / DEG:.10f}°, camber {camber / DEG:.10f}°, "
+                f"toe {toe / DEG:.10f}°,\n#       wheel_z {z:.12f} m\n")
+
+    rows = "".join(row(d) for d in (-15, -10, -5, 5, 10, 15))
+    P = WISHBONE_PARALLELOGRAM
+    psweep = wishbone_sweep(P, [-15, 15])
+    pmax = max(max(abs(c), abs(t)) for _, c, t, _ in psweep.values())
+    assert pmax < 1e-14, pmax
+    fmt = lambda key: v(G[key])
+    header = f"""# double-wishbone.yaml — double-wishbone front suspension, left wheel (dimension: 3).
+#
+# Source: spatial.md §4.8. Vehicle axes x forward, y outboard (left wheel), z up; m.
+#   Lower arm: pivots LA_f = {fmt("LAf")}, LA_r = {fmt("LAr")},
+#     ball joint LBJ = {fmt("LBJ")};
+#   upper arm: pivots UA_f = {fmt("UAf")}, UA_r = {fmt("UAr")},
+#     ball joint UBJ = {fmt("UBJ")};
+#   tie rod: inner (chassis) {fmt("TRi")}, outer (upright) {fmt("TRo")};
+#   wheel centre {fmt("WC")}, spin axis +y at the design pose. The chassis is the ground.
+#   Arms on revolutes (axes LA_f − LA_r, UA_f − UA_r, through the pivots' mid-points), spherical
+#   ball joints to the upright, the tie rod a `distance` row (massless rod, spherical ends). Masses and inertias are
+#   assumed (arms: equal point masses at their three corners; upright with hub and wheel 20 kg,
+#   com at the wheel centre); they change the dynamics, not the kinematics below.
+# Input: the lower-arm angle ψ (joint LA, measure `psi`; > 0 moves the wheel up, bump).
+# Measures (docs/file-format.md): camber = −asin(s_z) (> 0: top of the wheel outboard), toe =
+#   atan2(s_x, s_y) (> 0: toe-in), s the spin axis; wheel_z = the wheel centre's height (travel).
+# Facts tests rely on (tests/unit/analysis/double_wishbone_test.cpp):
+#   - 3 moving bodies: n = 18, n_c = 5 + 5 + 3 + 3 + 1 = 17, Grübler 1, rank 17: DOF 1.
+#   - Design pose ψ = 0: camber 0, toe 0, wheel_z 0.27 m (every joint holds exactly).
+#   - An independent loop solve (Newton in the upper-arm angle and the upright's rotation,
+#     scripts/gen_spatial_mechanisms.py) gives, continued from the design pose:
+{rows}#   - Equal, parallel arms with a parallel tie rod (UA = LA + (0, 0, 0.3), UBJ = LBJ + (0, 0, 0.3),
+#     tie rod inner {v(P["TRi"])}, outer {v(r12(P["TRo"]))}): the upright translates,
+#     camber and toe stay 0 over the travel (tests/data/spatial/double-wishbone-parallelogram.yaml).
+"""
+    write("double-wishbone.yaml", wishbone_text(
+        G, "double-wishbone", "Double-wishbone front suspension, left wheel (spatial.md 4.8)", header))
+    pheader = f"""# double-wishbone-parallelogram.yaml — test fixture: mechanisms/double-wishbone.yaml with
+# equal, parallel arms and a tie rod parallel to them (spatial.md §4.8 (i); written by
+# scripts/gen_spatial_mechanisms.py). UA = LA + (0, 0, 0.3), UBJ = LBJ + (0, 0, 0.3), tie rod
+# inner {v(P["TRi"])}, outer {v(r12(P["TRo"]))} = inner + (LBJ − LA): the upright
+# translates, camber and toe are 0 over the travel (the independent solve: max {pmax:.1e} rad
+# over ψ = ±15°).
+"""
+    write("double-wishbone-parallelogram.yaml", wishbone_text(
+        P, "double-wishbone-parallelogram", "Double wishbone with a parallelogram linkage",
+        pheader), "tests/data/spatial")
+
+
 if __name__ == "__main__":
     bennett()
     bricard()
@@ -517,3 +741,4 @@ if __name__ == "__main__":
     slider_crank()
     heavy_top()
     crank_rocker_3d()
+    double_wishbone()

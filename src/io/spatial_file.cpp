@@ -627,9 +627,19 @@ void Reader::read_spatial_measures(const YAML::Node& root) {
       }
       m.kind = a;
       unit = "rad";
+    } else if (type == "camber" || type == "toe") {
+      // {type: camber|toe, body: b, axis: [..]}: the wheel's outboard spin axis in b's frame.
+      expect_map(item, element, {"name", "type", "body", "axis", "derivative"});
+      WheelAngle w;
+      w.body = spatial_body_ref(require(item, "body", element), element);
+      w.axis = unit_vec3(require(item, "axis", element), element, "axis");
+      w.which = type == "camber" ? WheelAngle::Which::camber : WheelAngle::Which::toe;
+      m.kind = w;
+      unit = "rad";
     } else {
       fail(item["type"], element,
-           "unknown measure type '" + type + "' (allowed: joint, point, distance, angle)");
+           "unknown measure type '" + type +
+               "' (allowed: joint, point, distance, angle, camber, toe)");
     }
     if (const YAML::Node d = item["derivative"]) {
       const double v = number(d, element, "derivative");

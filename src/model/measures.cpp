@@ -1,5 +1,6 @@
 #include "orthomech/model/measures.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <stdexcept>
@@ -142,6 +143,34 @@ struct Evaluator {
     const Vec3 kdot = sn > 0.0 ? Vec3(-(cdot - c * c.dot(cdot) / (sn * sn)) / sn) : Vec3::Zero();
     x.h = {k, -k};
     x.hdot = {kdot, -kdot};
+    return spatial(x);
+  }
+
+  // Camber c = −asin(s_z), s = R a (ṡ = w × s): ċ = w·h with h = (ẑ × s)/√(1 − s_z²).
+  // Toe t = atan2(s_x, σ s_y), σ = sign(s_y): ṫ = w·h with h = N/r², N = σ s × (s_y, −s_x, 0),
+  // r² = s_x² + s_y² (the (P5) pattern of atan2). ḣ by differentiating h along ṡ.
+  ScalarKinematics operator()(const WheelAngle& m) const {
+    SpatialScalar x;
+    x.frame[0] = spatial_frame(model, m.body, q, u);
+    const Vec3 s = x.frame[0].R * m.axis;
+    const Vec3 sd = x.frame[0].w.cross(s);
+    const Vec3 z = Vec3::UnitZ();
+    if (m.which == WheelAngle::Which::camber) {
+      const double sz = std::clamp(s.z(), -1.0, 1.0);
+      const double cz = std::sqrt(1.0 - sz * sz);  // 0 only for a vertical spin axis
+      x.value = 0.0 - std::asin(sz);               // not −asin: +0, never −0, at zero camber
+      x.h[0] = z.cross(s) / cz;
+      x.hdot[0] = z.cross(sd) / cz + z.cross(s) * (sz * sd.z() / (cz * cz * cz));
+    } else {
+      const double sigma = s.y() < 0.0 ? -1.0 : 1.0;
+      const double r2 = s.x() * s.x() + s.y() * s.y();
+      x.value = std::atan2(s.x(), sigma * s.y());
+      const Vec3 mv(s.y(), -s.x(), 0.0), md(sd.y(), -sd.x(), 0.0);
+      const Vec3 N = sigma * s.cross(mv);
+      const Vec3 Nd = sigma * (sd.cross(mv) + s.cross(md));
+      x.h[0] = N / r2;
+      x.hdot[0] = Nd / r2 - N * (2.0 * (s.x() * sd.x() + s.y() * sd.y()) / (r2 * r2));
+    }
     return spatial(x);
   }
 

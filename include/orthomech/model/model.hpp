@@ -267,8 +267,18 @@ struct VectorAngle {  // angle between a vector fixed in body i and one fixed in
   int bi = kGround, bj = kGround;
   Vec3 ai = Vec3::UnitX(), aj = Vec3::UnitX();  // unit, in each body's frame
 };
-using MeasureKind = std::variant<JointCoordinate, PointCoordinate, PointDistance, BodyAngle,
-                                 SpatialPointCoordinate, SpatialPointDistance, VectorAngle>;
+// Camber or toe of a wheel whose outboard spin axis a is fixed in `body` (s = R a in world;
+// vehicle axes x forward, z up, docs/file-format.md): camber = −asin(s_z) (> 0: the top of the
+// wheel leans outboard), toe = atan2(s_x, |s_y|) (> 0: toe-in, either side of the vehicle).
+struct WheelAngle {
+  enum class Which { camber, toe };
+  int body = kGround;
+  Vec3 axis = Vec3::UnitY();  // unit, body frame
+  Which which = Which::camber;
+};
+using MeasureKind =
+    std::variant<JointCoordinate, PointCoordinate, PointDistance, BodyAngle, SpatialPointCoordinate,
+                 SpatialPointDistance, VectorAngle, WheelAngle>;
 struct Measure {
   std::string name;
   MeasureKind kind;
