@@ -3,7 +3,7 @@
 // w·a = s_r, energy constant) in both dynamics forms; the contact force equals the closed form
 // F = m Ω V e2 + m g k (normal force m g, friction m Ω V toward the circle's centre); the file
 // mechanisms/rolling-disc.yaml reads to the same model and its `initial` rates give the same
-// motion; the dual and primal forms agree on it (crosscheck); its reading errors.
+// motion; the dual and primal forms agree on it (crosscheck); the reader's keys; the CLI.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -236,6 +236,50 @@ TEST(RollingDiscDynamics, GapAtTheDesignPoseIsAWarningAndIsClosed) {
   const SimulateResult r = simulate(m, o);
   ASSERT_EQ(r.status, SimulateStatus::completed) << r.message;
   for (const SimulationSample& smp : r.samples) EXPECT_LT(smp.residual, 1e-9);
+}
+
+// The reader: `centre` (a point of the disc's body, from the centre of mass), `plane` (point,
+// normal normalised) and `t1` (made perpendicular to the normal; default the world axis least
+// aligned with the normal, projected), in the file's units.
+TEST(RollingDiscDynamics, ReaderTakesCentrePlaneAndT1) {
+  const auto read = [](const std::string& disc) {
+    return parse_mechanism(
+        "orthomech: 1\ndimension: 3\nunits: {length: mm, angle: deg, mass: kg}\n"
+        "bodies:\n  - name: wheel\n    mass: 1\n    inertia: [2500, 2500, 5000]\n"
+        "    com: [0, 0, 10]\n    pose: {position: [0, 0, 100], orientation: {x: [1, 0, 0], "
+        "z: [0, 1, 0]}}\n    points: {H: [0, 0, 30]}\n"
+        "nonholonomic:\n  - {name: c, type: rolling-disc, body: wheel, radius: 100, axis: [0, 0, "
+        "2]" +
+            disc + "}\n",
+        "wheel.yaml");
+  };
+  {
+    const Model m = read(", centre: wheel.H, plane: {point: [0, 0, -5], normal: [0, 0, 3]}");
+    ASSERT_EQ(m.rolling_discs.size(), 1u);
+    const RollingDisc& d = m.rolling_discs[0];
+    EXPECT_EQ(d.body, 0);
+    EXPECT_DOUBLE_EQ(d.radius, 0.1);
+    EXPECT_LT((d.axis_local - Vec3::UnitZ()).norm(), 1e-15);
+    EXPECT_LT((d.centre_local - Vec3(0, 0, 0.02)).norm(), 1e-15);  // H − com
+    EXPECT_LT((d.plane_point - Vec3(0, 0, -0.005)).norm(), 1e-15);
+    EXPECT_LT((d.normal - Vec3::UnitZ()).norm(), 1e-15);
+    EXPECT_LT((d.t1 - Vec3::UnitX()).norm(), 1e-15);
+    EXPECT_EQ(d.row_offset, 0);
+    // The disc centre H is 0.1 m up, the axis horizontal: the lowest rim point is at z = 0,
+    // 5 mm above the plane z = −5 mm: a warning.
+    ASSERT_EQ(m.warnings.size(), 1u);
+    EXPECT_NE(m.warnings[0].find("its lowest rim point is 5 mm above"), std::string::npos)
+        << m.warnings[0];
+  }
+  {
+    const Model m = read(", t1: [1, 1, 0.5]");
+    EXPECT_LT((m.rolling_discs[0].t1 - Vec3(1, 1, 0).normalized()).norm(), 1e-15);
+  }
+  {
+    const Model m = read(", plane: {normal: [1, 1, 0]}");
+    EXPECT_LT((m.rolling_discs[0].t1 - Vec3::UnitZ()).norm(), 1e-15);  // z least aligned
+    EXPECT_LT((m.rolling_discs[0].normal - Vec3(1, 1, 0).normalized()).norm(), 1e-15);
+  }
 }
 
 // The command line: `simulate` completes on the bundled file and reports the contact force
