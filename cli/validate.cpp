@@ -1,7 +1,8 @@
 // `orthomech validate FILE`: the design positions report (analysis/validate.hpp): assembly,
 // target, DOF, singularity measures and distance to the nearest dead/change point, four-bar
-// Grashof type and transmission angle, assembly modes, circuit/branch/order defects. Exit status
-// 0 only when every position passes every check, 1 otherwise (docs/cli.md).
+// Grashof type and transmission angle, assembly modes, circuit/branch/order defects. Planar and
+// spatial files (on a spatial one the planar-only checks read "not applicable"). Exit status 0
+// only when every position passes every check, 1 otherwise (docs/cli.md).
 #include "orthomech/analysis/validate.hpp"
 
 #include <spdlog/spdlog.h>
@@ -43,7 +44,6 @@ std::string cell(const std::optional<double>& v, double scale, const char* f = "
 
 int run_validate(const ValidateCliOptions& opt) {
   const Model model = load(opt.file, opt.sets);
-  require_planar(model, "validate");
   const UnitSystem U = resolve_units(model, opt.units);
   ValidateOptions vo;
   try {  // a bare number is in the file's angle unit
@@ -59,10 +59,8 @@ int run_validate(const ValidateCliOptions& opt) {
   if (model.design_positions.empty())
     spdlog::warn("{}: no design positions: nothing to validate", model.file);
   const ValidationReport rep = validate_design_positions(model, vo);
-  const bool input_angular =
-      !rep.input.empty() &&
-      std::holds_alternative<Revolute>(
-          model.joints[static_cast<size_t>(model.find_joint(rep.input))].kind);
+  const bool input_angular = rep.input_angular;
+  const bool applicable = rep.not_applicable.empty();  // the planar loop checks
   const OutputUnit length_u = output_unit(Dimension::length, U);
   const OutputUnit angle_u = output_unit(Dimension::angle, U);
   const OutputUnit in_u = input_angular ? angle_u : length_u;
@@ -88,6 +86,7 @@ int run_validate(const ValidateCliOptions& opt) {
     j["order_defect"] = rep.order_defect;
     j["defects"] = rep.defects;
     j["singular_points"] = rep.singular_points;
+    j["not_applicable"] = rep.not_applicable;
     nlohmann::json positions = nlohmann::json::array();
     for (const PositionReport& p : rep.positions) {
       nlohmann::json fb = nlohmann::json::array();
@@ -103,12 +102,15 @@ int run_validate(const ValidateCliOptions& opt) {
       nlohmann::json blocks = nlohmann::json::array();
       for (const LimitBlock& b : p.limit_blocks) {
         const Joint& jt = model.joints[static_cast<size_t>(b.joint)];
-        const OutputUnit u = std::holds_alternative<Revolute>(jt.kind) ? angle_u : length_u;
+        const OutputUnit u = b.angular ? angle_u : length_u;
         blocks.push_back({{"joint", jt.name},
                           {"needed", u.from_si(b.needed)},
                           {"limits", {u.from_si(jt.limits->x()), u.from_si(jt.limits->y())}},
                           {"unit", u.name}});
       }
+      nlohmann::json idle = nlohmann::json::array();
+      for (const Mobility::Idle& i : p.idle) idle.push_back({{"body", i.body}, {"count", i.count}});
+      const nlohmann::json na = "not applicable";
       positions.push_back({{"name", p.name},
                            {"pass", p.pass()},
                            {"failures", p.failures},
@@ -123,13 +125,14 @@ int run_validate(const ValidateCliOptions& opt) {
                            {"dof", p.dof},
                            {"rank", p.rank},
                            {"redundant", p.redundant},
+                           {"idle", idle},
                            {"sigma_min", p.singular.sigma_min},
                            {"transmission_index", opt_json(p.singular.eta)},
                            {"singular_distance", conv(p.singular_distance, in_u)},
                            {"singular_kind", p.singular_kind},
                            {"singular_input", conv(p.singular_input, in_u)},
-                           {"four_bars", fb},
-                           {"slider_cranks", sc},
+                           {"four_bars", applicable ? fb : na},
+                           {"slider_cranks", applicable ? sc : na},
                            {"limit_blocks", blocks},
                            {"modes", p.modes},
                            {"mode", p.mode},
@@ -167,7 +170,7 @@ int run_validate(const ValidateCliOptions& opt) {
           cell(p.target_error, 1.0 / length_u.si).c_str(), p.dof,
           cell(std::optional<double>(p.singular.sigma_min), 1.0, "%.3g").c_str(),
           cell(p.singular.eta, 1.0, "%.3g").c_str(), cell(p.singular_distance, in_scale).c_str(),
-          cell(mu, 1.0 / angle_u.si, "%.2f").c_str(), mode.c_str(),
+          applicable ? cell(mu, 1.0 / angle_u.si, "%.2f").c_str() : "n/a", mode.c_str(),
           p.circuit > 0 ? std::to_string(p.circuit).c_str() : "-",
           p.branch > 0 ? std::to_string(p.branch).c_str() : "-", p.pass() ? "pass" : "FAIL");
       out << line;
@@ -187,7 +190,22 @@ int run_validate(const ValidateCliOptions& opt) {
         out << (&c == &p.slider_cranks.front() ? "\nslider-crank loops at " + p.name + "\n" : "")
             << "  " << c.joints << "  pressure angle " << format_input(c.pressure, true, U)
             << (c.ok ? "" : "  (too large)") << "\n";
+    if (!applicable) {
+      out << "\nnot applicable (spatial mechanism)\n";
+      for (const std::string& s : rep.not_applicable) out << "  " << s << "\n";
+    }
     bool header = false;
+    for (const PositionReport& p : rep.positions)
+      if (!p.idle.empty()) {
+        if (!header) out << "\n";
+        header = true;
+        out << "idle degrees of freedom at " << p.name << " (held at zero rate):";
+        for (size_t k = 0; k < p.idle.size(); ++k)
+          out << (k ? ";" : "") << " body '" << p.idle[k].body << "' (" << p.idle[k].count
+              << (p.idle[k].count == 1 ? " direction)" : " directions)");
+        out << "\n";
+      }
+    header = false;
     for (const PositionReport& p : rep.positions)
       if (!p.redundant.empty()) {
         if (!header) out << "\n";

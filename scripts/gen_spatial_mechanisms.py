@@ -150,6 +150,8 @@ def bennett():
 #   - 3 moving bodies, 4 revolutes: n = 18, n_c = 20, Grübler −2; rank 17: DOF 1, 3 redundant.
 #   - θ1 = 20°, 75°, 140° → θ2 = 172.6144863489°, 148.6240189537°, 89.6773892272°
 #     (measures theta1, theta2 read θ1 and θ2).
+#   - design_positions t20, t75, t140 (J1 at those θ1): `validate` passes, DOF 1 and 3 redundant
+#     equations at each, one circuit with no dead point of J1 (θ1 turns fully).
 orthomech: 1
 dimension: 3
 name: bennett
@@ -170,6 +172,10 @@ measures:
   - {{name: theta2, type: joint, joint: J2}}
 drivers:
   - {{name: motor, joint: J1, speed: 60 rpm}}
+design_positions:
+  - {{name: t20, inputs: {{J1: 20}}}}
+  - {{name: t75, inputs: {{J1: 75}}}}
+  - {{name: t140, inputs: {{J1: 140}}}}
 analysis: {{driver: motor, steps: 360}}
 """
     write("bennett.yaml", text)
@@ -248,6 +254,7 @@ def hooke():
 # Facts tests rely on:
 #   - 2 moving bodies, 2 revolutes and a universal joint: n = 12, n_c = 5 + 5 + 4 = 14,
 #     Grübler −2; rank 11: DOF 1, 3 redundant (the revolute axes meet at the U-joint centre).
+#   - design_positions t0, t45, t90 (R1 at those θ1): `validate` passes, DOF 1, 3 redundant.
 orthomech: 1
 dimension: 3
 name: hooke-joint
@@ -280,6 +287,10 @@ measures:
   - {{name: omega2, type: joint, joint: R2, derivative: 1}}
 drivers:
   - {{name: motor, joint: R1, speed: 60 rpm}}
+design_positions:
+  - {{name: t0, inputs: {{R1: 0}}}}
+  - {{name: t45, inputs: {{R1: 45}}}}
+  - {{name: t90, inputs: {{R1: 90}}}}
 analysis: {{driver: motor, steps: 360}}
 """
     write("hooke-joint.yaml", text)
@@ -315,6 +326,7 @@ def slider_crank():
 #   - 3 moving bodies: n = 18, n_c = 5 + 3 + 4 + 5 = 17, Grübler 1, rank 17: DOF 1, no redundancy.
 #   - Measures crank_angle (φ, from world y about x: 90° at the design pose), slider_x (the
 #     prismatic slide = x_C), slider_v.
+#   - design_positions p90, p135, p180 (A0 at those φ): `validate` passes, x_C = (M2) there.
 orthomech: 1
 dimension: 3
 name: spatial-slider-crank
@@ -359,6 +371,10 @@ drivers:
   - {{name: motor, joint: A0, speed: 6 rad/s}}
 initial:
   rates: {{crank_angle: 6 rad/s}}
+design_positions:
+  - {{name: p90, inputs: {{A0: 90}}}}
+  - {{name: p135, inputs: {{A0: 135}}}}
+  - {{name: p180, inputs: {{A0: 180}}}}
 analysis: {{driver: motor, steps: 360}}
 """
     write("spatial-slider-crank.yaml", text)

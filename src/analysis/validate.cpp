@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <map>
 #include <numbers>
 #include <optional>
@@ -17,9 +18,11 @@
 #include "orthomech/analysis/cycle_metrics.hpp"
 #include "orthomech/analysis/mobility.hpp"
 #include "orthomech/constraints/joints.hpp"
+#include "orthomech/constraints/spatial_joints.hpp"
 #include "orthomech/io/units.hpp"
 #include "orthomech/model/free_system.hpp"
 #include "orthomech/model/measures.hpp"
+#include "orthomech/model/spatial.hpp"
 
 namespace orthomech {
 
@@ -41,28 +44,36 @@ std::string fmt(double v, int precision = 4) {
   return s.str();
 }
 
+// Whether a joint's coordinate is an angle (rad, compared modulo 2π): a planar revolute, or a
+// spatial revolute, cylindrical or screw joint (spatial.md §2.4: the (P5) twist angle).
 bool is_revolute(const Model& model, int joint) {
-  return std::holds_alternative<Revolute>(model.joints[static_cast<size_t>(joint)].kind);
+  const JointKind& k = model.joints[static_cast<size_t>(joint)].kind;
+  if (const auto* s = std::get_if<SpatialJoint>(&k))
+    return spatial_joint_spec(s->type).coordinate == SpatialCoordinate::angle;
+  return std::holds_alternative<Revolute>(k);
 }
 
 // The mechanism's length scale: the largest joint-point offset on a body or distance between
 // ground points (m).
 double length_scale(const Model& model) {
   double L = 0.0;
-  std::vector<Vec2> ground;
-  auto visit = [&](const PointRef& p) {
-    if (p.body == kGround)
-      ground.push_back(p.s);
+  std::vector<Vec3> ground;
+  auto visit = [&](int body, const Vec3& s) {
+    if (body == kGround)
+      ground.push_back(s);
     else
-      L = std::max(L, p.s.norm());
+      L = std::max(L, s.norm());
   };
   for (const Joint& j : model.joints)
     std::visit(
         [&](const auto& k) {
           using K = std::decay_t<decltype(k)>;
-          if constexpr (!std::is_same_v<K, GearPair> && !std::is_same_v<K, SpatialJoint>) {
-            visit(k.pi);
-            visit(k.pj);
+          if constexpr (std::is_same_v<K, SpatialJoint>) {
+            visit(k.pi.body, k.pi.s);
+            visit(k.pj.body, k.pj.s);
+          } else if constexpr (!std::is_same_v<K, GearPair>) {
+            visit(k.pi.body, Vec3(k.pi.s.x(), k.pi.s.y(), 0.0));
+            visit(k.pj.body, Vec3(k.pj.s.x(), k.pj.s.y(), 0.0));
           }
         },
         j.kind);
@@ -71,10 +82,44 @@ double length_scale(const Model& model) {
   return std::max(L, 1e-6);
 }
 
-// Max over coordinates of |Δ| (angles wrapped, lengths / L).
-double scaled_distance(const Model& model, const VecX& a, const VecX& b, double L) {
+// The joint points of spatial body b (body frame): an idle body's own motion (spatial.md §4.1)
+// leaves them in place, so positions are compared by them.
+std::vector<Vec3> joint_points_on(const Model& model, int b) {
+  std::vector<Vec3> out;
+  for (const Joint& j : model.joints)
+    if (const auto* s = std::get_if<SpatialJoint>(&j.kind)) {
+      if (s->pi.body == b) out.push_back(s->pi.s);
+      if (s->pj.body == b) out.push_back(s->pj.s);
+    }
+  return out;
+}
+
+// Max over coordinates of |Δ| (angles wrapped, lengths / L). Spatial bodies: |Δr| / L of the
+// centre of mass and the angle of the rotation between the two orientations; a body in
+// `idle` (an idle degree of freedom) by the largest move of its joint points / L instead.
+double scaled_distance(const Model& model, const VecX& a, const VecX& b, double L,
+                       const std::vector<int>& idle = {}) {
   double d = 0.0;
-  for (const Body& body : model.bodies) {
+  for (size_t k = 0; k < model.bodies.size(); ++k) {
+    const Body& body = model.bodies[k];
+    if (body.kind == BodyKind::spatial) {
+      const int bi = static_cast<int>(k);
+      if (std::find(idle.begin(), idle.end(), bi) != idle.end()) {
+        const SpatialFrame fa = spatial_frame(model, bi, a, nullptr);
+        const SpatialFrame fb = spatial_frame(model, bi, b, nullptr);
+        for (const Vec3& s : joint_points_on(model, bi))
+          d = std::max(d, (spatial_point(fa, s).r - spatial_point(fb, s).r).norm() / L);
+        continue;
+      }
+      d = std::max(d, (a.segment<3>(body.q_offset) - b.segment<3>(body.q_offset)).norm() / L);
+      // The relative rotation δ = e_a* ⊗ e_b: angle 2·atan2(|vec δ|, |δ₀|) (= 2·acos|e_a·e_b|,
+      // accurate near 0).
+      Quat ea = a.segment<4>(body.q_offset + 3).normalized();
+      ea.tail<3>() = -ea.tail<3>();
+      const Quat delta = quaternion_multiply(ea, b.segment<4>(body.q_offset + 3).normalized());
+      d = std::max(d, 2.0 * std::atan2(delta.tail<3>().norm(), std::abs(delta(0))));
+      continue;
+    }
     d = std::max(d, std::abs(a(body.q_offset) - b(body.q_offset)) / L);
     d = std::max(d, std::abs(a(body.q_offset + 1) - b(body.q_offset + 1)) / L);
     if (body.kind == BodyKind::rigid)
@@ -83,14 +128,137 @@ double scaled_distance(const Model& model, const VecX& a, const VecX& b, double 
   return d;
 }
 
-// Coordinates scaled to be comparable: lengths / L, angles as they are.
+// A velocity-space vector (size n) scaled to be comparable: lengths / L, angles as they are
+// (spatial bodies: v / L, ω as it is).
 VecX scale_vector(const Model& model, const VecX& v, double L) {
   VecX s = v;
   for (const Body& body : model.bodies) {
-    s(body.q_offset) /= L;
-    s(body.q_offset + 1) /= L;
+    const int nt = body.kind == BodyKind::spatial ? 3 : 2;
+    for (int c = 0; c < nt; ++c) s(body.u_offset + c) /= L;
   }
   return s;
+}
+
+// δu with a ⊕ δu = b (size n; planar: b − a).
+VecX difference(const Model& model, const VecX& b, const VecX& a) {
+  VecX du(model.n);
+  difference_positions(model, b, a, du);
+  return du;
+}
+
+// a ⊕ h·du (size nq).
+VecX moved(const Model& model, const VecX& a, const VecX& du, double h) {
+  VecX q = a;
+  integrate_positions(model, q, du, h);
+  return q;
+}
+
+// Rows that hold the idle bodies' own motions at zero rate, mass-orthogonally (spatial.md §6.5):
+// for every v in the null space of Eᵀ restricted to body b (its columns scaled by √A_kk, rows
+// normalised, as mobility's test), the row vᵀM. Empty without idle bodies.
+MatX idle_rows(const Model& model, const VecX& q, const std::vector<int>& idle) {
+  if (idle.empty()) return MatX(0, model.n);
+  MatX Et(model.nc, model.n), M(model.n, model.n), A(model.n, model.n);
+  compute_constraint_jacobian(model, q, Et);
+  compute_mass_matrix(model, q, M);
+  compute_inverse_mass_matrix(model, q, A);
+  std::vector<VecX> rows;
+  for (const int b : idle) {
+    const Body& body = model.bodies[static_cast<size_t>(b)];
+    MatX cols = Et.middleCols(body.u_offset, body.nu());
+    VecX sa(body.nu());
+    for (int k = 0; k < body.nu(); ++k) sa(k) = std::sqrt(A(body.u_offset + k, body.u_offset + k));
+    cols = cols * sa.asDiagonal();
+    for (Eigen::Index r = 0; r < cols.rows(); ++r) {
+      const double n = Et.row(r).norm();
+      if (n > 0.0) cols.row(r) /= n;
+    }
+    Eigen::FullPivLU<MatX> lu(cols);
+    lu.setThreshold(ChartOptions{}.rank_tolerance);
+    const MatX K = lu.kernel();
+    if (lu.rank() == body.nu()) continue;
+    for (Eigen::Index c = 0; c < K.cols(); ++c) {
+      VecX v = VecX::Zero(model.n);
+      v.segment(body.u_offset, body.nu()) = sa.asDiagonal() * K.col(c);
+      const VecX row = M * v;
+      rows.push_back(row / row.norm());
+    }
+  }
+  MatX R(static_cast<Eigen::Index>(rows.size()), model.n);
+  for (size_t k = 0; k < rows.size(); ++k) R.row(static_cast<Eigen::Index>(k)) = rows[k];
+  return R;
+}
+
+// Whether every spatial joint is on its drawn branch (spatial.md §2.4): the rows f_i·h_j, g_i·h_j
+// also vanish with the axis flipped (h_j = −h_i) and the twist row g_i·f_j at a half-turn, with
+// Eᵀ of full rank there, so a projection from a random start may land on them. They are not
+// assemblies of the joint as built: h_i·h_j > 0 and f_i·f_j > 0 (joints with a twist row).
+bool on_drawn_branch(const Model& model, const VecX& q) {
+  for (const Joint& j : model.joints) {
+    const auto* s = std::get_if<SpatialJoint>(&j.kind);
+    if (!s) continue;
+    const SpatialJointSpec& spec = spatial_joint_spec(s->type);
+    const Mat3 Ai = spatial_frame(model, s->pi.body, q, nullptr).R * s->frame_i;
+    const Mat3 Aj = spatial_frame(model, s->pj.body, q, nullptr).R * s->frame_j;
+    for (int r = 0; r < spec.rows; ++r) {
+      const std::string name = spec.row[static_cast<size_t>(r)].name;
+      if ((name == "f" || name == "g") && Ai.col(2).dot(Aj.col(2)) <= 0.0) return false;
+      if (name == "twist" && Ai.col(0).dot(Aj.col(0)) <= 0.0) return false;
+    }
+  }
+  return true;
+}
+
+// Mass-metric Gauss–Newton with locked inputs. Planar: project_with_locks. Spatial
+// (spatial.md §6.3): residual [f; wrap(s_k(q) − value_k)] (angles compared modulo 2π, slides as
+// they are), minimum-norm step Δu = −A Cᵀ (C A Cᵀ)⁺ c in velocity space, q ← q ⊕ Δu with
+// backtracking on the max residual.
+bool project_locked(const Model& model, VecX& q, const std::vector<JointLock>& locks,
+                    double tolerance = 1e-12, int max_iterations = 50) {
+  if (model.dimension != 3) return project_with_locks(model, q, locks, tolerance, max_iterations);
+  const int nl = static_cast<int>(locks.size());
+  MatX C(model.nc + nl, model.n), Et(model.nc, model.n), A(model.n, model.n);
+  VecX c(model.nc + nl), f(model.nc), d(model.n);
+  compute_inverse_mass_matrix(model, q, A);
+  auto residual = [&](const VecX& x) {
+    compute_constraint_residual(model, x, f);
+    c.head(model.nc) = f;
+    for (int k = 0; k < nl; ++k) {
+      const JointLock& l = locks[static_cast<size_t>(k)];
+      const double s = joint_coordinate(model, l.joint, x) - l.value;
+      c(model.nc + k) = is_revolute(model, l.joint) ? wrap(s) : s;
+    }
+    const double r = c.size() ? c.cwiseAbs().maxCoeff() : 0.0;
+    return std::isfinite(r) ? r : std::numeric_limits<double>::infinity();
+  };
+  double r = residual(q);
+  for (int it = 0; it < max_iterations && r > tolerance; ++it) {
+    compute_constraint_jacobian(model, q, Et);
+    C.topRows(model.nc) = Et;
+    for (int k = 0; k < nl; ++k) {
+      d.setZero();
+      (void)compute_scalar(model, JointCoordinate{locks[static_cast<size_t>(k)].joint}, q, nullptr,
+                           d);
+      C.row(model.nc + k) = d.transpose();
+    }
+    residual(q);
+    const MatX ACt = A * C.transpose();
+    const Eigen::CompleteOrthogonalDecomposition<MatX> cod(C * ACt);
+    const VecX du = -ACt * cod.solve(c);
+    if (!du.allFinite()) return false;
+    double step = 1.0;
+    VecX trial = moved(model, q, du, step);
+    double rt = residual(trial);
+    for (int k = 0; k < 8 && !(rt < r); ++k) {
+      step *= 0.5;
+      trial = moved(model, q, du, step);
+      rt = residual(trial);
+    }
+    if (!(rt < r)) return false;
+    q = trial;
+    r = rt;
+  }
+  return r <= tolerance;
 }
 
 Vec2 world(const Model& model, const PointRef& p, const VecX& q) {
@@ -130,10 +298,12 @@ struct Circuit {
 
 class Tracer {
  public:
-  Tracer(const Model& model, int input, int generic_rank, const ValidateOptions& o)
+  Tracer(const Model& model, int input, int generic_rank, const ValidateOptions& o,
+         std::vector<int> idle)
       : m_(model),
         input_(input),
         rank_(generic_rank),
+        idle_(std::move(idle)),
         opt_(o),
         L_(length_scale(model)),
         Et_(model.nc, model.n),
@@ -146,9 +316,14 @@ class Tracer {
 
   // Unit tangent of the curve f(q) = 0 at q (last right singular vector of Eᵀ), oriented along
   // `prev` (or so that the input increases).
+  // Velocity space (size n): with idle bodies, their own motions held at zero rate.
   VecX tangent(const VecX& q, const VecX* prev) {
     compute_constraint_jacobian(m_, q, Et_);
-    Eigen::JacobiSVD<MatX> svd(Et_, Eigen::ComputeFullV);
+    const MatX I = idle_rows(m_, q, idle_);
+    MatX J(m_.nc + I.rows(), m_.n);
+    J.topRows(m_.nc) = Et_;
+    J.bottomRows(I.rows()) = I;
+    Eigen::JacobiSVD<MatX> svd(J, Eigen::ComputeFullV);
     VecX t = svd.matrixV().col(m_.n - 1);
     const VecX ts = scale_vector(m_, t, L_);
     t /= ts.cwiseAbs().maxCoeff();
@@ -169,25 +344,29 @@ class Tracer {
   // σ_r / σ_1 of the scaled Eᵀ.
   double sigma(const VecX& q) { return singularity_measures(m_, q, {}, rank_).sigma_min; }
 
-  // Newton on [f(q) = 0; tᵀ(q − q_pred) = 0] (minimum-norm steps).
+  // Newton on [f(q) = 0; tᵀ(q ⊖ q_pred) = 0] (minimum-norm steps in velocity space, q ← q ⊕ −δu;
+  // idle bodies' own motions held by rows with zero residual).
   bool correct(VecX& q, const VecX& q_pred, const VecX& t) {
-    MatX J(m_.nc + 1, m_.n);
-    VecX r(m_.nc + 1);
+    const MatX I = idle_rows(m_, q_pred, idle_);
+    const Eigen::Index ni = I.rows();
+    MatX J(m_.nc + ni + 1, m_.n);
+    VecX r = VecX::Zero(m_.nc + ni + 1);
+    J.middleRows(m_.nc, ni) = I;
+    J.row(m_.nc + ni) = t.transpose();
     for (int it = 0; it < 12; ++it) {
       compute_constraint_residual(m_, q, f_);
       r.head(m_.nc) = f_;
-      r(m_.nc) = t.dot(q - q_pred);
+      r(m_.nc + ni) = t.dot(difference(m_, q, q_pred));
       const double res = r.cwiseAbs().maxCoeff();
       if (!std::isfinite(res)) return false;
-      if (f_.cwiseAbs().maxCoeff() <= 1e-12 * std::max(1.0, L_) && std::abs(r(m_.nc)) < 1e-10)
+      if (f_.cwiseAbs().maxCoeff() <= 1e-12 * std::max(1.0, L_) && std::abs(r(m_.nc + ni)) < 1e-10)
         return true;
       compute_constraint_jacobian(m_, q, Et_);
       J.topRows(m_.nc) = Et_;
-      J.row(m_.nc) = t.transpose();
       const Eigen::CompleteOrthogonalDecomposition<MatX> cod(J);
       const VecX dq = cod.solve(r);
       if (!dq.allFinite()) return false;
-      q -= dq;
+      integrate_positions(m_, q, dq, -1.0);  // q ⊕ (−δu)
     }
     compute_constraint_residual(m_, q, f_);
     return f_.cwiseAbs().maxCoeff() <= 1e-10 * std::max(1.0, L_);
@@ -195,7 +374,7 @@ class Tracer {
 
   // Point on the curve at parameter τ from sample `a` along its tangent.
   bool at(const Sample& a, double tau, VecX& q) {
-    const VecX pred = a.q + tau * a.t;
+    const VecX pred = moved(m_, a.q, a.t, tau);
     q = pred;
     return correct(q, pred, a.t);
   }
@@ -234,13 +413,16 @@ class Tracer {
       b.dsdl = dsdl(q, t);
       b.sigma = sigma(q);
       c.samples.push_back(b);
-      if (c.samples.size() > 8 && scaled_distance(m_, q, q_start, L_) < 1.01 * h) {
+      // A step moves every scaled component by at most h; the spatial distance takes norms of
+      // 3-vectors (a translation, a rotation angle): up to √3 h.
+      const double reach = (m_.dimension == 3 ? std::sqrt(3.0) : 1.0) * 1.01 * h;
+      if (c.samples.size() > 8 && scaled_distance(m_, q, q_start, L_, idle_) < reach) {
         // Back at the start: close the loop with the start itself.
         Sample e = c.samples.front();
         double dse = input_value(q_start) - input_value(q);
         if (is_revolute(m_, input_)) dse = wrap(dse);
         e.s = b.s + dse;
-        e.l = b.l + scaled_distance(m_, q, q_start, L_);
+        e.l = b.l + scaled_distance(m_, q, q_start, L_, idle_);
         c.samples.push_back(e);
         c.closed = true;
         break;
@@ -315,9 +497,9 @@ class Tracer {
       if (rev) target = sq + kTwoPi * std::ceil((lo - sq) / kTwoPi - 1e-12);
       if (target < lo - 1e-12 || target > hi + 1e-12) continue;
       const double frac = hi > lo ? (target - S[i].s) / (S[i + 1].s - S[i].s) : 0.0;
-      VecX x = S[i].q + frac * (S[i + 1].q - S[i].q);
-      if (!project_with_locks(m_, x, {{input_, target}}, 1e-12, 30)) continue;
-      if (scaled_distance(m_, x, q, L_) < kSamePosition)
+      VecX x = moved(m_, S[i].q, difference(m_, S[i + 1].q, S[i].q), frac);
+      if (!project_locked(m_, x, {{input_, target}}, 1e-12, 30)) continue;
+      if (scaled_distance(m_, x, q, L_, idle_) < kSamePosition)
         return S[i].l + frac * (S[i + 1].l - S[i].l);
     }
     return std::nullopt;
@@ -327,6 +509,7 @@ class Tracer {
   const Model& m_;
   int input_;
   int rank_;
+  std::vector<int> idle_;
   ValidateOptions opt_;
   double L_;
   MatX Et_;
@@ -335,28 +518,72 @@ class Tracer {
 
 // Distinct solutions of f = 0 with the inputs locked: the given one plus multi-start
 // projections from random poses (body positions within ±L of the design, angles uniform).
+// Distinct solutions of f = 0 with the inputs locked: the given one plus multi-start
+// projections from random poses (body positions within ±L of the design, angles uniform; spatial
+// bodies: half the starts uniformly random orientations, normalised Gaussian quaternions
+// [Shoemake 1992], half the design orientation turned about one of the body's joint axes; only
+// solutions on the drawn branch of every joint axis are kept). Idle bodies are compared by their
+// joint points.
 std::vector<VecX> assembly_modes(const Model& model, const std::vector<JointLock>& locks,
                                  const VecX& q_ref, const VecX& q_design, double L,
-                                 const ValidateOptions& opt, std::mt19937& gen) {
+                                 const ValidateOptions& opt, std::mt19937& gen,
+                                 const std::vector<int>& idle) {
   std::vector<VecX> modes = {q_ref};
   std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  // The world axes (h) of every spatial body's joints at the design pose: turning a body about
+  // them keeps its joints near their drawn branch, where uniformly random orientations mostly
+  // land on flipped axes (rejected below); half the starts use each.
+  std::vector<std::vector<Vec3>> axes_of(model.bodies.size());
+  for (const Joint& j : model.joints)
+    if (const auto* s = std::get_if<SpatialJoint>(&j.kind)) {
+      if (s->type == SpatialJointType::spherical || s->type == SpatialJointType::distance) continue;
+      for (const int body : {s->pi.body, s->pj.body}) {
+        if (body == kGround) continue;
+        const Mat3 R = spatial_frame(model, body, q_design, nullptr).R;
+        const Mat3& F = body == s->pi.body ? s->frame_i : s->frame_j;
+        axes_of[static_cast<size_t>(body)].push_back((R * F.col(2)).normalized());
+      }
+    }
   for (int k = 0; k < opt.starts; ++k) {
     VecX q = q_design;
     for (const Body& b : model.bodies) {
+      if (b.kind == BodyKind::spatial) {
+        for (int c = 0; c < 3; ++c) q(b.q_offset + c) += L * u(gen);
+        const std::vector<Vec3>& axes = axes_of[static_cast<size_t>(&b - model.bodies.data())];
+        if (axes.empty() || k % 2 == 0) {  // a uniformly random orientation
+          Quat e;
+          for (int c = 0; c < 4; ++c) e(c) = gauss(gen);
+          q.segment<4>(b.q_offset + 3) = e.normalized();
+        } else {  // the design orientation turned about one of its joint axes (world)
+          const size_t pick = std::min(
+              axes.size() - 1,
+              static_cast<size_t>(0.5 * (u(gen) + 1.0) * static_cast<double>(axes.size())));
+          q.segment<4>(b.q_offset + 3) =
+              quaternion_multiply(quaternion_exp(kPi * u(gen) * axes[pick]),
+                                  q_design.segment<4>(b.q_offset + 3).normalized());
+        }
+        continue;
+      }
       q(b.q_offset) += L * u(gen);
       q(b.q_offset + 1) += L * u(gen);
       if (b.kind == BodyKind::rigid) q(b.q_offset + 2) = kPi * u(gen);
     }
-    if (!project_with_locks(model, q, locks, 1e-12, 60)) continue;
+    if (!project_locked(model, q, locks, 1e-12, 60)) continue;
+    if (model.dimension == 3 && !on_drawn_branch(model, q)) continue;
     bool known = false;
-    for (const VecX& m : modes) known = known || scaled_distance(model, m, q, L) < kSamePosition;
+    for (const VecX& m : modes)
+      known = known || scaled_distance(model, m, q, L, idle) < kSamePosition;
     if (!known) modes.push_back(q);
   }
   return modes;
 }
 
+// "+"/"−" per four-bar loop (the coupler–follower turn), then "/±": the sign of det [Eᵀ_R; d]
+// (R = `rows`, every row when empty) when it is square and `with_det`.
 std::string mode_signature(const Model& model, const VecX& q, const std::vector<FourBarLoop>& loops,
-                           const std::vector<int>& inputs) {
+                           const std::vector<int>& inputs, const std::vector<int>& rows,
+                           bool with_det) {
   std::string sig;
   for (const FourBarLoop& l : loops) {
     const Vec2 A = world(model, l.at[0], q);
@@ -367,13 +594,14 @@ std::string mode_signature(const Model& model, const VecX& q, const std::vector<
   }
   MatX Et(model.nc, model.n);
   compute_constraint_jacobian(model, q, Et);
-  if (model.nc + static_cast<int>(inputs.size()) == model.n) {
+  const int nr = rows.empty() ? model.nc : static_cast<int>(rows.size());
+  if (with_det && nr + static_cast<int>(inputs.size()) == model.n) {
     MatX J(model.n, model.n);
-    J.topRows(model.nc) = Et;
+    for (int r = 0; r < nr; ++r) J.row(r) = Et.row(rows.empty() ? r : rows[static_cast<size_t>(r)]);
     VecX d(model.n);
     for (size_t k = 0; k < inputs.size(); ++k) {
       compute_scalar(model, JointCoordinate{inputs[k]}, q, nullptr, d);
-      J.row(model.nc + static_cast<int>(k)) = d.transpose();
+      J.row(nr + static_cast<int>(k)) = d.transpose();
     }
     const double det = J.partialPivLu().determinant();
     sig += det >= 0.0 ? "/+" : "/-";
@@ -592,7 +820,8 @@ std::vector<FourBarLoop> find_four_bar_loops(const Model& model, int input_joint
 int loop_basis_size(const Model& model) {
   int edges = 0;
   for (const Joint& j : model.joints)
-    if (std::holds_alternative<Revolute>(j.kind) || std::holds_alternative<Prismatic>(j.kind))
+    if (std::holds_alternative<Revolute>(j.kind) || std::holds_alternative<Prismatic>(j.kind) ||
+        std::holds_alternative<SpatialJoint>(j.kind))  // every spatial joint joins two links
       ++edges;
   return edges - static_cast<int>(model.bodies.size() + 1) + 1;  // j − b + 1, b with the ground
 }
@@ -675,10 +904,14 @@ namespace {
 // previous position (mass-metric Gauss–Newton). Small steps keep the mode of the design (the same
 // branch, as `cycle` follows it); a projection of the design pose straight onto the locks may
 // land on another mode. Empty when a step does not converge (a dead point in between).
+// With `secant`, each step is predicted along the previous one (q_k ⊕ (q_k ⊖ q_{k−1}), equal
+// input steps) before the projection: through a change point, where two branches cross, it
+// stays on the branch it came along (a projection from the previous position alone may turn onto
+// the other one).
 std::optional<VecX> continue_to_locks(const Model& model, const VecX& q_guess,
-                                      const std::vector<JointLock>& locks) {
+                                      const std::vector<JointLock>& locks, bool secant = false) {
   VecX q = q_guess;
-  if (!project_with_locks(model, q, {}, 1e-12, 60)) return std::nullopt;
+  if (!project_locked(model, q, {}, 1e-12, 60)) return std::nullopt;
   const double L = length_scale(model);
   std::vector<double> from, to;
   double steps = 1.0;
@@ -693,12 +926,68 @@ std::optional<VecX> continue_to_locks(const Model& model, const VecX& q_guess,
   }
   const int n = static_cast<int>(std::min(steps, 1000.0));
   std::vector<JointLock> at = locks;
+  VecX q_prev = q;
   for (int k = 1; k <= n; ++k) {
     for (size_t i = 0; i < locks.size(); ++i)
       at[i].value = from[i] + (to[i] - from[i]) * static_cast<double>(k) / n;
-    if (!project_with_locks(model, q, at, 1e-12, 60)) return std::nullopt;
+    const VecX q_last = q;
+    if (secant && k > 1) q = moved(model, q, difference(model, q, q_prev), 1.0);
+    if (!project_locked(model, q, at, 1e-12, 60)) return std::nullopt;
+    q_prev = q_last;
   }
   return q;
+}
+
+// A spatial joint's coordinate at q, an angle taken modulo 2π nearest the middle of its limits.
+double spatial_limit_coordinate(const Model& model, int joint, const VecX& q) {
+  const Joint& j = model.joints[static_cast<size_t>(joint)];
+  const double x = joint_coordinate(model, joint, q);
+  if (!is_revolute(model, joint) || !j.limits) return x;
+  const double mid = 0.5 * (j.limits->x() + j.limits->y());
+  return x - kTwoPi * std::round((x - mid) / kTwoPi);
+}
+
+// A spatial design position (spatial.md §6.3–6.4): (A1) without the inputs (assemble: Ipopt in
+// local coordinates, limits not applied), then the inputs reached by continuation from that
+// pose on its assembly mode and branch (continue_to_locks with the secant predictor: the
+// mass-metric Gauss–Newton in velocity space, q ⊕ δu), else by one projection onto the inputs.
+// `assemble` takes no locks on spatial joints, so this is the spatial counterpart of
+// assemble(model, q_design, {locks}).
+AssemblyResult assemble_spatial_at(const Model& model, const VecX& q_design,
+                                   const std::vector<JointLock>& locks) {
+  AssemblyOptions free;
+  free.use_limits = false;
+  AssemblyResult a = assemble(model, q_design, free);
+  const bool closed =
+      a.status == AssemblyStatus::assembled || a.status == AssemblyStatus::unchanged;
+  if (!closed || locks.empty()) return a;
+  double lock_residual = 0.0;
+  for (const JointLock& l : locks) {
+    const double s = joint_coordinate(model, l.joint, a.q) - l.value;
+    lock_residual = std::max(lock_residual, std::abs(is_revolute(model, l.joint) ? wrap(s) : s));
+  }
+  if (lock_residual <= 1e-12) return a;  // the design pose is at the inputs
+  AssemblyResult r = a;
+  std::optional<VecX> q = continue_to_locks(model, a.q, locks, true);
+  std::string how = "continued from there to the inputs";
+  if (!q) {
+    VecX x = a.q;
+    if (project_locked(model, x, locks, 1e-12, 200)) {
+      q = x;
+      how = "projected from there onto the inputs (the continuation did not reach them)";
+    }
+  }
+  if (!q) {
+    r.status = AssemblyStatus::cannot_close;
+    r.message =
+        "no position at the inputs: from the assembled design pose neither the "
+        "continuation nor a projection onto the inputs converges";
+    return r;
+  }
+  r.status = AssemblyStatus::assembled;
+  r.q = *q;
+  r.message = "design pose: " + a.message + "; " + how;
+  return r;
 }
 
 }  // namespace
@@ -716,24 +1005,28 @@ std::vector<LimitBlock> find_limit_blocks(const Model& model, const VecX& q_gues
   if (a.status != AssemblyStatus::assembled && a.status != AssemblyStatus::unchanged) return out;
   for (size_t j = 0; j < model.joints.size(); ++j)
     if (outside_limits(model, static_cast<int>(j), a.q))
-      out.push_back({static_cast<int>(j), limit_coordinate(model, static_cast<int>(j), a.q)});
+      out.push_back({static_cast<int>(j), limit_coordinate(model, static_cast<int>(j), a.q),
+                     is_revolute(model, static_cast<int>(j))});
   return out;
 }
 
 SingularityMeasures singularity_measures(const Model& model, const VecX& q,
-                                         const std::vector<int>& input_joints, int generic_rank) {
+                                         const std::vector<int>& input_joints, int generic_rank,
+                                         const std::vector<int>& idle_bodies) {
   SingularityMeasures out;
-  const int ni = static_cast<int>(input_joints.size());
+  const MatX idle = idle_rows(model, q, idle_bodies);
+  const int ni = static_cast<int>(input_joints.size()) + static_cast<int>(idle.rows());
   MatX J(model.nc + ni, model.n);
   MatX Et(model.nc, model.n), A(model.n, model.n);
   compute_constraint_jacobian(model, q, Et);
   compute_inverse_mass_matrix(model, q, A);
   J.topRows(model.nc) = Et;
   VecX d(model.n);
-  for (int k = 0; k < ni; ++k) {
-    compute_scalar(model, JointCoordinate{input_joints[static_cast<size_t>(k)]}, q, nullptr, d);
-    J.row(model.nc + k) = d.transpose();
+  for (size_t k = 0; k < input_joints.size(); ++k) {
+    compute_scalar(model, JointCoordinate{input_joints[k]}, q, nullptr, d);
+    J.row(model.nc + static_cast<int>(k)) = d.transpose();
   }
+  J.bottomRows(idle.rows()) = idle;  // idle bodies' own motions held (mass-orthogonal)
   // Mass-metric column scaling (u = √A ũ) and unit rows: unit-free.
   const VecX sqrtA = A.diagonal().cwiseSqrt();
   J = J * sqrtA.asDiagonal();
@@ -748,7 +1041,7 @@ SingularityMeasures singularity_measures(const Model& model, const VecX& q,
                         ? s(generic_rank - 1) / s(0)
                         : 0.0;
   }
-  if (ni > 0 && J.rows() >= model.n) {
+  if (!input_joints.empty() && J.rows() >= model.n) {
     const Eigen::JacobiSVD<MatX> svd(J);
     const VecX& s = svd.singularValues();
     out.eta = s(0) > 0.0 ? s(model.n - 1) / s(0) : 0.0;
@@ -778,16 +1071,38 @@ ValidationReport validate_design_positions(const Model& model, const ValidateOpt
     if (!p.inputs.empty() && input < 0) input = p.inputs[0].first;
   }
   if (!common) input = -1;
-  if (input >= 0) rep.input = model.joints[static_cast<size_t>(input)].name;
-  const std::vector<FourBarLoop> loops = find_four_bar_loops(model, input);
-  const std::vector<SliderCrankLoop> slider_cranks = find_slider_crank_loops(model);
+  if (input >= 0) {
+    rep.input = model.joints[static_cast<size_t>(input)].name;
+    rep.input_angular = is_revolute(model, input);
+  }
+  const bool spatial = model.dimension == 3;
+  if (spatial) {
+    for (const DesignPosition& p : model.design_positions)
+      if (p.target)
+        throw std::invalid_argument("validate: design position '" + p.name +
+                                    "': a target is not supported in a spatial mechanism "
+                                    "(dimension 3)");
+    rep.not_applicable = {"Grashof type: planar four-bar loops only",
+                          "four-bar transmission angle: planar four-bar loops only",
+                          "slider-crank pressure angle: planar slider-crank loops only"};
+  }
+  const std::vector<FourBarLoop> loops =
+      spatial ? std::vector<FourBarLoop>{} : find_four_bar_loops(model, input);
+  const std::vector<SliderCrankLoop> slider_cranks =
+      spatial ? std::vector<SliderCrankLoop>{} : find_slider_crank_loops(model);
 
-  // Generic rank: at the assembled design pose and at every position (max).
+  // Generic rank: at the assembled design pose and at every position (max). Idle bodies
+  // (spatial.md §4.1): those mobility finds at the assembled design pose.
+  std::vector<int> idle_bodies;
   {
     VecX q = q_design;
-    const AssemblyResult a = assemble(model, q_design);
+    AssemblyOptions ao;
+    ao.use_limits = !spatial;  // spatial limits are checked per position below
+    const AssemblyResult a = assemble(model, q_design, ao);
     if (a.status == AssemblyStatus::assembled || a.status == AssemblyStatus::unchanged) q = a.q;
-    rep.generic_rank = compute_mobility(model, q).rank;
+    const Mobility mob = compute_mobility(model, q);
+    rep.generic_rank = mob.rank;
+    for (const Mobility::Idle& i : mob.idle) idle_bodies.push_back(model.find_body(i.body));
   }
 
   // Pass 1: assembly, modes, the position's mode, target, mobility.
@@ -800,25 +1115,43 @@ ValidationReport validate_design_positions(const Model& model, const ValidateOpt
       ao.locks.push_back({j, v});
       inputs.push_back(j);
     }
-    const AssemblyResult a = assemble(model, q_design, ao);
+    const AssemblyResult a =
+        spatial ? assemble_spatial_at(model, q_design, ao.locks) : assemble(model, q_design, ao);
     pr.assembly = a.status;
     pr.assembly_message = a.message;
     pr.assembles = a.status == AssemblyStatus::assembled || a.status == AssemblyStatus::unchanged;
+    if (spatial && pr.assembles) {  // limits: checked at the position (assemble takes none)
+      for (size_t j = 0; j < model.joints.size(); ++j) {
+        const Joint& jt = model.joints[j];
+        if (!jt.limits) continue;
+        const double x = spatial_limit_coordinate(model, static_cast<int>(j), a.q);
+        if (x < jt.limits->x() - 1e-9 || x > jt.limits->y() + 1e-9)
+          pr.limit_blocks.push_back(
+              {static_cast<int>(j), x, is_revolute(model, static_cast<int>(j))});
+      }
+      if (!pr.limit_blocks.empty()) {
+        pr.assembles = false;
+        pr.assembly = AssemblyStatus::cannot_close;
+      }
+    }
     if (!pr.assembles) {
-      pr.limit_blocks = find_limit_blocks(model, q_design, ao);
+      if (!spatial) pr.limit_blocks = find_limit_blocks(model, q_design, ao);
       for (const LimitBlock& b : pr.limit_blocks) {
         const Joint& jt = model.joints[static_cast<size_t>(b.joint)];
-        const bool rev = std::holds_alternative<Revolute>(jt.kind);
+        const bool rev = is_revolute(model, b.joint);
         pr.failures.push_back("joint '" + jt.name + "' would need " +
                               format_input(b.needed, rev, file_units) + ", outside its limits [" +
                               format_input(jt.limits->x(), rev, file_units) + ", " +
                               format_input(jt.limits->y(), rev, file_units) + "]");
       }
-      pr.failures.push_back("does not assemble: " + a.message);
+      pr.failures.push_back(pr.limit_blocks.empty() || !spatial
+                                ? "does not assemble: " + a.message
+                                : "does not assemble within the joint limits");
       rep.positions.push_back(std::move(pr));
       continue;
     }
-    std::vector<VecX> modes = assembly_modes(model, ao.locks, a.q, q_design, L, opt, gen);
+    std::vector<VecX> modes =
+        assembly_modes(model, ao.locks, a.q, q_design, L, opt, gen, idle_bodies);
     // With a target, the position is the mode that meets it best; else the projection of the
     // design pose.
     auto target_error = [&](const VecX& q) {
@@ -832,9 +1165,20 @@ ValidationReport validate_design_positions(const Model& model, const ValidateOpt
         if (target_error(modes[k]) < target_error(modes[chosen]) - 1e-12) chosen = k;
     pr.q = modes[chosen];
     // Modes sorted by signature, then by coordinates.
+    // Spatial: the sign of det [Eᵀ_R; d] over the independent rows R at the position (redundant
+    // rows are the norm in spatial linkages); not with idle bodies (the matrix is singular).
+    std::vector<int> rows;
+    if (spatial) {
+      const Mobility mob = compute_mobility(model, pr.q);
+      for (int r = 0; r < model.nc; ++r)
+        if (std::find(mob.redundant_rows.begin(), mob.redundant_rows.end(), r) ==
+            mob.redundant_rows.end())
+          rows.push_back(r);
+    }
     std::vector<std::pair<std::string, size_t>> order;
     for (size_t k = 0; k < modes.size(); ++k)
-      order.push_back({mode_signature(model, modes[k], loops, inputs), k});
+      order.push_back(
+          {mode_signature(model, modes[k], loops, inputs, rows, idle_bodies.empty()), k});
     std::sort(order.begin(), order.end(), [&](const auto& x, const auto& y) {
       if (x.first != y.first) return x.first < y.first;
       const VecX& a1 = modes[x.second];
@@ -851,11 +1195,20 @@ ValidationReport validate_design_positions(const Model& model, const ValidateOpt
       }
     MatX M(model.n, model.n);
     compute_mass_matrix(model, q_design, M);
-    const VecX dq = pr.q - q_design;
+    const VecX dq = difference(model, pr.q, q_design);  // velocity-sized: q_design ⊕ dq = q
     pr.distance = std::sqrt(std::max(0.0, dq.dot(M * dq)));
     for (size_t b = 0; b < model.bodies.size(); ++b) {
       const Body& body = model.bodies[b];
-      const PointRef origin{static_cast<int>(b), -body.com_local, body.name};
+      const int bi = static_cast<int>(b);
+      if (body.kind == BodyKind::spatial) {  // the body frame's origin
+        const Vec3 o = -body.spatial.com_local;
+        pr.max_translation = std::max(
+            pr.max_translation, (spatial_point(spatial_frame(model, bi, pr.q, nullptr), o).r -
+                                 spatial_point(spatial_frame(model, bi, q_design, nullptr), o).r)
+                                    .norm());
+        continue;
+      }
+      const PointRef origin{bi, -body.com_local, body.name};
       pr.max_translation = std::max(
           pr.max_translation, (world(model, origin, pr.q) - world(model, origin, q_design)).norm());
     }
@@ -885,6 +1238,8 @@ ValidationReport validate_design_positions(const Model& model, const ValidateOpt
     pr.dof = mob.dof;
     pr.rank = mob.rank;
     pr.redundant = mob.redundant;
+    pr.idle = mob.idle;
+    for (const Mobility::Idle& i : mob.idle) pr.idle_dof += i.count;
     rep.generic_rank = std::max(rep.generic_rank, mob.rank);
     rep.positions.push_back(std::move(pr));
   }
@@ -895,14 +1250,15 @@ ValidationReport validate_design_positions(const Model& model, const ValidateOpt
     if (!pr.assembles) continue;
     std::vector<int> inputs;
     for (const auto& [j, v] : model.design_positions[k].inputs) inputs.push_back(j);
-    pr.singular = singularity_measures(model, pr.q, inputs, rep.generic_rank);
+    pr.singular = singularity_measures(model, pr.q, inputs, rep.generic_rank, idle_bodies);
     if (pr.singular.sigma_min < opt.min_sigma)
       pr.failures.push_back("singular: sigma_min of the constraint Jacobian " +
                             fmt(pr.singular.sigma_min) + " (a change point)");
-    if (pr.dof > static_cast<int>(inputs.size())) {
+    if (pr.dof - pr.idle_dof > static_cast<int>(inputs.size())) {
       // The inputs leave the mechanism free to move: η is 0 by construction, not a dead point.
       pr.singular.eta.reset();
       pr.failures.push_back("the inputs do not fix the position: DOF " + std::to_string(pr.dof) +
+                            (pr.idle_dof ? " (" + std::to_string(pr.idle_dof) + " idle)" : "") +
                             ", " + std::to_string(inputs.size()) + " input(s)");
     } else if (pr.singular.eta && *pr.singular.eta < opt.min_sigma) {
       pr.failures.push_back("dead point of the inputs: transmission index " +
@@ -972,10 +1328,11 @@ ValidationReport validate_design_positions(const Model& model, const ValidateOpt
 
   // Circuits and branches (1-DOF mechanisms with one common input).
   const bool traceable =
-      input >= 0 && std::all_of(rep.positions.begin(), rep.positions.end(),
-                                [](const auto& p) { return p.assembles && p.dof == 1; });
+      input >= 0 && std::all_of(rep.positions.begin(), rep.positions.end(), [](const auto& p) {
+        return p.assembles && p.dof - p.idle_dof == 1;
+      });
   if (traceable && !rep.positions.empty()) {
-    Tracer tracer(model, input, rep.generic_rank, opt);
+    Tracer tracer(model, input, rep.generic_rank, opt, idle_bodies);
     std::vector<Circuit> circuits;
     std::vector<std::optional<double>> where(rep.positions.size());
     for (size_t k = 0; k < rep.positions.size(); ++k) {

@@ -10,16 +10,24 @@
 //     nearest dead or change point on the position's circuit (arclength continuation of the
 //     circuit, extremes of the input refined with NLopt);
 //   - every planar four-bar loop (ground + 3 bodies in a ring of revolutes): Grashof type and
-//     transmission angle;
+//     transmission angle (planar mechanisms only: not applicable to a spatial one, see
+//     ValidationReport::not_applicable);
 //   - defects of the set: circuit (positions on different circuits), branch (a dead or change
 //     point between consecutive positions on a circuit), order (the input not monotone in the
 //     given order).
+// Spatial mechanisms (dimension 3, spatial.md): the same report, with positions moved through
+// q ⊕ δu (quaternions, nq ≠ n), the inputs locked on the spatial joints' coordinates (wrapped
+// angles), idle degrees of freedom (spatial.md §4.1) reported as mobility does and held at zero
+// rate (mass-orthogonal) in η, the circuit trace and the mode comparison, and assembly modes on
+// the drawn branch of every joint axis (h_i·h_j > 0, f_i·f_j > 0 for twist rows). Targets are
+// planar only (the reader refuses them in dimension 3; a Model built in code with one throws).
 // Results are data; nothing here throws for a numerical outcome.
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "orthomech/analysis/assembly.hpp"
+#include "orthomech/analysis/mobility.hpp"
 #include "orthomech/model/model.hpp"
 
 namespace orthomech {
@@ -64,8 +72,8 @@ struct FourBarLoop {
 };
 // Every four-bar loop of the mechanism (revolutes only).
 [[nodiscard]] std::vector<FourBarLoop> find_four_bar_loops(const Model& model, int input_joint);
-// j − b + 1: the number of independent loops of the joint graph (revolutes and prismatics as
-// edges, the ground and every body as vertices; a connected graph).
+// j − b + 1: the number of independent loops of the joint graph (revolutes, prismatics and
+// spatial joints as edges, the ground and every body as vertices; a connected graph).
 [[nodiscard]] int loop_basis_size(const Model& model);
 // Grashof type from the four lengths (s + l vs p + q, which link is shortest); `tol` relative.
 [[nodiscard]] GrashofType classify_grashof(double ground, double crank, double coupler,
@@ -93,9 +101,13 @@ struct SingularityMeasures {
   std::optional<double> eta;  // σ_n/σ_1 of the scaled input-locked Jacobian [Eᵀ; d] (→ 0 at
                               // dead points and change points); none if not square or more
 };
+// `idle_bodies`: bodies with an idle degree of freedom (Mobility::idle); their own motions are
+// locked mass-orthogonally in η (rows vᵀM for every v in the null space of Eᵀ restricted to the
+// body), so that η measures the inputs' hold on the rest of the mechanism.
 [[nodiscard]] SingularityMeasures singularity_measures(const Model& model, const VecX& q,
                                                        const std::vector<int>& input_joints,
-                                                       int generic_rank);
+                                                       int generic_rank,
+                                                       const std::vector<int>& idle_bodies = {});
 
 struct FourBarReport {
   std::string joints;  // "A0-A-B-B0"
@@ -114,6 +126,7 @@ struct SliderCrankReport {
 struct LimitBlock {
   int joint = -1;
   double needed = 0.0;
+  bool angular = false;  // an angle (rad), else a slide (m)
 };
 
 struct PositionReport {
@@ -129,6 +142,8 @@ struct PositionReport {
   bool target_met = true;
   int dof = 0, rank = 0;
   std::vector<std::string> redundant;
+  std::vector<Mobility::Idle> idle;  // idle degrees of freedom (counted in dof), as mobility
+  int idle_dof = 0;                  // Σ idle count: the inputs must fix dof − idle_dof
   SingularityMeasures singular;
   std::optional<double> singular_distance;  // |Δ input| to the nearest dead/change point, SI
   std::string singular_kind;                // "dead point" / "change point"
@@ -146,13 +161,17 @@ struct PositionReport {
 };
 
 struct ValidationReport {
-  std::string input;  // input joint name ("" when positions have no common single input)
+  std::string input;           // input joint name ("" when positions have no common single input)
+  bool input_angular = false;  // the input is an angle (rad), else a slide (m)
   std::vector<PositionReport> positions;
   int generic_rank = 0;
   bool circuit_defect = false, branch_defect = false, order_defect = false;
   std::vector<std::string> defects;          // in words
   int circuits = 0;                          // circuits traced
   std::vector<std::string> singular_points;  // every dead/change point found, in words
+  // Checks that do not apply to this mechanism, in words (a spatial mechanism: Grashof type,
+  // four-bar transmission angle, slider-crank pressure angle); empty for a planar one.
+  std::vector<std::string> not_applicable;
   [[nodiscard]] bool pass() const;
 };
 
