@@ -4,7 +4,7 @@
     python3 scripts/gen_spatial_mechanisms.py
 
 Writes bennett.yaml, bricard.yaml, hooke-joint.yaml, spatial-slider-crank.yaml, heavy-top.yaml,
-crank-rocker-3d.yaml and double-wishbone.yaml from the geometry of /work/shared/spatial.md §4 (and,
+rolling-disc.yaml, crank-rocker-3d.yaml and double-wishbone.yaml from the geometry of /work/shared/spatial.md §4 (and,
 for crank-rocker-3d, the planar mechanisms/crank-rocker.yaml), and the test fixture
 tests/data/spatial/double-wishbone-parallelogram.yaml. Design poses are computed here in closed
 form and printed at full double precision (repr), so every joint holds at the design pose to ~1e-15 m;
@@ -450,6 +450,82 @@ initial:
     write("heavy-top.yaml", text)
 
 
+# ---- rolling disc, steady circular rolling (spatial.md §3.1) -----------------------------------
+def rolling_disc():
+    rho, m, A, Cs, g = 0.1, 1.0, 0.0025, 0.005, 9.81
+    theta, Om = 20 * DEG, 3.0
+    s, c = math.sin(theta), math.cos(theta)
+    s_r = (A * Om * Om * s * c - m * g * rho * s) / ((Cs + m * rho * rho) * Om * c)  # (D1)
+    V = rho * s_r
+    R_c = V / Om
+    sigma = s_r - Om * s
+    a = (0.0, c, s)
+    e1 = (1.0, 0.0, 0.0)
+    by = cross(a, e1)  # body y: from the centre towards the contact point
+    r_C = mul(rho, (0.0, -s, c))
+    w = add(mul(Om, (0, 0, 1)), mul(sigma, a))
+    omega = (dot(e1, w), dot(by, w), dot(a, w))  # body frame
+    vel = (V, 0.0, 0.0)
+    v_F = add(vel, cross(w, mul(rho, e1)))   # front rim point F = C + ρ e1
+    v_B = add(vel, cross(w, mul(-rho, e1)))  # back rim point B = C − ρ e1
+    F_friction = m * Om * V  # along e2 = the horizontal projection of the axis, (0, 1, 0) at t = 0
+    text = f"""# rolling-disc.yaml — a thin disc rolling without slipping on the plane z = 0 (dimension: 3).
+#
+# Source: spatial.md §3 (rows (D0)) and §3.1 (steady circular rolling (D1)). Thin uniform disc:
+#   radius ρ = 0.1 m, m = 1 kg, A = m ρ²/4 = 0.0025 (diametral), C_s = m ρ²/2 = 0.005 kg m² (axial,
+#   body z); gravity g = 9.81 m/s² along −z. `nonholonomic:` rolling-disc `contact`: rows t1, t2
+#   (no slip, nonholonomic) and n (contact, holonomic: the lowest rim point on the plane).
+# Steady motion (D1): A Ω² sin θ cos θ − (C_s + m ρ²) Ω s_r cos θ = m g ρ sin θ, θ the tilt of the
+#   axis above the horizontal, Ω the precession rate about z, s_r = w·a the spin. Here θ = 20°,
+#   Ω = 3 rad/s: s_r = {s_r!r} rad/s, σ = s_r − Ω sin θ = {sigma!r} rad/s,
+#   V = ρ s_r = {V!r} m/s (speed of the centre), R_c = V/Ω = {R_c!r} m (radius of the
+#   centre's circle; negative: its centre lies on the −e2 side, toward which the disc leans).
+# Initial state: contact at the origin, heading e1 = x, axis a = (0, cos θ, sin θ) (the pose below:
+#   body x = e1, body z = a, body y = a × e1 points from the centre to the contact point),
+#   r_C = ρ (0, −sin θ, cos θ); v = (V, 0, 0), w = Ω z + σ a = {v(w)} rad/s (world),
+#   ω = {v(omega)} rad/s (body).
+#   `initial` gives it as three measure rates that fix the admissible velocity (3 of the 6 are
+#   free: w; v = ρ_P × w): C_x = V, F_z and B_z (the front and back rim points F, B = C ± ρ e1):
+#   v_F = {v(v_F)}, v_B = {v(v_B)} m/s. (Rates must be non-zero in `initial`; these three
+#   determine w, det = −2 ρ³ sin² θ ≠ 0.)
+# Facts tests rely on:
+#   - 1 moving body, 1 rolling disc: n = 6, n_c = 3 (t1, t2 nonholonomic, n holonomic), rank 3:
+#     3 velocity DOF (5 position DOF).
+#   - Under `simulate` from `initial`: tilt 20° (measure `tilt` = 70°, the axis from the vertical)
+#     constant, the centre on a circle of radius |R_c| about r_C,xy(0) + R_c e2 = (0, {num(-rho * s + R_c)}),
+#     heading Ω t, w·a = s_r; energy conserved.
+#   - Contact force (spatial.md §3.1): F = m Ω V e2 + m g z: normal force `contact.N` = m g = 9.81 N,
+#     friction {num(F_friction)} N along e2 (the horizontal projection of the axis; toward the centre
+#     of the circle), `contact.Fz` = 9.81 N.
+orthomech: 1
+dimension: 3
+name: rolling-disc
+description: "Thin disc rho = 0.1 m, m = 1 kg rolling on z = 0: steady circular rolling, tilt 20 deg, precession 3 rad/s"
+units: {{length: m, angle: deg, mass: kg, time: s, force: N}}
+bodies:
+  - name: disc
+    mass: 1
+    inertia: [0.0025, 0.0025, 0.005]
+    pose: {{position: {v(r_C)}, orientation: {{x: [1, 0, 0], z: {v(a)}}}}}
+    points: {{C: [0, 0, 0], F: [0.1, 0, 0], B: [-0.1, 0, 0]}}
+nonholonomic:
+  - {{name: contact, type: rolling-disc, body: disc, radius: 0.1, axis: [0, 0, 1],
+     plane: {{point: [0, 0, 0], normal: [0, 0, 1]}}, t1: [1, 0, 0]}}
+loads:
+  - {{name: weight, type: gravity, g: [0, 0, -9.81]}}
+measures:
+  - {{name: C_x, type: point, point: disc.C, component: x}}
+  - {{name: C_y, type: point, point: disc.C, component: y}}
+  - {{name: C_z, type: point, point: disc.C, component: z}}
+  - {{name: F_z, type: point, point: disc.F, component: z}}
+  - {{name: B_z, type: point, point: disc.B, component: z}}
+  - {{name: tilt, type: angle, between: [{{body: disc, vector: [0, 0, 1]}}, {{body: ground, vector: [0, 0, 1]}}]}}
+initial:
+  rates: {{C_x: {num(V)}, F_z: {num(v_F[2])}, B_z: {num(v_B[2])}}}
+"""
+    write("rolling-disc.yaml", text)
+
+
 # ---- crank-rocker rebuilt with spatial bodies --------------------------------------------------
 def crank_rocker_3d():
     # The planar file's numbers (mechanisms/crank-rocker.yaml, from scripts/gen_mechanisms.py).
@@ -740,5 +816,6 @@ if __name__ == "__main__":
     hooke()
     slider_crank()
     heavy_top()
+    rolling_disc()
     crank_rocker_3d()
     double_wishbone()

@@ -665,11 +665,11 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
         "a start or an end input (--from, --to) needs a constant-speed driver: give --speed too";
     return result;
   }
-  if (!model.knife_edges.empty()) {
+  if (!model.knife_edges.empty() || !model.rolling_discs.empty()) {
     result.status = CycleStatus::invalid_request;
     result.message =
-        "the mechanism has nonholonomic constraints (knife edges): its positions do not follow "
-        "from the input alone, so it has no driven cycle; use simulate";
+        "the mechanism has nonholonomic constraints (knife edges, rolling discs): its positions "
+        "do not follow from the input alone, so it has no driven cycle; use simulate";
     return result;
   }
   if (options.reverse_at_dead_point && !constant) {

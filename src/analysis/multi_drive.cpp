@@ -133,7 +133,7 @@ MultiDriveResult run_multi_drive(const Model& model, const MultiDriveOptions& op
     }
     joints.push_back(d.joint);
   }
-  if (!model.knife_edges.empty()) {
+  if (!model.knife_edges.empty() || !model.rolling_discs.empty()) {
     result.status = MultiDriveStatus::invalid_request;
     result.message =
         "the mechanism has nonholonomic constraints: its positions do not follow from the inputs";

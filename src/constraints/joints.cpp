@@ -3,6 +3,7 @@
 #include <array>
 
 #include "../model/dot_row.hpp"
+#include "orthomech/constraints/rolling_disc.hpp"
 #include "orthomech/constraints/spatial_joints.hpp"
 #include "orthomech/model/free_system.hpp"
 #include "orthomech/model/general_system.hpp"
@@ -256,6 +257,8 @@ void evaluate(const Model& model, const VecX& q, const VecX* u, VecX* f, MatX* E
     std::visit(ev, joint.kind);
   }
   for (const KnifeEdge& k : model.knife_edges) knife_edge(model, k, q, u, f, Et, Dt, Dtu);
+  for (const RollingDisc& d : model.rolling_discs)
+    evaluate_rolling_disc(model, d, q, u, f, Et, Dt, Dtu);
 }
 
 }  // namespace

@@ -339,6 +339,7 @@ class Reader {
   void read_spatial_ground(const YAML::Node& node);
   void read_spatial_bodies(const YAML::Node& root);
   void read_spatial_joints(const YAML::Node& root);
+  void read_spatial_nonholonomic(const YAML::Node& root);
   void read_spatial_loads(const YAML::Node& root);
   void read_spatial_measures(const YAML::Node& root);
   Vec3 vec3(const YAML::Node& node, const std::string& element, const std::string& field,

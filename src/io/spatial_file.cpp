@@ -283,9 +283,7 @@ void Reader::read_spatial(const YAML::Node& root) {
   read_spatial_ground(root["ground"]);
   read_spatial_bodies(root);
   read_spatial_joints(root);
-  if (const YAML::Node n = root["nonholonomic"]; n && !n.IsNull())
-    fail(n, "nonholonomic",
-         "nonholonomic constraints are not yet supported in a spatial mechanism (dimension: 3)");
+  read_spatial_nonholonomic(root);
   read_spatial_measures(root);
   read_spatial_loads(root);
   read_drivers(root);
@@ -463,6 +461,84 @@ void Reader::read_spatial_joints(const YAML::Node& root) {
                   msg.str() + " at the design pose (the position solvers close the gap)");
     j.kind = s;
     model_.joints.push_back(std::move(j));
+  }
+}
+
+// ---- nonholonomic constraints ------------------------------------------------------------------
+// rolling-disc (spatial.md §3): {name, type, body, radius, axis (body frame), centre (a point of
+// the body, default its centre of mass), plane: {point, normal} (world; default the origin, +z), t1
+// (world, in the plane; default the world axis least aligned with the normal, projected)}.
+void Reader::read_spatial_nonholonomic(const YAML::Node& root) {
+  const YAML::Node node = list(root, "nonholonomic");
+  if (!node || node.IsNull()) return;
+  std::set<std::string> seen;
+  for (const Joint& j : model_.joints) seen.insert(j.name);  // one namespace with the joints
+  size_t index = 0;
+  for (const auto& item : node) {
+    const std::string name = name_of(item, "nonholonomic constraint", index++, seen);
+    const std::string what = "nonholonomic constraint '" + name + "'";
+    const std::string type = string_field(item, "type", what);
+    if (type == "knife-edge")
+      fail(item["type"], what,
+           "a knife edge is a planar constraint (dimension 2); dimension 3 allows: rolling-disc");
+    if (type != "rolling-disc")
+      fail(item["type"], what,
+           "unknown nonholonomic constraint type '" + type + "' (allowed: rolling-disc)");
+    const std::string element = "rolling disc '" + name + "'";
+    expect_map(item, element, {"name", "type", "body", "radius", "axis", "centre", "plane", "t1"});
+    RollingDisc d;
+    d.name = name;
+    d.where = loc(item);
+    const YAML::Node body = require(item, "body", element);
+    d.body = spatial_body_ref(body, element);
+    if (d.body == kGround) fail(body, element, "the disc must be a moving body, not the ground");
+    d.radius = number_field(item, "radius", element, units_.length, Quantity::length);
+    if (!(d.radius > 0.0)) fail(item["radius"], element, "radius must be positive");
+    d.axis_local = unit_vec3(require(item, "axis", element), element, "axis");
+    if (const YAML::Node c = item["centre"]) {
+      const SpatialPointRef p = spatial_point_ref(c, element);
+      if (p.body != d.body)
+        fail(c, element,
+             "the centre must be a point of the disc's body '" + model_.body_name(d.body) + "'");
+      d.centre_local = p.s;
+    }
+    if (const YAML::Node plane = item["plane"]) {
+      if (!plane.IsMap())
+        fail(plane, element, "field 'plane' must be a mapping {point: [x, y, z], normal: [..]}");
+      expect_map(plane, element, {"point", "normal"});
+      if (plane["point"])
+        d.plane_point =
+            vec3(plane["point"], element, "plane.point", units_.length, Quantity::length);
+      if (plane["normal"]) d.normal = unit_vec3(plane["normal"], element, "plane.normal");
+    }
+    d.t1 = least_aligned(d.normal);
+    if (const YAML::Node t = item["t1"]) {
+      const Vec3 t1 = unit_vec3(t, element, "t1");
+      d.t1 = t1 - t1.dot(d.normal) * d.normal;
+      if (!(d.t1.norm() > kParallelSine)) fail(t, element, "t1 is parallel to the plane normal");
+      d.t1.normalize();
+    }
+    // At the design pose: the axis must not be along the normal (the contact point is undefined
+    // for a disc lying flat), and the disc should touch the plane (else a warning).
+    const Mat3 R = design_rotation(model_, d.body);
+    const SpatialBodyData& b = model_.bodies[static_cast<size_t>(d.body)].spatial;
+    const Vec3 a = R * d.axis_local;
+    const double s = d.normal.cross(a).norm();
+    if (!(s > kParallelSine))
+      fail(item["axis"], element,
+           "the disc lies flat on the plane at the design pose (its axis is along the plane "
+           "normal): the contact point is undefined");
+    const Vec3 centre = b.design_position + R * (b.com_local + d.centre_local);
+    const double gap = d.normal.dot(centre - d.plane_point) - d.radius * s;
+    if (std::abs(gap) > kPointGap) {
+      std::ostringstream msg;
+      msg.precision(6);
+      msg << "its lowest rim point is " << gap / units_.length << " " << model_.units.length
+          << (gap > 0.0 ? " above" : " below")
+          << " the plane at the design pose (the position solvers close the gap)";
+      add_warning(item, element, msg.str());
+    }
+    model_.rolling_discs.push_back(std::move(d));
   }
 }
 

@@ -104,13 +104,19 @@ std::string Model::constraint_row_name(int row) const {
   }
   for (const KnifeEdge& k : knife_edges)
     if (row == k.row_offset) return "knife edge '" + k.name + "', lateral";
+  for (const RollingDisc& d : rolling_discs) {
+    static const char* rows[] = {"t1", "t2", "n"};
+    if (row >= d.row_offset && row < d.row_offset + 3)
+      return "rolling disc '" + d.name + "', " + rows[row - d.row_offset];
+  }
   throw std::invalid_argument("constraint_row_name: row out of range");
 }
 
 void finalize_model(Model& model) {
   if (model.general) {
     if (!model.bodies.empty() || !model.joints.empty() || !model.knife_edges.empty() ||
-        !model.loads.empty() || !model.measures.empty() || !model.drivers.empty())
+        !model.rolling_discs.empty() || !model.loads.empty() || !model.measures.empty() ||
+        !model.drivers.empty())
       throw std::invalid_argument(
           "finalize_model: a general system has no bodies, joints, loads, measures or drivers");
     model.nq = model.n = model.general->n;
@@ -136,6 +142,10 @@ void finalize_model(Model& model) {
     row += j.rows();
   }
   for (KnifeEdge& k : model.knife_edges) k.row_offset = row++;
+  for (RollingDisc& d : model.rolling_discs) {
+    d.row_offset = row;
+    row += 3;
+  }
   model.nc = row;
   const int nb = static_cast<int>(model.bodies.size());
   auto check_body = [nb](int b) {
@@ -146,6 +156,13 @@ void finalize_model(Model& model) {
     if (k.at.body == kGround ||
         model.bodies[static_cast<size_t>(k.at.body)].kind != BodyKind::rigid)
       throw std::invalid_argument("finalize_model: a knife edge needs a rigid moving body");
+  }
+  for (const RollingDisc& d : model.rolling_discs) {
+    check_body(d.body);
+    if (d.body == kGround || model.bodies[static_cast<size_t>(d.body)].kind != BodyKind::spatial)
+      throw std::invalid_argument("finalize_model: a rolling disc needs a spatial moving body");
+    if (!(d.radius > 0.0))
+      throw std::invalid_argument("finalize_model: a rolling disc needs a positive radius");
   }
   for (const Joint& j : model.joints) {
     std::visit(

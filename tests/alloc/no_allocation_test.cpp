@@ -187,6 +187,28 @@ TEST(NoAllocationSpatial, DualPrimalAndCorrectorAllocateNothingAfterSetUp) {
   }
 }
 
+// The rolling disc's rows (a nonholonomic constraint of a spatial body) allocate nothing either.
+TEST(NoAllocationSpatial, RollingDiscAllocatesNothingAfterSetUp) {
+  const Model model = test::load_bundled("rolling-disc");
+  const VecX q = model.design_q();
+  Workspace ws(model, compute_mobility(model, q).rank);
+  State s(model);
+  s.q = q;
+  s.u = test::admissible_velocity(model, q, 7);
+  ASSERT_EQ(evaluate_dual(model, s, ws), ProjectionStatus::ok);
+  ASSERT_EQ(evaluate_primal(model, s, ws), ProjectionStatus::ok);
+  VecX q_work = q;
+  const long before = g_allocations.load();
+  for (int k = 0; k < 100; ++k) {
+    s.q(0) = q(0) + 1e-9 * k;
+    (void)evaluate_dual(model, s, ws);
+    (void)evaluate_primal(model, s, ws);
+    q_work = q;
+    (void)correct_positions_in_chart(model, q_work, ws);
+  }
+  EXPECT_EQ(g_allocations.load() - before, 0);
+}
+
 TEST(NoAllocationIntegrators, RosenbrockStepsAllocateNothing) {
   EXPECT_EQ(allocations_of_run(detail::OdeStepper::rosenbrock4, 1000),
             allocations_of_run(detail::OdeStepper::rosenbrock4, 100));

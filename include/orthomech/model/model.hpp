@@ -169,6 +169,27 @@ struct KnifeEdge {
   SourceLocation where;
 };
 
+// Rolling disc (spatial.md §3): a thin disc of a spatial body rolls without slipping on a fixed
+// plane (point O, unit normal k; tangents t1, t2 = k × t1). With a = R axis_local, c = k·a,
+// s = √(1 − c²), m = (k − c a)/s and ρ_P = R centre_local − radius·m (contact point P from the
+// centre of mass): the disc's material point at P has zero velocity, nᵀ(v + w × ρ_P) = 0 for
+// n = t1, t2 (nonholonomic, f = 0) and n = k (holonomic: f = k·(r_C − O) − radius·s, the height
+// of the lowest rim point, corrected with the joints). λ of the three rows, named t1, t2, n, is the
+// contact force of the ground on the disc at P: friction along t1, t2 and the normal force.
+// Rows in constraints/rolling_disc.hpp.
+struct RollingDisc {
+  std::string name;
+  int body = kGround;                // a spatial moving body
+  double radius = 0.0;               // m, > 0
+  Vec3 axis_local = Vec3::UnitZ();   // symmetry axis, body frame, unit
+  Vec3 centre_local = Vec3::Zero();  // disc centre from the centre of mass, body frame
+  Vec3 plane_point = Vec3::Zero();   // O, world
+  Vec3 normal = Vec3::UnitZ();       // k, world, unit
+  Vec3 t1 = Vec3::UnitX();           // world, unit, ⟂ k
+  int row_offset = 0;                // its rows t1, t2, n in Eᵀ (after the knife edges')
+  SourceLocation where;
+};
+
 // ---- Loads (design §9). Each gives a generalized force Q (eq. (8)). ---------------------------
 struct Gravity {
   Vec2 g = Vec2(0.0, -9.81);
@@ -348,7 +369,8 @@ struct Model {
   std::string file;          // where it came from (for messages)
   std::vector<Body> bodies;  // moving bodies only; the ground is implicit (kGround)
   std::vector<Joint> joints;
-  std::vector<KnifeEdge> knife_edges;  // nonholonomic rows, after the joints' rows
+  std::vector<KnifeEdge> knife_edges;      // nonholonomic rows, after the joints' rows
+  std::vector<RollingDisc> rolling_discs;  // three rows each, after the knife edges' rows
   std::vector<Load> loads;
   std::vector<Measure> measures;
   std::vector<Driver> drivers;
