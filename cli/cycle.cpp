@@ -24,6 +24,7 @@
 
 #include "commands.hpp"
 #include "common.hpp"
+#include "cycle_drivers.hpp"
 #include "orthomech/analysis/cycle_metrics.hpp"
 #include "orthomech/constraints/joints.hpp"
 #include "orthomech/error.hpp"
@@ -49,11 +50,13 @@ struct CycleCliOptions {
   bool quiet = false, verbose = false;
   bool reverse = false;
   std::string units = "file";
-  double speed_fluctuation = 0.0;   // C_s for the flywheel inertia (0: not asked)
-  std::vector<std::string> traces;  // --trace BODY.POINT
-  std::string animate;              // --animate FILE.svg
-  std::string report;               // --report FILE.html
-  double duration = 4.0;            // s per loop of the animation
+  double speed_fluctuation = 0.0;    // C_s for the flywheel inertia (0: not asked)
+  std::vector<std::string> drivers;  // --drivers A,B,…: the several-driver sweep
+  double t_end = 0.0;                // --t-end (several drivers)
+  std::vector<std::string> traces;   // --trace BODY.POINT
+  std::string animate;               // --animate FILE.svg
+  std::string report;                // --report FILE.html
+  double duration = 4.0;             // s per loop of the animation
 };
 
 std::string fmt(double v, int precision = 4) {
@@ -325,6 +328,16 @@ std::vector<ReportPlot> report_plots(const CycleResult& r,
 
 int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) {
   const Model model = load(opt.file, opt.sets);
+  if (!opt.drivers.empty()) {  // several drivers: cli/cycle_drivers.cpp
+    DriversRequest request;
+    request.drivers = opt.drivers;
+    request.t_end = opt.t_end;
+    request.steps = opt.steps;
+    request.json = opt.json;
+    request.units = opt.units;
+    request.out = opt.out;
+    return run_cycle_drivers(model, request);
+  }
   const UnitSystem U = resolve_units(model, opt.units);
   const UnitSystem file_units = unit_system(model.units);
   if (!opt.animate.empty() && image_format_of(opt.animate) != ImageFormat::svg)
@@ -831,6 +844,13 @@ void register_cycle(CLI::App& app, const GlobalOptions& globals, int& exit_code)
                   "start input, e.g. 30deg, 20mm; a bare number is in the file's declared units");
   cmd->add_option("--to", opt->to,
                   "end input: sweep the range instead of a full turn (units as --from)");
+  cmd->add_option("--drivers", opt->drivers,
+                  "several drivers at once (names of the file's drivers or their joints, "
+                  "comma-separated): one per degree of freedom, each with its own time law; "
+                  "swept over --t-end or one period of the slowest law")
+      ->delimiter(',');
+  cmd->add_option("--t-end", opt->t_end, "with --drivers: end of the sweep (s)")
+      ->check(CLI::PositiveNumber);
   cmd->add_flag("--reverse-at-dead-point", opt->reverse,
                 "at a dead point, pass it and drive the input back (sweeps a rocker's closed "
                 "curve)");

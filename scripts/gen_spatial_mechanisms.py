@@ -810,6 +810,96 @@ def double_wishbone():
         pheader), "tests/data/spatial")
 
 
+def stewart():
+    """Stewart platform (spatial.md §4.7): six U-P-S legs, each a cylinder and a piston."""
+    base = [(math.cos(a * DEG), math.sin(a * DEG), 0.0) for a in (-15, 15, 105, 135, 225, 255)]
+    plat = [(0.5 * math.cos(a * DEG), 0.5 * math.sin(a * DEG), 0.0)
+            for a in (-45, 45, 75, 165, 195, 285)]
+    home = (0.0, 0.0, 1.0)
+    legs = []
+    for i in range(6):
+        top = add(home, plat[i])
+        d = sub(top, base[i])
+        n = unit(d)
+        u = unit(cross((0.0, 0.0, 1.0), n))
+        legs.append((norm(d), n, u, top))
+    # IK of the reference pose of spatial.md §4.7, quoted in the header.
+    c, s_ = math.cos, math.sin
+    Rz, Ry, Rx = rot_z(10 * DEG), ((c(5 * DEG), 0, s_(5 * DEG)), (0, 1, 0), (-s_(5 * DEG), 0, c(5 * DEG))), rot_x(-5 * DEG)
+    R = mat_mul(mat_mul(Rz, Ry), Rx)
+    p = (0.1, -0.05, 1.1)
+    ik = [norm(sub(add(p, mat_vec(R, plat[i])), base[i])) for i in range(6)]
+    amplitudes = (0.04, -0.03, 0.05, 0.02, -0.045, 0.035)
+    out = []
+    out.append("""# stewart-platform.yaml — 6-6 Stewart platform with six U-P-S legs (dimension: 3).
+#
+# Source: spatial.md §4.7 (written by scripts/gen_spatial_mechanisms.py). Base radius 1.0 m,
+#   joints at (-15, 15, 105, 135, 225, 255) deg in z = 0; platform radius 0.5 m, joints at
+#   (-45, 45, 75, 165, 195, 285) deg in the platform's z = 0 plane; home pose p = (0, 0, 1) m,
+#   R = I. Leg i: a cylinder on a universal joint at B_i (pins: the horizontal u_i ⟂ the leg,
+#   and n_i × u_i), a piston on a prismatic joint along the leg (its slide = the leg length
+#   l_i = |p + R P_i − B_i|), a spherical joint to the platform at P_i.
+# Facts tests rely on:
+#   - 13 moving bodies: n = 78, n_c = 6 (4 + 5 + 3) = 72, rank 72, DOF 6, no redundancy.
+#   - Home leg lengths """ + ", ".join(f"{l:.12f}" for l, _, _, _ in legs) + """ m.
+#   - IK at p = (0.1, -0.05, 1.1) m, R = Rz(10°) Ry(5°) Rx(-5°):
+#     l = """ + ", ".join(f"{x:.12f}" for x in ik) + """ m.
+#   - Drivers L1 … L6: harmonic leg lengths about the home lengths (amplitudes
+#     """ + ", ".join(num(a) for a in amplitudes) + """ m, 0.5 Hz); `cycle --drivers L1,L2,L3,L4,L5,L6`
+#     sweeps them over one period (2 s). The payload is a 981 N force at the platform's centre
+#     (no gravity: the legs carry only the payload, so the leg forces are the Jacobian-transpose
+#     equilibrium of the platform).
+orthomech: 1
+dimension: 3
+name: stewart-platform
+description: "6-6 Stewart platform, U-P-S legs, base radius 1 m, platform radius 0.5 m"
+units: {length: m, angle: deg, mass: kg, time: s, force: N}
+ground:
+  points: {""" + ", ".join(f"B{i + 1}: {v(base[i])}" for i in range(6)) + """}
+bodies:
+  - name: platform
+    mass: 20
+    inertia: [1.25, 1.25, 2.5]
+    com: [0, 0, 0]
+    pose: {position: """ + v(home) + """, orientation: {axis: [0, 0, 1], angle: 0}}
+    points: {C: [0, 0, 0], """ + ", ".join(f"P{i + 1}: {v(plat[i])}" for i in range(6)) + """}
+""")
+    for i, (l, n, u, top) in enumerate(legs):
+        k = i + 1
+        out.append(f"""  - name: cylinder{k}
+    mass: 2
+    inertia: [0.002, 0.06, 0.06]
+    com: [0.3, 0, 0]
+    pose: {{position: {v(base[i])}, orientation: {{x: {v(n)}, y: {v(u)}}}}}
+    points: {{B: [0, 0, 0]}}
+  - name: piston{k}
+    mass: 1
+    inertia: [0.001, 0.03, 0.03]
+    com: [-0.3, 0, 0]
+    pose: {{position: {v(top)}, orientation: {{x: {v(n)}, y: {v(u)}}}}}
+    points: {{P: [0, 0, 0]}}
+""")
+    out.append("joints:\n")
+    for i, (l, n, u, top) in enumerate(legs):
+        k = i + 1
+        out.append(f"""  - {{name: U{k}, type: universal, connects: [ground.B{k}, cylinder{k}.B], axes: [{v(u)}, [0, 0, 1]]}}
+  - {{name: P{k}, type: prismatic, connects: [cylinder{k}.B, piston{k}.P], axis: [1, 0, 0]}}
+  - {{name: S{k}, type: spherical, connects: [piston{k}.P, platform.P{k}]}}
+""")
+    out.append("""loads:
+  - {name: payload, type: force, point: platform.C, force: [0, 0, -981], frame: world}
+measures:
+  - {name: platform_x, type: point, point: platform.C, component: x}
+  - {name: platform_y, type: point, point: platform.C, component: y}
+  - {name: platform_z, type: point, point: platform.C, component: z}
+""")
+    out.append("drivers:\n")
+    for i, (l, n, u, top) in enumerate(legs):
+        out.append(f"  - {{name: L{i + 1}, joint: P{i + 1}, profile: harmonic, initial: {num(l)}, "
+                   f"amplitude: {num(amplitudes[i])}, frequency: 0.5}}\n")
+    write("stewart-platform.yaml", "".join(out))
+
+
 if __name__ == "__main__":
     bennett()
     bricard()
@@ -819,3 +909,4 @@ if __name__ == "__main__":
     rolling_disc()
     crank_rocker_3d()
     double_wishbone()
+    stewart()

@@ -89,5 +89,28 @@ TEST(SpatialCycleCli, PicturesOfSpatialMechanismsAreRefusedWithExitTwo) {
   }
 }
 
+// Several drivers: `cycle --drivers` sweeps the Stewart platform's six legs over one period; the
+// JSON's leg lengths are the harmonic laws (the closed-form IK is checked in
+// analysis/multi_drive_test.cpp); a wrong driver name is exit 2.
+TEST(SpatialCycleCli, SeveralDriversSweepTheStewartPlatform) {
+  const std::string file = test::bundled_file("stewart-platform");
+  const CliResult r =
+      run_cli({"cycle", file, "--drivers", "L1,L2,L3,L4,L5,L6", "--steps", "9", "--json"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const json j = json::parse(r.out);
+  EXPECT_EQ(j["status"], "completed");
+  EXPECT_EQ(j["dof"], 6);
+  ASSERT_EQ(j["points"].size(), 9u);
+  const json& p = j["points"][2];  // t = 0.5 s: sin(2π·0.5·0.5) = 1
+  EXPECT_NEAR(p["time"].get<double>(), 0.5, 1e-12);
+  EXPECT_NEAR(p["inputs"]["L3"].get<double>() - j["points"][0]["inputs"]["L3"].get<double>(), 0.05,
+              1e-12);
+  EXPECT_TRUE(p["drives"].contains("L6"));
+  EXPECT_TRUE(p["reactions"].contains("S1.Fz"));
+  const CliResult bad = run_cli({"cycle", file, "--drivers", "L1,L9"});
+  EXPECT_EQ(bad.status, 2) << bad.err;
+  EXPECT_NE(bad.err.find("'L9' is not a driver"), std::string::npos) << bad.err;
+}
+
 }  // namespace
 }  // namespace orthomech
