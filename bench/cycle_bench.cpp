@@ -1,4 +1,4 @@
-// Benchmarks of the driven sweep (issue 3 §7): the whole cycle at 3600 positions — assembly,
+// Benchmarks of the driven sweep (issue 3 §7; spatial files: issue 13 item 7): the whole cycle at 3600 positions — assembly,
 // continuation (predictor + locked-input Newton corrector), velocities, accelerations, drive and
 // minimum-norm reactions, measures and energies at every position. Reported per position
 // (items_per_second = positions per second). Run: build/bench/orthomech_bench
@@ -45,4 +45,8 @@ BENCHMARK_CAPTURE(cycle, CycleAndrews3600, std::string("andrews-squeezer"), fals
 BENCHMARK_CAPTURE(cycle, CycleCrankRocker3600KeepHeap, std::string("crank-rocker"), true)
     ->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(cycle, CycleAndrews3600KeepHeap, std::string("andrews-squeezer"), true)
+    ->Unit(benchmark::kMillisecond);
+// Spatial cycles (issue 13 item 7): RSSR (target ≤ 5 µs per position) and the double wishbone.
+BENCHMARK_CAPTURE(cycle, CycleRssr3600, std::string("rssr"), true)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(cycle, CycleDoubleWishbone3600, std::string("double-wishbone"), true)
     ->Unit(benchmark::kMillisecond);

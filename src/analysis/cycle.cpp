@@ -735,8 +735,9 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
   result.dof = mob.dof;
   result.redundant = model.nc - mob.rank;
   if (mob.dof != 1) {
-    result.message =
-        "a single driver needs a mechanism with 1 DOF; this one has " + std::to_string(mob.dof);
+    result.message = "a single driver needs a mechanism with 1 DOF; this one has " +
+                     std::to_string(mob.dof) +
+                     (mob.dof > 1 ? " (drive every degree of freedom: cycle --drivers A,B,…)" : "");
     return result;
   }
   Workspace ws(model, mob.rank);

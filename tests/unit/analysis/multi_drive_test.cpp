@@ -165,6 +165,46 @@ TEST(MultiDrive, PowerBalanceOfTheMovingStewartPlatform) {
   EXPECT_LT(worst, 1e-9 * scale);
 }
 
+// The planar five-bar with two cranks (mechanisms/five-bar.yaml): C at the closed-form circle
+// intersection, and the drives' power = d/dt of kinetic plus potential energy.
+TEST(MultiDrive, FiveBarCouplerPointAndPowerBalance) {
+  const Model model = test::load_bundled("five-bar");
+  MultiDriveOptions o;
+  o.drivers = model.drivers;
+  o.steps = 201;
+  const MultiDriveResult r = run_multi_drive(model, o);
+  ASSERT_EQ(r.status, MultiDriveStatus::completed) << r.message;
+  EXPECT_EQ(r.dof, 2);
+  EXPECT_NEAR(r.t_end, 2.0, 1e-15);  // one turn of the 30 rpm crank
+  const size_t cx = 2, cy = 3;       // measures C_x, C_y
+  ASSERT_EQ(model.measures[cx].name, "C_x");
+  double scale = 0.0, worst = 0.0;
+  for (const MultiDrivenPoint& p : r.points) {
+    const double t1 = p.inputs(0), t2 = p.inputs(1);
+    EXPECT_NEAR(t1, 0.5 * std::numbers::pi + 2 * std::numbers::pi * p.time, 1e-12);
+    EXPECT_NEAR(t2, 0.5 * std::numbers::pi + std::numbers::pi * p.time, 1e-12);
+    const Eigen::Vector2d A(0.1 * std::cos(t1), 0.1 * std::sin(t1));
+    const Eigen::Vector2d E(0.3 + 0.1 * std::cos(t2), 0.1 * std::sin(t2));
+    const double L = (E - A).norm();
+    const Eigen::Vector2d e = (E - A) / L;
+    const Eigen::Vector2d C =
+        0.5 * (A + E) + std::sqrt(0.09 - 0.25 * L * L) * Eigen::Vector2d(-e.y(), e.x());
+    EXPECT_NEAR(p.measures[cx], C.x(), 1e-12) << p.time;
+    EXPECT_NEAR(p.measures[cy], C.y(), 1e-12) << p.time;
+    double rate = 0.0;
+    for (const Body& b : model.bodies) {
+      const int k = b.u_offset;
+      rate += b.mass * (p.u(k) * p.udot(k) + p.u(k + 1) * p.udot(k + 1)) +
+              b.inertia * p.u(k + 2) * p.udot(k + 2) + b.mass * 9.81 * p.u(k + 1);
+    }
+    const double power = p.drives.dot(p.input_rates);
+    scale = std::max(scale, std::abs(power));
+    worst = std::max(worst, std::abs(power - rate));
+  }
+  EXPECT_GT(scale, 0.1);
+  EXPECT_LT(worst, 1e-9 * scale);
+}
+
 TEST(MultiDrive, WrongCountsAndPeriodlessLawsAreRefused) {
   const Model model = test::load_bundled("stewart-platform");
   MultiDriveOptions o;
