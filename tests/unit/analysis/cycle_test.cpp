@@ -138,8 +138,8 @@ TEST_P(CycleReactions, Eq91_PrimalReactionsAndLagrangeMultipliersEqualDual) {
 
 INSTANTIATE_TEST_SUITE_P(Bundled, CycleReactions,
                          ::testing::Values("crank-rocker", "slider-crank", "watt-six-bar",
-                                           "stephenson-six-bar", "quick-return",
-                                           "andrews-squeezer"),
+                                           "stephenson-six-bar", "quick-return", "andrews-squeezer",
+                                           "rssr", "spatial-slider-crank", "double-wishbone"),
                          [](const auto& param_info) {
                            std::string s = param_info.param;
                            for (char& c : s) c = c == '-' ? '_' : c;
@@ -388,7 +388,8 @@ TEST(Cycle, ReverseAtDeadPointSweepsTheClosedCurve) {
 // Results do not depend on the order of bodies and joints in the file: the file is rewritten
 // with both lists reversed and the drive and every reaction component (matched by name) agree.
 TEST(Cycle, IndependentOfBodyAndJointOrder) {
-  for (const std::string name : {"crank-rocker", "slider-crank", "andrews-squeezer"}) {
+  for (const std::string name :
+       {"crank-rocker", "slider-crank", "andrews-squeezer", "rssr", "bennett", "double-wishbone"}) {
     const std::string path = test::source_path("mechanisms/" + name + ".yaml");
     YAML::Node root = YAML::LoadFile(path);
     for (const char* list : {"bodies", "joints"}) {
