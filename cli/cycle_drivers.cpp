@@ -3,9 +3,11 @@
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <iostream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -179,16 +181,37 @@ int run_cycle_drivers(const Model& model, const DriversRequest& request) {
         << "\n";
     out << "mobility        DOF " << r.dof << ", rank of E " << r.rank << ", " << r.redundant
         << " redundant equation(s)\n\n";
-    out << "quantity  unit  max  at t  min  at t  RMS\n";
+    // The table: columns sized to the longest name; rounding noise of a component as 0 (below
+    // 1e-12 of the largest of its dimension).
+    size_t name_w = 8, unit_w = 4;
+    for (const Series& s : series) {
+      name_w = std::max(name_w, s.name.size());
+      unit_w = std::max(unit_w, output_unit(s.dimension, U).name.size());
+    }
+    std::map<Dimension, double> largest;
+    for (const Series& s : series)
+      largest[s.dimension] = std::max({largest[s.dimension], std::abs(s.max), std::abs(s.min)});
+    auto clean = [&](Dimension d, double v) { return std::abs(v) < 1e-12 * largest[d] ? 0.0 : v; };
+    char line[400];
+    const int nw = static_cast<int>(name_w), uw = static_cast<int>(unit_w);
+    std::snprintf(line, sizeof line, "%-*s  %-*s %12s %10s %12s %10s %12s\n", nw, "quantity", uw,
+                  "unit", "max", "at t", "min", "at t", "RMS");
+    out << line;
     for (size_t k = 0; k < series.size(); ++k) {
       const Series& s = series[k];
       const OutputUnit u = output_unit(s.dimension, U);
       const bool det = k < mo.drivers.size() || r.determinate[k - mo.drivers.size()];
-      out << s.name << "  " << u.name << "  " << u.from_si(s.max) << "  " << time_u.from_si(s.t_max)
-          << "  " << u.from_si(s.min) << "  " << time_u.from_si(s.t_min) << "  "
-          << u.from_si(std::sqrt(s.sum2 / std::max(1, s.count)))
-          << (det ? "" : "  indeterminate (minimum norm)") << "\n";
+      std::snprintf(line, sizeof line, "%-*s  %-*s %12.5g %10.4g %12.5g %10.4g %12.5g%s\n", nw,
+                    s.name.c_str(), uw, u.name.c_str(), u.from_si(clean(s.dimension, s.max)),
+                    time_u.from_si(s.t_max), u.from_si(clean(s.dimension, s.min)),
+                    time_u.from_si(s.t_min),
+                    u.from_si(clean(s.dimension, std::sqrt(s.sum2 / std::max(1, s.count)))),
+                    det ? "" : "   indeterminate (minimum norm)");
+      out << line;
     }
+    out << "\nconvention: drive.<driver> is the driver's torque or force on its joint's second "
+           "body; reactions are forces and moments on a joint's first body from its second (as "
+           "for one driver). Every position: --json or --out.\n";
     std::cout << out.str();
   }
   return r.status == MultiDriveStatus::completed ? kOk : kNumerical;
