@@ -1,7 +1,7 @@
-// Benchmarks of the driven sweep (issue 3 §7; spatial files: issue 13 item 7): the whole cycle at 3600 positions — assembly,
-// continuation (predictor + locked-input Newton corrector), velocities, accelerations, drive and
-// minimum-norm reactions, measures and energies at every position. Reported per position
-// (items_per_second = positions per second). Run: build/bench/orthomech_bench
+// Benchmarks of the driven sweep (issue 3 §7; spatial files: issue 13 item 7): the whole cycle at
+// 3600 positions — assembly, continuation (predictor + locked-input Newton corrector), velocities,
+// accelerations, drive and minimum-norm reactions, measures and energies at every position.
+// Reported per position (items_per_second = positions per second). Run: build/bench/orthomech_bench
 // --benchmark_filter=Cycle
 #include <benchmark/benchmark.h>
 #include <malloc.h>

@@ -277,6 +277,16 @@ void compute_reactions(const Model& model, const VecX& q, const Eigen::Ref<const
 
 namespace {
 
+// R = M u̇ + Ṁu − Q̂ (the free system at the state of u), (C3)–(C4). Allocation-free.
+void inertia_residual(const Workspace& ws, const VecX& u, const VecX& udot, VecX& R) {
+  if (ws.free.diagonal_mass)
+    R = ws.free.M_diag.cwiseProduct(udot);
+  else
+    R.noalias() = ws.free.M * udot;
+  if (!ws.free.constant_mass) R.noalias() += ws.free.Mdot * u;
+  R -= ws.free.Q;
+}
+
 // Minimum-norm λ with E λ = R and the null space N of E (redundancy directions) (C4). R is in
 // the range of E by (C3) (FᵀR = 0), so the chart's square block gives a particular solution λ_p
 // on the chart's rows R (zero on the others): E_{D,R} λ_R = R_D with the chart's LU.
@@ -349,12 +359,7 @@ bool compute_driven(const Model& model, int driver_joint, double sdot, double sd
   const double vdot = (sddot - sk.ddot_u - w.d.dot(w.Fdot_v)) / dTF;
   out.udot = F * vdot + w.Fdot_v;
   // (C3) drive: Fᵀ(M u̇ + Ṁu − Q̂) = (Fᵀd) τ.
-  if (ws.free.diagonal_mass)
-    w.R = ws.free.M_diag.cwiseProduct(out.udot);
-  else
-    w.R.noalias() = ws.free.M * out.udot;
-  if (!ws.free.constant_mass) w.R.noalias() += ws.free.Mdot * state.u;
-  w.R -= ws.free.Q;
+  inertia_residual(ws, state.u, out.udot, w.R);
   out.drive = F.dot(w.R) / dTF;
   // (C4) reactions: E λ = M u̇ + Ṁu − Q̂ − d τ.
   w.R -= out.drive * w.d;
@@ -407,12 +412,7 @@ bool compute_multi_driven(const Model& model, const std::vector<int>& joints, co
   const VecX vdot = lu.solve(sddot - ddot_u - Ds * w.Fdot_v);
   out.udot = F * vdot + w.Fdot_v;
   // (C3) the drivers' forces: Fᵀ R = Gᵀ τ.
-  if (ws.free.diagonal_mass)
-    w.R = ws.free.M_diag.cwiseProduct(out.udot);
-  else
-    w.R.noalias() = ws.free.M * out.udot;
-  if (!ws.free.constant_mass) w.R.noalias() += ws.free.Mdot * state.u;
-  w.R -= ws.free.Q;
+  inertia_residual(ws, state.u, out.udot, w.R);
   out.drives = G.transpose().partialPivLu().solve(F.transpose() * w.R);
   // (C4) reactions: E λ = R − D_sᵀ τ.
   w.R.noalias() -= Ds.transpose() * out.drives;
