@@ -13,6 +13,7 @@
 #include "orthomech/analysis/mobility.hpp"
 #include "orthomech/analysis/positions.hpp"
 #include "orthomech/constraints/joints.hpp"
+#include "orthomech/constraints/rolling_disc.hpp"
 #include "orthomech/constraints/spatial_joints.hpp"
 #include "orthomech/io/units.hpp"
 #include "orthomech/model/free_system.hpp"
@@ -199,6 +200,14 @@ std::vector<ReactionComponent> reaction_components(const Model& model) {
     out.push_back({name + ".Fy", ji, true, "N"});
     out.push_back({name + ".N", ji, false, "N"});
   }
+  // Rolling discs (after the knife edges, as their rows): the contact force of the ground on the
+  // disc, world components and along t1, t2 (friction) and k (normal force).
+  for (size_t d = 0; d < model.rolling_discs.size(); ++d) {
+    const int index = static_cast<int>(model.joints.size() + model.knife_edges.size() + d);
+    const std::string& name = model.rolling_discs[d].name;
+    for (const char* c : {".Fx", ".Fy", ".Fz"}) out.push_back({name + c, index, true, "N"});
+    for (const char* c : {".Ft1", ".Ft2", ".N"}) out.push_back({name + c, index, false, "N"});
+  }
   return out;
 }
 
@@ -272,6 +281,11 @@ void compute_reactions(const Model& model, const VecX& q, const Eigen::Ref<const
     out.push_back(N * n.x());
     out.push_back(N * n.y());
     out.push_back(N);
+  }
+  for (const RollingDisc& d : model.rolling_discs) {
+    const Vec3 F = rolling_disc_contact_force(d, lambda.segment<3>(d.row_offset));
+    for (int a = 0; a < 3; ++a) out.push_back(F(a));
+    for (int a = 0; a < 3; ++a) out.push_back(lambda(d.row_offset + a));
   }
 }
 

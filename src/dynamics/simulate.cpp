@@ -15,7 +15,6 @@
 #include "orthomech/analysis/assembly.hpp"
 #include "orthomech/analysis/mobility.hpp"
 #include "orthomech/constraints/joints.hpp"
-#include "orthomech/constraints/rolling_disc.hpp"
 #include "orthomech/dynamics/equations.hpp"
 #include "orthomech/io/units.hpp"
 #include "orthomech/model/free_system.hpp"
@@ -66,25 +65,6 @@ bool parse_integrator(const std::string& name, Integrator& out) {
 }
 
 namespace {
-
-// Rolling discs (after the joints' and knife edges' components, as their rows): the contact force
-// of the ground on the disc, world components and along t1, t2 (friction) and k (normal force).
-void append_rolling_disc_components(const Model& model, std::vector<ReactionComponent>& out) {
-  for (size_t d = 0; d < model.rolling_discs.size(); ++d) {
-    const int index = static_cast<int>(model.joints.size() + model.knife_edges.size() + d);
-    const std::string& name = model.rolling_discs[d].name;
-    for (const char* c : {".Fx", ".Fy", ".Fz"}) out.push_back({name + c, index, true, "N"});
-    for (const char* c : {".Ft1", ".Ft2", ".N"}) out.push_back({name + c, index, false, "N"});
-  }
-}
-void append_rolling_disc_reactions(const Model& model, const VecX& lambda,
-                                   std::vector<double>& out) {
-  for (const RollingDisc& d : model.rolling_discs) {
-    const Vec3 F = rolling_disc_contact_force(d, lambda.segment<3>(d.row_offset));
-    for (int a = 0; a < 3; ++a) out.push_back(F(a));
-    for (int a = 0; a < 3; ++a) out.push_back(lambda(d.row_offset + a));
-  }
-}
 
 // A time for a message, in the file's declared time unit (a model built in code: s).
 std::string time_text(const Model& model, double t) {
@@ -477,7 +457,6 @@ class Dynamics {
       s.lambda = lambda_;
     }
     compute_reactions(model_, state_.q, s.lambda, s.reactions);
-    append_rolling_disc_reactions(model_, s.lambda, s.reactions);
   }
 
   const Model& model_;
@@ -564,7 +543,6 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
   const int n = model.n, nq = model.nq, na = n - rank;
   Dynamics dyn(model, rank, options);
   result.components = reaction_components(model);
-  append_rolling_disc_components(model, result.components);
 
   // 2. Chart and F at q; velocities u = α u₀ (eq. (70)), then the requested rates.
   dyn.state_.q = q;
