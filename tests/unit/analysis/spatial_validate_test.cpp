@@ -259,10 +259,15 @@ TEST(SpatialValidate, IdleSpinIsReportedAndHeld) {
   }
   // Without the idle spin held the inputs would not fix the position: a second idle-free check
   // that the oracle's row matters (η of [Eᵀ; d] alone is 0).
+  // [Eᵀ; d] has n_c + 1 = n − 1 rows here: padded with a zero row to n × n, its smallest
+  // singular value is 0 (the oracle's singular values are n only for a square matrix).
   const DifferenceJacobian J = difference_jacobian(m, rep.positions[0].q, {A0});
-  MatX Jd(m.nc + 1, m.n);
-  Jd << J.Et, J.d;
+  ASSERT_EQ(m.nc + 1, m.n - 1);
+  MatX Jd = MatX::Zero(m.n, m.n);
+  Jd.topRows(m.nc) = J.Et;
+  Jd.row(m.nc) = J.d.row(0);
   const VecX sd = scaled_singular_values(m, Jd);
+  ASSERT_EQ(sd.size(), m.n);
   EXPECT_LT(sd(m.n - 1) / sd(0), 1e-8);
 }
 
