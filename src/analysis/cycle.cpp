@@ -386,6 +386,17 @@ bool compute_driven(const Model& model, int driver_joint, double sdot, double sd
   return true;
 }
 
+void compute_driven_outputs(const Model& model, const State& state, const VecX& lambda,
+                            const VecX& udot, const Eigen::Matrix2d* rotations, DrivenOutputs out) {
+  compute_reactions(model, state.q, lambda, out.reactions, rotations);
+  out.measures.clear();
+  for (const Measure& m : model.measures)
+    out.measures.push_back(evaluate_measure(model, m, state.q, &state.u, &udot, rotations));
+  out.kinetic = kinetic_energy(model, state);
+  out.potential = potential_energy(model, state.q);
+  out.dissipated = dissipated_power(model, state);
+}
+
 bool compute_multi_driven(const Model& model, const std::vector<int>& joints, const VecX& sdot,
                           const VecX& sddot, State& state, Workspace& ws, DrivenWorkspace& w,
                           MultiDrivenPoint& out) {
@@ -875,14 +886,8 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
     }
     p.singular = ws.dual.quality < kSingularQuality;
     // The rotation table compute_driven filled at this q: no sin/cos in reactions and measures.
-    const Eigen::Matrix2d* rotations = w.rotations.data();
-    compute_reactions(model, state.q, p.lambda, p.reactions, rotations);
-    p.measures.clear();
-    for (const Measure& m : model.measures)
-      p.measures.push_back(evaluate_measure(model, m, state.q, &state.u, &p.udot, rotations));
-    p.kinetic = kinetic_energy(model, state);
-    p.potential = potential_energy(model, state.q);
-    p.dissipated = dissipated_power(model, state);
+    compute_driven_outputs(model, state, p.lambda, p.udot, w.rotations.data(),
+                           {p.reactions, p.measures, p.kinetic, p.potential, p.dissipated});
     return true;
   };
   // A converged step keeps the branch when the tangent dq/ds keeps its direction (a jump across

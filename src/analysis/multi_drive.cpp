@@ -8,7 +8,6 @@
 #include "orthomech/analysis/positions.hpp"
 #include "orthomech/constraints/joints.hpp"
 #include "orthomech/model/free_system.hpp"
-#include "orthomech/model/loads.hpp"
 #include "orthomech/model/measures.hpp"
 #include "orthomech/projection/dual.hpp"
 
@@ -57,13 +56,8 @@ struct MultiSweep {
     if (!compute_multi_driven(model, joints, sdot, sddot, state, ws, w, p)) return false;
     p.time = t;
     p.inputs = s;
-    compute_reactions(model, state.q, p.lambda, p.reactions, nullptr);
-    p.measures.clear();
-    for (const Measure& m : model.measures)
-      p.measures.push_back(evaluate_measure(model, m, state.q, &state.u, &p.udot, nullptr));
-    p.kinetic = kinetic_energy(model, state);
-    p.potential = potential_energy(model, state.q);
-    p.dissipated = dissipated_power(model, state);
+    compute_driven_outputs(model, state, p.lambda, p.udot, nullptr,
+                           {p.reactions, p.measures, p.kinetic, p.potential, p.dissipated});
     return true;
   }
 

@@ -272,6 +272,19 @@ struct DrivenWorkspace {
   DrivenWorkspace(const Model& model, int rank);
 };
 
+// What a driven position reports at its state (q, u) with u̇ and λ: every joint's reaction
+// (compute_reactions), every measure, the kinetic and potential energies and the dissipated
+// power. `rotations`, if given: R(φ_b) of every body at state.q (no sin/cos then).
+struct DrivenOutputs {
+  std::vector<double>& reactions;
+  std::vector<double>& measures;
+  double& kinetic;
+  double& potential;
+  double& dissipated;
+};
+void compute_driven_outputs(const Model& model, const State& state, const VecX& lambda,
+                            const VecX& udot, const Eigen::Matrix2d* rotations, DrivenOutputs out);
+
 // A driver's input s(t), ṡ(t), s̈(t) (SI): constant speed s0 + ω t, harmonic initial + a sin(2π f
 // t), polynomial Σ c_k t^k.
 void driver_law(const Driver& driver, double s0, double t, double& s, double& sdot, double& sddot);
