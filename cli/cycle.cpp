@@ -419,6 +419,17 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
   if (r.status == CycleStatus::failed)
     spdlog::error("{}: the sweep stopped: {}", model.file, r.message);
   for (const std::string& w : r.warnings) spdlog::warn("{}: {}", model.file, w);
+  if (!r.idle.empty()) {  // idle degrees of freedom (counted in the DOF), held at zero rate
+    std::string bodies;
+    for (const Mobility::Idle& i : r.idle) {
+      bodies.append(bodies.empty() ? "body '" : "; body '").append(i.body).append("' (");
+      bodies.append(std::to_string(i.count)).append(i.count == 1 ? " direction)" : " directions)");
+    }
+    spdlog::info(
+        "{}: idle degrees of freedom held at zero rate (mass-orthogonal to the driven motion, "
+        "not dead points): {}",
+        model.file, bodies);
+  }
   if (r.status == CycleStatus::stopped_at_dead_point) spdlog::warn("{}: {}", model.file, r.message);
   for (const DeadPoint& d : r.singular_positions) spdlog::info("{}", d.message);
   spdlog::info(
@@ -667,7 +678,11 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
           << fmt(time_u.from_si(r.points.back().time)) << " " << time_u.name << "\n";
     out << "status          " << to_string(r.status) << (r.message.empty() ? "" : ": ") << r.message
         << "\n";
-    out << "mobility        DOF " << r.dof << ", rank of E " << r.rank << ", "
+    int idle_dof = 0;
+    for (const Mobility::Idle& i : r.idle) idle_dof += i.count;
+    out << "mobility        DOF " << r.dof;
+    if (idle_dof > 0) out << " (" << idle_dof << " idle, held at zero rate)";
+    out << ", rank of E " << r.rank << ", "
         << (r.redundant ? std::to_string(r.redundant) + " redundant equation(s)"
                         : std::string("no redundant equations"))
         << "\n";

@@ -25,6 +25,20 @@
 
 namespace orthomech {
 
+namespace {
+
+// Size of the mechanism (the largest distance of a body's design position from the origin, at
+// least 1 mm): the scale of lengths for step control and start moves.
+double mechanism_size(const Model& model) {
+  double size = 1e-3;
+  for (const Body& b : model.bodies)
+    size = std::max(size, b.kind == BodyKind::spatial ? b.spatial.design_position.norm()
+                                                      : b.design_pose.head<2>().norm());
+  return size;
+}
+
+}  // namespace
+
 const char* to_string(CycleStatus s) {
   switch (s) {
     case CycleStatus::completed:
@@ -39,7 +53,7 @@ const char* to_string(CycleStatus s) {
   return "?";
 }
 
-DrivenWorkspace::DrivenWorkspace(const Model& model, int rank)
+DrivenWorkspace::DrivenWorkspace(const Model& model, int rank, std::vector<int> idle)
     : d(VecX::Zero(model.n)),
       Fdot_v(VecX::Zero(model.n)),
       R(VecX::Zero(model.n)),
@@ -53,7 +67,9 @@ DrivenWorkspace::DrivenWorkspace(const Model& model, int rank)
       J_piv(model.n),
       g(model.n),
       dq(model.n),
-      rotations(model.bodies.size()) {}
+      rotations(model.bodies.size()),
+      idle_bodies(std::move(idle)),
+      length_scale(mechanism_size(model)) {}
 
 // ---- stored positions -----------------------------------------------------------------------
 void DrivenPoints::unwrap_measure(std::size_t i) {
@@ -95,6 +111,7 @@ DrivenPointView DrivenPoints::operator[](std::size_t k) const {
                          s.kinetic,
                          s.potential,
                          s.dissipated,
+                         s.idle_hold,
                          s.singular,
                          s.bridge};
 }
@@ -105,9 +122,9 @@ void DrivenPoints::reserve(std::size_t count) {
 }
 
 DrivenPoints::Scalars DrivenPoints::scalars_of(const DrivenPoint& p) const {
-  return {p.input,    p.time,    p.input_rate, p.input_acceleration, p.drive,    p.chart_quality,
-          p.dTF,      p.kinetic, p.potential,  p.dissipated,         p.chart_id, p.chart_sign,
-          p.singular, p.bridge};
+  return {p.input,         p.time,     p.input_rate, p.input_acceleration, p.drive,
+          p.chart_quality, p.dTF,      p.kinetic,    p.potential,          p.dissipated,
+          p.idle_hold,     p.chart_id, p.chart_sign, p.singular,           p.bridge};
 }
 
 void DrivenPoints::check_sizes(const DrivenPoint& p) const {
@@ -337,6 +354,59 @@ void solve_multipliers(Workspace& ws, DrivenWorkspace& w, VecX& lambda) {
   lambda.noalias() -= w.N * w.small;
 }
 
+// The idle motions held (spatial.md §6.5): the idle rows I and motions V at q, I F, and the held
+// basis F z with (I F) z = 0, |z| = 1 (z's largest component positive). False when F does not
+// have 1 + k columns (k idle motions) or I F has not rank k.
+bool hold_idle(const Model& model, const VecX& q, const MatX& F, DrivenWorkspace& w) {
+  w.idle_I = idle_rows(model, q, w.idle_bodies, &w.idle_V);
+  const Eigen::Index k = w.idle_I.rows();
+  if (k == 0 || F.cols() != k + 1) return false;
+  w.idle_IF.noalias() = w.idle_I * F;
+  const Eigen::JacobiSVD<MatX> svd(w.idle_IF, Eigen::ComputeFullV);
+  if (!(svd.singularValues()(k - 1) > 1e-10 * F.norm())) return false;
+  w.F_held.noalias() = F * svd.matrixV().col(k);
+  Eigen::Index big = 0;
+  (void)svd.matrixV().col(k).cwiseAbs().maxCoeff(&big);
+  if (svd.matrixV()(big, k) < 0.0) w.F_held = -w.F_held;
+  return true;
+}
+
+// İ u of the idle rows at (q, u) (they depend on q) (I1). Any basis of their span holds the
+// same motions; Ĩ(q′) = I₀ P(q′), with I₀ = I(q) and P(q′) the orthogonal projector onto the span
+// of I(q′), is one that is smooth in q′ whatever basis idle_rows picks there and equals I₀ at q.
+// Differentiating P(q) u = 0 along the motion: I₀ u̇ = −I₀ Ṗ u (I₀ P = I₀), so İ u = I₀ Ṗ u, by
+// central differences along the motion, at q ⊕ (±h u + ½h² a) with Eᵀa = −Dᵀu (a particular
+// acceleration: the two positions are on f(q) = 0 to O(h³), so the rank decisions of idle_rows
+// there are those at q), h turning a body by 1e-4 rad or moving it by 1e-4 of the mechanism's
+// size. The rows themselves carry rounding of ~1e-12 (the kernel of a block scaled by √A), so
+// İ u is good to ~1e-8 of |u|²: truncation (1e-8) and rounding (1e-12/1e-4) balance there.
+// Errors in İ u change u̇ only along the idle motions (and μ), never the drive or λ: M times an
+// idle motion is a multiple of an idle row, which F z and the multipliers do not see.
+bool idle_rows_rate(const Model& model, const VecX& q, const VecX& u, const VecX& a,
+                    DrivenWorkspace& w) {
+  const Eigen::Index k = w.idle_I.rows();
+  w.idle_Idot_u = VecX::Zero(k);
+  double speed = 0.0;
+  for (const Body& b : model.bodies) {
+    const int nt = b.kind == BodyKind::spatial ? 3 : 2;
+    speed = std::max(speed, u.segment(b.u_offset, nt).cwiseAbs().maxCoeff() / w.length_scale);
+    for (int c = nt; c < b.nu(); ++c) speed = std::max(speed, std::abs(u(b.u_offset + c)));
+  }
+  if (!(speed > 0.0)) return true;  // at rest: İ u = 0
+  const double h = 1e-4 / speed;
+  VecX qh(model.nq);
+  for (const double sign : {1.0, -1.0}) {
+    qh = q;
+    integrate_positions(model, qh, sign * h * u + 0.5 * h * h * a, 1.0);
+    const MatX I = idle_rows(model, qh, w.idle_bodies);
+    if (I.rows() != k) return false;
+    const VecX Pu = I.transpose() * (I * I.transpose()).ldlt().solve(I * u);
+    w.idle_Idot_u += sign * (w.idle_I * Pu);
+  }
+  w.idle_Idot_u /= 2.0 * h;  // (I1)
+  return true;
+}
+
 }  // namespace
 
 bool compute_driven(const Model& model, int driver_joint, double sdot, double sddot, State& state,
@@ -353,7 +423,11 @@ bool compute_driven(const Model& model, int driver_joint, double sdot, double sd
     body_rotations(model, state.q, w.rotations.data());
   }
   if (compute_basis(model, state, ws) != ProjectionStatus::ok) return false;
-  const auto F = ws.dual.F.col(0);
+  // With idle degrees of freedom, the basis that holds them: F z, I F z = 0 (spatial.md §6.5).
+  const bool idle = !w.idle_bodies.empty();
+  if (idle && !hold_idle(model, state.q, ws.dual.F, w)) return false;
+  const Eigen::Ref<const VecX> F =
+      idle ? Eigen::Ref<const VecX>(w.F_held) : Eigen::Ref<const VecX>(ws.dual.F.col(0));
   (void)compute_scalar(model, input, state.q, nullptr, w.d);
   const double dTF = w.d.dot(F);
   const double scale = w.d.norm() * F.norm();
@@ -369,6 +443,12 @@ bool compute_driven(const Model& model, int driver_joint, double sdot, double sd
   const ScalarKinematics sk = compute_scalar(model, input, state.q, &state.u, w.d);
   solve_chart(ws, ws.constraints.Dtu, w.Fdot_v);  // x_D = (E_RDᵀ)⁻¹ (Dᵀu)_R
   w.Fdot_v = -w.Fdot_v;                           // Eᵀ (Ḟ v) = −Dᵀ u
+  if (idle) {  // and I (Ḟ v) = −İ u: add F y with (I F) y = −İ u − I (Ḟ v), y the least-norm one
+    if (!idle_rows_rate(model, state.q, state.u, w.Fdot_v, w)) return false;
+    const VecX rhs = -w.idle_Idot_u - w.idle_I * w.Fdot_v;
+    w.Fdot_v.noalias() +=
+        ws.dual.F * (w.idle_IF.transpose() * (w.idle_IF * w.idle_IF.transpose()).ldlt().solve(rhs));
+  }
   // (C2) accelerations.
   const double vdot = (sddot - sk.ddot_u - w.d.dot(w.Fdot_v)) / dTF;
   out.udot = F * vdot + w.Fdot_v;
@@ -377,6 +457,16 @@ bool compute_driven(const Model& model, int driver_joint, double sdot, double sd
   out.drive = F.dot(w.R) / dTF;
   // (C4) reactions: E λ = M u̇ + Ṁu − Q̂ − d τ.
   w.R -= out.drive * w.d;
+  out.idle_hold = 0.0;
+  if (idle) {  // − Iᵀ μ, the forces holding the idle motions: (I F)ᵀ μ = Fᵀ(R − d τ)
+    w.idle_mu =
+        (w.idle_IF * w.idle_IF.transpose()).ldlt().solve(w.idle_IF * (ws.dual.F.transpose() * w.R));
+    w.R.noalias() -= w.idle_I.transpose() * w.idle_mu;
+    // Their work per unit rate of each idle motion (V: unit angular rate).
+    const VecX work = w.idle_V.transpose() * (w.idle_I.transpose() * w.idle_mu);
+    for (Eigen::Index j = 0; j < work.size(); ++j)
+      if (std::abs(work(j)) > std::abs(out.idle_hold)) out.idle_hold = work(j);
+  }
   out.lambda.resize(model.nc);
   solve_multipliers(ws, w, out.lambda);
   out.q = state.q;
@@ -514,6 +604,7 @@ struct Sweep {
   DrivenWorkspace& w;
   bool jacobian_at_q = false;  // ws.constraints.Et holds Eᵀ at the q the corrector returned
   VecX offset = VecX::Zero(model.n);  // q − q_ref for the linear lock
+  MatX idle_at = MatX(0, 0);          // idle rows at the corrector's first iterate
   // The input's coordinate at q, on the turn of `near` where it is read modulo 2π.
   [[nodiscard]] double input_at(const VecX& q, double near) const {
     const double value = compute_scalar(model, JointCoordinate{joint}, q, nullptr).value;
@@ -525,7 +616,9 @@ struct Sweep {
   // Newton on [f_R(q); s(q) − target] = 0 with Jacobian [E_Rᵀ; dᵀ] (the input locked), or, when
   // `row` is given, on [f_R(q); rowᵀ(q − q_ref) − target] (a linear lock, for the pseudo-arclength
   // step across a dead point). A step longer than max_step (a jump towards another branch or
-  // another turn of an angle) fails.
+  // another turn of an angle) fails. Idle degrees of freedom (w.idle_bodies): rows I of their
+  // motions, taken at the first iterate, with zero right-hand side (the steps do not move along
+  // them; spatial.md §6.5).
   bool corrector(VecX& q, double target, double max_step, const VecX* row = nullptr,
                  const VecX* q_ref = nullptr) {
     const MeasureKind input = JointCoordinate{joint};
@@ -535,6 +628,10 @@ struct Sweep {
     // With redundant rows, Gauss–Newton on all of them: next to a change point the chart's rows
     // alone do not imply the others, and q could leave the mechanism by 1e-7 while f_R = 0.
     const bool all_rows = nc > r;
+    const Eigen::Index k = static_cast<Eigen::Index>(w.idle_bodies.size()) > 0
+                               ? (idle_at = idle_rows(model, q, w.idle_bodies)).rows()
+                               : 0;
+    if (!all_rows && r + 1 + k != model.n) return false;
     // Chord Newton: the Jacobian is factored at the first iterate and kept while the residual
     // falls at least tenfold per iteration (the predictor is close: usually one factorisation).
     bool factored = false;
@@ -565,6 +662,7 @@ struct Sweep {
             w.J.noalias() += *row * row->transpose();
           else
             w.J.noalias() += w.d * w.d.transpose();
+          if (k > 0) w.J.noalias() += idle_at.transpose() * idle_at;
         } else {
           for (int i = 0; i < r; ++i)
             w.J.row(i) = ws.constraints.Et.row(c.rows[static_cast<size_t>(i)]);
@@ -572,6 +670,7 @@ struct Sweep {
             w.J.row(r) = row->transpose();
           else
             w.J.row(r) = w.d.transpose();
+          if (k > 0) w.J.bottomRows(k) = idle_at;
         }
         if (!(lu_factor(w.J, w.J_piv) > (all_rows ? 1e-26 : 1e-13))) return false;
         factored = true;
@@ -586,6 +685,7 @@ struct Sweep {
       } else {
         for (int i = 0; i < r; ++i) w.dq(i) = ws.constraints.f(c.rows[static_cast<size_t>(i)]);
         w.dq(r) = s - target;
+        w.dq.tail(k).setZero();  // the idle rows
       }
       lu_solve(w.J, w.J_piv, w.dq);
       if (!(w.dq.cwiseAbs().maxCoeff() <= max_step)) return false;
@@ -600,15 +700,6 @@ struct Sweep {
 // Predicted q at input s from a converged point p: q + τ Δs + ½ q'' Δs², with q'' = d²q/ds² =
 // (u̇ − τ s̈)/ṡ². The curvature term is used only where it is smaller than the tangent step (next
 // to a singular position u̇ is unreliable) and where ṡ ≠ 0.
-// Size of the mechanism (the largest distance of a body's design position from the origin, at
-// least 1 mm): the scale of lengths for step control and start moves.
-double mechanism_size(const Model& model) {
-  double size = 1e-3;
-  for (const Body& b : model.bodies)
-    size = std::max(size, b.kind == BodyKind::spatial ? b.spatial.design_position.norm()
-                                                      : b.design_pose.head<2>().norm());
-  return size;
-}
 
 // Indices of the measures that read a spatial joint angle (modulo 2π): unwrapped by continuity
 // over the sweep.
@@ -759,14 +850,25 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
   result.rank = mob.rank;
   result.dof = mob.dof;
   result.redundant = model.nc - mob.rank;
-  if (mob.dof != 1) {
-    result.message = "a single driver needs a mechanism with 1 DOF; this one has " +
-                     std::to_string(mob.dof) +
-                     (mob.dof > 1 ? " (drive every degree of freedom: cycle --drivers A,B,…)" : "");
+  result.idle = mob.idle;
+  // Idle degrees of freedom (a coupler's spin between two spherical joints) are held at zero
+  // rate: the driver moves the others.
+  int idle_dof = 0;
+  for (const Mobility::Idle& i : mob.idle) idle_dof += i.count;
+  if (mob.dof - idle_dof != 1) {
+    const int driven = mob.dof - idle_dof;
+    std::string& m = result.message;
+    m = "a single driver needs a mechanism with 1 DOF; this one has ";
+    m.append(std::to_string(mob.dof));
+    if (idle_dof > 0) {
+      m.append(" (").append(std::to_string(idle_dof)).append(" idle, held at zero rate: ");
+      m.append(std::to_string(driven)).append(" to drive)");
+    }
+    if (driven > 1) m.append(" (drive every degree of freedom: cycle --drivers A,B,…)");
     return result;
   }
   Workspace ws(model, mob.rank);
-  DrivenWorkspace w(model, mob.rank);
+  DrivenWorkspace w(model, mob.rank, idle_body_indices(model, mob));
   Sweep sweep{model, joint, ws, w};
   const MeasureKind input = JointCoordinate{joint};
   (void)evaluate_dual(model, state, ws);
@@ -1121,7 +1223,11 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
         arc *= 0.5;
         continue;
       }
-      VecX f = ws.dual.F.col(0).normalized();
+      if (!w.idle_bodies.empty() && !hold_idle(model, state.q, ws.dual.F, w)) {
+        arc *= 0.5;
+        continue;
+      }
+      VecX f = (w.idle_bodies.empty() ? VecX(ws.dual.F.col(0)) : w.F_held).normalized();
       if (f.dot(dir) < 0.0) f = -f;
       const double s_new = sweep.input_at(trial, s_dead);
       q_cur = trial;
@@ -1412,6 +1518,7 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
         bridged.chart_sign = p.chart_sign;
         bridged.chart_id = p.chart_id;
         bridged.dTF = p.dTF;
+        bridged.idle_hold = p.idle_hold;
         bridged.singular = p.singular;
         bridged.bridge = index;
         result.points.assign(k, bridged);
@@ -1426,6 +1533,32 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
         if (bridge_at(j, factor)) break;
   }
   unwrap_measures(result, wrapped);
+  if (!result.idle.empty()) {
+    // Holding an idle motion at zero rate takes no force when the motion is idle dynamically too
+    // (the body's spin about the line of its joints with its centre of mass on it and its inertia
+    // symmetric about it). Otherwise the reactions are those of the motion held, not free.
+    double drive_peak = 0.0;
+    for (const DrivenPointView& p : result.points) {
+      result.idle_hold_peak = std::max(result.idle_hold_peak, std::abs(p.idle_hold));
+      drive_peak = std::max(drive_peak, std::abs(p.drive));
+    }
+    if (result.idle_hold_peak > 1e-8 * drive_peak) {
+      std::string bodies;
+      for (const Mobility::Idle& i : result.idle)
+        bodies += (bodies.empty() ? "'" : ", '") + i.body + "'";
+      char peak[32];
+      std::snprintf(peak, sizeof peak, "%.3g", result.idle_hold_peak);
+      result.warnings.push_back(
+          "holding the idle motion of " + bodies +
+          " at zero rate takes a generalised force of "
+          "up to " +
+          peak +
+          " N*m (a torque about the motion's axis): the motion is not idle "
+          "dynamically "
+          "(a centre of mass off the line of its joints, or an inertia not symmetric about it); "
+          "the reactions are those with it held");
+    }
+  }
   result.chart_switches = ws.dual.switch_count;
   result.reversals = reversals;
   if (options.progress) options.progress(1.0);

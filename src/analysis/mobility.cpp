@@ -23,18 +23,26 @@ int joints_at(const Model& model, int b) {
   return count;
 }
 
-// Motions of body b alone: the null space of Eᵀ restricted to its columns (every other body at
-// rest), columns scaled by √A_kk and rows normalised as the rank test of the chart selector.
-int own_motions(const Body& b, const MatX& Et, const VecX& A_diag, double tolerance) {
-  MatX cols = Et.middleCols(b.u_offset, b.nu());
-  for (int k = 0; k < b.nu(); ++k) cols.col(k) *= std::sqrt(A_diag(b.u_offset + k));
+// Body b's columns of Eᵀ scaled by √A_kk (the scales in `sa`), rows normalised, as the rank test
+// of the chart selector: its null space is b's own motions (every other body at rest), in scaled
+// coordinates.
+Eigen::FullPivLU<MatX> own_motion_lu(const Body& b, const MatX& Et, const VecX& A_diag,
+                                     double tolerance, VecX& sa) {
+  sa.resize(b.nu());
+  for (int k = 0; k < b.nu(); ++k) sa(k) = std::sqrt(A_diag(b.u_offset + k));
+  MatX cols = Et.middleCols(b.u_offset, b.nu()) * sa.asDiagonal();
   for (Eigen::Index r = 0; r < cols.rows(); ++r) {
     const double norm = Et.row(r).norm();
     if (norm > 0.0) cols.row(r) /= norm;
   }
   Eigen::FullPivLU<MatX> lu(cols);
   lu.setThreshold(tolerance);
-  return b.nu() - static_cast<int>(lu.rank());
+  return lu;
+}
+
+int own_motions(const Body& b, const MatX& Et, const VecX& A_diag, double tolerance) {
+  VecX sa;
+  return b.nu() - static_cast<int>(own_motion_lu(b, Et, A_diag, tolerance, sa).rank());
 }
 
 }  // namespace
@@ -70,6 +78,55 @@ Mobility compute_mobility(const Model& model, const VecX& q, const ChartOptions&
       if (count > 0) m.idle.push_back({model.bodies[b].name, count});
     }
   return m;
+}
+
+std::vector<int> idle_body_indices(const Model& model, const Mobility& m) {
+  std::vector<int> out;
+  for (const Mobility::Idle& i : m.idle) out.push_back(model.find_body(i.body));
+  return out;
+}
+
+MatX idle_motions(const Model& model, const VecX& q, const std::vector<int>& idle) {
+  if (idle.empty()) return MatX(model.n, 0);
+  MatX Et(model.nc, model.n), A(model.n, model.n);
+  compute_constraint_jacobian(model, q, Et);
+  compute_inverse_mass_matrix(model, q, A);
+  const VecX A_diag = A.diagonal();
+  std::vector<VecX> motions;
+  for (const int b : idle) {
+    const Body& body = model.bodies[static_cast<size_t>(b)];
+    VecX sa;
+    const Eigen::FullPivLU<MatX> lu =
+        own_motion_lu(body, Et, A_diag, ChartOptions{}.rank_tolerance, sa);
+    if (lu.rank() == body.nu()) continue;
+    const MatX K = lu.kernel();
+    // The rotation components of the body's velocity (planar φ̇; spatial ω).
+    const int rot_at = body.kind == BodyKind::spatial ? 3 : 2;
+    const int rot_count = body.kind == BodyKind::spatial ? 3 : body.kind == BodyKind::rigid ? 1 : 0;
+    for (Eigen::Index c = 0; c < K.cols(); ++c) {
+      VecX v = VecX::Zero(model.n);
+      v.segment(body.u_offset, body.nu()) = sa.asDiagonal() * K.col(c);
+      const double turn = v.segment(body.u_offset + rot_at, rot_count).norm();
+      motions.push_back(v / (turn > 0.0 ? turn : v.norm()));
+    }
+  }
+  MatX V(model.n, static_cast<Eigen::Index>(motions.size()));
+  for (size_t k = 0; k < motions.size(); ++k) V.col(static_cast<Eigen::Index>(k)) = motions[k];
+  return V;
+}
+
+MatX idle_rows(const Model& model, const VecX& q, const std::vector<int>& idle, MatX* motions) {
+  MatX V = idle_motions(model, q, idle);
+  MatX R(V.cols(), model.n);
+  if (motions) *motions = V;
+  if (V.cols() == 0) return R;
+  MatX M(model.n, model.n);
+  compute_mass_matrix(model, q, M);
+  for (Eigen::Index k = 0; k < V.cols(); ++k) {
+    const VecX row = M * V.col(k);
+    R.row(k) = row.transpose() / row.norm();
+  }
+  return R;
 }
 
 }  // namespace orthomech

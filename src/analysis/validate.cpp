@@ -153,42 +153,6 @@ VecX moved(const Model& model, const VecX& a, const VecX& du, double h) {
   return q;
 }
 
-// Rows that hold the idle bodies' own motions at zero rate, mass-orthogonally (spatial.md §6.5):
-// for every v in the null space of Eᵀ restricted to body b (its columns scaled by √A_kk, rows
-// normalised, as mobility's test), the row vᵀM. Empty without idle bodies.
-MatX idle_rows(const Model& model, const VecX& q, const std::vector<int>& idle) {
-  if (idle.empty()) return MatX(0, model.n);
-  MatX Et(model.nc, model.n), M(model.n, model.n), A(model.n, model.n);
-  compute_constraint_jacobian(model, q, Et);
-  compute_mass_matrix(model, q, M);
-  compute_inverse_mass_matrix(model, q, A);
-  std::vector<VecX> rows;
-  for (const int b : idle) {
-    const Body& body = model.bodies[static_cast<size_t>(b)];
-    MatX cols = Et.middleCols(body.u_offset, body.nu());
-    VecX sa(body.nu());
-    for (int k = 0; k < body.nu(); ++k) sa(k) = std::sqrt(A(body.u_offset + k, body.u_offset + k));
-    cols = cols * sa.asDiagonal();
-    for (Eigen::Index r = 0; r < cols.rows(); ++r) {
-      const double n = Et.row(r).norm();
-      if (n > 0.0) cols.row(r) /= n;
-    }
-    Eigen::FullPivLU<MatX> lu(cols);
-    lu.setThreshold(ChartOptions{}.rank_tolerance);
-    const MatX K = lu.kernel();
-    if (lu.rank() == body.nu()) continue;
-    for (Eigen::Index c = 0; c < K.cols(); ++c) {
-      VecX v = VecX::Zero(model.n);
-      v.segment(body.u_offset, body.nu()) = sa.asDiagonal() * K.col(c);
-      const VecX row = M * v;
-      rows.push_back(row / row.norm());
-    }
-  }
-  MatX R(static_cast<Eigen::Index>(rows.size()), model.n);
-  for (size_t k = 0; k < rows.size(); ++k) R.row(static_cast<Eigen::Index>(k)) = rows[k];
-  return R;
-}
-
 // Whether every spatial joint is on its drawn branch (spatial.md §2.4): the rows f_i·h_j, g_i·h_j
 // also vanish with the axis flipped (h_j = −h_i) and the twist row g_i·f_j at a half-turn, with
 // Eᵀ of full rank there, so a projection from a random start may land on them. They are not

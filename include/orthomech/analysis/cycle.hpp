@@ -12,6 +12,17 @@
 // λ is the minimum-norm solution and the other components are reported as indeterminate.
 // dᵀF → 0 is a dead point of the driver: it is located (bisection on the input) and reported,
 // never divided by.
+//
+// Idle degrees of freedom (Mobility::idle: a body's own motion that moves no other body, e.g. the
+// spin of a coupler between two spherical joints about the line through them; spatial.md §4.1,
+// §6.5) are held at zero rate instead of being left to the driver: with I the idle rows
+// (idle_rows: vᵀM for each idle motion v, so that the held velocity is mass-orthogonal to it)
+// and F the basis of null(Eᵀ) (n_a = 1 + k columns), the held basis is F z with (I F) z = 0 and
+// (C1)–(C4) hold with F z for F. Accelerations keep I u̇ + İ u = 0 (İ u by central differences of
+// the rows' span along u, (I1)); the forces μ that hold the idle motions, (I F)ᵀ μ = Fᵀ(R − d τ),
+// are not joint reactions: E λ = R − d τ − Iᵀ μ. They vanish when the motion is idle
+// dynamically too (a coupler with its centre of mass on the line of its joints and an inertia
+// symmetric about it: spin held at zero needs no moment); DrivenPoint::idle_hold reports them.
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
 #include <cstddef>
@@ -21,6 +32,7 @@
 #include <string>
 #include <vector>
 
+#include "orthomech/analysis/mobility.hpp"
 #include "orthomech/model/model.hpp"
 #include "orthomech/model/state.hpp"
 #include "orthomech/projection/workspace.hpp"
@@ -84,6 +96,11 @@ struct DrivenPoint {
   std::vector<double> reactions;  // per ReactionComponent
   std::vector<double> measures;   // per Model::measures
   double kinetic = 0.0, potential = 0.0, dissipated = 0.0;
+  // The generalised force that holds the idle degrees of freedom at zero rate (0 without idle
+  // ones): its work per unit rate of each idle motion (unit angular rate: N·m, a torque about the
+  // motion's axis; a translation: N), the largest in magnitude. Not a joint reaction; 0 (up to
+  // rounding) when the motion is idle dynamically too.
+  double idle_hold = 0.0;
   // At a change point (E loses rank; chart quality < 1e-4): the direct evaluation there is not
   // meaningful (the multipliers grow without bound as the rank drops). A grid position exactly
   // on one is first evaluated just past it.
@@ -111,6 +128,7 @@ struct DrivenPointView {
   std::span<const double> reactions;
   std::span<const double> measures;
   double kinetic = 0.0, potential = 0.0, dissipated = 0.0;
+  double idle_hold = 0.0;
   bool singular = false;
   int bridge = -1;
 };
@@ -162,7 +180,7 @@ class DrivenPoints {
  private:
   struct Scalars {
     double input, time, input_rate, input_acceleration, drive, chart_quality, dTF, kinetic,
-        potential, dissipated;
+        potential, dissipated, idle_hold;
     long chart_id;
     int chart_sign;
     bool singular;
@@ -239,6 +257,9 @@ struct CycleResult {
   long chart_switches = 0;
   int reversals = 0;  // dead points passed by reversing the input (reverse_at_dead_point)
   int rank = 0, dof = 0, redundant = 0;
+  // Idle degrees of freedom (counted in dof), held at zero rate: dof − Σ count = 1 (the driver).
+  std::vector<Mobility::Idle> idle;
+  double idle_hold_peak = 0.0;  // max |DrivenPoint::idle_hold| over the positions
 };
 
 // Reaction components of every joint (names, frames, units), in output order.
@@ -269,7 +290,14 @@ struct DrivenWorkspace {
   // R(φ_b) of every body at the q of the last compute_driven (body_rotations); the corrector
   // fills it with Eᵀ.
   std::vector<Eigen::Matrix2d> rotations;
-  DrivenWorkspace(const Model& model, int rank);
+  // Idle degrees of freedom held at zero rate (empty: none): their bodies (Mobility::idle), and
+  // at the q of the last compute_driven the idle rows I (k × n), the idle motions V (n × k), I F
+  // (k × n_a), the held basis F z (n), İ u (k) and the holding forces μ (k). Not allocation-free.
+  std::vector<int> idle_bodies;
+  MatX idle_I, idle_V, idle_IF;
+  VecX F_held, idle_Idot_u, idle_mu;
+  double length_scale = 1.0;  // of the mechanism (m): the step of the İ u differences
+  DrivenWorkspace(const Model& model, int rank, std::vector<int> idle_bodies = {});
 };
 
 // What a driven position reports at its state (q, u) with u̇ and λ: every joint's reaction
@@ -316,8 +344,9 @@ bool compute_multi_driven(const Model& model, const std::vector<int>& joints, co
 // Velocities, accelerations, drive and multipliers at a position q on f(q) = 0 where the input
 // moves with rate sdot and acceleration sddot (C1)–(C4). Returns false at a dead point (dᵀF = 0).
 // jacobian_current: ws.constraints.Et already holds Eᵀ(q) and dws.rotations R(φ_b) at q (the
-// corrector's last evaluation).
-// Allocation-free after set-up.
+// corrector's last evaluation). With dws.idle_bodies the idle motions are held at zero rate
+// (dᵀF is then that of the held basis F z).
+// Allocation-free after set-up (without idle bodies).
 bool compute_driven(const Model& model, int driver_joint, double sdot, double sddot, State& state,
                     Workspace& ws, DrivenWorkspace& dws, DrivenPoint& out,
                     bool jacobian_current = false);

@@ -34,4 +34,22 @@ struct Mobility {
 [[nodiscard]] Mobility compute_mobility(const Model& model, const VecX& q,
                                         const ChartOptions& options = {});
 
+// The indices (Model::bodies) of the bodies of m.idle.
+[[nodiscard]] std::vector<int> idle_body_indices(const Model& model, const Mobility& m);
+
+// The own motions of the bodies `idle` at q (spatial.md §4.1, §6.5): for each, a basis of the
+// null space of Eᵀ restricted to its columns (scaled by √A_kk, rows normalised, as the rank test
+// of compute_mobility), every other body at rest. One column (size n) per motion, scaled to a
+// unit angular rate (1 rad/s; a motion without rotation: unit speed). n × 0 without idle bodies.
+[[nodiscard]] MatX idle_motions(const Model& model, const VecX& q, const std::vector<int>& idle);
+
+// Rows that hold those motions at zero rate, mass-orthogonally: for every motion v of
+// idle_motions, the row vᵀM normalised. I u = 0 makes u M-orthogonal to the idle motions (the
+// admissible velocity of least kinetic energy among u + span(v)). Used by validate (tangent,
+// corrector, singularity measures) and by cycle (velocities, accelerations, positions).
+// 0 × n without idle bodies. `motions`, if given: the motions v (idle_motions), row k's in
+// column k.
+[[nodiscard]] MatX idle_rows(const Model& model, const VecX& q, const std::vector<int>& idle,
+                             MatX* motions = nullptr);
+
 }  // namespace orthomech
