@@ -1546,17 +1546,12 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
       std::string bodies;
       for (const Mobility::Idle& i : result.idle)
         bodies += (bodies.empty() ? "'" : ", '") + i.body + "'";
-      char peak[32];
-      std::snprintf(peak, sizeof peak, "%.3g", result.idle_hold_peak);
       result.warnings.push_back(
-          "holding the idle motion of " + bodies +
-          " at zero rate takes a generalised force of "
-          "up to " +
-          peak +
-          " N*m (a torque about the motion's axis): the motion is not idle "
-          "dynamically "
-          "(a centre of mass off the line of its joints, or an inertia not symmetric about it); "
-          "the reactions are those with it held");
+          "holding the idle motion of " + bodies + " at zero rate takes up to " +
+          format_quantity(result.idle_hold_peak, Dimension::moment, file_units) +
+          " (a torque about the motion's axis): it is not idle dynamically (a centre of mass off "
+          "the line of its joints, or an inertia not symmetric about it); the reactions are those "
+          "with it held");
     }
   }
   result.chart_switches = ws.dual.switch_count;
