@@ -262,6 +262,22 @@ TEST(SpatialIdleCycle, OffAxisCouplerHoldsItsSpinWithTheRowsRate) {
   EXPECT_NEAR(r.idle_hold_peak, hold_peak, 1e-9 * hold_peak);
 }
 
+// With the crank's joint cylindrical (it may also slide) the S–S RSSR has DOF 3: one idle, two
+// to drive. The refusal counts them.
+TEST(SpatialIdleCycle, RefusalCountsTheIdleDegreesOfFreedom) {
+  Model m = rssr(true, 1e-6);
+  std::get<SpatialJoint>(m.joints[static_cast<size_t>(m.find_joint("A0"))].kind).type =
+      SpatialJointType::cylindrical;
+  finalize_model(m);
+  const CycleResult r = full_cycle(m, 36);
+  EXPECT_EQ(r.status, CycleStatus::failed);
+  EXPECT_EQ(r.dof, 3);
+  ASSERT_EQ(r.idle.size(), 1u);
+  EXPECT_EQ(r.message,
+            "a single driver needs a mechanism with 1 DOF; this one has 3 (1 idle, held at zero "
+            "rate: 2 to drive) (drive every degree of freedom: cycle --drivers A,B,…)");
+}
+
 TEST(SpatialIdleCycle, CliSaysTheIdleSpinIsHeld) {
   std::string text = test::read_text(test::bundled_file("rssr"));
   const std::string from =
