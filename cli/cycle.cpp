@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
@@ -56,6 +57,7 @@ struct CycleCliOptions {
   std::vector<std::string> traces;   // --trace BODY.POINT
   std::string animate;               // --animate FILE.svg
   std::string report;                // --report FILE.html
+  std::string view;                  // --view (spatial pictures; "" is iso)
   double duration = 4.0;             // s per loop of the animation
 };
 
@@ -281,7 +283,8 @@ SweepPositions sweep_positions_of(const CycleResult& r) {
   return s;
 }
 
-// The traces' columns of cycle.csv: "trace coupler.P.x", "trace coupler.P.y".
+// The traces' columns of cycle.csv: "trace coupler.P.x", "trace coupler.P.y" (spatial: and
+// "trace coupler.P.z").
 std::vector<ExtraColumn> trace_columns(const std::vector<PointTrace>& traces) {
   std::vector<ExtraColumn> cols;
   for (const PointTrace& t : traces) {
@@ -293,6 +296,8 @@ std::vector<ExtraColumn> trace_columns(const std::vector<PointTrace>& traces) {
     }
     cols.push_back(std::move(x));
     cols.push_back(std::move(y));
+    if (!t.z.empty())
+      cols.push_back(ExtraColumn{"trace " + t.point + ".z", Dimension::length, t.z});
   }
   return cols;
 }
@@ -342,17 +347,8 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
   const UnitSystem file_units = unit_system(model.units);
   if (!opt.animate.empty() && image_format_of(opt.animate) != ImageFormat::svg)
     throw CLI::ValidationError("--animate", "the animation is an SVG: give a NAME.svg");
-  if (model.dimension == 3) {  // the pictures are planar drawings
-    const char* option = !opt.traces.empty()    ? "--trace"
-                         : !opt.animate.empty() ? "--animate"
-                         : !opt.report.empty()  ? "--report"
-                                                : nullptr;
-    if (option)
-      throw CLI::ValidationError(
-          option, std::string(option) +
-                      " is not available for spatial mechanisms yet (the named points' "
-                      "coordinates are columns of cycle.csv and of --json --positions)");
-  }
+  const ViewChoice view = choose_view(model, opt.view);
+  if (!view.projection) throw InputError({"command line", 0, 0}, "option", view.message);
   const TracePoints trace_request = resolve_trace_points(model, opt.traces);
   if (trace_request.status == TraceStatus::bad_request)
     throw InputError({"command line", 0, 0}, "option", trace_request.message);
@@ -460,8 +456,7 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
 
   // The traced points over the cycle's own positions.
   const SweepPositions sweep = sweep_positions_of(r);
-  const std::vector<PointTrace> traces =
-      trace_paths(model, trace_request.points, sweep.q, sweep.input);
+  const std::vector<PointTrace> traces = trace_paths(model, trace_request, sweep.q, sweep.input);
   const OutputUnit length_u = output_unit(Dimension::length, U);
 
   // Files first: a failure to write is reported before anything goes to stdout.
@@ -660,6 +655,11 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
       e["input"] = in;
       e["x"] = x;
       e["y"] = y;
+      if (!t.z.empty()) {
+        std::vector<double> z;
+        for (const double v : t.z) z.push_back(length_u.from_si(v));
+        e["z"] = z;
+      }
       traced.push_back(e);
     }
     j["traces"] = traced;
@@ -784,7 +784,13 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
       }
       out << "trace  " << t.point << ": x " << fmt(length_u.from_si(lo.x()), 7) << " ... "
           << fmt(length_u.from_si(hi.x()), 7) << ", y " << fmt(length_u.from_si(lo.y()), 7)
-          << " ... " << fmt(length_u.from_si(hi.y()), 7) << " " << length_u.name << "\n";
+          << " ... " << fmt(length_u.from_si(hi.y()), 7);
+      if (!t.z.empty()) {
+        const auto [zlo, zhi] = std::minmax_element(t.z.begin(), t.z.end());
+        out << ", z " << fmt(length_u.from_si(*zlo), 7) << " ... "
+            << fmt(length_u.from_si(*zhi), 7);
+      }
+      out << " " << length_u.name << "\n";
     }
     bool any = false;
     for (size_t i = 0; i < r.components.size(); ++i) {
@@ -806,6 +812,7 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
   if (!opt.animate.empty() || !opt.report.empty()) {
     RenderOptions ro;
     ro.driver = co.driver.joint;
+    ro.projection = *view.projection;
     ro.traces = traces;
     std::string animation;
     try {
@@ -887,6 +894,9 @@ void register_cycle(CLI::App& app, const GlobalOptions& globals, int& exit_code)
   cmd->add_option("--report", opt->report,
                   "FILE.html: one self-contained page (offline): the summary, the drive and "
                   "reaction plots and the animation with a slider");
+  cmd->add_option("--view", opt->view,
+                  "the pictures of a spatial mechanism (--animate, --report): iso (default), "
+                  "front, top, side, or AZIMUTH,ELEVATION in degrees (orthographic)");
   cmd->add_option("--duration", opt->duration,
                   "seconds of one loop of the animation (--animate, --report; default 4)")
       ->check(finite_range(0.0, 3600.0, true));

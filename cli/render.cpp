@@ -1,6 +1,7 @@
 // `orthomech render FILE --out X.svg|.png|.pdf`: the mechanism drawn at its design position (as
 // `assemble` projects it), at a design position of the file (--position) or with the driver at a
-// value (--input), through Cairo (io/render.hpp). docs/cli.md, "render".
+// value (--input), through Cairo (io/render.hpp); a spatial one in an orthographic view (--view).
+// docs/cli.md, "render".
 #include "orthomech/io/render.hpp"
 
 #include <spdlog/spdlog.h>
@@ -22,6 +23,7 @@ struct RenderCliOptions {
   std::string out;
   std::string position;
   std::string input;
+  std::string view;  // --view: "" is iso for spatial files
   std::vector<std::string> traces;
   bool labels = false;
   bool animate = false;
@@ -38,7 +40,8 @@ int run_render(const RenderCliOptions& opt) {
   const auto format = image_format_of(opt.out);
   if (!format) bad("--out: unknown image type '" + opt.out + "' (use .svg, .png or .pdf)");
   const Model model = load(opt.file, opt.sets);
-  require_planar(model, "render");
+  const ViewChoice view = choose_view(model, opt.view);
+  if (!view.projection) bad(view.message);
   const PoseResult pose = assemble_pose(model, RenderPose{opt.position, opt.input});
   if (pose.status == PoseStatus::bad_request) bad(pose.message);
   if (pose.status == PoseStatus::cannot_assemble) {
@@ -50,6 +53,7 @@ int run_render(const RenderCliOptions& opt) {
   options.height = opt.height;
   options.labels = opt.labels;
   options.driver = pose.driver;
+  options.projection = *view.projection;
   int code = kOk;
   if (!opt.traces.empty()) {
     TraceResult traced = trace_points(model, opt.traces, pose.driver);
@@ -126,6 +130,9 @@ void register_render(CLI::App& app, const GlobalOptions& globals, int& exit_code
                 "an SVG that plays the driver's cycle by itself, one frame per position");
   cmd->add_option("--duration", opt->duration, "seconds of one loop of --animate (default 4)")
       ->check(finite_range(0.0, 3600.0, true));
+  cmd->add_option("--view", opt->view,
+                  "spatial mechanisms: iso (default), front, top, side, or AZIMUTH,ELEVATION in "
+                  "degrees (orthographic; a planar mechanism is drawn in its plane)");
   cmd->add_flag("--labels", opt->labels, "names of bodies, joints and points");
   cmd->add_option("--width", opt->width, "image width (px; pt in a PDF)")
       ->check(CLI::Range(200, 10000));

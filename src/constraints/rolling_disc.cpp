@@ -37,13 +37,11 @@ void evaluate_rolling_disc(const Model& model, const RollingDisc& disc, const Ve
     if (f) (*f)(r) = k == 2 ? x.height : 0.0;  // eq. (20): rows t1, t2 nonholonomic
     if (Et) {
       auto e = Et->row(r);
-      e.setZero();
       add_spatial_row(x.frame, n, h, 1.0, e);  // (D0), eq. (23)
     }
     const Vec3 hdot = x.rho_p_dot.cross(n);
     if (Dt) {
       auto e = Dt->row(r);
-      e.setZero();
       add_spatial_row_rate(x.frame, Vec3::Zero(), h, hdot, 1.0, e);  // (D0), eq. (76)
     }
     if (Dtu) (*Dtu)(r) = hdot.dot(x.frame.w);  // (R3): ġ = 0

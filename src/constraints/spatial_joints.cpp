@@ -194,12 +194,10 @@ void evaluate_spatial_joint(const Model& model, const SpatialJoint& joint, const
     if (f) (*f)(r + k) = t.f;  // eq. (20)
     if (Et) {
       auto e = Et->row(r + k);
-      e.setZero();
       for (int s = 0; s < 2; ++s) add_spatial_row(x.k[s], t.g[s], t.h[s], 1.0, e);  // eq. (23)
     }
     if (Dt) {
       auto e = Dt->row(r + k);
-      e.setZero();
       for (int s = 0; s < 2; ++s)
         add_spatial_row_rate(x.k[s], t.gdot[s], t.h[s], t.hdot[s], 1.0, e);  // eq. (76)
     }

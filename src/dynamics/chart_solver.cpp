@@ -33,6 +33,28 @@ ChartSolver::ChartSolver(const Model& model, int rank)
       xd_(rank),
       sw_(rank) {
   triplets_.reserve(static_cast<size_t>(8 * rank + 8));
+  if (sparse_) structural_pattern();
+}
+
+void ChartSolver::structural_pattern() {
+  MatX Et(nc_, n_);
+  row_columns_.assign(static_cast<size_t>(nc_), {});
+  std::vector<std::vector<char>> seen(static_cast<size_t>(nc_),
+                                      std::vector<char>(static_cast<size_t>(n_), 0));
+  for (const double scale : {0.0137, -0.0291}) {  // two generic positions near the design
+    VecX q = model_.design_q();
+    VecX du(n_);
+    for (int k = 0; k < n_; ++k) du(k) = scale * (1.0 + std::sin(1.7 * k + 0.3));
+    integrate_positions(model_, q, du, 1.0);
+    compute_constraint_jacobian(model_, q, Et);
+    for (int i = 0; i < nc_; ++i)
+      for (int j = 0; j < n_; ++j)
+        if (Et(i, j) != 0.0) seen[static_cast<size_t>(i)][static_cast<size_t>(j)] = 1;
+  }
+  for (int i = 0; i < nc_; ++i)
+    for (int j = 0; j < n_; ++j)
+      if (seen[static_cast<size_t>(i)][static_cast<size_t>(j)])
+        row_columns_[static_cast<size_t>(i)].push_back(j);
 }
 
 void ChartSolver::set_chart(const Chart& c) {
@@ -41,6 +63,12 @@ void ChartSolver::set_chart(const Chart& c) {
   std::fill(dep_pos_.begin(), dep_pos_.end(), -1);
   for (size_t k = 0; k < chart_.dependent.size(); ++k)
     dep_pos_[static_cast<size_t>(chart_.dependent[k])] = static_cast<int>(k);
+  block_entries_.clear();
+  if (!sparse_) return;
+  for (int i = 0; i < r_; ++i)
+    for (const int j : row_columns_[static_cast<size_t>(chart_.rows[static_cast<size_t>(i)])])
+      if (const int k = dep_pos_[static_cast<size_t>(j)]; k >= 0)
+        block_entries_.push_back({i, k, j});
 }
 
 bool ChartSolver::select(const MatX& Et, const VecX& A_diag) {
@@ -77,16 +105,11 @@ bool ChartSolver::factor(const MatX& Et) {
     return lu_factor(ED_, piv_) > 1e-14;
   }
   triplets_.clear();
-  for (int i = 0; i < r_; ++i) {
-    const int row = chart_.rows[static_cast<size_t>(i)];
-    for (int j = 0; j < n_; ++j) {
-      const int k = dep_pos_[static_cast<size_t>(j)];
-      if (k >= 0 && Et(row, j) != 0.0) triplets_.emplace_back(i, k, Et(row, j));
-    }
-  }
+  for (const BlockEntry& e : block_entries_)  // the structural entries, zero or not
+    triplets_.emplace_back(e.i, e.k, Et(chart_.rows[static_cast<size_t>(e.i)], e.column));
   EDs_.setFromTriplets(triplets_.begin(), triplets_.end());
-  // The ordering (COLAMD) is computed once per sparsity pattern; entries that vanish exactly at
-  // some positions (sin 0) change the pattern and trigger a new analysis.
+  // The ordering (COLAMD) is computed once per pattern: the structural pattern is the same
+  // within a chart.
   const auto nnz = EDs_.nonZeros();
   bool same = analyzed_ && nnz == static_cast<Eigen::Index>(pattern_inner_.size());
   if (same) {

@@ -71,6 +71,8 @@ class ChartSolver {
   [[nodiscard]] int na() const { return n_ - r_; }
 
  private:
+  void structural_pattern();  // fills row_columns_ (sparse path)
+
   const Model& model_;
   int n_, nc_, r_;
   bool sparse_;
@@ -83,6 +85,17 @@ class ChartSolver {
   Eigen::SparseMatrix<double> EDs_;
   Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>> slu_;
   std::vector<Eigen::Triplet<double>> triplets_;
+  // Structural pattern of Eᵀ (sparse path): the columns each row can have non-zero, from Eᵀ at
+  // two generic positions (an entry that vanishes at one position, sin 0, does not at the
+  // other). block_entries_: (row of the block, column of the block, column of Eᵀ) of the
+  // dependent block's structural entries in the current chart (set_chart), so that factor
+  // reads O(non-zeros) entries instead of scanning r × n, and the block's pattern, hence its
+  // ordering, stays the same within a chart.
+  std::vector<std::vector<int>> row_columns_;
+  struct BlockEntry {
+    int i, k, column;
+  };
+  std::vector<BlockEntry> block_entries_;
   bool analyzed_ = false;  // slu_ has the ordering of pattern_*
   std::vector<int> pattern_inner_, pattern_outer_;
   VecX br_, xd_;  // r

@@ -15,6 +15,7 @@
 //     next output time, so every output is a step end (corrected like any other step end).
 #include <functional>
 #include <string>
+#include <vector>
 
 #include "orthomech/model/model.hpp"
 
@@ -39,6 +40,13 @@ struct OdeProblem {
   // Optional: after every accepted step, the longest next step the problem allows (+∞ for no
   // limit); e.g. simulate's chart monitor ahead of a chart's singularity.
   std::function<double()> step_limit;
+  // Optional (rosenbrock4): the columns of ∂f/∂x that can be non-zero; the Jacobian's other
+  // columns are exactly zero and are not differenced. Asked before every Jacobian, so it may
+  // change between steps (simulate's projected stages: the chart's independent coordinates and
+  // the velocity coordinates; the chart can switch at a step end). Empty function: every column.
+  std::function<void(std::vector<Eigen::Index>& columns)> jacobian_columns;
+  // f does not depend on t: ∂f/∂t is zero and is not differenced (rosenbrock4).
+  bool autonomous = false;
 };
 
 struct OdeOptions {
@@ -67,9 +75,12 @@ OdeStats integrate_ode(const OdeProblem& problem, VecX& x, const OdeOptions& opt
 // Jacobian ∂f/∂x and ∂f/∂t of problem.rhs at (x, t) by central differences, step
 // h_j = ∛ε · max(1, |x_j|) (truncation O(h²) and rounding O(ε/h) balanced: ~1e-11 relative for a
 // smooth f) [Nocedal & Wright 2006, §8.1]. Costs 2·(dim x + 1) evaluations of f. Buffers are the
-// caller's (no allocation after the first call with a given size).
+// caller's (no allocation after the first call with a given size). With
+// problem.jacobian_columns, only the columns it names are differenced (2 evaluations each); the
+// others are set to zero.
 struct FiniteDifferenceJacobian {
   VecX xp, fp, fm;
+  std::vector<Eigen::Index> columns;
   void compute(const OdeProblem& problem, const VecX& x, double t, MatX& J, VecX& dfdt);
 };
 

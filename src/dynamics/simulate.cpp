@@ -198,6 +198,18 @@ std::string chart_name(const Model& model, const Chart& c) {
   return s;
 }
 
+// Whether the dual form evaluates every stage at its position projected onto f(q) = 0 in the
+// chart (independent coordinates fixed): on request, and always for rosenbrock4. Its Jacobian
+// is then that of the ODE on the constraint manifold in chart coordinates (the columns of the
+// dependent coordinates are zero). Without the projection the right-hand side off the manifold
+// is that of F extended through Eᵀ(q), which stiffens as the chart degrades: rosenbrock4 needed
+// 14 812 steps (2·10⁻⁶ s next to the change points) on n-four-bar-2 over 10 s at rtol 1e-6,
+// 1057 with it (issue 10; docs/theory.md, "Rosenbrock on the chart's ODE").
+bool projects_stages(const SimulateOptions& options) {
+  return options.project_stages ||
+         (options.form == DynamicsForm::dual && options.integrator == Integrator::rosenbrock4);
+}
+
 // Everything the two forms share: the free system, constraints, the chart solver for F and for
 // position correction, the power of the non-conservative loads, and the samples.
 class Dynamics {
@@ -210,6 +222,7 @@ class Dynamics {
         nc_(model.nc),
         r_(rank),
         na_(model.n - rank),
+        project_stages_(projects_stages(options)),
         ws_(model, rank),
         cs_(model, rank),
         state_(model),
@@ -320,7 +333,7 @@ class Dynamics {
     //    (L4): the right-hand side is then the ODE on the constraint manifold in the chart
     //    coordinates, smooth even next to a change point, where F off the manifold is very
     //    sensitive to the stage's constraint error (IFToMM A02).
-    if (options_.project_stages) {
+    if (project_stages_) {
       // Leaves Eᵀ at the projected q factorised in the chart.
       const SolveResult pr = cs_.correct_positions(state_.q, ws_.constraints.Et, ws_.constraints.f,
                                                    dq_, options_.position_tolerance);
@@ -462,6 +475,7 @@ class Dynamics {
   const Model& model_;
   const SimulateOptions& options_;
   int n_, nq_, nc_, r_, na_;
+  bool project_stages_;
   Workspace ws_;
   ChartSolver cs_;
   State state_;
@@ -742,6 +756,34 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
     }
     dy(nx - 1) = dyn.nonconservative_power();
   };
+
+  problem.autonomous = !model.general;  // only a general system's forces may depend on t
+  // With projected stages the right-hand side depends on q through the chart's independent
+  // coordinates only (the dependent ones are solved for): the Jacobian's other position
+  // columns, and the work column, are zero. A planar body's velocity component k is its
+  // coordinate k; a spatial body's rotation moves all four quaternion components.
+  if (!primal && dyn.project_stages_)
+    problem.jacobian_columns = [&](std::vector<Eigen::Index>& columns) {
+      columns.clear();
+      const Chart& c = dyn.cs_.chart();
+      for (const int k : c.independent) {
+        if (model.nq == model.n) {
+          columns.push_back(k);
+          continue;
+        }
+        for (const Body& b : model.bodies) {
+          if (k < b.u_offset || k >= b.u_offset + b.nu()) continue;
+          if (b.nq() == b.nu()) {
+            columns.push_back(b.q_offset + (k - b.u_offset));
+          } else {
+            for (int i = 0; i < b.nq(); ++i) columns.push_back(b.q_offset + i);
+          }
+        }
+      }
+      std::sort(columns.begin(), columns.end());
+      columns.erase(std::unique(columns.begin(), columns.end()), columns.end());
+      for (int k = 0; k < na; ++k) columns.push_back(nq + k);
+    };
 
   auto sample_at = [&](double t, const VecX& y, SimulationSample& smp) {
     if (primal) {

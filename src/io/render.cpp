@@ -9,6 +9,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <memory>
 #include <numbers>
@@ -19,6 +20,7 @@
 #include "orthomech/io/mechanism_writer.hpp"
 #include "orthomech/io/units.hpp"
 #include "orthomech/model/free_system.hpp"
+#include "orthomech/model/spatial.hpp"
 
 namespace orthomech {
 
@@ -52,6 +54,7 @@ constexpr double kSlotWidth = 12.0;
 constexpr double kPointRadius = 2.5;
 constexpr double kDriverRadius = 15.0;
 constexpr double kLabelSize = 11.0;
+constexpr double kTriadLength = 25.0;  // px, an axis of the ground frame's triad
 // Two drawn points closer than this (m) are the same place (a named point at a joint).
 constexpr double kSamePlace = 1e-9;
 
@@ -135,24 +138,37 @@ double angle_unit_si(const std::string& name) { return name == "deg" ? kPi / 180
 class SceneBuilder {
  public:
   SceneBuilder(const Model& model, const VecX& q, const RenderOptions& options)
-      : model_(model), q_(q), options_(options) {}
+      : model_(model), q_(q), options_(options), proj_(options.projection) {}
 
   Scene build() {
-    collect_ground_points();
-    add_ground();
-    for (size_t b = 0; b < model_.bodies.size(); ++b) add_body(static_cast<int>(b));
-    for (const Load& l : model_.loads)
-      if (const auto* s = std::get_if<SpringDamper>(&l.kind)) add_spring(l.name, *s);
-    add_traces();
-    for (size_t j = 0; j < model_.joints.size(); ++j) add_joint(static_cast<int>(j));
-    add_points();
+    const bool spatial = model_.dimension == 3;
+    if (spatial) {
+      build_spatial();
+    } else {
+      collect_ground_points();
+      add_ground();
+      for (size_t b = 0; b < model_.bodies.size(); ++b) add_body(static_cast<int>(b));
+      for (const Load& l : model_.loads)
+        if (const auto* s = std::get_if<SpringDamper>(&l.kind))
+          add_spring(l.name, world(model_, s->pi, q_), world(model_, s->pj, q_), s->stiffness,
+                     s->damping);
+      add_traces();
+      for (size_t j = 0; j < model_.joints.size(); ++j) add_joint(static_cast<int>(j));
+      add_points();
+    }
     if (options_.driver >= 0 && options_.driver < static_cast<int>(model_.joints.size()))
       add_driver(options_.driver);
-    if (options_.labels) add_labels();
+    if (options_.labels) {
+      if (spatial)
+        add_spatial_labels();
+      else
+        add_labels();
+    }
     Scene scene;
     const double unit = length_unit_si(model_.units.length);
     scene.view = options_.view ? *options_.view : fit_view(prims_, options_, 100.0 / unit);
     add_scale_bar(scene.view, unit);
+    if (spatial) add_triad(scene.view);
     scene.primitives = std::move(prims_);
     return scene;
   }
@@ -161,6 +177,7 @@ class SceneBuilder {
   const Model& model_;
   const VecX& q_;
   const RenderOptions& options_;
+  const Projection proj_;
   std::vector<Primitive> prims_;
   std::vector<std::pair<std::string, Vec2>> ground_points_;  // label, world
   std::vector<std::pair<std::string, Vec2>> joint_places_;   // joint name, world
@@ -293,7 +310,10 @@ class SceneBuilder {
     for (size_t k = 0; k < options_.traces.size(); ++k) {
       const PointTrace& t = options_.traces[k];
       Path path;
-      for (const Vec2& p : t.path) path.points.push_back(at(p));
+      if (model_.dimension == 3)
+        for (size_t i = 0; i < t.path.size(); ++i) path.points.push_back(at(proj_(t.at(i))));
+      else
+        for (const Vec2& p : t.path) path.points.push_back(at(p));
       path.style = stroke_only(kTrace[k % std::size(kTrace)], kTraceWidth, true);
       add(Role::trace, t.point, path);
     }
@@ -443,9 +463,9 @@ class SceneBuilder {
 
   // A spring (zig-zag) and a dashpot side by side between the two points; only the spring when
   // there is no damping and only the dashpot when there is no stiffness.
-  void add_spring(const std::string& name, const SpringDamper& s) {
-    const Vec2 a = world(model_, s.pi, q_), b = world(model_, s.pj, q_);
-    const bool spring = s.stiffness != 0.0 || s.damping == 0.0, damper = s.damping != 0.0;
+  void add_spring(const std::string& name, const Vec2& a, const Vec2& b, double stiffness,
+                  double damping) {
+    const bool spring = stiffness != 0.0 || damping == 0.0, damper = damping != 0.0;
     const Vec2 d = px_dir(b - a), n = px_perp(d);
     const double side = spring && damper ? 9.0 : 0.0;
     auto lerp = [&](double t) { return a + t * (b - a); };
@@ -600,6 +620,266 @@ class SceneBuilder {
       }
   }
 
+  // ---- spatial mechanisms: everything drawn through the projection proj_ -----------------------
+  [[nodiscard]] Vec3 world3(int body, const Vec3& s) const {
+    return spatial_point(spatial_frame(model_, body, q_, nullptr), s).r;
+  }
+  [[nodiscard]] Vec3 world3(const SpatialPointRef& p) const { return world3(p.body, p.s); }
+  [[nodiscard]] Mat3 rotation3(int body) const {
+    return spatial_frame(model_, body, q_, nullptr).R;
+  }
+
+  // Bodies (farther first: painter's order along the view direction), springs, traces, the joints
+  // with their axes, the points not at a joint.
+  void build_spatial() {
+    // Every body's joint points (world), and the ground's.
+    std::vector<std::vector<Vec3>> joint_points(model_.bodies.size());
+    auto take = [&](const SpatialPointRef& p) {
+      const Vec3 w = world3(p);
+      if (p.body == kGround) {
+        const Vec2 g = proj_(w);
+        if (std::none_of(ground_points_.begin(), ground_points_.end(),
+                         [&](const auto& x) { return (x.second - g).norm() <= kSamePlace; }))
+          ground_points_.emplace_back(p.label, g);
+        return;
+      }
+      auto& pts = joint_points[static_cast<size_t>(p.body)];
+      if (std::none_of(pts.begin(), pts.end(),
+                       [&](const Vec3& x) { return (x - w).norm() <= kSamePlace; }))
+        pts.push_back(w);
+    };
+    for (const Joint& j : model_.joints)
+      if (const auto* k = std::get_if<SpatialJoint>(&j.kind)) {
+        take(k->pi);
+        take(k->pj);
+      }
+    add_ground();
+    const Vec3 w = proj_.toward_viewer();
+    std::vector<int> order(model_.bodies.size());
+    for (size_t b = 0; b < order.size(); ++b) order[b] = static_cast<int>(b);
+    auto depth = [&](int b) {
+      const Body& body = model_.bodies[static_cast<size_t>(b)];
+      return body.kind == BodyKind::spatial ? w.dot(q_.segment<3>(body.q_offset)) : 0.0;
+    };
+    std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return depth(a) < depth(b); });
+    for (const int b : order) add_spatial_body(b, joint_points[static_cast<size_t>(b)]);
+    for (const Load& l : model_.loads)
+      if (const auto* s = std::get_if<SpatialSpringDamper>(&l.kind))
+        add_spring(l.name, proj_(world3(s->pi)), proj_(world3(s->pj)), s->stiffness, s->damping);
+    add_traces();
+    for (const Joint& j : model_.joints)
+      if (const auto* k = std::get_if<SpatialJoint>(&j.kind)) add_spatial_joint(j.name, *k);
+    add_spatial_points();
+  }
+
+  void add_spatial_body(int b, std::vector<Vec3> pts) {
+    const Body& body = model_.bodies[static_cast<size_t>(b)];
+    if (body.kind != BodyKind::spatial) return;
+    const Rgba fill = kBodyFill[static_cast<size_t>(b) % std::size(kBodyFill)];
+    const Rgba edge = kBodyEdge[static_cast<size_t>(b) % std::size(kBodyEdge)];
+    const Vec3 com = q_.segment<3>(body.q_offset);
+    // Fewer than two joint points: the named points and the centre of mass give the shape.
+    if (pts.size() < 2) {
+      for (const auto& [name, p] : body.spatial.points)
+        pts.push_back(world3(b, p - body.spatial.com_local));
+      pts.push_back(com);
+    }
+    std::vector<Vec2> flat;
+    for (const Vec3& p : pts) {
+      const Vec2 f = proj_(p);
+      if (std::none_of(flat.begin(), flat.end(),
+                       [&](const Vec2& x) { return (x - f).norm() <= kSamePlace; }))
+        flat.push_back(f);
+    }
+    if (flat.size() > 2 && convex_hull(flat).size() < 3) flat = convex_hull(flat);
+    if (flat.size() <= 1) {
+      Circle c;
+      c.centre = at(proj_(com));
+      c.radius_px = 8.0;
+      c.style = filled(fill, edge, 2.0);
+      c.style.fill->a = 1.0;
+      add(Role::body, body.name, c);
+      return;
+    }
+    if (flat.size() == 2) {
+      Path under, over;
+      under.points = over.points = {at(flat[0]), at(flat[1])};
+      under.style = stroke_only(edge, kBarWidth + 3.0, true);
+      Rgba solid = fill;
+      solid.a = 1.0;
+      over.style = stroke_only(solid, kBarWidth, true);
+      add(Role::body, body.name, under);
+      add(Role::body, body.name, over);
+      return;
+    }
+    Path plate;
+    for (const Vec2& p : convex_hull(flat)) plate.points.push_back(at(p));
+    plate.closed = true;
+    plate.style = filled(fill, edge, 2.0);
+    plate.style.round = true;
+    add(Role::body, body.name, plate);
+  }
+
+  // A stroke of ± kAxisLength px along the projection of the world direction d through p: long
+  // when d lies in the screen plane, a dot when it points at the viewer.
+  void add_axis_stroke(const std::string& name, const Vec2& p, const Vec3& d, const Rgba& colour) {
+    constexpr double kAxisLength = 18.0;
+    const Vec2 s = kAxisLength * Vec2(proj_.u.dot(d), -proj_.v.dot(d)) / std::max(d.norm(), 1e-300);
+    Path axis;
+    axis.points = {at(p, -s), at(p, s)};
+    axis.style = stroke_only(colour, 2.5, true);
+    add(Role::axis, name, axis);
+  }
+
+  void add_spatial_joint(const std::string& name, const SpatialJoint& k) {
+    const Vec3 pi = world3(k.pi), pj = world3(k.pj);
+    if (k.type == SpatialJointType::distance) {
+      const Vec2 a = proj_(pi), b = proj_(pj);
+      joint_places_.emplace_back(name, 0.5 * (a + b));
+      Path rod;
+      rod.points = {at(a), at(b)};
+      rod.style = stroke_only(kInk, 2.0, true);
+      add(Role::distance, name, rod);
+      for (const Vec2& e : {a, b}) {
+        Circle c;
+        c.centre = at(e);
+        c.radius_px = 4.0;
+        c.style = filled(kBackground, kInk, 1.5);
+        add(Role::distance, name, c);
+      }
+      return;
+    }
+    const Vec2 p = proj_(pi);
+    joint_places_.emplace_back(name, p);
+    const Mat3 Ri = rotation3(k.pi.body), Rj = rotation3(k.pj.body);
+    switch (k.type) {
+      case SpatialJointType::revolute:
+      case SpatialJointType::cylindrical:
+      case SpatialJointType::prismatic:
+      case SpatialJointType::screw:
+        add_axis_stroke(name, p, Ri * k.frame_i.col(2), kInk);
+        break;
+      case SpatialJointType::universal:  // pin 1 = f of frame_i, pin 2 = g of frame_j
+        add_axis_stroke(name, p, Ri * k.frame_i.col(0), kInk);
+        add_axis_stroke(name, p, Rj * k.frame_j.col(1), kInk);
+        break;
+      default:
+        break;
+    }
+    Circle c;
+    c.centre = at(p);
+    c.radius_px = kJointRadius;
+    c.style = filled(kJointFill, kJointInk, kJointRing);
+    add(Role::spatial_joint, name, c);
+  }
+
+  void add_spatial_points() {
+    for (size_t b = 0; b < model_.bodies.size(); ++b) {
+      const Body& body = model_.bodies[b];
+      if (body.kind != BodyKind::spatial) continue;
+      for (const auto& [name, p] : body.spatial.points) {
+        const Vec2 w = proj_(world3(static_cast<int>(b), p - body.spatial.com_local));
+        if (at_joint(w)) continue;
+        Circle c;
+        c.centre = at(w);
+        c.radius_px = kPointRadius;
+        c.style = filled(kInk, kInk, 1.0);
+        add(Role::point, body.name + "." + name, c);
+      }
+    }
+  }
+
+  void add_spatial_labels() {
+    for (size_t b = 0; b < model_.bodies.size(); ++b) {
+      const Body& body = model_.bodies[b];
+      if (body.kind != BodyKind::spatial) continue;
+      Vec2 c = proj_(q_.segment<3>(body.q_offset));
+      if (!body.spatial.points.empty()) {
+        c = Vec2::Zero();
+        for (const auto& [name, p] : body.spatial.points)
+          c += proj_(world3(static_cast<int>(b), p - body.spatial.com_local));
+        c /= static_cast<double>(body.spatial.points.size());
+      }
+      add_text(body.name, at(c, Vec2(4.0, 14.0)), body.name);
+    }
+    for (const auto& [name, p] : joint_places_)
+      add_text(name, at(p, Vec2(kJointRadius + 3.0, -kJointRadius - 3.0)), name);
+    for (size_t b = 0; b < model_.bodies.size(); ++b) {
+      const Body& body = model_.bodies[b];
+      if (body.kind != BodyKind::spatial) continue;
+      for (const auto& [name, p] : body.spatial.points) {
+        const Vec2 w = proj_(world3(static_cast<int>(b), p - body.spatial.com_local));
+        if (at_joint(w)) continue;
+        const std::string label = body.name + "." + name;
+        add_text(label, at(w, Vec2(5.0, -5.0)), label);
+      }
+    }
+  }
+
+  // The ground frame's axes x (red), y (green), z (blue), kTriadLength px where they lie in the
+  // screen plane, bottom right in the legend strip (screen positions). An axis along the view
+  // direction is a small circle: with a dot when it points at the viewer, a cross when away.
+  void add_triad(const ViewTransform& view) {
+    // The triad's extent right of and below its origin (tips, labels ~8 px high), then the origin
+    // that puts its bottom right 4 px inside the image and half a margin from the right edge.
+    Vec2 hi = Vec2::Zero();
+    for (int a = 0; a < 3; ++a) {
+      const Vec3 e = Vec3::Unit(a);
+      const Vec2 d = kTriadLength * Vec2(proj_.u.dot(e), -proj_.v.dot(e));
+      const Vec2 l = d.norm() < 4.0 ? Vec2(7.0, 12.0) : d + 9.0 * d.normalized() + Vec2(-3.5, 4.0);
+      for (const Vec2& p : {d, l, Vec2(l.x() + 7.0, l.y() - 8.0)}) hi = hi.cwiseMax(p);
+    }
+    const Vec2 o(view.width - 0.5 * options_.margin - hi.x(), view.height - 4.0 - hi.y());
+    const Rgba colours[] = {{0.8, 0.1, 0.1, 1.0}, {0.1, 0.55, 0.1, 1.0}, {0.1, 0.2, 0.8, 1.0}};
+    const char* names[] = {"x", "y", "z"};
+    const Vec3 w = proj_.toward_viewer();
+    for (int a = 0; a < 3; ++a) {
+      const Vec3 e = Vec3::Unit(a);
+      const Vec2 d = kTriadLength * Vec2(proj_.u.dot(e), -proj_.v.dot(e));  // px, y down
+      const Rgba& c = colours[a];
+      if (d.norm() < 4.0) {
+        Circle ring;
+        ring.centre = screen(o.x(), o.y());
+        ring.radius_px = 5.0;
+        ring.style = stroke_only(c, 1.5);
+        add(Role::triad, names[a], ring);
+        if (w.dot(e) > 0.0) {
+          Circle dot;
+          dot.centre = screen(o.x(), o.y());
+          dot.radius_px = 1.5;
+          dot.style = filled(c, c, 1.0);
+          add(Role::triad, names[a], dot);
+        } else {
+          for (const double sgn : {-1.0, 1.0}) {
+            Path cross;
+            cross.points = {screen(o.x() - 3.5, o.y() - 3.5 * sgn),
+                            screen(o.x() + 3.5, o.y() + 3.5 * sgn)};
+            cross.style = stroke_only(c, 1.5);
+            add(Role::triad, names[a], cross);
+          }
+        }
+        add(Role::triad, names[a],
+            Text{screen(o.x() + 7.0, o.y() + 12.0), names[a], kLabelSize, c});
+        continue;
+      }
+      Path shaft;
+      shaft.points = {screen(o.x(), o.y()), screen(o.x() + d.x(), o.y() + d.y())};
+      shaft.style = stroke_only(c, 2.0, true);
+      add(Role::triad, names[a], shaft);
+      const Vec2 t = d.normalized(), n(-t.y(), t.x());
+      const Vec2 tip = o + d;
+      Path head;
+      head.points = {
+          screen(tip.x() - 6.0 * t.x() + 3.5 * n.x(), tip.y() - 6.0 * t.y() + 3.5 * n.y()),
+          screen(tip.x(), tip.y()),
+          screen(tip.x() - 6.0 * t.x() - 3.5 * n.x(), tip.y() - 6.0 * t.y() - 3.5 * n.y())};
+      head.style = stroke_only(c, 2.0, true);
+      add(Role::triad, names[a], head);
+      const Vec2 l = tip + 9.0 * t + Vec2(-3.5, 4.0);
+      add(Role::triad, names[a], Text{screen(l.x(), l.y()), names[a], kLabelSize, c});
+    }
+  }
+
   // A bar of a round length (1, 2 or 5 × 10^k file units) near a quarter of the area's width,
   // bottom left, in the legend strip.
   void add_scale_bar(const ViewTransform& view, double unit_si) {
@@ -749,8 +1029,71 @@ ViewTransform fit_view(const std::vector<Primitive>& primitives, const RenderOpt
   return view;
 }
 
+Projection projection_from(double azimuth, double elevation) {
+  // (V1): the viewer along w = (cos e cos a, cos e sin a, sin e); u horizontal, v = w × u.
+  const double ca = std::cos(azimuth), sa = std::sin(azimuth);
+  const double ce = std::cos(elevation), se = std::sin(elevation);
+  Projection p;
+  p.u = Vec3(-sa, ca, 0.0);
+  p.v = Vec3(-se * ca, -se * sa, ce);
+  return p;
+}
+
+std::optional<Projection> view_projection(const std::string& view) {
+  // The named views with exact vectors (the top view is the identity of the planar drawing).
+  Projection p;
+  if (view == "top") return p;
+  if (view == "front") {
+    p.v = Vec3::UnitZ();
+    return p;
+  }
+  if (view == "side") {
+    p.u = Vec3::UnitY();
+    p.v = Vec3::UnitZ();
+    return p;
+  }
+  if (view == "iso") {
+    p.u = Vec3(-1.0, 1.0, 0.0) / std::sqrt(2.0);
+    p.v = Vec3(-1.0, -1.0, 2.0) / std::sqrt(6.0);
+    return p;
+  }
+  // "AZ,EL" in degrees.
+  const auto comma = view.find(',');
+  if (comma == std::string::npos) return std::nullopt;
+  auto number = [](const std::string& t) -> std::optional<double> {
+    if (t.empty()) return std::nullopt;
+    char* end = nullptr;
+    const double v = std::strtod(t.c_str(), &end);
+    if (end != t.c_str() + t.size() || !std::isfinite(v)) return std::nullopt;
+    return v;
+  };
+  const auto az = number(view.substr(0, comma)), el = number(view.substr(comma + 1));
+  if (!az || !el || std::abs(*el) > 90.0) return std::nullopt;
+  return projection_from(*az * kPi / 180.0, *el * kPi / 180.0);
+}
+
+ViewChoice choose_view(const Model& model, const std::string& view) {
+  ViewChoice choice;
+  const std::string name = view.empty() ? (model.dimension == 3 ? "iso" : "top") : view;
+  const std::optional<Projection> p = view_projection(name);
+  if (!p) {
+    choice.message = "--view: unknown view '" + view +
+                     "' (use iso, front, top, side or AZIMUTH,ELEVATION in degrees, e.g. 30,20)";
+    return choice;
+  }
+  if (model.dimension != 3 && !p->is_top()) {
+    choice.message =
+        "--view: a planar mechanism is drawn in its plane (the top view), not '" + view + "'";
+    return choice;
+  }
+  choice.projection = p;
+  return choice;
+}
+
 Scene build_scene(const Model& model, const VecX& q, const RenderOptions& options) {
   if (q.size() != model.nq) throw std::invalid_argument("build_scene: q has the wrong size");
+  if (model.dimension != 3 && !options.projection.is_top())
+    throw std::invalid_argument("build_scene: a planar mechanism is drawn in the top view only");
   if (options.width <= 0 || options.height <= 0 || options.width - 2.0 * options.margin <= 0.0 ||
       options.height - 2.0 * options.margin - options.legend <= 0.0)
     throw std::invalid_argument("build_scene: the image is smaller than its margins");
@@ -811,6 +1154,7 @@ void release_render_caches() {
 
 TracePoints resolve_trace_points(const Model& model, const std::vector<std::string>& points) {
   TracePoints result;
+  const bool spatial = model.dimension == 3;
   // The points: "body.point" of a moving body (PointRef: s from the centre of mass).
   for (const std::string& name : points) {
     const auto dot = name.find('.');
@@ -823,24 +1167,57 @@ TracePoints resolve_trace_points(const Model& model, const std::vector<std::stri
       return result;
     }
     const Body& body = model.bodies[static_cast<size_t>(b)];
-    const auto it = std::find_if(body.points.begin(), body.points.end(),
-                                 [&](const auto& p) { return p.first == point; });
-    if (it == body.points.end() && point != "origin") {
+    std::vector<std::string> names;
+    if (spatial)
+      for (const auto& p : body.spatial.points) names.push_back(p.first);
+    else
+      for (const auto& p : body.points) names.push_back(p.first);
+    const auto it = std::find(names.begin(), names.end(), point);
+    const auto index = static_cast<size_t>(it - names.begin());
+    if (it == names.end() && point != "origin") {
       std::string known;
-      for (const auto& p : body.points) known += (known.empty() ? "" : ", ") + p.first;
+      for (const std::string& p : names) known += (known.empty() ? "" : ", ") + p;
       result.status = TraceStatus::bad_request;
       result.message = "--trace: body '" + body.name + "' has no point '" + point + "' (it has " +
                        (known.empty() ? std::string("origin") : known) + ")";
       result.points.clear();
       return result;
     }
+    if (spatial) {
+      SpatialPointRef ref;
+      ref.body = b;
+      ref.s = (it == names.end() ? Vec3::Zero() : body.spatial.points[index].second) -
+              body.spatial.com_local;
+      ref.label = name;
+      result.spatial_points.push_back(ref);
+      continue;
+    }
     PointRef ref;
     ref.body = b;
-    ref.s = (it == body.points.end() ? Vec2::Zero() : it->second) - body.com_local;
+    ref.s = (it == names.end() ? Vec2::Zero() : body.points[index].second) - body.com_local;
     ref.label = name;
     result.points.push_back(ref);
   }
   return result;
+}
+
+std::vector<PointTrace> trace_paths(const Model& model, const TracePoints& points,
+                                    const std::vector<VecX>& q, const std::vector<double>& input) {
+  std::vector<PointTrace> traces = trace_paths(model, points.points, q, input);
+  for (const SpatialPointRef& ref : points.spatial_points) {
+    PointTrace t;
+    t.point = ref.label;
+    t.input = input;
+    t.path.reserve(q.size());
+    t.z.reserve(q.size());
+    for (const VecX& qk : q) {
+      const Vec3 r = spatial_point(spatial_frame(model, ref.body, qk, nullptr), ref.s).r;
+      t.path.emplace_back(r.x(), r.y());
+      t.z.push_back(r.z());
+    }
+    traces.push_back(std::move(t));
+  }
+  return traces;
 }
 
 std::vector<PointTrace> trace_paths(const Model& model, const std::vector<PointRef>& points,
@@ -871,7 +1248,7 @@ TraceResult trace_points(const Model& model, const std::vector<std::string>& poi
     result.message = sweep.message;
     return result;
   }
-  result.traces = trace_paths(model, refs.points, sweep.q, sweep.input);
+  result.traces = trace_paths(model, refs, sweep.q, sweep.input);
   result.status = sweep.status;
   result.message = sweep.message;
   return result;
@@ -954,9 +1331,13 @@ std::string animated_svg(const Model& model, const std::vector<VecX>& frames,
   for (size_t k = 0; k < n; ++k) {
     // The traces drawn along: up to this frame's position.
     for (size_t t = 0; t < fixed.traces.size(); ++t)
-      if (options.traces[t].path.size() == n)
+      if (options.traces[t].path.size() == n) {
         fixed.traces[t].path.assign(options.traces[t].path.begin(),
                                     options.traces[t].path.begin() + static_cast<long>(k) + 1);
+        if (options.traces[t].z.size() == n)
+          fixed.traces[t].z.assign(options.traces[t].z.begin(),
+                                   options.traces[t].z.begin() + static_cast<long>(k) + 1);
+      }
     const std::string svg = draw_image(build_scene(model, frames[k], fixed), ImageFormat::svg);
     // The frame's content: between the end of the <svg …> start tag and </svg>.
     const size_t open = svg.find("<svg");
@@ -1005,6 +1386,14 @@ PoseResult assemble_pose(const Model& model, const RenderPose& pose) {
   if (!pose.position.empty() && !pose.input.empty()) {
     result.status = PoseStatus::bad_request;
     result.message = "--position and --input are exclusive";
+    return result;
+  }
+  if (model.dimension == 3 && (!pose.position.empty() || !pose.input.empty())) {
+    // Both lock joints, and `assemble` has no locks on spatial joints yet.
+    result.status = PoseStatus::bad_request;
+    result.message = std::string(pose.position.empty() ? "--input" : "--position") +
+                     " is not available for spatial mechanisms yet (assemble has no locks on "
+                     "spatial joints): the design position is drawn without it";
     return result;
   }
   if (!pose.position.empty()) {

@@ -27,7 +27,8 @@ struct RollingDiscKinematics {
                                                             const VecX* u);
 
 // The disc's rows (from disc.row_offset): f (if f), Eᵀ (if Et), Dᵀ (if Dt), Dᵀu (if Dtu, needs u).
-// Allocation-free.
+// Its rows of Eᵀ and Dᵀ are added into: they must be zero on entry (compute_constraints zeroes
+// the matrices once). Allocation-free.
 void evaluate_rolling_disc(const Model& model, const RollingDisc& disc, const VecX& q,
                            const VecX* u, VecX* f, MatX* Et, MatX* Dt, VecX* Dtu);
 

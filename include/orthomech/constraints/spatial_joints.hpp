@@ -52,7 +52,8 @@ struct TwistAngle {
                                      const Vec3& wj);
 
 // Rows of one spatial joint from row r on: f (if f), Eᵀ (if Et), Dᵀ (if Dt), Dᵀu (if Dtu, needs
-// u). Allocation-free.
+// u). Its rows of Eᵀ and Dᵀ are added into: they must be zero on entry (compute_constraints
+// zeroes the matrices once). Allocation-free.
 void evaluate_spatial_joint(const Model& model, const SpatialJoint& joint, const VecX& q,
                             const VecX* u, int r, VecX* f, MatX* Et, MatX* Dt, VecX* Dtu);
 

@@ -20,6 +20,12 @@
 //               with (cx, cy) the box centre and (cx_px, cy_px) the area centre.
 // A pixel (i, j) of the PNG covers [i, i + 1) × [j, j + 1) in these coordinates (Cairo's
 // convention). SVG uses the same numbers in px, PDF in pt.
+//
+// Spatial mechanisms (dimension 3) are drawn in an orthographic projection (Projection): a world
+// point p is the model point (uᵀp, vᵀp) of the drawing above, u the screen's right and v its up
+// direction; everything after that (fit_view, the transform, Cairo) is the planar drawing's. A
+// planar mechanism is the special case of the view "top", u = x, v = y (the identity).
+#include <Eigen/Geometry>
 #include <optional>
 #include <string>
 #include <variant>
@@ -49,6 +55,9 @@ enum class Role {
   driver,
   label,
   scale_bar,
+  spatial_joint,  // the marker of a spatial joint (the revolute symbol)
+  axis,           // a spatial joint's axis (revolute, cylindrical, prismatic, screw, universal)
+  triad,          // the ground frame's axes (spatial views)
 };
 
 // A model point plus a pixel offset (x right, y down), or a pure screen position.
@@ -107,8 +116,45 @@ struct ViewTransform {
 struct PointTrace {
   std::string point;          // "body.point" as given
   std::vector<double> input;  // the driver's input at each position (rad or m)
-  std::vector<Vec2> path;     // world position of the point at each position, m
+  std::vector<Vec2> path;     // world x, y of the point at each position, m
+  std::vector<double> z;      // spatial mechanisms: world z at each position, m (planar: empty)
+  // The world position of point k (z = 0 when z is empty).
+  [[nodiscard]] Vec3 at(size_t k) const {
+    return Vec3(path[k].x(), path[k].y(), z.empty() ? 0.0 : z[k]);
+  }
 };
+
+// ---- the view of a spatial mechanism ---------------------------------------------------------
+// An orthographic projection onto the screen: u points right, v up (unit, orthogonal, world
+// frame); w = u × v points from the mechanism toward the viewer. From an azimuth a and an
+// elevation e (the viewer in the direction w = (cos e cos a, cos e sin a, sin e), z up):
+//   u = (−sin a, cos a, 0),   v = w × u = (−sin e cos a, −sin e sin a, cos e)          (V1)
+// The named views (docs/cli.md, "render --view"):
+//   top   a = −90°, e = 90°:          u = x, v = y (the planar drawing's identity)
+//   front a = −90°, e = 0:            u = x, v = z (the viewer on −y)
+//   side  a = 0,    e = 0:            u = y, v = z (the viewer on +x)
+//   iso   a = 45°,  e = asin(1/√3):   u = (−1, 1, 0)/√2, v = (−1, −1, 2)/√6 (the viewer on (1, 1,
+//   1))
+struct Projection {
+  Vec3 u = Vec3::UnitX(), v = Vec3::UnitY();  // the top view
+  [[nodiscard]] Vec2 operator()(const Vec3& p) const { return Vec2(u.dot(p), v.dot(p)); }
+  [[nodiscard]] Vec3 toward_viewer() const { return u.cross(v); }
+  [[nodiscard]] bool is_top() const { return u == Vec3::UnitX() && v == Vec3::UnitY(); }
+};
+// (V1) from an azimuth and an elevation in radians (the named views' exact vectors are those of
+// view_projection, not these rounded ones).
+[[nodiscard]] Projection projection_from(double azimuth, double elevation);
+// "iso", "front", "top", "side" (exact vectors above), or "AZ,EL" in degrees (|EL| ≤ 90);
+// nullopt for anything else.
+[[nodiscard]] std::optional<Projection> view_projection(const std::string& view);
+// The view of `render --view` and `cycle --view` for this model: "" is "iso" for a spatial
+// mechanism and "top" for a planar one, which is drawn in its plane only. nullopt with the
+// message (naming the option) for an unknown view or a planar mechanism in another view.
+struct ViewChoice {
+  std::optional<Projection> projection;
+  std::string message;
+};
+[[nodiscard]] ViewChoice choose_view(const Model& model, const std::string& view);
 
 // The look of a render (sizes in px).
 struct RenderOptions {
@@ -119,6 +165,7 @@ struct RenderOptions {
   int driver = -1;                    // joint index to mark as driven (−1: none)
   std::vector<PointTrace> traces;     // paths drawn (and fitted in the view) over the bodies
   std::optional<ViewTransform> view;  // this view instead of fit_view (frames of an animation)
+  Projection projection;              // spatial mechanisms; a planar one is drawn in "top" only
 };
 
 // Revolute symbol: a filled circle of radius kJointRadius − kJointRing/2 in kJointFill with a ring
@@ -142,7 +189,13 @@ struct Scene {
 // scale bar in the file's length unit (model.units.length). Bodies from their outline, else a
 // bar (two points) or the convex hull of three or more points; ground symbols with hatching at
 // the ground points of joints and springs; a symbol per joint and spring-damper; the driver
-// marked; labels if asked.
+// marked; labels if asked. A spatial mechanism in options.projection: each body as the segments
+// between its joint points (a bar for two, the convex hull of the projected points for more; a
+// disc at the centre of mass for none), ground supports at the ground's joint points, a marker
+// per joint (the revolute symbol) with a short stroke along the projected axis of an axial joint,
+// named points and traces projected, and the ground frame's axes as a triad in the legend strip
+// (bottom right, screen positions: it does not move the view). Throws std::invalid_argument for a
+// planar mechanism in any projection but "top".
 [[nodiscard]] Scene build_scene(const Model& model, const VecX& q, const RenderOptions& options);
 
 // The documented transform (above) for these primitives.
@@ -205,15 +258,20 @@ struct TraceResult {
 // the cycle's own positions). resolve_trace_points: the named points as PointRef (s from the
 // centre of mass, label the name as given), or status bad_request with the message (traces
 // empty). trace_paths: the world path of each point at the positions q (inputs alongside).
+// Spatial mechanisms: spatial_points instead of points (and the traces' z filled).
 struct TracePoints {
   TraceStatus status = TraceStatus::completed;  // completed or bad_request
   std::string message;
-  std::vector<PointRef> points;
+  std::vector<PointRef> points;                 // planar
+  std::vector<SpatialPointRef> spatial_points;  // spatial
 };
 [[nodiscard]] TracePoints resolve_trace_points(const Model& model,
                                                const std::vector<std::string>& points);
 [[nodiscard]] std::vector<PointTrace> trace_paths(const Model& model,
                                                   const std::vector<PointRef>& points,
+                                                  const std::vector<VecX>& q,
+                                                  const std::vector<double>& input);
+[[nodiscard]] std::vector<PointTrace> trace_paths(const Model& model, const TracePoints& points,
                                                   const std::vector<VecX>& q,
                                                   const std::vector<double>& input);
 

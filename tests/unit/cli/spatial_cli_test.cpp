@@ -102,9 +102,10 @@ TEST(SpatialCli, InfoReportsAnIdleDegreeOfFreedom) {
 }
 
 TEST(SpatialCli, CommandsNotYetSpatialRefuseWithExitTwo) {
-  for (const char* cmd : {"render"}) {
+  for (const char* cmd : {"sweep"}) {  // render draws spatial files now (spatial_pictures_cli)
     std::vector<std::string> args = {cmd, test::bundled_file("rssr")};
-    if (std::string(cmd) == "render") args.insert(args.end(), {"--out", "/tmp/never.png"});
+    if (std::string(cmd) == "sweep")
+      args.insert(args.end(), {"--study", "/tmp/never.yaml", "--out", "/tmp/never-sweep"});
     const CliResult r = run_cli(args);
     EXPECT_EQ(r.status, 2) << cmd << ": " << r.err;
     EXPECT_NE(r.err.find("not available for spatial mechanisms yet"), std::string::npos)

@@ -1,4 +1,5 @@
-// `orthomech cycle` on spatial files (issue 13 item 1): the table, JSON, CSV and the refusals.
+// `orthomech cycle` on spatial files (issue 13 item 1): the table, JSON and CSV (the pictures:
+// spatial_pictures_cli_test.cpp).
 // The numbers themselves are checked against closed forms in analysis/spatial_cycle_test.cpp;
 // here the CLI's outputs agree with each other and with the library's determinacy.
 #include <gtest/gtest.h>
@@ -74,19 +75,6 @@ TEST(SpatialCycleCli, JsonPositionsAndCsvCarryTheSpatialPosesAndVelocities) {
   int rows = 0;
   for (std::string line; std::getline(csv, line);) ++rows;
   EXPECT_EQ(rows, 12);
-}
-
-TEST(SpatialCycleCli, PicturesOfSpatialMechanismsAreRefusedWithExitTwo) {
-  const std::string rssr = test::bundled_file("rssr");
-  for (const auto& extra : std::vector<std::vector<std::string>>{{"--trace", "coupler.B"},
-                                                                 {"--animate", "/tmp/never.svg"},
-                                                                 {"--report", "/tmp/never.html"}}) {
-    std::vector<std::string> args = {"cycle", rssr};
-    args.insert(args.end(), extra.begin(), extra.end());
-    const CliResult r = run_cli(args);
-    EXPECT_EQ(r.status, 2) << extra[0] << ": " << r.err;
-    EXPECT_NE(r.err.find("not available for spatial mechanisms yet"), std::string::npos) << r.err;
-  }
 }
 
 // Several drivers: `cycle --drivers` sweeps the Stewart platform's six legs over one period; the

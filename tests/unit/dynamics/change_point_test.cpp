@@ -207,11 +207,19 @@ const std::vector<double> kAllRtols = {1e-6, 1e-8, 1e-10, 1e-12};
 const std::vector<Integrator> kBoth = {Integrator::dopri5, Integrator::rkf78};
 const std::vector<Integrator> kThree = {Integrator::dopri5, Integrator::rkf78,
                                         Integrator::bulirsch_stoer};
+const std::vector<Integrator> kFour = {Integrator::dopri5, Integrator::rkf78,
+                                       Integrator::bulirsch_stoer, Integrator::rosenbrock4};
 
 // N = 2 (10 s) and N = 10 (20 s): every rtol, both integrators.
-INSTANTIATE_TEST_SUITE_P(N2, NFourBar, testing::ValuesIn(matrix(2, 10.0, kAllRtols, kThree)),
+INSTANTIATE_TEST_SUITE_P(N2, NFourBar, testing::ValuesIn(matrix(2, 10.0, kAllRtols, kFour)),
                          case_name);
+// rosenbrock4 at N = 10: rtol 1e-6 and 1e-8 here (2 and 4 s); 1e-10 and 1e-12 (10 and 26 s) in
+// the long matrix below.
 INSTANTIATE_TEST_SUITE_P(N10, NFourBar, testing::ValuesIn(matrix(10, 20.0, kAllRtols, kThree)),
+                         case_name);
+INSTANTIATE_TEST_SUITE_P(N10Rosenbrock, NFourBar,
+                         testing::ValuesIn(matrix(10, 20.0, {1e-6, 1e-8},
+                                                  {Integrator::rosenbrock4})),
                          case_name);
 // N = 40 (20 s, ~1–2 s of CPU each): two tolerances here, the full matrix below.
 INSTANTIATE_TEST_SUITE_P(N40, NFourBar,
@@ -219,7 +227,8 @@ INSTANTIATE_TEST_SUITE_P(N40, NFourBar,
                                          Case{40, 20.0, 1e-10, Integrator::rkf78}),
                          case_name);
 
-// The whole N = 40 matrix (12 runs, ~50 s of CPU): run with ORTHOMECH_LONG_TESTS=1, e.g.
+// The whole N = 40 matrix (16 runs, ~3 min of CPU, rosenbrock4 at rtol 1e-12 alone ~1.5 min) and
+// rosenbrock4 at N = 10 to rtol 1e-12: run with ORTHOMECH_LONG_TESTS=1, e.g.
 //   ORTHOMECH_LONG_TESTS=1 build/tests/orthomech_tests --gtest_filter='N40Matrix/*'
 class NFourBarLong : public testing::TestWithParam<Case> {};
 TEST_P(NFourBarLong, DualPassesEveryChangePoint_AgainstExactReduction) {
@@ -228,7 +237,11 @@ TEST_P(NFourBarLong, DualPassesEveryChangePoint_AgainstExactReduction) {
   run_case(GetParam());
 }
 INSTANTIATE_TEST_SUITE_P(N40Matrix, NFourBarLong,
-                         testing::ValuesIn(matrix(40, 20.0, kAllRtols, kThree)), case_name);
+                         testing::ValuesIn(matrix(40, 20.0, kAllRtols, kFour)), case_name);
+INSTANTIATE_TEST_SUITE_P(N10RosenbrockTight, NFourBarLong,
+                         testing::ValuesIn(matrix(10, 20.0, {1e-10, 1e-12},
+                                                  {Integrator::rosenbrock4})),
+                         case_name);
 
 // Never a motion off the branch reported as completed, whatever the step length (issue 10):
 // Bulirsch–Stoer at rtol 1e-6 takes steps of up to ~0.3 s on the N = 40 bar, longer than the

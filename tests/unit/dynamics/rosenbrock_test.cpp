@@ -38,6 +38,33 @@ TEST(FiniteDifferenceJacobian, CentralDifferencesMatchAnalyticDerivatives) {
   EXPECT_LT((ft - ft_exact).cwiseAbs().maxCoeff(), kFdTol);
 }
 
+// With jacobian_columns only the listed columns are differenced; the others are zero. The
+// listed ones equal the full difference Jacobian's bit for bit (same steps, same evaluations).
+TEST(FiniteDifferenceJacobian, ListedColumnsOnly_OthersZero) {
+  OdeProblem p;
+  p.rhs = [](const VecX& x, VecX& f, double t) {
+    f.resize(3);
+    f << x(1) * x(1) + x(2), std::sin(x(0)) * x(1) + t * t, t * x(0) - x(2);
+  };
+  VecX x(3);
+  x << 0.7, -1.3, 2.0;
+  MatX J_full, J_cols;
+  VecX ft_full, ft_cols;
+  FiniteDifferenceJacobian fd;
+  fd.compute(p, x, 0.4, J_full, ft_full);
+  p.jacobian_columns = [](std::vector<Eigen::Index>& c) { c = {0, 2}; };
+  fd.compute(p, x, 0.4, J_cols, ft_cols);
+  EXPECT_EQ(J_cols.col(0), J_full.col(0));
+  EXPECT_EQ(J_cols.col(2), J_full.col(2));
+  EXPECT_EQ(J_cols.col(1), VecX::Zero(3));
+  EXPECT_NE(J_full.col(1), VecX::Zero(3));  // the omitted column is not zero in truth
+  EXPECT_EQ(ft_cols, ft_full);
+  // An autonomous problem's ∂f/∂t is not differenced: zero.
+  p.autonomous = true;
+  fd.compute(p, x, 0.4, J_cols, ft_cols);
+  EXPECT_EQ(ft_cols, VecX::Zero(3));
+}
+
 // Error at t_end of Rosenbrock at a fixed step h: rtol so loose that every step is accepted,
 // and the step pinned by dt_init = max_dt = h.
 double fixed_step_error(const OdeProblem& p, const VecX& x0, double t_end, double h,
@@ -83,6 +110,30 @@ TEST(Rosenbrock4, OrderFour_HarmonicOscillator) {
   x0 << 1.0, 0.0;
   exact << std::cos(2.0), -std::sin(2.0);
   expect_order_four(p, x0, 2.0, exact);
+}
+
+// The Woodbury path (jacobian_columns with 2m < n): x'' = −x carried along by three passive
+// integrals that f does not depend on, (x₀, x₁, ∫x₀, ∫x₁², ∫x₀x₁): the Jacobian has two non-zero
+// columns of five. Order 4 against the closed form, and the same result as the dense LU path to
+// rounding (the same method, W⁻¹ by the Sherman–Morrison–Woodbury identity).
+TEST(Rosenbrock4, OrderFour_LowRankJacobian_EqualsDensePath) {
+  const auto f = [](const VecX& x, VecX& dx, double) {
+    dx.resize(5);
+    dx << x(1), -x(0), x(0), x(1) * x(1), x(0) * x(1);
+  };
+  OdeProblem dense = problem(f);
+  OdeProblem low_rank = problem(f);
+  low_rank.jacobian_columns = [](std::vector<Eigen::Index>& c) { c = {0, 1}; };
+  low_rank.autonomous = true;
+  VecX x0(5), exact(5);
+  x0 << 1.0, 0.0, 0.0, 0.0, 0.0;
+  const double T = 2.0;  // x = cos t: ∫cos = sin T, ∫sin² = T/2 − sin 2T/4, ∫−cos sin = −sin² T/2
+  exact << std::cos(T), -std::sin(T), std::sin(T), T / 2.0 - std::sin(2.0 * T) / 4.0,
+      -std::sin(T) * std::sin(T) / 2.0;
+  expect_order_four(low_rank, x0, T, exact);
+  for (const double h : {0.05, 0.0125})
+    EXPECT_NEAR(fixed_step_error(low_rank, x0, T, h, exact),
+                fixed_step_error(dense, x0, T, h, exact), 1e-12);
 }
 
 TEST(Rosenbrock4, OrderFour_NonAutonomous) {
