@@ -94,8 +94,9 @@ int run_validate(const ValidateCliOptions& opt) {
         rep.min_transmission_index ? nlohmann::json({{"index", *rep.min_transmission_index},
                                                      {"position", rep.min_transmission_index_at}})
                                    : nlohmann::json(nullptr);
-    bool any_spatial_loop = false;
-    for (const PositionReport& p : rep.positions) any_spatial_loop |= !p.spatial_loops.empty();
+    // An array whenever the mechanism has spatial transmission loops (empty where a position
+    // does not assemble).
+    const bool any_spatial_loop = !find_spatial_transmission_loops(model, -1).empty();
     nlohmann::json positions = nlohmann::json::array();
     for (const PositionReport& p : rep.positions) {
       nlohmann::json fb = nlohmann::json::array();

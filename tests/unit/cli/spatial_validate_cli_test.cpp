@@ -133,6 +133,10 @@ TEST(SpatialValidateCli, SpatialJointLimitsNameTheJoint) {
   EXPECT_EQ(b["joint"], "B0");
   EXPECT_EQ(b["unit"], "deg");
   EXPECT_NEAR(b["needed"].get<double>(), 158.12936317866155, 1e-6);
+  // The mechanism has a transmission loop, the position no index (it does not assemble).
+  EXPECT_TRUE(doc["positions"][0]["transmission_loops"].is_array());
+  EXPECT_TRUE(doc["positions"][0]["transmission_loops"].empty());
+  EXPECT_TRUE(doc["min_loop_transmission_index"].is_null());
 }
 
 // The RSSR with a spherical joint at B (an S–S coupler): an idle spin about AB (spatial.md §4.1),
