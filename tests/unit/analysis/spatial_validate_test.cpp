@@ -727,6 +727,47 @@ TEST(SpatialValidate, DistanceRowCouplerHasTheRssrIndex) {
   }
 }
 
+// The same index in its velocity form (an independent formulation): |a·(r × s)| / |a × r| =
+// |t·s|, t the unit velocity of B on its circle about the rocker axis, (0, −sin φ, cos φ) from
+// (M1). Driven from the rocker (input B0) the loop turns round: B0-B-A-A0 ("RUSR"), the output
+// the crank about z through A0, TI = |t_A·s| with t_A = (−sin θ, cos θ, 0), θ the root of (M1)
+// for the given φ on the branch the position is on (cos θ, sin θ from the linear equation
+// −2 r1 r2 cos φ sin θ − 2 p r1 cos θ = −(2 h r2 sin φ + p² + r1² + r2² + h² − L²)).
+TEST(SpatialValidate, RssrTransmissionIndexVelocityFormAndRockerInput) {
+  for (int k = 0; k < 8; ++k) {
+    const double theta = 45.0 * k * kDeg, phi = rocker(theta);
+    const Vec3 A = crank_A(theta), B = rocker_B(phi), s = (B - A).normalized();
+    EXPECT_NEAR(rssr_index(theta), std::abs(Vec3(0.0, -std::sin(phi), std::cos(phi)).dot(s)),
+                1e-12);
+  }
+  Model m = test::load_bundled("rssr");
+  const int A0 = m.find_joint("A0"), B0 = m.find_joint("B0");
+  m.design_positions = {position("r150", B0, 150.0 * kDeg), position("r170", B0, 170.0 * kDeg),
+                        position("r200", B0, 200.0 * kDeg)};
+  const ValidationReport rep = validate_design_positions(m, any_index());
+  for (const PositionReport& pr : rep.positions) {
+    ASSERT_TRUE(pr.assembles) << pr.name << ": " << pr.assembly_message;
+    ASSERT_EQ(pr.spatial_loops.size(), 1u);
+    EXPECT_EQ(pr.spatial_loops[0].joints, "B0-B-A-A0");
+    EXPECT_EQ(pr.spatial_loops[0].type, "RUSR");
+    const double phi = joint_coordinate(m, B0, pr.q);
+    // a sin θ + b cos θ = c: θ = atan2(a, b) ± acos(c / √(a² + b²)).
+    const double a = -2.0 * r1 * r2 * std::cos(phi), b = -2.0 * p * r1;
+    const double c = -(2.0 * h * r2 * std::sin(phi) + p * p + r1 * r1 + r2 * r2 + h * h - Lc * Lc);
+    const double base = std::atan2(a, b), off = std::acos(c / std::hypot(a, b));
+    const double model_theta = joint_coordinate(m, A0, pr.q);
+    const double theta =
+        std::abs(wrap(base + off - model_theta)) < std::abs(wrap(base - off - model_theta))
+            ? base + off
+            : base - off;
+    EXPECT_NEAR(wrap(theta - model_theta), 0.0, 1e-9) << pr.name;  // on (M1)
+    const Vec3 A = crank_A(theta), B = rocker_B(phi), s = (B - A).normalized();
+    EXPECT_NEAR(pr.spatial_loops[0].index,
+                std::abs(Vec3(-std::sin(theta), std::cos(theta), 0.0).dot(s)), 1e-9)
+        << pr.name;
+  }
+}
+
 // No transmission loop (Bennett: four revolutes with skew axes): "not applicable", no index.
 TEST(SpatialValidate, BennettHasNoTransmissionLoop) {
   const Model m = test::load_bundled("bennett");
