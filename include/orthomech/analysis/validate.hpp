@@ -216,7 +216,8 @@ struct ValidationReport {
   int circuits = 0;                          // circuits traced
   std::vector<std::string> singular_points;  // every dead/change point found, in words
   // Checks that do not apply to this mechanism, in words (a spatial mechanism: Grashof type,
-  // four-bar transmission angle, slider-crank pressure angle); empty for a planar one.
+  // four-bar transmission angle, slider-crank pressure angle, and the Sutherland–Roth index when
+  // it has no spatial transmission loop); empty for a planar one.
   std::vector<std::string> not_applicable;
   // The smallest Sutherland–Roth index over the loops and the assembled positions, and where
   // (none without spatial transmission loops); the bound applied.
