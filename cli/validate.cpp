@@ -26,6 +26,7 @@ struct ValidateCliOptions {
   std::vector<std::string> sets;  // --set PATH=VALUE
   bool json = false;
   std::string min_transmission = "30deg";
+  double min_transmission_index = -1.0;  // < 0: sin(min_transmission)
   int starts = 24;
   unsigned seed = 1;
   std::string units = "file";
@@ -54,6 +55,7 @@ int run_validate(const ValidateCliOptions& opt) {
   }
   if (!(vo.min_transmission >= 0.0 && vo.min_transmission <= std::numbers::pi / 2))
     throw CLI::ValidationError("--min-transmission", "must lie in [0, 90] deg");
+  if (opt.min_transmission_index >= 0.0) vo.min_transmission_index = opt.min_transmission_index;
   vo.starts = opt.starts;
   vo.seed = opt.seed;
   if (model.design_positions.empty())
@@ -87,6 +89,14 @@ int run_validate(const ValidateCliOptions& opt) {
     j["defects"] = rep.defects;
     j["singular_points"] = rep.singular_points;
     j["not_applicable"] = rep.not_applicable;
+    j["transmission_index_bound"] = rep.transmission_index_bound;
+    j["min_loop_transmission_index"] =
+        rep.min_transmission_index ? nlohmann::json({{"index", *rep.min_transmission_index},
+                                                     {"position", rep.min_transmission_index_at}})
+                                   : nlohmann::json(nullptr);
+    // An array whenever the mechanism has spatial transmission loops (empty where a position
+    // does not assemble).
+    const bool any_spatial_loop = !find_spatial_transmission_loops(model, -1).empty();
     nlohmann::json positions = nlohmann::json::array();
     for (const PositionReport& p : rep.positions) {
       nlohmann::json fb = nlohmann::json::array();
@@ -99,6 +109,9 @@ int run_validate(const ValidateCliOptions& opt) {
       for (const SliderCrankReport& c : p.slider_cranks)
         sc.push_back(
             {{"joints", c.joints}, {"pressure_angle", angle_u.from_si(c.pressure)}, {"ok", c.ok}});
+      nlohmann::json tl = nlohmann::json::array();
+      for (const SpatialLoopReport& l : p.spatial_loops)
+        tl.push_back({{"joints", l.joints}, {"type", l.type}, {"index", l.index}, {"ok", l.ok}});
       nlohmann::json blocks = nlohmann::json::array();
       for (const LimitBlock& b : p.limit_blocks) {
         const Joint& jt = model.joints[static_cast<size_t>(b.joint)];
@@ -133,6 +146,7 @@ int run_validate(const ValidateCliOptions& opt) {
                            {"singular_input", conv(p.singular_input, in_u)},
                            {"four_bars", applicable ? fb : na},
                            {"slider_cranks", applicable ? sc : na},
+                           {"transmission_loops", any_spatial_loop ? tl : na},
                            {"limit_blocks", blocks},
                            {"modes", p.modes},
                            {"mode", p.mode},
@@ -190,6 +204,19 @@ int run_validate(const ValidateCliOptions& opt) {
         out << (&c == &p.slider_cranks.front() ? "\nslider-crank loops at " + p.name + "\n" : "")
             << "  " << c.joints << "  pressure angle " << format_input(c.pressure, true, U)
             << (c.ok ? "" : "  (too large)") << "\n";
+    if (rep.min_transmission_index) {
+      out << "\ntransmission index of the spatial loops (Sutherland & Roth 1973; needs at least "
+          << rep.transmission_index_bound << ")\n";
+      for (const PositionReport& p : rep.positions)
+        for (const SpatialLoopReport& l : p.spatial_loops) {
+          std::snprintf(line, sizeof line, "  %-10s %s (%s)  %.4f%s\n", p.name.c_str(),
+                        l.joints.c_str(), l.type.c_str(), l.index, l.ok ? "" : "  (too small)");
+          out << line;
+        }
+      std::snprintf(line, sizeof line, "  minimum %.4f at %s\n", *rep.min_transmission_index,
+                    rep.min_transmission_index_at.c_str());
+      out << line;
+    }
     if (!applicable) {
       out << "\nnot applicable (spatial mechanism)\n";
       for (const std::string& s : rep.not_applicable) out << "  " << s << "\n";
@@ -241,6 +268,10 @@ void register_validate(CLI::App& app, const GlobalOptions& globals, int& exit_co
   cmd->add_option("--min-transmission", opt->min_transmission,
                   "smallest acceptable transmission angle deviation from a straight line, e.g. "
                   "30deg (default); a bare number is in the file's angle unit");
+  cmd->add_option("--min-transmission-index", opt->min_transmission_index,
+                  "smallest acceptable Sutherland-Roth transmission index of a spatial loop, in "
+                  "[0, 1] (default: sin of --min-transmission, 0.5)")
+      ->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--starts", opt->starts, "multi-start projections per position (default 24)")
       ->check(CLI::Range(0, 100000));
   cmd->add_option("--seed", opt->seed, "seed of the multi-start (default 1)");

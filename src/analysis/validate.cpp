@@ -225,6 +225,37 @@ bool project_locked(const Model& model, VecX& q, const std::vector<JointLock>& l
   return r <= tolerance;
 }
 
+// A spatial target's errors at q: |P − at| (m) and, with an orientation target, the angle of the
+// rotation from the target frame to the body's, 2·atan2(|vec δ|, |δ₀|) with δ = e_t* ⊗ e (accurate
+// near 0); with a direction target, the angle between R·b and the world direction w,
+// atan2(|Rb × w|, Rb·w).
+struct SpatialTargetErrors {
+  double distance = 0.0;
+  std::optional<double> angle;
+};
+SpatialTargetErrors spatial_target_errors(const Model& model, const DesignTarget& t,
+                                          const VecX& q) {
+  const int body = t.spatial_point.body;
+  const SpatialFrame k = spatial_frame(model, body, q, nullptr);
+  SpatialTargetErrors e;
+  e.distance = (spatial_point(k, t.spatial_point.s).r - t.spatial_position).norm();
+  if (t.orientation) {
+    const Quat eb =
+        body == kGround
+            ? Quat(1.0, 0.0, 0.0, 0.0)
+            : Quat(q.segment<4>(model.bodies[static_cast<size_t>(body)].q_offset + 3).normalized());
+    Quat et = t.orientation->normalized();
+    et.tail<3>() = -et.tail<3>();
+    const Quat delta = quaternion_multiply(et, eb);
+    e.angle = 2.0 * std::atan2(delta.tail<3>().norm(), std::abs(delta(0)));
+  }
+  if (t.direction) {
+    const Vec3 a = k.R * t.direction->first;
+    e.angle = std::atan2(a.cross(t.direction->second).norm(), a.dot(t.direction->second));
+  }
+  return e;
+}
+
 Vec2 world(const Model& model, const PointRef& p, const VecX& q) {
   return point_kinematics(model, p, q, nullptr).r;
 }
@@ -860,6 +891,156 @@ double pressure_angle(const Model& model, const SliderCrankLoop& l, const VecX& 
   return std::atan2(std::abs(u.x() * axis.y() - u.y() * axis.x()), std::abs(u.dot(axis)));
 }
 
+// ---- spatial transmission loops [Sutherland & Roth 1973] ---------------------------------------
+
+namespace {
+
+const SpatialJoint* spatial_joint(const Model& model, int joint) {
+  return std::get_if<SpatialJoint>(&model.joints[static_cast<size_t>(joint)].kind);
+}
+const SpatialPointRef& spatial_side_on(const SpatialJoint& s, int body) {
+  return s.pi.body == body ? s.pi : s.pj;
+}
+Vec3 spatial_world(const Model& model, const SpatialPointRef& p, const VecX& q) {
+  return spatial_point(spatial_frame(model, p.body, q, nullptr), p.s).r;
+}
+// The joint axis h in world (body i's side; the same line for both sides when assembled).
+Vec3 spatial_axis(const Model& model, const SpatialJoint& s, const VecX& q) {
+  return (spatial_frame(model, s.pi.body, q, nullptr).R * s.frame_i.col(2)).normalized();
+}
+char joint_letter(SpatialJointType t) {
+  switch (t) {
+    case SpatialJointType::revolute:
+      return 'R';
+    case SpatialJointType::prismatic:
+      return 'P';
+    case SpatialJointType::spherical:
+      return 'S';
+    case SpatialJointType::universal:
+      return 'U';
+    case SpatialJointType::distance:
+      return 'D';
+    default:
+      return '?';
+  }
+}
+
+}  // namespace
+
+std::vector<SpatialTransmissionLoop> find_spatial_transmission_loops(const Model& model,
+                                                                     int input_joint) {
+  std::vector<SpatialTransmissionLoop> loops;
+  if (model.dimension != 3) return loops;
+  using T = SpatialJointType;
+  const int nj = static_cast<int>(model.joints.size());
+  auto type_of = [&](int j) { return spatial_joint(model, j)->type; };
+  auto other = [&](int j, int body) {
+    const SpatialJoint& s = *spatial_joint(model, j);
+    return s.pi.body == body ? s.pj.body : s.pi.body;
+  };
+  auto touches = [&](int j, int body) {
+    const SpatialJoint& s = *spatial_joint(model, j);
+    return s.pi.body == body || s.pj.body == body;
+  };
+  // Joints per body (every spatial joint; a binary coupler has exactly two).
+  std::vector<std::vector<int>> joints_of(model.bodies.size());
+  std::vector<int> grounded;  // revolute or prismatic joints to the ground
+  for (int j = 0; j < nj; ++j) {
+    const SpatialJoint* s = spatial_joint(model, j);
+    if (!s) return loops;  // not a spatial model
+    for (const int b : {s->pi.body, s->pj.body})
+      if (b != kGround) joints_of[static_cast<size_t>(b)].push_back(j);
+    if ((s->pi.body == kGround || s->pj.body == kGround) &&
+        (s->type == T::revolute || s->type == T::prismatic))
+      grounded.push_back(j);
+  }
+  const VecX q0 = model.design_q();
+  constexpr double kParallel = 1e-9;  // |h_a × h_b|: parallel axes (the file's axes are exact)
+  // Every revolute axis among `js` parallel, every prismatic axis perpendicular to them.
+  auto planar_loop = [&](const std::vector<int>& js) {
+    std::optional<Vec3> n;
+    for (const int j : js)
+      if (type_of(j) == T::revolute) {
+        const Vec3 h = spatial_axis(model, *spatial_joint(model, j), q0);
+        if (n && n->cross(h).norm() > kParallel) return false;
+        if (!n) n = h;
+      }
+    if (!n) return false;
+    for (const int j : js)
+      if (type_of(j) == T::prismatic &&
+          std::abs(n->dot(spatial_axis(model, *spatial_joint(model, j), q0))) > kParallel)
+        return false;
+    return true;
+  };
+  for (size_t a = 0; a < grounded.size(); ++a)
+    for (size_t b = a + 1; b < grounded.size(); ++b) {
+      int g_in = grounded[a], g_out = grounded[b];
+      if (input_joint == g_out) std::swap(g_in, g_out);
+      const int X = other(g_in, kGround), Y = other(g_out, kGround);
+      if (X == Y || X == kGround || Y == kGround) continue;
+      auto add = [&](int c_in, int c_out, int C, bool planar) {
+        SpatialTransmissionLoop l;
+        const int J[4] = {g_in, c_in, c_out, g_out};
+        std::copy(J, J + 4, l.joints);
+        l.bodies[0] = X, l.bodies[1] = C, l.bodies[2] = Y;
+        l.planar = planar;
+        l.prismatic_output = type_of(g_out) == T::prismatic;
+        l.type += joint_letter(type_of(g_in));
+        l.type += joint_letter(type_of(c_in));
+        if (c_out != c_in) l.type += joint_letter(type_of(c_out));
+        l.type += joint_letter(type_of(g_out));
+        loops.push_back(l);
+      };
+      // A distance row between the two links.
+      for (int d = 0; d < nj; ++d)
+        if (type_of(d) == T::distance && touches(d, X) && touches(d, Y)) add(d, d, -1, false);
+      // A binary coupler C between them.
+      for (size_t c = 0; c < model.bodies.size(); ++c) {
+        const int C = static_cast<int>(c);
+        const std::vector<int>& cj = joints_of[c];
+        if (C == X || C == Y || cj.size() != 2) continue;
+        int c_in = cj[0], c_out = cj[1];
+        if (touches(c_in, Y) && touches(c_out, X)) std::swap(c_in, c_out);
+        if (!(touches(c_in, X) && other(c_in, C) == X && touches(c_out, Y) && other(c_out, C) == Y))
+          continue;
+        const T ti = type_of(c_in), to = type_of(c_out);
+        const bool ends_su = (ti == T::spherical || ti == T::universal) &&
+                             (to == T::spherical || to == T::universal) &&
+                             (ti == T::spherical || to == T::spherical);
+        if (ends_su)
+          add(c_in, c_out, C, false);
+        else if (ti == T::revolute && to == T::revolute && planar_loop({g_in, c_in, c_out, g_out}))
+          add(c_in, c_out, C, true);
+      }
+    }
+  return loops;
+}
+
+double spatial_transmission_index(const Model& model, const SpatialTransmissionLoop& l,
+                                  const VecX& q) {
+  const SpatialJoint& c_in = *spatial_joint(model, l.joints[1]);
+  const SpatialJoint& c_out = *spatial_joint(model, l.joints[2]);
+  const SpatialJoint& g_out = *spatial_joint(model, l.joints[3]);
+  // The coupler line: from its input-end point to its output-end point p (on the output link).
+  const Vec3 p_in = spatial_world(model, spatial_side_on(c_in, l.bodies[0]), q);
+  const Vec3 p = spatial_world(model, spatial_side_on(c_out, l.bodies[2]), q);
+  const Vec3 a = spatial_axis(model, g_out, q);  // output axis (unit)
+  Vec3 s = p - p_in;
+  if (l.planar) {  // the force lies in the plane of motion, normal n: the revolutes' axis
+    const Vec3 n = spatial_axis(model, c_in, q);
+    s -= s.dot(n) * n;
+  }
+  const double ls = s.norm();
+  if (!(ls > 0.0)) return 0.0;
+  s /= ls;
+  if (l.prismatic_output) return std::abs(a.dot(s));  // [Sutherland & Roth 1973]: |a·s|
+  const Vec3 o = spatial_world(model, g_out.pi.body == kGround ? g_out.pi : g_out.pj, q);
+  const Vec3 r = p - o;
+  const double lever = a.cross(r).norm();  // the largest |a·(r × s)| over unit s
+  if (!(lever > 1e-12 * std::max(1.0, r.norm()))) return 0.0;
+  return std::min(1.0, std::abs(a.dot(r.cross(s))) / lever);  // [Sutherland & Roth 1973]
+}
+
 namespace {
 
 // The design's assembly mode at the locks, limits ignored: the design pose is closed (no lock),
@@ -1041,11 +1222,6 @@ ValidationReport validate_design_positions(const Model& model, const ValidateOpt
   }
   const bool spatial = model.dimension == 3;
   if (spatial) {
-    for (const DesignPosition& p : model.design_positions)
-      if (p.target)
-        throw std::invalid_argument("validate: design position '" + p.name +
-                                    "': a target is not supported in a spatial mechanism "
-                                    "(dimension 3)");
     rep.not_applicable = {"Grashof type: planar four-bar loops only",
                           "four-bar transmission angle: planar four-bar loops only",
                           "slider-crank pressure angle: planar slider-crank loops only"};
@@ -1054,6 +1230,14 @@ ValidationReport validate_design_positions(const Model& model, const ValidateOpt
       spatial ? std::vector<FourBarLoop>{} : find_four_bar_loops(model, input);
   const std::vector<SliderCrankLoop> slider_cranks =
       spatial ? std::vector<SliderCrankLoop>{} : find_slider_crank_loops(model);
+  const std::vector<SpatialTransmissionLoop> transmission_loops =
+      find_spatial_transmission_loops(model, input);
+  rep.transmission_index_bound =
+      opt.min_transmission_index.value_or(std::sin(opt.min_transmission));
+  if (spatial && transmission_loops.empty())
+    rep.not_applicable.push_back(
+        "transmission index (Sutherland & Roth 1973): no loop ground -R/P- link -S/U- binary "
+        "coupler -S/U- link -R/P- ground (or a distance row, or parallel revolutes)");
 
   // Generic rank: at the assembled design pose and at every position (max). Idle bodies
   // (spatial.md §4.1): those mobility finds at the assembled design pose.
@@ -1118,8 +1302,14 @@ ValidationReport validate_design_positions(const Model& model, const ValidateOpt
         assembly_modes(model, ao.locks, a.q, q_design, L, opt, gen, idle_bodies);
     // With a target, the position is the mode that meets it best; else the projection of the
     // design pose.
+    // Spatial: the larger of the distance and the angle errors, each over its tolerance.
     auto target_error = [&](const VecX& q) {
       const DesignTarget& t = *dp.target;
+      if (spatial) {
+        const SpatialTargetErrors e = spatial_target_errors(model, t, q);
+        return std::max(e.distance / t.tolerance,
+                        e.angle ? *e.angle / t.angle_tolerance.value_or(t.tolerance / L) : 0.0);
+      }
       double e = (world(model, t.point, q) - t.position).norm();
       return e;
     };
@@ -1176,7 +1366,27 @@ ValidationReport validate_design_positions(const Model& model, const ValidateOpt
       pr.max_translation = std::max(
           pr.max_translation, (world(model, origin, pr.q) - world(model, origin, q_design)).norm());
     }
-    if (dp.target) {
+    if (dp.target && spatial) {
+      const DesignTarget& t = *dp.target;
+      const SpatialTargetErrors e = spatial_target_errors(model, t, pr.q);
+      pr.target_error = e.distance;
+      pr.target_met = e.distance <= t.tolerance;
+      if (!pr.target_met)
+        pr.failures.push_back(
+            "target missed by " + format_quantity(e.distance, Dimension::length, file_units) +
+            " (tolerance " + format_quantity(t.tolerance, Dimension::length, file_units) + ")");
+      if (e.angle) {
+        pr.target_angle_error = e.angle;
+        const double tol_angle = t.angle_tolerance.value_or(t.tolerance / L);
+        if (*e.angle > tol_angle) {
+          pr.target_met = false;
+          pr.failures.push_back(
+              std::string(t.orientation ? "target orientation" : "target direction") +
+              " missed by " + format_quantity(*e.angle, Dimension::angle, file_units) +
+              " (tolerance " + format_quantity(tol_angle, Dimension::angle, file_units) + ")");
+        }
+      }
+    } else if (dp.target) {
       const DesignTarget& t = *dp.target;
       pr.target_error = target_error(pr.q);
       pr.target_met = *pr.target_error <= t.tolerance;
@@ -1255,6 +1465,24 @@ ValidationReport validate_design_positions(const Model& model, const ValidateOpt
             " in slider-crank loop " + sc.joints + " (needs at most " +
             format_quantity(kPi / 2.0 - opt.min_transmission, Dimension::angle, file_units) + ")");
       pr.slider_cranks.push_back(sc);
+    }
+    for (const SpatialTransmissionLoop& l : transmission_loops) {
+      SpatialLoopReport lr;
+      for (int j = 0; j < 4; ++j)
+        if (j != 2 || l.joints[2] != l.joints[1])
+          lr.joints += (j ? "-" : "") + model.joints[static_cast<size_t>(l.joints[j])].name;
+      lr.type = l.type;
+      lr.index = spatial_transmission_index(model, l, pr.q);
+      lr.ok = lr.index >= rep.transmission_index_bound;
+      if (!lr.ok)
+        pr.failures.push_back("transmission index " + fmt(lr.index) + " in loop " + lr.joints +
+                              " (" + lr.type + ", Sutherland & Roth; needs at least " +
+                              fmt(rep.transmission_index_bound) + ")");
+      if (!rep.min_transmission_index || lr.index < *rep.min_transmission_index) {
+        rep.min_transmission_index = lr.index;
+        rep.min_transmission_index_at = pr.name;
+      }
+      pr.spatial_loops.push_back(lr);
     }
   }
 

@@ -627,10 +627,11 @@ void Reader::read_design_positions(const YAML::Node& root) {
       }
     }
     if (const YAML::Node t = item["target"]) {
-      if (model_.dimension == 3)
-        fail(t, element,
-             "a target is not yet supported in a spatial mechanism (dimension: 3); give the "
-             "inputs only");
+      if (model_.dimension == 3) {  // spatial_file.cpp
+        p.target = spatial_target(t, element);
+        model_.design_positions.push_back(std::move(p));
+        continue;
+      }
       expect_map(t, element, {"point", "at", "angle", "tolerance"});
       DesignTarget target;
       target.point = point_ref(require(t, "point", element), element);

@@ -352,6 +352,8 @@ class Reader {
   void check_inertia(const YAML::Node& node, const std::string& element, const Mat3& J) const;
   Quat orientation(const YAML::Node& node, const std::string& element) const;
   SpatialPointRef spatial_point_ref(const YAML::Node& node, const std::string& element) const;
+  // A design position's `target` in dimension 3 (docs/file-format.md "Design positions").
+  DesignTarget spatial_target(const YAML::Node& node, const std::string& element) const;
   std::pair<SpatialPointRef, SpatialPointRef> spatial_connects(const YAML::Node& item,
                                                                const std::string& element) const;
   int spatial_body_ref(const YAML::Node& node, const std::string& element) const;

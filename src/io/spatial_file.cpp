@@ -258,6 +258,50 @@ SpatialPointRef Reader::spatial_point_ref(const YAML::Node& node,
       [](const Body& b) { return b.spatial.com_local; });
 }
 
+// target: {point: body.P, at: [x, y, z], tolerance: t, orientation: {..} | direction: {body: [..],
+// world: [..]}, angle_tolerance: a} (docs/file-format.md "Design positions"): the point at a world
+// position and, optionally, the orientation of the point's body, as a whole (the forms of a body
+// pose's `orientation`) or as one body axis along a world direction.
+DesignTarget Reader::spatial_target(const YAML::Node& t, const std::string& element) const {
+  if (t.IsMap() && t["angle"])
+    fail(t["angle"], element,
+         "'angle' is a planar body angle; in dimension 3 give 'orientation' (the body frame in "
+         "world) or 'direction' ({body: [..], world: [..]}: a body axis along a world direction)");
+  expect_map(t, element,
+             {"point", "at", "tolerance", "orientation", "direction", "angle_tolerance"});
+  DesignTarget target;
+  target.spatial_point = spatial_point_ref(require(t, "point", element), element);
+  target.spatial_position =
+      vec3(require(t, "at", element), element, "at", units_.length, Quantity::length);
+  target.tolerance =
+      optional_number(t, "tolerance", element, 1e-3, units_.length, Quantity::length);
+  if (!(target.tolerance > 0.0)) fail(t["tolerance"], element, "tolerance must be positive");
+  if (t["orientation"] && t["direction"])
+    fail(t["direction"], element, "give 'orientation' or 'direction', not both");
+  const YAML::Node o = t["orientation"] ? t["orientation"] : t["direction"];
+  if (o && target.spatial_point.body == kGround)
+    fail(o, element,
+         "the target point '" + target.spatial_point.label +
+             "' is on the ground: an orientation target needs a moving body");
+  if (t["orientation"]) target.orientation = orientation(t["orientation"], element);
+  if (const YAML::Node d = t["direction"]) {
+    if (!d.IsMap())
+      fail(d, element,
+           "field 'direction' must be a mapping {body: [x, y, z], world: [x, y, z]} (a body axis "
+           "in the body frame and the world direction it must point along)");
+    expect_map(d, element, {"body", "world"});
+    target.direction = std::make_pair(unit_vec3(require(d, "body", element), element, "body"),
+                                      unit_vec3(require(d, "world", element), element, "world"));
+  }
+  if (const YAML::Node a = t["angle_tolerance"]) {
+    if (!o)
+      fail(a, element, "'angle_tolerance' needs an 'orientation' or a 'direction' to apply to");
+    target.angle_tolerance = number(a, element, "angle_tolerance", units_.angle, Quantity::angle);
+    if (!(*target.angle_tolerance > 0.0)) fail(a, element, "angle_tolerance must be positive");
+  }
+  return target;
+}
+
 std::pair<SpatialPointRef, SpatialPointRef> Reader::spatial_connects(
     const YAML::Node& item, const std::string& element) const {
   const YAML::Node c = require(item, "connects", element);

@@ -19,8 +19,10 @@
 // q ⊕ δu (quaternions, nq ≠ n), the inputs locked on the spatial joints' coordinates (wrapped
 // angles), idle degrees of freedom (spatial.md §4.1) reported as mobility does and held at zero
 // rate (mass-orthogonal) in η, the circuit trace and the mode comparison, and assembly modes on
-// the drawn branch of every joint axis (h_i·h_j > 0, f_i·f_j > 0 for twist rows). Targets are
-// planar only (the reader refuses them in dimension 3; a Model built in code with one throws).
+// the drawn branch of every joint axis (h_i·h_j > 0, f_i·f_j > 0 for twist rows). Spatial
+// targets: a point at a world position, optionally the orientation of its body (the whole frame,
+// or one body axis along a world direction; DesignTarget). Spatial transmission loops (RSSR,
+// RSSP, ...): Sutherland & Roth's transmission index, find_spatial_transmission_loops.
 // Results are data; nothing here throws for a numerical outcome.
 #include <optional>
 #include <string>
@@ -36,6 +38,9 @@ struct ValidateOptions {
   int starts = 24;    // multi-start projections per position (assembly modes)
   unsigned seed = 1;  // random starts are reproducible
   double min_transmission = 30.0 * 0.017453292519943295;  // rad: |90° − μ| ≤ 90° − this passes
+  // Spatial transmission loops: the Sutherland–Roth index below this fails; none: the planar
+  // bound's equivalent, sin(min_transmission) (a planar four-bar's index is sin μ).
+  std::optional<double> min_transmission_index;
   double min_sigma = 1e-6;  // σ_min and η below this: singular (fails)
   double step = 0.05;       // trace step (scaled coordinates: rad, length / L)
   int max_trace_steps = 20000;
@@ -96,6 +101,39 @@ struct SliderCrankLoop {
 // slide axis. For an offset slider-crank, sin α = |r sin θ − e| / l.
 [[nodiscard]] double pressure_angle(const Model& model, const SliderCrankLoop& loop, const VecX& q);
 
+// A spatial transmission loop (dimension 3): ground —g_in— input link —c_in— coupler —c_out—
+// output link —g_out— ground, g_in and g_out revolute or prismatic joints to the ground, and
+//   - a binary coupler (no other joint) with spherical or universal ends, at least one spherical
+//     (RSSR, RSUR, RSSP, ...): with no load on it, it carries one force along the line of its
+//     two joint points (a universal end passes a moment only about its cross normal, which the
+//     spherical end's zero moment forbids);
+//   - or a distance row between the two links (c_in = c_out, coupler −1: a massless S–S rod);
+//   - or a binary coupler with revolute ends whose axes, and the revolute ground axes, are all
+//     parallel, every prismatic axis perpendicular to them (a planar four-bar or slider-crank
+//     built with spatial joints): the force along the coupler line in the plane of motion.
+// Oriented so that g_in is the input joint when it is one of the two ground joints; else g_in is
+// the one with the lower index. `type`: the joint letters (R, P, S, U; D a distance row).
+struct SpatialTransmissionLoop {
+  int joints[4] = {-1, -1, -1, -1};  // g_in, c_in, c_out, g_out
+  int bodies[3] = {-1, -1, -1};      // input link, coupler (−1: a distance row), output link
+  bool planar = false;               // revolute coupler ends, parallel axes
+  bool prismatic_output = false;
+  std::string type;  // e.g. "RSUR", "RSUP", "RDR", "RRRR"
+};
+// Every spatial transmission loop of the mechanism (empty for a planar one).
+[[nodiscard]] std::vector<SpatialTransmissionLoop> find_spatial_transmission_loops(
+    const Model& model, int input_joint);
+// Sutherland & Roth's transmission index at q [Sutherland & Roth 1973] (docs/theory.md): the
+// virtual coefficient of the transmission wrench (a unit force along the coupler line, through
+// its output-end point p, direction s) and the output twist (unit rotation about the output's
+// ground axis a through o, or unit translation along a prismatic a), over its largest value for
+// any line through p:
+//   revolute output  TI = |a·((p − o) × s)| / |a × (p − o)|,   prismatic output  TI = |a·s|,
+// in [0, 1]; s is taken in the plane of motion for a planar loop. For a planar four-bar it is
+// sin μ (μ the transmission angle); 0 at a dead point of the output. 0 when p is on the axis.
+[[nodiscard]] double spatial_transmission_index(const Model& model,
+                                                const SpatialTransmissionLoop& loop, const VecX& q);
+
 struct SingularityMeasures {
   double sigma_min = 0.0;  // σ_r/σ_1 of the scaled Eᵀ, r the generic rank (→ 0 at change points)
   std::optional<double> eta;  // σ_n/σ_1 of the scaled input-locked Jacobian [Eᵀ; d] (→ 0 at
@@ -119,6 +157,13 @@ struct SliderCrankReport {
   std::string joints;     // "O-A-B-slide"
   double pressure = 0.0;  // α, rad
   bool ok = true;         // α ≤ π/2 − min_transmission
+};
+
+struct SpatialLoopReport {
+  std::string joints;  // "A0-A-B-B0" (a distance row once: "A0-rod-B0")
+  std::string type;    // SpatialTransmissionLoop::type
+  double index = 0.0;  // Sutherland–Roth transmission index, [0, 1]
+  bool ok = true;      // index ≥ the bound (ValidateOptions::min_transmission_index)
 };
 
 // A joint limit that keeps a position from closing: without the limits it assembles with the
@@ -150,7 +195,8 @@ struct PositionReport {
   std::optional<double> singular_input;     // input value there
   std::vector<FourBarReport> four_bars;
   std::vector<SliderCrankReport> slider_cranks;
-  int modes = 0;               // distinct assembly modes found at the inputs
+  std::vector<SpatialLoopReport> spatial_loops;  // spatial transmission loops
+  int modes = 0;                                 // distinct assembly modes found at the inputs
   int mode = -1;               // 1-based index of this position's mode (modes sorted by signature)
   std::string mode_signature;  // e.g. "+" per four-bar loop, then the sign of det [Eᵀ; d]
   int circuit = -1;            // 1-based, −1 when not traced (DOF ≠ 1 or no single input)
@@ -170,8 +216,14 @@ struct ValidationReport {
   int circuits = 0;                          // circuits traced
   std::vector<std::string> singular_points;  // every dead/change point found, in words
   // Checks that do not apply to this mechanism, in words (a spatial mechanism: Grashof type,
-  // four-bar transmission angle, slider-crank pressure angle); empty for a planar one.
+  // four-bar transmission angle, slider-crank pressure angle, and the Sutherland–Roth index when
+  // it has no spatial transmission loop); empty for a planar one.
   std::vector<std::string> not_applicable;
+  // The smallest Sutherland–Roth index over the loops and the assembled positions, and where
+  // (none without spatial transmission loops); the bound applied.
+  std::optional<double> min_transmission_index;
+  std::string min_transmission_index_at;  // position name
+  double transmission_index_bound = 0.0;
   [[nodiscard]] bool pass() const;
 };
 

@@ -327,6 +327,15 @@ struct DesignTarget {
   Vec2 position = Vec2::Zero();
   std::optional<double> angle;  // body angle target (motion generation)
   double tolerance = 1e-3;
+  // Dimension 3 (the planar fields above are then unused): the point, its world position (m) and
+  // optionally the orientation of the point's body: the whole body frame in world, or one body
+  // axis (body frame, unit) along a world direction (unit). angle_tolerance: rad (none: the
+  // planar rule, tolerance / L).
+  SpatialPointRef spatial_point;
+  Vec3 spatial_position = Vec3::Zero();
+  std::optional<Quat> orientation;
+  std::optional<std::pair<Vec3, Vec3>> direction;  // (body axis, world direction)
+  std::optional<double> angle_tolerance;
 };
 struct DesignPosition {
   std::string name;

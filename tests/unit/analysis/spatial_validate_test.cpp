@@ -10,15 +10,21 @@
 //    (its long axis), written in the test.
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <Eigen/LU>
 #include <Eigen/SVD>
 #include <cmath>
+#include <fstream>
+#include <iterator>
 #include <numbers>
+#include <sstream>
+#include <stdexcept>
 
 #include "orthomech/analysis/validate.hpp"
 #include "orthomech/constraints/joints.hpp"
 #include "orthomech/io/mechanism_file.hpp"
 #include "orthomech/model/free_system.hpp"
+#include "support/cli_runner.hpp"
 #include "support/fixtures.hpp"
 
 namespace orthomech {
@@ -48,6 +54,14 @@ double rocker_slope(double theta) {  // dφ/dθ
   const M1 m(theta);
   const double phi = rocker(theta);
   return -(m.dP * std::cos(phi) + m.dS) / (-m.P * std::sin(phi) + m.Q * std::cos(phi));
+}
+
+// The transmission index is checked in its own tests below: elsewhere any index passes (the
+// RSSR's is 0.29 … 0.53 over the turn, below the default bound 0.5 at most crank angles).
+ValidateOptions any_index() {
+  ValidateOptions o;
+  o.min_transmission_index = 0.0;
+  return o;
 }
 
 DesignPosition position(const std::string& name, int joint, double value) {
@@ -116,7 +130,7 @@ TEST(SpatialValidate, RssrCrankPositionsMatchClosedFormM1) {
   m.design_positions.clear();
   for (int k = 0; k < 4; ++k)
     m.design_positions.push_back(position(std::to_string(90 * k) + "deg", A0, 90.0 * k * kDeg));
-  const ValidationReport rep = validate_design_positions(m);
+  const ValidationReport rep = validate_design_positions(m, any_index());
   ASSERT_EQ(rep.positions.size(), 4u);
   EXPECT_EQ(rep.input, "A0");
   EXPECT_TRUE(rep.input_angular);
@@ -235,7 +249,7 @@ TEST(SpatialValidate, IdleSpinIsReportedAndHeld) {
       SpatialJointType::spherical;
   finalize_model(m);
   m.design_positions = {position("p30", A0, 30.0 * kDeg), position("p120", A0, 120.0 * kDeg)};
-  const ValidationReport rep = validate_design_positions(m);
+  const ValidationReport rep = validate_design_positions(m, any_index());
   ASSERT_EQ(rep.positions.size(), 2u);
   EXPECT_EQ(rep.circuits, 1);
   for (const PositionReport& pr : rep.positions) {
@@ -395,14 +409,14 @@ TEST(SpatialValidate, SliderCrankSlideInputDeadPointsFromM2) {
   const double x_hi = std::sqrt(0.09 - (c - 0.08) * (c - 0.08));
   m.design_positions = {position("s1", slide, 0.2), position("s2", slide, 0.25),
                         position("s3", slide, 0.15)};  // s3: below x_lo, cannot close
-  const ValidationReport rep = validate_design_positions(m);
+  const ValidationReport rep = validate_design_positions(m, any_index());
   ASSERT_EQ(rep.positions.size(), 3u);
   EXPECT_FALSE(rep.input_angular);
   EXPECT_FALSE(rep.positions[2].assembles);
   EXPECT_FALSE(rep.pass());
   EXPECT_EQ(rep.circuits, 0);  // not every position assembles: no trace
   m.design_positions.pop_back();
-  const ValidationReport ok = validate_design_positions(m);
+  const ValidationReport ok = validate_design_positions(m, any_index());
   EXPECT_TRUE(ok.pass());
   EXPECT_EQ(ok.circuits, 1);
   ASSERT_EQ(ok.singular_points.size(), 2u);
@@ -454,14 +468,315 @@ TEST(SpatialValidate, BennettPositionsClosureAndThreeRedundantEquations) {
   EXPECT_EQ(rep.positions[1].q.size(), m.nq);
 }
 
-// A target cannot be given in a spatial mechanism (the reader refuses it; a Model built in code
-// with one is API misuse).
-TEST(SpatialValidate, TargetInASpatialModelIsRefused) {
+// ---- spatial targets ---------------------------------------------------------------------------
+
+// mechanisms/rssr.yaml with its design positions replaced by `positions` (YAML, file units mm and
+// deg), loaded through the reader.
+Model rssr_with_positions(const std::string& positions) {
+  std::ifstream in(test::bundled_file("rssr"));
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const size_t at = text.find("design_positions:");
+  const size_t end = text.find("analysis:", at);
+  EXPECT_NE(at, std::string::npos);
+  text =
+      text.substr(0, at).append("design_positions:\n").append(positions).append(text.substr(end));
+  const test::TempDir dir("orthomech_spatial_target_");
+  const std::string file = (dir.path / "rssr-targets.yaml").string();
+  std::ofstream(file) << text;
+  return load_mechanism(file);
+}
+
+std::string num(double v) {  // every digit: the test knows exactly what the file holds
+  std::ostringstream s;
+  s.precision(17);
+  s << v;
+  return s.str();
+}
+std::string vec(const Vec3& v) {
+  return std::string("[") + num(v.x()) + ", " + num(v.y()) + ", " + num(v.z()) + "]";
+}
+
+// The RSSR's points from (M1), mm: A on the crank, B on the rocker (branch `sign` of φ).
+Vec3 crank_A(double theta) { return 1e3 * Vec3(r1 * std::cos(theta), r1 * std::sin(theta), 0.0); }
+double rocker_root(double theta, double sign) {
+  const M1 m(theta);
+  return std::atan2(m.Q, m.P) + sign * std::acos(-m.S / std::hypot(m.P, m.Q));
+}
+Vec3 rocker_B(double phi) { return 1e3 * Vec3(p, r2 * std::cos(phi), h + r2 * std::sin(phi)); }
+
+// Targets at θ = 60°, written in the test from (M1): rocker.B at its closed-form position
+// (met: error ≈ 0), 2 mm above it (missed by exactly 2 mm); the rocker's whole orientation
+// (body x along B0→B, z along world x: its frame at φ) met, and turned 3° about world x (missed
+// by 3°); the coupler's x axis along A→B (met) and along world z (missed by the angle between
+// A→B and z, computed here; its point coupler.B at B pins the assembly mode, as a direction alone
+// picks the mode nearest it); the other root of (M1) as target picks that assembly mode.
+TEST(SpatialValidate, TargetsMetAndMissedAgainstTheClosedFormM1) {
+  const double theta = 60.0 * kDeg;
+  const double phi = rocker_root(theta, 1.0), phi2 = rocker_root(theta, -1.0);
+  const Vec3 A = crank_A(theta), B = rocker_B(phi), B2 = rocker_B(phi2);
+  const Vec3 up(0.0, 0.0, 2.0);
+  auto rocker_axes = [&](double f) {
+    return std::string("{x: ") + vec(Vec3(0.0, std::cos(f), std::sin(f))) + ", z: [1, 0, 0]}";
+  };
+  const Vec3 AB = (B - A).normalized();
+  const std::string pos =
+      std::string("  - {name: met, inputs: {A0: 60}, target: {point: rocker.B, at: ") + vec(B) +
+      ", tolerance: 0.001}}\n"
+      "  - {name: high, inputs: {A0: 60}, target: {point: rocker.B, at: " +
+      vec(B + up) +
+      ", tolerance: 1}}\n"
+      "  - {name: frame, inputs: {A0: 60}, target: {point: rocker.B, at: " +
+      vec(B) + ", orientation: " + rocker_axes(phi) +
+      ", angle_tolerance: 0.01}}\n"
+      "  - {name: turned, inputs: {A0: 60}, target: {point: rocker.B, at: " +
+      vec(B) + ", orientation: " + rocker_axes(phi + 3.0 * kDeg) +
+      ", angle_tolerance: 1}}\n"
+      "  - {name: along, inputs: {A0: 60}, target: {point: coupler.A, at: " +
+      vec(A) + ", direction: {body: [1, 0, 0], world: " + vec(AB) +
+      "}, angle_tolerance: 0.01}}\n"
+      "  - {name: up, inputs: {A0: 60}, target: {point: coupler.B, at: " +
+      vec(B) +
+      ", tolerance: 0.001, direction: {body: [1, 0, 0], world: [0, 0, 1]}, angle_tolerance: 1}}\n"
+      "  - {name: other, inputs: {A0: 60}, target: {point: rocker.B, at: " +
+      vec(B2) + ", tolerance: 0.001}}\n";
+  const Model m = rssr_with_positions(pos);
+  ASSERT_EQ(m.design_positions.size(), 7u);
+  const ValidationReport rep = validate_design_positions(m, any_index());
+  ASSERT_EQ(rep.positions.size(), 7u);
+  for (const PositionReport& pr : rep.positions) {
+    ASSERT_TRUE(pr.assembles) << pr.name << ": " << pr.assembly_message;
+    ASSERT_TRUE(pr.target_error.has_value()) << pr.name;
+  }
+  auto at = [&](const char* name) -> const PositionReport& {
+    for (const PositionReport& pr : rep.positions)
+      if (pr.name == name) return pr;
+    throw std::runtime_error(name);
+  };
+  constexpr double kPos = 1e-9;  // m: the assembled pose to 1e-12, the closed form to round-off
+  constexpr double kAng = 1e-9;  // rad
+  // Position targets.
+  EXPECT_LT(*at("met").target_error, kPos);
+  EXPECT_TRUE(at("met").target_met);
+  EXPECT_FALSE(at("met").target_angle_error.has_value());
+  EXPECT_TRUE(at("met").pass()) << at("met").failures.at(0);
+  EXPECT_NEAR(*at("high").target_error, 2e-3, kPos);
+  EXPECT_FALSE(at("high").target_met);
+  ASSERT_FALSE(at("high").failures.empty());
+  EXPECT_NE(at("high").failures[0].find("target missed by 2 mm (tolerance 1 mm)"),
+            std::string::npos)
+      << at("high").failures[0];
+  // Orientation targets: the rotation angle between the rocker's frame and the target.
+  ASSERT_TRUE(at("frame").target_angle_error.has_value());
+  EXPECT_LT(*at("frame").target_angle_error, kAng);
+  EXPECT_TRUE(at("frame").target_met);
+  ASSERT_TRUE(at("turned").target_angle_error.has_value());
+  EXPECT_NEAR(*at("turned").target_angle_error, 3.0 * kDeg, kAng);
+  EXPECT_LT(*at("turned").target_error, kPos);  // the point is met, the orientation is not
+  EXPECT_FALSE(at("turned").target_met);
+  ASSERT_FALSE(at("turned").failures.empty());
+  EXPECT_NE(at("turned").failures[0].find("target orientation missed by 3 deg (tolerance 1 deg)"),
+            std::string::npos)
+      << at("turned").failures[0];
+  // Direction targets: the coupler's x axis runs A→B.
+  EXPECT_LT(*at("along").target_angle_error, kAng);
+  EXPECT_TRUE(at("along").target_met);
+  const double to_z = std::acos(AB.z());
+  EXPECT_NEAR(*at("up").target_angle_error, to_z, kAng);
+  EXPECT_EQ(at("up").target_met, to_z <= 1.0 * kDeg);
+  EXPECT_FALSE(at("up").target_met);
+  // The other root of (M1): the target picks that assembly mode.
+  const PositionReport& o = at("other");
+  EXPECT_LT(*o.target_error, kPos);
+  EXPECT_TRUE(o.target_met);
+  EXPECT_NEAR(wrap(joint_coordinate(m, m.find_joint("B0"), o.q) - phi2), 0.0, 1e-9);
+  EXPECT_NE(o.mode, at("met").mode);
+  EXPECT_GE(o.modes, 2);
+}
+
+// ---- Sutherland–Roth transmission index --------------------------------------------------------
+
+// TI = |a·((p − o) × s)| / |a × (p − o)| written in the test from (M1): a = world x (the rocker
+// axis), o = B0, p = B, s = (B − A)/|B − A|.
+double rssr_index(double theta) {
+  const Vec3 A = crank_A(theta), B = rocker_B(rocker(theta));
+  const Vec3 r = B - 1e3 * Vec3(p, 0.0, h), s = (B - A).normalized(), a = Vec3::UnitX();
+  return std::abs(a.dot(r.cross(s))) / a.cross(r).norm();
+}
+
+TEST(SpatialValidate, RssrTransmissionIndexAgainstTheClosedFormM1) {
   Model m = test::load_bundled("rssr");
-  DesignTarget t;
-  t.point.body = 0;
-  m.design_positions[0].target = t;
-  EXPECT_THROW((void)validate_design_positions(m), std::invalid_argument);
+  const int A0 = m.find_joint("A0");
+  m.design_positions.clear();
+  for (int k = 0; k < 8; ++k)
+    m.design_positions.push_back(
+        position(std::string("t").append(std::to_string(45 * k)), A0, 45.0 * k * kDeg));
+  const std::vector<SpatialTransmissionLoop> loops = find_spatial_transmission_loops(m, A0);
+  ASSERT_EQ(loops.size(), 1u);
+  EXPECT_EQ(loops[0].type, "RSUR");
+  EXPECT_FALSE(loops[0].planar);
+  EXPECT_FALSE(loops[0].prismatic_output);
+  const ValidationReport rep = validate_design_positions(m);
+  EXPECT_EQ(rep.not_applicable.size(), 3u);  // the planar checks only
+  double lowest = 2.0;
+  std::string lowest_at;
+  for (int k = 0; k < 8; ++k) {
+    const PositionReport& pr = rep.positions[static_cast<size_t>(k)];
+    ASSERT_TRUE(pr.assembles) << pr.name;
+    ASSERT_EQ(pr.spatial_loops.size(), 1u);
+    EXPECT_EQ(pr.spatial_loops[0].joints, "A0-A-B-B0");
+    EXPECT_EQ(pr.spatial_loops[0].type, "RSUR");
+    const double ti = rssr_index(45.0 * k * kDeg);
+    EXPECT_NEAR(pr.spatial_loops[0].index, ti, 1e-9) << pr.name;
+    EXPECT_EQ(pr.spatial_loops[0].ok, ti >= 0.5) << pr.name;
+    if (ti < lowest) lowest = ti, lowest_at = pr.name;
+  }
+  ASSERT_TRUE(rep.min_transmission_index.has_value());
+  EXPECT_NEAR(*rep.min_transmission_index, lowest, 1e-9);
+  EXPECT_EQ(rep.min_transmission_index_at, lowest_at);
+  EXPECT_DOUBLE_EQ(rep.transmission_index_bound, 0.5);  // sin 30°
+  // A bound above the largest index fails every position, naming the loop.
+  ValidateOptions strict;
+  strict.min_transmission_index = 0.9999;
+  const ValidationReport fail = validate_design_positions(m, strict);
+  EXPECT_FALSE(fail.pass());
+  for (const PositionReport& pr : fail.positions) {
+    EXPECT_FALSE(pr.spatial_loops[0].ok) << pr.name;
+    const bool named = std::any_of(pr.failures.begin(), pr.failures.end(), [](const auto& f) {
+      return f.find("transmission index") != std::string::npos &&
+             f.find("A0-A-B-B0 (RSUR") != std::string::npos;
+    });
+    EXPECT_TRUE(named) << pr.name;
+  }
+}
+
+// The planar four-bar built with spatial revolutes (mechanisms/crank-rocker-3d.yaml): TI = sin μ,
+// μ the transmission angle validate reports for the planar file at the same crank angles.
+TEST(SpatialValidate, CrankRocker3dTransmissionIndexIsSineOfThePlanarTransmissionAngle) {
+  Model m = test::load_bundled("crank-rocker-3d");
+  Model planar = test::load_bundled("crank-rocker");
+  const int A0 = m.find_joint("A0"), pA0 = planar.find_joint("A0");
+  m.design_positions.clear();
+  planar.design_positions.clear();
+  for (int k = 0; k < 6; ++k) {
+    const std::string name = std::string("c").append(std::to_string(60 * k));
+    m.design_positions.push_back(position(name, A0, (60.0 * k + 10.0) * kDeg));
+    planar.design_positions.push_back(position(name, pA0, (60.0 * k + 10.0) * kDeg));
+  }
+  const ValidationReport rep = validate_design_positions(m);
+  const ValidationReport prep = validate_design_positions(planar);
+  for (size_t k = 0; k < 6; ++k) {
+    const PositionReport& pr = rep.positions[k];
+    const PositionReport& pp = prep.positions[k];
+    ASSERT_TRUE(pr.assembles && pp.assembles) << pr.name;
+    ASSERT_EQ(pr.spatial_loops.size(), 1u);
+    EXPECT_EQ(pr.spatial_loops[0].type, "RRRR");
+    EXPECT_EQ(pr.spatial_loops[0].joints, "A0-A-B-B0");
+    ASSERT_EQ(pp.four_bars.size(), 1u);
+    EXPECT_NEAR(pr.spatial_loops[0].index, std::sin(pp.four_bars[0].transmission), 1e-9) << pr.name;
+    EXPECT_EQ(pr.spatial_loops[0].ok, pp.four_bars[0].ok) << pr.name;
+  }
+  EXPECT_TRUE(planar.dimension == 2 && find_spatial_transmission_loops(planar, pA0).empty());
+}
+
+// The spatial slider-crank (RSUP): TI = |x·s| = x_C / 0.3 from (M2) (C = (x_C, 0, 0), rod 0.3 m).
+TEST(SpatialValidate, SliderCrankTransmissionIndexFromM2) {
+  const Model m = test::load_bundled("spatial-slider-crank");
+  const int A0 = m.find_joint("A0");
+  const ValidationReport rep = validate_design_positions(m);
+  ASSERT_EQ(rep.positions.size(), 3u);
+  for (const PositionReport& pr : rep.positions) {
+    ASSERT_TRUE(pr.assembles) << pr.name;
+    ASSERT_EQ(pr.spatial_loops.size(), 1u);
+    EXPECT_EQ(pr.spatial_loops[0].type, "RSUP");
+    const double phi = joint_coordinate(m, A0, pr.q);
+    const double by = 0.1 + 0.08 * std::cos(phi), bz = 0.12 + 0.08 * std::sin(phi);
+    EXPECT_NEAR(pr.spatial_loops[0].index, std::sqrt(0.09 - by * by - bz * bz) / 0.3, 1e-10)
+        << pr.name;
+  }
+}
+
+// The RSSR with its coupler replaced by a distance row between crank.A and rocker.B (an S–S rod
+// of 420 mm: the same kinematics): the loop "RDR", the index of (M1).
+TEST(SpatialValidate, DistanceRowCouplerHasTheRssrIndex) {
+  std::ifstream in(test::bundled_file("rssr"));
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  auto cut = [&](const std::string& from, const std::string& to) {
+    const size_t a = text.find(from), b = text.find(to, a);
+    ASSERT_NE(a, std::string::npos);
+    ASSERT_NE(b, std::string::npos);
+    text.erase(a, b - a);
+  };
+  cut("  - name: coupler", "  - name: rocker");
+  cut("  - {name: A, type: spherical", "  - {name: B0,");
+  const size_t j = text.find("  - {name: B0,");
+  text.insert(j, "  - {name: rod, type: distance, connects: [crank.A, rocker.B], length: 420}\n");
+  const test::TempDir dir("orthomech_spatial_rdr_");
+  const std::string file = (dir.path / "rdr.yaml").string();
+  std::ofstream(file) << text;
+  Model m = load_mechanism(file);
+  const int A0 = m.find_joint("A0");
+  m.design_positions = {position("t0", A0, 0.0), position("t90", A0, 90.0 * kDeg)};
+  const ValidationReport rep = validate_design_positions(m);
+  for (size_t k = 0; k < 2; ++k) {
+    const PositionReport& pr = rep.positions[k];
+    ASSERT_TRUE(pr.assembles) << pr.name << ": " << pr.assembly_message;
+    ASSERT_EQ(pr.spatial_loops.size(), 1u);
+    EXPECT_EQ(pr.spatial_loops[0].type, "RDR");
+    EXPECT_EQ(pr.spatial_loops[0].joints, "A0-rod-B0");
+    EXPECT_NEAR(pr.spatial_loops[0].index, rssr_index(90.0 * static_cast<double>(k) * kDeg), 1e-9);
+  }
+}
+
+// The same index in its velocity form (an independent formulation): |a·(r × s)| / |a × r| =
+// |t·s|, t the unit velocity of B on its circle about the rocker axis, (0, −sin φ, cos φ) from
+// (M1). Driven from the rocker (input B0) the loop turns round: B0-B-A-A0 ("RUSR"), the output
+// the crank about z through A0, TI = |t_A·s| with t_A = (−sin θ, cos θ, 0), θ the root of (M1)
+// for the given φ on the branch the position is on (cos θ, sin θ from the linear equation
+// −2 r1 r2 cos φ sin θ − 2 p r1 cos θ = −(2 h r2 sin φ + p² + r1² + r2² + h² − L²)).
+TEST(SpatialValidate, RssrTransmissionIndexVelocityFormAndRockerInput) {
+  for (int k = 0; k < 8; ++k) {
+    const double theta = 45.0 * k * kDeg, phi = rocker(theta);
+    const Vec3 A = crank_A(theta), B = rocker_B(phi), s = (B - A).normalized();
+    EXPECT_NEAR(rssr_index(theta), std::abs(Vec3(0.0, -std::sin(phi), std::cos(phi)).dot(s)),
+                1e-12);
+  }
+  Model m = test::load_bundled("rssr");
+  const int A0 = m.find_joint("A0"), B0 = m.find_joint("B0");
+  m.design_positions = {position("r150", B0, 150.0 * kDeg), position("r170", B0, 170.0 * kDeg),
+                        position("r200", B0, 200.0 * kDeg)};
+  const ValidationReport rep = validate_design_positions(m, any_index());
+  for (const PositionReport& pr : rep.positions) {
+    ASSERT_TRUE(pr.assembles) << pr.name << ": " << pr.assembly_message;
+    ASSERT_EQ(pr.spatial_loops.size(), 1u);
+    EXPECT_EQ(pr.spatial_loops[0].joints, "B0-B-A-A0");
+    EXPECT_EQ(pr.spatial_loops[0].type, "RUSR");
+    const double phi = joint_coordinate(m, B0, pr.q);
+    // a sin θ + b cos θ = c: θ = atan2(a, b) ± acos(c / √(a² + b²)).
+    const double a = -2.0 * r1 * r2 * std::cos(phi), b = -2.0 * p * r1;
+    const double c = -(2.0 * h * r2 * std::sin(phi) + p * p + r1 * r1 + r2 * r2 + h * h - Lc * Lc);
+    const double base = std::atan2(a, b), off = std::acos(c / std::hypot(a, b));
+    const double model_theta = joint_coordinate(m, A0, pr.q);
+    const double theta =
+        std::abs(wrap(base + off - model_theta)) < std::abs(wrap(base - off - model_theta))
+            ? base + off
+            : base - off;
+    EXPECT_NEAR(wrap(theta - model_theta), 0.0, 1e-9) << pr.name;  // on (M1)
+    const Vec3 A = crank_A(theta), B = rocker_B(phi), s = (B - A).normalized();
+    EXPECT_NEAR(pr.spatial_loops[0].index,
+                std::abs(Vec3(-std::sin(theta), std::cos(theta), 0.0).dot(s)), 1e-9)
+        << pr.name;
+  }
+}
+
+// No transmission loop (Bennett: four revolutes with skew axes): "not applicable", no index.
+TEST(SpatialValidate, BennettHasNoTransmissionLoop) {
+  const Model m = test::load_bundled("bennett");
+  EXPECT_TRUE(find_spatial_transmission_loops(m, -1).empty());
+  const ValidationReport rep = validate_design_positions(m);
+  ASSERT_EQ(rep.not_applicable.size(), 4u);
+  EXPECT_NE(rep.not_applicable[3].find("Sutherland & Roth"), std::string::npos);
+  EXPECT_FALSE(rep.min_transmission_index.has_value());
+  for (const PositionReport& pr : rep.positions) EXPECT_TRUE(pr.spatial_loops.empty());
 }
 
 }  // namespace
