@@ -273,10 +273,20 @@ class SceneBuilder {
                        [&](const Vec2& x) { return (x - w).norm() <= kSamePlace; }))
         pts.push_back(w);
     }
+    add_body_shape(b, pts, Vec2(q_(body.q_offset), q_(body.q_offset + 1)));
+  }
+
+  // The shape of body b over its distinct points (model coordinates, already projected for a
+  // spatial body): a disc at its centre of mass for one point or none, a bar for two (or for
+  // collinear points, between the extreme ones), else a plate over their convex hull.
+  void add_body_shape(int b, std::vector<Vec2> pts, const Vec2& centre) {
+    const Body& body = model_.bodies[static_cast<size_t>(b)];
+    const Rgba fill = kBodyFill[static_cast<size_t>(b) % std::size(kBodyFill)];
+    const Rgba edge = kBodyEdge[static_cast<size_t>(b) % std::size(kBodyEdge)];
     if (pts.size() <= 1) {
       // A particle or a body with one point: a disc at its centre of mass.
       Circle c;
-      c.centre = at(Vec2(q_(body.q_offset), q_(body.q_offset + 1)));
+      c.centre = at(centre);
       c.radius_px = 8.0;
       c.style = filled(fill, edge, 2.0);
       c.style.fill->a = 1.0;
@@ -675,8 +685,6 @@ class SceneBuilder {
   void add_spatial_body(int b, std::vector<Vec3> pts) {
     const Body& body = model_.bodies[static_cast<size_t>(b)];
     if (body.kind != BodyKind::spatial) return;
-    const Rgba fill = kBodyFill[static_cast<size_t>(b) % std::size(kBodyFill)];
-    const Rgba edge = kBodyEdge[static_cast<size_t>(b) % std::size(kBodyEdge)];
     const Vec3 com = q_.segment<3>(body.q_offset);
     // Fewer than two joint points: the named points and the centre of mass give the shape.
     if (pts.size() < 2) {
@@ -691,33 +699,7 @@ class SceneBuilder {
                        [&](const Vec2& x) { return (x - f).norm() <= kSamePlace; }))
         flat.push_back(f);
     }
-    if (flat.size() > 2 && convex_hull(flat).size() < 3) flat = convex_hull(flat);
-    if (flat.size() <= 1) {
-      Circle c;
-      c.centre = at(proj_(com));
-      c.radius_px = 8.0;
-      c.style = filled(fill, edge, 2.0);
-      c.style.fill->a = 1.0;
-      add(Role::body, body.name, c);
-      return;
-    }
-    if (flat.size() == 2) {
-      Path under, over;
-      under.points = over.points = {at(flat[0]), at(flat[1])};
-      under.style = stroke_only(edge, kBarWidth + 3.0, true);
-      Rgba solid = fill;
-      solid.a = 1.0;
-      over.style = stroke_only(solid, kBarWidth, true);
-      add(Role::body, body.name, under);
-      add(Role::body, body.name, over);
-      return;
-    }
-    Path plate;
-    for (const Vec2& p : convex_hull(flat)) plate.points.push_back(at(p));
-    plate.closed = true;
-    plate.style = filled(fill, edge, 2.0);
-    plate.style.round = true;
-    add(Role::body, body.name, plate);
+    add_body_shape(b, std::move(flat), proj_(com));
   }
 
   // A stroke of ± kAxisLength px along the projection of the world direction d through p: long
