@@ -4,6 +4,7 @@
 
 #include <Eigen/SVD>
 #include <random>
+#include <stdexcept>
 
 #include "orthomech/analysis/positions.hpp"
 #include "orthomech/constraints/joints.hpp"
@@ -47,6 +48,19 @@ int svd_rank(const Model& model, const VecX& q, double rel_tol) {
   Eigen::JacobiSVD<MatX> svd(Et);
   svd.setThreshold(rel_tol);
   return static_cast<int>(svd.rank());
+}
+
+CycleResult full_cycle(const Model& model, int steps) {
+  CycleOptions o;
+  o.driver = model.drivers.at(0);
+  o.steps = steps;
+  return run_cycle(model, o);
+}
+
+size_t measure_index(const Model& model, const std::string& name) {
+  for (size_t i = 0; i < model.measures.size(); ++i)
+    if (model.measures[i].name == name) return i;
+  throw std::invalid_argument("no measure " + name);
 }
 
 }  // namespace orthomech::test

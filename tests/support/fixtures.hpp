@@ -2,6 +2,7 @@
 // Test fixtures: mechanisms loaded from mechanisms/, assembled, with a workspace.
 #include <string>
 
+#include "orthomech/analysis/cycle.hpp"
 #include "orthomech/model/model.hpp"
 #include "orthomech/model/state.hpp"
 
@@ -18,5 +19,9 @@ namespace orthomech::test {
 [[nodiscard]] VecX admissible_velocity(const Model& model, const VecX& q, unsigned seed);
 // Rank of Eᵀ at q by SVD (independent oracle for the QR-based rank).
 [[nodiscard]] int svd_rank(const Model& model, const VecX& q, double rel_tol = 1e-8);
+// The full turn of the file's first driver in `steps` steps (run_cycle).
+[[nodiscard]] CycleResult full_cycle(const Model& model, int steps);
+// Index of the measure `name` in model.measures (throws std::invalid_argument if there is none).
+[[nodiscard]] size_t measure_index(const Model& model, const std::string& name);
 
 }  // namespace orthomech::test

@@ -26,18 +26,8 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-CycleResult full_cycle(const Model& model, int steps) {
-  CycleOptions o;
-  o.driver = model.drivers.at(0);
-  o.steps = steps;
-  return run_cycle(model, o);
-}
-
-size_t measure_index(const Model& model, const std::string& name) {
-  for (size_t i = 0; i < model.measures.size(); ++i)
-    if (model.measures[i].name == name) return i;
-  throw std::invalid_argument("no measure " + name);
-}
+using test::full_cycle;
+using test::measure_index;
 
 size_t component_index(const CycleResult& r, const std::string& name) {
   for (size_t i = 0; i < r.components.size(); ++i)
