@@ -755,12 +755,18 @@ class SceneBuilder {
     add(Role::spatial_joint, name, c);
   }
 
+  // A named point p of spatial body b (body frame) on the screen.
+  Vec2 projected_point(size_t b, const Vec3& p) const {
+    const Body& body = model_.bodies[b];
+    return proj_(world3(static_cast<int>(b), p - body.spatial.com_local));
+  }
+
   void add_spatial_points() {
     for (size_t b = 0; b < model_.bodies.size(); ++b) {
       const Body& body = model_.bodies[b];
       if (body.kind != BodyKind::spatial) continue;
       for (const auto& [name, p] : body.spatial.points) {
-        const Vec2 w = proj_(world3(static_cast<int>(b), p - body.spatial.com_local));
+        const Vec2 w = projected_point(b, p);
         if (at_joint(w)) continue;
         Circle c;
         c.centre = at(w);
@@ -778,8 +784,7 @@ class SceneBuilder {
       Vec2 c = proj_(q_.segment<3>(body.q_offset));
       if (!body.spatial.points.empty()) {
         c = Vec2::Zero();
-        for (const auto& [name, p] : body.spatial.points)
-          c += proj_(world3(static_cast<int>(b), p - body.spatial.com_local));
+        for (const auto& [name, p] : body.spatial.points) c += projected_point(b, p);
         c /= static_cast<double>(body.spatial.points.size());
       }
       add_text(body.name, at(c, Vec2(4.0, 14.0)), body.name);
@@ -790,7 +795,7 @@ class SceneBuilder {
       const Body& body = model_.bodies[b];
       if (body.kind != BodyKind::spatial) continue;
       for (const auto& [name, p] : body.spatial.points) {
-        const Vec2 w = proj_(world3(static_cast<int>(b), p - body.spatial.com_local));
+        const Vec2 w = projected_point(b, p);
         if (at_joint(w)) continue;
         const std::string label = body.name + "." + name;
         add_text(label, at(w, Vec2(5.0, -5.0)), label);

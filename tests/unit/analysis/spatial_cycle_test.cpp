@@ -20,6 +20,7 @@
 #include "orthomech/model/measures.hpp"
 #include "orthomech/model/spatial.hpp"
 #include "support/fixtures.hpp"
+#include "support/spatial_energy.hpp"
 
 namespace orthomech {
 namespace {
@@ -86,17 +87,6 @@ TEST(SpatialCycle, RssrRockerAngleAndRateEqualTheClosedForm) {
   EXPECT_GT(top, kPi);
 }
 
-// Σ over the bodies of (m v·v̇ + ωᵀ J ω̇) − m g·v: d/dt of kinetic plus potential energy.
-double energy_rate(const Model& model, const DrivenPointView& p, const Vec3& g) {
-  double sum = 0.0;
-  for (const Body& b : model.bodies) {
-    const Vec3 v = p.u.segment<3>(b.u_offset), vdot = p.udot.segment<3>(b.u_offset);
-    const Vec3 w = p.u.segment<3>(b.u_offset + 3), wdot = p.udot.segment<3>(b.u_offset + 3);
-    sum += b.mass * v.dot(vdot) + w.dot(b.spatial.inertia * wdot) - b.mass * g.dot(v);
-  }
-  return sum;
-}
-
 TEST(SpatialCycle, PowerBalanceAtEveryPosition) {
   for (const char* name : {"rssr", "spatial-slider-crank", "crank-rocker-3d", "bennett"}) {
     const Model model = test::load_bundled(name);
@@ -110,7 +100,7 @@ TEST(SpatialCycle, PowerBalanceAtEveryPosition) {
     for (const DrivenPointView& p : r.points) {
       const double drive_power = p.drive * p.input_rate;
       scale = std::max(scale, std::abs(drive_power));
-      worst = std::max(worst, std::abs(drive_power - energy_rate(model, p, g)));
+      worst = std::max(worst, std::abs(drive_power - test::spatial_energy_rate(model, p, g)));
     }
     EXPECT_LT(worst, 1e-6 * scale) << name << " (drive power up to " << scale << " W)";
     // The same balance by differences of the reported energies over the time grid (a check that

@@ -26,6 +26,7 @@
 #include "orthomech/projection/workspace.hpp"
 #include "support/cli_runner.hpp"
 #include "support/fixtures.hpp"
+#include "support/spatial_energy.hpp"
 
 namespace orthomech {
 namespace {
@@ -57,19 +58,6 @@ double rocker_closed_form(double theta) {
   const double P = -2 * r1 * r2 * std::sin(theta), Q = 2 * h * r2;
   const double S = p * p + r1 * r1 + r2 * r2 + h * h - L * L - 2 * p * r1 * std::cos(theta);
   return std::atan2(Q, P) + std::acos(-S / std::hypot(P, Q));
-}
-
-// Σ over the bodies of (m v·v̇ + ωᵀ J ω̇) − m g·v: d/dt of kinetic plus potential energy (body-frame
-// ω: the gyroscopic term does no work).
-double energy_rate(const Model& model, const DrivenPointView& p) {
-  const Vec3 g(0, 0, -9.81);
-  double sum = 0.0;
-  for (const Body& b : model.bodies) {
-    const Vec3 v = p.u.segment<3>(b.u_offset), vdot = p.udot.segment<3>(b.u_offset);
-    const Vec3 w = p.u.segment<3>(b.u_offset + 3), wdot = p.udot.segment<3>(b.u_offset + 3);
-    sum += b.mass * v.dot(vdot) + w.dot(b.spatial.inertia * wdot) - b.mass * g.dot(v);
-  }
-  return sum;
 }
 
 TEST(SpatialIdleCycle, SsCouplerIsDrivenWithItsSpinHeld) {
@@ -163,7 +151,8 @@ TEST(SpatialIdleCycle, PowerBalanceWithTheSpinHeld) {
   for (const DrivenPointView& p : r.points) {
     const double drive_power = p.drive * p.input_rate;
     scale = std::max(scale, std::abs(drive_power));
-    worst = std::max(worst, std::abs(drive_power - energy_rate(m, p)));
+    worst =
+        std::max(worst, std::abs(drive_power - test::spatial_energy_rate(m, p, Vec3(0, 0, -9.81))));
   }
   EXPECT_GT(scale, 1.0);
   EXPECT_LT(worst, 1e-6 * scale);
