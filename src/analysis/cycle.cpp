@@ -322,7 +322,7 @@ void inertia_residual(const Workspace& ws, const VecX& u, const VecX& udot, VecX
 // the range of E by (C3) (FᵀR = 0), so the chart's square block gives a particular solution λ_p
 // on the chart's rows R (zero on the others): E_{D,R} λ_R = R_D with the chart's LU.
 void solve_multipliers(Workspace& ws, DrivenWorkspace& w, VecX& lambda) {
-  const Chart& c = ws.dual.chart;
+  const Chart& c = ws.dual.engine.chart();
   const MatX& Et = ws.constraints.Et;
   const int r = c.rank();
   const int k = static_cast<int>(w.other_rows.size());
@@ -622,7 +622,7 @@ struct Sweep {
   bool corrector(VecX& q, double target, double max_step, const VecX* row = nullptr,
                  const VecX* q_ref = nullptr) {
     const MeasureKind input = JointCoordinate{joint};
-    const Chart& c = ws.dual.chart;
+    const Chart& c = ws.dual.engine.chart();
     const int r = c.rank();
     const int nc = model.nc;
     // With redundant rows, Gauss–Newton on all of them: next to a change point the chart's rows
@@ -973,20 +973,12 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
     if (!compute_driven(model, joint, sdot, sddot, state, ws, w, p, jacobian_current)) return false;
     p.input = sweep.input_at(state.q, s);
     p.time = t;
-    p.chart_quality = ws.dual.quality;
-    // Sign of det of the chart's block (LU: signs of U_kk and of the interchanges) and the chart
-    // it belongs to: a sign change within one chart is a change point passed between positions.
-    {
-      int sign = 1;
-      const MatX& LU = ws.dual.Ert_D;
-      for (Eigen::Index i = 0; i < LU.rows(); ++i) {
-        if (LU(i, i) < 0.0) sign = -sign;
-        if (ws.dual.Ert_D_piv(i) != i) sign = -sign;
-      }
-      p.chart_sign = sign;
-      p.chart_id = ws.dual.switch_count;
-    }
-    p.singular = ws.dual.quality < kSingularQuality;
+    p.chart_quality = ws.dual.engine.quality();
+    // Sign of det of the chart's block and the chart it belongs to: a sign change within one
+    // chart is a change point passed between positions.
+    p.chart_sign = ws.dual.engine.determinant_sign();
+    p.chart_id = ws.dual.engine.switch_count();
+    p.singular = ws.dual.engine.quality() < kSingularQuality;
     // The rotation table compute_driven filled at this q: no sin/cos in reactions and measures.
     compute_driven_outputs(model, state, p.lambda, p.udot, w.rotations.data(),
                            {p.reactions, p.measures, p.kinetic, p.potential, p.dissipated});
@@ -1554,7 +1546,7 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
           "with it held");
     }
   }
-  result.chart_switches = ws.dual.switch_count;
+  result.chart_switches = ws.dual.engine.switch_count();
   result.reversals = reversals;
   if (options.progress) options.progress(1.0);
   return result;

@@ -109,38 +109,4 @@ SolveResult project_positions(const Model& model, VecX& q, const PositionOptions
   }
 }
 
-SolveResult correct_positions_in_chart(const Model& model, VecX& q, Workspace& ws,
-                                       const PositionOptions& options) {
-  SolveResult result;
-  VecX& f = ws.constraints.f;
-  VecX& dq = ws.dual.dq;
-  if (!ws.free.mass_ready) {
-    State s(model);
-    s.q = q;
-    compute_free_system(model, s, ws);
-  }
-  for (int it = 0;; ++it) {
-    compute_constraint_residual(model, q, f);
-    result.residual = f.size() ? f.cwiseAbs().maxCoeff() : 0.0;
-    result.iterations = it;
-    if (result.residual <= options.tolerance) {
-      result.status = SolveStatus::converged;
-      return result;
-    }
-    if (it >= options.max_iterations || !std::isfinite(result.residual)) {
-      result.status = SolveStatus::not_converged;
-      result.message = "chart corrector did not converge";
-      return result;
-    }
-    compute_constraint_jacobian(model, q, ws.constraints.Et);
-    if (!(refactor_chart(ws) > 0.0)) {
-      result.status = SolveStatus::singular;
-      result.message = "dependent block of the chart is singular";
-      return result;
-    }
-    solve_chart(ws, f, dq);                   // E_RDᵀ Δq_D = f_R
-    integrate_positions(model, q, dq, -1.0);  // Newton step q_D ← q_D − Δq_D
-  }
-}
-
 }  // namespace orthomech

@@ -27,7 +27,8 @@ ProjectionStatus compute_dual_dynamics(const Model& model, const State& state, W
   const auto& d = ws.dual;
   const auto& fs = ws.free;
   VecX v(d.na);
-  for (int k = 0; k < d.na; ++k) v(k) = state.u(d.chart.independent[static_cast<size_t>(k)]);
+  for (int k = 0; k < d.na; ++k)
+    v(k) = state.u(d.engine.chart().independent[static_cast<size_t>(k)]);
   const VecX Fdot_v = d.Fdot * v;                                                 // (L1)
   const VecX rhs = d.F.transpose() * (fs.Q - fs.Mdot * state.u - fs.M * Fdot_v);  // (L2)
   const VecX vdot = d.H_llt.solve(rhs);  // eq. (68): H v̇ = …

@@ -10,7 +10,6 @@
 #include <stdexcept>
 #include <vector>
 
-#include "chart_solver.hpp"
 #include "integrator.hpp"
 #include "orthomech/analysis/assembly.hpp"
 #include "orthomech/analysis/mobility.hpp"
@@ -89,11 +88,9 @@ detail::OdeStepper ode_stepper(Integrator i) {
   return detail::OdeStepper::dopri5;
 }
 
-using detail::ChartSolver;
-
 // Chart monitor (dual form): re-select the chart when an entry of F in the mass metric exceeds
 // this (a dependent velocity then moves 4 times faster, in energy terms, than the independent
-// ones). The new chart is chosen from the current F (ChartSolver::select_from_tangent), whose
+// ones). The new chart is chosen from the current F (ChartEngine::select_from_tangent), whose
 // entries are then ≤ 1 for n_a = 1: the hysteresis is the factor 4.
 constexpr double kSpreadLimit = 4.0;
 // Per-step position correction: a Newton step more than this many times the residual means the
@@ -101,6 +98,8 @@ constexpr double kSpreadLimit = 4.0;
 // left uncorrected (its residual is the integrator's local error) rather than risk a jump to
 // another branch; counted in SimulateResult::uncorrected_steps.
 constexpr double kMaxCorrectionGain = 1e4;
+// The chart's block is singular for the integrator below this quality (min/max pivot of its LU).
+constexpr double kSingularBlock = 1e-14;
 // A step ends at most this fraction of the way to the chart's singularity extrapolated from the
 // spread (1/spread linear in t next to it).
 constexpr double kChartStepFraction = 0.5;
@@ -224,7 +223,7 @@ class Dynamics {
         na_(model.n - rank),
         project_stages_(projects_stages(options)),
         ws_(model, rank),
-        cs_(model, rank),
+        cs_(model, rank, ChartFactorisation::sparse_when_large),
         state_(model),
         F_(MatX::Zero(model.n, model.n - rank)),
         MF_(model.n, model.n - rank),
@@ -287,6 +286,18 @@ class Dynamics {
     return false;
   }
 
+  // λ (size nc): λ_R = (E_RD)⁻¹ c_D on the chart's rows, 0 on the others: the unique λ of
+  // E λ = c when E has full column rank and c ∈ range(E).
+  void solve_transposed(const VecX& c, VecX& lambda) {
+    lambda.setZero();
+    auto lambda_r = col_.head(r_);  // scratch
+    cs_.solve_transposed(c, lambda_r);
+    for (int i = 0; i < r_; ++i) lambda(cs_.chart().rows[static_cast<size_t>(i)]) = lambda_r(i);
+  }
+
+  // The chart's block at Eᵀ (scaled to the free system's metric). False when it is singular.
+  bool factor_chart(const MatX& Et) { return cs_.factor(Et, ws_.free.A_sqrt) > kSingularBlock; }
+
   // F in the current chart at Eᵀ = ws_.constraints.Et (factorised): F = P [I; −(E_RDᵀ)⁻¹ E_RIᵀ].
   void compute_F() {
     const Chart& c = cs_.chart();
@@ -336,10 +347,10 @@ class Dynamics {
     if (project_stages_) {
       // Leaves Eᵀ at the projected q factorised in the chart.
       const SolveResult pr = cs_.correct_positions(state_.q, ws_.constraints.Et, ws_.constraints.f,
-                                                   dq_, options_.position_tolerance);
+                                                   dq_, {.tolerance = options_.position_tolerance});
       if (pr.status != SolveStatus::converged) {  // factorise at the q it stopped at
         compute_constraint_jacobian(model_, state_.q, ws_.constraints.Et);
-        if (pr.status == SolveStatus::singular || !cs_.factor(ws_.constraints.Et))
+        if (pr.status == SolveStatus::singular || !factor_chart(ws_.constraints.Et))
           throw SingularEvaluation{"the chart's dependent block is singular at t = " +
                                    time_text(model_, t) + " (a change point: E loses rank)"};
       }
@@ -352,7 +363,7 @@ class Dynamics {
       //    The bodies' rotations at q come along for the constraint rate below.
       compute_constraint_residual_and_jacobian(model_, state_.q, ws_.constraints.f,
                                                ws_.constraints.Et, rotations_.data());
-      if (!cs_.factor(ws_.constraints.Et))
+      if (!factor_chart(ws_.constraints.Et))
         throw SingularEvaluation{"the chart's dependent block is singular at t = " +
                                  time_text(model_, t) + " (a change point: E loses rank)"};
       compute_F();
@@ -464,7 +475,7 @@ class Dynamics {
       tmp_ = ws_.free.M * udot_ - ws_.free.Q;
       if (!ws_.free.constant_mass) tmp_ += ws_.free.Mdot * state_.u;
       if (r_ == nc_)
-        cs_.solve_transposed(ws_.constraints.Et, tmp_, lambda_);
+        solve_transposed(tmp_, lambda_);
       else
         compute_multipliers(ws_.constraints.Et, tmp_, lambda_);  // minimum-norm (redundant)
       s.lambda = lambda_;
@@ -477,7 +488,7 @@ class Dynamics {
   int n_, nq_, nc_, r_, na_;
   bool project_stages_;
   Workspace ws_;
-  ChartSolver cs_;
+  ChartEngine cs_;
   State state_;
   MatX F_, MF_, H_;
   Eigen::LLT<MatX> H_llt_;
@@ -564,14 +575,14 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
   dyn.free_system();
   compute_constraint_jacobian(model, q, dyn.ws_.constraints.Et);
   if (!dyn.cs_.select(dyn.ws_.constraints.Et, dyn.ws_.free.A_diag) ||
-      !dyn.cs_.factor(dyn.ws_.constraints.Et)) {
+      !dyn.factor_chart(dyn.ws_.constraints.Et)) {
     result.status = SimulateStatus::singular;
     result.message = "the initial position is singular (E loses rank there)";
     return result;
   }
   dyn.compute_F();
   dyn.cs_.select_from_tangent(dyn.F_, dyn.M_sqrt());  // independent components that move most
-  if (!dyn.cs_.factor(dyn.ws_.constraints.Et)) {
+  if (!dyn.factor_chart(dyn.ws_.constraints.Et)) {
     result.status = SimulateStatus::singular;
     result.message = "the initial position is singular (E loses rank there)";
     return result;
@@ -630,7 +641,7 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
   const auto grid_pending = [&] { return grid_time(next_out) <= T1 + grid_slack; };
 
   // Change-point monitor (both forms): σ̂ = σ_min(E_RDᵀ S_D)/σ_ref at every accepted, corrected
-  // state (ChartSolver::estimate_sigma_min; S = diag(1/√M_kk), σ_ref the largest mass-scaled
+  // state (ChartEngine::estimate_sigma_min; S = diag(1/√M_kk), σ_ref the largest mass-scaled
   // column norm of Eᵀ at the start). Near a change point σ̂ ≈ a |t − t*| (C1), so two states
   // give the estimate t* = t_k + σ̂_k (t_k − t_{k−1}) / (σ̂_{k−1} − σ̂_k).
   VecX sigma_w;
@@ -665,7 +676,7 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
   double t_last_accept = T0, h_last = 0.0;
   const auto chart_quality = [&]() {
     if (model.nc == 0 || rank == 0) return std::numeric_limits<double>::infinity();
-    return dyn.cs_.estimate_sigma_min(dyn.ws_.free.A_sqrt, sigma_w) / sigma_ref;
+    return dyn.cs_.estimate_sigma_min(sigma_w) / sigma_ref;
   };
   // (C1) σ̂ and its rate dσ̂/dt at (q, u) in the current chart (factorised at q): the rate of a
   // simple singular value is ŷᵀ (dB̃/dt) ŵ with its unit singular vectors [Stewart & Sun 1990,
@@ -679,8 +690,7 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
   const auto chart_quality_rate = [&](const VecX& qq, const VecX& uu, double& rate) {
     rate = 0.0;
     if (model.nc == 0 || rank == 0) return std::numeric_limits<double>::infinity();
-    const double sigma =
-        dyn.cs_.estimate_sigma_min(dyn.ws_.free.A_sqrt, sigma_w, &sigma_left) / sigma_ref;
+    const double sigma = dyn.cs_.estimate_sigma_min(sigma_w, &sigma_left) / sigma_ref;
     const double wn = sigma_w.norm(), un = uu.norm();
     if (!(sigma > 0.0) || !(wn > 0.0) || !std::isfinite(wn) || !(un > 0.0)) return sigma;
     const Chart& c = dyn.cs_.chart();
@@ -856,7 +866,7 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
     }
     // The chart's block at the step's q: the corrector's first Newton step uses it, and (dual)
     // the step's velocity u = F(q) v before the correction (re-projected below).
-    const bool factored = dyn.cs_.factor(Et);
+    const bool factored = dyn.factor_chart(Et);
     if (!primal) {
       if (factored) {
         dyn.compute_F();
@@ -867,14 +877,16 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
     }
     // Position correction in the chart (Newton; independent coordinates fixed). It leaves Eᵀ
     // at the corrected q factorised in the chart.
-    bool near_singular = false;
-    SolveResult corr = dyn.cs_.correct_positions(q, Et, f, dq, options.position_tolerance,
-                                                 kMaxCorrectionGain, &near_singular, factored);
-    if (near_singular) ++result.uncorrected_steps;
+    ChartCorrectionResult corr = dyn.cs_.correct_positions(
+        q, Et, f, dq,
+        {.tolerance = options.position_tolerance,
+         .max_gain = kMaxCorrectionGain,
+         .start = factored ? ChartCorrection::Start::prepared : ChartCorrection::Start::evaluate});
+    if (corr.near_singular) ++result.uncorrected_steps;
     if (corr.status == SolveStatus::singular) {  // try a fresh chart once
       compute_constraint_jacobian(model, q, Et);
       if (dyn.cs_.select(Et, dyn.ws_.free.A_diag))
-        corr = dyn.cs_.correct_positions(q, Et, f, dq, options.position_tolerance);
+        corr = dyn.cs_.correct_positions(q, Et, f, dq, {.tolerance = options.position_tolerance});
       chart_changed = true;
     }
     if (corr.status != SolveStatus::converged) {
@@ -904,9 +916,9 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
         const Chart old = dyn.cs_.chart();
         dyn.cs_.select_from_tangent(dyn.F_, dyn.M_sqrt());
         chart_changed = true;
-        if (!dyn.cs_.factor(dyn.ws_.constraints.Et)) {
+        if (!dyn.factor_chart(dyn.ws_.constraints.Et)) {
           dyn.cs_.set_chart(old);
-          (void)dyn.cs_.factor(dyn.ws_.constraints.Et);
+          (void)dyn.factor_chart(dyn.ws_.constraints.Et);
         }
       }
     } else {
@@ -939,7 +951,7 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
         const VecX u = dyn.F_ * y.segment(nq, na);
         dyn.cs_.select_from_tangent(dyn.F_, dyn.M_sqrt());
         bool switched = false;
-        if (dyn.cs_.factor(dyn.ws_.constraints.Et)) {
+        if (dyn.factor_chart(dyn.ws_.constraints.Et)) {
           dyn.compute_F();
           // Take the new chart only if it is clearly better (hysteresis 2): next to a change
           // point F is inaccurate in every chart and switching would not help.
@@ -955,7 +967,7 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
         }
         if (!switched) {  // keep the chart; try again only when it degrades further
           dyn.cs_.set_chart(old);
-          (void)dyn.cs_.factor(dyn.ws_.constraints.Et);
+          (void)dyn.factor_chart(dyn.ws_.constraints.Et);
           dyn.compute_F();
           spread_limit = 2.0 * spread;
         }
@@ -1145,7 +1157,8 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
                              std::string& why) {
     s.q = qq;
     MatX& Et = dyn.ws_.constraints.Et;
-    const SolveResult corr = dyn.cs_.correct_positions(s.q, Et, f, dq, options.position_tolerance);
+    const SolveResult corr =
+        dyn.cs_.correct_positions(s.q, Et, f, dq, {.tolerance = options.position_tolerance});
     if (corr.status != SolveStatus::converged) {
       why = "a position of the passage does not close (" + corr.message + ")";
       return false;

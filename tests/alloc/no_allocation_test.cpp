@@ -86,7 +86,7 @@ TEST_P(NoAllocation, DualPrimalAndCorrectorAllocateNothingAfterSetUp) {
     (void)correct_positions_in_chart(model, q_work, ws);
   }
   EXPECT_EQ(g_allocations.load() - before, 0) << "heap allocations in the hot path";
-  EXPECT_EQ(ws.dual.switch_count, 0);
+  EXPECT_EQ(ws.dual.engine.switch_count(), 0);
 }
 
 // The driven computation of every cycle position, (C1)–(C4) with minimum-norm multipliers.

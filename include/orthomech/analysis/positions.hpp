@@ -4,19 +4,10 @@
 #include <string>
 
 #include "orthomech/model/model.hpp"
+#include "orthomech/numerics/solve_result.hpp"
 #include "orthomech/projection/workspace.hpp"
 
 namespace orthomech {
-
-enum class SolveStatus { converged, not_converged, singular };
-[[nodiscard]] const char* to_string(SolveStatus s);
-
-struct SolveResult {
-  SolveStatus status = SolveStatus::not_converged;
-  std::string message;
-  int iterations = 0;
-  double residual = 0.0;  // max |f_k| at the end (SI: m or rad)
-};
 
 struct PositionOptions {
   double tolerance = 1e-12;  // max |f_k| (m, rad); positions of mechanisms of 1 mm–10 m
@@ -41,11 +32,5 @@ struct PositionOptions {
 // one more row (its gradient d appended to E_R); if those rows depend on the constraints' (the
 // joints cannot move there, a dead point of them), the result is `singular`.
 SolveResult project_positions(const Model& model, VecX& q, const PositionOptions& options = {});
-
-// Newton in the current chart of ws: the independent coordinates stay fixed, the dependent ones
-// move: Δq_D = −(E_RDᵀ)⁻¹ f_R. The per-step corrector of continuation and integration;
-// allocation-free.
-SolveResult correct_positions_in_chart(const Model& model, VecX& q, Workspace& ws,
-                                       const PositionOptions& options = {});
 
 }  // namespace orthomech

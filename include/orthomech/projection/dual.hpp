@@ -26,6 +26,12 @@ void solve_chart(Workspace& ws, const VecX& b, VecX& x);
 // x (size r, chart row order) solving (E_RDᵀ)ᵀ x = b_D, the dependent components of b (size n):
 // E λ = b on the dependent coordinates with λ on the chart's rows. Allocation-free.
 void solve_chart_transposed(Workspace& ws, const VecX& b, Eigen::Ref<VecX> x);
+// Newton in the current chart of ws (a chart chosen at q first if none): the independent
+// coordinates stay fixed, the dependent ones move, Δq_D = −(E_RDᵀ)⁻¹ f_R
+// (ChartEngine::correct_positions, the one chart corrector). Allocation-free once the free
+// system is computed.
+ChartCorrectionResult correct_positions_in_chart(const Model& model, VecX& q, Workspace& ws,
+                                                 const ChartCorrection& options = {});
 // Forces a fresh chart choice at the current Eᵀ (e.g. at the start of an analysis).
 void reset_chart(Workspace& ws);
 

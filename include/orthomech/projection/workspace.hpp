@@ -8,7 +8,7 @@
 
 #include "orthomech/constraints/joints.hpp"
 #include "orthomech/model/model.hpp"
-#include "orthomech/projection/chart.hpp"
+#include "orthomech/projection/chart_engine.hpp"
 
 namespace orthomech {
 
@@ -52,45 +52,29 @@ struct PrimalWorkspace {
   explicit PrimalWorkspace(const Model& model);
 };
 
-struct ChartEvent {
-  double t;            // time (or input value) at the switch
-  double quality_old;  // quality of the chart that was left
-  double quality_new;  // quality of the chart that was entered
-};
-
 // Stage 2b: dual (F-based) projections, eqs. (68)–(70), (83)–(84), in charts ((71)–(72) and
 // (85) follow from these and are checked in tests, not stored).
 struct DualWorkspace {
-  int na;  // admissible DOF n_a, eq. (25)
-  int r;   // rank of Eᵀ
-  Chart chart;
-  ChartSelector selector;
-  ChartOptions options;
-  bool chart_ready = false;
-  double quality = 0.0;              // current chart quality (see ChartOptions)
-  std::vector<ChartEvent> switches;  // every chart switch (reserved, see kMaxRecordedSwitches)
-  long switch_count = 0;
-  MatX Ert_D;  // r × r: scaled dependent block of the independent rows, then its LU (in place)
-  Eigen::VectorXi Ert_D_piv;  // r: row interchanges of that LU (numerics/small_lu.hpp)
-  MatX rhs;                   // r × n_a: scratch (right-hand sides of the dependent block)
-  MatX sol;                   // r × n_a: scratch (solutions)
-  MatX F;                     // n × n_a: basis of admissible velocities, Eᵀ F = 0
-  MatX MF;                    // n × n_a: M F
-  MatX H;                     // n_a × n_a: H = Fᵀ M F, eq. (68)
+  int na;              // admissible DOF n_a, eq. (25)
+  int r;               // rank of Eᵀ
+  ChartEngine engine;  // the chart, its factorised block, the switching policy (chart_engine.hpp)
+  MatX rhs;            // r × n_a: scratch (right-hand sides of the dependent block)
+  MatX F;              // n × n_a: basis of admissible velocities, Eᵀ F = 0
+  MatX MF;             // n × n_a: M F
+  MatX H;              // n_a × n_a: H = Fᵀ M F, eq. (68)
   Eigen::LLT<MatX> H_llt;
-  MatX HinvFt;        // n_a × n: H⁻¹ Fᵀ
-  MatX psi;           // n × n: ψ = α A = F H⁻¹ Fᵀ, eq. (69)
-  MatX alpha;         // n × n: α = ψ M, eq. (70)
-  MatX beta;          // n × n: β = I − ψ M, eq. (70)
-  MatX DtF;           // nc × n_a: Dᵀ F
-  MatX MFdot;         // n × n_a: M Ḟ
-  MatX betaFdot;      // n × n_a: β Ḟ = Ḟ − F H⁻¹ Fᵀ M Ḟ
-  MatX small;         // n_a × n_a: scratch
-  MatX Fdot;          // n × n_a: Ḟ from Eᵀ Ḟ = −Dᵀ F (design §4)
-  MatX Theta;         // n × n: Θ = Ḟ H⁻¹ Fᵀ, eq. (83)
-  MatX theta;         // n × n: θ = ψ̇ = β Θ + Θᵀ βᵀ, eq. (84)
-  MatX Fdot_scratch;  // n × max(1, n_a): scratch of solve_chart
-  VecX dq;            // n: scratch of the chart position corrector
+  MatX HinvFt;    // n_a × n: H⁻¹ Fᵀ
+  MatX psi;       // n × n: ψ = α A = F H⁻¹ Fᵀ, eq. (69)
+  MatX alpha;     // n × n: α = ψ M, eq. (70)
+  MatX beta;      // n × n: β = I − ψ M, eq. (70)
+  MatX DtF;       // nc × n_a: Dᵀ F
+  MatX MFdot;     // n × n_a: M Ḟ
+  MatX betaFdot;  // n × n_a: β Ḟ = Ḟ − F H⁻¹ Fᵀ M Ḟ
+  MatX small;     // n_a × n_a: scratch
+  MatX Fdot;      // n × n_a: Ḟ from Eᵀ Ḟ = −Dᵀ F (design §4)
+  MatX Theta;     // n × n: Θ = Ḟ H⁻¹ Fᵀ, eq. (83)
+  MatX theta;     // n × n: θ = ψ̇ = β Θ + Θᵀ βᵀ, eq. (84)
+  VecX dq;        // n: scratch of the chart position corrector
   ProjectionStatus status = ProjectionStatus::ok;
   DualWorkspace(const Model& model, int rank);
 };

@@ -154,10 +154,8 @@ TEST_P(Projection, Eq42_44_PrimalProjectionsEqualDualOnes) {
 // so q(t) stays on f = 0 and q̇(0) = u.
 VecX on_manifold(const Model& model, const VecX& q, const VecX& u, double t, Workspace& chart_ws) {
   VecX qt = q + t * u;
-  PositionOptions tight;
-  tight.tolerance = 1e-15;
-  tight.max_iterations = 50;
-  const SolveResult r = correct_positions_in_chart(model, qt, chart_ws, tight);
+  const SolveResult r =
+      correct_positions_in_chart(model, qt, chart_ws, {.tolerance = 1e-15, .max_iterations = 50});
   EXPECT_NE(r.status, SolveStatus::singular);
   return qt;
 }
@@ -181,8 +179,8 @@ TEST_P(Projection, Eq79_OmegaEqualsTimeDerivativeOfPi) {
 TEST_P(Projection, Eq83_84_ThetaAndFdotAgainstDifferences) {
   Evaluated e(GetParam());
   Workspace probe(e.model, e.mob.rank);
-  probe.dual.chart = e.ws->dual.chart;  // same chart: F(q(t)) is then one smooth function
-  probe.dual.chart_ready = true;
+  probe.dual.engine.set_chart(
+      e.ws->dual.engine.chart());  // same chart: F(q(t)) one smooth function
   Workspace chart_ws(e.model, e.mob.rank);
   (void)evaluate_dual(e.model, e.state, chart_ws);
   State s = e.state;
@@ -191,7 +189,7 @@ TEST_P(Projection, Eq83_84_ThetaAndFdotAgainstDifferences) {
   const MatX psi_plus = probe.dual.psi, F_plus = probe.dual.F;
   s.q = on_manifold(e.model, e.q, e.state.u, -kFdStep, chart_ws);
   ASSERT_EQ(evaluate_dual(e.model, s, probe), ProjectionStatus::ok);
-  ASSERT_EQ(probe.dual.switch_count, 0);
+  ASSERT_EQ(probe.dual.engine.switch_count(), 0);
   const MatX psi_dot = (psi_plus - probe.dual.psi) / (2.0 * kFdStep);
   const MatX F_dot = (F_plus - probe.dual.F) / (2.0 * kFdStep);
   EXPECT_LT(rel(e.ws->dual.Fdot, F_dot), kFdTol) << "Ḟ (from Eᵀ Ḟ = −Dᵀ F) ≠ difference of F";
@@ -231,13 +229,14 @@ TEST(Charts, SwitchAtRockerLimitsAndCloseTheLoopAfterOneTurn) {
   ASSERT_GE(rocker, 0);
   const int rocker_phi = model.bodies[static_cast<size_t>(rocker)].u_offset + 2;
   const int crank_phi = model.bodies[static_cast<size_t>(crank)].u_offset + 2;
-  Chart& c = ws.dual.chart;
+  Chart c = ws.dual.engine.chart();
   auto& dep = c.dependent;
   const auto it = std::find(dep.begin(), dep.end(), rocker_phi);
   ASSERT_NE(it, dep.end()) << "rocker angle already independent";
   *it = c.independent[0];
   c.independent[0] = rocker_phi;
   std::sort(dep.begin(), dep.end());
+  ws.dual.engine.set_chart(c);
   const double start = s.q(crank_phi);
   const int steps = 3600;
   const double h = 2.0 * M_PI / steps;
@@ -257,8 +256,9 @@ TEST(Charts, SwitchAtRockerLimitsAndCloseTheLoopAfterOneTurn) {
     const SolveResult r = correct_positions_in_chart(model, s.q, ws);
     ASSERT_EQ(r.status, SolveStatus::converged) << "step " << k << ": " << r.message;
   }
-  EXPECT_GE(ws.dual.switch_count, 1) << "the rocker-angle chart must be left at a rocker limit";
-  EXPECT_EQ(ws.dual.switches.size(), static_cast<size_t>(ws.dual.switch_count));
+  EXPECT_GE(ws.dual.engine.switch_count(), 1)
+      << "the rocker-angle chart must be left at a rocker limit";
+  EXPECT_EQ(ws.dual.engine.switches().size(), static_cast<size_t>(ws.dual.engine.switch_count()));
   EXPECT_NEAR(s.q(crank_phi) - start, 2.0 * M_PI, 1e-3);  // crank held by the predictor only
   // Back to the start: every coordinate but the crank angle returns (same assembly mode).
   VecX back = s.q;
