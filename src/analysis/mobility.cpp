@@ -1,7 +1,12 @@
 #include "orthomech/analysis/mobility.hpp"
 
 #include <Eigen/LU>
+#include <Eigen/OrderingMethods>
+#include <Eigen/SparseCore>
+#include <Eigen/SparseQR>
 #include <algorithm>
+#include <stdexcept>
+#include <string>
 
 #include "orthomech/constraints/joints.hpp"
 #include "orthomech/model/free_system.hpp"
@@ -10,58 +15,90 @@ namespace orthomech {
 
 namespace {
 
-// The number of joints that connect body b.
-int joints_at(const Model& model, int b) {
-  int count = 0;
+using SparseMat = Eigen::SparseMatrix<double>;  // column-major
+
+// The number of joints that connect each body (a joint from a body to itself counts once).
+std::vector<int> joints_per_body(const Model& model) {
+  std::vector<int> count(model.bodies.size(), 0);
   for (const Joint& j : model.joints)
     std::visit(
         [&](const auto& k) {
-          if constexpr (requires { k.pi.body; })
-            if (k.pi.body == b || k.pj.body == b) ++count;
+          if constexpr (requires { k.pi.body; }) {
+            if (k.pi.body != kGround) ++count[static_cast<size_t>(k.pi.body)];
+            if (k.pj.body != kGround && k.pj.body != k.pi.body)
+              ++count[static_cast<size_t>(k.pj.body)];
+          }
         },
         j.kind);
   return count;
 }
 
+// Eᵀ at q (eq. (23)) and its sparse copy (n_c × n, column-major: column k lists the constraint
+// rows that involve velocity component k), with ‖row‖ of every constraint row.
+struct SparseJacobian {
+  SparseMat Et;
+  VecX row_norm;
+};
+
+SparseJacobian sparse_jacobian(const MatX& Et) {
+  SparseJacobian J;
+  J.Et = Et.sparseView(0.0, 0.0);  // exact zeros only: every computed entry is kept
+  J.Et.makeCompressed();
+  J.row_norm = VecX::Zero(Et.rows());
+  for (Eigen::Index k = 0; k < J.Et.outerSize(); ++k)
+    for (SparseMat::InnerIterator it(J.Et, k); it; ++it)
+      J.row_norm(it.row()) += it.value() * it.value();
+  J.row_norm = J.row_norm.cwiseSqrt();
+  return J;
+}
+
+// The constraint rows with a nonzero in body b's columns, ascending.
+std::vector<int> rows_at(const Body& b, const SparseMat& Et) {
+  std::vector<int> rows;
+  for (int k = 0; k < b.nu(); ++k)
+    for (SparseMat::InnerIterator it(Et, b.u_offset + k); it; ++it)
+      rows.push_back(static_cast<int>(it.row()));
+  std::sort(rows.begin(), rows.end());
+  rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
+  return rows;
+}
+
 // Body b's columns of Eᵀ scaled by √A_kk (the scales in `sa`), rows normalised, as the rank test
 // of the chart selector: its null space is b's own motions (every other body at rest), in scaled
-// coordinates.
-Eigen::FullPivLU<MatX> own_motion_lu(const Body& b, const MatX& Et, const VecX& A_diag,
+// coordinates. Only the rows that involve b (rows_at) are formed: the others are zero in these
+// columns and change neither the rank nor the kernel of the full-pivoting LU (a zero row is never
+// a pivot while a nonzero entry is left, and the order of the other rows is kept).
+Eigen::FullPivLU<MatX> own_motion_lu(const Body& b, const SparseJacobian& J, const VecX& A_diag,
                                      double tolerance, VecX& sa) {
   sa.resize(b.nu());
   for (int k = 0; k < b.nu(); ++k) sa(k) = std::sqrt(A_diag(b.u_offset + k));
-  MatX cols = Et.middleCols(b.u_offset, b.nu()) * sa.asDiagonal();
-  for (Eigen::Index r = 0; r < cols.rows(); ++r) {
-    const double norm = Et.row(r).norm();
-    if (norm > 0.0) cols.row(r) /= norm;
+  const std::vector<int> rows = rows_at(b, J.Et);
+  MatX cols = MatX::Zero(static_cast<Eigen::Index>(rows.size()), b.nu());
+  for (int k = 0; k < b.nu(); ++k)
+    for (SparseMat::InnerIterator it(J.Et, b.u_offset + k); it; ++it) {
+      const auto at = std::lower_bound(rows.begin(), rows.end(), static_cast<int>(it.row()));
+      cols(at - rows.begin(), k) = it.value() * sa(k);
+    }
+  for (size_t r = 0; r < rows.size(); ++r) {
+    const double norm = J.row_norm(rows[r]);
+    if (norm > 0.0) cols.row(static_cast<Eigen::Index>(r)) /= norm;
   }
   Eigen::FullPivLU<MatX> lu(cols);
   lu.setThreshold(tolerance);
   return lu;
 }
 
-int own_motions(const Body& b, const MatX& Et, const VecX& A_diag, double tolerance) {
+int own_motions(const Body& b, const SparseJacobian& J, const VecX& A_diag, double tolerance) {
   VecX sa;
-  return b.nu() - static_cast<int>(own_motion_lu(b, Et, A_diag, tolerance, sa).rank());
+  return b.nu() - static_cast<int>(own_motion_lu(b, J, A_diag, tolerance, sa).rank());
 }
 
-}  // namespace
-
-Mobility compute_mobility(const Model& model, const VecX& q, const ChartOptions& options) {
-  Mobility m;
-  m.nq = model.nq;
-  m.n = model.n;
-  m.nc = model.nc;
-  m.grubler = model.n - model.nc;
-  m.tolerance = options.rank_tolerance;
-  MatX Et(model.nc, model.n);
-  compute_constraint_jacobian(model, q, Et);
-  MatX A(model.n, model.n);
-  compute_inverse_mass_matrix(model, q, A);
+// Rank and redundant rows by the dense, column-pivoted QR of the chart selector.
+void dense_rank(const Model& model, const MatX& Et, const VecX& A_diag, const ChartOptions& options,
+                Mobility& m) {
   ChartSelector selector(model.nc, model.n);
   Chart chart;
-  m.rank = selector.select(Et, A.diagonal(), options, chart);
-  m.dof = model.n - m.rank;
+  m.rank = selector.select(Et, A_diag, options, chart);
   const auto& order = selector.row_order();
   const VecX& piv = selector.row_pivots();
   m.smallest_pivot = m.rank > 0 ? piv(m.rank - 1) : 0.0;
@@ -69,14 +106,149 @@ Mobility compute_mobility(const Model& model, const VecX& q, const ChartOptions&
     m.redundant_rows.push_back(order[static_cast<size_t>(k)]);
     m.largest_dropped = std::max(m.largest_dropped, piv(k));
   }
+}
+
+// Rank and redundant rows by a sparse QR of the same scaled matrix as the chart selector's step 1
+// (docs/theory.md, "Rank and redundancy"):
+//   (L1) S = diag(√A) E (n × n_c), each column (a constraint row) normalised to unit length;
+//   (L2) columns in the COLAMD fill-reducing order; rows matched to columns (column j takes an
+//        unmatched row of its own pattern, the one that enters earliest) and placed in that order,
+//        the unmatched rows after them, the empty rows left out. Eigen's SparseQR reflects column
+//        j onto row j (it does not order rows), so without the matching the rows a tall S has in
+//        excess of its columns fill Q and R: 1000-link chain 669 000 entries in R, 7 000 with it;
+//   (L3) S P = Q R, left-looking Householder QR; a column whose part orthogonal to the columns
+//        kept before it, |R_kk|, is below the tolerance is dropped (moved to the end of P):
+//        Eigen's SparseQR, as SuiteSparseQR's rank detection [Davis 2011, Algorithm 915, §2];
+//   (L4) r = the number kept; the dropped columns are the redundant rows. Each is within the
+//        tolerance of the span of the kept ones, ‖(Qᵀ s_c)_{r…}‖ ≤ tolerance: largest_dropped.
+// The columns are unit vectors (|R_11| = 1 in the dense QR), so the same tolerance applies to
+// |R_kk| directly. Without column pivoting R's diagonal is not ordered: smallest_pivot is the
+// smallest kept |R_kk|.
+void sparse_rank(const Model& model, const SparseJacobian& J, const VecX& A_diag,
+                 const ChartOptions& options, Mobility& m) {
+  m.sparse = true;
+  if (model.nc == 0) return;
+  const int n = model.n, nc = model.nc;
+  SparseMat S = J.Et.transpose();  // n × n_c
+  const VecX sqrt_A = A_diag.cwiseSqrt();
+  for (Eigen::Index c = 0; c < S.outerSize(); ++c) {  // (L1)
+    double norm2 = 0.0;
+    for (SparseMat::InnerIterator it(S, c); it; ++it) {
+      it.valueRef() *= sqrt_A(it.row());
+      norm2 += it.value() * it.value();
+    }
+    if (norm2 > 0.0) S.col(c) /= std::sqrt(norm2);
+  }
+  S.makeCompressed();
+  // (L2) Column order: column j of SP is column col_at[j] of S.
+  Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> colamd;
+  Eigen::COLAMDOrdering<int>()(S, colamd);
+  std::vector<int> col_at(static_cast<size_t>(nc));
+  for (int i = 0; i < nc; ++i) col_at[static_cast<size_t>(colamd.indices()(i))] = i;
+  std::vector<int> first(static_cast<size_t>(n), nc);  // first column of each row in that order
+  for (int j = 0; j < nc; ++j)
+    for (SparseMat::InnerIterator it(S, col_at[static_cast<size_t>(j)]); it; ++it)
+      first[static_cast<size_t>(it.row())] = std::min(first[static_cast<size_t>(it.row())], j);
+  std::vector<int> row_at(static_cast<size_t>(n), -1);  // new row of each row of S (−1: empty)
+  int rows = 0;
+  for (int j = 0; j < nc; ++j) {  // matched rows, in column order
+    int best = -1;
+    for (SparseMat::InnerIterator it(S, col_at[static_cast<size_t>(j)]); it; ++it) {
+      const int r = static_cast<int>(it.row());
+      if (row_at[static_cast<size_t>(r)] >= 0) continue;
+      if (best < 0 || first[static_cast<size_t>(r)] < first[static_cast<size_t>(best)]) best = r;
+    }
+    if (best >= 0) row_at[static_cast<size_t>(best)] = rows++;
+  }
+  std::vector<int> rest;  // the unmatched nonempty rows, by the column they enter
+  for (int r = 0; r < n; ++r)
+    if (row_at[static_cast<size_t>(r)] < 0 && first[static_cast<size_t>(r)] < nc) rest.push_back(r);
+  std::stable_sort(rest.begin(), rest.end(), [&](int a, int b) {
+    return first[static_cast<size_t>(a)] < first[static_cast<size_t>(b)];
+  });
+  for (const int r : rest) row_at[static_cast<size_t>(r)] = rows++;
+  std::vector<Eigen::Triplet<double>> entries;
+  entries.reserve(static_cast<size_t>(S.nonZeros()));
+  for (int j = 0; j < nc; ++j)
+    for (SparseMat::InnerIterator it(S, col_at[static_cast<size_t>(j)]); it; ++it)
+      entries.emplace_back(row_at[static_cast<size_t>(it.row())], j, it.value());
+  SparseMat SP(rows, nc);
+  SP.setFromTriplets(entries.begin(), entries.end());
+  SP.makeCompressed();
+  Eigen::SparseQR<SparseMat, Eigen::NaturalOrdering<int>> qr;  // (L3)
+  qr.setPivotThreshold(options.rank_tolerance);
+  qr.compute(SP);
+  if (qr.info() != Eigen::Success)
+    throw std::runtime_error(std::string(__FILE__) + ":" + std::to_string(__LINE__) +
+                             ": sparse QR of E failed: " + qr.lastErrorMessage());
+  m.rank = static_cast<int>(qr.rank());  // (L4)
+  const auto& order = qr.colsPermutation().indices();
+  const SparseMat& R = qr.matrixR();
+  m.smallest_pivot = m.rank > 0 ? 1.0 : 0.0;
+  for (int k = 0; k < m.rank; ++k)
+    m.smallest_pivot = std::min(m.smallest_pivot, std::abs(R.coeff(k, k)));
+  for (int k = m.rank; k < nc; ++k) {
+    const int j = order(k);
+    m.redundant_rows.push_back(col_at[static_cast<size_t>(j)]);
+    const VecX Qt_s = qr.matrixQ().adjoint() * VecX(SP.col(j));
+    m.largest_dropped = std::max(m.largest_dropped, Qt_s.tail(rows - m.rank).norm());
+  }
+}
+
+}  // namespace
+
+VecX inverse_mass_diagonal(const Model& model, const VecX& q) {
+  if (model.general) {
+    MatX A(model.n, model.n);
+    compute_inverse_mass_matrix(model, q, A);
+    return A.diagonal();
+  }
+  VecX d(model.n);
+  for (const Body& b : model.bodies) {  // eq. (6): A is block diagonal, A_b = M_b⁻¹
+    const int o = b.u_offset;
+    d(o) = 1.0 / b.mass;
+    d(o + 1) = 1.0 / b.mass;
+    if (b.kind == BodyKind::rigid) d(o + 2) = 1.0 / b.inertia;
+    if (b.kind == BodyKind::spatial) {  // A_b = diag(I₃/m, J⁻¹)
+      d(o + 2) = 1.0 / b.mass;
+      d.segment<3>(o + 3) = b.spatial.inertia.inverse().diagonal();
+    }
+  }
+  return d;
+}
+
+Mobility compute_mobility(const Model& model, const VecX& q, const ChartOptions& options,
+                          RankMethod method) {
+  Mobility m;
+  m.nq = model.nq;
+  m.n = model.n;
+  m.nc = model.nc;
+  m.grubler = model.n - model.nc;
+  m.tolerance = options.rank_tolerance;
+  if (method == RankMethod::automatic)
+    method =
+        !model.general && model.n >= kSparseMobilityFrom ? RankMethod::sparse : RankMethod::dense;
+  MatX Et(model.nc, model.n);
+  compute_constraint_jacobian(model, q, Et);
+  const VecX A_diag = inverse_mass_diagonal(model, q);
+  const SparseJacobian J = sparse_jacobian(Et);
+  if (method == RankMethod::sparse) {
+    Et.resize(0, 0);  // the sparse path needs only J
+    sparse_rank(model, J, A_diag, options, m);
+  } else {
+    dense_rank(model, Et, A_diag, options, m);
+  }
+  m.dof = model.n - m.rank;
   std::sort(m.redundant_rows.begin(), m.redundant_rows.end());
   for (int row : m.redundant_rows) m.redundant.push_back(model.constraint_row_name(row));
-  if (!model.general)
+  if (!model.general) {
+    const std::vector<int> joints = joints_per_body(model);
     for (size_t b = 0; b < model.bodies.size(); ++b) {
-      if (joints_at(model, static_cast<int>(b)) < 2) continue;
-      const int count = own_motions(model.bodies[b], Et, A.diagonal(), options.rank_tolerance);
+      if (joints[b] < 2) continue;
+      const int count = own_motions(model.bodies[b], J, A_diag, options.rank_tolerance);
       if (count > 0) m.idle.push_back({model.bodies[b].name, count});
     }
+  }
   return m;
 }
 
@@ -88,16 +260,16 @@ std::vector<int> idle_body_indices(const Model& model, const Mobility& m) {
 
 MatX idle_motions(const Model& model, const VecX& q, const std::vector<int>& idle) {
   if (idle.empty()) return MatX(model.n, 0);
-  MatX Et(model.nc, model.n), A(model.n, model.n);
+  MatX Et(model.nc, model.n);
   compute_constraint_jacobian(model, q, Et);
-  compute_inverse_mass_matrix(model, q, A);
-  const VecX A_diag = A.diagonal();
+  const SparseJacobian J = sparse_jacobian(Et);
+  const VecX A_diag = inverse_mass_diagonal(model, q);
   std::vector<VecX> motions;
   for (const int b : idle) {
     const Body& body = model.bodies[static_cast<size_t>(b)];
     VecX sa;
     const Eigen::FullPivLU<MatX> lu =
-        own_motion_lu(body, Et, A_diag, ChartOptions{}.rank_tolerance, sa);
+        own_motion_lu(body, J, A_diag, ChartOptions{}.rank_tolerance, sa);
     if (lu.rank() == body.nu()) continue;
     const MatX K = lu.kernel();
     // The rotation components of the body's velocity (planar φ̇; spatial ω).

@@ -28,9 +28,8 @@ SolveResult project_positions(const Model& model, VecX& q, const PositionOptions
   SolveResult result;
   VecX f(model.nc);
   MatX Et(model.nc, model.n);
-  MatX A(model.n, model.n);
-  compute_inverse_mass_matrix(model, q, A);
-  const VecX A_diag = A.diagonal();
+  MatX A;  // A = M⁻¹, eq. (6): formed at the first step (a design position that holds needs none)
+  VecX A_diag;
   ChartSelector selector(model.nc, model.n);
   Chart chart;
   ChartOptions chart_options;
@@ -75,6 +74,11 @@ SolveResult project_positions(const Model& model, VecX& q, const PositionOptions
       return result;
     }
     previous = result.residual;
+    if (A.size() == 0) {
+      A.resize(model.n, model.n);
+      compute_inverse_mass_matrix(model, q, A);
+      A_diag = A.diagonal();
+    }
     compute_constraint_jacobian(model, q, Et);
     const int r = selector.select(Et, A_diag, chart_options, chart);
     if (r == 0) {

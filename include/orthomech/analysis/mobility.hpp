@@ -3,6 +3,10 @@
 // rank in place of n_c), the Grübler–Kutzbach count n − n_c, and the redundant constraint
 // equations named by joint and component, from the rank-revealing factorisation of the chart
 // selector (scaled QR with column pivoting; tolerance ChartOptions::rank_tolerance).
+// Large models (n ≥ kSparseMobilityFrom) use a sparse QR of the same scaled matrix instead
+// (Eigen's SparseQR, COLAMD column ordering): the same rank and DOF; the redundant set it names
+// is a valid one (the other rows have full rank) but may differ from the dense choice
+// (docs/theory.md, "Rank and redundancy"; docs/performance.md, "Mobility of large models").
 #include <string>
 #include <vector>
 
@@ -21,6 +25,7 @@ struct Mobility {
   double smallest_pivot = 0.0;         // smallest kept |R_kk|/|R_11| (distance from a rank drop)
   double largest_dropped = 0.0;        // largest dropped |R_kk|/|R_11| (0 if none)
   double tolerance = 0.0;
+  bool sparse = false;  // rank revealed by the sparse QR (RankMethod::sparse)
   // Idle degrees of freedom (spatial.md §4.1, §6.5): a body held by two or more joints that can
   // move while every other body is at rest, e.g. a coupler between two spherical joints spinning
   // about the line through them. Each counts in `dof`.
@@ -31,8 +36,18 @@ struct Mobility {
   std::vector<Idle> idle;
 };
 
+// How the rank of E is revealed: `automatic` is `dense` below kSparseMobilityFrom velocities and
+// `sparse` from there on (models given by functions, Model::general, stay dense).
+enum class RankMethod { automatic, dense, sparse };
+inline constexpr int kSparseMobilityFrom = 600;
+
 [[nodiscard]] Mobility compute_mobility(const Model& model, const VecX& q,
-                                        const ChartOptions& options = {});
+                                        const ChartOptions& options = {},
+                                        RankMethod method = RankMethod::automatic);
+
+// The diagonal of A = M⁻¹ (eq. (6)) at q, without forming the n × n matrix (except for a model
+// given by functions, Model::general). Equal to compute_inverse_mass_matrix(…).diagonal().
+[[nodiscard]] VecX inverse_mass_diagonal(const Model& model, const VecX& q);
 
 // The indices (Model::bodies) of the bodies of m.idle.
 [[nodiscard]] std::vector<int> idle_body_indices(const Model& model, const Mobility& m);
