@@ -17,6 +17,7 @@
 #include "common.hpp"
 #include "orthomech/analysis/assembly.hpp"
 #include "orthomech/analysis/validate.hpp"
+#include "orthomech/constraints/joints.hpp"
 #include "orthomech/io/mechanism_writer.hpp"
 #include "orthomech/io/noise.hpp"
 #include "orthomech/io/units.hpp"
@@ -59,12 +60,14 @@ JointLock parse_lock(const Model& model, const std::string& text) {
   const std::string name = text.substr(0, eq);
   const int j = model.find_joint(name);
   if (j < 0) bad("--lock: joint '" + name + "' is not defined");
-  const auto& kind = model.joints[static_cast<size_t>(j)].kind;
-  if (model.dimension == 3)
-    bad("--lock: locks on spatial joints are not available yet (joint '" + name + "')");
-  const bool angular = std::holds_alternative<Revolute>(kind);
-  if (!angular && !std::holds_alternative<Prismatic>(kind))
-    bad("--lock: joint '" + name + "' is neither revolute nor prismatic and has no coordinate");
+  const CoordinateKind kind = joint_coordinate_kind(model.joints[static_cast<size_t>(j)]);
+  if (kind == CoordinateKind::none)
+    bad("--lock: joint '" + name + "' has no coordinate (" +
+        (model.dimension == 3 ? "revolute, cylindrical and screw joints have an angle, prismatic "
+                                "joints a slide"
+                              : "it is neither revolute nor prismatic") +
+        ")");
+  const bool angular = kind == CoordinateKind::angle;
   const UnitSystem file = unit_system(model.units);
   try {
     return {j,
@@ -111,7 +114,7 @@ int run_assemble(const AssembleOptions& opt) {
   const OutputUnit energy_u = output_unit(Dimension::moment, U);
   const OutputUnit distance_u = mass_metric_unit(U);
   auto joint_unit = [&](int joint) {
-    return std::holds_alternative<Revolute>(model.joints[static_cast<size_t>(joint)].kind)
+    return joint_coordinate_kind(model.joints[static_cast<size_t>(joint)]) == CoordinateKind::angle
                ? angle_u
                : length_u;
   };
@@ -119,12 +122,6 @@ int run_assemble(const AssembleOptions& opt) {
   AssemblyOptions options;
   options.tolerance = opt.tolerance;
   options.use_limits = !opt.no_limits;
-  if (model.dimension == 3 && options.use_limits)  // not yet: exit 2 naming the joint
-    for (const Joint& j : model.joints)
-      if (j.limits)
-        throw InputError(j.where, "joint '" + j.name + "'",
-                         "limits on spatial joints are not available in assemble yet "
-                         "(--no-limits assembles without them)");
   if (!opt.position.empty()) {
     const auto it = std::find_if(model.design_positions.begin(), model.design_positions.end(),
                                  [&](const DesignPosition& p) { return p.name == opt.position; });
@@ -277,7 +274,7 @@ int run_assemble(const AssembleOptions& opt) {
           << " iterations (Ipopt + Newton polish)\n";
     for (const LimitBlock& b : blocks) {
       const Joint& jt = model.joints[static_cast<size_t>(b.joint)];
-      const bool rev = std::holds_alternative<Revolute>(jt.kind);
+      const bool rev = b.angular;
       out << "limit       joint '" << jt.name << "' would need " << format_input(b.needed, rev, U)
           << ", outside its limits [" << format_input(jt.limits->x(), rev, U) << ", "
           << format_input(jt.limits->y(), rev, U) << "]\n";
@@ -364,7 +361,7 @@ int run_assemble(const AssembleOptions& opt) {
     spdlog::error("{}: {}", model.file, res.message);
     for (const LimitBlock& b : blocks) {
       const Joint& jt = model.joints[static_cast<size_t>(b.joint)];
-      const bool rev = std::holds_alternative<Revolute>(jt.kind);
+      const bool rev = b.angular;
       spdlog::error("{}: joint '{}' would need {}, outside its limits [{}, {}]", model.file,
                     jt.name, format_input(b.needed, rev, U), format_input(jt.limits->x(), rev, U),
                     format_input(jt.limits->y(), rev, U));

@@ -502,15 +502,15 @@ void Reader::read_measures(const YAML::Node& root) {
 
 // A speed or rate: a number (the file's units), a number with its unit ('300 rpm'), or an
 // expression of the parameters (the file's units).
-double Reader::speed_text(const std::string& text, bool angular) const {
+double Reader::speed_text(const std::string& text, bool angular, bool allow_zero) const {
   const double bare = (angular ? units_.angle : units_.length) / units_.time;
   try {
-    return parse_speed(text, angular, bare);
+    return parse_speed(text, angular, bare, allow_zero);
   } catch (const std::invalid_argument&) {
     if (expressions_.parameters().empty() || text.size() > kMaxExpressionLength) throw;
     const double v = expressions_.evaluate(text) * bare;
     if (!std::isfinite(v)) throw std::invalid_argument("'" + text + "' is not finite");
-    if (v == 0.0) throw std::invalid_argument("the speed must not be zero");
+    if (v == 0.0 && !allow_zero) throw std::invalid_argument("the speed must not be zero");
     return v;
   }
 }
@@ -706,7 +706,7 @@ void Reader::read_initial(const YAML::Node& node) {
     InitialRateSpec spec;
     spec.measure = m;
     try {
-      spec.rate = speed_text(kv.second.Scalar(), angular);
+      spec.rate = speed_text(kv.second.Scalar(), angular, /*allow_zero=*/true);  // at rest
     } catch (const std::invalid_argument& e) {
       // parse_speed speaks of a joint's speed; here it is a measure's rate.
       std::string message = e.what();

@@ -326,7 +326,7 @@ class Reader {
     return body == kGround ? 0.0 : model_.bodies[static_cast<size_t>(body)].design_pose.z();
   }
   double speed_value(const YAML::Node& node, const std::string& element, bool angular) const;
-  double speed_text(const std::string& text, bool angular) const;
+  double speed_text(const std::string& text, bool angular, bool allow_zero = false) const;
   void read_parameters(const YAML::Node& node);
   Table table(const YAML::Node& node, const std::string& element) const;
   ActiveWhile active_while(const YAML::Node& node, const std::string& element) const;

@@ -24,8 +24,10 @@
 namespace orthomech {
 
 struct JointLock {
-  int joint = -1;      // revolute or prismatic joint
-  double value = 0.0;  // joint coordinate, SI (revolute: matched modulo 2π nearest the guess)
+  int joint = -1;      // a joint with a coordinate (joint_coordinate_kind: planar revolute or
+                       // prismatic; spatial revolute, cylindrical, screw, prismatic)
+  double value = 0.0;  // joint coordinate, SI (planar revolute: matched modulo 2π nearest the
+                       // guess; spatial angle: modulo 2π)
 };
 
 struct AssemblyOptions {
