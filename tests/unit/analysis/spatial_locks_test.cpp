@@ -20,6 +20,7 @@
 #include "orthomech/model/free_system.hpp"
 #include "orthomech/model/measures.hpp"
 #include "support/fixtures.hpp"
+#include "support/spatial_oracles.hpp"
 
 namespace orthomech {
 namespace {
@@ -54,13 +55,7 @@ void expect_closed(const Model& m, const AssemblyResult& r) {
     EXPECT_NEAR(r.q.segment<4>(b.q_offset + 3).norm(), 1.0, 1e-14) << b.name;
 }
 
-// (M1): P cos φ + Q sin φ + S = 0, φ = atan2(Q, P) + acos(−S/√(P² + Q²)) (the file's branch).
-double rssr_phi(double theta) {
-  const double r1 = 0.1, r2 = 0.2, p = 0.3, h = 0.2, L = 0.42;
-  const double P = -2 * r1 * r2 * std::sin(theta), Q = 2 * h * r2;
-  const double S = p * p + r1 * r1 + r2 * r2 + h * h - L * L - 2 * p * r1 * std::cos(theta);
-  return std::atan2(Q, P) + std::acos(-S / std::hypot(P, Q));
-}
+using test::rssr_rocker_angle;
 
 TEST(SpatialLocks, RssrCrankLockGivesTheRockerAngleOfM1OnTheFilesBranch) {
   const Model m = test::load_bundled("rssr");
@@ -71,7 +66,8 @@ TEST(SpatialLocks, RssrCrankLockGivesTheRockerAngleOfM1OnTheFilesBranch) {
     expect_closed(m, r);
     const double theta = measure(m, "crank_angle", r.q);
     EXPECT_NEAR(wrap(theta - deg * kDeg), 0.0, 1e-12) << deg;
-    EXPECT_NEAR(wrap(measure(m, "rocker_angle", r.q) - rssr_phi(deg * kDeg)), 0.0, kClosedForm)
+    EXPECT_NEAR(wrap(measure(m, "rocker_angle", r.q) - rssr_rocker_angle(deg * kDeg)), 0.0,
+                kClosedForm)
         << deg;
     EXPECT_LT(r.residual, 1e-12);
   }
@@ -184,7 +180,8 @@ TEST(SpatialLocks, LimitsOnASpatialAngleAreBoundsReadModuloATurn) {
   o.locks.push_back({A0, 215 * kDeg});
   const AssemblyResult locked = assemble(m, m.design_q(), o);
   expect_closed(m, locked);
-  EXPECT_NEAR(wrap(measure(m, "rocker_angle", locked.q) - rssr_phi(215 * kDeg)), 0.0, kClosedForm);
+  EXPECT_NEAR(wrap(measure(m, "rocker_angle", locked.q) - rssr_rocker_angle(215 * kDeg)), 0.0,
+              kClosedForm);
 
   // Compared with its limits, the angle reads modulo a turn nearest their middle: 215°, not the
   // (P5) angle's −145° (cycle_metrics' limit_coordinate, used for limit blocks and excursions).
@@ -205,7 +202,8 @@ TEST(SpatialLocks, LimitsOnASpatialAngleAreBoundsReadModuloATurn) {
   const double at_bound =
       std::min(std::abs(wrap(theta - 200 * kDeg)), std::abs(wrap(theta - 220 * kDeg)));
   EXPECT_LT(at_bound, 1e-10) << theta / kDeg;
-  EXPECT_NEAR(wrap(measure(m, "rocker_angle", free.q) - rssr_phi(theta)), 0.0, kClosedForm);
+  EXPECT_NEAR(wrap(measure(m, "rocker_angle", free.q) - rssr_rocker_angle(theta)), 0.0,
+              kClosedForm);
 }
 
 // A slide limit on the spatial slider-crank: [0.25, 0.3] m keeps x_C from its drawn 0.2 m, so

@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "support/cli_runner.hpp"
+#include "support/spatial_oracles.hpp"
 
 namespace orthomech {
 namespace {
@@ -119,11 +120,8 @@ TEST(SpatialCli, CommandsNotYetSpatialRefuseWithExitTwo) {
 // naming it; a joint without a coordinate is exit 2; --write is still refused.
 TEST(SpatialCli, AssembleLocksSpatialJointsAndHonoursLimits) {
   const std::string rssr = test::bundled_file("rssr");
-  auto rocker_deg = [](double theta_deg) {  // (M1), this branch
-    const double r1 = 0.1, r2 = 0.2, p = 0.3, h = 0.2, L = 0.42, t = theta_deg * M_PI / 180;
-    const double P = -2 * r1 * r2 * std::sin(t), Q = 2 * h * r2;
-    const double S = p * p + r1 * r1 + r2 * r2 + h * h - L * L - 2 * p * r1 * std::cos(t);
-    return (std::atan2(Q, P) + std::acos(-S / std::hypot(P, Q))) * 180 / M_PI;
+  auto rocker_deg = [](double theta_deg) {  // (M1), the file's branch
+    return test::rssr_rocker_angle(theta_deg * M_PI / 180) * 180 / M_PI;
   };
   auto wrap_deg = [](double a) { return std::remainder(a, 360.0); };
   const CliResult lock = run_cli({"assemble", rssr, "--lock", "A0=90deg", "--json"});
