@@ -5,6 +5,7 @@
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -59,7 +60,22 @@ JointLock parse_lock(const Model& model, const std::string& text) {
   if (eq == std::string::npos) bad("--lock expects JOINT=VALUE, got '" + text + "'");
   const std::string name = text.substr(0, eq);
   const int j = model.find_joint(name);
-  if (j < 0) bad("--lock: joint '" + name + "' is not defined");
+  if (j < 0) {  // a measure's value: its position quantity, in its unit (rad: an angle)
+    const int m = model.find_measure(name);
+    if (m < 0) bad("--lock: joint '" + name + "' is not defined, nor a measure of that name");
+    const Measure& measure = model.measures[static_cast<size_t>(m)];
+    const bool angular = measure.unit.rfind("rad", 0) == 0;
+    const UnitSystem file = unit_system(model.units);
+    try {
+      JointLock l;
+      l.value =
+          parse_position(text.substr(eq + 1), angular, angular ? file.angle_si : file.length_si);
+      l.measure = m;
+      return l;
+    } catch (const std::invalid_argument& e) {
+      bad("--lock " + name + ": " + e.what());
+    }
+  }
   const CoordinateKind kind = joint_coordinate_kind(model.joints[static_cast<size_t>(j)]);
   if (kind == CoordinateKind::none)
     bad("--lock: joint '" + name + "' has no coordinate (" +
@@ -118,6 +134,16 @@ int run_assemble(const AssembleOptions& opt) {
                ? angle_u
                : length_u;
   };
+  // A lock's name and output unit: its joint's, or its measure's.
+  auto lock_name = [&](const JointLock& l) {
+    return l.measure >= 0 ? model.measures[static_cast<size_t>(l.measure)].name
+                          : model.joints[static_cast<size_t>(l.joint)].name;
+  };
+  auto lock_unit = [&](const JointLock& l) {
+    if (l.measure < 0) return joint_unit(l.joint);
+    return model.measures[static_cast<size_t>(l.measure)].unit.rfind("rad", 0) == 0 ? angle_u
+                                                                                    : length_u;
+  };
   auto measure_unit = [&](const Measure& m) { return output_unit(dimension_of(m.unit), U); };
   AssemblyOptions options;
   options.tolerance = opt.tolerance;
@@ -157,8 +183,11 @@ int run_assemble(const AssembleOptions& opt) {
   VelocityProjection vel;
   if (ok) vel = project_velocities(model, res.q, u0);
   // A limit that keeps it from closing: the value the joint would need.
+  // (find_limit_blocks follows joint locks only.)
+  const bool measure_locks = std::any_of(options.locks.begin(), options.locks.end(),
+                                         [](const JointLock& l) { return l.measure >= 0; });
   const std::vector<LimitBlock> blocks =
-      ok ? std::vector<LimitBlock>{} : find_limit_blocks(model, q0, options);
+      ok || measure_locks ? std::vector<LimitBlock>{} : find_limit_blocks(model, q0, options);
 
   std::string written;
   if (ok && !write_to.empty()) {
@@ -204,9 +233,9 @@ int run_assemble(const AssembleOptions& opt) {
     j["distance_unit"] = distance_u.name;
     nlohmann::json locks = nlohmann::json::array();
     for (const JointLock& l : options.locks)
-      locks.push_back({{"joint", model.joints[static_cast<size_t>(l.joint)].name},
-                       {"value", joint_unit(l.joint).from_si(l.value)},
-                       {"unit", joint_unit(l.joint).name}});
+      locks.push_back({{l.measure >= 0 ? "measure" : "joint", lock_name(l)},
+                       {"value", lock_unit(l).from_si(l.value)},
+                       {"unit", lock_unit(l).name}});
     j["locks"] = locks;
     nlohmann::json bodies = nlohmann::json::array();
     for (const BodyMove& b : res.bodies)
@@ -285,9 +314,8 @@ int run_assemble(const AssembleOptions& opt) {
     out << "distance    " << fmt(distance_u.from_si(res.distance), 4) << " " << distance_u.name
         << "   (mass metric)\n";
     for (const JointLock& l : options.locks)
-      out << "lock        " << model.joints[static_cast<size_t>(l.joint)].name << " = "
-          << fmt(joint_unit(l.joint).from_si(l.value), 10) << " " << joint_unit(l.joint).name
-          << "\n";
+      out << "lock        " << lock_name(l) << " = " << fmt(lock_unit(l).from_si(l.value), 10)
+          << " " << lock_unit(l).name << "\n";
     // Columns as wide as their longest entry (body, joint and measure names, headers).
     auto width_of = [](const std::string& header, const auto& names) {
       size_t w = header.size();
@@ -383,8 +411,8 @@ void register_assemble(CLI::App& app, const GlobalOptions& globals, int& exit_co
   add_set_option(cmd, opt->sets);
   cmd->add_flag("--json", opt->json, "one JSON document on stdout");
   cmd->add_option("--lock", opt->locks,
-                  "JOINT=VALUE: lock a revolute/prismatic joint (30deg, 12mm; a bare number is in "
-                  "the file's declared units); repeatable");
+                  "JOINT=VALUE: lock a joint's coordinate (30deg, 12mm; a bare number is in the "
+                  "file's declared units), or MEASURE=VALUE a measure's value; repeatable");
   cmd->add_option("--position", opt->position,
                   "lock the inputs of this design position of the file");
   cmd->add_flag("--no-limits", opt->no_limits, "ignore the joint limits of the file");

@@ -45,7 +45,21 @@ struct CoordinateRow {
   // wrapped residual").                                                                      (L4)
   bool wraps = false;
   double centre = 0.0;
+  int measure = -1;  // a lock on a position measure's value instead of a joint coordinate
 };
+
+// Whether a lock is on an angle (rad): a joint's angle coordinate or a measure in rad.
+bool lock_is_angle(const Model& model, const JointLock& l) {
+  if (l.measure >= 0)
+    return model.measures[static_cast<size_t>(l.measure)].unit.rfind("rad", 0) == 0;
+  return joint_coordinate_kind(model.joints[static_cast<size_t>(l.joint)]) == CoordinateKind::angle;
+}
+
+// The scalar a row reads: the joint's coordinate, or the measure's position quantity.
+MeasureKind row_kind(const Model& model, const CoordinateRow& r) {
+  if (r.measure >= 0) return model.measures[static_cast<size_t>(r.measure)].kind;
+  return JointCoordinate{r.joint};
+}
 
 std::vector<int> body_columns(const Model& model, int body) {
   std::vector<int> c;
@@ -98,7 +112,27 @@ std::vector<CoordinateRow> coordinate_rows(const Model& model, const VecX& q0,
     }
     rows.push_back(r);
   };
-  for (const JointLock& l : options.locks) make(l.joint, l.value, l.value, true);
+  for (const JointLock& l : options.locks) {
+    if (l.measure < 0) {
+      make(l.joint, l.value, l.value, true);
+      continue;
+    }
+    // A measure's value (its position quantity; measures with derivative 1 or 2 name it too): a
+    // joint measure is its joint's lock; others are not wrapped (spatial measure angles lie in
+    // [0, π] or (−π/2, π/2]), their Hessian by (L1) over every coordinate.
+    const Measure& m = model.measures.at(static_cast<size_t>(l.measure));
+    if (std::holds_alternative<JointCoordinate>(m.kind)) {
+      make(std::get<JointCoordinate>(m.kind).joint, l.value, l.value, true);
+      continue;
+    }
+    CoordinateRow r;
+    r.measure = l.measure;
+    r.lock = true;
+    r.lo = r.hi = l.value;
+    r.linear = false;
+    for (int k = 0; k < model.nq; ++k) r.cols.push_back(k);
+    rows.push_back(r);
+  }
   if (options.use_limits)
     for (size_t k = 0; k < model.joints.size(); ++k)
       if (model.joints[k].limits)
@@ -110,7 +144,7 @@ std::vector<CoordinateRow> coordinate_rows(const Model& model, const VecX& q0,
 double eval_coordinate(const Model& model, const CoordinateRow& r, const VecX& q,
                        Eigen::Ref<VecX> d) {
   d.setZero();
-  const double s = compute_scalar(model, JointCoordinate{r.joint}, q, nullptr, d).value;
+  const double s = compute_scalar(model, row_kind(model, r), q, nullptr, d).value;
   return r.wraps ? r.centre + std::remainder(s - r.centre, kTwoPi) : s;  // (L4)
 }
 
@@ -124,7 +158,7 @@ void add_coordinate_hessian(const Model& model, const CoordinateRow& r, const Ve
     u.setZero();
     u(a) += 1.0;
     u(b) += 1.0;
-    return compute_scalar(model, JointCoordinate{r.joint}, q, &u).ddot_u;
+    return compute_scalar(model, row_kind(model, r), q, &u).ddot_u;
   };
   std::vector<double> diag(r.cols.size());
   for (size_t i = 0; i < r.cols.size(); ++i) diag[i] = 0.25 * Q(r.cols[i], r.cols[i]);  // u = 2e
@@ -187,7 +221,9 @@ ResidualSplit split_residual(const Model& model, const VecX& q,
   for (const CoordinateRow& c : rows) {
     const double s = eval_coordinate(model, c, q, d);
     const bool is_angle =
-        joint_coordinate_kind(model.joints[static_cast<size_t>(c.joint)]) == CoordinateKind::angle;
+        c.measure >= 0 ? model.measures[static_cast<size_t>(c.measure)].unit.rfind("rad", 0) == 0
+                       : joint_coordinate_kind(model.joints[static_cast<size_t>(c.joint)]) ==
+                             CoordinateKind::angle;
     double& to = is_angle ? out.angle : out.length;
     to = std::max({to, c.lo - s, s - c.hi});
   }
@@ -654,22 +690,28 @@ void collect_gaps(const Model& model, const VecX& q_ls, double tol, AssemblyResu
   for (const JointResidual& j : res.gaps) res.total_gap += j.gap;
 }
 
-// The locks in words for messages: " with joint 'A0' locked at 30 deg" (the file's units).
+// The locks in words for messages: " with joint 'A0' locked at 30 deg", " with measure 'B_z'
+// locked at 250 mm" (the file's units).
 std::string locks_text(const Model& model, const std::vector<JointLock>& locks) {
-  if (locks.empty()) return "";
   const UnitSystem file_units = unit_system(model.units);
-  std::string out = " with joint";
-  if (locks.size() > 1) out += "s";
+  std::string out;
   for (size_t k = 0; k < locks.size(); ++k) {
-    const Joint& j = model.joints[static_cast<size_t>(locks[k].joint)];
-    out +=
-        (k == 0                  ? " '"
-         : k + 1 == locks.size() ? " and '"
-                                 : ", '") +
-        j.name + "' locked at " +
-        format_input(locks[k].value, joint_coordinate_kind(j) == CoordinateKind::angle, file_units);
+    const JointLock& l = locks[k];
+    const bool measure = l.measure >= 0;
+    const std::string name = measure ? model.measures[static_cast<size_t>(l.measure)].name
+                                     : model.joints[static_cast<size_t>(l.joint)].name;
+    out += k == 0 ? " with " : k + 1 == locks.size() ? " and " : ", ";
+    out += std::string(measure ? "measure '" : "joint '") + name + "' locked at " +
+           format_input(l.value, lock_is_angle(model, l), file_units);
   }
   return out;
+}
+
+// The locked quantity at q: the joint's coordinate or the measure's position quantity.
+double lock_value(const Model& model, const JointLock& l, const VecX& q) {
+  if (l.measure < 0) return joint_coordinate(model, l.joint, q);
+  return compute_scalar(model, model.measures[static_cast<size_t>(l.measure)].kind, q, nullptr)
+      .value;
 }
 
 AssemblyResult assemble_spatial(const Model& model, const VecX& q0, const AssemblyOptions& options);
@@ -805,10 +847,11 @@ std::optional<VecX> follow_locks(const Model& model, const VecX& q_guess,
   std::vector<double> from, to;
   double steps = 1.0;
   for (const JointLock& l : locks) {
-    const bool angle =
-        joint_coordinate_kind(model.joints[static_cast<size_t>(l.joint)]) == CoordinateKind::angle;
-    const double s = joint_coordinate(model, l.joint, q);
-    const double target = angle ? s + std::remainder(l.value - s, kTwoPi) : l.value;
+    const bool angle = lock_is_angle(model, l);
+    const double s = lock_value(model, l, q);
+    // A joint angle the short way round; a measure's value as it is.
+    const double target =
+        angle && l.measure < 0 ? s + std::remainder(l.value - s, kTwoPi) : l.value;
     from.push_back(s);
     to.push_back(target);
     steps = std::max(steps, std::ceil(std::abs(target - s) / (angle ? kAngleStep : 0.02 * L)));
@@ -986,8 +1029,17 @@ AssemblyResult assemble_spatial(const Model& model, const VecX& q0_in,
 
 }  // namespace
 
-AssemblyResult assemble(const Model& model, const VecX& q0, const AssemblyOptions& options) {
+AssemblyResult assemble(const Model& model, const VecX& q0, const AssemblyOptions& options_in) {
   if (q0.size() != model.nq) throw std::invalid_argument("assemble: q0 has the wrong size");
+  // A lock on a joint measure is a lock on its joint.
+  AssemblyOptions options = options_in;
+  for (JointLock& l : options.locks)
+    if (l.measure >= 0)
+      if (const auto* jc = std::get_if<JointCoordinate>(
+              &model.measures.at(static_cast<size_t>(l.measure)).kind)) {
+        l.joint = jc->joint;
+        l.measure = -1;
+      }
   AssemblyResult res = assemble_position(model, q0, options);
   const ResidualSplit split = split_residual(model, res.q, coordinate_rows(model, q0, options));
   res.residual_length = split.length;

@@ -153,6 +153,40 @@ TEST(SpatialLocks, ALockOutOfReachCannotCloseAndNamesTheLock) {
   EXPECT_NEAR(wrap(joint_coordinate(m, m.find_joint("B0"), r.q) - 90 * kDeg), 0.0, 1e-3);
 }
 
+// A measure's value locked: the RSSR's rocker point B at height z = h + r2 sin φ with φ = 170°
+// (from the drawn 158.1°, the rocker turning on): the rocker at φ and the crank where (M1) puts
+// the rocker there on the file's branch. Out of reach (z above h + r2 = 0.4 m): named.
+TEST(SpatialLocks, AMeasuresValueIsLockedOnTheFilesBranch) {
+  const Model m = test::load_bundled("rssr");
+  const double phi = 170 * kDeg, z = 0.2 + 0.2 * std::sin(phi);
+  AssemblyOptions o;
+  JointLock l;
+  l.measure = m.find_measure("B_z");
+  l.value = z;
+  o.locks.push_back(l);
+  const AssemblyResult r = assemble(m, m.design_q(), o);
+  expect_closed(m, r);
+  EXPECT_NEAR(measure(m, "B_z", r.q), z, 1e-12);
+  EXPECT_NEAR(wrap(measure(m, "rocker_angle", r.q) - phi), 0.0, kClosedForm);
+  EXPECT_NEAR(wrap(rssr_rocker_angle(measure(m, "crank_angle", r.q)) - phi), 0.0, kClosedForm);
+  // A joint measure locks its joint (read modulo a turn).
+  JointLock crank;
+  crank.measure = m.find_measure("crank_angle");
+  crank.value = (90 + 360) * kDeg;
+  o.locks = {crank};
+  const AssemblyResult c = assemble(m, m.design_q(), o);
+  expect_closed(m, c);
+  EXPECT_NEAR(wrap(measure(m, "rocker_angle", c.q) - rssr_rocker_angle(90 * kDeg)), 0.0,
+              kClosedForm);
+
+  o.locks = {l};
+  o.locks[0].value = 0.45;
+  const AssemblyResult far = assemble(m, m.design_q(), o);
+  EXPECT_EQ(far.status, AssemblyStatus::cannot_close) << far.message;
+  EXPECT_NE(far.message.find("with measure 'B_z' locked at 450 mm"), std::string::npos)
+      << far.message;
+}
+
 TEST(SpatialLocks, AJointWithoutACoordinateCannotBeLocked) {
   const Model m = test::load_bundled("rssr");
   AssemblyOptions o;
@@ -207,8 +241,10 @@ TEST(SpatialLocks, LimitsOnASpatialAngleAreBoundsReadModuloATurn) {
 }
 
 // A slide limit on the spatial slider-crank: [0.25, 0.3] m keeps x_C from its drawn 0.2 m, so
-// the slide ends at 0.25 m, a KKT point of (A1): W x = Cᵀλ with C = ∂(f, s)/∂x by central
-// differences in x (q = q₀ ⊕ x), independent of the code's Jacobians.
+// the slide ends at the nearer bound 0.25 m. With the slide row C = ∂(f, s)/∂x is square (DOF 1),
+// so W x = Cᵀλ only fixes λ (C by central differences in x, q = q₀ ⊕ x): the multiplier of the
+// bound must be that of a lower bound holding the pose back (λ > 0); at the upper bound or on the
+// wrong side it would not be.
 TEST(SpatialLocks, ASlideLimitIsAnActiveBoundAtAKktPoint) {
   Model m = test::load_bundled("spatial-slider-crank");
   const int slide = m.find_joint("slide");

@@ -153,6 +153,21 @@ TEST(SpatialCli, AssembleLocksSpatialJointsAndHonoursLimits) {
   EXPECT_NE(far.err.find("the mechanism cannot close with joint 'B0' locked at 90 deg"),
             std::string::npos)
       << far.err;
+  // A measure's value: the rocker's point B at z = 250 mm (file units), on the file's branch.
+  const CliResult bz = run_cli({"assemble", rssr, "--lock", "B_z=250", "--json"});
+  ASSERT_EQ(bz.status, 0) << bz.err;
+  const json b = json::parse(bz.out);
+  EXPECT_EQ(b["locks"][0]["measure"], "B_z");
+  EXPECT_EQ(b["locks"][0]["unit"], "mm");
+  EXPECT_NEAR(b["measures"]["B_z"].get<double>(), 250.0, 1e-9);
+  EXPECT_NEAR(wrap_deg(b["measures"]["rocker_angle"].get<double>() -
+                       rocker_deg(b["measures"]["crank_angle"].get<double>())),
+              0.0, 1e-7);
+  const CliResult unknown = run_cli({"assemble", rssr, "--lock", "Q=1"});
+  EXPECT_EQ(unknown.status, 2) << unknown.err;
+  EXPECT_NE(unknown.err.find("--lock: joint 'Q' is not defined, nor a measure of that name"),
+            std::string::npos)
+      << unknown.err;
   const CliResult none = run_cli({"assemble", rssr, "--lock", "A=10"});
   EXPECT_EQ(none.status, 2) << none.err;
   EXPECT_NE(none.err.find("--lock: joint 'A' has no coordinate"), std::string::npos) << none.err;
