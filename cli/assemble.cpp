@@ -5,6 +5,7 @@
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -17,6 +18,7 @@
 #include "common.hpp"
 #include "orthomech/analysis/assembly.hpp"
 #include "orthomech/analysis/validate.hpp"
+#include "orthomech/constraints/joints.hpp"
 #include "orthomech/io/mechanism_writer.hpp"
 #include "orthomech/io/noise.hpp"
 #include "orthomech/io/units.hpp"
@@ -58,13 +60,30 @@ JointLock parse_lock(const Model& model, const std::string& text) {
   if (eq == std::string::npos) bad("--lock expects JOINT=VALUE, got '" + text + "'");
   const std::string name = text.substr(0, eq);
   const int j = model.find_joint(name);
-  if (j < 0) bad("--lock: joint '" + name + "' is not defined");
-  const auto& kind = model.joints[static_cast<size_t>(j)].kind;
-  if (model.dimension == 3)
-    bad("--lock: locks on spatial joints are not available yet (joint '" + name + "')");
-  const bool angular = std::holds_alternative<Revolute>(kind);
-  if (!angular && !std::holds_alternative<Prismatic>(kind))
-    bad("--lock: joint '" + name + "' is neither revolute nor prismatic and has no coordinate");
+  if (j < 0) {  // a measure's value: its position quantity, in its unit (rad: an angle)
+    const int m = model.find_measure(name);
+    if (m < 0) bad("--lock: joint '" + name + "' is not defined, nor a measure of that name");
+    const Measure& measure = model.measures[static_cast<size_t>(m)];
+    const bool angular = measure.unit.rfind("rad", 0) == 0;
+    const UnitSystem file = unit_system(model.units);
+    try {
+      JointLock l;
+      l.value =
+          parse_position(text.substr(eq + 1), angular, angular ? file.angle_si : file.length_si);
+      l.measure = m;
+      return l;
+    } catch (const std::invalid_argument& e) {
+      bad("--lock " + name + ": " + e.what());
+    }
+  }
+  const CoordinateKind kind = joint_coordinate_kind(model.joints[static_cast<size_t>(j)]);
+  if (kind == CoordinateKind::none)
+    bad("--lock: joint '" + name + "' has no coordinate (" +
+        (model.dimension == 3 ? "revolute, cylindrical and screw joints have an angle, prismatic "
+                                "joints a slide"
+                              : "it is neither revolute nor prismatic") +
+        ")");
+  const bool angular = kind == CoordinateKind::angle;
   const UnitSystem file = unit_system(model.units);
   try {
     return {j,
@@ -111,20 +130,24 @@ int run_assemble(const AssembleOptions& opt) {
   const OutputUnit energy_u = output_unit(Dimension::moment, U);
   const OutputUnit distance_u = mass_metric_unit(U);
   auto joint_unit = [&](int joint) {
-    return std::holds_alternative<Revolute>(model.joints[static_cast<size_t>(joint)].kind)
+    return joint_coordinate_kind(model.joints[static_cast<size_t>(joint)]) == CoordinateKind::angle
                ? angle_u
                : length_u;
+  };
+  // A lock's name and output unit: its joint's, or its measure's.
+  auto lock_name = [&](const JointLock& l) {
+    return l.measure >= 0 ? model.measures[static_cast<size_t>(l.measure)].name
+                          : model.joints[static_cast<size_t>(l.joint)].name;
+  };
+  auto lock_unit = [&](const JointLock& l) {
+    if (l.measure < 0) return joint_unit(l.joint);
+    return model.measures[static_cast<size_t>(l.measure)].unit.rfind("rad", 0) == 0 ? angle_u
+                                                                                    : length_u;
   };
   auto measure_unit = [&](const Measure& m) { return output_unit(dimension_of(m.unit), U); };
   AssemblyOptions options;
   options.tolerance = opt.tolerance;
   options.use_limits = !opt.no_limits;
-  if (model.dimension == 3 && options.use_limits)  // not yet: exit 2 naming the joint
-    for (const Joint& j : model.joints)
-      if (j.limits)
-        throw InputError(j.where, "joint '" + j.name + "'",
-                         "limits on spatial joints are not available in assemble yet "
-                         "(--no-limits assembles without them)");
   if (!opt.position.empty()) {
     const auto it = std::find_if(model.design_positions.begin(), model.design_positions.end(),
                                  [&](const DesignPosition& p) { return p.name == opt.position; });
@@ -160,8 +183,11 @@ int run_assemble(const AssembleOptions& opt) {
   VelocityProjection vel;
   if (ok) vel = project_velocities(model, res.q, u0);
   // A limit that keeps it from closing: the value the joint would need.
+  // (find_limit_blocks follows joint locks only.)
+  const bool measure_locks = std::any_of(options.locks.begin(), options.locks.end(),
+                                         [](const JointLock& l) { return l.measure >= 0; });
   const std::vector<LimitBlock> blocks =
-      ok ? std::vector<LimitBlock>{} : find_limit_blocks(model, q0, options);
+      ok || measure_locks ? std::vector<LimitBlock>{} : find_limit_blocks(model, q0, options);
 
   std::string written;
   if (ok && !write_to.empty()) {
@@ -207,9 +233,9 @@ int run_assemble(const AssembleOptions& opt) {
     j["distance_unit"] = distance_u.name;
     nlohmann::json locks = nlohmann::json::array();
     for (const JointLock& l : options.locks)
-      locks.push_back({{"joint", model.joints[static_cast<size_t>(l.joint)].name},
-                       {"value", joint_unit(l.joint).from_si(l.value)},
-                       {"unit", joint_unit(l.joint).name}});
+      locks.push_back({{l.measure >= 0 ? "measure" : "joint", lock_name(l)},
+                       {"value", lock_unit(l).from_si(l.value)},
+                       {"unit", lock_unit(l).name}});
     j["locks"] = locks;
     nlohmann::json bodies = nlohmann::json::array();
     for (const BodyMove& b : res.bodies)
@@ -277,7 +303,7 @@ int run_assemble(const AssembleOptions& opt) {
           << " iterations (Ipopt + Newton polish)\n";
     for (const LimitBlock& b : blocks) {
       const Joint& jt = model.joints[static_cast<size_t>(b.joint)];
-      const bool rev = std::holds_alternative<Revolute>(jt.kind);
+      const bool rev = b.angular;
       out << "limit       joint '" << jt.name << "' would need " << format_input(b.needed, rev, U)
           << ", outside its limits [" << format_input(jt.limits->x(), rev, U) << ", "
           << format_input(jt.limits->y(), rev, U) << "]\n";
@@ -288,9 +314,8 @@ int run_assemble(const AssembleOptions& opt) {
     out << "distance    " << fmt(distance_u.from_si(res.distance), 4) << " " << distance_u.name
         << "   (mass metric)\n";
     for (const JointLock& l : options.locks)
-      out << "lock        " << model.joints[static_cast<size_t>(l.joint)].name << " = "
-          << fmt(joint_unit(l.joint).from_si(l.value), 10) << " " << joint_unit(l.joint).name
-          << "\n";
+      out << "lock        " << lock_name(l) << " = " << fmt(lock_unit(l).from_si(l.value), 10)
+          << " " << lock_unit(l).name << "\n";
     // Columns as wide as their longest entry (body, joint and measure names, headers).
     auto width_of = [](const std::string& header, const auto& names) {
       size_t w = header.size();
@@ -364,7 +389,7 @@ int run_assemble(const AssembleOptions& opt) {
     spdlog::error("{}: {}", model.file, res.message);
     for (const LimitBlock& b : blocks) {
       const Joint& jt = model.joints[static_cast<size_t>(b.joint)];
-      const bool rev = std::holds_alternative<Revolute>(jt.kind);
+      const bool rev = b.angular;
       spdlog::error("{}: joint '{}' would need {}, outside its limits [{}, {}]", model.file,
                     jt.name, format_input(b.needed, rev, U), format_input(jt.limits->x(), rev, U),
                     format_input(jt.limits->y(), rev, U));
@@ -386,8 +411,8 @@ void register_assemble(CLI::App& app, const GlobalOptions& globals, int& exit_co
   add_set_option(cmd, opt->sets);
   cmd->add_flag("--json", opt->json, "one JSON document on stdout");
   cmd->add_option("--lock", opt->locks,
-                  "JOINT=VALUE: lock a revolute/prismatic joint (30deg, 12mm; a bare number is in "
-                  "the file's declared units); repeatable");
+                  "JOINT=VALUE: lock a joint's coordinate (30deg, 12mm; a bare number is in the "
+                  "file's declared units), or MEASURE=VALUE a measure's value; repeatable");
   cmd->add_option("--position", opt->position,
                   "lock the inputs of this design position of the file");
   cmd->add_flag("--no-limits", opt->no_limits, "ignore the joint limits of the file");

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -11,6 +12,7 @@
 #include "orthomech/analysis/mobility.hpp"
 #include "orthomech/analysis/positions.hpp"
 #include "orthomech/constraints/joints.hpp"
+#include "orthomech/constraints/spatial_joints.hpp"
 #include "orthomech/io/units.hpp"
 #include "orthomech/model/free_system.hpp"
 #include "orthomech/model/measures.hpp"
@@ -37,7 +39,27 @@ struct CoordinateRow {
   bool lock = false;
   bool linear = true;     // revolute: s = φ_j − φ_i is linear in q (zero Hessian)
   std::vector<int> cols;  // coordinates s depends on (for its Hessian)
+  // Spatial angle (revolute, cylindrical, screw: the (P5) twist angle θ ∈ (−π, π]): known only
+  // modulo 2π, so the row reads s = centre + wrap(θ − centre), the value of θ nearest `centre`
+  // (the lock's value; a limit's midpoint). Its gradient is θ's (spatial.md §6.4: "locks use the
+  // wrapped residual").                                                                      (L4)
+  bool wraps = false;
+  double centre = 0.0;
+  int measure = -1;  // a lock on a position measure's value instead of a joint coordinate
 };
+
+// Whether a lock is on an angle (rad): a joint's angle coordinate or a measure in rad.
+bool lock_is_angle(const Model& model, const JointLock& l) {
+  if (l.measure >= 0)
+    return model.measures[static_cast<size_t>(l.measure)].unit.rfind("rad", 0) == 0;
+  return joint_coordinate_kind(model.joints[static_cast<size_t>(l.joint)]) == CoordinateKind::angle;
+}
+
+// The scalar a row reads: the joint's coordinate, or the measure's position quantity.
+MeasureKind row_kind(const Model& model, const CoordinateRow& r) {
+  if (r.measure >= 0) return model.measures[static_cast<size_t>(r.measure)].kind;
+  return JointCoordinate{r.joint};
+}
 
 std::vector<int> body_columns(const Model& model, int body) {
   std::vector<int> c;
@@ -49,7 +71,8 @@ std::vector<int> body_columns(const Model& model, int body) {
 
 // Rows for locks and limits. Revolute values are matched modulo 2π nearest the guess q0 (a lock
 // of 30° holds at 390° if the drawing has the crank there); limits are shifted by the same rule
-// applied to their midpoint.
+// applied to their midpoint. Spatial joints: their coordinate (joint_coordinate_kind), an angle
+// read by (L4).
 std::vector<CoordinateRow> coordinate_rows(const Model& model, const VecX& q0,
                                            const AssemblyOptions& options) {
   std::vector<CoordinateRow> rows;
@@ -58,14 +81,25 @@ std::vector<CoordinateRow> coordinate_rows(const Model& model, const VecX& q0,
     CoordinateRow r;
     r.joint = joint;
     r.lock = lock;
-    if (const auto* rev = std::get_if<Revolute>(&j.kind)) {
+    if (std::holds_alternative<SpatialJoint>(j.kind)) {
+      const CoordinateKind kind = joint_coordinate_kind(j);
+      if (kind == CoordinateKind::none)
+        throw std::invalid_argument(
+            "joint '" + j.name + "' has no coordinate to lock (a " +
+            spatial_joint_spec(std::get<SpatialJoint>(j.kind).type).type +
+            " joint; revolute, cylindrical and screw joints have an angle, prismatic a slide)");
+      r.lo = lo;
+      r.hi = hi;
+      r.linear = false;
+      r.wraps = kind == CoordinateKind::angle;
+      r.centre = 0.5 * (lo + hi);
+    } else if (std::holds_alternative<Revolute>(j.kind)) {
       const double s0 = joint_coordinate(model, joint, q0);
       const double mid = 0.5 * (lo + hi);
       const double shift = kTwoPi * std::round((s0 - mid) / kTwoPi);
       r.lo = lo + shift;
       r.hi = hi + shift;
       r.linear = true;
-      (void)rev;
     } else if (const auto* pri = std::get_if<Prismatic>(&j.kind)) {
       r.lo = lo;
       r.hi = hi;
@@ -78,7 +112,27 @@ std::vector<CoordinateRow> coordinate_rows(const Model& model, const VecX& q0,
     }
     rows.push_back(r);
   };
-  for (const JointLock& l : options.locks) make(l.joint, l.value, l.value, true);
+  for (const JointLock& l : options.locks) {
+    if (l.measure < 0) {
+      make(l.joint, l.value, l.value, true);
+      continue;
+    }
+    // A measure's value (its position quantity; measures with derivative 1 or 2 name it too): a
+    // joint measure is its joint's lock; others are not wrapped (spatial measure angles lie in
+    // [0, π] or (−π/2, π/2]), their Hessian by (L1) over every coordinate.
+    const Measure& m = model.measures.at(static_cast<size_t>(l.measure));
+    if (std::holds_alternative<JointCoordinate>(m.kind)) {
+      make(std::get<JointCoordinate>(m.kind).joint, l.value, l.value, true);
+      continue;
+    }
+    CoordinateRow r;
+    r.measure = l.measure;
+    r.lock = true;
+    r.lo = r.hi = l.value;
+    r.linear = false;
+    for (int k = 0; k < model.nq; ++k) r.cols.push_back(k);
+    rows.push_back(r);
+  }
   if (options.use_limits)
     for (size_t k = 0; k < model.joints.size(); ++k)
       if (model.joints[k].limits)
@@ -90,7 +144,8 @@ std::vector<CoordinateRow> coordinate_rows(const Model& model, const VecX& q0,
 double eval_coordinate(const Model& model, const CoordinateRow& r, const VecX& q,
                        Eigen::Ref<VecX> d) {
   d.setZero();
-  return compute_scalar(model, JointCoordinate{r.joint}, q, nullptr, d).value;
+  const double s = compute_scalar(model, row_kind(model, r), q, nullptr, d).value;
+  return r.wraps ? r.centre + std::remainder(s - r.centre, kTwoPi) : s;  // (L4)
 }
 
 // Adds w ∇²s to H (exact): for B̃ = I the convective term ḋu of measures is uᵀ∇²s u, so the
@@ -103,7 +158,7 @@ void add_coordinate_hessian(const Model& model, const CoordinateRow& r, const Ve
     u.setZero();
     u(a) += 1.0;
     u(b) += 1.0;
-    return compute_scalar(model, JointCoordinate{r.joint}, q, &u).ddot_u;
+    return compute_scalar(model, row_kind(model, r), q, &u).ddot_u;
   };
   std::vector<double> diag(r.cols.size());
   for (size_t i = 0; i < r.cols.size(); ++i) diag[i] = 0.25 * Q(r.cols[i], r.cols[i]);  // u = 2e
@@ -165,9 +220,11 @@ ResidualSplit split_residual(const Model& model, const VecX& q,
   }
   for (const CoordinateRow& c : rows) {
     const double s = eval_coordinate(model, c, q, d);
-    const bool revolute =
-        std::holds_alternative<Revolute>(model.joints[static_cast<size_t>(c.joint)].kind);
-    double& to = revolute ? out.angle : out.length;
+    const bool is_angle =
+        c.measure >= 0 ? model.measures[static_cast<size_t>(c.measure)].unit.rfind("rad", 0) == 0
+                       : joint_coordinate_kind(model.joints[static_cast<size_t>(c.joint)]) ==
+                             CoordinateKind::angle;
+    double& to = is_angle ? out.angle : out.length;
     to = std::max({to, c.lo - s, s - c.hi});
   }
   if (!std::isfinite(out.length)) out.length = std::numeric_limits<double>::infinity();
@@ -319,36 +376,49 @@ struct LocalProblem {
   VecX q0;
   MatX W;
   std::vector<int> f_rows;
+  std::vector<CoordinateRow> coords;  // locks and limits, read by (L4) for angles
   bool least_squares = false;
-  mutable VecX f, q;
+  mutable VecX f, q, d;
   mutable MatX Et, EtJ;
 
   LocalProblem(const Model& m, const VecX& q0_)
-      : model(m), q0(q0_), f(m.nc), q(m.nq), Et(m.nc, m.n), EtJ(m.nc, m.n) {}
+      : model(m), q0(q0_), f(m.nc), q(m.nq), d(m.n), Et(m.nc, m.n), EtJ(m.nc, m.n) {}
 
   const VecX& at(const VecX& x) const {
     q = q0;
     integrate_positions(model, q, x, 1.0);
     return q;
   }
+  // A velocity-space row r (∂/∂u) as a row in x: r · blockdiag(I₃, J_r(θ_b)) per body.
+  template <class Rows>
+  void to_local(const VecX& x, Rows&& rows) const {
+    for (const Body& b : model.bodies)
+      if (b.kind == BodyKind::spatial)
+        rows.middleCols(b.u_offset + 3, 3) =
+            (rows.middleCols(b.u_offset + 3, 3) * exp_right_jacobian(x.segment<3>(b.u_offset + 3)))
+                .eval();
+  }
   // ∂f/∂x = Eᵀ(q(x)) · blockdiag(I₃, J_r(θ_b)) per body.
   const MatX& jacobian(const VecX& x) const {
     compute_constraint_jacobian(model, at(x), Et);
     EtJ = Et;
-    for (const Body& b : model.bodies)
-      if (b.kind == BodyKind::spatial)
-        EtJ.middleCols<3>(b.u_offset + 3) =
-            Et.middleCols<3>(b.u_offset + 3) * exp_right_jacobian(x.segment<3>(b.u_offset + 3));
+    to_local(x, EtJ);
     return EtJ;
   }
+
+  int n_f() const { return least_squares ? 0 : static_cast<int>(f_rows.size()); }
 
   solvers::DenseNlp nlp(const VecX& start) const {
     solvers::DenseNlp p;
     p.n = model.n;
-    p.m = least_squares ? 0 : static_cast<int>(f_rows.size());
+    p.m = n_f() + static_cast<int>(coords.size());
     p.x0 = start;
     p.g_lower = VecX::Zero(p.m);
     p.g_upper = VecX::Zero(p.m);
+    for (size_t k = 0; k < coords.size(); ++k) {
+      p.g_lower(n_f() + static_cast<Eigen::Index>(k)) = coords[k].lo;
+      p.g_upper(n_f() + static_cast<Eigen::Index>(k)) = coords[k].hi;
+    }
     p.objective = [this](const VecX& x) {
       if (!least_squares) return 0.5 * x.dot(W * x);
       compute_constraint_residual(model, at(x), f);
@@ -363,13 +433,26 @@ struct LocalProblem {
       g.noalias() = jacobian(x).transpose() * f;
     };
     p.constraints = [this](const VecX& x, VecX& g) {
-      compute_constraint_residual(model, at(x), f);
-      for (size_t k = 0; k < f_rows.size(); ++k) g(static_cast<Eigen::Index>(k)) = f(f_rows[k]);
+      const VecX& qx = at(x);
+      Eigen::Index r = 0;
+      if (!least_squares) {
+        compute_constraint_residual(model, qx, f);
+        for (int row : f_rows) g(r++) = f(row);
+      }
+      for (const CoordinateRow& c : coords) g(r++) = eval_coordinate(model, c, qx, d);
     };
     p.jacobian = [this](const VecX& x, MatX& J) {
-      const MatX& EJ = jacobian(x);
-      for (size_t k = 0; k < f_rows.size(); ++k)
-        J.row(static_cast<Eigen::Index>(k)) = EJ.row(f_rows[k]);
+      Eigen::Index r = 0;
+      if (!least_squares) {
+        const MatX& EJ = jacobian(x);
+        for (int row : f_rows) J.row(r++) = EJ.row(row);
+      }
+      const VecX& qx = at(x);
+      for (const CoordinateRow& c : coords) {
+        eval_coordinate(model, c, qx, d);
+        J.row(r) = d.transpose();
+        to_local(x, J.row(r++));
+      }
     };
     return p;  // no Hessian: limited-memory
   }
@@ -607,6 +690,30 @@ void collect_gaps(const Model& model, const VecX& q_ls, double tol, AssemblyResu
   for (const JointResidual& j : res.gaps) res.total_gap += j.gap;
 }
 
+// The locks in words for messages: " with joint 'A0' locked at 30 deg", " with measure 'B_z'
+// locked at 250 mm" (the file's units).
+std::string locks_text(const Model& model, const std::vector<JointLock>& locks) {
+  const UnitSystem file_units = unit_system(model.units);
+  std::string out;
+  for (size_t k = 0; k < locks.size(); ++k) {
+    const JointLock& l = locks[k];
+    const bool measure = l.measure >= 0;
+    const std::string name = measure ? model.measures[static_cast<size_t>(l.measure)].name
+                                     : model.joints[static_cast<size_t>(l.joint)].name;
+    out += k == 0 ? " with " : k + 1 == locks.size() ? " and " : ", ";
+    out += std::string(measure ? "measure '" : "joint '") + name + "' locked at " +
+           format_input(l.value, lock_is_angle(model, l), file_units);
+  }
+  return out;
+}
+
+// The locked quantity at q: the joint's coordinate or the measure's position quantity.
+double lock_value(const Model& model, const JointLock& l, const VecX& q) {
+  if (l.measure < 0) return joint_coordinate(model, l.joint, q);
+  return compute_scalar(model, model.measures[static_cast<size_t>(l.measure)].kind, q, nullptr)
+      .value;
+}
+
 AssemblyResult assemble_spatial(const Model& model, const VecX& q0, const AssemblyOptions& options);
 
 AssemblyResult assemble_position(const Model& model, const VecX& q0,
@@ -695,8 +802,7 @@ AssemblyResult assemble_position(const Model& model, const VecX& q0,
     res.joints = joint_residuals(model, res.q);
     // In the file's declared units (a model built in code: SI).
     const UnitSystem file_units = unit_system(model.units);
-    msg << "the mechanism cannot close";
-    if (!options.locks.empty()) msg << " with the locked inputs";
+    msg << "the mechanism cannot close" << locks_text(model, options.locks);
     msg << ": at the best least-squares pose";
     for (size_t k = 0; k < res.gaps.size(); ++k) {
       msg << (k ? "," : "") << " joint '" << res.gaps[k].joint << "' ";
@@ -714,33 +820,145 @@ AssemblyResult assemble_position(const Model& model, const VecX& q0,
   return res;
 }
 
-// (A1) for spatial models in local coordinates (LocalProblem), then the mass-metric Gauss–Newton
-// projection (the position corrector, in u-space with ⊕) to the rounding level; (A2) in the same
-// coordinates when no pose closes.
+// A length scale of a spatial mechanism (m): the largest joint-point offset from a body's centre
+// of mass or from the world origin (ground points); 1 when there is none.
+double spatial_length_scale(const Model& model) {
+  double L = 0.0;
+  for (const Joint& j : model.joints)
+    if (const auto* s = std::get_if<SpatialJoint>(&j.kind))
+      L = std::max({L, s->pi.s.norm(), s->pj.s.norm()});
+  return L > 0.0 ? L : 1.0;
+}
+
+// The start of the spatial (A1) with locks, on the branch of the guess: the guess closed without
+// the locks (mass-metric Gauss–Newton, q ⊕ Δu), then each locked coordinate moved from its value
+// there to the lock (an angle the short way round, (L4)) in equal steps of at most 2° or 2 % of
+// the length scale, each predicted along the previous one (q_k ⊕ (q_k ⊖ q_{k−1})) and corrected
+// by the same Gauss–Newton with the locks at the step's values. Small steps keep the guess's
+// assembly mode and the joints' drawn branches (spatial.md §2.4), as `cycle` follows them; a
+// projection straight onto the locks may land on another mode. Empty when a step does not
+// converge (a dead point of the locked coordinate on the way, or a lock out of reach).
+std::optional<VecX> follow_locks(const Model& model, const VecX& q_guess,
+                                 const std::vector<JointLock>& locks, double tol) {
+  VecX q = q_guess;
+  if (!project_with_locks(model, q, {}, tol, 60)) return std::nullopt;
+  const double L = spatial_length_scale(model);
+  constexpr double kAngleStep = std::numbers::pi / 90.0;  // 2°
+  std::vector<double> from, to;
+  double steps = 1.0;
+  for (const JointLock& l : locks) {
+    const bool angle = lock_is_angle(model, l);
+    const double s = lock_value(model, l, q);
+    // A joint angle the short way round; a measure's value as it is.
+    const double target =
+        angle && l.measure < 0 ? s + std::remainder(l.value - s, kTwoPi) : l.value;
+    from.push_back(s);
+    to.push_back(target);
+    steps = std::max(steps, std::ceil(std::abs(target - s) / (angle ? kAngleStep : 0.02 * L)));
+  }
+  const int n = static_cast<int>(std::min(steps, 1000.0));
+  std::vector<JointLock> at = locks;
+  VecX q_prev = q, dq(model.n);
+  for (int k = 1; k <= n; ++k) {
+    for (size_t i = 0; i < locks.size(); ++i)
+      at[i].value = from[i] + (to[i] - from[i]) * static_cast<double>(k) / n;
+    const VecX q_last = q;
+    if (k > 1) {  // secant predictor
+      difference_positions(model, q, q_prev, dq);
+      integrate_positions(model, q, dq, 1.0);
+    }
+    if (!project_with_locks(model, q, at, tol, 60)) return std::nullopt;
+    q_prev = q_last;
+  }
+  return q;
+}
+
+// Feasibility to the rounding level after Ipopt (optimality is Ipopt's): the mass-metric
+// Gauss–Newton in velocity space, Δu = −A Cᵀ (C A Cᵀ)⁺ c, q ← q ⊕ Δu (spatial.md §6.3), on the
+// rows Ipopt kept — the independent rows of f, the locks, the limits active at q (held at their
+// nearer bound). The row set is fixed: off the manifold the redundant rows of an overconstrained
+// mechanism regain rank, and re-ranking them with a lock row made the step singular on the
+// Bennett linkage. Returns the steps taken.
+int polish_spatial(const Model& model, VecX& q, const std::vector<int>& f_rows,
+                   const std::vector<CoordinateRow>& coords, double tol) {
+  std::vector<const CoordinateRow*> held;
+  VecX f(model.nc), d(model.n);
+  for (const CoordinateRow& c : coords) {
+    const double s = eval_coordinate(model, c, q, d);
+    const double band = std::max(1e-8, 1e3 * tol);
+    if (c.lock || s - c.lo < band || c.hi - s < band) held.push_back(&c);
+  }
+  const int nf = static_cast<int>(f_rows.size());
+  const int m = nf + static_cast<int>(held.size());
+  MatX C(m, model.n), Et(model.nc, model.n), A(model.n, model.n);
+  VecX c(m), du(model.n);
+  compute_inverse_mass_matrix(model, q, A);
+  double r = total_residual(model, q, coords, f, d);
+  int steps = 0;
+  for (int it = 0; it < 10 && r > tol; ++it) {
+    compute_constraint_residual(model, q, f);
+    compute_constraint_jacobian(model, q, Et);
+    for (int k = 0; k < nf; ++k) {
+      C.row(k) = Et.row(f_rows[static_cast<size_t>(k)]);
+      c(k) = f(f_rows[static_cast<size_t>(k)]);
+    }
+    for (size_t k = 0; k < held.size(); ++k) {
+      const CoordinateRow& h = *held[k];
+      const double s = eval_coordinate(model, h, q, d);
+      const Eigen::Index row = nf + static_cast<Eigen::Index>(k);
+      C.row(row) = d.transpose();
+      c(row) = s - (h.lock || s - h.lo < h.hi - s ? h.lo : h.hi);
+    }
+    const MatX ACt = A * C.transpose();
+    const Eigen::CompleteOrthogonalDecomposition<MatX> cod(C * ACt);
+    du = -ACt * cod.solve(c);
+    if (!du.allFinite()) break;
+    VecX trial = q;
+    integrate_positions(model, trial, du, 1.0);
+    const double rt = total_residual(model, trial, coords, f, d);
+    if (!(rt < r)) break;
+    q = trial;
+    r = rt;
+    ++steps;
+  }
+  return steps;
+}
+
+// (A1) for spatial models in local coordinates (LocalProblem), from the guess closed and moved to
+// the locks on its branch (follow_locks), then the fixed-row Gauss–Newton (polish_spatial) to
+// the rounding level; (A2) in the same coordinates, locks and limits kept, when no pose closes.
 AssemblyResult assemble_spatial(const Model& model, const VecX& q0_in,
                                 const AssemblyOptions& options) {
-  bool any_limits = false;
-  for (const Joint& j : model.joints) any_limits = any_limits || j.limits.has_value();
-  if (!options.locks.empty() || (options.use_limits && any_limits))
-    throw std::invalid_argument(
-        "assemble: locks and limits on spatial joints are not available yet");
   AssemblyResult res;
   VecX q0 = q0_in;
   normalize_coordinates(model, q0);
   VecX f(model.nc), d(model.n);
   const double tol = options.tolerance;
-  const std::vector<CoordinateRow> none;
-  const double r0 = total_residual(model, q0, none, f, d);
+  const std::vector<CoordinateRow> coords = coordinate_rows(model, q0, options);
+  const double r0 = total_residual(model, q0, coords, f, d);
   if (r0 <= tol)
-    return unchanged_result(model, q0, r0, "the design position already satisfies every joint");
+    return unchanged_result(model, q0, r0,
+                            coords.empty()
+                                ? "the design position already satisfies every joint"
+                                : "the design position already satisfies every joint, lock and "
+                                  "limit");
   LocalProblem p(model, q0);
   MatX M(model.n, model.n);
   compute_mass_matrix(model, q0, M);
   p.W = M / M.diagonal().maxCoeff();
-  // Independent rows at a cheap Gauss–Newton projection of the guess, which is also the start.
+  p.coords = coords;
+  // The start: the guess closed and moved to the locks on its branch; else projected straight
+  // onto them; else the guess. The independent rows of f there (the rank is generic on the
+  // manifold; redundant rows would break Ipopt's constraint qualification).
   VecX q_start = q0;
-  const bool gn = project_with_locks(model, q_start, {}, tol, 30);
-  if (!gn) q_start = q0;
+  bool on_manifold = false;
+  if (const std::optional<VecX> followed = follow_locks(model, q0, options.locks, tol)) {
+    q_start = *followed;
+    on_manifold = true;
+  } else {
+    on_manifold = project_with_locks(model, q_start, options.locks, tol, 200);
+    if (!on_manifold) q_start = q0;
+  }
   p.f_rows = independent_rows(model, q_start);
   VecX x_start(model.n);
   difference_positions(model, q_start, q0, x_start);
@@ -753,12 +971,9 @@ AssemblyResult assemble_spatial(const Model& model, const VecX& q0_in,
   res.iterations = out.iterations;
   const VecX x = out.x.size() == model.n && out.x.allFinite() ? out.x : x_start;
   VecX q = p.at(x);
-  // Feasibility to the rounding level with the one position corrector (optimality: Ipopt's).
-  PositionOptions popt;
-  popt.tolerance = tol;
-  const SolveResult polished = project_positions(model, q, popt);
-  res.iterations += polished.iterations;
-  res.residual = total_residual(model, q, none, f, d);
+  const int polished = polish_spatial(model, q, p.f_rows, coords, tol);
+  res.iterations += polished;
+  res.residual = total_residual(model, q, coords, f, d);
   if (res.residual <= tol) {
     res.status = AssemblyStatus::assembled;
     res.q = q;
@@ -768,31 +983,37 @@ AssemblyResult assemble_spatial(const Model& model, const VecX& q0_in,
     res.bodies = body_moves(model, q0, q);
     res.joints = joint_residuals(model, q);
     std::ostringstream msg;
-    msg << "projected onto the constraints: Ipopt " << out.status << " in " << out.iterations
-        << " iterations (local coordinates, limited-memory Hessian), then " << polished.iterations
+    msg << "projected onto the constraints";
+    if (!options.locks.empty())
+      msg << " (from the design pose moved to the locks on its branch"
+          << (on_manifold ? "" : ": not reached, from the design pose") << ")";
+    msg << ": Ipopt " << out.status << " in " << out.iterations
+        << " iterations (local coordinates, limited-memory Hessian), then " << polished
         << " Gauss–Newton steps";
     res.message = msg.str();
     return res;
   }
-  // No feasible pose: the least-squares pose says which joints cannot close.
+  // No feasible pose: the least-squares pose (locks and limits kept) says which joints cannot
+  // close.
   p.least_squares = true;
   const solvers::IpoptOutcome ls = solvers::solve_with_ipopt(p.nlp(x_start), settings);
   if (ls.error) std::rethrow_exception(ls.error);
   res.q_least_squares = p.at(ls.x.size() == model.n && ls.x.allFinite() ? ls.x : x);
   collect_gaps(model, res.q_least_squares, tol, res);
   res.q = res.gaps.empty() ? q : res.q_least_squares;
-  res.residual = total_residual(model, res.q, none, f, d);
+  res.residual = total_residual(model, res.q, coords, f, d);
   res.bodies = body_moves(model, q0, res.q);
   res.joints = joint_residuals(model, res.q);
   std::ostringstream msg;
   if (res.gaps.empty()) {
     res.status = AssemblyStatus::not_converged;
-    msg << "no assembled position found (" << out.status << "; residual " << res.residual
-        << "), although a least-squares pose closes every joint";
+    msg << "no assembled position found" << locks_text(model, options.locks) << " (" << out.status
+        << "; residual " << res.residual << "), although a least-squares pose closes every joint";
   } else {
     res.status = AssemblyStatus::cannot_close;
     const UnitSystem file_units = unit_system(model.units);
-    msg << "the mechanism cannot close: at the best least-squares pose";
+    msg << "the mechanism cannot close" << locks_text(model, options.locks)
+        << ": at the best least-squares pose";
     for (size_t k = 0; k < res.gaps.size(); ++k) {
       msg << (k ? "," : "") << " joint '" << res.gaps[k].joint << "' ";
       if (res.gaps[k].gap > 0.0)
@@ -808,8 +1029,17 @@ AssemblyResult assemble_spatial(const Model& model, const VecX& q0_in,
 
 }  // namespace
 
-AssemblyResult assemble(const Model& model, const VecX& q0, const AssemblyOptions& options) {
+AssemblyResult assemble(const Model& model, const VecX& q0, const AssemblyOptions& options_in) {
   if (q0.size() != model.nq) throw std::invalid_argument("assemble: q0 has the wrong size");
+  // A lock on a joint measure is a lock on its joint.
+  AssemblyOptions options = options_in;
+  for (JointLock& l : options.locks)
+    if (l.measure >= 0)
+      if (const auto* jc = std::get_if<JointCoordinate>(
+              &model.measures.at(static_cast<size_t>(l.measure)).kind)) {
+        l.joint = jc->joint;
+        l.measure = -1;
+      }
   AssemblyResult res = assemble_position(model, q0, options);
   const ResidualSplit split = split_residual(model, res.q, coordinate_rows(model, q0, options));
   res.residual_length = split.length;

@@ -5,6 +5,7 @@
 #include <numbers>
 
 #include "orthomech/analysis/validate.hpp"
+#include "orthomech/constraints/joints.hpp"
 #include "orthomech/io/noise.hpp"
 #include "orthomech/model/measures.hpp"
 
@@ -76,7 +77,7 @@ StrokeMetric stroke(const CycleResult& r, std::string name, std::string unit,
 double limit_coordinate(const Model& model, int joint, const VecX& q) {
   const Joint& j = model.joints[static_cast<size_t>(joint)];
   const double x = compute_scalar(model, JointCoordinate{joint}, q, nullptr).value;
-  if (!std::holds_alternative<Revolute>(j.kind)) return x;
+  if (joint_coordinate_kind(j) != CoordinateKind::angle) return x;  // planar or spatial angle
   const double mid = j.limits ? 0.5 * (j.limits->x() + j.limits->y()) : 0.0;
   constexpr double kTurn = 2.0 * std::numbers::pi;
   return x - kTurn * std::round((x - mid) / kTurn);

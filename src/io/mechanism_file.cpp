@@ -8,8 +8,10 @@
 #include <fstream>
 #include <functional>
 #include <numbers>
+#include <optional>
 #include <set>
 #include <sstream>
+#include <tuple>
 
 #include "expressions.hpp"
 #include "mechanism_reader.hpp"
@@ -204,13 +206,9 @@ void Reader::read_joints(const YAML::Node& root) {
       j.kind = PinInSlot{a, b, unit_axis(item, element)};
     } else if (type == "gear") {
       expect_map(item, element, {"name", "type", "bodies", "ratio", "carrier"});
-      const YAML::Node bodies = require(item, "bodies", element);
-      if (!bodies.IsSequence() || bodies.size() != 2)
-        fail(bodies, element, "field 'bodies' must be a list of two bodies");
       GearPair g;
-      g.bi = rigid_body_ref(bodies[0], element);
-      g.bj = rigid_body_ref(bodies[1], element);
-      if (g.bi == g.bj) fail(bodies, element, "a gear pair needs two different bodies");
+      std::tie(g.bi, g.bj) = rigid_body_pair(item, element);
+      if (g.bi == g.bj) fail(item["bodies"], element, "a gear pair needs two different bodies");
       g.carrier = item["carrier"] ? rigid_body_ref(item["carrier"], element) : kGround;
       g.ratio = number_field(item, "ratio", element);
       if (g.ratio == 0.0) fail(item["ratio"], element, "ratio must not be zero");
@@ -330,13 +328,14 @@ ActiveWhile Reader::active_while(const YAML::Node& node, const std::string& elem
   return a;
 }
 
-// ---- loads -------------------------------------------------------------------------------------
+// ---- loads and measures: one loop for planar and spatial files --------------------------------
+// Each item: a unique name, the element's label for messages, its type; the type's keys are read
+// by planar_load / spatial_load (spatial_file.cpp), which return nothing for an unknown type.
 void Reader::read_loads(const YAML::Node& root) {
   const YAML::Node node = list(root, "loads");
   if (!node || node.IsNull()) return;
   std::set<std::string> seen;
   size_t index = 0;
-  const double force = units_.force, length = units_.length, angle = units_.angle;
   for (const auto& item : node) {
     const std::string name = name_of(item, "load", index++, seen);
     const std::string element = "load '" + name + "'";
@@ -344,90 +343,122 @@ void Reader::read_loads(const YAML::Node& root) {
     Load l;
     l.name = name;
     l.where = loc(item);
-    if (type == "gravity") {
-      expect_map(item, element, {"name", "type", "g"});
-      Gravity g;
-      if (item["g"]) g.g = vec2(item["g"], element, "g", length / (units_.time * units_.time));
-      // A gravity far from the Earth's after unit conversion is most often a unit slip
-      // (g: [0, -9.81] in a mm file is 0.00981 m/s²): a warning, not an error
-      // (docs/file-format.md).
-      constexpr double kEarth = 9.81, kFactor = 2.0;  // warn outside [g/2, 2 g]
-      const double gn = g.g.norm();
-      if (gn < kEarth / kFactor || gn > kEarth * kFactor) {
-        const SourceLocation w = loc(item["g"] ? item["g"] : item);
-        std::ostringstream msg;
-        msg << w.file << ':' << w.line << ':' << w.column << ": warning: " << element
-            << ": |g| = " << gn << " m/s^2 after unit conversion (the file's length unit is "
-            << model_.units.length << ", time " << model_.units.time
-            << "), far from 9.81 m/s^2: is the unit right?";
-        model_.warnings.push_back(msg.str());
-      }
-      l.kind = g;
-    } else if (type == "force") {
-      expect_map(item, element,
-                 {"name", "type", "point", "force", "frame", "table", "active_while"});
-      PointForce f;
-      f.at = point_ref(require(item, "point", element), element);
-      f.force = vec2(require(item, "force", element), element, "force", force);
-      if (const YAML::Node fr = item["frame"]) {
-        if (!fr.IsScalar()) fail(fr, element, "frame must be 'world' or 'body'");
-        if (fr.Scalar() == "body")
-          f.body_fixed = true;
-        else if (fr.Scalar() != "world")
-          fail(fr, element, "frame must be 'world' or 'body', got '" + fr.Scalar() + "'");
-      }
-      f.table = table(item["table"], element);
-      l.kind = f;
-    } else if (type == "torque") {
-      expect_map(item, element, {"name", "type", "body", "torque", "table", "active_while"});
-      Torque t;
-      t.body = rigid_body_ref(require(item, "body", element), element);
-      if (t.body == kGround) fail(item["body"], element, "a torque on the ground does nothing");
-      t.torque = number_field(item, "torque", element, force * length);
-      t.table = table(item["table"], element);
-      l.kind = t;
-    } else if (type == "spring-damper") {
-      expect_map(item, element,
-                 {"name", "type", "connects", "stiffness", "free_length", "damping"});
-      auto [a, b] = connects(item, element);
-      SpringDamper s{a, b, number_field(item, "stiffness", element, force / length),
-                     optional_number(item, "free_length", element, 0.0, length, Quantity::length),
-                     optional_number(item, "damping", element, 0.0, force * units_.time / length)};
-      if (s.stiffness < 0.0 || s.damping < 0.0 || s.free_length < 0.0)
-        fail(item, element, "stiffness, free_length and damping must not be negative");
-      l.kind = s;
-    } else if (type == "rotary-spring-damper") {
-      expect_map(item, element, {"name", "type", "bodies", "stiffness", "free_angle", "damping"});
-      const YAML::Node bodies = require(item, "bodies", element);
-      if (!bodies.IsSequence() || bodies.size() != 2)
-        fail(bodies, element, "field 'bodies' must be a list of two bodies");
-      RotarySpringDamper r;
-      r.bi = rigid_body_ref(bodies[0], element);
-      r.bj = rigid_body_ref(bodies[1], element);
-      if (r.bi == r.bj) fail(bodies, element, "a rotary spring-damper needs two different bodies");
-      r.stiffness = number_field(item, "stiffness", element, force * length / angle);
-      r.free_angle = optional_number(item, "free_angle", element, 0.0, angle, Quantity::angle);
-      r.damping =
-          optional_number(item, "damping", element, 0.0, force * length * units_.time / angle);
-      if (r.stiffness < 0.0 || r.damping < 0.0)
-        fail(item, element, "stiffness and damping must not be negative");
-      l.kind = r;
-    } else {
+    std::optional<LoadKind> kind = model_.dimension == 3 ? spatial_load(item, element, type)
+                                                         : planar_load(item, element, type);
+    if (!kind)
       fail(item["type"], element,
            "unknown load type '" + type +
                "' (allowed: gravity, force, torque, spring-damper, rotary-spring-damper)");
-    }
+    l.kind = std::move(*kind);
     if (const YAML::Node aw = item["active_while"]) l.active_while = active_while(aw, element);
     model_.loads.push_back(std::move(l));
   }
 }
 
-// ---- measures ----------------------------------------------------------------------------------
+std::optional<LoadKind> Reader::planar_load(const YAML::Node& item, const std::string& element,
+                                            const std::string& type) {
+  const double force = units_.force, length = units_.length;
+  if (type == "gravity") {
+    expect_map(item, element, {"name", "type", "g"});
+    Gravity g;
+    if (item["g"]) g.g = vec2(item["g"], element, "g", length / (units_.time * units_.time));
+    check_gravity(item, element, g.g.norm());
+    return g;
+  }
+  if (type == "force") {
+    expect_map(item, element, {"name", "type", "point", "force", "frame", "table", "active_while"});
+    PointForce f;
+    f.at = point_ref(require(item, "point", element), element);
+    f.force = vec2(require(item, "force", element), element, "force", force);
+    f.body_fixed = body_frame(item, element);
+    f.table = table(item["table"], element);
+    return f;
+  }
+  if (type == "torque") {
+    expect_map(item, element, {"name", "type", "body", "torque", "table", "active_while"});
+    Torque t;
+    t.body = rigid_body_ref(require(item, "body", element), element);
+    if (t.body == kGround) fail(item["body"], element, "a torque on the ground does nothing");
+    t.torque = number_field(item, "torque", element, force * length);
+    t.table = table(item["table"], element);
+    return t;
+  }
+  if (type == "spring-damper") {
+    expect_map(item, element, {"name", "type", "connects", "stiffness", "free_length", "damping"});
+    auto [a, b] = connects(item, element);
+    const SpringNumbers k = spring_numbers(item, element);
+    return SpringDamper{a, b, k.stiffness, k.free_length, k.damping};
+  }
+  if (type == "rotary-spring-damper") {
+    expect_map(item, element, {"name", "type", "bodies", "stiffness", "free_angle", "damping"});
+    RotarySpringDamper r;
+    std::tie(r.bi, r.bj) = rigid_body_pair(item, element);
+    if (r.bi == r.bj)
+      fail(item["bodies"], element, "a rotary spring-damper needs two different bodies");
+    const SpringNumbers k = rotary_spring_numbers(item, element);
+    r.stiffness = k.stiffness;
+    r.free_angle = k.free_length;
+    r.damping = k.damping;
+    return r;
+  }
+  return std::nullopt;
+}
+
+// A gravity far from the Earth's after unit conversion is most often a unit slip (g: [0, -9.81]
+// in a mm file is 0.00981 m/s²): a warning, not an error (docs/file-format.md).
+void Reader::check_gravity(const YAML::Node& item, const std::string& element, double gn) {
+  constexpr double kEarth = 9.81, kFactor = 2.0;  // warn outside [g/2, 2 g]
+  if (gn >= kEarth / kFactor && gn <= kEarth * kFactor) return;
+  std::ostringstream msg;
+  msg << "|g| = " << gn << " m/s^2 after unit conversion (the file's length unit is "
+      << model_.units.length << ", time " << model_.units.time
+      << "), far from 9.81 m/s^2: is the unit right?";
+  add_warning(item["g"] ? item["g"] : item, element, msg.str());
+}
+
+// `frame: world|body` of a force or torque (default world): true for body.
+bool Reader::body_frame(const YAML::Node& item, const std::string& element) const {
+  const YAML::Node fr = item["frame"];
+  if (!fr) return false;
+  if (!fr.IsScalar()) fail(fr, element, "frame must be 'world' or 'body'");
+  if (fr.Scalar() == "body") return true;
+  if (fr.Scalar() != "world")
+    fail(fr, element, "frame must be 'world' or 'body', got '" + fr.Scalar() + "'");
+  return false;
+}
+
+// stiffness, free_length, damping of a spring-damper (in this order; none negative).
+Reader::SpringNumbers Reader::spring_numbers(const YAML::Node& item,
+                                             const std::string& element) const {
+  const double force = units_.force, length = units_.length;
+  SpringNumbers k;
+  k.stiffness = number_field(item, "stiffness", element, force / length);
+  k.free_length = optional_number(item, "free_length", element, 0.0, length, Quantity::length);
+  k.damping = optional_number(item, "damping", element, 0.0, force * units_.time / length);
+  if (k.stiffness < 0.0 || k.damping < 0.0 || k.free_length < 0.0)
+    fail(item, element, "stiffness, free_length and damping must not be negative");
+  return k;
+}
+
+// stiffness, free_angle (in free_length), damping of a rotary spring-damper (none negative).
+Reader::SpringNumbers Reader::rotary_spring_numbers(const YAML::Node& item,
+                                                    const std::string& element) const {
+  const double force = units_.force, length = units_.length, angle = units_.angle;
+  SpringNumbers k;
+  k.stiffness = number_field(item, "stiffness", element, force * length / angle);
+  k.free_length = optional_number(item, "free_angle", element, 0.0, angle, Quantity::angle);
+  k.damping = optional_number(item, "damping", element, 0.0, force * length * units_.time / angle);
+  if (k.stiffness < 0.0 || k.damping < 0.0)
+    fail(item, element, "stiffness and damping must not be negative");
+  return k;
+}
+
 void Reader::read_measures(const YAML::Node& root) {
   const YAML::Node node = list(root, "measures");
   if (!node || node.IsNull()) return;
   std::set<std::string> seen;
   size_t index = 0;
+  const bool spatial = model_.dimension == 3;
   for (const auto& item : node) {
     const std::string name = name_of(item, "measure", index++, seen);
     const std::string element = "measure '" + name + "'";
@@ -436,60 +467,13 @@ void Reader::read_measures(const YAML::Node& root) {
     m.name = name;
     m.where = loc(item);
     std::string unit = "m";
-    if (type == "joint") {
-      expect_map(item, element, {"name", "type", "joint", "derivative"});
-      const YAML::Node jn = require(item, "joint", element);
-      const int j = model_.find_joint(jn.Scalar());
-      if (j < 0) fail(jn, element, "joint '" + jn.Scalar() + "' is not defined");
-      const JointKind& kind = model_.joints[static_cast<size_t>(j)].kind;
-      if (std::holds_alternative<Revolute>(kind)) {
-        const auto& r = std::get<Revolute>(kind);
-        for (int b : {r.pi.body, r.pj.body})
-          if (b != kGround && model_.bodies[static_cast<size_t>(b)].kind == BodyKind::particle)
-            fail(jn, element, "joint '" + jn.Scalar() + "' connects a particle: it has no angle");
-        unit = "rad";
-      } else if (!std::holds_alternative<Prismatic>(kind)) {
-        fail(jn, element, "joint '" + jn.Scalar() + "' is neither revolute nor prismatic");
-      }
-      m.kind = JointCoordinate{j};
-    } else if (type == "point") {
-      expect_map(item, element, {"name", "type", "point", "component", "derivative"});
-      PointCoordinate p;
-      p.point = point_ref(require(item, "point", element), element);
-      const std::string c = string_field(item, "component", element);
-      if (c == "x")
-        p.axis = 0;
-      else if (c == "y")
-        p.axis = 1;
-      else
-        fail(item["component"], element, "component must be 'x' or 'y', got '" + c + "'");
-      m.kind = p;
-    } else if (type == "distance") {
-      expect_map(item, element, {"name", "type", "points", "derivative"});
-      const YAML::Node pts = require(item, "points", element);
-      if (!pts.IsSequence() || pts.size() != 2)
-        fail(pts, element, "field 'points' must be a list of two points");
-      m.kind = PointDistance{point_ref(pts[0], element), point_ref(pts[1], element)};
-    } else if (type == "angle") {
-      expect_map(item, element, {"name", "type", "body", "bodies", "derivative"});
-      BodyAngle a;
-      if (item["body"] && item["bodies"])
-        fail(item, element, "give either 'body' or 'bodies', not both");
-      if (item["body"]) {
-        a.bj = rigid_body_ref(item["body"], element);
-      } else {
-        const YAML::Node bodies = require(item, "bodies", element);
-        if (!bodies.IsSequence() || bodies.size() != 2)
-          fail(bodies, element, "field 'bodies' must be a list of two bodies");
-        a.bi = rigid_body_ref(bodies[0], element);
-        a.bj = rigid_body_ref(bodies[1], element);
-      }
-      m.kind = a;
-      unit = "rad";
-    } else {
+    std::optional<MeasureKind> kind = spatial ? spatial_measure(item, element, type, unit)
+                                              : planar_measure(item, element, type, unit);
+    if (!kind)
       fail(item["type"], element,
-           "unknown measure type '" + type + "' (allowed: joint, point, distance, angle)");
-    }
+           "unknown measure type '" + type + "' (allowed: joint, point, distance, angle" +
+               (spatial ? ", camber, toe)" : ")"));
+    m.kind = std::move(*kind);
     if (const YAML::Node d = item["derivative"]) {
       const double v = number(d, element, "derivative");
       if (v != 0.0 && v != 1.0 && v != 2.0) fail(d, element, "derivative must be 0, 1 or 2");
@@ -500,17 +484,89 @@ void Reader::read_measures(const YAML::Node& root) {
   }
 }
 
+// `bodies: [b1, b2]` of a gear, a rotary spring-damper or an angle measure: two rigid bodies
+// (or the ground).
+std::pair<int, int> Reader::rigid_body_pair(const YAML::Node& item,
+                                            const std::string& element) const {
+  const YAML::Node bodies = require(item, "bodies", element);
+  if (!bodies.IsSequence() || bodies.size() != 2)
+    fail(bodies, element, "field 'bodies' must be a list of two bodies");
+  return {rigid_body_ref(bodies[0], element), rigid_body_ref(bodies[1], element)};
+}
+
+// The `points` of a distance measure: a list of two.
+YAML::Node Reader::two_points(const YAML::Node& item, const std::string& element) const {
+  const YAML::Node pts = require(item, "points", element);
+  if (!pts.IsSequence() || pts.size() != 2)
+    fail(pts, element, "field 'points' must be a list of two points");
+  return pts;
+}
+
+std::optional<MeasureKind> Reader::planar_measure(const YAML::Node& item,
+                                                  const std::string& element,
+                                                  const std::string& type, std::string& unit) {
+  if (type == "joint") {
+    expect_map(item, element, {"name", "type", "joint", "derivative"});
+    const YAML::Node jn = require(item, "joint", element);
+    const int j = model_.find_joint(jn.Scalar());
+    if (j < 0) fail(jn, element, "joint '" + jn.Scalar() + "' is not defined");
+    const JointKind& kind = model_.joints[static_cast<size_t>(j)].kind;
+    if (std::holds_alternative<Revolute>(kind)) {
+      const auto& r = std::get<Revolute>(kind);
+      for (int b : {r.pi.body, r.pj.body})
+        if (b != kGround && model_.bodies[static_cast<size_t>(b)].kind == BodyKind::particle)
+          fail(jn, element, "joint '" + jn.Scalar() + "' connects a particle: it has no angle");
+      unit = "rad";
+    } else if (!std::holds_alternative<Prismatic>(kind)) {
+      fail(jn, element, "joint '" + jn.Scalar() + "' is neither revolute nor prismatic");
+    }
+    return JointCoordinate{j};
+  }
+  if (type == "point") {
+    expect_map(item, element, {"name", "type", "point", "component", "derivative"});
+    PointCoordinate p;
+    p.point = point_ref(require(item, "point", element), element);
+    const std::string c = string_field(item, "component", element);
+    if (c == "x")
+      p.axis = 0;
+    else if (c == "y")
+      p.axis = 1;
+    else
+      fail(item["component"], element, "component must be 'x' or 'y', got '" + c + "'");
+    return p;
+  }
+  if (type == "distance") {
+    expect_map(item, element, {"name", "type", "points", "derivative"});
+    const YAML::Node pts = two_points(item, element);
+    return PointDistance{point_ref(pts[0], element), point_ref(pts[1], element)};
+  }
+  if (type == "angle") {
+    expect_map(item, element, {"name", "type", "body", "bodies", "derivative"});
+    BodyAngle a;
+    if (item["body"] && item["bodies"])
+      fail(item, element, "give either 'body' or 'bodies', not both");
+    if (item["body"]) {
+      a.bj = rigid_body_ref(item["body"], element);
+    } else {
+      std::tie(a.bi, a.bj) = rigid_body_pair(item, element);
+    }
+    unit = "rad";
+    return a;
+  }
+  return std::nullopt;
+}
+
 // A speed or rate: a number (the file's units), a number with its unit ('300 rpm'), or an
 // expression of the parameters (the file's units).
-double Reader::speed_text(const std::string& text, bool angular) const {
+double Reader::speed_text(const std::string& text, bool angular, bool allow_zero) const {
   const double bare = (angular ? units_.angle : units_.length) / units_.time;
   try {
-    return parse_speed(text, angular, bare);
+    return parse_speed(text, angular, bare, allow_zero);
   } catch (const std::invalid_argument&) {
     if (expressions_.parameters().empty() || text.size() > kMaxExpressionLength) throw;
     const double v = expressions_.evaluate(text) * bare;
     if (!std::isfinite(v)) throw std::invalid_argument("'" + text + "' is not finite");
-    if (v == 0.0) throw std::invalid_argument("the speed must not be zero");
+    if (v == 0.0 && !allow_zero) throw std::invalid_argument("the speed must not be zero");
     return v;
   }
 }
@@ -706,7 +762,7 @@ void Reader::read_initial(const YAML::Node& node) {
     InitialRateSpec spec;
     spec.measure = m;
     try {
-      spec.rate = speed_text(kv.second.Scalar(), angular);
+      spec.rate = speed_text(kv.second.Scalar(), angular, /*allow_zero=*/true);  // at rest
     } catch (const std::invalid_argument& e) {
       // parse_speed speaks of a joint's speed; here it is a measure's rate.
       std::string message = e.what();

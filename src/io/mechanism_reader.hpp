@@ -248,8 +248,23 @@ class Reader {
   void read_bodies(const YAML::Node& node);
   void read_joints(const YAML::Node& node);
   void read_nonholonomic(const YAML::Node& node);
+  // Loads and measures: one loop for both dimensions; each item's type read by planar_* or
+  // spatial_* (nothing for an unknown type).
   void read_loads(const YAML::Node& node);
   void read_measures(const YAML::Node& node);
+  std::optional<LoadKind> planar_load(const YAML::Node& item, const std::string& element,
+                                      const std::string& type);
+  std::optional<MeasureKind> planar_measure(const YAML::Node& item, const std::string& element,
+                                            const std::string& type, std::string& unit);
+  struct SpringNumbers {
+    double stiffness = 0.0, free_length = 0.0, damping = 0.0;  // rotary: free_length = free_angle
+  };
+  SpringNumbers spring_numbers(const YAML::Node& item, const std::string& element) const;
+  SpringNumbers rotary_spring_numbers(const YAML::Node& item, const std::string& element) const;
+  void check_gravity(const YAML::Node& item, const std::string& element, double gn);
+  bool body_frame(const YAML::Node& item, const std::string& element) const;
+  YAML::Node two_points(const YAML::Node& item, const std::string& element) const;
+  std::pair<int, int> rigid_body_pair(const YAML::Node& item, const std::string& element) const;
   void read_drivers(const YAML::Node& node);
   void read_design_positions(const YAML::Node& node);
   void read_analysis(const YAML::Node& node);
@@ -326,7 +341,7 @@ class Reader {
     return body == kGround ? 0.0 : model_.bodies[static_cast<size_t>(body)].design_pose.z();
   }
   double speed_value(const YAML::Node& node, const std::string& element, bool angular) const;
-  double speed_text(const std::string& text, bool angular) const;
+  double speed_text(const std::string& text, bool angular, bool allow_zero = false) const;
   void read_parameters(const YAML::Node& node);
   Table table(const YAML::Node& node, const std::string& element) const;
   ActiveWhile active_while(const YAML::Node& node, const std::string& element) const;
@@ -340,8 +355,10 @@ class Reader {
   void read_spatial_bodies(const YAML::Node& root);
   void read_spatial_joints(const YAML::Node& root);
   void read_spatial_nonholonomic(const YAML::Node& root);
-  void read_spatial_loads(const YAML::Node& root);
-  void read_spatial_measures(const YAML::Node& root);
+  std::optional<LoadKind> spatial_load(const YAML::Node& item, const std::string& element,
+                                       const std::string& type);
+  std::optional<MeasureKind> spatial_measure(const YAML::Node& item, const std::string& element,
+                                             const std::string& type, std::string& unit);
   Vec3 vec3(const YAML::Node& node, const std::string& element, const std::string& field,
             double scale, Quantity quantity = Quantity::general) const;
   Vec3 unit_vec3(const YAML::Node& node, const std::string& element,

@@ -17,6 +17,7 @@
 
 #include "orthomech/analysis/assembly.hpp"
 #include "orthomech/analysis/cycle.hpp"
+#include "orthomech/constraints/joints.hpp"
 #include "orthomech/io/mechanism_writer.hpp"
 #include "orthomech/io/units.hpp"
 #include "orthomech/model/free_system.hpp"
@@ -1375,14 +1376,6 @@ PoseResult assemble_pose(const Model& model, const RenderPose& pose) {
     result.message = "--position and --input are exclusive";
     return result;
   }
-  if (model.dimension == 3 && (!pose.position.empty() || !pose.input.empty())) {
-    // Both lock joints, and `assemble` has no locks on spatial joints yet.
-    result.status = PoseStatus::bad_request;
-    result.message = std::string(pose.position.empty() ? "--input" : "--position") +
-                     " is not available for spatial mechanisms yet (assemble has no locks on "
-                     "spatial joints): the design position is drawn without it";
-    return result;
-  }
   if (!pose.position.empty()) {
     const auto it = std::find_if(model.design_positions.begin(), model.design_positions.end(),
                                  [&](const DesignPosition& p) { return p.name == pose.position; });
@@ -1405,7 +1398,7 @@ PoseResult assemble_pose(const Model& model, const RenderPose& pose) {
       return result;
     }
     const Joint& joint = model.joints[static_cast<size_t>(result.driver)];
-    const bool angular = std::holds_alternative<Revolute>(joint.kind);
+    const bool angular = joint_coordinate_kind(joint) == CoordinateKind::angle;
     double value = 0.0;
     try {
       value = parse_position(

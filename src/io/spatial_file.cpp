@@ -7,6 +7,7 @@
 #include <Eigen/Geometry>
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <sstream>
 
 #include "mechanism_reader.hpp"
@@ -328,8 +329,8 @@ void Reader::read_spatial(const YAML::Node& root) {
   read_spatial_bodies(root);
   read_spatial_joints(root);
   read_spatial_nonholonomic(root);
-  read_spatial_measures(root);
-  read_spatial_loads(root);
+  read_measures(root);  // one loop for both dimensions (mechanism_file.cpp)
+  read_loads(root);
   read_drivers(root);
   read_design_positions(root);
   read_analysis(root["analysis"]);
@@ -586,189 +587,129 @@ void Reader::read_spatial_nonholonomic(const YAML::Node& root) {
   }
 }
 
-// ---- loads -------------------------------------------------------------------------------------
-void Reader::read_spatial_loads(const YAML::Node& root) {
-  const YAML::Node node = list(root, "loads");
-  if (!node || node.IsNull()) return;
-  std::set<std::string> seen;
-  size_t index = 0;
-  const double force = units_.force, length = units_.length, angle = units_.angle;
-  const auto frame = [&](const YAML::Node& item, const std::string& element) {
-    const YAML::Node fr = item["frame"];
-    if (!fr) return false;
-    if (!fr.IsScalar()) fail(fr, element, "frame must be 'world' or 'body'");
-    if (fr.Scalar() == "body") return true;
-    if (fr.Scalar() != "world")
-      fail(fr, element, "frame must be 'world' or 'body', got '" + fr.Scalar() + "'");
-    return false;
-  };
-  for (const auto& item : node) {
-    const std::string name = name_of(item, "load", index++, seen);
-    const std::string element = "load '" + name + "'";
-    const std::string type = string_field(item, "type", element);
-    Load l;
-    l.name = name;
-    l.where = loc(item);
-    if (type == "gravity") {
-      expect_map(item, element, {"name", "type", "g"});
-      SpatialGravity g;  // default (0, 0, −9.81) m/s²: −z is down in 3D
-      if (item["g"]) g.g = vec3(item["g"], element, "g", length / (units_.time * units_.time));
-      constexpr double kEarth = 9.81, kFactor = 2.0;  // as planar: warn outside [g/2, 2 g]
-      const double gn = g.g.norm();
-      if (gn < kEarth / kFactor || gn > kEarth * kFactor) {
-        std::ostringstream msg;
-        msg << "|g| = " << gn << " m/s^2 after unit conversion (the file's length unit is "
-            << model_.units.length << ", time " << model_.units.time
-            << "), far from 9.81 m/s^2: is the unit right?";
-        add_warning(item["g"] ? item["g"] : item, element, msg.str());
-      }
-      l.kind = g;
-    } else if (type == "force") {
-      expect_map(item, element,
-                 {"name", "type", "point", "force", "frame", "table", "active_while"});
-      SpatialPointForce f;
-      f.at = spatial_point_ref(require(item, "point", element), element);
-      f.force = vec3(require(item, "force", element), element, "force", force);
-      f.body_fixed = frame(item, element);
-      if (f.body_fixed && f.at.body == kGround)
-        fail(item["frame"], element, "a force in the ground's body frame is a world force");
-      f.table = table(item["table"], element);
-      l.kind = f;
-    } else if (type == "torque") {
-      expect_map(item, element,
-                 {"name", "type", "body", "torque", "frame", "table", "active_while"});
-      SpatialTorque t;
-      t.body = spatial_body_ref(require(item, "body", element), element);
-      if (t.body == kGround) fail(item["body"], element, "a torque on the ground does nothing");
-      t.torque = vec3(require(item, "torque", element), element, "torque", force * length);
-      t.body_fixed = frame(item, element);
-      t.table = table(item["table"], element);
-      l.kind = t;
-    } else if (type == "spring-damper") {
-      expect_map(item, element,
-                 {"name", "type", "connects", "stiffness", "free_length", "damping"});
-      auto [a, b] = spatial_connects(item, element);
-      SpatialSpringDamper s{
-          a, b, number_field(item, "stiffness", element, force / length),
-          optional_number(item, "free_length", element, 0.0, length, Quantity::length),
-          optional_number(item, "damping", element, 0.0, force * units_.time / length)};
-      if (s.stiffness < 0.0 || s.damping < 0.0 || s.free_length < 0.0)
-        fail(item, element, "stiffness, free_length and damping must not be negative");
-      l.kind = s;
-    } else if (type == "rotary-spring-damper") {
-      expect_map(item, element, {"name", "type", "joint", "stiffness", "free_angle", "damping"});
-      const YAML::Node jn = require(item, "joint", element);
-      JointSpringDamper r;
-      r.joint = model_.find_joint(scalar(jn, element, "field 'joint'"));
-      if (r.joint < 0) fail(jn, element, "joint '" + jn.Scalar() + "' is not defined");
-      if (joint_coordinate(r.joint) != 1)
-        fail(jn, element,
-             "joint '" + jn.Scalar() + "' is a " +
-                 model_.joints[static_cast<size_t>(r.joint)].type_name() +
-                 " joint, which has no angle (a rotary spring-damper acts on a revolute, "
-                 "cylindrical or screw joint)");
-      r.stiffness = number_field(item, "stiffness", element, force * length / angle);
-      r.free_angle = optional_number(item, "free_angle", element, 0.0, angle, Quantity::angle);
-      r.damping =
-          optional_number(item, "damping", element, 0.0, force * length * units_.time / angle);
-      if (r.stiffness < 0.0 || r.damping < 0.0)
-        fail(item, element, "stiffness and damping must not be negative");
-      l.kind = r;
-    } else {
-      fail(item["type"], element,
-           "unknown load type '" + type +
-               "' (allowed: gravity, force, torque, spring-damper, rotary-spring-damper)");
-    }
-    if (const YAML::Node aw = item["active_while"]) l.active_while = active_while(aw, element);
-    model_.loads.push_back(std::move(l));
+// ---- loads and measures (the loop: Reader::read_loads, read_measures) -------------------------
+std::optional<LoadKind> Reader::spatial_load(const YAML::Node& item, const std::string& element,
+                                             const std::string& type) {
+  const double force = units_.force, length = units_.length;
+  if (type == "gravity") {
+    expect_map(item, element, {"name", "type", "g"});
+    SpatialGravity g;  // default (0, 0, −9.81) m/s²: −z is down in 3D
+    if (item["g"]) g.g = vec3(item["g"], element, "g", length / (units_.time * units_.time));
+    check_gravity(item, element, g.g.norm());
+    return g;
   }
+  if (type == "force") {
+    expect_map(item, element, {"name", "type", "point", "force", "frame", "table", "active_while"});
+    SpatialPointForce f;
+    f.at = spatial_point_ref(require(item, "point", element), element);
+    f.force = vec3(require(item, "force", element), element, "force", force);
+    f.body_fixed = body_frame(item, element);
+    if (f.body_fixed && f.at.body == kGround)
+      fail(item["frame"], element, "a force in the ground's body frame is a world force");
+    f.table = table(item["table"], element);
+    return f;
+  }
+  if (type == "torque") {
+    expect_map(item, element, {"name", "type", "body", "torque", "frame", "table", "active_while"});
+    SpatialTorque t;
+    t.body = spatial_body_ref(require(item, "body", element), element);
+    if (t.body == kGround) fail(item["body"], element, "a torque on the ground does nothing");
+    t.torque = vec3(require(item, "torque", element), element, "torque", force * length);
+    t.body_fixed = body_frame(item, element);
+    t.table = table(item["table"], element);
+    return t;
+  }
+  if (type == "spring-damper") {
+    expect_map(item, element, {"name", "type", "connects", "stiffness", "free_length", "damping"});
+    auto [a, b] = spatial_connects(item, element);
+    const SpringNumbers k = spring_numbers(item, element);
+    return SpatialSpringDamper{a, b, k.stiffness, k.free_length, k.damping};
+  }
+  if (type == "rotary-spring-damper") {
+    expect_map(item, element, {"name", "type", "joint", "stiffness", "free_angle", "damping"});
+    const YAML::Node jn = require(item, "joint", element);
+    JointSpringDamper r;
+    r.joint = model_.find_joint(scalar(jn, element, "field 'joint'"));
+    if (r.joint < 0) fail(jn, element, "joint '" + jn.Scalar() + "' is not defined");
+    if (joint_coordinate(r.joint) != 1)
+      fail(jn, element,
+           "joint '" + jn.Scalar() + "' is a " +
+               model_.joints[static_cast<size_t>(r.joint)].type_name() +
+               " joint, which has no angle (a rotary spring-damper acts on a revolute, "
+               "cylindrical or screw joint)");
+    const SpringNumbers k = rotary_spring_numbers(item, element);
+    r.stiffness = k.stiffness;
+    r.free_angle = k.free_length;
+    r.damping = k.damping;
+    return r;
+  }
+  return std::nullopt;
 }
 
-// ---- measures ----------------------------------------------------------------------------------
-void Reader::read_spatial_measures(const YAML::Node& root) {
-  const YAML::Node node = list(root, "measures");
-  if (!node || node.IsNull()) return;
-  std::set<std::string> seen;
-  size_t index = 0;
-  for (const auto& item : node) {
-    const std::string name = name_of(item, "measure", index++, seen);
-    const std::string element = "measure '" + name + "'";
-    const std::string type = string_field(item, "type", element);
-    Measure m;
-    m.name = name;
-    m.where = loc(item);
-    std::string unit = "m";
-    if (type == "joint") {
-      expect_map(item, element, {"name", "type", "joint", "derivative"});
-      const YAML::Node jn = require(item, "joint", element);
-      const int j = model_.find_joint(scalar(jn, element, "field 'joint'"));
-      if (j < 0) fail(jn, element, "joint '" + jn.Scalar() + "' is not defined");
-      const int coordinate = joint_coordinate(j);
-      if (coordinate == 0)
-        fail(jn, element,
-             "joint '" + jn.Scalar() + "' is a " +
-                 model_.joints[static_cast<size_t>(j)].type_name() +
-                 " joint, which has no coordinate (revolute, cylindrical, screw: an angle; "
-                 "prismatic: a slide)");
-      if (coordinate == 1) unit = "rad";
-      m.kind = JointCoordinate{j};
-    } else if (type == "point") {
-      expect_map(item, element, {"name", "type", "point", "component", "derivative"});
-      SpatialPointCoordinate p;
-      p.point = spatial_point_ref(require(item, "point", element), element);
-      const std::string c = string_field(item, "component", element);
-      if (c != "x" && c != "y" && c != "z")
-        fail(item["component"], element, "component must be 'x', 'y' or 'z', got '" + c + "'");
-      p.axis = c[0] - 'x';
-      m.kind = p;
-    } else if (type == "distance") {
-      expect_map(item, element, {"name", "type", "points", "derivative"});
-      const YAML::Node pts = require(item, "points", element);
-      if (!pts.IsSequence() || pts.size() != 2)
-        fail(pts, element, "field 'points' must be a list of two points");
-      m.kind = SpatialPointDistance{spatial_point_ref(pts[0], element),
-                                    spatial_point_ref(pts[1], element)};
-    } else if (type == "angle") {
-      // The angle in [0, π] between a vector fixed in one body and one fixed in another:
-      // between: [{body: b1, vector: [..]}, {body: b2, vector: [..]}] (each in its body's frame).
-      expect_map(item, element, {"name", "type", "between", "derivative"});
-      const YAML::Node between = require(item, "between", element);
-      if (!between.IsSequence() || between.size() != 2)
-        fail(between, element,
-             "field 'between' must be a list of two {body: NAME, vector: [x, y, z]}");
-      VectorAngle a;
-      for (size_t k = 0; k < 2; ++k) {
-        const YAML::Node side = between[k];
-        expect_map(side, element, {"body", "vector"});
-        const int b = spatial_body_ref(require(side, "body", element), element);
-        const Vec3 v = unit_vec3(require(side, "vector", element), element, "vector");
-        (k == 0 ? a.bi : a.bj) = b;
-        (k == 0 ? a.ai : a.aj) = v;
-      }
-      m.kind = a;
-      unit = "rad";
-    } else if (type == "camber" || type == "toe") {
-      // {type: camber|toe, body: b, axis: [..]}: the wheel's outboard spin axis in b's frame.
-      expect_map(item, element, {"name", "type", "body", "axis", "derivative"});
-      WheelAngle w;
-      w.body = spatial_body_ref(require(item, "body", element), element);
-      w.axis = unit_vec3(require(item, "axis", element), element, "axis");
-      w.which = type == "camber" ? WheelAngle::Which::camber : WheelAngle::Which::toe;
-      m.kind = w;
-      unit = "rad";
-    } else {
-      fail(item["type"], element,
-           "unknown measure type '" + type +
-               "' (allowed: joint, point, distance, angle, camber, toe)");
-    }
-    if (const YAML::Node d = item["derivative"]) {
-      const double v = number(d, element, "derivative");
-      if (v != 0.0 && v != 1.0 && v != 2.0) fail(d, element, "derivative must be 0, 1 or 2");
-      m.derivative = static_cast<int>(v);
-    }
-    m.unit = unit + (m.derivative == 1 ? "/s" : m.derivative == 2 ? "/s^2" : "");
-    model_.measures.push_back(std::move(m));
+std::optional<MeasureKind> Reader::spatial_measure(const YAML::Node& item,
+                                                   const std::string& element,
+                                                   const std::string& type, std::string& unit) {
+  if (type == "joint") {
+    expect_map(item, element, {"name", "type", "joint", "derivative"});
+    const YAML::Node jn = require(item, "joint", element);
+    const int j = model_.find_joint(scalar(jn, element, "field 'joint'"));
+    if (j < 0) fail(jn, element, "joint '" + jn.Scalar() + "' is not defined");
+    const int coordinate = joint_coordinate(j);
+    if (coordinate == 0)
+      fail(jn, element,
+           "joint '" + jn.Scalar() + "' is a " + model_.joints[static_cast<size_t>(j)].type_name() +
+               " joint, which has no coordinate (revolute, cylindrical, screw: an angle; "
+               "prismatic: a slide)");
+    if (coordinate == 1) unit = "rad";
+    return JointCoordinate{j};
   }
+  if (type == "point") {
+    expect_map(item, element, {"name", "type", "point", "component", "derivative"});
+    SpatialPointCoordinate p;
+    p.point = spatial_point_ref(require(item, "point", element), element);
+    const std::string c = string_field(item, "component", element);
+    if (c != "x" && c != "y" && c != "z")
+      fail(item["component"], element, "component must be 'x', 'y' or 'z', got '" + c + "'");
+    p.axis = c[0] - 'x';
+    return p;
+  }
+  if (type == "distance") {
+    expect_map(item, element, {"name", "type", "points", "derivative"});
+    const YAML::Node pts = two_points(item, element);
+    return SpatialPointDistance{spatial_point_ref(pts[0], element),
+                                spatial_point_ref(pts[1], element)};
+  }
+  if (type == "angle") {
+    // The angle in [0, π] between a vector fixed in one body and one fixed in another:
+    // between: [{body: b1, vector: [..]}, {body: b2, vector: [..]}] (each in its body's frame).
+    expect_map(item, element, {"name", "type", "between", "derivative"});
+    const YAML::Node between = require(item, "between", element);
+    if (!between.IsSequence() || between.size() != 2)
+      fail(between, element,
+           "field 'between' must be a list of two {body: NAME, vector: [x, y, z]}");
+    VectorAngle a;
+    for (size_t k = 0; k < 2; ++k) {
+      const YAML::Node side = between[k];
+      expect_map(side, element, {"body", "vector"});
+      const int b = spatial_body_ref(require(side, "body", element), element);
+      const Vec3 v = unit_vec3(require(side, "vector", element), element, "vector");
+      (k == 0 ? a.bi : a.bj) = b;
+      (k == 0 ? a.ai : a.aj) = v;
+    }
+    unit = "rad";
+    return a;
+  }
+  if (type == "camber" || type == "toe") {
+    // {type: camber|toe, body: b, axis: [..]}: the wheel's outboard spin axis in b's frame.
+    expect_map(item, element, {"name", "type", "body", "axis", "derivative"});
+    WheelAngle w;
+    w.body = spatial_body_ref(require(item, "body", element), element);
+    w.axis = unit_vec3(require(item, "axis", element), element, "axis");
+    w.which = type == "camber" ? WheelAngle::Which::camber : WheelAngle::Which::toe;
+    unit = "rad";
+    return w;
+  }
+  return std::nullopt;
 }
 
 }  // namespace orthomech::detail

@@ -77,13 +77,13 @@ std::string range_problem(double v, Quantity q) {
   return "";
 }
 
-double parse_speed(const std::string& text, bool angular, double bare_factor) {
+double parse_speed(const std::string& text, bool angular, double bare_factor, bool allow_zero) {
   static const UnitTable angular_units = {
       {"rpm", 2.0 * std::numbers::pi / 60.0}, {"rad/s", 1.0}, {"deg/s", std::numbers::pi / 180.0}};
   static const UnitTable linear_units = {{"m/s", 1.0}, {"mm/s", 1e-3}};
   const double v = parse_with_units(text, angular ? angular_units : linear_units, bare_factor,
                                     "speed", angular ? "revolute" : "prismatic", Quantity::general);
-  if (v == 0.0) throw std::invalid_argument("the speed must not be zero");
+  if (v == 0.0 && !allow_zero) throw std::invalid_argument("the speed must not be zero");
   return v;
 }
 

@@ -24,8 +24,12 @@
 namespace orthomech {
 
 struct JointLock {
-  int joint = -1;      // revolute or prismatic joint
-  double value = 0.0;  // joint coordinate, SI (revolute: matched modulo 2π nearest the guess)
+  int joint = -1;      // a joint with a coordinate (joint_coordinate_kind: planar revolute or
+                       // prismatic; spatial revolute, cylindrical, screw, prismatic)
+  double value = 0.0;  // joint coordinate, SI (planar revolute: matched modulo 2π nearest the
+                       // guess; spatial angle: modulo 2π)
+  int measure = -1;    // ≥ 0: lock this measure's position quantity instead (joint ignored;
+                       // assemble and project_with_locks only; a measure's value is not wrapped)
 };
 
 struct AssemblyOptions {

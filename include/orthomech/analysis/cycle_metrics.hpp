@@ -67,8 +67,9 @@ struct CycleMetrics {
   std::vector<LimitExcursion> limits;
 };
 
-// The coordinate of a revolute or prismatic joint compared with its limits: prismatic, the slide;
-// revolute, φ_j − φ_i taken modulo 2π nearest the middle of the limits (or of [−π, π]).
+// The coordinate of a joint compared with its limits: a slide as it is; an angle (planar
+// revolute φ_j − φ_i, or a spatial revolute, cylindrical or screw joint's (P5) angle) taken
+// modulo 2π nearest the middle of the limits (or of [−π, π]).
 [[nodiscard]] double limit_coordinate(const Model& model, int joint, const VecX& q);
 // Whether the joint is outside its limits at q by more than kLimitSlack (none: false).
 [[nodiscard]] bool outside_limits(const Model& model, int joint, const VecX& q);

@@ -90,8 +90,10 @@ inline constexpr std::size_t kMaxNumberLength = 64;
 // A speed: "300rpm", "300 rpm", "31.4 rad/s", "90 deg/s" (angular) or "0.5 m/s", "20 mm/s"
 // (linear). A bare number is multiplied by `bare_factor` (SI per the caller's default unit).
 // Throws std::invalid_argument with a message naming the allowed units, and when the value is not
-// finite or out of the limits (Quantity::general), or zero (a speed must not be zero).
-[[nodiscard]] double parse_speed(const std::string& text, bool angular, double bare_factor);
+// finite or out of the limits (Quantity::general), or zero unless `allow_zero` (a driver's speed
+// must not be zero; an initial rate may: at rest in that coordinate).
+[[nodiscard]] double parse_speed(const std::string& text, bool angular, double bare_factor,
+                                 bool allow_zero = false);
 
 // An input position: "30deg", "30 deg", "0.5 rad" (angular) or "20 mm", "0.02 m" (linear). A bare
 // number is multiplied by `bare_factor`. Throws std::invalid_argument (also when out of the limits

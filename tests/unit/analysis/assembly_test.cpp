@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/QR>
 #include <Eigen/SVD>
 #include <cmath>
 #include <fstream>
@@ -334,6 +335,56 @@ TEST(MechanismWriter, ReplacedPosesReadBackAndCommentsKept) {
     const VecX qb = back.design_q();
     EXPECT_LE((qb - q).cwiseAbs().maxCoeff(), 1e-14) << name;
   }
+}
+
+}  // namespace
+}  // namespace orthomech
+
+namespace orthomech {
+namespace {
+
+// A measure's value locked on a planar file: the five-bar (DOF 2) with its point C at x = C_x + 5
+// mm. The pose closes, C_x holds, and it is a KKT point of (A1): M (q − q₀) = Cᵀλ with
+// C = ∂(f, C_x)/∂q by central differences (B̃ = I), independent of the code's derivatives; with
+// 10 + 1 rows on 12 coordinates that is a real condition (one DOF is left to the metric).
+TEST(Assembly, AMeasuresValueLockIsAKktPointOfTheMassMetric) {
+  const Model m = test::load_bundled("five-bar");
+  const int px = m.find_measure("C_x");
+  const VecX q0 = m.design_q();
+  const double target =
+      evaluate_measure(m, m.measures[static_cast<size_t>(px)], q0, nullptr, nullptr) + 0.005;
+  AssemblyOptions o;
+  JointLock l;
+  l.measure = px;
+  l.value = target;
+  o.locks.push_back(l);
+  const AssemblyResult r = assemble(m, q0, o);
+  ASSERT_EQ(r.status, AssemblyStatus::assembled) << r.message;
+  const Measure& P = m.measures[static_cast<size_t>(px)];
+  EXPECT_NEAR(evaluate_measure(m, P, r.q, nullptr, nullptr), target, 1e-12);
+  VecX f(m.nc);
+  compute_constraint_residual(m, r.q, f);
+  EXPECT_LT(f.cwiseAbs().maxCoeff(), 1e-12);
+  MatX C(m.nc + 1, m.nq);
+  const double h = 1e-7;
+  for (int k = 0; k < m.nq; ++k) {
+    VecX qp = r.q, qm = r.q, fp(m.nc), fm(m.nc);
+    qp(k) += h;
+    qm(k) -= h;
+    compute_constraint_residual(m, qp, fp);
+    compute_constraint_residual(m, qm, fm);
+    C.col(k).head(m.nc) = (fp - fm) / (2 * h);
+    C(m.nc, k) = (evaluate_measure(m, P, qp, nullptr, nullptr) -
+                  evaluate_measure(m, P, qm, nullptr, nullptr)) /
+                 (2 * h);
+  }
+  MatX M(m.n, m.n);
+  compute_mass_matrix(m, q0, M);
+  const VecX g = M * (r.q - q0);
+  const VecX lambda = C.transpose().completeOrthogonalDecomposition().solve(g);
+  ASSERT_LT(C.rows(), m.nq);
+  EXPECT_LT((C.transpose() * lambda - g).norm(), 1e-6 * g.norm());
+  EXPECT_GT((r.q - q0).norm(), 1e-4);  // it moved
 }
 
 }  // namespace

@@ -27,6 +27,7 @@
 #include "support/cli_runner.hpp"
 #include "support/fixtures.hpp"
 #include "support/spatial_energy.hpp"
+#include "support/spatial_oracles.hpp"
 
 namespace orthomech {
 namespace {
@@ -52,13 +53,7 @@ Model rssr(bool spherical, double axial) {
   return m;
 }
 
-// The rocker angle φ(θ) of spatial.md (M1), the file's branch.
-double rocker_closed_form(double theta) {
-  const double r1 = 0.1, r2 = 0.2, p = 0.3, h = 0.2, L = 0.42;
-  const double P = -2 * r1 * r2 * std::sin(theta), Q = 2 * h * r2;
-  const double S = p * p + r1 * r1 + r2 * r2 + h * h - L * L - 2 * p * r1 * std::cos(theta);
-  return std::atan2(Q, P) + std::acos(-S / std::hypot(P, Q));
-}
+using test::rssr_rocker_angle;  // spatial.md (M1), the file's branch
 
 TEST(SpatialIdleCycle, SsCouplerIsDrivenWithItsSpinHeld) {
   const Model m = rssr(true, 1e-6);
@@ -86,7 +81,7 @@ TEST(SpatialIdleCycle, SsCouplerIsDrivenWithItsSpinHeld) {
     drive_peak = std::max(drive_peak, std::abs(p.drive));
     worst_angle = std::max(
         worst_angle, std::abs(std::remainder(
-                         p.measures[rocker] - rocker_closed_form(p.measures[crank]), 2 * kPi)));
+                         p.measures[rocker] - rssr_rocker_angle(p.measures[crank]), 2 * kPi)));
     const Vec3 w = p.u.segment<3>(c + 3), wdot = p.udot.segment<3>(c + 3);
     worst_spin = std::max(worst_spin, std::abs(w.x()) / w.norm());
     worst_spin_rate = std::max(worst_spin_rate, std::abs(wdot.x()));

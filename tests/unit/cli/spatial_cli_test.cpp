@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "support/cli_runner.hpp"
+#include "support/spatial_oracles.hpp"
 
 namespace orthomech {
 namespace {
@@ -113,22 +114,64 @@ TEST(SpatialCli, CommandsNotYetSpatialRefuseWithExitTwo) {
   }
 }
 
-// assemble on a spatial file: locks and limits are not available yet: exit 2 naming the joint
-// (not an internal error), and --no-limits assembles.
-TEST(SpatialCli, AssembleRefusesSpatialLocksAndLimitsWithExitTwo) {
+// assemble on a spatial file with a lock on a spatial joint's coordinate: exit 0, the rocker at
+// (M1) (spatial.md §4.1) on the file's branch, in the file's degrees; limits are bounds (the
+// crank limited to [0°, 20°] from its drawn 30° ends at 20°); an unreachable lock is exit 3
+// naming it; a joint without a coordinate is exit 2; --write is still refused.
+TEST(SpatialCli, AssembleLocksSpatialJointsAndHonoursLimits) {
   const std::string rssr = test::bundled_file("rssr");
-  const CliResult lim = run_cli({"assemble", rssr, "--set", "joints.A0.limits=[0, 90]"});
-  EXPECT_EQ(lim.status, 2) << lim.err;
-  EXPECT_NE(lim.err.find("joint 'A0': limits on spatial joints are not available"),
-            std::string::npos)
-      << lim.err;
+  auto rocker_deg = [](double theta_deg) {  // (M1), the file's branch
+    return test::rssr_rocker_angle(theta_deg * M_PI / 180) * 180 / M_PI;
+  };
+  auto wrap_deg = [](double a) { return std::remainder(a, 360.0); };
+  const CliResult lock = run_cli({"assemble", rssr, "--lock", "A0=90deg", "--json"});
+  ASSERT_EQ(lock.status, 0) << lock.err;
+  const json j = json::parse(lock.out);
+  EXPECT_EQ(j["status"], "assembled");
+  EXPECT_EQ(j["locks"][0]["joint"], "A0");
+  EXPECT_EQ(j["locks"][0]["unit"], "deg");
+  EXPECT_NEAR(j["locks"][0]["value"].get<double>(), 90.0, 1e-12);
+  EXPECT_NEAR(wrap_deg(j["measures"]["crank_angle"].get<double>() - 90.0), 0.0, 1e-10);
+  EXPECT_NEAR(wrap_deg(j["measures"]["rocker_angle"].get<double>() - rocker_deg(90.0)), 0.0,
+              1e-7);  // 1e-9 rad in degrees
+  const CliResult text = run_cli({"assemble", rssr, "--lock", "A0=90"});
+  EXPECT_EQ(text.status, 0) << text.err;
+  EXPECT_NE(text.out.find("lock        A0 = 90 deg"), std::string::npos) << text.out;
+
+  const CliResult lim = run_cli({"assemble", rssr, "--set", "joints.A0.limits=[0, 20]", "--json"});
+  ASSERT_EQ(lim.status, 0) << lim.err;
+  const json l = json::parse(lim.out);
+  EXPECT_NEAR(l["measures"]["crank_angle"].get<double>(), 20.0, 1e-8);
+  EXPECT_NEAR(wrap_deg(l["measures"]["rocker_angle"].get<double>() - rocker_deg(20.0)), 0.0, 1e-7);
   const CliResult ok =
-      run_cli({"assemble", rssr, "--set", "joints.A0.limits=[0, 90]", "--no-limits", "--json"});
-  EXPECT_EQ(ok.status, 0) << ok.err;
-  const CliResult lock = run_cli({"assemble", rssr, "--lock", "A0=40"});
-  EXPECT_EQ(lock.status, 2) << lock.err;
-  EXPECT_NE(lock.err.find("locks on spatial joints are not available yet"), std::string::npos)
-      << lock.err;
+      run_cli({"assemble", rssr, "--set", "joints.A0.limits=[0, 20]", "--no-limits", "--json"});
+  ASSERT_EQ(ok.status, 0) << ok.err;
+  EXPECT_NEAR(json::parse(ok.out)["measures"]["crank_angle"].get<double>(), 30.0, 1e-6);
+
+  const CliResult far = run_cli({"assemble", rssr, "--lock", "B0=90"});
+  EXPECT_EQ(far.status, 3) << far.err;
+  EXPECT_NE(far.err.find("the mechanism cannot close with joint 'B0' locked at 90 deg"),
+            std::string::npos)
+      << far.err;
+  // A measure's value: the rocker's point B at z = 250 mm (file units), on the file's branch.
+  const CliResult bz = run_cli({"assemble", rssr, "--lock", "B_z=250", "--json"});
+  ASSERT_EQ(bz.status, 0) << bz.err;
+  const json b = json::parse(bz.out);
+  EXPECT_EQ(b["locks"][0]["measure"], "B_z");
+  EXPECT_EQ(b["locks"][0]["unit"], "mm");
+  EXPECT_NEAR(b["measures"]["B_z"].get<double>(), 250.0, 1e-9);
+  EXPECT_NEAR(wrap_deg(b["measures"]["rocker_angle"].get<double>() -
+                       rocker_deg(b["measures"]["crank_angle"].get<double>())),
+              0.0, 1e-7);
+  const CliResult unknown = run_cli({"assemble", rssr, "--lock", "Q=1"});
+  EXPECT_EQ(unknown.status, 2) << unknown.err;
+  EXPECT_NE(unknown.err.find("--lock: joint 'Q' is not defined, nor a measure of that name"),
+            std::string::npos)
+      << unknown.err;
+  const CliResult none = run_cli({"assemble", rssr, "--lock", "A=10"});
+  EXPECT_EQ(none.status, 2) << none.err;
+  EXPECT_NE(none.err.find("--lock: joint 'A' has no coordinate"), std::string::npos) << none.err;
+
   const test::TempDir dir("orthomech_spatial_write_");
   const CliResult write = run_cli({"assemble", rssr, "--write", (dir.path / "out.yaml").string()});
   EXPECT_EQ(write.status, 2) << write.err;

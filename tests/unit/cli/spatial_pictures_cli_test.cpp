@@ -83,17 +83,28 @@ TEST(SpatialPicturesCli, RenderDrawsASpatialFileInEveryNamedView) {
   EXPECT_NE(slurp(anim).find("id=\"frame-359\""), std::string::npos);
 }
 
-// --input and --position lock joints, which `assemble` cannot do on spatial joints yet: exit 2
-// saying so (not an internal error).
-TEST(SpatialPicturesCli, RenderInputOnASpatialFileIsAUsageError) {
+// --input and --position lock spatial joints (assemble's locks): an SVG at the input, exit 0
+// (RenderRssr.InputAndPositionDrawTheClosedFormPoseThere checks the pixels); an input the
+// mechanism cannot reach is exit 3 naming the joint and the value.
+TEST(SpatialPicturesCli, RenderInputOnASpatialFileDrawsThere) {
   const test::TempDir dir("orthomech_spatial_pictures_");
-  const std::string out = (dir.path / "x.png").string();
+  const std::string out = (dir.path / "x.svg").string();
   const CliResult r =
       run_cli({"render", test::bundled_file("rssr"), "--input", "90", "--out", out});
-  EXPECT_EQ(r.status, 2) << r.err;
-  EXPECT_NE(r.err.find("--input is not available for spatial mechanisms yet"), std::string::npos)
-      << r.err;
-  EXPECT_FALSE(std::filesystem::exists(out));
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(slurp(out).find("<svg"), std::string::npos);
+  const std::string design = (dir.path / "design.svg").string();
+  ASSERT_EQ(run_cli({"render", test::bundled_file("rssr"), "--out", design}).status, 0);
+  EXPECT_NE(slurp(out), slurp(design));  // drawn at 90°, not at the drawing's 30°
+  const CliResult p =
+      run_cli({"render", test::bundled_file("rssr"), "--position", "p30", "--out", out});
+  EXPECT_EQ(p.status, 0) << p.err;
+  // Driven by its rocker instead, the RSSR cannot reach 90° (the rocker swings over
+  // 129.6°…237.4°): exit 3 with assemble's reason.
+  const CliResult far = run_cli({"render", test::bundled_file("rssr"), "--set",
+                                 "drivers.motor.joint=B0", "--input", "90", "--out", out});
+  EXPECT_EQ(far.status, 3) << far.err;
+  EXPECT_NE(far.err.find("cannot assemble joint 'B0' at 90 deg"), std::string::npos) << far.err;
 }
 
 TEST(SpatialPicturesCli, AnUnknownViewIsAUsageErrorNamingTheOption) {

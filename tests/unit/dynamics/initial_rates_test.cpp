@@ -79,6 +79,44 @@ TEST(InitialRates, NFourBarFileGivesTheBenchmarkVelocity) {
   EXPECT_NEAR(simulate(model, o).samples.front().kinetic, 0.0, kTight);
 }
 
+// A zero rate is an input like any other (at rest in that coordinate). A double pendulum of two
+// rods (1 kg, 0.1 kg m² about the centre, 1 m, hinged at O and at their common end): with the
+// first hinge at 1 rad/s and the second at 0 the pair turns as one rigid body about O, so
+// T = ½ ω² Σ (m r_c² + J) = ½ (0.25 + 0.1 + 2.25 + 0.1) = 1.35 J; with the first rate alone the
+// least-squares velocity is another one (the zero is not the same as no rate).
+TEST(InitialRates, AZeroRateHoldsItsCoordinateAtRest) {
+  auto pendulum = [](const std::string& rates) {
+    return "orthomech: 1\nground:\n  points: {O: [0, 0]}\nbodies:\n"
+           "  - {name: a, mass: 1, inertia: 0.1, pose: [0.5, 0, 0], points: {O: [-0.5, 0], B: "
+           "[0.5, 0]}}\n"
+           "  - {name: b, mass: 1, inertia: 0.1, pose: [1.5, 0, 0], points: {B: [-0.5, 0]}}\n"
+           "joints:\n  - {name: J1, type: revolute, connects: [ground.O, a.O]}\n"
+           "  - {name: J2, type: revolute, connects: [a.B, b.B]}\n"
+           "measures:\n  - {name: t1, type: joint, joint: J1}\n"
+           "  - {name: t2, type: joint, joint: J2}\n"
+           "  - {name: w2, type: joint, joint: J2, derivative: 1}\n"
+           "initial:\n  rates: " +
+           rates + "\n";
+  };
+  const Model m = parse_mechanism(pendulum("{t1: 1, t2: 0}"), "zero.yaml");
+  ASSERT_EQ(m.initial.rates.size(), 2u);
+  EXPECT_EQ(m.initial.rates[1].rate, 0.0);
+  SimulateOptions o;
+  o.t_end = 1e-3;
+  o.dt_out = 1e-3;
+  o.reactions = false;
+  const SimulateResult r = simulate(m, o);
+  ASSERT_EQ(r.status, SimulateStatus::completed) << r.message;
+  EXPECT_NEAR(r.samples.front().kinetic, 1.35, kTight);
+  EXPECT_NEAR(r.samples.front().measures[static_cast<size_t>(m.find_measure("w2"))], 0.0, kTight);
+  // '0 rpm' with its unit too; without the zero the start differs.
+  const Model with_unit = parse_mechanism(pendulum("{t1: 1, t2: '0 rpm'}"), "zero.yaml");
+  EXPECT_EQ(with_unit.initial.rates[1].rate, 0.0);
+  const SimulateResult one = simulate(parse_mechanism(pendulum("{t1: 1}"), "one.yaml"), o);
+  ASSERT_EQ(one.status, SimulateStatus::completed) << one.message;
+  EXPECT_GT(std::abs(one.samples.front().kinetic - 1.35), 1e-3);
+}
+
 TEST(InitialRates, CliUsesTheFileAndRateOverridesIt) {
   const std::string file = test::source_path("mechanisms/n-four-bar-2.yaml");
   const auto a = test::run_cli({"simulate", file, "--t-end", "0.01", "--json"});

@@ -20,6 +20,7 @@
 #include "orthomech/model/spatial.hpp"
 #include "support/cli_runner.hpp"
 #include "support/fixtures.hpp"
+#include "support/spatial_oracles.hpp"
 
 namespace orthomech {
 namespace {
@@ -71,12 +72,7 @@ double max_residual(const Model& m, const VecX& q) {
 }
 
 // RSSR closed form (spatial.md (M1)), SI: φ(θ) on the branch of the file.
-double rssr_phi(double theta) {
-  const double r1 = 0.1, r2 = 0.2, p = 0.3, h = 0.2, L = 0.42;
-  const double P = -2 * r1 * r2 * std::sin(theta), Q = 2 * h * r2;
-  const double S = p * p + r1 * r1 + r2 * r2 + h * h - L * L - 2 * p * r1 * std::cos(theta);
-  return std::atan2(Q, P) + std::acos(-S / std::hypot(P, Q));
-}
+using test::rssr_rocker_angle;  // (M1)
 
 // ---- RSSR (mechanisms/rssr.yaml = spatial.md §5) ----------------------------------------------
 TEST(SpatialFile, RssrBodiesPointsAndFramesMatchAnIndependentComputation) {
@@ -138,8 +134,8 @@ TEST(SpatialFile, RssrClosesAtTheDesignPoseAndItsJointMeasuresReadTheClosedFormA
   hold.locked_joint = m.find_joint("A0");
   hold.locked_value = 30 * kDeg;
   ASSERT_EQ(project_positions(m, qa, hold).status, SolveStatus::converged);
-  EXPECT_NEAR(measure(m, "rocker_angle", qa), rssr_phi(30 * kDeg), 1e-10);
-  EXPECT_NEAR(rssr_phi(30 * kDeg), 158.12936317866155 * kDeg, 1e-12);
+  EXPECT_NEAR(measure(m, "rocker_angle", qa), rssr_rocker_angle(30 * kDeg), 1e-10);
+  EXPECT_NEAR(rssr_rocker_angle(30 * kDeg), 158.12936317866155 * kDeg, 1e-12);
 }
 
 // ---- every bundled spatial mechanism ----------------------------------------------------------
@@ -395,13 +391,14 @@ TEST(SpatialFile, RssrRockerAngleFollowsTheClosedFormAroundTheTurn) {
       hold.locked_value = theta;
       ASSERT_EQ(project_positions(m, q, hold).status, SolveStatus::converged) << degrees;
       EXPECT_NEAR(measure(m, "crank_angle", q), theta, 1e-12);
-      EXPECT_NEAR(
-          std::remainder(measure(m, "rocker_angle", q) - rssr_phi(theta), 2 * std::numbers::pi),
-          0.0, 1e-10)
+      EXPECT_NEAR(std::remainder(measure(m, "rocker_angle", q) - rssr_rocker_angle(theta),
+                                 2 * std::numbers::pi),
+                  0.0, 1e-10)
           << "theta " << degrees;
       if (degrees % 90 == 0) {
-        EXPECT_NEAR(std::remainder(rssr_phi(theta) - published[((degrees + 360) % 360) / 90] * kDeg,
-                                   2 * std::numbers::pi),
+        EXPECT_NEAR(std::remainder(
+                        rssr_rocker_angle(theta) - published[((degrees + 360) % 360) / 90] * kDeg,
+                        2 * std::numbers::pi),
                     0.0, 1e-11);
       }
     }

@@ -144,12 +144,15 @@ bool same_colour(const Rgba& a, const Rgba& b) {
   return std::abs(a.r - b.r) <= tol && std::abs(a.g - b.g) <= tol && std::abs(a.b - b.b) <= tol;
 }
 
-TEST_P(RenderRssr, JointMarkersAtTheProjectedClosedFormPixels) {
-  const PngCase& c = GetParam();
+// Renders the RSSR with `extra` arguments in view c and checks every joint marker at the pixel
+// of the closed-form pose (θ, φ) projected by hand.
+void expect_rssr_joints_at(const PngCase& c, const std::vector<std::string>& extra,
+                           double theta_deg, double phi_deg) {
   const test::TempDir dir("orthomech_spatial_render_");
   const std::string out = (dir.path / "rssr.png").string();
   std::vector<std::string> args = {"render", test::bundled_file("rssr"), "--view", c.view, "--out",
                                    out};
+  args.insert(args.end(), extra.begin(), extra.end());
   const CliResult r = run_cli(args);
   ASSERT_EQ(r.status, 0) << r.err;
   const test::PngImage png = test::PngImage::from_file(out);
@@ -157,7 +160,7 @@ TEST_P(RenderRssr, JointMarkersAtTheProjectedClosedFormPixels) {
   ASSERT_EQ(png.height, 600);
   // Project by hand (metres do not matter: the transform is scale-free), then the documented
   // transform: box of the projected joint points, area 720 × 480 px (margins 40, legend 40).
-  const RssrPose pose = rssr_at(kDesignTheta, kDesignPhi);
+  const RssrPose pose = rssr_at(theta_deg, phi_deg);
   const Vec3 joints[] = {pose.A0, pose.A, pose.B, pose.B0};
   const char* names[] = {"A0", "A", "B", "B0"};
   std::vector<Vec2> flat;
@@ -175,6 +178,18 @@ TEST_P(RenderRssr, JointMarkersAtTheProjectedClosedFormPixels) {
       EXPECT_TRUE(same_colour(colour_at(png, px + kJointRadius * d), kJointInk))
           << c.view << " joint " << names[k] << " ring";
   }
+}
+
+TEST_P(RenderRssr, JointMarkersAtTheProjectedClosedFormPixels) {
+  expect_rssr_joints_at(GetParam(), {}, kDesignTheta, kDesignPhi);
+}
+
+// --input locks the driver's spatial joint (assemble with a lock on the crank angle): the joints
+// at the pixels of (M1) at θ = 90°, φ = 208.8717849220° (spatial.md §4.1), on the file's branch;
+// --position p30 locks the file's design position (θ = 30°).
+TEST_P(RenderRssr, InputAndPositionDrawTheClosedFormPoseThere) {
+  expect_rssr_joints_at(GetParam(), {"--input", "90deg"}, 90.0, 208.8717849220);
+  expect_rssr_joints_at(GetParam(), {"--position", "p30"}, kDesignTheta, kDesignPhi);
 }
 
 INSTANTIATE_TEST_SUITE_P(Views, RenderRssr,
