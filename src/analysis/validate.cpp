@@ -1235,7 +1235,7 @@ ValidationReport validate_design_positions(const Model& model, const ValidateOpt
   rep.transmission_index_bound =
       opt.min_transmission_index.value_or(std::sin(opt.min_transmission));
   if (spatial && transmission_loops.empty())
-    rep.not_applicable.push_back(
+    rep.not_applicable.emplace_back(
         "transmission index (Sutherland & Roth 1973): no loop ground -R/P- link -S/U- binary "
         "coupler -S/U- link -R/P- ground (or a distance row, or parallel revolutes)");
 
@@ -1331,8 +1331,8 @@ ValidationReport validate_design_positions(const Model& model, const ValidateOpt
     }
     std::vector<std::pair<std::string, size_t>> order;
     for (size_t k = 0; k < modes.size(); ++k)
-      order.push_back(
-          {mode_signature(model, modes[k], loops, inputs, rows, idle_bodies.empty()), k});
+      order.emplace_back(mode_signature(model, modes[k], loops, inputs, rows, idle_bodies.empty()),
+                         k);
     std::sort(order.begin(), order.end(), [&](const auto& x, const auto& y) {
       if (x.first != y.first) return x.first < y.first;
       const VecX& a1 = modes[x.second];
@@ -1514,7 +1514,7 @@ ValidationReport validate_design_positions(const Model& model, const ValidateOpt
     }
     if (rev && std::abs(total) >= kTwoPi) {
       rep.order_defect = true;
-      rep.defects.push_back("order defect: the positions span more than one turn of the input");
+      rep.defects.emplace_back("order defect: the positions span more than one turn of the input");
     }
   }
 

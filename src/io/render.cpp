@@ -114,9 +114,9 @@ std::vector<Vec2> convex_hull(std::vector<Vec2> p) {
   };
   std::vector<Vec2> h(2 * p.size());
   size_t k = 0;
-  for (size_t i = 0; i < p.size(); ++i) {
-    while (k >= 2 && cross(h[k - 2], h[k - 1], p[i]) <= 0.0) --k;
-    h[k++] = p[i];
+  for (const Vec2& pi : p) {
+    while (k >= 2 && cross(h[k - 2], h[k - 1], pi) <= 0.0) --k;
+    h[k++] = pi;
   }
   for (size_t i = p.size() - 1, t = k + 1; i-- > 0;) {
     while (k >= t && cross(h[k - 2], h[k - 1], p[i]) <= 0.0) --k;

@@ -31,6 +31,7 @@ std::vector<std::string> Joint::component_names() const {
   if (const auto* s = std::get_if<SpatialJoint>(&kind)) {
     const SpatialJointSpec& spec = spatial_joint_spec(s->type);
     std::vector<std::string> names;
+    names.reserve(static_cast<size_t>(spec.rows));
     for (int k = 0; k < spec.rows; ++k) names.emplace_back(spec.row[static_cast<size_t>(k)].name);
     return names;
   }
