@@ -10,6 +10,7 @@
 #include "../solvers/ipopt_nlp.hpp"
 #include "orthomech/analysis/mobility.hpp"
 #include "orthomech/analysis/positions.hpp"
+#include "orthomech/check.hpp"
 #include "orthomech/constraints/joints.hpp"
 #include "orthomech/io/units.hpp"
 #include "orthomech/model/free_system.hpp"
@@ -809,7 +810,7 @@ AssemblyResult assemble_spatial(const Model& model, const VecX& q0_in,
 }  // namespace
 
 AssemblyResult assemble(const Model& model, const VecX& q0, const AssemblyOptions& options) {
-  if (q0.size() != model.nq) throw std::invalid_argument("assemble: q0 has the wrong size");
+  check_argument(q0.size() == model.nq, "assemble", "q0", "must have model.nq coordinates");
   AssemblyResult res = assemble_position(model, q0, options);
   const ResidualSplit split = split_residual(model, res.q, coordinate_rows(model, q0, options));
   res.residual_length = split.length;

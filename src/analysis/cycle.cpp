@@ -12,6 +12,7 @@
 #include "orthomech/analysis/assembly.hpp"
 #include "orthomech/analysis/mobility.hpp"
 #include "orthomech/analysis/positions.hpp"
+#include "orthomech/check.hpp"
 #include "orthomech/constraints/joints.hpp"
 #include "orthomech/constraints/rolling_disc.hpp"
 #include "orthomech/constraints/spatial_joints.hpp"
@@ -411,6 +412,13 @@ bool idle_rows_rate(const Model& model, const VecX& q, const VecX& u, const VecX
 
 bool compute_driven(const Model& model, int driver_joint, double sdot, double sddot, State& state,
                     Workspace& ws, DrivenWorkspace& dws, DrivenPoint& out, bool jacobian_current) {
+  check_argument(driver_joint >= 0 && static_cast<size_t>(driver_joint) < model.joints.size(),
+                 "compute_driven", "driver_joint", "is not a joint of the model");
+  check_argument(state.q.size() == model.nq && state.u.size() == model.n, "compute_driven", "state",
+                 "must have model.nq coordinates and model.n velocities");
+  check_argument(ws.model == &model, "compute_driven", "ws", "was built for another Model");
+  check_argument(dws.rotations.size() == model.bodies.size(), "compute_driven", "dws",
+                 "was built for another Model");
   const MeasureKind input = JointCoordinate{driver_joint};
   // Positions: the chart and F at q (F depends on q only). The chart's scaling A comes from the
   // free system; with a constant mass matrix it is computed once.

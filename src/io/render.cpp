@@ -17,6 +17,7 @@
 
 #include "orthomech/analysis/assembly.hpp"
 #include "orthomech/analysis/cycle.hpp"
+#include "orthomech/check.hpp"
 #include "orthomech/io/mechanism_writer.hpp"
 #include "orthomech/io/units.hpp"
 #include "orthomech/model/free_system.hpp"
@@ -1078,12 +1079,13 @@ ViewChoice choose_view(const Model& model, const std::string& view) {
 }
 
 Scene build_scene(const Model& model, const VecX& q, const RenderOptions& options) {
-  if (q.size() != model.nq) throw std::invalid_argument("build_scene: q has the wrong size");
-  if (model.dimension != 3 && !options.projection.is_top())
-    throw std::invalid_argument("build_scene: a planar mechanism is drawn in the top view only");
-  if (options.width <= 0 || options.height <= 0 || options.width - 2.0 * options.margin <= 0.0 ||
-      options.height - 2.0 * options.margin - options.legend <= 0.0)
-    throw std::invalid_argument("build_scene: the image is smaller than its margins");
+  check_argument(q.size() == model.nq, "build_scene", "q", "must have model.nq coordinates");
+  check_argument(model.dimension == 3 || options.projection.is_top(), "build_scene",
+                 "options.projection", "must be the top view for a planar mechanism");
+  check_argument(options.width > 0 && options.height > 0 &&
+                     options.width - 2.0 * options.margin > 0.0 &&
+                     options.height - 2.0 * options.margin - options.legend > 0.0,
+                 "build_scene", "options", "makes the image smaller than its margins");
   return SceneBuilder(model, q, options).build();
 }
 
@@ -1303,7 +1305,7 @@ ViewTransform animation_view(const Model& model, const std::vector<VecX>& frames
 
 std::string animated_svg(const Model& model, const std::vector<VecX>& frames,
                          const RenderOptions& options, double duration) {
-  if (frames.empty()) throw std::invalid_argument("animated_svg: no frames");
+  check_argument(!frames.empty(), "animated_svg", "frames", "must not be empty");
   // One view for every frame.
   RenderOptions fixed = options;
   fixed.view = animation_view(model, frames, options);
