@@ -562,8 +562,9 @@ VelocityProjection project_velocities(const Model& model, const VecX& q, const V
   const MatX G = Et * AE;  // eq. (42)
   const Eigen::CompleteOrthogonalDecomposition<MatX> cod(G);
   v.ok = cod.rank() == G.rows();
-  const VecX beta_u0 = AE * cod.solve(Et * u0);  // β u₀ = A π u₀, eqs. (43)–(44)
-  v.u = u0 - beta_u0;                            // α u₀ = (I − A π) u₀, eq. (44)
+  const VecX Ginv_Et_u0 = cod.solve(Et * u0);  // G⁺ Eᵀ u₀: E times it is π u₀, eq. (43)
+  const VecX beta_u0 = AE * Ginv_Et_u0;  // β u₀ = A π u₀ = (A E) G⁺ Eᵀ u₀, eq. (44)
+  v.u = u0 - beta_u0;                    // α u₀ = (I − A π) u₀, eq. (44)
   v.kinetic_initial = 0.5 * u0.dot(M * u0);
   v.kinetic = 0.5 * v.u.dot(M * v.u);
   v.kinetic_removed = 0.5 * beta_u0.dot(M * beta_u0);
