@@ -21,6 +21,7 @@
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <numbers>
+#include <optional>
 #include <sstream>
 
 #include "commands.hpp"
@@ -331,31 +332,45 @@ std::vector<ReportPlot> report_plots(const CycleResult& r,
   return plots;
 }
 
-int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) {
-  const Model model = load(opt.file, opt.sets);
-  if (!opt.drivers.empty()) {  // several drivers: cli/cycle_drivers.cpp
-    DriversRequest request;
-    request.drivers = opt.drivers;
-    request.t_end = opt.t_end;
-    request.steps = opt.steps;
-    request.json = opt.json;
-    request.units = opt.units;
-    request.out = opt.out;
-    return run_cycle_drivers(model, request);
+// What one `cycle` run shares among its steps once the sweep is done: the request, the result,
+// its summaries and metrics, and the units of the outputs.
+struct CycleRun {
+  const CycleCliOptions& opt;
+  const Model& model;
+  const CycleOptions& co;
+  const CycleResult& r;
+  bool angular = false;
+  UnitSystem U;
+  std::string drive_unit_si{};  // "N*m" (revolute driver) or "N"
+  std::vector<ReactionMagnitude> magnitudes{};
+  std::vector<SeriesSummary> summary{};
+  std::vector<SeriesSummary> component_summary{};
+  CycleMetrics metrics{};
+  SweepPositions sweep{};
+  std::vector<PointTrace> traces{};
+  NoiseFloor noise{};
+  // Units of the outputs.
+  OutputUnit input_u{}, time_u{}, power_u{}, energy_u{}, inertia_u{}, angle_u{}, speed_u{},
+      length_u{};
+  [[nodiscard]] OutputUnit unit_of(const std::string& si) const {
+    return output_unit(dimension_of(si), U);
   }
-  const UnitSystem U = resolve_units(model, opt.units);
+  // Angles at extremes in [0°, 360°) (the sweep line keeps the continuous input).
+  [[nodiscard]] double wrapped(double s) const {
+    if (!angular) return s;
+    double w = std::fmod(s, 2.0 * std::numbers::pi);
+    if (w < 0.0) w += 2.0 * std::numbers::pi;
+    return w > 2.0 * std::numbers::pi - 1e-9 ? 0.0 : w;
+  }
+};
+
+// Step 1: the sweep's request from the options: driver, steps, reversal and the input range
+// (bare numbers in the file's declared units: an angle in deg in a deg file).
+CycleOptions cycle_request(const Model& model, const CycleCliOptions& opt, const UnitSystem& U) {
   const UnitSystem file_units = unit_system(model.units);
-  if (!opt.animate.empty() && image_format_of(opt.animate) != ImageFormat::svg)
-    throw CLI::ValidationError("--animate", "the animation is an SVG: give a NAME.svg");
-  const ViewChoice view = choose_view(model, opt.view);
-  if (!view.projection) throw InputError({"command line", 0, 0}, "option", view.message);
-  const TracePoints trace_request = resolve_trace_points(model, opt.traces);
-  if (trace_request.status == TraceStatus::bad_request)
-    throw InputError({"command line", 0, 0}, "option", trace_request.message);
   CycleOptions co;
   co.driver = resolve_driver(model, opt);
   const bool angular = is_angular(model, co.driver.joint);
-  const std::string drive_unit_si = angular ? "N*m" : "N";
   co.steps = opt.steps > 0 ? opt.steps : model.analysis.steps;
   co.reverse_at_dead_point = opt.reverse;
   // Bare numbers are in the file's declared units (an angle in deg in a deg file).
@@ -377,31 +392,14 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
   if (!opt.from.empty())
     spdlog::info("start input {} ({})", format_input(co.start, angular, U), opt.from);
   if (!opt.to.empty()) spdlog::info("end input {} ({})", format_input(co.end, angular, U), opt.to);
+  return co;
+}
 
-  // Progress on stderr for sweeps longer than a second, only on a terminal and not when quiet.
-  const bool show_progress = !opt.quiet && !globals.quiet && isatty(STDERR_FILENO) != 0;
-  const auto started = std::chrono::steady_clock::now();
-  bool progress_shown = false;
-  if (show_progress) {
-    co.progress = [&](double fraction) {
-      if (std::chrono::steady_clock::now() - started < std::chrono::seconds(1)) return;
-      std::fprintf(stderr, "\rcycle: %3.0f %%", 100.0 * fraction);
-      std::fflush(stderr);
-      progress_shown = true;
-    };
-  }
-  const CycleResult r = run_cycle(model, co);
-  if (progress_shown) std::fprintf(stderr, "\r\033[K");
-  const std::vector<ReactionMagnitude> magnitudes = reaction_magnitudes(r);
-  const std::vector<SeriesSummary> summary = summarize_cycle(r, magnitudes, drive_unit_si);
-  const std::vector<SeriesSummary> component_summary = summarize_components(r);
-  const Joint& joint = model.joints[static_cast<size_t>(co.driver.joint)];
-  CycleMetricsOptions mo;
-  mo.driver_joint = co.driver.joint;
-  mo.full_cycle = co.full_cycle;
-  if (opt.speed_fluctuation > 0.0) mo.speed_fluctuation = opt.speed_fluctuation;
-  const CycleMetrics metrics = compute_cycle_metrics(model, r, mo);
-
+// Step 3: the sweep's outcome: a request the sweep rejected is an input error (the file's, at
+// the driver's line, when the driver is the file's as written); a sweep without any position is
+// a numerical failure (kNumerical); else std::nullopt, the run goes on.
+std::optional<int> check_cycle_outcome(const Model& model, const CycleCliOptions& opt,
+                                       const CycleOptions& co, const CycleResult& r) {
   if (r.status == CycleStatus::invalid_request) {
     // A driver taken from the file as written: the problem is the file's, at the driver's line.
     if (opt.speed.empty() && opt.from.empty() && opt.to.empty() && co.driver.where.line > 0)
@@ -412,6 +410,16 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
     spdlog::error("{}: the cycle cannot be computed: {}", model.file, r.message);
     return kNumerical;
   }
+  return std::nullopt;
+}
+
+// Step 4: the log (stderr): a stopped sweep, warnings, idle degrees of freedom, dead and
+// singular points, chart switches.
+void log_cycle(const CycleRun& c) {
+  const Model& model = c.model;
+  const CycleResult& r = c.r;
+  const CycleCliOptions& opt = c.opt;
+  const CycleMetrics& metrics = c.metrics;
   if (r.status == CycleStatus::failed)
     spdlog::error("{}: the sweep stopped: {}", model.file, r.message);
   for (const std::string& w : r.warnings) spdlog::warn("{}: {}", model.file, w);
@@ -435,31 +443,20 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
   if (opt.speed_fluctuation > 0.0 && !metrics.power.flywheel_inertia)
     spdlog::warn(
         "--speed-fluctuation: no flywheel inertia (it needs a revolute driver and a drive)");
+}
 
-  // Units of the outputs.
-  const OutputUnit input_u = output_unit(angular ? Dimension::angle : Dimension::length, U);
-  const OutputUnit time_u = output_unit(Dimension::time, U);
-  const OutputUnit power_u = output_unit(Dimension::power, U);
-  const OutputUnit energy_u = output_unit(Dimension::moment, U);
-  const OutputUnit inertia_u = output_unit(Dimension::inertia, U);
-  const OutputUnit angle_u = output_unit(Dimension::angle, U);
-  const OutputUnit speed_u =
-      output_unit(angular ? Dimension::angular_velocity : Dimension::velocity, U);
-  auto unit_of = [&](const std::string& si) { return output_unit(dimension_of(si), U); };
-  // Angles at extremes in [0°, 360°) (the sweep line keeps the continuous input).
-  auto wrapped = [angular](double s) {
-    if (!angular) return s;
-    double w = std::fmod(s, 2.0 * std::numbers::pi);
-    if (w < 0.0) w += 2.0 * std::numbers::pi;
-    return w > 2.0 * std::numbers::pi - 1e-9 ? 0.0 : w;
-  };
-
-  // The traced points over the cycle's own positions.
-  const SweepPositions sweep = sweep_positions_of(r);
-  const std::vector<PointTrace> traces = trace_paths(model, trace_request, sweep.q, sweep.input);
-  const OutputUnit length_u = output_unit(Dimension::length, U);
-
-  // Files first: a failure to write is reported before anything goes to stdout.
+// Step 5: the files of --out (cycle.csv, cycle.gp and gnuplot's plots), before anything goes to
+// stdout so that a failure to write is reported first. Returns the note of the files written
+// ("" without --out).
+std::string write_cycle_files(const CycleRun& c) {
+  const Model& model = c.model;
+  const CycleResult& r = c.r;
+  const CycleCliOptions& opt = c.opt;
+  const CycleOptions& co = c.co;
+  const UnitSystem& U = c.U;
+  const bool angular = c.angular;
+  const std::vector<ReactionMagnitude>& magnitudes = c.magnitudes;
+  const std::vector<PointTrace>& traces = c.traces;
   std::string files_note;
   if (!opt.out.empty()) {
     const std::filesystem::path dir(opt.out);
@@ -498,348 +495,464 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
     files_note = opt.out + "/cycle.csv, " + opt.out + "/cycle.gp" +
                  (plotted ? ", drive.svg, drive.png, reactions.svg, reactions.png" : "");
   }
+  return files_note;
+}
 
-  const NoiseFloor noise = cycle_noise_floor(model, r, magnitudes, angular);
-  std::ostringstream out, json_out;
-  if (opt.json) {
-    auto extreme = [&](const SeriesExtreme& e, const OutputUnit& u) {
-      return nlohmann::json{{"value", u.from_si(e.value)},
-                            {"input", input_u.from_si(e.input)},
-                            {"time", time_u.from_si(e.time)}};
-    };
-    nlohmann::json j;
-    j["mechanism"] = model.name;
-    j["file"] = model.file;
-    j["units"] = units_json(U);
-    j["status"] = r.status == CycleStatus::completed               ? "completed"
-                  : r.status == CycleStatus::stopped_at_dead_point ? "stopped_at_dead_point"
-                                                                   : "failed";
-    j["message"] = r.message;
-    j["driver"] = {{"joint", joint.name},
-                   {"name", co.driver.name},
-                   {"profile", profile_name(co.driver.profile)},
-                   {"speed", speed_u.from_si(co.driver.speed)},
-                   {"speed_unit", speed_u.name},
-                   {"input_unit", input_u.name},
-                   {"drive_unit", unit_of(drive_unit_si).name}};
-    j["positions"] = r.points.size();
-    j["steps"] = co.steps;
-    j["dof"] = r.dof;
-    j["rank"] = r.rank;
-    nlohmann::json redundant = nlohmann::json::array();
-    for (size_t k = 0; k < r.row_names.size(); ++k)
-      if (!r.row_determinate.empty() && !r.row_determinate[k]) redundant.push_back(r.row_names[k]);
-    j["indeterminate_rows"] = redundant;
-    j["chart_switches"] = r.chart_switches;
-    j["reversals"] = r.reversals;
-    auto events = [&](const std::vector<DeadPoint>& v) {
-      nlohmann::json a = nlohmann::json::array();
-      for (const DeadPoint& d : v)
-        a.push_back({{"input", input_u.from_si(d.input)},
-                     {"time", time_u.from_si(d.time)},
-                     {"message", d.message}});
-      return a;
-    };
-    j["dead_points"] = events(r.dead_points);
-    j["singular_positions"] = events(r.singular_positions);
-    const OutputUnit drive_out = unit_of(drive_unit_si);
-    nlohmann::json bridges = nlohmann::json::array();
-    for (const ChangePointBridge& b : r.bridges) {
-      nlohmann::json div = nlohmann::json::array();
-      for (size_t i = 0; i < r.components.size(); ++i)
-        if (b.diverging[i]) div.push_back(r.components[i].name);
-      bridges.push_back({{"input", input_u.from_si(b.input)},
-                         {"time", time_u.from_si(b.time)},
-                         {"time_from", time_u.from_si(b.time_from)},
-                         {"time_to", time_u.from_si(b.time_to)},
-                         {"drive_error", drive_out.from_si(b.drive_error)},
-                         {"diverging", div}});
-    }
-    j["bridges"] = bridges;
-    // peaks: the drive, every reaction magnitude and every reaction component.
-    // A component zero by construction (a frictionless slide's axial force) is 0, not the
-    // rounding noise of the solve (io/noise.hpp).
-    nlohmann::json peaks;
-    for (const auto* list : {&summary, &component_summary})
-      for (const SeriesSummary& s : *list) {
-        const OutputUnit u = unit_of(s.unit);
-        const Dimension d = dimension_of(s.unit);
-        SeriesExtreme max = s.max, min = s.min;
-        max.value = noise.clean(d, max.value);
-        min.value = noise.clean(d, min.value);
-        peaks[s.name] = {{"peak", u.from_si(noise.clean(d, s.peak))},
-                         {"input", input_u.from_si(s.peak_input)},
-                         {"time", time_u.from_si(s.peak_time)},
-                         {"rms", u.from_si(noise.clean(d, s.rms))},
-                         {"max", extreme(max, u)},
-                         {"min", extreme(min, u)},
-                         {"unit", u.name},
-                         {"determinate", s.determinate},
-                         {"diverges", s.diverges}};
-      }
-    j["peaks"] = peaks;
-    nlohmann::json comps = nlohmann::json::array();
+// Step 6a: the --json document (docs/cli.md).
+nlohmann::json cycle_json(const CycleRun& c) {
+  const Model& model = c.model;
+  const CycleResult& r = c.r;
+  const CycleCliOptions& opt = c.opt;
+  const CycleOptions& co = c.co;
+  const CycleMetrics& metrics = c.metrics;
+  const UnitSystem& U = c.U;
+  const OutputUnit &input_u = c.input_u, &time_u = c.time_u, &power_u = c.power_u,
+                   &energy_u = c.energy_u, &inertia_u = c.inertia_u, &angle_u = c.angle_u,
+                   &speed_u = c.speed_u, &length_u = c.length_u;
+  const Joint& joint = model.joints[static_cast<size_t>(co.driver.joint)];
+  const NoiseFloor& noise = c.noise;
+  auto unit_of = [&](const std::string& si) { return c.unit_of(si); };
+  const std::string& drive_unit_si = c.drive_unit_si;
+  auto extreme = [&](const SeriesExtreme& e, const OutputUnit& u) {
+    return nlohmann::json{{"value", u.from_si(e.value)},
+                          {"input", input_u.from_si(e.input)},
+                          {"time", time_u.from_si(e.time)}};
+  };
+  nlohmann::json j;
+  j["mechanism"] = model.name;
+  j["file"] = model.file;
+  j["units"] = units_json(U);
+  j["status"] = r.status == CycleStatus::completed               ? "completed"
+                : r.status == CycleStatus::stopped_at_dead_point ? "stopped_at_dead_point"
+                                                                 : "failed";
+  j["message"] = r.message;
+  j["driver"] = {{"joint", joint.name},
+                 {"name", co.driver.name},
+                 {"profile", profile_name(co.driver.profile)},
+                 {"speed", speed_u.from_si(co.driver.speed)},
+                 {"speed_unit", speed_u.name},
+                 {"input_unit", input_u.name},
+                 {"drive_unit", unit_of(drive_unit_si).name}};
+  j["positions"] = r.points.size();
+  j["steps"] = co.steps;
+  j["dof"] = r.dof;
+  j["rank"] = r.rank;
+  nlohmann::json redundant = nlohmann::json::array();
+  for (size_t k = 0; k < r.row_names.size(); ++k)
+    if (!r.row_determinate.empty() && !r.row_determinate[k]) redundant.push_back(r.row_names[k]);
+  j["indeterminate_rows"] = redundant;
+  j["chart_switches"] = r.chart_switches;
+  j["reversals"] = r.reversals;
+  auto events = [&](const std::vector<DeadPoint>& v) {
+    nlohmann::json a = nlohmann::json::array();
+    for (const DeadPoint& d : v)
+      a.push_back({{"input", input_u.from_si(d.input)},
+                   {"time", time_u.from_si(d.time)},
+                   {"message", d.message}});
+    return a;
+  };
+  j["dead_points"] = events(r.dead_points);
+  j["singular_positions"] = events(r.singular_positions);
+  const OutputUnit drive_out = unit_of(drive_unit_si);
+  nlohmann::json bridges = nlohmann::json::array();
+  for (const ChangePointBridge& b : r.bridges) {
+    nlohmann::json div = nlohmann::json::array();
     for (size_t i = 0; i < r.components.size(); ++i)
-      comps.push_back({{"name", r.components[i].name},
-                       {"joint", model.joints[static_cast<size_t>(r.components[i].joint)].name},
-                       {"frame", r.components[i].global ? "global" : "joint"},
-                       {"unit", unit_of(r.components[i].unit).name},
-                       {"determinate", r.determinate[i]},
-                       {"diverging", r.diverging.empty() ? false : bool(r.diverging[i])}});
-    j["components"] = comps;
-    // Design metrics.
-    nlohmann::json loops = nlohmann::json::array();
-    for (const LoopAngleMetric& l : metrics.loops)
-      loops.push_back({{"loop", l.loop},
-                       {"kind", l.slider_crank ? "slider-crank" : "four-bar"},
-                       {"angle", l.slider_crank ? "pressure" : "transmission"},
-                       {"min", extreme(l.min, angle_u)},
-                       {"max", extreme(l.max, angle_u)},
-                       {"worst", extreme(l.worst, angle_u)}});
-    j["loops"] = loops;
-    if (metrics.power.available) {
-      const PowerMetric& pw = metrics.power;
-      j["power"] = {{"mean", power_u.from_si(pw.mean)},
-                    {"peak", power_u.from_si(pw.peak)},
-                    {"max", extreme(pw.max, power_u)},
-                    {"min", extreme(pw.min, power_u)},
-                    {"unit", power_u.name}};
-      j["energy_fluctuation"] = {{"value", energy_u.from_si(pw.energy_fluctuation)},
-                                 {"max", extreme(pw.energy_max, energy_u)},
-                                 {"min", extreme(pw.energy_min, energy_u)},
-                                 {"unit", energy_u.name},
-                                 {"mean_speed", speed_u.from_si(pw.mean_speed)}};
-      if (pw.flywheel_inertia)
-        j["flywheel"] = {{"speed_fluctuation", opt.speed_fluctuation},
-                         {"inertia", inertia_u.from_si(*pw.flywheel_inertia)},
-                         {"unit", inertia_u.name}};
-    }
-    nlohmann::json strokes = nlohmann::json::array();
-    for (const StrokeMetric& st : metrics.strokes) {
-      const OutputUnit u = unit_of(st.unit);
-      nlohmann::json e = {{"name", st.name},
-                          {"min", extreme(st.min, u)},
-                          {"max", extreme(st.max, u)},
-                          {"range", u.from_si(st.range)},
-                          {"unit", u.name}};
-      if (st.time_ratio)
-        e["time_ratio"] = {{"forward_over_return", *st.time_ratio},
-                           {"forward_time", time_u.from_si(st.forward_time)},
-                           {"return_time", time_u.from_si(st.return_time)}};
-      strokes.push_back(e);
-    }
-    j["strokes"] = strokes;
-    nlohmann::json limits = nlohmann::json::array();
-    for (const LimitExcursion& l : metrics.limits) {
-      const Joint& lj = model.joints[static_cast<size_t>(l.joint)];
-      const OutputUnit u = output_unit(
-          std::holds_alternative<Revolute>(lj.kind) ? Dimension::angle : Dimension::length, U);
-      limits.push_back({{"joint", lj.name},
-                        {"limits", {u.from_si(lj.limits->x()), u.from_si(lj.limits->y())}},
-                        {"first", extreme(l.first, u)},
-                        {"furthest", extreme(l.furthest, u)},
-                        {"positions", l.positions},
-                        {"unit", u.name}});
-    }
-    j["limits"] = limits;
-    if (opt.positions) j["points"] = positions_json(model, r, angular, U, noise);
-    nlohmann::json traced = nlohmann::json::array();
-    for (const PointTrace& t : traces) {
-      nlohmann::json e = {{"point", t.point}, {"unit", length_u.name}};
-      std::vector<double> in, x, y;
-      for (size_t k = 0; k < t.path.size(); ++k) {
-        in.push_back(input_u.from_si(t.input[k]));
-        x.push_back(length_u.from_si(t.path[k].x()));
-        y.push_back(length_u.from_si(t.path[k].y()));
-      }
-      e["input"] = in;
-      e["x"] = x;
-      e["y"] = y;
-      if (!t.z.empty()) {
-        std::vector<double> z;
-        for (const double v : t.z) z.push_back(length_u.from_si(v));
-        e["z"] = z;
-      }
-      traced.push_back(e);
-    }
-    j["traces"] = traced;
-    json_out << j.dump(2) << '\n';
+      if (b.diverging[i]) div.push_back(r.components[i].name);
+    bridges.push_back({{"input", input_u.from_si(b.input)},
+                       {"time", time_u.from_si(b.time)},
+                       {"time_from", time_u.from_si(b.time_from)},
+                       {"time_to", time_u.from_si(b.time_to)},
+                       {"drive_error", drive_out.from_si(b.drive_error)},
+                       {"diverging", div}});
   }
-  {  // the terminal summary (also the report's)
-    out << "mechanism       " << model.name << "  (" << model.file << ")\n";
-    out << "driver          joint '" << joint.name << "' (" << joint.type_name() << "), "
-        << speed_text(co.driver, angular, U) << "\n";
-    if (r.points.empty())
-      out << "sweep           no position computed\n";
-    else
-      out << "sweep           " << r.points.size() << " positions, input "
-          << format_input(r.points.front().input, angular, U) << " -> "
-          << format_input(r.points.back().input, angular, U) << ", t = 0 -> "
-          << fmt(time_u.from_si(r.points.back().time)) << " " << time_u.name << "\n";
-    out << "status          " << to_string(r.status) << (r.message.empty() ? "" : ": ") << r.message
-        << "\n";
-    int idle_dof = 0;
-    for (const Mobility::Idle& i : r.idle) idle_dof += i.count;
-    out << "mobility        DOF " << r.dof;
-    if (idle_dof > 0) out << " (" << idle_dof << " idle, held at zero rate)";
-    out << ", rank of E " << r.rank << ", "
-        << (r.redundant ? std::to_string(r.redundant) + " redundant equation(s)"
-                        : std::string("no redundant equations"))
-        << "\n";
-    out << "dead points     " << (r.dead_points.empty() ? "none" : "") << "\n";
-    for (const DeadPoint& d : r.dead_points)
-      out << "  t = " << fmt(time_u.from_si(d.time), 6) << " " << time_u.name << ": " << d.message
-          << "\n";
-    out << "singular        " << (r.singular_positions.empty() ? "none" : "") << "\n";
-    for (const DeadPoint& d : r.singular_positions)
-      out << "  at input " << format_input(d.input, angular, U) << ": passed (E loses rank)\n";
-    for (const ChangePointBridge& b : r.bridges) {
-      int diverging = 0;
-      for (const bool x : b.diverging) diverging += x ? 1 : 0;
-      const OutputUnit du = unit_of(drive_unit_si);
-      out << "  bridged at " << format_input(b.input, angular, U) << ": values within "
-          << format_input(std::abs(b.time_to - b.time) * std::abs(co.driver.speed), angular, U)
-          << " from the branch (drive error estimate " << fmt(du.from_si(b.drive_error), 2) << " "
-          << du.name << "; " << diverging << " diverging component(s) not reported there)\n";
-    }
-    out << "limits          " << (metrics.limits.empty() ? "kept" : "") << "\n";
-    for (const LimitExcursion& l : metrics.limits) {
-      const Joint& lj = model.joints[static_cast<size_t>(l.joint)];
-      const bool rev = std::holds_alternative<Revolute>(lj.kind);
-      out << "  joint '" << lj.name << "' leaves its limits ["
-          << format_input(lj.limits->x(), rev, U) << ", " << format_input(lj.limits->y(), rev, U)
-          << "] at input " << format_input(wrapped(l.first.input), angular, U) << " and reaches "
-          << format_input(l.furthest.value, rev, U) << " at input "
-          << format_input(wrapped(l.furthest.input), angular, U) << " (" << l.positions
-          << " positions outside)\n";
-    }
-    if (!files_note.empty()) out << "files           " << files_note << "\n";
-    out << "\n";
-    // The table: columns sized to the longest name.
-    size_t name_w = 8, unit_w = 4;
-    for (const SeriesSummary& s : summary) {
-      name_w = std::max(name_w, s.name.size());
-      unit_w = std::max(unit_w, unit_of(s.unit).name.size());
-    }
-    char line[400];
-    const int nw = static_cast<int>(name_w), uw = static_cast<int>(unit_w);
-    std::snprintf(line, sizeof line, "%-*s  %-*s %12s %14s %12s %14s %12s\n", nw, "quantity", uw,
-                  "unit", "max", "at input", "min", "at input", "RMS");
-    out << line;
-    for (const SeriesSummary& s : summary) {
-      if (s.samples == 0) continue;
+  j["bridges"] = bridges;
+  // peaks: the drive, every reaction magnitude and every reaction component.
+  // A component zero by construction (a frictionless slide's axial force) is 0, not the
+  // rounding noise of the solve (io/noise.hpp).
+  nlohmann::json peaks;
+  for (const auto* list : {&c.summary, &c.component_summary})
+    for (const SeriesSummary& s : *list) {
       const OutputUnit u = unit_of(s.unit);
-      std::snprintf(line, sizeof line, "%-*s  %-*s %12.5g %14s %12.5g %14s %12.5g%s\n", nw,
-                    s.name.c_str(), uw, u.name.c_str(),
-                    u.from_si(noise.clean(dimension_of(s.unit), s.max.value)),
-                    format_input(wrapped(s.max.input), angular, U).c_str(),
-                    u.from_si(noise.clean(dimension_of(s.unit), s.min.value)),
-                    format_input(wrapped(s.min.input), angular, U).c_str(),
-                    u.from_si(noise.clean(dimension_of(s.unit), s.rms)),
-                    s.determinate ? ""
-                    : s.diverges  ? "   indeterminate (minimum norm), diverges at a change point"
-                                  : "   indeterminate (minimum norm)");
-      out << line;
+      const Dimension d = dimension_of(s.unit);
+      SeriesExtreme max = s.max, min = s.min;
+      max.value = noise.clean(d, max.value);
+      min.value = noise.clean(d, min.value);
+      peaks[s.name] = {{"peak", u.from_si(noise.clean(d, s.peak))},
+                       {"input", input_u.from_si(s.peak_input)},
+                       {"time", time_u.from_si(s.peak_time)},
+                       {"rms", u.from_si(noise.clean(d, s.rms))},
+                       {"max", extreme(max, u)},
+                       {"min", extreme(min, u)},
+                       {"unit", u.name},
+                       {"determinate", s.determinate},
+                       {"diverges", s.diverges}};
     }
-    // Design metrics.
-    if (!metrics.loops.empty() || metrics.power.available || !metrics.strokes.empty()) out << "\n";
-    for (const LoopAngleMetric& l : metrics.loops) {
-      if (l.slider_crank)
-        out << "pressure angle      loop " << l.loop << ": max "
-            << format_input(l.max.value, true, U) << " at input "
-            << format_input(wrapped(l.max.input), angular, U) << "\n";
-      else
-        out << "transmission angle  loop " << l.loop << ": " << format_input(l.min.value, true, U)
-            << " ... " << format_input(l.max.value, true, U) << "; worst "
-            << format_input(l.worst.value, true, U) << " from a straight line at input "
-            << format_input(wrapped(l.worst.input), angular, U) << "\n";
-    }
-    if (metrics.power.available) {
-      const PowerMetric& pw = metrics.power;
-      out << "drive power         mean " << fmt(power_u.from_si(pw.mean), 5) << " " << power_u.name
-          << ", max " << fmt(power_u.from_si(pw.max.value), 5) << " at input "
-          << format_input(wrapped(pw.max.input), angular, U) << ", min "
-          << fmt(power_u.from_si(pw.min.value), 5) << " at input "
-          << format_input(wrapped(pw.min.input), angular, U) << "\n";
-      out << "energy fluctuation  " << fmt(energy_u.from_si(pw.energy_fluctuation), 5) << " "
-          << energy_u.name << " (max - min of the integral of drive power minus its mean)\n";
-      if (pw.flywheel_inertia)
-        out << "flywheel            " << fmt(inertia_u.from_si(*pw.flywheel_inertia), 5) << " "
-            << inertia_u.name << " on the input for a speed fluctuation of "
-            << fmt(opt.speed_fluctuation) << "\n";
-    }
-    for (const StrokeMetric& st : metrics.strokes) {
-      const OutputUnit u = unit_of(st.unit);
-      out << "range  " << st.name << ": " << fmt(u.from_si(st.min.value), 7) << " ... "
-          << fmt(u.from_si(st.max.value), 7) << " " << u.name << " (stroke "
-          << fmt(u.from_si(st.range), 7) << ")";
-      if (st.time_ratio) out << ", time ratio forward/return " << fmt(*st.time_ratio, 6);
-      out << "\n";
-    }
-    for (const PointTrace& t : traces) {
-      Vec2 lo = Vec2::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
-      for (const Vec2& p : t.path) {
-        lo = lo.cwiseMin(p);
-        hi = hi.cwiseMax(p);
-      }
-      out << "trace  " << t.point << ": x " << fmt(length_u.from_si(lo.x()), 7) << " ... "
-          << fmt(length_u.from_si(hi.x()), 7) << ", y " << fmt(length_u.from_si(lo.y()), 7)
-          << " ... " << fmt(length_u.from_si(hi.y()), 7);
-      if (!t.z.empty()) {
-        const auto [zlo, zhi] = std::minmax_element(t.z.begin(), t.z.end());
-        out << ", z " << fmt(length_u.from_si(*zlo), 7) << " ... "
-            << fmt(length_u.from_si(*zhi), 7);
-      }
-      out << " " << length_u.name << "\n";
-    }
-    bool any = false;
-    for (size_t i = 0; i < r.components.size(); ++i) {
-      if (r.determinate[i]) continue;
-      out << (any ? ", "
-                  : "\nstatically indeterminate components (minimum-norm values "
-                    "reported; any value in a family balances the loads):\n  ")
-          << r.components[i].name;
-      any = true;
-    }
-    if (any) out << "\n";
-    out << "\nconvention: reactions are forces and moments on a joint's first body from its "
-           "second; \"_local\" and joint-frame components are in the joint's frame (the first "
-           "body's, or the second's when the first is the ground). Signed max and min of every "
-           "component: --json.\n";
+  j["peaks"] = peaks;
+  nlohmann::json comps = nlohmann::json::array();
+  for (size_t i = 0; i < r.components.size(); ++i)
+    comps.push_back({{"name", r.components[i].name},
+                     {"joint", model.joints[static_cast<size_t>(r.components[i].joint)].name},
+                     {"frame", r.components[i].global ? "global" : "joint"},
+                     {"unit", unit_of(r.components[i].unit).name},
+                     {"determinate", r.determinate[i]},
+                     {"diverging", r.diverging.empty() ? false : bool(r.diverging[i])}});
+  j["components"] = comps;
+  // Design metrics.
+  nlohmann::json loops = nlohmann::json::array();
+  for (const LoopAngleMetric& l : metrics.loops)
+    loops.push_back({{"loop", l.loop},
+                     {"kind", l.slider_crank ? "slider-crank" : "four-bar"},
+                     {"angle", l.slider_crank ? "pressure" : "transmission"},
+                     {"min", extreme(l.min, angle_u)},
+                     {"max", extreme(l.max, angle_u)},
+                     {"worst", extreme(l.worst, angle_u)}});
+  j["loops"] = loops;
+  if (metrics.power.available) {
+    const PowerMetric& pw = metrics.power;
+    j["power"] = {{"mean", power_u.from_si(pw.mean)},
+                  {"peak", power_u.from_si(pw.peak)},
+                  {"max", extreme(pw.max, power_u)},
+                  {"min", extreme(pw.min, power_u)},
+                  {"unit", power_u.name}};
+    j["energy_fluctuation"] = {{"value", energy_u.from_si(pw.energy_fluctuation)},
+                               {"max", extreme(pw.energy_max, energy_u)},
+                               {"min", extreme(pw.energy_min, energy_u)},
+                               {"unit", energy_u.name},
+                               {"mean_speed", speed_u.from_si(pw.mean_speed)}};
+    if (pw.flywheel_inertia)
+      j["flywheel"] = {{"speed_fluctuation", opt.speed_fluctuation},
+                       {"inertia", inertia_u.from_si(*pw.flywheel_inertia)},
+                       {"unit", inertia_u.name}};
   }
-  // The pictures: one animation of the cycle's positions (render's animated_svg), in the report
-  // too.
-  if (!opt.animate.empty() || !opt.report.empty()) {
-    RenderOptions ro;
-    ro.driver = co.driver.joint;
-    ro.projection = *view.projection;
-    ro.traces = traces;
-    std::string animation;
-    try {
-      animation = animated_svg(model, sweep.q, ro, opt.duration);
-      if (!opt.animate.empty()) {
-        write_file_atomically(opt.animate, animation);
-        spdlog::info("wrote {} ({} frames)", opt.animate, sweep.q.size());
-      }
-      if (!opt.report.empty()) {
-        CycleReport report;
-        report.title = model.name;
-        report.summary = out.str();
-        report.input_label = "input [" + input_u.name + "]";
-        for (const double s : sweep.input) report.input.push_back(input_u.from_si(s));
-        report.plots = report_plots(r, magnitudes, angular, U);
-        report.animation = std::move(animation);
-        report.duration = opt.duration;
-        write_file_atomically(opt.report, cycle_report_html(report));
-        spdlog::info("wrote {} ({} positions)", opt.report, sweep.q.size());
-      }
-    } catch (const std::runtime_error& e) {
-      release_render_caches();
-      throw CLI::ValidationError(opt.report.empty() ? "--animate" : "--report", e.what());
+  nlohmann::json strokes = nlohmann::json::array();
+  for (const StrokeMetric& st : metrics.strokes) {
+    const OutputUnit u = unit_of(st.unit);
+    nlohmann::json e = {{"name", st.name},
+                        {"min", extreme(st.min, u)},
+                        {"max", extreme(st.max, u)},
+                        {"range", u.from_si(st.range)},
+                        {"unit", u.name}};
+    if (st.time_ratio)
+      e["time_ratio"] = {{"forward_over_return", *st.time_ratio},
+                         {"forward_time", time_u.from_si(st.forward_time)},
+                         {"return_time", time_u.from_si(st.return_time)}};
+    strokes.push_back(e);
+  }
+  j["strokes"] = strokes;
+  nlohmann::json limits = nlohmann::json::array();
+  for (const LimitExcursion& l : metrics.limits) {
+    const Joint& lj = model.joints[static_cast<size_t>(l.joint)];
+    const OutputUnit u = output_unit(
+        std::holds_alternative<Revolute>(lj.kind) ? Dimension::angle : Dimension::length, U);
+    limits.push_back({{"joint", lj.name},
+                      {"limits", {u.from_si(lj.limits->x()), u.from_si(lj.limits->y())}},
+                      {"first", extreme(l.first, u)},
+                      {"furthest", extreme(l.furthest, u)},
+                      {"positions", l.positions},
+                      {"unit", u.name}});
+  }
+  j["limits"] = limits;
+  if (opt.positions) j["points"] = positions_json(model, r, c.angular, U, noise);
+  nlohmann::json traced = nlohmann::json::array();
+  for (const PointTrace& t : c.traces) {
+    nlohmann::json e = {{"point", t.point}, {"unit", length_u.name}};
+    std::vector<double> in, x, y;
+    for (size_t k = 0; k < t.path.size(); ++k) {
+      in.push_back(input_u.from_si(t.input[k]));
+      x.push_back(length_u.from_si(t.path[k].x()));
+      y.push_back(length_u.from_si(t.path[k].y()));
     }
+    e["input"] = in;
+    e["x"] = x;
+    e["y"] = y;
+    if (!t.z.empty()) {
+      std::vector<double> z;
+      for (const double v : t.z) z.push_back(length_u.from_si(v));
+      e["z"] = z;
+    }
+    traced.push_back(e);
+  }
+  j["traces"] = traced;
+  return j;
+}
+
+// Step 6b: the terminal summary (also the report's): the run, the table of the drive and the
+// reaction magnitudes, the design metrics, the traces.
+std::string cycle_summary(const CycleRun& c, const std::string& files_note) {
+  const Model& model = c.model;
+  const CycleResult& r = c.r;
+  const CycleCliOptions& opt = c.opt;
+  const CycleOptions& co = c.co;
+  const CycleMetrics& metrics = c.metrics;
+  const UnitSystem& U = c.U;
+  const bool angular = c.angular;
+  const OutputUnit &time_u = c.time_u, &power_u = c.power_u, &energy_u = c.energy_u,
+                   &inertia_u = c.inertia_u, &length_u = c.length_u;
+  const Joint& joint = model.joints[static_cast<size_t>(co.driver.joint)];
+  const NoiseFloor& noise = c.noise;
+  const std::vector<SeriesSummary>& summary = c.summary;
+  auto unit_of = [&](const std::string& si) { return c.unit_of(si); };
+  auto wrapped = [&](double s) { return c.wrapped(s); };
+  const std::string& drive_unit_si = c.drive_unit_si;
+  std::ostringstream out;
+  out << "mechanism       " << model.name << "  (" << model.file << ")\n";
+  out << "driver          joint '" << joint.name << "' (" << joint.type_name() << "), "
+      << speed_text(co.driver, angular, U) << "\n";
+  if (r.points.empty())
+    out << "sweep           no position computed\n";
+  else
+    out << "sweep           " << r.points.size() << " positions, input "
+        << format_input(r.points.front().input, angular, U) << " -> "
+        << format_input(r.points.back().input, angular, U) << ", t = 0 -> "
+        << fmt(time_u.from_si(r.points.back().time)) << " " << time_u.name << "\n";
+  out << "status          " << to_string(r.status) << (r.message.empty() ? "" : ": ") << r.message
+      << "\n";
+  int idle_dof = 0;
+  for (const Mobility::Idle& i : r.idle) idle_dof += i.count;
+  out << "mobility        DOF " << r.dof;
+  if (idle_dof > 0) out << " (" << idle_dof << " idle, held at zero rate)";
+  out << ", rank of E " << r.rank << ", "
+      << (r.redundant ? std::to_string(r.redundant) + " redundant equation(s)"
+                      : std::string("no redundant equations"))
+      << "\n";
+  out << "dead points     " << (r.dead_points.empty() ? "none" : "") << "\n";
+  for (const DeadPoint& d : r.dead_points)
+    out << "  t = " << fmt(time_u.from_si(d.time), 6) << " " << time_u.name << ": " << d.message
+        << "\n";
+  out << "singular        " << (r.singular_positions.empty() ? "none" : "") << "\n";
+  for (const DeadPoint& d : r.singular_positions)
+    out << "  at input " << format_input(d.input, angular, U) << ": passed (E loses rank)\n";
+  for (const ChangePointBridge& b : r.bridges) {
+    int diverging = 0;
+    for (const bool x : b.diverging) diverging += x ? 1 : 0;
+    const OutputUnit du = unit_of(drive_unit_si);
+    out << "  bridged at " << format_input(b.input, angular, U) << ": values within "
+        << format_input(std::abs(b.time_to - b.time) * std::abs(co.driver.speed), angular, U)
+        << " from the branch (drive error estimate " << fmt(du.from_si(b.drive_error), 2) << " "
+        << du.name << "; " << diverging << " diverging component(s) not reported there)\n";
+  }
+  out << "limits          " << (metrics.limits.empty() ? "kept" : "") << "\n";
+  for (const LimitExcursion& l : metrics.limits) {
+    const Joint& lj = model.joints[static_cast<size_t>(l.joint)];
+    const bool rev = std::holds_alternative<Revolute>(lj.kind);
+    out << "  joint '" << lj.name << "' leaves its limits [" << format_input(lj.limits->x(), rev, U)
+        << ", " << format_input(lj.limits->y(), rev, U) << "] at input "
+        << format_input(wrapped(l.first.input), angular, U) << " and reaches "
+        << format_input(l.furthest.value, rev, U) << " at input "
+        << format_input(wrapped(l.furthest.input), angular, U) << " (" << l.positions
+        << " positions outside)\n";
+  }
+  if (!files_note.empty()) out << "files           " << files_note << "\n";
+  out << "\n";
+  // The table: columns sized to the longest name.
+  size_t name_w = 8, unit_w = 4;
+  for (const SeriesSummary& s : summary) {
+    name_w = std::max(name_w, s.name.size());
+    unit_w = std::max(unit_w, unit_of(s.unit).name.size());
+  }
+  char line[400];
+  const int nw = static_cast<int>(name_w), uw = static_cast<int>(unit_w);
+  std::snprintf(line, sizeof line, "%-*s  %-*s %12s %14s %12s %14s %12s\n", nw, "quantity", uw,
+                "unit", "max", "at input", "min", "at input", "RMS");
+  out << line;
+  for (const SeriesSummary& s : summary) {
+    if (s.samples == 0) continue;
+    const OutputUnit u = unit_of(s.unit);
+    std::snprintf(line, sizeof line, "%-*s  %-*s %12.5g %14s %12.5g %14s %12.5g%s\n", nw,
+                  s.name.c_str(), uw, u.name.c_str(),
+                  u.from_si(noise.clean(dimension_of(s.unit), s.max.value)),
+                  format_input(wrapped(s.max.input), angular, U).c_str(),
+                  u.from_si(noise.clean(dimension_of(s.unit), s.min.value)),
+                  format_input(wrapped(s.min.input), angular, U).c_str(),
+                  u.from_si(noise.clean(dimension_of(s.unit), s.rms)),
+                  s.determinate ? ""
+                  : s.diverges  ? "   indeterminate (minimum norm), diverges at a change point"
+                                : "   indeterminate (minimum norm)");
+    out << line;
+  }
+  // Design metrics.
+  if (!metrics.loops.empty() || metrics.power.available || !metrics.strokes.empty()) out << "\n";
+  for (const LoopAngleMetric& l : metrics.loops) {
+    if (l.slider_crank)
+      out << "pressure angle      loop " << l.loop << ": max " << format_input(l.max.value, true, U)
+          << " at input " << format_input(wrapped(l.max.input), angular, U) << "\n";
+    else
+      out << "transmission angle  loop " << l.loop << ": " << format_input(l.min.value, true, U)
+          << " ... " << format_input(l.max.value, true, U) << "; worst "
+          << format_input(l.worst.value, true, U) << " from a straight line at input "
+          << format_input(wrapped(l.worst.input), angular, U) << "\n";
+  }
+  if (metrics.power.available) {
+    const PowerMetric& pw = metrics.power;
+    out << "drive power         mean " << fmt(power_u.from_si(pw.mean), 5) << " " << power_u.name
+        << ", max " << fmt(power_u.from_si(pw.max.value), 5) << " at input "
+        << format_input(wrapped(pw.max.input), angular, U) << ", min "
+        << fmt(power_u.from_si(pw.min.value), 5) << " at input "
+        << format_input(wrapped(pw.min.input), angular, U) << "\n";
+    out << "energy fluctuation  " << fmt(energy_u.from_si(pw.energy_fluctuation), 5) << " "
+        << energy_u.name << " (max - min of the integral of drive power minus its mean)\n";
+    if (pw.flywheel_inertia)
+      out << "flywheel            " << fmt(inertia_u.from_si(*pw.flywheel_inertia), 5) << " "
+          << inertia_u.name << " on the input for a speed fluctuation of "
+          << fmt(opt.speed_fluctuation) << "\n";
+  }
+  for (const StrokeMetric& st : metrics.strokes) {
+    const OutputUnit u = unit_of(st.unit);
+    out << "range  " << st.name << ": " << fmt(u.from_si(st.min.value), 7) << " ... "
+        << fmt(u.from_si(st.max.value), 7) << " " << u.name << " (stroke "
+        << fmt(u.from_si(st.range), 7) << ")";
+    if (st.time_ratio) out << ", time ratio forward/return " << fmt(*st.time_ratio, 6);
+    out << "\n";
+  }
+  for (const PointTrace& t : c.traces) {
+    Vec2 lo = Vec2::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+    for (const Vec2& p : t.path) {
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+    }
+    out << "trace  " << t.point << ": x " << fmt(length_u.from_si(lo.x()), 7) << " ... "
+        << fmt(length_u.from_si(hi.x()), 7) << ", y " << fmt(length_u.from_si(lo.y()), 7) << " ... "
+        << fmt(length_u.from_si(hi.y()), 7);
+    if (!t.z.empty()) {
+      const auto [zlo, zhi] = std::minmax_element(t.z.begin(), t.z.end());
+      out << ", z " << fmt(length_u.from_si(*zlo), 7) << " ... " << fmt(length_u.from_si(*zhi), 7);
+    }
+    out << " " << length_u.name << "\n";
+  }
+  bool any = false;
+  for (size_t i = 0; i < r.components.size(); ++i) {
+    if (r.determinate[i]) continue;
+    out << (any ? ", "
+                : "\nstatically indeterminate components (minimum-norm values "
+                  "reported; any value in a family balances the loads):\n  ")
+        << r.components[i].name;
+    any = true;
+  }
+  if (any) out << "\n";
+  out << "\nconvention: reactions are forces and moments on a joint's first body from its "
+         "second; \"_local\" and joint-frame components are in the joint's frame (the first "
+         "body's, or the second's when the first is the ground). Signed max and min of every "
+         "component: --json.\n";
+  return out.str();
+}
+
+// Step 7: the pictures of --animate and --report: one animation of the cycle's positions
+// (render's animated_svg), in the report too with the summary and the plots.
+void write_cycle_pictures(const CycleRun& c, const Projection& projection,
+                          const std::string& summary) {
+  const Model& model = c.model;
+  const CycleCliOptions& opt = c.opt;
+  RenderOptions ro;
+  ro.driver = c.co.driver.joint;
+  ro.projection = projection;
+  ro.traces = c.traces;
+  std::string animation;
+  try {
+    animation = animated_svg(model, c.sweep.q, ro, opt.duration);
+    if (!opt.animate.empty()) {
+      write_file_atomically(opt.animate, animation);
+      spdlog::info("wrote {} ({} frames)", opt.animate, c.sweep.q.size());
+    }
+    if (!opt.report.empty()) {
+      CycleReport report;
+      report.title = model.name;
+      report.summary = summary;
+      report.input_label = "input [" + c.input_u.name + "]";
+      for (const double s : c.sweep.input) report.input.push_back(c.input_u.from_si(s));
+      report.plots = report_plots(c.r, c.magnitudes, c.angular, c.U);
+      report.animation = std::move(animation);
+      report.duration = opt.duration;
+      write_file_atomically(opt.report, cycle_report_html(report));
+      spdlog::info("wrote {} ({} positions)", opt.report, c.sweep.q.size());
+    }
+  } catch (const std::runtime_error& e) {
     release_render_caches();
+    throw CLI::ValidationError(opt.report.empty() ? "--animate" : "--report", e.what());
   }
-  std::cout << (opt.json ? json_out.str() : out.str());  // all at once
+  release_render_caches();
+}
+
+int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) {
+  const Model model = load(opt.file, opt.sets);
+  if (!opt.drivers.empty()) {  // several drivers: cli/cycle_drivers.cpp
+    DriversRequest request;
+    request.drivers = opt.drivers;
+    request.t_end = opt.t_end;
+    request.steps = opt.steps;
+    request.json = opt.json;
+    request.units = opt.units;
+    request.out = opt.out;
+    return run_cycle_drivers(model, request);
+  }
+  // Step 1: the request (units, pictures' view, traced points, driver and range).
+  const UnitSystem U = resolve_units(model, opt.units);
+  if (!opt.animate.empty() && image_format_of(opt.animate) != ImageFormat::svg)
+    throw CLI::ValidationError("--animate", "the animation is an SVG: give a NAME.svg");
+  const ViewChoice view = choose_view(model, opt.view);
+  if (!view.projection) throw InputError({"command line", 0, 0}, "option", view.message);
+  const TracePoints trace_request = resolve_trace_points(model, opt.traces);
+  if (trace_request.status == TraceStatus::bad_request)
+    throw InputError({"command line", 0, 0}, "option", trace_request.message);
+  const CycleOptions request = cycle_request(model, opt, U);
+
+  // Step 2: the sweep, with progress on stderr for sweeps longer than a second, only on a
+  // terminal and not when quiet.
+  CycleOptions co = request;
+  const bool show_progress = !opt.quiet && !globals.quiet && isatty(STDERR_FILENO) != 0;
+  const auto started = std::chrono::steady_clock::now();
+  bool progress_shown = false;
+  if (show_progress) {
+    co.progress = [&](double fraction) {
+      if (std::chrono::steady_clock::now() - started < std::chrono::seconds(1)) return;
+      std::fprintf(stderr, "\rcycle: %3.0f %%", 100.0 * fraction);
+      std::fflush(stderr);
+      progress_shown = true;
+    };
+  }
+  const CycleResult r = run_cycle(model, co);
+  if (progress_shown) std::fprintf(stderr, "\r\033[K");
+
+  // Summaries, metrics, traced points and units of what the sweep found.
+  const bool angular = is_angular(model, co.driver.joint);
+  CycleRun c{opt, model, co, r, angular, U};
+  c.drive_unit_si = angular ? "N*m" : "N";
+  c.magnitudes = reaction_magnitudes(r);
+  c.summary = summarize_cycle(r, c.magnitudes, c.drive_unit_si);
+  c.component_summary = summarize_components(r);
+  CycleMetricsOptions mo;
+  mo.driver_joint = co.driver.joint;
+  mo.full_cycle = co.full_cycle;
+  if (opt.speed_fluctuation > 0.0) mo.speed_fluctuation = opt.speed_fluctuation;
+  c.metrics = compute_cycle_metrics(model, r, mo);
+
+  // Step 3: a rejected request or an empty sweep ends the run here.
+  if (const std::optional<int> code = check_cycle_outcome(model, opt, co, r)) return *code;
+  // Step 4: the log.
+  log_cycle(c);
+
+  c.input_u = output_unit(angular ? Dimension::angle : Dimension::length, U);
+  c.time_u = output_unit(Dimension::time, U);
+  c.power_u = output_unit(Dimension::power, U);
+  c.energy_u = output_unit(Dimension::moment, U);
+  c.inertia_u = output_unit(Dimension::inertia, U);
+  c.angle_u = output_unit(Dimension::angle, U);
+  c.speed_u = output_unit(angular ? Dimension::angular_velocity : Dimension::velocity, U);
+  c.length_u = output_unit(Dimension::length, U);
+  // The traced points over the cycle's own positions.
+  c.sweep = sweep_positions_of(r);
+  c.traces = trace_paths(model, trace_request, c.sweep.q, c.sweep.input);
+
+  // Step 5: files first.
+  const std::string files_note = write_cycle_files(c);
+  // Step 6: the results (stdout): the JSON document or the terminal summary.
+  c.noise = cycle_noise_floor(model, r, c.magnitudes, angular);
+  const std::string summary = cycle_summary(c, files_note);
+  const std::string json = opt.json ? cycle_json(c).dump(2) + "\n" : std::string();
+  // Step 7: the pictures.
+  if (!opt.animate.empty() || !opt.report.empty())
+    write_cycle_pictures(c, *view.projection, summary);
+  std::cout << (opt.json ? json : summary);  // all at once
   return r.status == CycleStatus::completed               ? kOk
          : r.status == CycleStatus::stopped_at_dead_point ? kCheckFailed
                                                           : kNumerical;

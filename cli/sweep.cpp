@@ -67,11 +67,13 @@ nlohmann::json summarize(const Study& study, const StudyDatabase& db,
   // partial); the checks of the design (validate.*, assemble.*) of every variant that has them
   // (a variant that does not assemble is part of the yield).
   std::vector<std::vector<double>> values;
+  values.reserve(rows.size());
   for (const auto& r : rows) values.push_back(r.values);
   const auto metric_column = [&](size_t m) {
     const std::string& name = db.metrics()[m];
     const bool check = name.rfind("validate.", 0) == 0 || name.rfind("assemble.", 0) == 0;
     std::vector<double> y;
+    y.reserve(rows.size());
     for (const auto& r : rows)
       y.push_back(r.status == "completed" || check ? r.metrics[m] : std::nan(""));
     return y;

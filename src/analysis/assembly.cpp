@@ -11,6 +11,7 @@
 #include "../solvers/ipopt_nlp.hpp"
 #include "orthomech/analysis/mobility.hpp"
 #include "orthomech/analysis/positions.hpp"
+#include "orthomech/check.hpp"
 #include "orthomech/constraints/joints.hpp"
 #include "orthomech/constraints/spatial_joints.hpp"
 #include "orthomech/io/units.hpp"
@@ -644,8 +645,9 @@ VelocityProjection project_velocities(const Model& model, const VecX& q, const V
   const MatX G = Et * AE;  // eq. (42)
   const Eigen::CompleteOrthogonalDecomposition<MatX> cod(G);
   v.ok = cod.rank() == G.rows();
-  const VecX beta_u0 = AE * cod.solve(Et * u0);  // β u₀ = A π u₀, eqs. (43)–(44)
-  v.u = u0 - beta_u0;                            // α u₀ = (I − A π) u₀, eq. (44)
+  const VecX Ginv_Et_u0 = cod.solve(Et * u0);  // G⁺ Eᵀ u₀: E times it is π u₀, eq. (43)
+  const VecX beta_u0 = AE * Ginv_Et_u0;  // β u₀ = A π u₀ = (A E) G⁺ Eᵀ u₀, eq. (44)
+  v.u = u0 - beta_u0;                    // α u₀ = (I − A π) u₀, eq. (44)
   v.kinetic_initial = 0.5 * u0.dot(M * u0);
   v.kinetic = 0.5 * v.u.dot(M * v.u);
   v.kinetic_removed = 0.5 * beta_u0.dot(M * beta_u0);
@@ -1030,7 +1032,7 @@ AssemblyResult assemble_spatial(const Model& model, const VecX& q0_in,
 }  // namespace
 
 AssemblyResult assemble(const Model& model, const VecX& q0, const AssemblyOptions& options_in) {
-  if (q0.size() != model.nq) throw std::invalid_argument("assemble: q0 has the wrong size");
+  check_argument(q0.size() == model.nq, "assemble", "q0", "must have model.nq coordinates");
   // A lock on a joint measure is a lock on its joint.
   AssemblyOptions options = options_in;
   for (JointLock& l : options.locks)

@@ -12,6 +12,7 @@
 #include "orthomech/analysis/assembly.hpp"
 #include "orthomech/analysis/mobility.hpp"
 #include "orthomech/analysis/positions.hpp"
+#include "orthomech/check.hpp"
 #include "orthomech/constraints/joints.hpp"
 #include "orthomech/constraints/rolling_disc.hpp"
 #include "orthomech/constraints/spatial_joints.hpp"
@@ -410,7 +411,14 @@ bool idle_rows_rate(const Model& model, const VecX& q, const VecX& u, const VecX
 }  // namespace
 
 bool compute_driven(const Model& model, int driver_joint, double sdot, double sddot, State& state,
-                    Workspace& ws, DrivenWorkspace& w, DrivenPoint& out, bool jacobian_current) {
+                    Workspace& ws, DrivenWorkspace& dws, DrivenPoint& out, bool jacobian_current) {
+  check_argument(driver_joint >= 0 && static_cast<size_t>(driver_joint) < model.joints.size(),
+                 "compute_driven", "driver_joint", "is not a joint of the model");
+  check_argument(state.q.size() == model.nq && state.u.size() == model.n, "compute_driven", "state",
+                 "must have model.nq coordinates and model.n velocities");
+  check_argument(ws.model == &model, "compute_driven", "ws", "was built for another Model");
+  check_argument(dws.rotations.size() == model.bodies.size(), "compute_driven", "dws",
+                 "was built for another Model");
   const MeasureKind input = JointCoordinate{driver_joint};
   // Positions: the chart and F at q (F depends on q only). The chart's scaling A comes from the
   // free system; with a constant mass matrix it is computed once.
@@ -420,17 +428,17 @@ bool compute_driven(const Model& model, int driver_joint, double sdot, double sd
   }
   if (!jacobian_current) {
     compute_constraint_jacobian(model, state.q, ws.constraints.Et);
-    body_rotations(model, state.q, w.rotations.data());
+    body_rotations(model, state.q, dws.rotations.data());
   }
   if (compute_basis(model, state, ws) != ProjectionStatus::ok) return false;
   // With idle degrees of freedom, the basis that holds them: F z, I F z = 0 (spatial.md §6.5).
-  const bool idle = !w.idle_bodies.empty();
-  if (idle && !hold_idle(model, state.q, ws.dual.F, w)) return false;
+  const bool idle = !dws.idle_bodies.empty();
+  if (idle && !hold_idle(model, state.q, ws.dual.F, dws)) return false;
   const Eigen::Ref<const VecX> F =
-      idle ? Eigen::Ref<const VecX>(w.F_held) : Eigen::Ref<const VecX>(ws.dual.F.col(0));
-  (void)compute_scalar(model, input, state.q, nullptr, w.d);
-  const double dTF = w.d.dot(F);
-  const double scale = w.d.norm() * F.norm();
+      idle ? Eigen::Ref<const VecX>(dws.F_held) : Eigen::Ref<const VecX>(ws.dual.F.col(0));
+  (void)compute_scalar(model, input, state.q, nullptr, dws.d);
+  const double dTF = dws.d.dot(F);
+  const double scale = dws.d.norm() * F.norm();
   out.dTF = scale > 0.0 ? dTF / scale : 0.0;
   if (!(std::abs(out.dTF) > 1e-12)) return false;  // dead point: the driver cannot drive
   out.tangent = F / dTF;                           // dq/ds along the branch
@@ -438,37 +446,38 @@ bool compute_driven(const Model& model, int driver_joint, double sdot, double sd
   const double v = sdot / dTF;
   state.u.noalias() = F * v;
   // Rate terms at (q, u): Dᵀu, Q̂(q, u), Ṁ, ḋu.
-  compute_constraint_rate(model, state, ws.constraints, w.rotations.data());
+  compute_constraint_rate(model, state, ws.constraints, dws.rotations.data());
   compute_free_system(model, state, ws);
-  const ScalarKinematics sk = compute_scalar(model, input, state.q, &state.u, w.d);
-  solve_chart(ws, ws.constraints.Dtu, w.Fdot_v);  // x_D = (E_RDᵀ)⁻¹ (Dᵀu)_R
-  w.Fdot_v = -w.Fdot_v;                           // Eᵀ (Ḟ v) = −Dᵀ u
+  const ScalarKinematics sk = compute_scalar(model, input, state.q, &state.u, dws.d);
+  solve_chart(ws, ws.constraints.Dtu, dws.Fdot_v);  // x_D = (E_RDᵀ)⁻¹ (Dᵀu)_R
+  dws.Fdot_v = -dws.Fdot_v;                         // Eᵀ (Ḟ v) = −Dᵀ u
   if (idle) {  // and I (Ḟ v) = −İ u: add F y with (I F) y = −İ u − I (Ḟ v), y the least-norm one
-    if (!idle_rows_rate(model, state.q, state.u, w.Fdot_v, w)) return false;
-    const VecX rhs = -w.idle_Idot_u - w.idle_I * w.Fdot_v;
-    w.Fdot_v.noalias() +=
-        ws.dual.F * (w.idle_IF.transpose() * (w.idle_IF * w.idle_IF.transpose()).ldlt().solve(rhs));
+    if (!idle_rows_rate(model, state.q, state.u, dws.Fdot_v, dws)) return false;
+    const VecX rhs = -dws.idle_Idot_u - dws.idle_I * dws.Fdot_v;
+    dws.Fdot_v.noalias() += ws.dual.F * (dws.idle_IF.transpose() *
+                                         (dws.idle_IF * dws.idle_IF.transpose()).ldlt().solve(rhs));
   }
   // (C2) accelerations.
-  const double vdot = (sddot - sk.ddot_u - w.d.dot(w.Fdot_v)) / dTF;
-  out.udot = F * vdot + w.Fdot_v;
+  const double vdot = (sddot - sk.ddot_u - dws.d.dot(dws.Fdot_v)) / dTF;
+  out.udot = F * vdot + dws.Fdot_v;
   // (C3) drive: Fᵀ(M u̇ + Ṁu − Q̂) = (Fᵀd) τ.
-  inertia_residual(ws, state.u, out.udot, w.R);
-  out.drive = F.dot(w.R) / dTF;
+  inertia_residual(ws, state.u, out.udot, dws.R);
+  out.drive = F.dot(dws.R) / dTF;
   // (C4) reactions: E λ = M u̇ + Ṁu − Q̂ − d τ.
-  w.R -= out.drive * w.d;
+  dws.R -= out.drive * dws.d;
   out.idle_hold = 0.0;
   if (idle) {  // − Iᵀ μ, the forces holding the idle motions: (I F)ᵀ μ = Fᵀ(R − d τ)
-    w.idle_mu =
-        (w.idle_IF * w.idle_IF.transpose()).ldlt().solve(w.idle_IF * (ws.dual.F.transpose() * w.R));
-    w.R.noalias() -= w.idle_I.transpose() * w.idle_mu;
+    dws.idle_mu = (dws.idle_IF * dws.idle_IF.transpose())
+                      .ldlt()
+                      .solve(dws.idle_IF * (ws.dual.F.transpose() * dws.R));
+    dws.R.noalias() -= dws.idle_I.transpose() * dws.idle_mu;
     // Their work per unit rate of each idle motion (V: unit angular rate).
-    const VecX work = w.idle_V.transpose() * (w.idle_I.transpose() * w.idle_mu);
+    const VecX work = dws.idle_V.transpose() * (dws.idle_I.transpose() * dws.idle_mu);
     for (Eigen::Index j = 0; j < work.size(); ++j)
       if (std::abs(work(j)) > std::abs(out.idle_hold)) out.idle_hold = work(j);
   }
   out.lambda.resize(model.nc);
-  solve_multipliers(ws, w, out.lambda);
+  solve_multipliers(ws, dws, out.lambda);
   out.q = state.q;
   out.u = state.u;
   out.input_rate = sdot;
@@ -488,7 +497,7 @@ void compute_driven_outputs(const Model& model, const State& state, const VecX& 
 }
 
 bool compute_multi_driven(const Model& model, const std::vector<int>& joints, const VecX& sdot,
-                          const VecX& sddot, State& state, Workspace& ws, DrivenWorkspace& w,
+                          const VecX& sddot, State& state, Workspace& ws, DrivenWorkspace& dws,
                           MultiDrivenPoint& out) {
   const Eigen::Index m = static_cast<Eigen::Index>(joints.size());
   out.conditioning = 0.0;
@@ -507,7 +516,7 @@ bool compute_multi_driven(const Model& model, const std::vector<int>& joints, co
   }
   const MatX G = Ds * F;
   const Eigen::JacobiSVD<MatX> svd(G);
-  const VecX sv = svd.singularValues();
+  const VecX& sv = svd.singularValues();
   out.conditioning = sv.size() && sv(0) > 0.0 ? sv(sv.size() - 1) / sv(0) : 0.0;
   if (!(out.conditioning > 1e-12)) return false;  // the drivers cannot move the mechanism here
   const Eigen::PartialPivLU<MatX> lu(G);
@@ -521,18 +530,18 @@ bool compute_multi_driven(const Model& model, const std::vector<int>& joints, co
     ddot_u(i) = compute_scalar(model, JointCoordinate{joints[static_cast<size_t>(i)]}, state.q,
                                &state.u, row)
                     .ddot_u;
-  solve_chart(ws, ws.constraints.Dtu, w.Fdot_v);  // x_D = (E_RDᵀ)⁻¹ (Dᵀu)_R
-  w.Fdot_v = -w.Fdot_v;                           // Eᵀ w = −Dᵀ u
+  solve_chart(ws, ws.constraints.Dtu, dws.Fdot_v);  // x_D = (E_RDᵀ)⁻¹ (Dᵀu)_R
+  dws.Fdot_v = -dws.Fdot_v;                         // Eᵀ w = −Dᵀ u
   // (C2) accelerations.
-  const VecX vdot = lu.solve(sddot - ddot_u - Ds * w.Fdot_v);
-  out.udot = F * vdot + w.Fdot_v;
+  const VecX vdot = lu.solve(sddot - ddot_u - Ds * dws.Fdot_v);
+  out.udot = F * vdot + dws.Fdot_v;
   // (C3) the drivers' forces: Fᵀ R = Gᵀ τ.
-  inertia_residual(ws, state.u, out.udot, w.R);
-  out.drives = G.transpose().partialPivLu().solve(F.transpose() * w.R);
+  inertia_residual(ws, state.u, out.udot, dws.R);
+  out.drives = G.transpose().partialPivLu().solve(F.transpose() * dws.R);
   // (C4) reactions: E λ = R − D_sᵀ τ.
-  w.R.noalias() -= Ds.transpose() * out.drives;
+  dws.R.noalias() -= Ds.transpose() * out.drives;
   out.lambda.resize(model.nc);
-  solve_multipliers(ws, w, out.lambda);
+  solve_multipliers(ws, dws, out.lambda);
   out.q = state.q;
   out.u = state.u;
   out.input_rates = sdot;

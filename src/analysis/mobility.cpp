@@ -279,7 +279,7 @@ MatX idle_motions(const Model& model, const VecX& q, const std::vector<int>& idl
       VecX v = VecX::Zero(model.n);
       v.segment(body.u_offset, body.nu()) = sa.asDiagonal() * K.col(c);
       const double turn = v.segment(body.u_offset + rot_at, rot_count).norm();
-      motions.push_back(v / (turn > 0.0 ? turn : v.norm()));
+      motions.emplace_back(v / (turn > 0.0 ? turn : v.norm()));
     }
   }
   MatX V(model.n, static_cast<Eigen::Index>(motions.size()));

@@ -1200,384 +1200,484 @@ bool ValidationReport::pass() const {
                      [](const PositionReport& p) { return p.pass(); });
 }
 
-ValidationReport validate_design_positions(const Model& model, const ValidateOptions& opt) {
-  ValidationReport rep;
-  // Messages quote values in the file's declared units (a model built in code: SI).
-  const UnitSystem file_units = unit_system(model.units);
-  const double L = length_scale(model);
-  const VecX q_design = model.design_q();
-  std::mt19937 gen(opt.seed);
+namespace {
 
-  // The common input: the single joint every position locks (circuits, order, η need it).
+// What every step of validate_design_positions reads: the model, the options and what is found
+// once for all positions (units of the messages, length scale, design pose, loops, idle bodies).
+struct ValidationContext {
+  const Model& model;
+  const ValidateOptions& opt;
+  UnitSystem file_units;  // messages quote values in the file's declared units (in code: SI)
+  double L = 1.0;         // length scale of the mechanism
+  VecX q_design{};
+  bool spatial = false;
+  int input = -1;  // the common input joint (−1: none)
+  std::vector<FourBarLoop> loops{};
+  std::vector<SliderCrankLoop> slider_cranks{};
+  std::vector<SpatialTransmissionLoop> transmission_loops{};
+  std::vector<int> idle_bodies{};  // idle bodies at the assembled design pose
+};
+
+// The common input: the single joint every position locks (circuits, order, η need it); −1 if
+// the positions lock different joints or more than one.
+int find_common_input(const Model& model) {
   int input = -1;
   bool common = !model.design_positions.empty();
   for (const DesignPosition& p : model.design_positions) {
     if (p.inputs.size() != 1 || (input >= 0 && p.inputs[0].first != input)) common = false;
     if (!p.inputs.empty() && input < 0) input = p.inputs[0].first;
   }
-  if (!common) input = -1;
-  if (input >= 0) {
-    rep.input = model.joints[static_cast<size_t>(input)].name;
-    rep.input_angular = is_revolute(model, input);
-  }
-  const bool spatial = model.dimension == 3;
-  if (spatial) {
+  return common ? input : -1;
+}
+
+// The loops whose quality is checked at every position (four-bars and slider-cranks: planar
+// only; Sutherland–Roth transmission loops), and what does not apply to this mechanism.
+void find_checked_loops(ValidationContext& c, ValidationReport& rep) {
+  if (c.spatial) {
     rep.not_applicable = {"Grashof type: planar four-bar loops only",
                           "four-bar transmission angle: planar four-bar loops only",
                           "slider-crank pressure angle: planar slider-crank loops only"};
   }
-  const std::vector<FourBarLoop> loops =
-      spatial ? std::vector<FourBarLoop>{} : find_four_bar_loops(model, input);
-  const std::vector<SliderCrankLoop> slider_cranks =
-      spatial ? std::vector<SliderCrankLoop>{} : find_slider_crank_loops(model);
-  const std::vector<SpatialTransmissionLoop> transmission_loops =
-      find_spatial_transmission_loops(model, input);
+  if (!c.spatial) {
+    c.loops = find_four_bar_loops(c.model, c.input);
+    c.slider_cranks = find_slider_crank_loops(c.model);
+  }
+  c.transmission_loops = find_spatial_transmission_loops(c.model, c.input);
   rep.transmission_index_bound =
-      opt.min_transmission_index.value_or(std::sin(opt.min_transmission));
-  if (spatial && transmission_loops.empty())
-    rep.not_applicable.push_back(
+      c.opt.min_transmission_index.value_or(std::sin(c.opt.min_transmission));
+  if (c.spatial && c.transmission_loops.empty())
+    rep.not_applicable.emplace_back(
         "transmission index (Sutherland & Roth 1973): no loop ground -R/P- link -S/U- binary "
         "coupler -S/U- link -R/P- ground (or a distance row, or parallel revolutes)");
+}
 
-  // Generic rank: at the assembled design pose and at every position (max). Idle bodies
-  // (spatial.md §4.1): those mobility finds at the assembled design pose.
-  std::vector<int> idle_bodies;
-  {
-    VecX q = q_design;
-    AssemblyOptions ao;
-    ao.use_limits = !spatial;  // spatial limits are checked per position below
-    const AssemblyResult a = assemble(model, q_design, ao);
-    if (a.status == AssemblyStatus::assembled || a.status == AssemblyStatus::unchanged) q = a.q;
-    const Mobility mob = compute_mobility(model, q);
-    rep.generic_rank = mob.rank;
-    for (const Mobility::Idle& i : mob.idle) idle_bodies.push_back(model.find_body(i.body));
+// Generic rank: at the assembled design pose (the positions raise it to their max later). Idle
+// bodies (spatial.md §4.1): those mobility finds at the assembled design pose.
+void design_pose_mobility(ValidationContext& c, ValidationReport& rep) {
+  VecX q = c.q_design;
+  AssemblyOptions ao;
+  ao.use_limits = !c.spatial;  // spatial limits are checked per position
+  const AssemblyResult a = assemble(c.model, c.q_design, ao);
+  if (a.status == AssemblyStatus::assembled || a.status == AssemblyStatus::unchanged) q = a.q;
+  const Mobility mob = compute_mobility(c.model, q);
+  rep.generic_rank = mob.rank;
+  for (const Mobility::Idle& i : mob.idle) c.idle_bodies.push_back(c.model.find_body(i.body));
+}
+
+// Assembly with the position's inputs locked: pr.assembly, pr.assembles and (spatial: checked
+// at the assembled position; planar: the limits the assembly ran into) pr.limit_blocks. When it
+// does not assemble, the failures say why. Returns the assembly.
+AssemblyResult assemble_design_position(const ValidationContext& c, const AssemblyOptions& ao,
+                                        PositionReport& pr) {
+  const Model& model = c.model;
+  AssemblyResult a = c.spatial ? assemble_spatial_at(model, c.q_design, ao.locks)
+                               : assemble(model, c.q_design, ao);
+  pr.assembly = a.status;
+  pr.assembly_message = a.message;
+  pr.assembles = a.status == AssemblyStatus::assembled || a.status == AssemblyStatus::unchanged;
+  if (c.spatial && pr.assembles) {  // limits: checked at the position (assemble takes none)
+    for (size_t j = 0; j < model.joints.size(); ++j) {
+      const Joint& jt = model.joints[j];
+      if (!jt.limits) continue;
+      const double x = spatial_limit_coordinate(model, static_cast<int>(j), a.q);
+      if (x < jt.limits->x() - 1e-9 || x > jt.limits->y() + 1e-9)
+        pr.limit_blocks.push_back(
+            {static_cast<int>(j), x, is_revolute(model, static_cast<int>(j))});
+    }
+    if (!pr.limit_blocks.empty()) {
+      pr.assembles = false;
+      pr.assembly = AssemblyStatus::cannot_close;
+    }
   }
+  if (pr.assembles) return a;
+  if (!c.spatial) pr.limit_blocks = find_limit_blocks(model, c.q_design, ao);
+  for (const LimitBlock& b : pr.limit_blocks) {
+    const Joint& jt = model.joints[static_cast<size_t>(b.joint)];
+    const bool rev = is_revolute(model, b.joint);
+    pr.failures.push_back("joint '" + jt.name + "' would need " +
+                          format_input(b.needed, rev, c.file_units) + ", outside its limits [" +
+                          format_input(jt.limits->x(), rev, c.file_units) + ", " +
+                          format_input(jt.limits->y(), rev, c.file_units) + "]");
+  }
+  pr.failures.push_back(pr.limit_blocks.empty() || !c.spatial
+                            ? "does not assemble: " + a.message
+                            : "does not assemble within the joint limits");
+  return a;
+}
 
-  // Pass 1: assembly, modes, the position's mode, target, mobility.
-  for (const DesignPosition& dp : model.design_positions) {
-    PositionReport pr;
-    pr.name = dp.name;
-    AssemblyOptions ao;
-    std::vector<int> inputs;
-    for (const auto& [j, v] : dp.inputs) {
-      ao.locks.push_back({j, v});
-      inputs.push_back(j);
+// How far a position misses its target, relative: planar, the target point's distance (m);
+// spatial, the larger of the distance and the angle errors, each over its tolerance.
+double target_error(const ValidationContext& c, const DesignTarget& t, const VecX& q) {
+  if (c.spatial) {
+    const SpatialTargetErrors e = spatial_target_errors(c.model, t, q);
+    return std::max(e.distance / t.tolerance,
+                    e.angle ? *e.angle / t.angle_tolerance.value_or(t.tolerance / c.L) : 0.0);
+  }
+  double e = (world(c.model, t.point, q) - t.position).norm();
+  return e;
+}
+
+// The position among the assembly modes (with a target, the mode that meets it best; else the
+// projection of the design pose, modes[0]), and its number among the modes sorted by signature,
+// then by coordinates: pr.q, pr.modes, pr.mode, pr.mode_signature.
+void choose_mode(const ValidationContext& c, const DesignPosition& dp,
+                 const std::vector<int>& inputs, const std::vector<VecX>& modes,
+                 PositionReport& pr) {
+  const Model& model = c.model;
+  size_t chosen = 0;
+  if (dp.target)
+    for (size_t k = 1; k < modes.size(); ++k)
+      if (target_error(c, *dp.target, modes[k]) <
+          target_error(c, *dp.target, modes[chosen]) - 1e-12)
+        chosen = k;
+  pr.q = modes[chosen];
+  // Spatial: the sign of det [Eᵀ_R; d] over the independent rows R at the position (redundant
+  // rows are the norm in spatial linkages); not with idle bodies (the matrix is singular).
+  std::vector<int> rows;
+  if (c.spatial) {
+    const Mobility mob = compute_mobility(model, pr.q);
+    for (int r = 0; r < model.nc; ++r)
+      if (std::find(mob.redundant_rows.begin(), mob.redundant_rows.end(), r) ==
+          mob.redundant_rows.end())
+        rows.push_back(r);
+  }
+  std::vector<std::pair<std::string, size_t>> order;
+  for (size_t k = 0; k < modes.size(); ++k)
+    order.emplace_back(
+        mode_signature(model, modes[k], c.loops, inputs, rows, c.idle_bodies.empty()), k);
+  std::sort(order.begin(), order.end(), [&](const auto& x, const auto& y) {
+    if (x.first != y.first) return x.first < y.first;
+    const VecX& a1 = modes[x.second];
+    const VecX& b1 = modes[y.second];
+    for (Eigen::Index i = 0; i < a1.size(); ++i)
+      if (std::abs(a1(i) - b1(i)) > 1e-9) return a1(i) < b1(i);
+    return false;
+  });
+  pr.modes = static_cast<int>(modes.size());
+  for (size_t k = 0; k < order.size(); ++k)
+    if (order[k].second == chosen) {
+      pr.mode = static_cast<int>(k) + 1;
+      pr.mode_signature = order[k].first;
     }
-    const AssemblyResult a =
-        spatial ? assemble_spatial_at(model, q_design, ao.locks) : assemble(model, q_design, ao);
-    pr.assembly = a.status;
-    pr.assembly_message = a.message;
-    pr.assembles = a.status == AssemblyStatus::assembled || a.status == AssemblyStatus::unchanged;
-    if (spatial && pr.assembles) {  // limits: checked at the position (assemble takes none)
-      for (size_t j = 0; j < model.joints.size(); ++j) {
-        const Joint& jt = model.joints[j];
-        if (!jt.limits) continue;
-        const double x = spatial_limit_coordinate(model, static_cast<int>(j), a.q);
-        if (x < jt.limits->x() - 1e-9 || x > jt.limits->y() + 1e-9)
-          pr.limit_blocks.push_back(
-              {static_cast<int>(j), x, is_revolute(model, static_cast<int>(j))});
-      }
-      if (!pr.limit_blocks.empty()) {
-        pr.assembles = false;
-        pr.assembly = AssemblyStatus::cannot_close;
-      }
-    }
-    if (!pr.assembles) {
-      if (!spatial) pr.limit_blocks = find_limit_blocks(model, q_design, ao);
-      for (const LimitBlock& b : pr.limit_blocks) {
-        const Joint& jt = model.joints[static_cast<size_t>(b.joint)];
-        const bool rev = is_revolute(model, b.joint);
-        pr.failures.push_back("joint '" + jt.name + "' would need " +
-                              format_input(b.needed, rev, file_units) + ", outside its limits [" +
-                              format_input(jt.limits->x(), rev, file_units) + ", " +
-                              format_input(jt.limits->y(), rev, file_units) + "]");
-      }
-      pr.failures.push_back(pr.limit_blocks.empty() || !spatial
-                                ? "does not assemble: " + a.message
-                                : "does not assemble within the joint limits");
-      rep.positions.push_back(std::move(pr));
+}
+
+// How far the position is from the design pose: the kinetic-energy distance √(dqᵀ M dq) and the
+// largest translation of a body frame's origin.
+void measure_displacement(const ValidationContext& c, PositionReport& pr) {
+  const Model& model = c.model;
+  MatX M(model.n, model.n);
+  compute_mass_matrix(model, c.q_design, M);
+  const VecX dq = difference(model, pr.q, c.q_design);  // velocity-sized: q_design ⊕ dq = q
+  pr.distance = std::sqrt(std::max(0.0, dq.dot(M * dq)));
+  for (size_t b = 0; b < model.bodies.size(); ++b) {
+    const Body& body = model.bodies[b];
+    const int bi = static_cast<int>(b);
+    if (body.kind == BodyKind::spatial) {  // the body frame's origin
+      const Vec3 o = -body.spatial.com_local;
+      pr.max_translation = std::max(
+          pr.max_translation, (spatial_point(spatial_frame(model, bi, pr.q, nullptr), o).r -
+                               spatial_point(spatial_frame(model, bi, c.q_design, nullptr), o).r)
+                                  .norm());
       continue;
     }
-    std::vector<VecX> modes =
-        assembly_modes(model, ao.locks, a.q, q_design, L, opt, gen, idle_bodies);
-    // With a target, the position is the mode that meets it best; else the projection of the
-    // design pose.
-    // Spatial: the larger of the distance and the angle errors, each over its tolerance.
-    auto target_error = [&](const VecX& q) {
-      const DesignTarget& t = *dp.target;
-      if (spatial) {
-        const SpatialTargetErrors e = spatial_target_errors(model, t, q);
-        return std::max(e.distance / t.tolerance,
-                        e.angle ? *e.angle / t.angle_tolerance.value_or(t.tolerance / L) : 0.0);
-      }
-      double e = (world(model, t.point, q) - t.position).norm();
-      return e;
-    };
-    size_t chosen = 0;
-    if (dp.target)
-      for (size_t k = 1; k < modes.size(); ++k)
-        if (target_error(modes[k]) < target_error(modes[chosen]) - 1e-12) chosen = k;
-    pr.q = modes[chosen];
-    // Modes sorted by signature, then by coordinates.
-    // Spatial: the sign of det [Eᵀ_R; d] over the independent rows R at the position (redundant
-    // rows are the norm in spatial linkages); not with idle bodies (the matrix is singular).
-    std::vector<int> rows;
-    if (spatial) {
-      const Mobility mob = compute_mobility(model, pr.q);
-      for (int r = 0; r < model.nc; ++r)
-        if (std::find(mob.redundant_rows.begin(), mob.redundant_rows.end(), r) ==
-            mob.redundant_rows.end())
-          rows.push_back(r);
-    }
-    std::vector<std::pair<std::string, size_t>> order;
-    for (size_t k = 0; k < modes.size(); ++k)
-      order.push_back(
-          {mode_signature(model, modes[k], loops, inputs, rows, idle_bodies.empty()), k});
-    std::sort(order.begin(), order.end(), [&](const auto& x, const auto& y) {
-      if (x.first != y.first) return x.first < y.first;
-      const VecX& a1 = modes[x.second];
-      const VecX& b1 = modes[y.second];
-      for (Eigen::Index i = 0; i < a1.size(); ++i)
-        if (std::abs(a1(i) - b1(i)) > 1e-9) return a1(i) < b1(i);
-      return false;
-    });
-    pr.modes = static_cast<int>(modes.size());
-    for (size_t k = 0; k < order.size(); ++k)
-      if (order[k].second == chosen) {
-        pr.mode = static_cast<int>(k) + 1;
-        pr.mode_signature = order[k].first;
-      }
-    MatX M(model.n, model.n);
-    compute_mass_matrix(model, q_design, M);
-    const VecX dq = difference(model, pr.q, q_design);  // velocity-sized: q_design ⊕ dq = q
-    pr.distance = std::sqrt(std::max(0.0, dq.dot(M * dq)));
-    for (size_t b = 0; b < model.bodies.size(); ++b) {
-      const Body& body = model.bodies[b];
-      const int bi = static_cast<int>(b);
-      if (body.kind == BodyKind::spatial) {  // the body frame's origin
-        const Vec3 o = -body.spatial.com_local;
-        pr.max_translation = std::max(
-            pr.max_translation, (spatial_point(spatial_frame(model, bi, pr.q, nullptr), o).r -
-                                 spatial_point(spatial_frame(model, bi, q_design, nullptr), o).r)
-                                    .norm());
-        continue;
-      }
-      const PointRef origin{bi, -body.com_local, body.name};
-      pr.max_translation = std::max(
-          pr.max_translation, (world(model, origin, pr.q) - world(model, origin, q_design)).norm());
-    }
-    if (dp.target && spatial) {
-      const DesignTarget& t = *dp.target;
-      const SpatialTargetErrors e = spatial_target_errors(model, t, pr.q);
-      pr.target_error = e.distance;
-      pr.target_met = e.distance <= t.tolerance;
-      if (!pr.target_met)
-        pr.failures.push_back(
-            "target missed by " + format_quantity(e.distance, Dimension::length, file_units) +
-            " (tolerance " + format_quantity(t.tolerance, Dimension::length, file_units) + ")");
-      if (e.angle) {
-        pr.target_angle_error = e.angle;
-        const double tol_angle = t.angle_tolerance.value_or(t.tolerance / L);
-        if (*e.angle > tol_angle) {
-          pr.target_met = false;
-          pr.failures.push_back(
-              std::string(t.orientation ? "target orientation" : "target direction") +
-              " missed by " + format_quantity(*e.angle, Dimension::angle, file_units) +
-              " (tolerance " + format_quantity(tol_angle, Dimension::angle, file_units) + ")");
-        }
-      }
-    } else if (dp.target) {
-      const DesignTarget& t = *dp.target;
-      pr.target_error = target_error(pr.q);
-      pr.target_met = *pr.target_error <= t.tolerance;
-      if (!pr.target_met)
-        pr.failures.push_back(
-            "target missed by " + format_quantity(*pr.target_error, Dimension::length, file_units) +
-            " (tolerance " + format_quantity(t.tolerance, Dimension::length, file_units) + ")");
-      if (t.angle) {
-        // Angle targets: the body angle of the target point's body, within
-        // tolerance / L (rad): the tolerance at the mechanism's size (docs/theory.md).
-        pr.target_angle_error = std::abs(wrap(body_angle(model, t.point.body, pr.q) - *t.angle));
-        const double tol_angle = t.tolerance / L;
-        if (*pr.target_angle_error > tol_angle) {
-          pr.target_met = false;
-          pr.failures.push_back(
-              "target angle missed by " +
-              format_quantity(*pr.target_angle_error, Dimension::angle, file_units) +
-              " (tolerance " + format_quantity(tol_angle, Dimension::angle, file_units) + ")");
-        }
-      }
-    }
-    const Mobility mob = compute_mobility(model, pr.q);
-    pr.dof = mob.dof;
-    pr.rank = mob.rank;
-    pr.redundant = mob.redundant;
-    pr.idle = mob.idle;
-    for (const Mobility::Idle& i : mob.idle) pr.idle_dof += i.count;
-    rep.generic_rank = std::max(rep.generic_rank, mob.rank);
-    rep.positions.push_back(std::move(pr));
+    const PointRef origin{bi, -body.com_local, body.name};
+    pr.max_translation = std::max(
+        pr.max_translation, (world(model, origin, pr.q) - world(model, origin, c.q_design)).norm());
   }
+}
 
-  // Pass 2: singularity measures and four-bars.
+// The target at the chosen position: its distance and angle errors against their tolerances.
+void check_target(const ValidationContext& c, const DesignTarget& t, PositionReport& pr) {
+  const Model& model = c.model;
+  const UnitSystem& u = c.file_units;
+  if (c.spatial) {
+    const SpatialTargetErrors e = spatial_target_errors(model, t, pr.q);
+    pr.target_error = e.distance;
+    pr.target_met = e.distance <= t.tolerance;
+    if (!pr.target_met)
+      pr.failures.push_back("target missed by " +
+                            format_quantity(e.distance, Dimension::length, u) + " (tolerance " +
+                            format_quantity(t.tolerance, Dimension::length, u) + ")");
+    if (e.angle) {
+      pr.target_angle_error = e.angle;
+      const double tol_angle = t.angle_tolerance.value_or(t.tolerance / c.L);
+      if (*e.angle > tol_angle) {
+        pr.target_met = false;
+        pr.failures.push_back(
+            std::string(t.orientation ? "target orientation" : "target direction") + " missed by " +
+            format_quantity(*e.angle, Dimension::angle, u) + " (tolerance " +
+            format_quantity(tol_angle, Dimension::angle, u) + ")");
+      }
+    }
+    return;
+  }
+  pr.target_error = target_error(c, t, pr.q);
+  pr.target_met = *pr.target_error <= t.tolerance;
+  if (!pr.target_met)
+    pr.failures.push_back("target missed by " +
+                          format_quantity(*pr.target_error, Dimension::length, u) + " (tolerance " +
+                          format_quantity(t.tolerance, Dimension::length, u) + ")");
+  if (t.angle) {
+    // Angle targets: the body angle of the target point's body, within
+    // tolerance / L (rad): the tolerance at the mechanism's size (docs/theory.md).
+    pr.target_angle_error = std::abs(wrap(body_angle(model, t.point.body, pr.q) - *t.angle));
+    const double tol_angle = t.tolerance / c.L;
+    if (*pr.target_angle_error > tol_angle) {
+      pr.target_met = false;
+      pr.failures.push_back("target angle missed by " +
+                            format_quantity(*pr.target_angle_error, Dimension::angle, u) +
+                            " (tolerance " + format_quantity(tol_angle, Dimension::angle, u) + ")");
+    }
+  }
+}
+
+// Pass 1 for one design position: assembly, its modes, the position's mode, displacement,
+// target, mobility. Raises rep.generic_rank to the position's rank.
+PositionReport report_position(const ValidationContext& c, const DesignPosition& dp,
+                               std::mt19937& gen, ValidationReport& rep) {
+  PositionReport pr;
+  pr.name = dp.name;
+  AssemblyOptions ao;
+  std::vector<int> inputs;
+  for (const auto& [j, v] : dp.inputs) {
+    ao.locks.push_back({j, v});
+    inputs.push_back(j);
+  }
+  const AssemblyResult a = assemble_design_position(c, ao, pr);
+  if (!pr.assembles) return pr;
+  const std::vector<VecX> modes =
+      assembly_modes(c.model, ao.locks, a.q, c.q_design, c.L, c.opt, gen, c.idle_bodies);
+  choose_mode(c, dp, inputs, modes, pr);
+  measure_displacement(c, pr);
+  if (dp.target) check_target(c, *dp.target, pr);
+  const Mobility mob = compute_mobility(c.model, pr.q);
+  pr.dof = mob.dof;
+  pr.rank = mob.rank;
+  pr.redundant = mob.redundant;
+  pr.idle = mob.idle;
+  for (const Mobility::Idle& i : mob.idle) pr.idle_dof += i.count;
+  rep.generic_rank = std::max(rep.generic_rank, mob.rank);
+  return pr;
+}
+
+// Joint names of a loop, "A-B-C-D" (a joint shared by two sides named once when `skip_repeat`).
+template <class Loop>
+std::string loop_joint_names(const Model& model, const Loop& l, bool skip_repeat = false) {
+  std::string names;
+  for (int j = 0; j < 4; ++j)
+    if (!skip_repeat || j != 2 || l.joints[2] != l.joints[1])
+      names += (j ? "-" : "") + model.joints[static_cast<size_t>(l.joints[j])].name;
+  return names;
+}
+
+// Pass 2 for one assembled position: singularity measures (σ_min, η), whether the inputs fix the
+// position, and the quality of every checked loop (transmission angle, pressure angle,
+// transmission index; the smallest index over all positions into rep).
+void check_singularity_and_loops(const ValidationContext& c, const std::vector<int>& inputs,
+                                 PositionReport& pr, ValidationReport& rep) {
+  const Model& model = c.model;
+  const ValidateOptions& opt = c.opt;
+  const UnitSystem& u = c.file_units;
+  pr.singular = singularity_measures(model, pr.q, inputs, rep.generic_rank, c.idle_bodies);
+  if (pr.singular.sigma_min < opt.min_sigma)
+    pr.failures.push_back("singular: sigma_min of the constraint Jacobian " +
+                          fmt(pr.singular.sigma_min) + " (a change point)");
+  if (pr.dof - pr.idle_dof > static_cast<int>(inputs.size())) {
+    // The inputs leave the mechanism free to move: η is 0 by construction, not a dead point.
+    pr.singular.eta.reset();
+    pr.failures.push_back("the inputs do not fix the position: DOF " + std::to_string(pr.dof) +
+                          (pr.idle_dof ? " (" + std::to_string(pr.idle_dof) + " idle)" : "") +
+                          ", " + std::to_string(inputs.size()) + " input(s)");
+  } else if (pr.singular.eta && *pr.singular.eta < opt.min_sigma) {
+    pr.failures.push_back("dead point of the inputs: transmission index " + fmt(*pr.singular.eta));
+  }
+  for (const FourBarLoop& l : c.loops) {
+    FourBarReport fb;
+    fb.joints = loop_joint_names(model, l);
+    fb.type = l.type;
+    fb.transmission = transmission_angle(model, l, pr.q);
+    fb.ok = std::min(fb.transmission, kPi - fb.transmission) >= opt.min_transmission;
+    if (!fb.ok)
+      pr.failures.push_back("transmission angle " +
+                            format_quantity(fb.transmission, Dimension::angle, u) + " in loop " +
+                            fb.joints + " (needs " +
+                            format_quantity(opt.min_transmission, Dimension::angle, u) + " ... " +
+                            format_quantity(kPi - opt.min_transmission, Dimension::angle, u) + ")");
+    pr.four_bars.push_back(fb);
+  }
+  for (const SliderCrankLoop& l : c.slider_cranks) {
+    SliderCrankReport sc;
+    sc.joints = loop_joint_names(model, l);
+    sc.pressure = pressure_angle(model, l, pr.q);
+    sc.ok = sc.pressure <= kPi / 2.0 - opt.min_transmission;
+    if (!sc.ok)
+      pr.failures.push_back("pressure angle " + format_quantity(sc.pressure, Dimension::angle, u) +
+                            " in slider-crank loop " + sc.joints + " (needs at most " +
+                            format_quantity(kPi / 2.0 - opt.min_transmission, Dimension::angle, u) +
+                            ")");
+    pr.slider_cranks.push_back(sc);
+  }
+  for (const SpatialTransmissionLoop& l : c.transmission_loops) {
+    SpatialLoopReport lr;
+    lr.joints = loop_joint_names(model, l, true);
+    lr.type = l.type;
+    lr.index = spatial_transmission_index(model, l, pr.q);
+    lr.ok = lr.index >= rep.transmission_index_bound;
+    if (!lr.ok)
+      pr.failures.push_back("transmission index " + fmt(lr.index) + " in loop " + lr.joints + " (" +
+                            lr.type + ", Sutherland & Roth; needs at least " +
+                            fmt(rep.transmission_index_bound) + ")");
+    if (!rep.min_transmission_index || lr.index < *rep.min_transmission_index) {
+      rep.min_transmission_index = lr.index;
+      rep.min_transmission_index_at = pr.name;
+    }
+    pr.spatial_loops.push_back(lr);
+  }
+}
+
+// Order defect: the input must move monotonically through the positions, in the given order
+// (revolute steps taken the short way round, less than one turn in total).
+void check_order(const ValidationContext& c, ValidationReport& rep) {
+  const Model& model = c.model;
+  const bool rev = is_revolute(model, c.input);
+  double total = 0.0;
+  int sign = 0;
+  for (size_t k = 1; k < model.design_positions.size(); ++k) {
+    double ds =
+        model.design_positions[k].inputs[0].second - model.design_positions[k - 1].inputs[0].second;
+    if (rev) ds = wrap(ds);
+    total += ds;
+    const int sk = ds > 0.0 ? 1 : ds < 0.0 ? -1 : 0;
+    if (sign == 0 && k == 1) sign = sk;
+    if (sk == 0 || sk != sign) {
+      rep.order_defect = true;
+      const std::string msg = "order defect: input '" + rep.input + "' goes " +
+                              (sk == 0  ? "nowhere"
+                               : sk > 0 ? "up"
+                                        : "down") +
+                              " from '" + model.design_positions[k - 1].name + "' to '" +
+                              model.design_positions[k].name + "' but " +
+                              (sign > 0 ? "up" : "down") + " before";
+      rep.defects.push_back(msg);
+      rep.positions[k].failures.push_back(msg);
+    }
+  }
+  if (rev && std::abs(total) >= kTwoPi) {
+    rep.order_defect = true;
+    rep.defects.emplace_back("order defect: the positions span more than one turn of the input");
+  }
+}
+
+// Circuits: each position is located on a circuit already traced, else a new one is traced from
+// it (at most 8); its branch, and the nearest singular point of its circuit. Returns the
+// circuits.
+std::vector<Circuit> trace_circuits(const ValidationContext& c, ValidationReport& rep) {
+  const Model& model = c.model;
+  Tracer tracer(model, c.input, rep.generic_rank, c.opt, c.idle_bodies);
+  std::vector<Circuit> circuits;
+  std::vector<std::optional<double>> where(rep.positions.size());
+  for (size_t k = 0; k < rep.positions.size(); ++k) {
+    PositionReport& pr = rep.positions[k];
+    for (size_t ci = 0; ci < circuits.size() && pr.circuit < 0; ++ci)
+      if (auto l = tracer.locate(circuits[ci], pr.q)) {
+        pr.circuit = static_cast<int>(ci) + 1;
+        where[k] = l;
+      }
+    if (pr.circuit < 0 && circuits.size() < 8) {
+      circuits.push_back(tracer.trace(pr.q));
+      pr.circuit = static_cast<int>(circuits.size());
+      where[k] = 0.0;
+      for (const SingularPoint& sp : circuits.back().singular)
+        rep.singular_points.push_back(
+            sp.kind + " of input '" + rep.input + "' at " +
+            format_input(sp.s, is_revolute(model, c.input), c.file_units) + " on circuit " +
+            std::to_string(pr.circuit));
+    }
+    if (pr.circuit < 0) continue;
+    const Circuit& circuit = circuits[static_cast<size_t>(pr.circuit - 1)];
+    pr.branch = circuit.branch_at(*where[k]);
+    const double sk = joint_coordinate(model, c.input, pr.q);
+    for (const SingularPoint& sp : circuit.singular) {
+      double d = sp.s - sk;
+      if (is_revolute(model, c.input)) d = wrap(d);
+      if (!pr.singular_distance || std::abs(d) < *pr.singular_distance) {
+        pr.singular_distance = std::abs(d);
+        pr.singular_kind = sp.kind;
+        pr.singular_input = sk + d;
+      }
+    }
+  }
+  return circuits;
+}
+
+// Circuit and branch defects between consecutive positions: every position on the first one's
+// circuit, and no singular position between two on the same circuit.
+void check_circuits_and_branches(ValidationReport& rep) {
+  for (size_t k = 1; k < rep.positions.size(); ++k) {
+    PositionReport& a = rep.positions[k - 1];
+    PositionReport& b = rep.positions[k];
+    if (b.circuit != rep.positions[0].circuit) {
+      rep.circuit_defect = true;
+      const std::string msg = "circuit defect: '" + b.name + "' is on circuit " +
+                              std::to_string(b.circuit) + ", '" + rep.positions[0].name +
+                              "' on circuit " + std::to_string(rep.positions[0].circuit) +
+                              " (the linkage must be taken apart to go from one to the other)";
+      rep.defects.push_back(msg);
+      b.failures.push_back(msg);
+    } else if (a.circuit == b.circuit && a.branch != b.branch) {
+      rep.branch_defect = true;
+      const std::string msg = "branch defect: a singular position lies between '" + a.name +
+                              "' (branch " + std::to_string(a.branch) + ") and '" + b.name +
+                              "' (branch " + std::to_string(b.branch) + ")";
+      rep.defects.push_back(msg);
+      b.failures.push_back(msg);
+    }
+  }
+}
+
+}  // namespace
+
+ValidationReport validate_design_positions(const Model& model, const ValidateOptions& opt) {
+  ValidationReport rep;
+  // Step 1: what every position shares: the common input, the loops, the design pose's rank.
+  ValidationContext c{model, opt, unit_system(model.units)};
+  c.L = length_scale(model);
+  c.q_design = model.design_q();
+  c.spatial = model.dimension == 3;
+  c.input = find_common_input(model);
+  if (c.input >= 0) {
+    rep.input = model.joints[static_cast<size_t>(c.input)].name;
+    rep.input_angular = is_revolute(model, c.input);
+  }
+  find_checked_loops(c, rep);
+  design_pose_mobility(c, rep);
+
+  // Step 2 (pass 1): every position's assembly, modes, mode, target and mobility.
+  std::mt19937 gen(opt.seed);
+  for (const DesignPosition& dp : model.design_positions)
+    rep.positions.push_back(report_position(c, dp, gen, rep));
+
+  // Step 3 (pass 2): singularity measures and loop quality at every assembled position (with
+  // the generic rank over all positions).
   for (size_t k = 0; k < rep.positions.size(); ++k) {
     PositionReport& pr = rep.positions[k];
     if (!pr.assembles) continue;
     std::vector<int> inputs;
     for (const auto& [j, v] : model.design_positions[k].inputs) inputs.push_back(j);
-    pr.singular = singularity_measures(model, pr.q, inputs, rep.generic_rank, idle_bodies);
-    if (pr.singular.sigma_min < opt.min_sigma)
-      pr.failures.push_back("singular: sigma_min of the constraint Jacobian " +
-                            fmt(pr.singular.sigma_min) + " (a change point)");
-    if (pr.dof - pr.idle_dof > static_cast<int>(inputs.size())) {
-      // The inputs leave the mechanism free to move: η is 0 by construction, not a dead point.
-      pr.singular.eta.reset();
-      pr.failures.push_back("the inputs do not fix the position: DOF " + std::to_string(pr.dof) +
-                            (pr.idle_dof ? " (" + std::to_string(pr.idle_dof) + " idle)" : "") +
-                            ", " + std::to_string(inputs.size()) + " input(s)");
-    } else if (pr.singular.eta && *pr.singular.eta < opt.min_sigma) {
-      pr.failures.push_back("dead point of the inputs: transmission index " +
-                            fmt(*pr.singular.eta));
-    }
-    for (const FourBarLoop& l : loops) {
-      FourBarReport fb;
-      for (int j = 0; j < 4; ++j)
-        fb.joints += (j ? "-" : "") + model.joints[static_cast<size_t>(l.joints[j])].name;
-      fb.type = l.type;
-      fb.transmission = transmission_angle(model, l, pr.q);
-      fb.ok = std::min(fb.transmission, kPi - fb.transmission) >= opt.min_transmission;
-      if (!fb.ok)
-        pr.failures.push_back(
-            "transmission angle " + format_quantity(fb.transmission, Dimension::angle, file_units) +
-            " in loop " + fb.joints + " (needs " +
-            format_quantity(opt.min_transmission, Dimension::angle, file_units) + " ... " +
-            format_quantity(kPi - opt.min_transmission, Dimension::angle, file_units) + ")");
-      pr.four_bars.push_back(fb);
-    }
-    for (const SliderCrankLoop& l : slider_cranks) {
-      SliderCrankReport sc;
-      for (int j = 0; j < 4; ++j)
-        sc.joints += (j ? "-" : "") + model.joints[static_cast<size_t>(l.joints[j])].name;
-      sc.pressure = pressure_angle(model, l, pr.q);
-      sc.ok = sc.pressure <= kPi / 2.0 - opt.min_transmission;
-      if (!sc.ok)
-        pr.failures.push_back(
-            "pressure angle " + format_quantity(sc.pressure, Dimension::angle, file_units) +
-            " in slider-crank loop " + sc.joints + " (needs at most " +
-            format_quantity(kPi / 2.0 - opt.min_transmission, Dimension::angle, file_units) + ")");
-      pr.slider_cranks.push_back(sc);
-    }
-    for (const SpatialTransmissionLoop& l : transmission_loops) {
-      SpatialLoopReport lr;
-      for (int j = 0; j < 4; ++j)
-        if (j != 2 || l.joints[2] != l.joints[1])
-          lr.joints += (j ? "-" : "") + model.joints[static_cast<size_t>(l.joints[j])].name;
-      lr.type = l.type;
-      lr.index = spatial_transmission_index(model, l, pr.q);
-      lr.ok = lr.index >= rep.transmission_index_bound;
-      if (!lr.ok)
-        pr.failures.push_back("transmission index " + fmt(lr.index) + " in loop " + lr.joints +
-                              " (" + lr.type + ", Sutherland & Roth; needs at least " +
-                              fmt(rep.transmission_index_bound) + ")");
-      if (!rep.min_transmission_index || lr.index < *rep.min_transmission_index) {
-        rep.min_transmission_index = lr.index;
-        rep.min_transmission_index_at = pr.name;
-      }
-      pr.spatial_loops.push_back(lr);
-    }
+    check_singularity_and_loops(c, inputs, pr, rep);
   }
 
-  // Order defect: the input must move monotonically through the positions, in the given order
-  // (revolute steps taken the short way round, less than one turn in total).
-  if (input >= 0 && rep.positions.size() >= 2) {
-    const bool rev = is_revolute(model, input);
-    double total = 0.0;
-    int sign = 0;
-    for (size_t k = 1; k < model.design_positions.size(); ++k) {
-      double ds = model.design_positions[k].inputs[0].second -
-                  model.design_positions[k - 1].inputs[0].second;
-      if (rev) ds = wrap(ds);
-      total += ds;
-      const int sk = ds > 0.0 ? 1 : ds < 0.0 ? -1 : 0;
-      if (sign == 0 && k == 1) sign = sk;
-      if (sk == 0 || sk != sign) {
-        rep.order_defect = true;
-        const std::string msg = "order defect: input '" + rep.input + "' goes " +
-                                (sk == 0  ? "nowhere"
-                                 : sk > 0 ? "up"
-                                          : "down") +
-                                " from '" + model.design_positions[k - 1].name + "' to '" +
-                                model.design_positions[k].name + "' but " +
-                                (sign > 0 ? "up" : "down") + " before";
-        rep.defects.push_back(msg);
-        rep.positions[k].failures.push_back(msg);
-      }
-    }
-    if (rev && std::abs(total) >= kTwoPi) {
-      rep.order_defect = true;
-      rep.defects.push_back("order defect: the positions span more than one turn of the input");
-    }
-  }
+  // Step 4: order defect (a common input, two positions or more).
+  if (c.input >= 0 && rep.positions.size() >= 2) check_order(c, rep);
 
-  // Circuits and branches (1-DOF mechanisms with one common input).
+  // Step 5: circuits and branches (1-DOF mechanisms with one common input).
   const bool traceable =
-      input >= 0 && std::all_of(rep.positions.begin(), rep.positions.end(), [](const auto& p) {
+      c.input >= 0 && std::all_of(rep.positions.begin(), rep.positions.end(), [](const auto& p) {
         return p.assembles && p.dof - p.idle_dof == 1;
       });
   if (traceable && !rep.positions.empty()) {
-    Tracer tracer(model, input, rep.generic_rank, opt, idle_bodies);
-    std::vector<Circuit> circuits;
-    std::vector<std::optional<double>> where(rep.positions.size());
-    for (size_t k = 0; k < rep.positions.size(); ++k) {
-      PositionReport& pr = rep.positions[k];
-      for (size_t c = 0; c < circuits.size() && pr.circuit < 0; ++c)
-        if (auto l = tracer.locate(circuits[c], pr.q)) {
-          pr.circuit = static_cast<int>(c) + 1;
-          where[k] = l;
-        }
-      if (pr.circuit < 0 && circuits.size() < 8) {
-        circuits.push_back(tracer.trace(pr.q));
-        pr.circuit = static_cast<int>(circuits.size());
-        where[k] = 0.0;
-        for (const SingularPoint& sp : circuits.back().singular)
-          rep.singular_points.push_back(sp.kind + " of input '" + rep.input + "' at " +
-                                        format_input(sp.s, is_revolute(model, input), file_units) +
-                                        " on circuit " + std::to_string(pr.circuit));
-      }
-      if (pr.circuit < 0) continue;
-      const Circuit& c = circuits[static_cast<size_t>(pr.circuit - 1)];
-      pr.branch = c.branch_at(*where[k]);
-      const double sk = joint_coordinate(model, input, pr.q);
-      for (const SingularPoint& sp : c.singular) {
-        double d = sp.s - sk;
-        if (is_revolute(model, input)) d = wrap(d);
-        if (!pr.singular_distance || std::abs(d) < *pr.singular_distance) {
-          pr.singular_distance = std::abs(d);
-          pr.singular_kind = sp.kind;
-          pr.singular_input = sk + d;
-        }
-      }
-    }
-    rep.circuits = static_cast<int>(circuits.size());
-    for (size_t k = 1; k < rep.positions.size(); ++k) {
-      PositionReport& a = rep.positions[k - 1];
-      PositionReport& b = rep.positions[k];
-      if (b.circuit != rep.positions[0].circuit) {
-        rep.circuit_defect = true;
-        const std::string msg = "circuit defect: '" + b.name + "' is on circuit " +
-                                std::to_string(b.circuit) + ", '" + rep.positions[0].name +
-                                "' on circuit " + std::to_string(rep.positions[0].circuit) +
-                                " (the linkage must be taken apart to go from one to the other)";
-        rep.defects.push_back(msg);
-        b.failures.push_back(msg);
-      } else if (a.circuit == b.circuit && a.branch != b.branch) {
-        rep.branch_defect = true;
-        const std::string msg = "branch defect: a singular position lies between '" + a.name +
-                                "' (branch " + std::to_string(a.branch) + ") and '" + b.name +
-                                "' (branch " + std::to_string(b.branch) + ")";
-        rep.defects.push_back(msg);
-        b.failures.push_back(msg);
-      }
-    }
+    rep.circuits = static_cast<int>(trace_circuits(c, rep).size());
+    check_circuits_and_branches(rep);
   }
   return rep;
 }

@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "orthomech/analysis/cycle_metrics.hpp"
+#include "orthomech/check.hpp"
 #include "orthomech/io/noise.hpp"
 #include "orthomech/model/spatial.hpp"
 
@@ -262,8 +263,8 @@ CycleColumns write_cycle_csv(const std::filesystem::path& file, const Model& mod
   out << ",limits";
   std::vector<OutputUnit> extra_units;
   for (const ExtraColumn& c : extra) {
-    if (c.values.size() != result.points.size())
-      throw std::invalid_argument("write_cycle_csv: column " + c.name + " has the wrong size");
+    check_argument(c.values.size() == result.points.size(), "write_cycle_csv", "extra",
+                   "must have one value per position in every column");
     extra_units.push_back(output_unit(c.dimension, units));
     out << ',' << field(c.name + " [" + extra_units.back().name + "]");
   }

@@ -71,6 +71,7 @@ void Reader::read_units(const YAML::Node& node) {
         return;
       }
     std::vector<std::string> names;
+    names.reserve(table.size());
     for (const auto& e : table) names.push_back(e.first);
     fail(v, "units",
          "unknown " + key + " unit '" + v.Scalar() + "' (allowed: " + join(names) + ")");
@@ -1007,6 +1008,7 @@ Model parse_text(const std::string& text, const std::string& origin,
   }
   try {
     std::vector<SetNodes> sets;
+    sets.reserve(changes.size());
     for (const FileChange& change : changes) sets.push_back(apply_change(root, change, origin));
     return Reader(origin, std::move(sets)).read(root);
   } catch (const YAML::Exception& e) {  // anything yaml-cpp still throws: report, do not crash

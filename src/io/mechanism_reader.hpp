@@ -208,14 +208,14 @@ class Reader {
                                                            : kind + "s";
     const std::string anonymous = plural + "[" + std::to_string(index) + "]";
     if (!item.IsMap()) fail(item, anonymous, "expected a mapping with a 'name'");
-    const std::string name = string_field(item, "name", anonymous);
+    std::string name = string_field(item, "name", anonymous);
     if (name.empty()) fail(item["name"], anonymous, "name is empty");
     if (!seen.insert(name).second)
       fail(item["name"], kind + " '" + name + "'",
            "duplicate name: '" + name + "' is defined twice");
     return name;
   }
-  const YAML::Node list(const YAML::Node& root, const std::string& key) const {
+  YAML::Node list(const YAML::Node& root, const std::string& key) const {
     const YAML::Node node = root[key];
     if (node && !node.IsNull() && !node.IsSequence())
       fail(node, key, "expected a list (items starting with '- ')");
@@ -245,13 +245,13 @@ class Reader {
   }
   void read_units(const YAML::Node& node);
   void read_ground(const YAML::Node& node);
-  void read_bodies(const YAML::Node& node);
-  void read_joints(const YAML::Node& node);
-  void read_nonholonomic(const YAML::Node& node);
+  void read_bodies(const YAML::Node& root);
+  void read_joints(const YAML::Node& root);
+  void read_nonholonomic(const YAML::Node& root);
   // Loads and measures: one loop for both dimensions; each item's type read by planar_* or
   // spatial_* (nothing for an unknown type).
-  void read_loads(const YAML::Node& node);
-  void read_measures(const YAML::Node& node);
+  void read_loads(const YAML::Node& root);
+  void read_measures(const YAML::Node& root);
   std::optional<LoadKind> planar_load(const YAML::Node& item, const std::string& element,
                                       const std::string& type);
   std::optional<MeasureKind> planar_measure(const YAML::Node& item, const std::string& element,
@@ -265,8 +265,8 @@ class Reader {
   bool body_frame(const YAML::Node& item, const std::string& element) const;
   YAML::Node two_points(const YAML::Node& item, const std::string& element) const;
   std::pair<int, int> rigid_body_pair(const YAML::Node& item, const std::string& element) const;
-  void read_drivers(const YAML::Node& node);
-  void read_design_positions(const YAML::Node& node);
+  void read_drivers(const YAML::Node& root);
+  void read_design_positions(const YAML::Node& root);
   void read_analysis(const YAML::Node& node);
   void read_initial(const YAML::Node& node);
 
@@ -297,7 +297,7 @@ class Reader {
                       const std::vector<std::pair<std::string, Vec>>& ground, PointsOf points_of,
                       ComOf com_of) const {
     if (!node.IsScalar()) fail(node, element, "expected a point 'body.point'");
-    const std::string text = node.Scalar();
+    const std::string& text = node.Scalar();
     const auto dot = text.find('.');
     if (dot == std::string::npos)
       fail(node, element, "expected a point 'body.point', got '" + text + "'");
@@ -370,7 +370,7 @@ class Reader {
   Quat orientation(const YAML::Node& node, const std::string& element) const;
   SpatialPointRef spatial_point_ref(const YAML::Node& node, const std::string& element) const;
   // A design position's `target` in dimension 3 (docs/file-format.md "Design positions").
-  DesignTarget spatial_target(const YAML::Node& node, const std::string& element) const;
+  DesignTarget spatial_target(const YAML::Node& t, const std::string& element) const;
   std::pair<SpatialPointRef, SpatialPointRef> spatial_connects(const YAML::Node& item,
                                                                const std::string& element) const;
   int spatial_body_ref(const YAML::Node& node, const std::string& element) const;

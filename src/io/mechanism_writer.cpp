@@ -18,6 +18,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "orthomech/check.hpp"
 #include "orthomech/error.hpp"
 #include "orthomech/io/mechanism_file.hpp"
 #include "orthomech/io/noise.hpp"
@@ -126,7 +127,8 @@ void verify_written(const std::string& written, const std::string& origin, const
 
 std::string replace_design_poses(const std::string& file_text, const std::string& origin,
                                  const Model& model, const VecX& q) {
-  if (q.size() != model.nq) throw std::invalid_argument("replace_design_poses: q size");
+  check_argument(q.size() == model.nq, "replace_design_poses", "q",
+                 "must have model.nq coordinates");
   // A UTF-8 byte order mark is kept as it is; the YAML parser's offsets start after it.
   static const std::string bom = "\xEF\xBB\xBF";
   const bool has_bom = file_text.rfind(bom, 0) == 0;

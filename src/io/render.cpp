@@ -18,6 +18,7 @@
 #include "orthomech/analysis/assembly.hpp"
 #include "orthomech/analysis/cycle.hpp"
 #include "orthomech/constraints/joints.hpp"
+#include "orthomech/check.hpp"
 #include "orthomech/io/mechanism_writer.hpp"
 #include "orthomech/io/units.hpp"
 #include "orthomech/model/free_system.hpp"
@@ -115,9 +116,9 @@ std::vector<Vec2> convex_hull(std::vector<Vec2> p) {
   };
   std::vector<Vec2> h(2 * p.size());
   size_t k = 0;
-  for (size_t i = 0; i < p.size(); ++i) {
-    while (k >= 2 && cross(h[k - 2], h[k - 1], p[i]) <= 0.0) --k;
-    h[k++] = p[i];
+  for (const Vec2& pi : p) {
+    while (k >= 2 && cross(h[k - 2], h[k - 1], pi) <= 0.0) --k;
+    h[k++] = pi;
   }
   for (size_t i = p.size() - 1, t = k + 1; i-- > 0;) {
     while (k >= t && cross(h[k - 2], h[k - 1], p[i]) <= 0.0) --k;
@@ -1079,12 +1080,13 @@ ViewChoice choose_view(const Model& model, const std::string& view) {
 }
 
 Scene build_scene(const Model& model, const VecX& q, const RenderOptions& options) {
-  if (q.size() != model.nq) throw std::invalid_argument("build_scene: q has the wrong size");
-  if (model.dimension != 3 && !options.projection.is_top())
-    throw std::invalid_argument("build_scene: a planar mechanism is drawn in the top view only");
-  if (options.width <= 0 || options.height <= 0 || options.width - 2.0 * options.margin <= 0.0 ||
-      options.height - 2.0 * options.margin - options.legend <= 0.0)
-    throw std::invalid_argument("build_scene: the image is smaller than its margins");
+  check_argument(q.size() == model.nq, "build_scene", "q", "must have model.nq coordinates");
+  check_argument(model.dimension == 3 || options.projection.is_top(), "build_scene",
+                 "options.projection", "must be the top view for a planar mechanism");
+  check_argument(options.width > 0 && options.height > 0 &&
+                     options.width - 2.0 * options.margin > 0.0 &&
+                     options.height - 2.0 * options.margin - options.legend > 0.0,
+                 "build_scene", "options", "makes the image smaller than its margins");
   return SceneBuilder(model, q, options).build();
 }
 
@@ -1304,7 +1306,7 @@ ViewTransform animation_view(const Model& model, const std::vector<VecX>& frames
 
 std::string animated_svg(const Model& model, const std::vector<VecX>& frames,
                          const RenderOptions& options, double duration) {
-  if (frames.empty()) throw std::invalid_argument("animated_svg: no frames");
+  check_argument(!frames.empty(), "animated_svg", "frames", "must not be empty");
   // One view for every frame.
   RenderOptions fixed = options;
   fixed.view = animation_view(model, frames, options);

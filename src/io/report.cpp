@@ -3,6 +3,8 @@
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 
+#include "orthomech/check.hpp"
+
 namespace orthomech {
 
 namespace {
@@ -281,9 +283,9 @@ constexpr const char* kScript = R"JS(
 
 std::string cycle_report_html(const CycleReport& report) {
   const size_t n = report.input.size();
-  if (n == 0) throw std::invalid_argument("report: no positions");
-  if (count_frames(report.animation) != n)
-    throw std::invalid_argument("report: the animation has not one frame per position");
+  check_argument(n != 0, "cycle_report_html", "report.input", "must not be empty (no positions)");
+  check_argument(count_frames(report.animation) == n, "cycle_report_html", "report.animation",
+                 "must have one frame per position");
   nlohmann::json data;
   data["input"] = report.input;
   data["input_label"] = report.input_label;
@@ -292,8 +294,8 @@ std::string cycle_report_html(const CycleReport& report) {
   for (const ReportPlot& p : report.plots) {
     nlohmann::json series = nlohmann::json::array();
     for (const ReportSeries& s : p.series) {
-      if (s.values.size() != n)
-        throw std::invalid_argument("report: series " + s.name + " has not one value per position");
+      check_argument(s.values.size() == n, "cycle_report_html", "report.plots",
+                     "must have one value per position in every series");
       nlohmann::json values = nlohmann::json::array();
       for (const auto& v : s.values) values.push_back(v ? nlohmann::json(*v) : nlohmann::json());
       series.push_back({{"name", s.name}, {"values", values}});

@@ -164,7 +164,7 @@ void Reader::check_inertia(const YAML::Node& node, const std::string& element,
                            const Mat3& J) const {
   const double scale = units_.mass * units_.length * units_.length;
   const Eigen::SelfAdjointEigenSolver<Mat3> eig(J);
-  const Vec3 p = eig.eigenvalues();  // ascending
+  const Vec3& p = eig.eigenvalues();  // ascending
   if (!(p(0) > 1e-12 * p(2))) fail(node, element, "the inertia tensor is not positive definite");
   constexpr double kSlack = 1e-9;  // relative: [1, 166.6667, 166.6667] is a slender rod
   if (p(2) > (p(0) + p(1)) * (1.0 + kSlack)) {
@@ -406,10 +406,10 @@ void Reader::read_spatial_joints(const YAML::Node& root) {
     const bool axial = s.type != T::spherical && s.type != T::distance && s.type != T::universal;
     std::vector<std::string> keys = {"name", "type", "connects"};
     if (axial) keys.insert(keys.end(), {"axis", "ref"});
-    if (s.type == T::universal) keys.push_back("axes");
-    if (s.type == T::screw) keys.push_back("pitch");
-    if (s.type == T::distance) keys.push_back("length");
-    if (spec.coordinate != SpatialCoordinate::none) keys.push_back("limits");
+    if (s.type == T::universal) keys.emplace_back("axes");
+    if (s.type == T::screw) keys.emplace_back("pitch");
+    if (s.type == T::distance) keys.emplace_back("length");
+    if (spec.coordinate != SpatialCoordinate::none) keys.emplace_back("limits");
     expect_map(item, element, keys);
     Joint j;
     j.name = name;

@@ -2,6 +2,7 @@
 
 #include <stdexcept>
 
+#include "orthomech/check.hpp"
 #include "orthomech/constraints/spatial_joints.hpp"
 #include "orthomech/model/general_system.hpp"
 #include "orthomech/model/spatial.hpp"
@@ -31,6 +32,7 @@ std::vector<std::string> Joint::component_names() const {
   if (const auto* s = std::get_if<SpatialJoint>(&kind)) {
     const SpatialJointSpec& spec = spatial_joint_spec(s->type);
     std::vector<std::string> names;
+    names.reserve(static_cast<size_t>(spec.rows));
     for (int k = 0; k < spec.rows; ++k) names.emplace_back(spec.row[static_cast<size_t>(k)].name);
     return names;
   }
@@ -93,7 +95,7 @@ VecX Model::design_q() const {
 
 std::string Model::constraint_row_name(int row) const {
   if (general) {
-    if (row < 0 || row >= nc) throw std::invalid_argument("constraint_row_name: row out of range");
+    check_argument(row >= 0 && row < nc, "constraint_row_name", "row", "is out of range [0, nc)");
     return "constraint '" + general->rows[static_cast<size_t>(row)] + "'";
   }
   for (const Joint& j : joints) {
@@ -109,7 +111,7 @@ std::string Model::constraint_row_name(int row) const {
     if (row >= d.row_offset && row < d.row_offset + 3)
       return "rolling disc '" + d.name + "', " + rows[row - d.row_offset];
   }
-  throw std::invalid_argument("constraint_row_name: row out of range");
+  throw_invalid_argument("constraint_row_name", "row", "is out of range [0, nc)");
 }
 
 void finalize_model(Model& model) {
@@ -149,7 +151,8 @@ void finalize_model(Model& model) {
   model.nc = row;
   const int nb = static_cast<int>(model.bodies.size());
   auto check_body = [nb](int b) {
-    if (b < kGround || b >= nb) throw std::invalid_argument("finalize_model: bad body index");
+    check_argument(b >= kGround && b < nb, "finalize_model", "model",
+                   "has a body index out of range");
   };
   for (const KnifeEdge& k : model.knife_edges) {
     check_body(k.at.body);

@@ -672,6 +672,7 @@ MetricStatistics metric_statistics(const std::string& name,
   s.sensitivity.assign(p, std::nullopt);
   if (rows.empty()) return s;
   std::vector<double> y;
+  y.reserve(rows.size());
   for (size_t k : rows) y.push_back(metric[k]);
   double sum = 0.0;
   for (double v : y) sum += v;

@@ -108,8 +108,8 @@ struct VelocityProjection {
   double kinetic_removed;  // T(β u₀) = T(u₀) − T(u)
   bool ok = true;          // false when G is singular and the pseudo-inverse was used
 };
-// Mass-orthogonal projection of a velocity guess: u = u₀ − A E G⁺ Eᵀ u₀ (eqs. (42)–(44); G⁺ the
-// pseudo-inverse so that redundant constraints are handled).
+// Mass-orthogonal projection of a velocity guess: u = u₀ − A E G⁺ Eᵀ u₀ (G of eq. (42), π of
+// eq. (43), α of eq. (44); G⁺ the pseudo-inverse so that redundant constraints are handled).
 [[nodiscard]] VelocityProjection project_velocities(const Model& model, const VecX& q,
                                                     const VecX& u0);
 

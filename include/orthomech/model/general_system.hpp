@@ -5,8 +5,8 @@
 //
 // A Model built by make_general_model holds one of these instead of bodies and joints; the
 // model-level functions (free_system.hpp, loads.hpp, constraints/joints.hpp) call it, so every
-// algorithm — projections, mobility, position projection, simulate, crosscheck — runs
-// unchanged on it, with every Ṁ term (eqs. (81)–(82), (91), (97)–(99)) live.
+// algorithm (projections, mobility, positions, simulate, crosscheck) runs unchanged on it, with
+// every Ṁ term live (eq. (81), eq. (82), eq. (91), eq. (97), eq. (98), eq. (99)).
 #include <functional>
 #include <memory>
 #include <string>

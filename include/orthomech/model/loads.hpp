@@ -8,7 +8,7 @@
 
 namespace orthomech {
 
-// Q̂ (size n), eq. (15)–(17): the sum of every load in the model. Allocation-free.
+// Q̂ (size n), eq. (15), eq. (16), eq. (17): the sum of every load in the model. Allocation-free.
 void compute_applied_forces(const Model& model, const State& state, VecX& Q);
 // The velocity term of eq. (16) of every spatial body, −C p u = (0, −ω × Jω) (accumulated).
 void add_velocity_terms(const Model& model, const State& state, VecX& Q);

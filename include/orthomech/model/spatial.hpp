@@ -1,6 +1,6 @@
 #pragma once
 // Spatial rigid bodies (spatial.md §1): unit quaternions (scalar first, Hamilton product), the
-// rotation matrix, B̃ and B of eqs. (2)–(3)/(19), the exponential map q ⊕ h·u, and the
+// rotation matrix, B̃ and B of eq. (2), eq. (3) and eq. (19), the exponential map q ⊕ h·u, and the
 // kinematics of a spatial body's frame and points shared by joints, loads and measures.
 //
 //   q_b = (r, e): r world position of the centre of mass, e = (e₀, ε) unit quaternion;
