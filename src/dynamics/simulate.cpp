@@ -393,7 +393,7 @@ class Dynamics {
   }
 
   // Primal form at (t, q, p), Theorem 7. Expanding αᵀ = I − π A, Ω = E G⁻¹ Dᵀ and
-  // βᵀ = π A (eqs. (43)–(44), (78)) in eq. (99):
+  // βᵀ = π A (eq. (43), eq. (44), eq. (78)) in eq. (99):
   //   (L3) ṗ = Q̂ + E λ,  λ = −G⁻¹ (Eᵀ A (Q̂ − Ṁ u) + Dᵀ u),  u = A p (eq. (100)),
   // which avoids the n × n matrices; crosscheck compares it with the matrices of eq. (99).
   void evaluate_primal(double t, const Eigen::Ref<const VecX>& q, const Eigen::Ref<const VecX>& p) {
@@ -510,7 +510,7 @@ class Dynamics {
 };
 
 // Mass-orthogonal projection of u₀ onto the admissible velocities, u = α u₀ = ψ M u₀ with
-// ψ = F H⁻¹ Fᵀ (eqs. (69)–(70)); v = H⁻¹ Fᵀ M u₀ are its chart coordinates.
+// ψ = F H⁻¹ Fᵀ (eq. (69), eq. (70)); v = H⁻¹ Fᵀ M u₀ are its chart coordinates.
 VecX project_velocity(Dynamics& d, const VecX& u0) {
   return d.H_llt_.solve(d.MF_.transpose() * u0);  // eq. (70): α u₀ = F (H⁻¹ Fᵀ M u₀)
 }

@@ -26,8 +26,8 @@ struct DynamicsPoint {
 
 // Dual form at a state whose u is admissible (Eᵀ u = 0): with v = u_I (the chart's independent
 // components, so u = F v), H v̇ = Fᵀ (Q̂ − Ṁ u − M Ḟ v) and u̇ = F v̇ + Ḟ v; then R = ṗ − Q̂.
-// Evaluates the free system, the constraints and the dual projections (eqs. (68)–(70),
-// (83)–(84)) into ws first. λ by a minimum-norm least-squares solve of E λ = R.
+// Evaluates the free system, the constraints and the dual projections (eq. (68), eq. (69),
+// eq. (70), eq. (83), eq. (84)) into ws first. λ by a minimum-norm least-squares solve of E λ = R.
 ProjectionStatus compute_dual_dynamics(const Model& model, const State& state, Workspace& ws,
                                        DynamicsPoint& out);
 

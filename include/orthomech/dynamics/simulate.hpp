@@ -12,7 +12,7 @@
 // (eq. (68)). After every accepted step: Newton position correction in the chart (the
 // independent coordinates stay, the dependent ones move), then a chart check; on a switch v is
 // re-expressed in the new chart from u. Velocities are admissible by construction (u = F v).
-// Primal form: Theorem 7, ṗ = αᵀ Q̂ − Ω u + βᵀ Ṁ u, u = A p (eqs. (99)–(100)); after every
+// Primal form: Theorem 7, ṗ = αᵀ Q̂ − Ω u + βᵀ Ṁ u, u = A p (eq. (99), eq. (100)); after every
 // accepted step the invariant J = Eᵀ A p (eq. (105)) is recorded, then positions are corrected
 // and the momenta projected (p ← M α u).
 // Energy: T + V − W, with W the work of the non-conservative loads (torques, point forces,

@@ -6,8 +6,8 @@
 namespace orthomech {
 
 // F in the current chart (switching charts when it degrades), H, ψ, α, β, Ḟ, Θ, θ
-// (eqs. (68)–(70), (83)–(84)). Needs compute_free_system and compute_constraints first.
-// Allocation-free while no chart switch happens.
+// (eq. (68), eq. (69), eq. (70), eq. (83), eq. (84)). Needs compute_free_system and
+// compute_constraints first. Allocation-free while no chart switch happens.
 ProjectionStatus compute_dual(const Model& model, const State& state, Workspace& ws);
 // Only the first steps of compute_dual: the chart (switching when it degrades) and F. Needs
 // ws.constraints.Et at state.q and the free system's scaling A (ws.free.A_diag, A_sqrt).

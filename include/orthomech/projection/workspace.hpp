@@ -35,7 +35,7 @@ enum class ProjectionStatus {
 };
 [[nodiscard]] const char* to_string(ProjectionStatus s);
 
-// Stage 2a: primal (E-based) projections, eqs. (42)–(44), (78)–(79).
+// Stage 2a: primal (E-based) projections, eq. (42), eq. (43), eq. (44), eq. (78), eq. (79).
 struct PrimalWorkspace {
   MatX AE;  // n × nc: A E
   MatX G;   // nc × nc: fundamental matrix G = EᵀAE, eq. (42)
@@ -52,8 +52,8 @@ struct PrimalWorkspace {
   explicit PrimalWorkspace(const Model& model);
 };
 
-// Stage 2b: dual (F-based) projections, eqs. (68)–(70), (83)–(84), in charts ((71)–(72) and
-// (85) follow from these and are checked in tests, not stored).
+// Stage 2b: dual (F-based) projections, eq. (68), eq. (69), eq. (70), eq. (83), eq. (84), in charts
+// (eq. (71), eq. (72) and eq. (85) follow from these and are checked in tests, not stored).
 struct DualWorkspace {
   int na;              // admissible DOF n_a, eq. (25)
   int r;               // rank of Eᵀ
