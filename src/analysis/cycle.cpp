@@ -411,7 +411,8 @@ bool idle_rows_rate(const Model& model, const VecX& q, const VecX& u, const VecX
 }  // namespace
 
 bool compute_driven(const Model& model, int driver_joint, double sdot, double sddot, State& state,
-                    Workspace& ws, DrivenWorkspace& dws, DrivenPoint& out, bool jacobian_current) {
+                    Workspace& ws, DrivenWorkspace& dws, DrivenPoint& out,
+                    DrivenJacobian jacobian) {
   check_argument(driver_joint >= 0 && static_cast<size_t>(driver_joint) < model.joints.size(),
                  "compute_driven", "driver_joint", "is not a joint of the model");
   check_argument(state.q.size() == model.nq && state.u.size() == model.n, "compute_driven", "state",
@@ -426,7 +427,7 @@ bool compute_driven(const Model& model, int driver_joint, double sdot, double sd
     state.u.setZero();
     compute_free_system(model, state, ws);
   }
-  if (!jacobian_current) {
+  if (jacobian == DrivenJacobian::evaluate) {
     compute_constraint_jacobian(model, state.q, ws.constraints.Et);
     body_rotations(model, state.q, dws.rotations.data());
   }
@@ -974,12 +975,13 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
   // the multipliers, which grow without bound, are not meaningful.
   constexpr double kSingularQuality = 1e-4;
 
-  auto evaluate_at = [&](const VecX& q, double t, DrivenPoint& p, bool jacobian_current = false) {
+  auto evaluate_at = [&](const VecX& q, double t, DrivenPoint& p,
+                         DrivenJacobian jacobian = DrivenJacobian::evaluate) {
     double s = 0.0, sdot = 0.0, sddot = 0.0;
     law.at(t, s, sdot, sddot);
     state.q = q;
     state.t = t;
-    if (!compute_driven(model, joint, sdot, sddot, state, ws, w, p, jacobian_current)) return false;
+    if (!compute_driven(model, joint, sdot, sddot, state, ws, w, p, jacobian)) return false;
     p.input = sweep.input_at(state.q, s);
     p.time = t;
     p.chart_quality = ws.dual.engine.quality();
@@ -1020,7 +1022,9 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
     // Corrections beyond twice the size of the tangent step would leave the branch.
     const double max_step = 2.0 * std::abs(ds) * tangent.cwiseAbs().maxCoeff() + 1e-12;
     return sweep.corrector(trial, target, max_step) &&
-           evaluate_at(trial, t, out, sweep.jacobian_at_q) && same_branch(out.tangent, tangent);
+           evaluate_at(trial, t, out,
+                       sweep.jacobian_at_q ? DrivenJacobian::current : DrivenJacobian::evaluate) &&
+           same_branch(out.tangent, tangent);
   };
   // Determinacy (design §3): component cᵀλ is unique iff Nᵀc = 0 for the null space N of E. The
   // values of the components for λ = N_j are exactly (Nᵀc)_j; a component is determinate when

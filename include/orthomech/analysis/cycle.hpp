@@ -343,13 +343,14 @@ bool compute_multi_driven(const Model& model, const std::vector<int>& joints, co
 
 // Velocities, accelerations, drive and multipliers at a position q on f(q) = 0 where the input
 // moves with rate sdot and acceleration sddot (C1)–(C4). Returns false at a dead point (dᵀF = 0).
-// jacobian_current: ws.constraints.Et already holds Eᵀ(q) and dws.rotations R(φ_b) at q (the
-// corrector's last evaluation). With dws.idle_bodies the idle motions are held at zero rate
-// (dᵀF is then that of the held basis F z).
-// Allocation-free after set-up (without idle bodies).
+// DrivenJacobian::current: ws.constraints.Et already holds Eᵀ(q) and dws.rotations R(φ_b) at q
+// (the corrector's last evaluation); `evaluate` computes them. With dws.idle_bodies the idle
+// motions are held at zero rate (dᵀF is then that of the held basis F z). Allocation-free after
+// set-up (without idle bodies).
+enum class DrivenJacobian { evaluate, current };
 bool compute_driven(const Model& model, int driver_joint, double sdot, double sddot, State& state,
                     Workspace& ws, DrivenWorkspace& dws, DrivenPoint& out,
-                    bool jacobian_current = false);
+                    DrivenJacobian jacobian = DrivenJacobian::evaluate);
 
 // The sweep. Never throws for numerical trouble: the status says what happened.
 [[nodiscard]] CycleResult run_cycle(const Model& model, const CycleOptions& options);
