@@ -19,6 +19,7 @@
 #include "orthomech/dynamics/simulate.hpp"
 #include "orthomech/io/mechanism_file.hpp"
 #include "support/andrews_reference.hpp"
+#include "unit/analysis/large_mechanisms.hpp"
 
 namespace {
 using namespace orthomech;
@@ -61,35 +62,13 @@ BENCHMARK_CAPTURE(Andrews, primal_rkf78, DynamicsForm::primal, Integrator::rkf78
     ->Unit(benchmark::kMillisecond);
 
 // ---- IFToMM A02 N-four-bar ------------------------------------------------------------------
-// The mechanism file for any N (same layout as scripts/gen_mechanisms.py writes for 2 and 40).
+// The mechanism file for any N (tests/unit/analysis/large_mechanisms.hpp, the layout
+// scripts/gen_mechanisms.py writes for 2 and 40) at its initial pose, links vertical, with B0's
+// coordinates as measures.
 std::string four_bar_text(int N) {
-  std::ostringstream y;
-  y.precision(17);
-  y << "orthomech: 1\nname: n-four-bar-" << N << "\nunits: {length: m, angle: rad, mass: kg}\n";
-  y << "ground:\n  points: {";
-  for (int k = 0; k <= N; ++k) y << (k ? ", " : "") << "O" << k << ": [" << k << ", 0]";
-  y << "}\nbodies:\n";
-  for (int k = 0; k <= N; ++k)
-    y << "  - {name: link" << k << ", mass: 1, inertia: " << 1.0 / 12.0
-      << ", com: [0.5, 0], pose: [" << k << ", 0, " << M_PI / 2
-      << "], points: {O: [0, 0], B: [1, 0]}}\n";
-  for (int k = 0; k < N; ++k)
-    y << "  - {name: coupler" << k << ", mass: 1, inertia: " << 1.0 / 12.0
-      << ", com: [0.5, 0], pose: [" << k << ", 1, 0], points: {L: [0, 0], R: [1, 0]}}\n";
-  y << "joints:\n";
-  for (int k = 0; k <= N; ++k)
-    y << "  - {name: O" << k << ", type: revolute, connects: [ground.O" << k << ", link" << k
-      << ".O]}\n";
-  for (int k = 0; k < N; ++k) {
-    y << "  - {name: L" << k << ", type: revolute, connects: [coupler" << k << ".L, link" << k
-      << ".B]}\n";
-    y << "  - {name: R" << k << ", type: revolute, connects: [coupler" << k << ".R, link" << k + 1
-      << ".B]}\n";
-  }
-  y << "loads:\n  - {name: weight, type: gravity, g: [0, -9.81]}\n";
-  y << "measures:\n  - {name: B0_x, type: point, point: link0.B, component: x}\n";
-  y << "  - {name: B0_y, type: point, point: link0.B, component: y}\n";
-  return y.str();
+  return test::n_four_bar_yaml(N, M_PI / 2) +
+         "measures:\n  - {name: B0_x, type: point, point: link0.B, component: x}\n"
+         "  - {name: B0_y, type: point, point: link0.B, component: y}\n";
 }
 
 // Exact reduction on the parallelogram branch (tests/unit/dynamics/iftomm_test.cpp): RK4.

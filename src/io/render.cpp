@@ -17,8 +17,8 @@
 
 #include "orthomech/analysis/assembly.hpp"
 #include "orthomech/analysis/cycle.hpp"
-#include "orthomech/constraints/joints.hpp"
 #include "orthomech/check.hpp"
+#include "orthomech/constraints/joints.hpp"
 #include "orthomech/io/mechanism_writer.hpp"
 #include "orthomech/io/units.hpp"
 #include "orthomech/model/free_system.hpp"
