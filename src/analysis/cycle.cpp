@@ -22,6 +22,7 @@
 #include "orthomech/model/measures.hpp"
 #include "orthomech/numerics/small_lu.hpp"
 #include "orthomech/projection/dual.hpp"
+#include "orthomech/projection/free_system_stage.hpp"
 #include "orthomech/projection/primal.hpp"
 
 namespace orthomech {
@@ -68,7 +69,7 @@ DrivenWorkspace::DrivenWorkspace(const Model& model, int rank, std::vector<int> 
       J_piv(model.n),
       g(model.n),
       dq(model.n),
-      rotations(model.bodies.size()),
+      rotations(model),
       idle_bodies(std::move(idle)),
       length_scale(mechanism_size(model)) {}
 
@@ -169,142 +170,6 @@ void DrivenPoints::assign(std::size_t k, const DrivenPoint& p) {
   check_sizes(p);
   scalars_.at(k) = scalars_of(p);
   put_values(p, values_.data() + k * stride_);
-}
-
-// ---- reaction components -------------------------------------------------------------------
-std::vector<ReactionComponent> reaction_components(const Model& model) {
-  std::vector<ReactionComponent> out;
-  for (size_t j = 0; j < model.joints.size(); ++j) {
-    const Joint& joint = model.joints[j];
-    const int ji = static_cast<int>(j);
-    auto add = [&](const std::string& c, bool global, const char* unit) {
-      out.push_back({joint.name + "." + c, ji, global, unit});
-    };
-    if (std::holds_alternative<SpatialJoint>(joint.kind)) {  // spatial.md §2.6
-      for (const char* c : {"Fx", "Fy", "Fz"}) add(c, true, "N");
-      for (const char* c : {"Mx", "My", "Mz"}) add(c, true, "N*m");
-      for (const char* c : {"Ff", "Fg", "Fh"}) add(c, false, "N");
-      for (const char* c : {"Mf", "Mg", "Mh"}) add(c, false, "N*m");
-      continue;
-    }
-    switch (joint.kind.index()) {
-      case 0:  // revolute
-        add("Fx", true, "N"), add("Fy", true, "N"), add("Fx_local", false, "N"),
-            add("Fy_local", false, "N");
-        break;
-      case 1:  // prismatic
-        add("Fx", true, "N"), add("Fy", true, "N"), add("M", true, "N*m"), add("N", false, "N");
-        break;
-      case 2:  // fixed
-        add("Fx", true, "N"), add("Fy", true, "N"), add("M", true, "N*m"),
-            add("Fx_local", false, "N"), add("Fy_local", false, "N");
-        break;
-      case 3:  // pin-in-slot
-        add("Fx", true, "N"), add("Fy", true, "N"), add("N", false, "N");
-        break;
-      case 4:  // gear
-        add("lambda", false, "N*m");
-        break;
-      default:  // distance
-        add("Fx", true, "N"), add("Fy", true, "N"), add("T", false, "N");
-        break;
-    }
-  }
-  // Knife edges (nonholonomic rows after the joints'): the ground's lateral force on the body.
-  for (size_t e = 0; e < model.knife_edges.size(); ++e) {
-    const int ji = static_cast<int>(model.joints.size() + e);
-    const std::string& name = model.knife_edges[e].name;
-    out.push_back({name + ".Fx", ji, true, "N"});
-    out.push_back({name + ".Fy", ji, true, "N"});
-    out.push_back({name + ".N", ji, false, "N"});
-  }
-  // Rolling discs (after the knife edges, as their rows): the contact force of the ground on the
-  // disc, world components and along t1, t2 (friction) and k (normal force).
-  for (size_t d = 0; d < model.rolling_discs.size(); ++d) {
-    const int index = static_cast<int>(model.joints.size() + model.knife_edges.size() + d);
-    const std::string& name = model.rolling_discs[d].name;
-    for (const char* c : {".Fx", ".Fy", ".Fz"}) out.push_back({name + c, index, true, "N"});
-    for (const char* c : {".Ft1", ".Ft2", ".N"}) out.push_back({name + c, index, false, "N"});
-  }
-  return out;
-}
-
-// Forces and moments on the joint's first body from its second (docs/notation.md). The rows
-// of λ are the generalized forces E λ: for rows written "first − second" (revolute, fixed x/y) λ is
-// that force itself; for rows written "second − first" (slot normal, relative angle, rod) the
-// force on the first body is −λ along the row's direction.
-void compute_reactions(const Model& model, const VecX& q, const Eigen::Ref<const VecX>& lambda,
-                       std::vector<double>& out, const Eigen::Matrix2d* rotations) {
-  out.clear();
-  const VecX* none = nullptr;
-  auto rot = [&](int body) -> Eigen::Matrix2d {
-    return rotations && body != kGround ? rotations[body] : rotation(body_angle(model, body, q));
-  };
-  for (const Joint& joint : model.joints) {
-    const int r = joint.row_offset;
-    std::visit(
-        [&](const auto& k) {
-          using T = std::decay_t<decltype(k)>;
-          if constexpr (std::is_same_v<T, Revolute> || std::is_same_v<T, Fixed>) {
-            const Vec2 F(lambda(r), lambda(r + 1));
-            // The joint's frame: its first body's, or its second's when the first is the
-            // ground (the moving link's axes, where the ground's would repeat Fx, Fy).
-            const int frame = k.pi.body != kGround ? k.pi.body : k.pj.body;
-            const Vec2 local = rot(frame).transpose() * F;
-            out.push_back(F.x());
-            out.push_back(F.y());
-            if constexpr (std::is_same_v<T, Fixed>) out.push_back(-lambda(r + 2));
-            out.push_back(local.x());
-            out.push_back(local.y());
-          } else if constexpr (std::is_same_v<T, Prismatic> || std::is_same_v<T, PinInSlot>) {
-            const Vec2 n = rot(k.pi.body) * perp(k.axis_local);
-            const double normal = -lambda(r);
-            out.push_back(normal * n.x());
-            out.push_back(normal * n.y());
-            if constexpr (std::is_same_v<T, Prismatic>) {
-              // Moment about the joint's point pi on the first body (issue 10 item 8). The
-              // normal row nᵀ(r_Pj − r_Pi) gives the first body the force N n acting at P_j
-              // (its rotation entry is −λ(nᵀR'_i s_i + eᵀΔ), the moment of −λn applied at
-              // P_i + Δ, Δ = r_Pj − r_Pi, e = R_i a) (M1); the angle row φ_j − φ_i the couple −λ_φ
-              // (M2). About P_i: M = −λ_φ + Δ × (N n) = −λ_φ + N eᵀΔ, since Δ × n = eᵀΔ for
-              // n = J e (M3).
-              const Vec2 e = rot(k.pi.body) * k.axis_local;
-              const Vec2 delta = point_kinematics(model, k.pj, q, none, rotations).r -
-                                 point_kinematics(model, k.pi, q, none, rotations).r;
-              out.push_back(-lambda(r + 1) + normal * e.dot(delta));  // (M3)
-            }
-            out.push_back(normal);
-          } else if constexpr (std::is_same_v<T, GearPair>) {
-            out.push_back(lambda(r));
-          } else if constexpr (std::is_same_v<T, SpatialJoint>) {
-            const SpatialWrench w =
-                spatial_joint_reaction(model, k, q, lambda.segment(r, joint.rows()));
-            for (const Vec3* v : {&w.force, &w.moment, &w.force_local, &w.moment_local})
-              for (int a = 0; a < 3; ++a) out.push_back((*v)(a));
-          } else {  // Distance: force on the first body = −λ d / L; tension along e = d/|d|
-            const Vec2 d = point_kinematics(model, k.pj, q, none, rotations).r -
-                           point_kinematics(model, k.pi, q, none, rotations).r;
-            const Vec2 F = -lambda(r) * d / k.length;
-            out.push_back(F.x());
-            out.push_back(F.y());
-            out.push_back(F.dot(d.normalized()));
-          }
-        },
-        joint.kind);
-  }
-  // Knife edge: λ is the lateral force of the ground on the body along n = R(φ) perp(axis).
-  for (const KnifeEdge& k : model.knife_edges) {
-    const Vec2 n = rotation(body_angle(model, k.at.body, q)) * perp(k.axis_local);
-    const double N = lambda(k.row_offset);
-    out.push_back(N * n.x());
-    out.push_back(N * n.y());
-    out.push_back(N);
-  }
-  for (const RollingDisc& d : model.rolling_discs) {
-    const Vec3 F = rolling_disc_contact_force(d, lambda.segment<3>(d.row_offset));
-    for (int a = 0; a < 3; ++a) out.push_back(F(a));
-    for (int a = 0; a < 3; ++a) out.push_back(lambda(d.row_offset + a));
-  }
 }
 
 namespace {
@@ -418,7 +283,7 @@ bool compute_driven(const Model& model, int driver_joint, double sdot, double sd
   check_argument(state.q.size() == model.nq && state.u.size() == model.n, "compute_driven", "state",
                  "must have model.nq coordinates and model.n velocities");
   check_argument(ws.model == &model, "compute_driven", "ws", "was built for another Model");
-  check_argument(dws.rotations.size() == model.bodies.size(), "compute_driven", "dws",
+  check_argument(dws.rotations.table().size() == model.bodies.size(), "compute_driven", "dws",
                  "was built for another Model");
   const MeasureKind input = JointCoordinate{driver_joint};
   // Positions: the chart and F at q (F depends on q only). The chart's scaling A comes from the
@@ -429,7 +294,7 @@ bool compute_driven(const Model& model, int driver_joint, double sdot, double sd
   }
   if (jacobian == DrivenJacobian::evaluate) {
     compute_constraint_jacobian(model, state.q, ws.constraints.Et);
-    body_rotations(model, state.q, dws.rotations.data());
+    dws.rotations.update(model, state.q);
   }
   if (compute_basis(model, state, ws) != ProjectionStatus::ok) return false;
   // With idle degrees of freedom, the basis that holds them: F z, I F z = 0 (spatial.md §6.5).
@@ -447,7 +312,7 @@ bool compute_driven(const Model& model, int driver_joint, double sdot, double sd
   const double v = sdot / dTF;
   state.u.noalias() = F * v;
   // Rate terms at (q, u): Dᵀu, Q̂(q, u), Ṁ, ḋu.
-  compute_constraint_rate(model, state, ws.constraints, dws.rotations.data());
+  compute_constraint_rate(model, state, dws.rotations, ws.constraints);
   compute_free_system(model, state, ws);
   const ScalarKinematics sk = compute_scalar(model, input, state.q, &state.u, dws.d);
   solve_chart(ws, ws.constraints.Dtu, dws.Fdot_v);  // x_D = (E_RDᵀ)⁻¹ (Dᵀu)_R
@@ -487,8 +352,8 @@ bool compute_driven(const Model& model, int driver_joint, double sdot, double sd
 }
 
 void compute_driven_outputs(const Model& model, const State& state, const VecX& lambda,
-                            const VecX& udot, const Eigen::Matrix2d* rotations, DrivenOutputs out) {
-  compute_reactions(model, state.q, lambda, out.reactions, rotations);
+                            const VecX& udot, const BodyRotations& rotations, DrivenOutputs out) {
+  compute_reactions(model, state.q, rotations, lambda, out.reactions);
   out.measures.clear();
   for (const Measure& m : model.measures)
     out.measures.push_back(evaluate_measure(model, m, state.q, &state.u, &udot, rotations));
@@ -649,8 +514,9 @@ struct Sweep {
     for (int it = 0; it < 30; ++it) {
       // f and Eᵀ in one pass: Eᵀ (and the rotation table) at the converged q are then ready for
       // compute_driven.
-      compute_constraint_residual_and_jacobian(model, q, ws.constraints.f, ws.constraints.Et,
-                                               w.rotations.data());
+      w.rotations.update(model, q);
+      compute_constraint_residual_and_jacobian(model, q, w.rotations, ws.constraints.f,
+                                               ws.constraints.Et);
       jacobian_at_q = true;
       double s = 0.0;
       if (row) {
@@ -991,7 +857,7 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
     p.chart_id = ws.dual.engine.switch_count();
     p.singular = ws.dual.engine.quality() < kSingularQuality;
     // The rotation table compute_driven filled at this q: no sin/cos in reactions and measures.
-    compute_driven_outputs(model, state, p.lambda, p.udot, w.rotations.data(),
+    compute_driven_outputs(model, state, p.lambda, p.udot, w.rotations,
                            {p.reactions, p.measures, p.kinetic, p.potential, p.dissipated});
     return true;
   };
@@ -1034,7 +900,7 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
     if (result.redundant == 0 || p.singular) return;
     for (Eigen::Index j = 0; j < w.N.cols(); ++j) {
       const double tol = 1e-8 * w.N.col(j).norm();
-      compute_reactions(model, p.q, w.N.col(j), null_values, w.rotations.data());
+      compute_reactions(model, p.q, w.rotations, w.N.col(j), null_values);
       for (size_t i = 0; i < null_values.size(); ++i)
         if (std::abs(null_values[i]) > tol) result.determinate[i] = false;
       for (int r = 0; r < model.nc; ++r)

@@ -56,7 +56,8 @@ struct MultiSweep {
     if (!compute_multi_driven(model, joints, sdot, sddot, state, ws, w, p)) return false;
     p.time = t;
     p.inputs = s;
-    compute_driven_outputs(model, state, p.lambda, p.udot, nullptr,
+    w.rotations.update(model, state.q);
+    compute_driven_outputs(model, state, p.lambda, p.udot, w.rotations,
                            {p.reactions, p.measures, p.kinetic, p.potential, p.dissipated});
     return true;
   }
@@ -203,7 +204,7 @@ MultiDriveResult run_multi_drive(const Model& model, const MultiDriveOptions& op
   auto update_determinacy = [&](const MultiDrivenPoint& p) {
     for (Eigen::Index j = 0; j < w.N.cols(); ++j) {
       const double tol = 1e-8 * w.N.col(j).norm();
-      compute_reactions(model, p.q, w.N.col(j), null_values, nullptr);
+      compute_reactions(model, p.q, w.N.col(j), null_values);
       for (size_t i = 0; i < null_values.size(); ++i)
         if (std::abs(null_values[i]) > tol) result.determinate[i] = false;
     }

@@ -102,8 +102,8 @@ struct JointEvaluator {
   // Distance: f = (dᵀd − L²)/(2L), d = r_Pj − r_Pi; Eᵀ = dᵀ ∂d/∂u / L;
   // Dᵀ = (ḋᵀ ∂d/∂u + dᵀ d/dt(∂d/∂u)) / L.
   void operator()(const Distance& j) {
-    const PointKinematics ki = point_kinematics(model, j.pi, q, u, rot);
-    const PointKinematics kj = point_kinematics(model, j.pj, q, u, rot);
+    const PointKinematics ki = detail::point_kinematics_at(model, j.pi, q, u, rot);
+    const PointKinematics kj = detail::point_kinematics_at(model, j.pj, q, u, rot);
     const Vec2 d = kj.r - ki.r;
     const Vec2 dd = kj.v - ki.v;
     const double L = j.length;
@@ -123,8 +123,8 @@ struct JointEvaluator {
   }
 
   void point_coincidence(const PointRef& pi, const PointRef& pj) {
-    const PointKinematics ki = point_kinematics(model, pi, q, u, rot);
-    const PointKinematics kj = point_kinematics(model, pj, q, u, rot);
+    const PointKinematics ki = detail::point_kinematics_at(model, pi, q, u, rot);
+    const PointKinematics kj = detail::point_kinematics_at(model, pj, q, u, rot);
     if (f) (*f).segment<2>(r) = ki.r - kj.r;  // eq. (20)
     if (Et) {  // eq. (23): add_point_jacobian with c = x̂, ŷ written out: [I, perp(R s)] per point
       auto ex = row(Et, 0), ey = row(Et, 1);
@@ -166,8 +166,8 @@ struct JointEvaluator {
   //   ∂f/∂u  = nᵀ ∂d/∂u + (perp(n)ᵀ d) e_φi                                   (L1)
   //   d/dt   = ṅᵀ ∂d/∂u + nᵀ d/dt(∂d/∂u) + (−φ̇_i nᵀ d + perp(n)ᵀ ḋ) e_φi        (L2)
   void point_on_line(const PointRef& pi, const PointRef& pj, const Vec2& axis, int k) {
-    const PointKinematics ki = point_kinematics(model, pi, q, u, rot);
-    const PointKinematics kj = point_kinematics(model, pj, q, u, rot);
+    const PointKinematics ki = detail::point_kinematics_at(model, pi, q, u, rot);
+    const PointKinematics kj = detail::point_kinematics_at(model, pj, q, u, rot);
     const double phi_i = body_angle(model, pi.body, q);
     const double w_i = (u ? body_angular_velocity(model, pi.body, *u) : 0.0);
     const Vec2 n = (rot && pi.body != kGround ? rot[pi.body] : rotation(phi_i)) * perp(axis);
@@ -246,7 +246,7 @@ void evaluate(const Model& model, const VecX& q, const VecX* u, VecX* f, MatX* E
   std::array<Eigen::Matrix2d, kTable> table;
   const Eigen::Matrix2d* rot = rotations;
   if (!rot && model.bodies.size() <= kTable) {
-    body_rotations(model, q, table.data());
+    body_rotations(model, q, std::span(table.data(), model.bodies.size()));
     rot = table.data();
   }
   for (const Joint& joint : model.joints) {
@@ -268,16 +268,24 @@ void compute_constraint_jacobian(const Model& model, const VecX& q, MatX& Et) {
   evaluate(model, q, nullptr, nullptr, &Et, nullptr);
 }
 
-void compute_constraint_residual_and_jacobian(const Model& model, const VecX& q, VecX& f, MatX& Et,
-                                              Eigen::Matrix2d* rotations) {
-  if (rotations) body_rotations(model, q, rotations);
-  evaluate(model, q, nullptr, &f, &Et, nullptr, nullptr, rotations);
+void compute_constraint_residual_and_jacobian(const Model& model, const VecX& q, VecX& f,
+                                              MatX& Et) {
+  evaluate(model, q, nullptr, &f, &Et, nullptr);
 }
 
-void compute_constraint_rate(const Model& model, const State& state, ConstraintWorkspace& ws,
-                             const Eigen::Matrix2d* rotations) {
+void compute_constraint_residual_and_jacobian(const Model& model, const VecX& q,
+                                              const BodyRotations& rotations, VecX& f, MatX& Et) {
+  evaluate(model, q, nullptr, &f, &Et, nullptr, nullptr, rotations.table().data());
+}
+
+void compute_constraint_rate(const Model& model, const State& state, ConstraintWorkspace& ws) {
   // The convective term Dᵀu, eq. (76), row by row: Dᵀ itself is not formed (ws.Dt untouched).
-  evaluate(model, state.q, &state.u, nullptr, nullptr, nullptr, &ws.Dtu, rotations);
+  evaluate(model, state.q, &state.u, nullptr, nullptr, nullptr, &ws.Dtu);
+}
+
+void compute_constraint_rate(const Model& model, const State& state, const BodyRotations& rotations,
+                             ConstraintWorkspace& ws) {
+  evaluate(model, state.q, &state.u, nullptr, nullptr, nullptr, &ws.Dtu, rotations.table().data());
 }
 
 void compute_constraints(const Model& model, const State& state, ConstraintWorkspace& ws) {

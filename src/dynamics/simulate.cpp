@@ -21,6 +21,7 @@
 #include "orthomech/model/loads.hpp"
 #include "orthomech/model/measures.hpp"
 #include "orthomech/model/spatial.hpp"
+#include "orthomech/projection/free_system_stage.hpp"
 #include "orthomech/projection/primal.hpp"
 
 namespace orthomech {
@@ -243,7 +244,7 @@ class Dynamics {
         G_llt_(model.nc),
         dq_(VecX::Zero(model.n)),
         chart_q_(VecX::Zero(model.nq)),
-        rotations_(model.bodies.size()) {
+        rotations_(model) {
     for (const Load& l : model.loads)
       if (std::holds_alternative<PointForce>(l.kind) || std::holds_alternative<Torque>(l.kind) ||
           std::holds_alternative<SpatialPointForce>(l.kind) ||
@@ -356,13 +357,14 @@ class Dynamics {
       }
       compute_F();
       chart_ready_ = false;
-      body_rotations(model_, state_.q, rotations_.data());
+      rotations_.update(model_, state_.q);
     } else if (!(chart_ready_ && state_.q == chart_q_)) {
       // 1. Eᵀ(q), the chart's dependent block, F, unless they are already those at q (the
       //    stepper restarts at the accepted state, where the acceptance has just computed them).
       //    The bodies' rotations at q come along for the constraint rate below.
-      compute_constraint_residual_and_jacobian(model_, state_.q, ws_.constraints.f,
-                                               ws_.constraints.Et, rotations_.data());
+      rotations_.update(model_, state_.q);
+      compute_constraint_residual_and_jacobian(model_, state_.q, rotations_, ws_.constraints.f,
+                                               ws_.constraints.Et);
       if (!factor_chart(ws_.constraints.Et))
         throw SingularEvaluation{"the chart's dependent block is singular at t = " +
                                  time_text(model_, t) + " (a change point: E loses rank)"};
@@ -370,11 +372,11 @@ class Dynamics {
       chart_q_ = state_.q;
       chart_ready_ = true;
     } else {
-      body_rotations(model_, state_.q, rotations_.data());
+      rotations_.update(model_, state_.q);
     }
     // 2. u = F v; then Dᵀ u and Ḟ v (design §4: Eᵀ Ḟ v = −Dᵀ u, independent rows of Ḟ zero).
     state_.u.noalias() = F_ * v;
-    compute_constraint_rate(model_, state_, ws_.constraints, rotations_.data());  // Dᵀ u
+    compute_constraint_rate(model_, state_, rotations_, ws_.constraints);  // Dᵀ u
     b_ = -ws_.constraints.Dtu;
     cs_.solve(b_, Fdv_);
     // 3. Free system, H (eq. (68)) and v̇.
@@ -505,7 +507,7 @@ class Dynamics {
   // (the step's acceptance, the stage projection) clears it or sets it anew.
   bool chart_ready_ = false;
   VecX chart_q_;
-  std::vector<Eigen::Matrix2d> rotations_;  // R(φ_b) of every body at state_.q (evaluate_dual)
+  BodyRotations rotations_;  // R(φ_b) of every body at state_.q (evaluate_dual)
   std::vector<const Load*> nonconservative_;
 };
 

@@ -2,6 +2,7 @@
 
 #include <Eigen/Cholesky>
 
+#include "orthomech/check.hpp"
 #include "orthomech/model/general_system.hpp"
 #include "orthomech/model/spatial.hpp"
 
@@ -135,13 +136,17 @@ double kinetic_energy(const Model& model, const State& state) {
   return T;
 }
 
-void body_rotations(const Model& model, const VecX& q, Eigen::Matrix2d* rotations) {
+void body_rotations(const Model& model, const VecX& q, std::span<Eigen::Matrix2d> rotations) {
+  ORTHOMECH_CHECK(rotations.size() == model.bodies.size(), "one rotation per body");
   for (size_t b = 0; b < model.bodies.size(); ++b) {
     const Body& body = model.bodies[b];
     rotations[b] =
         body.kind == BodyKind::rigid ? rotation(q(body.q_offset + 2)) : Eigen::Matrix2d::Identity();
   }
 }
+
+BodyRotations::BodyRotations(const Model& model)
+    : R_(model.bodies.size(), Eigen::Matrix2d::Identity()) {}
 
 double body_angle(const Model& model, int body, const VecX& q) {
   if (body == kGround) return 0.0;

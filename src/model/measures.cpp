@@ -24,7 +24,7 @@ struct Evaluator {
   const Eigen::Matrix2d* rotations;  // R(φ_b) per body at q, or null
 
   [[nodiscard]] PointKinematics point(const PointRef& p) const {
-    return point_kinematics(model, p, q, u, rotations);
+    return detail::point_kinematics_at(model, p, q, u, rotations);
   }
   [[nodiscard]] Eigen::Matrix2d rotation_of(int body) const {
     return rotations && body != kGround ? rotations[body] : rotation(body_angle(model, body, q));
@@ -219,8 +219,9 @@ ScalarKinematics compute_scalar(const Model& model, const MeasureKind& kind, con
   return std::visit(Evaluator<Eigen::Ref<VecX>>{model, q, u, nullptr, nullptr}, kind);
 }
 
-double evaluate_measure(const Model& model, const Measure& m, const VecX& q, const VecX* u,
-                        const VecX* udot, const Eigen::Matrix2d* rotations) {
+namespace {
+double evaluate_measure_at(const Model& model, const Measure& m, const VecX& q, const VecX* u,
+                           const VecX* udot, const Eigen::Matrix2d* rotations) {
   using Plain = Evaluator<Eigen::Ref<VecX>>;
   if (m.derivative == 0)
     return std::visit(Plain{model, q, nullptr, nullptr, rotations}, m.kind).value;
@@ -229,6 +230,17 @@ double evaluate_measure(const Model& model, const Measure& m, const VecX& q, con
   DotRow d_udot{*udot};
   const ScalarKinematics s = std::visit(Evaluator<DotRow>{model, q, u, &d_udot, rotations}, m.kind);
   return d_udot.sum + s.ddot_u;
+}
+}  // namespace
+
+double evaluate_measure(const Model& model, const Measure& m, const VecX& q, const VecX* u,
+                        const VecX* udot) {
+  return evaluate_measure_at(model, m, q, u, udot, nullptr);
+}
+
+double evaluate_measure(const Model& model, const Measure& m, const VecX& q, const VecX* u,
+                        const VecX* udot, const BodyRotations& rotations) {
+  return evaluate_measure_at(model, m, q, u, udot, rotations.table().data());
 }
 
 }  // namespace orthomech

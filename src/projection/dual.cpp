@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "orthomech/numerics/small_lu.hpp"
+#include "orthomech/projection/free_system_stage.hpp"
 #include "orthomech/projection/primal.hpp"
 
 namespace orthomech {

@@ -114,13 +114,13 @@ TEST_P(NoAllocation, DrivenKinetostaticsAllocatesNothingAfterSetUp) {
     compute_reactions(model, q, p.lambda, values);
     // What the sweep stores per position: reactions and measures from compute_driven's rotation
     // table (acceleration measures included), and the rate term on its own.
-    compute_reactions(model, s.q, p.lambda, values, dws.rotations.data());
+    compute_reactions(model, s.q, dws.rotations, p.lambda, values);
     for (const Measure& m : model.measures)
-      measure_sum += evaluate_measure(model, m, s.q, &s.u, &p.udot, dws.rotations.data());
+      measure_sum += evaluate_measure(model, m, s.q, &s.u, &p.udot, dws.rotations);
     for (const Measure& m : accelerations)
       measure_sum += evaluate_measure(model, m, s.q, &s.u, &p.udot);
-    compute_constraint_rate(model, s, ws.constraints, dws.rotations.data());
-    body_rotations(model, s.q, dws.rotations.data());
+    compute_constraint_rate(model, s, dws.rotations, ws.constraints);
+    dws.rotations.update(model, s.q);
     // The determinacy test of the sweep: reactions of a null-space column, without a copy.
     for (Eigen::Index j = 0; j < dws.N.cols(); ++j)
       compute_reactions(model, q, dws.N.col(j), values);

@@ -33,6 +33,7 @@
 #include <vector>
 
 #include "orthomech/analysis/mobility.hpp"
+#include "orthomech/analysis/reactions.hpp"
 #include "orthomech/model/model.hpp"
 #include "orthomech/model/state.hpp"
 #include "orthomech/projection/workspace.hpp"
@@ -74,12 +75,6 @@ inline constexpr double kStartTurnTolerance = 1e-4;
 // One joint's reaction at one position, in the global frame and in the joint's frame.
 // Convention (docs/notation.md): forces and moments that the second body of the joint exerts on
 // the first.
-struct ReactionComponent {
-  std::string name;    // "A.Fx", "A.Ft", …
-  int joint = -1;      // index in Model::joints; knife edge e has joints.size() + e
-  bool global = true;  // global frame (else the joint's frame = the first body's frame)
-  std::string unit;    // "N" or "N*m"
-};
 
 // One position of the sweep, with its own storage: what compute_driven fills (and the sweep's
 // working points). The stored positions of a CycleResult are read as DrivenPointView.
@@ -262,14 +257,6 @@ struct CycleResult {
   double idle_hold_peak = 0.0;  // max |DrivenPoint::idle_hold| over the positions
 };
 
-// Reaction components of every joint (names, frames, units), in output order.
-[[nodiscard]] std::vector<ReactionComponent> reaction_components(const Model& model);
-// Their values at a position from the multipliers (any vector expression of size n_c, e.g. a
-// column of the null space N, without a copy). `rotations`, if given: R(φ_b) of every body at q
-// (body_rotations, e.g. DrivenWorkspace::rotations after compute_driven).
-void compute_reactions(const Model& model, const VecX& q, const Eigen::Ref<const VecX>& lambda,
-                       std::vector<double>& out, const Eigen::Matrix2d* rotations = nullptr);
-
 // Preallocated buffers of the driven computation (sizes fixed by the Model and the rank).
 struct DrivenWorkspace {
   VecX d;       // n: Jacobian row of the input, ṡ = d u
@@ -287,9 +274,8 @@ struct DrivenWorkspace {
   Eigen::VectorXi J_piv;  // n: row interchanges of that LU
   VecX g;                 // n: scratch (a row of Eᵀ, for the null space N)
   VecX dq;                // n: right-hand side, then Newton step, of the corrector
-  // R(φ_b) of every body at the q of the last compute_driven (body_rotations); the corrector
-  // fills it with Eᵀ.
-  std::vector<Eigen::Matrix2d> rotations;
+  // R(φ_b) of every body at the q of the last compute_driven; the corrector updates it with Eᵀ.
+  BodyRotations rotations;
   // Idle degrees of freedom held at zero rate (empty: none): their bodies (Mobility::idle), and
   // at the q of the last compute_driven the idle rows I (k × n), the idle motions V (n × k), I F
   // (k × n_a), the held basis F z (n), İ u (k) and the holding forces μ (k). Not allocation-free.
@@ -302,7 +288,7 @@ struct DrivenWorkspace {
 
 // What a driven position reports at its state (q, u) with u̇ and λ: every joint's reaction
 // (compute_reactions), every measure, the kinetic and potential energies and the dissipated
-// power. `rotations`, if given: R(φ_b) of every body at state.q (no sin/cos then).
+// power. `rotations`: R(φ_b) of every body at state.q.
 struct DrivenOutputs {
   std::vector<double>& reactions;
   std::vector<double>& measures;
@@ -311,7 +297,7 @@ struct DrivenOutputs {
   double& dissipated;
 };
 void compute_driven_outputs(const Model& model, const State& state, const VecX& lambda,
-                            const VecX& udot, const Eigen::Matrix2d* rotations, DrivenOutputs out);
+                            const VecX& udot, const BodyRotations& rotations, DrivenOutputs out);
 
 // A driver's input s(t), ṡ(t), s̈(t) (SI): constant speed s0 + ω t, harmonic initial + a sin(2π f
 // t), polynomial Σ c_k t^k.

@@ -5,6 +5,7 @@
 //   Dᵀ(q, u)        its time derivative along the motion, Dᵀ = d/dt Eᵀ, eq. (76),
 // so that Dᵀu is the convective term of the acceleration constraint Eᵀu̇ + Dᵀu = 0.
 // Rows are stacked joint by joint in file order (Joint::row_offset).
+#include "orthomech/model/free_system.hpp"
 #include "orthomech/model/model.hpp"
 #include "orthomech/model/state.hpp"
 
@@ -22,15 +23,17 @@ struct ConstraintWorkspace {
 void compute_constraint_residual(const Model& model, const VecX& q, VecX& f);
 // Eᵀ(q) only.
 void compute_constraint_jacobian(const Model& model, const VecX& q, MatX& Et);
-// f(q) and Eᵀ(q) in one pass (the point kinematics shared). `rotations`, if given, receives
-// R(φ_b) of every body at q (body_rotations), for the caller's later use at the same q.
-void compute_constraint_residual_and_jacobian(const Model& model, const VecX& q, VecX& f, MatX& Et,
-                                              Eigen::Matrix2d* rotations = nullptr);
+// f(q) and Eᵀ(q) in one pass (the point kinematics shared).
+void compute_constraint_residual_and_jacobian(const Model& model, const VecX& q, VecX& f, MatX& Et);
+// The same with the bodies' rotations at q already computed (rotations.update(model, q)).
+void compute_constraint_residual_and_jacobian(const Model& model, const VecX& q,
+                                              const BodyRotations& rotations, VecX& f, MatX& Et);
 // Dᵀu only (when Eᵀ at the same q is already there), each row's product with u formed directly:
-// ws.Dt is neither formed nor changed. `rotations`, if given: R(φ_b) of every body at state.q
-// (body_rotations). Allocation-free.
-void compute_constraint_rate(const Model& model, const State& state, ConstraintWorkspace& ws,
-                             const Eigen::Matrix2d* rotations = nullptr);
+// ws.Dt is neither formed nor changed. Allocation-free.
+void compute_constraint_rate(const Model& model, const State& state, ConstraintWorkspace& ws);
+// The same with the bodies' rotations at state.q already computed.
+void compute_constraint_rate(const Model& model, const State& state, const BodyRotations& rotations,
+                             ConstraintWorkspace& ws);
 // f, Eᵀ, Dᵀ and Dᵀu at a state. Allocation-free.
 void compute_constraints(const Model& model, const State& state, ConstraintWorkspace& ws);
 

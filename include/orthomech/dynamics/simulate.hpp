@@ -21,8 +21,8 @@
 #include <string>
 #include <vector>
 
-#include "orthomech/analysis/cycle.hpp"
 #include "orthomech/analysis/positions.hpp"
+#include "orthomech/analysis/reactions.hpp"
 #include "orthomech/model/model.hpp"
 #include "orthomech/model/state.hpp"
 
@@ -82,7 +82,7 @@ struct SimulationSample {
   double t = 0.0;
   VecX q, u, udot, lambda;
   std::vector<double> measures;   // per Model::measures
-  std::vector<double> reactions;  // per reaction component (analysis/cycle.hpp)
+  std::vector<double> reactions;  // per reaction component (analysis/reactions.hpp)
   double kinetic = 0.0, potential = 0.0;
   double work = 0.0;               // work of the non-conservative loads since t = 0
   double residual = 0.0;           // max |f(q)| (m, rad)

@@ -5,6 +5,8 @@
 // For the planar bodies implemented here B̃ = I and M is constant, but every function takes q
 // (and u) so that configuration-dependent systems fit the same calls.
 #include <Eigen/Core>
+#include <span>
+#include <vector>
 
 #include "orthomech/model/model.hpp"
 #include "orthomech/model/state.hpp"
@@ -43,16 +45,46 @@ struct PointKinematics {
   bool rotates = false;    // body has an angle coordinate
   bool moving = false;     // not the ground
 };
-// u may be null: then only r and Rs are filled (velocities zero). `rotations`, if given, holds
-// R(φ_b) of every body b at this q (computed once per evaluation instead of once per point).
-// (Defined below, inline: it is called for every point of every joint row and measure.)
+// R(φ_b) of every body b at q into rotations[0 … bodies.size()) (the identity for particles).
+// Allocation-free; rotations.size() must be model.bodies.size().
+void body_rotations(const Model& model, const VecX& q, std::span<Eigen::Matrix2d> rotations);
+
+// The kinematics stage of one position: R(φ_b) of every body at q, computed once (update) and
+// read by every point of every joint row, measure and reaction at that q, instead of a sin/cos
+// per point. Sized at construction (its only allocation); update is allocation-free.
+class BodyRotations {
+ public:
+  explicit BodyRotations(const Model& model);
+  void update(const Model& model, const VecX& q) { body_rotations(model, q, R_); }
+  [[nodiscard]] const Eigen::Matrix2d& operator[](int body) const {
+    return R_[static_cast<size_t>(body)];
+  }
+  [[nodiscard]] std::span<const Eigen::Matrix2d> table() const { return R_; }
+
+ private:
+  std::vector<Eigen::Matrix2d> R_;
+};
+
+namespace detail {
+// point_kinematics with the bodies' rotations from `table` (R(φ_b) per body at q), or computed
+// here when table is null (the writers of joints.cpp and measures.cpp hold such a table).
+[[nodiscard]] inline PointKinematics point_kinematics_at(const Model& model, const PointRef& p,
+                                                         const VecX& q, const VecX* u,
+                                                         const Eigen::Matrix2d* table);
+}  // namespace detail
+
+// u may be null: then only r and Rs are filled (velocities zero). Inline: it is called for every
+// point of every joint row and measure.
+[[nodiscard]] inline PointKinematics point_kinematics(const Model& model, const PointRef& p,
+                                                      const VecX& q, const VecX* u) {
+  return detail::point_kinematics_at(model, p, q, u, nullptr);
+}
+// The same with the bodies' rotations at this q already computed (no sin/cos).
 [[nodiscard]] inline PointKinematics point_kinematics(const Model& model, const PointRef& p,
                                                       const VecX& q, const VecX* u,
-                                                      const Eigen::Matrix2d* rotations = nullptr);
-// R(φ_b) of every body b at q into rotations[0 … bodies.size()) (the identity for particles): the
-// table the `rotations` arguments of point_kinematics, evaluate_measure, compute_reactions,
-// compute_constraint_rate take.
-void body_rotations(const Model& model, const VecX& q, Eigen::Matrix2d* rotations);
+                                                      const BodyRotations& rotations) {
+  return detail::point_kinematics_at(model, p, q, u, rotations.table().data());
+}
 [[nodiscard]] double body_angle(const Model& model, int body, const VecX& q);
 [[nodiscard]] double body_angular_velocity(const Model& model, int body, const VecX& u);
 [[nodiscard]] inline Vec2 perp(const Vec2& a) { return Vec2(-a.y(), a.x()); }  // rotate by +90°
@@ -63,8 +95,9 @@ void body_rotations(const Model& model, const VecX& q, Eigen::Matrix2d* rotation
   return R;
 }
 
-inline PointKinematics point_kinematics(const Model& model, const PointRef& p, const VecX& q,
-                                        const VecX* u, const Eigen::Matrix2d* rotations) {
+inline PointKinematics detail::point_kinematics_at(const Model& model, const PointRef& p,
+                                                   const VecX& q, const VecX* u,
+                                                   const Eigen::Matrix2d* table) {
   PointKinematics k;
   if (p.body == kGround) {
     k.r = p.s;
@@ -75,7 +108,7 @@ inline PointKinematics point_kinematics(const Model& model, const PointRef& p, c
   const Vec2 c(q(b.q_offset), q(b.q_offset + 1));
   if (b.kind == BodyKind::rigid) {
     k.rotates = true;
-    k.Rs = (rotations ? rotations[p.body] : rotation(q(b.q_offset + 2))) * p.s;
+    k.Rs = (table ? table[p.body] : rotation(q(b.q_offset + 2))) * p.s;
     if (u) k.phidot = (*u)(b.u_offset + 2);
   }
   k.r = c + k.Rs;

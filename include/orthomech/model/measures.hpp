@@ -2,6 +2,7 @@
 // Measures and inputs: scalar functions s(q) of the position, with their Jacobian row
 // d = ∂s/∂u (so ṡ = d u) and convective term ḋ u (so s̈ = d u̇ + ḋ u). Drivers use the same
 // functions for the input (design §6).
+#include "orthomech/model/free_system.hpp"
 #include "orthomech/model/model.hpp"
 
 namespace orthomech {
@@ -19,10 +20,12 @@ ScalarKinematics compute_scalar(const Model& model, const MeasureKind& kind, con
                                 const VecX* u);
 
 // Value of a measure (its derivative order applied). udot may be null for derivative < 2.
-// `rotations`, if given, holds R(φ_b) of every body at q (body_rotations): no sin/cos then.
 // Allocation-free.
 [[nodiscard]] double evaluate_measure(const Model& model, const Measure& m, const VecX& q,
+                                      const VecX* u, const VecX* udot);
+// The same with the bodies' rotations at q already computed (no sin/cos).
+[[nodiscard]] double evaluate_measure(const Model& model, const Measure& m, const VecX& q,
                                       const VecX* u, const VecX* udot,
-                                      const Eigen::Matrix2d* rotations = nullptr);
+                                      const BodyRotations& rotations);
 
 }  // namespace orthomech

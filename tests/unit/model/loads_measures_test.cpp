@@ -165,20 +165,21 @@ TEST(Measures, JacobianRateAndConvectiveTermAgainstDifferences) {
 }
 
 // evaluate_measure at every derivative order against compute_scalar (checked above against
-// differences): s, ṡ = d u and s̈ = d u̇ + ḋu, with and without a rotation table (body_rotations
+// differences): s, ṡ = d u and s̈ = d u̇ + ḋu, with and without a rotation table (BodyRotations
 // against rotation(φ) of each body's angle).
 TEST(Measures, EvaluateMeasureAtEveryOrderWithAndWithoutRotationTable) {
   const Model model = parse_mechanism(test::kZooYaml, "zoo");
   const State s = zoo_state(model);
   VecX udot(model.n);
   for (int k = 0; k < model.n; ++k) udot(k) = 0.7 * std::sin(1.1 * k + 0.2);
-  std::vector<Eigen::Matrix2d> rotations(model.bodies.size());
-  body_rotations(model, s.q, rotations.data());
+  BodyRotations rotations(model);
+  rotations.update(model, s.q);
   for (size_t b = 0; b < model.bodies.size(); ++b)
-    EXPECT_LT((rotations[b] - rotation(body_angle(model, static_cast<int>(b), s.q)))
-                  .cwiseAbs()
-                  .maxCoeff(),
-              1e-15);
+    EXPECT_LT(
+        (rotations[static_cast<int>(b)] - rotation(body_angle(model, static_cast<int>(b), s.q)))
+            .cwiseAbs()
+            .maxCoeff(),
+        1e-15);
   for (Measure m : model.measures) {
     VecX d(model.n);
     const ScalarKinematics k = compute_scalar(model, m.kind, s.q, &s.u, d);
@@ -188,8 +189,7 @@ TEST(Measures, EvaluateMeasureAtEveryOrderWithAndWithoutRotationTable) {
       const double tol = 1e-13 * (1.0 + std::abs(expected[order]));
       EXPECT_NEAR(evaluate_measure(model, m, s.q, &s.u, &udot), expected[order], tol)
           << m.name << " derivative " << order;
-      EXPECT_NEAR(evaluate_measure(model, m, s.q, &s.u, &udot, rotations.data()), expected[order],
-                  tol)
+      EXPECT_NEAR(evaluate_measure(model, m, s.q, &s.u, &udot, rotations), expected[order], tol)
           << m.name << " derivative " << order << " (rotation table)";
     }
   }
