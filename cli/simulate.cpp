@@ -225,9 +225,8 @@ nlohmann::json sample_json(const Model& model, const SimulateResult& res, const 
   return j;
 }
 
-int run_simulate(const SimulateCliOptions& opt) {
-  const Model model = load(opt.file, opt.sets);
-  const UnitSystem system = resolve_units(model, opt.units);
+// The library's options from the command line's (times in the file's unit).
+SimulateOptions simulate_options(const Model& model, const SimulateCliOptions& opt) {
   const double file_time = unit_system(model.units).time_si;  // bare times: the file's unit
   SimulateOptions so;
   so.t_end = opt.t_end * file_time;
@@ -240,6 +239,103 @@ int run_simulate(const SimulateCliOptions& opt) {
     throw std::logic_error("simulate: integrator '" + opt.integrator + "' has no stepper");
   for (const std::string& r : opt.rates) so.initial_rates.push_back(parse_rate(model, r));
   so.record_samples = true;
+  return so;
+}
+
+double relative_drift(const SimulateResult& res) {
+  return res.energy_scale > 0 ? res.energy_max_drift / res.energy_scale : 0.0;
+}
+
+// The chart switches and the change points passed, as JSON arrays.
+nlohmann::json chart_switches_json(const SimulateResult& res, const SimulateUnits& U) {
+  nlohmann::json sw = nlohmann::json::array();
+  for (const ChartSwitch& c : res.chart_switches)
+    sw.push_back({{"t", U.time.from_si(c.t)}, {"from", c.from}, {"to", c.to}});
+  return sw;
+}
+nlohmann::json passages_json(const SimulateResult& res, const SimulateUnits& U) {
+  nlohmann::json cp = nlohmann::json::array();
+  for (const ChangePointPassage& c : res.passages)
+    cp.push_back({{"t", U.time.from_si(c.t)},
+                  {"from", U.time.from_si(c.t_from)},
+                  {"to", U.time.from_si(c.t_to)},
+                  {"quality_from", c.sigma_from},
+                  {"quality_to", c.sigma_to},
+                  {"velocity_jump", c.velocity_jump},
+                  {"tangent_cosine", c.tangent_cosine}});
+  return cp;
+}
+
+// The --json document.
+nlohmann::json result_json(const Model& model, const UnitSystem& system, const SimulateOptions& so,
+                           const SimulateResult& res, const SimulateUnits& U, bool positions) {
+  nlohmann::json j;
+  j["mechanism"] = model.name;
+  j["units"] = units_json(system);
+  j["status"] = to_string(res.status);
+  j["message"] = res.message;
+  j["form"] = so.form == DynamicsForm::dual ? "dual" : "primal";
+  j["integrator"] = to_string(so.integrator);
+  j["rtol"] = so.rtol;
+  j["atol"] = so.atol;
+  j["final"] = sample_json(model, res, res.final, U);
+  j["energy"] = {{"initial", U.energy.from_si(res.energy_initial)},
+                 {"final", U.energy.from_si(res.energy_final)},
+                 {"max_drift", U.energy.from_si(res.energy_max_drift)},
+                 {"relative_drift", relative_drift(res)}};
+  j["max_residual_length"] = U.length.from_si(res.max_residual_length);
+  j["max_residual_angle"] = U.angle.from_si(res.max_residual_angle);
+  j["max_velocity_residual"] = res.max_velocity_residual;
+  if (so.form == DynamicsForm::primal) j["max_invariant_J"] = res.max_invariant_J;
+  j["kinetic_energy_removed"] = U.energy.from_si(res.kinetic_removed);
+  j["steps"] = res.steps;
+  j["evaluations"] = res.evaluations;
+  j["rejected_steps"] = res.rejected_steps;
+  j["jacobians"] = res.jacobians;
+  j["chart_switches"] = chart_switches_json(res, U);
+  j["change_points_passed"] = res.passages.size();
+  j["change_points"] = passages_json(res, U);
+  j["samples"] = series_json(model, res, U, positions);
+  return j;
+}
+
+// The text report: a summary, then one line per output time.
+void write_text(std::ostream& out, const Model& model, const SimulateCliOptions& opt,
+                const SimulateOptions& so, const SimulateResult& res, const SimulateUnits& U) {
+  out << "mechanism   " << model.name << "  (" << model.file << ")\n";
+  out << "form        " << opt.form << ", " << opt.integrator << ", rtol " << g(so.rtol, 3)
+      << ", atol " << g(so.atol, 3) << "\n";
+  out << "status      " << to_string(res.status) << (res.message.empty() ? "" : ": ") << res.message
+      << "\n";
+  out << "steps       " << res.steps << " (" << res.evaluations << " evaluations";
+  if (res.rejected_steps > 0) out << ", " << res.rejected_steps << " rejected";
+  if (res.jacobians > 0) out << ", " << res.jacobians << " Jacobians";
+  out << "), " << res.passages.size() << " change points passed\n";
+  const std::string eu = " " + U.energy.name;
+  out << "energy      initial " << g(U.energy.from_si(res.energy_initial)) << eu << ", final "
+      << g(U.energy.from_si(res.energy_final)) << eu << ", max drift "
+      << g(U.energy.from_si(res.energy_max_drift), 3) << eu << " (relative "
+      << g(relative_drift(res), 3) << ")\n";
+  out << "residual    max |f| " << g(U.length.from_si(res.max_residual_length), 3) << " "
+      << U.length.name << " (length rows), " << g(U.angle.from_si(res.max_residual_angle), 3) << " "
+      << U.angle.name << " (angular rows)";
+  if (so.form == DynamicsForm::primal) out << ", max |J| " << g(res.max_invariant_J, 3);
+  out << "\n\n";
+  out << "t [" << U.time.name << "]";
+  for (size_t k = 0; k < model.measures.size(); ++k)
+    out << "\t" << model.measures[k].name << " [" << U.measures[k].name << "]";
+  out << "\tenergy [" << U.energy.name << "]\n";
+  for (const SimulationSample& s : res.samples) {
+    out << g(U.time.from_si(s.t), 6);
+    for (size_t k = 0; k < s.measures.size(); ++k) out << "\t" << g(U.measure(k, s.measures[k]), 8);
+    out << "\t" << g(U.energy_of(s.kinetic + s.potential - s.work), 8) << "\n";
+  }
+}
+
+int run_simulate(const SimulateCliOptions& opt) {
+  const Model model = load(opt.file, opt.sets);
+  const UnitSystem system = resolve_units(model, opt.units);
+  const SimulateOptions so = simulate_options(model, opt);
   const SimulateResult res = simulate(model, so);
   const SimulateUnits U(model, res, system);
   if (res.kinetic_removed > 0.0)
@@ -253,79 +349,10 @@ int run_simulate(const SimulateCliOptions& opt) {
 
   std::ostringstream out;
   const bool ok = res.status == SimulateStatus::completed;
-  const double rel_drift = res.energy_scale > 0 ? res.energy_max_drift / res.energy_scale : 0.0;
-  if (opt.json) {
-    nlohmann::json j;
-    j["mechanism"] = model.name;
-    j["units"] = units_json(system);
-    j["status"] = to_string(res.status);
-    j["message"] = res.message;
-    j["form"] = so.form == DynamicsForm::dual ? "dual" : "primal";
-    j["integrator"] = to_string(so.integrator);
-    j["rtol"] = so.rtol;
-    j["atol"] = so.atol;
-    j["final"] = sample_json(model, res, res.final, U);
-    j["energy"] = {{"initial", U.energy.from_si(res.energy_initial)},
-                   {"final", U.energy.from_si(res.energy_final)},
-                   {"max_drift", U.energy.from_si(res.energy_max_drift)},
-                   {"relative_drift", rel_drift}};
-    j["max_residual_length"] = U.length.from_si(res.max_residual_length);
-    j["max_residual_angle"] = U.angle.from_si(res.max_residual_angle);
-    j["max_velocity_residual"] = res.max_velocity_residual;
-    if (so.form == DynamicsForm::primal) j["max_invariant_J"] = res.max_invariant_J;
-    j["kinetic_energy_removed"] = U.energy.from_si(res.kinetic_removed);
-    j["steps"] = res.steps;
-    j["evaluations"] = res.evaluations;
-    j["rejected_steps"] = res.rejected_steps;
-    j["jacobians"] = res.jacobians;
-    nlohmann::json sw = nlohmann::json::array();
-    for (const ChartSwitch& c : res.chart_switches)
-      sw.push_back({{"t", U.time.from_si(c.t)}, {"from", c.from}, {"to", c.to}});
-    j["chart_switches"] = sw;
-    nlohmann::json cp = nlohmann::json::array();
-    for (const ChangePointPassage& c : res.passages)
-      cp.push_back({{"t", U.time.from_si(c.t)},
-                    {"from", U.time.from_si(c.t_from)},
-                    {"to", U.time.from_si(c.t_to)},
-                    {"quality_from", c.sigma_from},
-                    {"quality_to", c.sigma_to},
-                    {"velocity_jump", c.velocity_jump},
-                    {"tangent_cosine", c.tangent_cosine}});
-    j["change_points_passed"] = res.passages.size();
-    j["change_points"] = cp;
-    j["samples"] = series_json(model, res, U, opt.positions);
-    out << j.dump(2) << '\n';
-  } else {
-    out << "mechanism   " << model.name << "  (" << model.file << ")\n";
-    out << "form        " << opt.form << ", " << opt.integrator << ", rtol " << g(so.rtol, 3)
-        << ", atol " << g(so.atol, 3) << "\n";
-    out << "status      " << to_string(res.status) << (res.message.empty() ? "" : ": ")
-        << res.message << "\n";
-    out << "steps       " << res.steps << " (" << res.evaluations << " evaluations";
-    if (res.rejected_steps > 0) out << ", " << res.rejected_steps << " rejected";
-    if (res.jacobians > 0) out << ", " << res.jacobians << " Jacobians";
-    out << "), " << res.passages.size() << " change points passed\n";
-    const std::string eu = " " + U.energy.name;
-    out << "energy      initial " << g(U.energy.from_si(res.energy_initial)) << eu << ", final "
-        << g(U.energy.from_si(res.energy_final)) << eu << ", max drift "
-        << g(U.energy.from_si(res.energy_max_drift), 3) << eu << " (relative " << g(rel_drift, 3)
-        << ")\n";
-    out << "residual    max |f| " << g(U.length.from_si(res.max_residual_length), 3) << " "
-        << U.length.name << " (length rows), " << g(U.angle.from_si(res.max_residual_angle), 3)
-        << " " << U.angle.name << " (angular rows)";
-    if (so.form == DynamicsForm::primal) out << ", max |J| " << g(res.max_invariant_J, 3);
-    out << "\n\n";
-    out << "t [" << U.time.name << "]";
-    for (size_t k = 0; k < model.measures.size(); ++k)
-      out << "\t" << model.measures[k].name << " [" << U.measures[k].name << "]";
-    out << "\tenergy [" << U.energy.name << "]\n";
-    for (const SimulationSample& s : res.samples) {
-      out << g(U.time.from_si(s.t), 6);
-      for (size_t k = 0; k < s.measures.size(); ++k)
-        out << "\t" << g(U.measure(k, s.measures[k]), 8);
-      out << "\t" << g(U.energy_of(s.kinetic + s.potential - s.work), 8) << "\n";
-    }
-  }
+  if (opt.json)
+    out << result_json(model, system, so, res, U, opt.positions).dump(2) << '\n';
+  else
+    write_text(out, model, opt, so, res, U);
   std::cout << out.str();
   if (!ok) spdlog::error("simulate: {}: {}", to_string(res.status), res.message);
   return ok ? kOk : kNumerical;

@@ -8,6 +8,8 @@
 #include <cstdio>
 #include <limits>
 #include <stdexcept>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "integrator.hpp"
@@ -517,39 +519,23 @@ VecX project_velocity(Dynamics& d, const VecX& u0) {
   return d.H_llt_.solve(d.MF_.transpose() * u0);  // eq. (70): α u₀ = F (H⁻¹ Fᵀ M u₀)
 }
 
-}  // namespace
+// ---- The run, step by step -------------------------------------------------------------------
 
-SimulateResult simulate(const Model& model, const SimulateOptions& options) {
-  State s(model);
-  s.q = model.design_q();
-  if (options.initial_u.size() == model.n) s.u = options.initial_u;
-  if (options.initial_rates.empty() && options.use_file_rates && !model.initial.rates.empty()) {
-    SimulateOptions with_file_rates = options;  // the file's initial rates (Model::initial)
-    for (const InitialRateSpec& r : model.initial.rates)
-      with_file_rates.initial_rates.push_back({r.measure, r.rate});
-    return simulate(model, s, with_file_rates);
-  }
-  return simulate(model, s, options);
-}
-
-SimulateResult simulate(const Model& model, const State& initial, const SimulateOptions& options) {
-  SimulateResult result;
-  result.form = options.form;
-  if (!(options.t_end > 0.0)) throw std::invalid_argument("simulate: t_end must be positive");
-  const bool primal = options.form == DynamicsForm::primal;
-
-  // 1. Consistent positions: mass-metric Gauss–Newton projection of the given position.
-  VecX q = initial.q;
+// 1. Consistent positions: mass-metric Gauss–Newton projection of the given position (q), and
+// the rank of E there. False (result's status and message set) when the start is refused.
+bool consistent_start(const Model& model, const State& initial, const SimulateOptions& options,
+                      VecX& q, int& rank, SimulateResult& result) {
+  q = initial.q;
   PositionOptions popt;
   popt.tolerance = options.position_tolerance;
   result.assembly = project_positions(model, q, popt);
   if (result.assembly.status != SolveStatus::converged) {
     result.status = SimulateStatus::failed_assembly;
     result.message = "the initial position does not assemble: " + result.assembly.message;
-    return result;
+    return false;
   }
   const Mobility mob = compute_mobility(model, q);
-  const int rank = mob.rank;
+  rank = mob.rank;
   // A start on a change point: E has lost rank there, so the velocity has more admissible
   // directions than on any branch through it and no branch is defined by the start. Refused
   // when the rank is below that at the design position (the generic rank of the file).
@@ -563,102 +549,93 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
             "the initial position is a change point: rank E = " + std::to_string(rank) +
             " there, " + std::to_string(generic) +
             " at the design position (the motion's branch is not defined there)";
-        return result;
+        return false;
       }
     }
   }
-  const int n = model.n, nq = model.nq, na = n - rank;
-  Dynamics dyn(model, rank, options);
-  result.components = reaction_components(model);
+  return true;
+}
 
-  // 2. Chart and F at q; velocities u = α u₀ (eq. (70)), then the requested rates.
-  dyn.state_.q = q;
-  dyn.state_.u.setZero();
-  dyn.free_system();
-  compute_constraint_jacobian(model, q, dyn.ws_.constraints.Et);
-  if (!dyn.cs_.select(dyn.ws_.constraints.Et, dyn.ws_.free.A_diag) ||
-      !dyn.factor_chart(dyn.ws_.constraints.Et)) {
-    result.status = SimulateStatus::singular;
-    result.message = "the initial position is singular (E loses rank there)";
-    return result;
+// The 4-stage Lobatto IIIA collocation method (order 6) [Hairer, Nørsett & Wanner, Solving ODEs
+// II, §IV.5]: nodes c = (0, (5 ∓ √5)/10, 1), coefficients L.
+struct LobattoIIIA {
+  double r5 = std::sqrt(5.0);
+  double c[4] = {0.0, (5.0 - r5) / 10.0, (5.0 + r5) / 10.0, 1.0};
+  double L[4][4] = {{0.0, 0.0, 0.0, 0.0},
+                    {(11 + r5) / 120, (25 - r5) / 120, (25 - 13 * r5) / 120, (-1 + r5) / 120},
+                    {(11 - r5) / 120, (25 + 13 * r5) / 120, (25 + r5) / 120, (-1 - r5) / 120},
+                    {1.0 / 12, 5.0 / 12, 5.0 / 12, 1.0 / 12}};
+};
+
+// One run of simulate() from a consistent start (q, rank): the run's state as members, its
+// steps as methods, in the order run() calls them:
+//   2. start_chart, consistent_velocities: the chart, F and u = α u₀ (eq. (70)) at the start;
+//   3. initial_ode_state, start_monitor, set_up_problem, start_energy: the ODE, the output
+//      grid, the change-point monitor and the energy balance;
+//   drive: the integration in segments (run_to; accept after every step), undoing steps that
+//      crossed a change point (rewind), approaching (approach) and passing (pass) change points;
+//   finish: the final sample and status.
+class Simulation {
+ public:
+  Simulation(const Model& model, const State& initial, const SimulateOptions& options,
+             const VecX& q, int rank, SimulateResult result)
+      : model_(model),
+        initial_(initial),
+        options_(options),
+        result_(std::move(result)),
+        primal_(options.form == DynamicsForm::primal),
+        n_(model.n),
+        nq_(model.nq),
+        na_(model.n - rank),
+        rank_(rank),
+        nx_(primal_ ? model.nq + model.n + 1 : model.nq + model.n - rank + 1),
+        dyn_(model, rank, options),
+        q_(q),
+        x_(nx_),
+        f_(model.nc),
+        dq_(model.n),
+        u_step_(VecX::Zero(model.n)),
+        T0_(initial.t),
+        T1_(initial.t + options.t_end),
+        dt_out_(options.dt_out > 0.0 ? options.dt_out : options.t_end / 100.0),
+        grid_slack_(1e-12 * std::max(1.0, std::abs(T1_))),
+        end_slack_(1e-14 * std::max(1.0, std::abs(T1_))),
+        t_last_accept_(initial.t),
+        rate_x_(VecX::Zero(model.n)),
+        rate_state_(model),
+        rate_ws_(model),
+        angular_row_(static_cast<size_t>(model.nc), 0),
+        local_passage_(model.nq != model.n),
+        t_now_(initial.t) {
+    result_.components = reaction_components(model);
   }
-  dyn.compute_F();
-  dyn.cs_.select_from_tangent(dyn.F_, dyn.M_sqrt());  // independent components that move most
-  if (!dyn.factor_chart(dyn.ws_.constraints.Et)) {
-    result.status = SimulateStatus::singular;
-    result.message = "the initial position is singular (E loses rank there)";
-    return result;
-  }
-  dyn.compute_F();
-  dyn.compute_H();
-  const VecX u0 = initial.u.size() == n ? initial.u : VecX::Zero(n);
-  VecX v = project_velocity(dyn, u0);
-  {
-    const VecX du = u0 - dyn.F_ * v;
-    result.kinetic_removed = 0.5 * du.dot(dyn.ws_.free.M * du);
-  }
-  if (!options.initial_rates.empty()) {
-    const int m = static_cast<int>(options.initial_rates.size());
-    MatX D(m, n);
-    VecX s(m);
-    for (int i = 0; i < m; ++i) {
-      const InitialRate& ir = options.initial_rates[static_cast<size_t>(i)];
-      if (ir.measure < 0 || ir.measure >= static_cast<int>(model.measures.size()))
-        throw std::invalid_argument("simulate: initial rate of an unknown measure");
-      VecX d(n);
-      (void)compute_scalar(model, model.measures[static_cast<size_t>(ir.measure)].kind, q, nullptr,
-                           d);
-      D.row(i) = d.transpose();
-      s(i) = ir.rate;
+
+  [[nodiscard]] SimulateResult run() {
+    // 2. Chart and F at q; velocities u = α u₀ (eq. (70)), then the requested rates.
+    if (!start_chart()) {
+      result_.status = SimulateStatus::singular;
+      result_.message = "the initial position is singular (E loses rank there)";
+      return std::move(result_);
     }
-    const MatX DF = D * dyn.F_;
-    const Eigen::CompleteOrthogonalDecomposition<MatX> cod(DF);
-    v += cod.solve(s - DF * v);  // least-squares change of v (minimum-norm)
+    const VecX v = consistent_velocities();
+    initial_ode_state(v);
+    start_monitor();
+    set_up_problem();
+    start_energy(v);
+    drive();
+    finish();
+    return std::move(result_);
   }
 
-  // 3. ODE state: dual (q, v, W) or primal (q, p, W); W = work of non-conservative loads.
-  const int nx = primal ? nq + n + 1 : nq + na + 1;
-  VecX x(nx);
-  x.head(nq) = q;
-  if (primal)
-    x.segment(nq, n) = dyn.ws_.free.M * (dyn.F_ * v);  // p = M u, eq. (5)
-  else
-    x.segment(nq, na) = v;
-  x(nx - 1) = 0.0;
-
-  double energy0 = 0.0;
-  bool have_energy0 = false;
-  long evaluations = 0;
-  VecX f(model.nc), dq(n), u_step(VecX::Zero(n));
-  double spread_limit = kSpreadLimit;  // chart monitor threshold (raised while no chart helps)
-
-  // Output grid T0 + k·dt_out ≤ T1. The integration runs in segments (between change-point
-  // passages and approaches): every output time is emitted once, whatever segment reaches it.
-  const double T0 = initial.t, T1 = initial.t + options.t_end;
-  const double dt_out = options.dt_out > 0.0 ? options.dt_out : options.t_end / 100.0;
-  const double grid_slack = 1e-12 * std::max(1.0, std::abs(T1));
-  const double end_slack = 1e-14 * std::max(1.0, std::abs(T1));
-  long next_out = 0;
-  const auto grid_time = [&](long k) { return T0 + static_cast<double>(k) * dt_out; };
-  const auto grid_pending = [&] { return grid_time(next_out) <= T1 + grid_slack; };
-
-  // Change-point monitor (both forms): σ̂ = σ_min(E_RDᵀ S_D)/σ_ref at every accepted, corrected
-  // state (ChartEngine::estimate_sigma_min; S = diag(1/√M_kk), σ_ref the largest mass-scaled
-  // column norm of Eᵀ at the start). Near a change point σ̂ ≈ a |t − t*| (C1), so two states
-  // give the estimate t* = t_k + σ̂_k (t_k − t_{k−1}) / (σ̂_{k−1} − σ̂_k).
-  VecX sigma_w;
-  double sigma_ref = 0.0;
-  for (int k = 0; k < n; ++k)
-    sigma_ref = std::max(sigma_ref, dyn.ws_.constraints.Et.col(k).norm() * dyn.ws_.free.A_sqrt(k));
-  if (!(sigma_ref > 0.0)) sigma_ref = 1.0;
+ private:
   struct MonitorPoint {
     bool valid = false;
     double t = 0.0, sigma = 0.0;
-  } monitor;
+  };
   struct Request {
     bool pending = false;
     double t_star = 0.0, sigma = 0.0;
-  } request;
+  };
   // The last two accepted states (with their charts): a step that crossed a change point
   // unannounced (C2') is undone back to the last state before it.
   struct SavedState {
@@ -667,55 +644,248 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
     double spread = 0.0;                      // the chart's spread (dual form; 0: unknown)
     VecX x;
     Chart chart;
-  } saved_older, saved_prev;
-  int rewind_to = -1;  // 0: saved_older, 1: saved_prev (with request)
-  double last_rewind_t_star = -std::numeric_limits<double>::infinity();
-  bool monitor_armed = true;
-  // Set when an approach does not reach σ̂ ≤ pass_quality in kMaxApproaches segments (σ̂ has a
-  // minimum above 0 there, not a change point): no request until σ̂ rises again.
-  bool monitor_quiet = false;
-  double pass_quality = kPassQuality;  // σ̂ at which the next passage is tried
-  double t_last_accept = T0, h_last = 0.0;
-  const auto chart_quality = [&]() {
-    if (model.nc == 0 || rank == 0) return std::numeric_limits<double>::infinity();
-    return dyn.cs_.estimate_sigma_min(sigma_w) / sigma_ref;
   };
+
+  // ---- 2. The start: chart, F and velocities ------------------------------------------------
+
+  // The chart at q (selected from Eᵀ, then from F: the independent components that move
+  // most), factorised, and F in it. False when the position is singular.
+  bool start_chart() {
+    dyn_.state_.q = q_;
+    dyn_.state_.u.setZero();
+    dyn_.free_system();
+    compute_constraint_jacobian(model_, q_, dyn_.ws_.constraints.Et);
+    if (!dyn_.cs_.select(dyn_.ws_.constraints.Et, dyn_.ws_.free.A_diag) ||
+        !dyn_.factor_chart(dyn_.ws_.constraints.Et))
+      return false;
+    dyn_.compute_F();
+    dyn_.cs_.select_from_tangent(dyn_.F_, dyn_.M_sqrt());  // independent components that move most
+    if (!dyn_.factor_chart(dyn_.ws_.constraints.Et)) return false;
+    dyn_.compute_F();
+    return true;
+  }
+
+  // v: the chart coordinates of u = α u₀ (eq. (70)), changed by the requested initial rates.
+  VecX consistent_velocities() {
+    dyn_.compute_H();
+    const VecX u0 = initial_.u.size() == n_ ? initial_.u : VecX::Zero(n_);
+    VecX v = project_velocity(dyn_, u0);
+    {
+      const VecX du = u0 - dyn_.F_ * v;
+      result_.kinetic_removed = 0.5 * du.dot(dyn_.ws_.free.M * du);
+    }
+    if (!options_.initial_rates.empty()) apply_initial_rates(v);
+    return v;
+  }
+
+  // The requested rates of measures: the least-squares change of v (minimum-norm).
+  void apply_initial_rates(VecX& v) const {
+    const int m = static_cast<int>(options_.initial_rates.size());
+    MatX D(m, n_);
+    VecX s(m);
+    for (int i = 0; i < m; ++i) {
+      const InitialRate& ir = options_.initial_rates[static_cast<size_t>(i)];
+      if (ir.measure < 0 || ir.measure >= static_cast<int>(model_.measures.size()))
+        throw std::invalid_argument("simulate: initial rate of an unknown measure");
+      VecX d(n_);
+      (void)compute_scalar(model_, model_.measures[static_cast<size_t>(ir.measure)].kind, q_,
+                           nullptr, d);
+      D.row(i) = d.transpose();
+      s(i) = ir.rate;
+    }
+    const MatX DF = D * dyn_.F_;
+    const Eigen::CompleteOrthogonalDecomposition<MatX> cod(DF);
+    v += cod.solve(s - DF * v);  // least-squares change of v (minimum-norm)
+  }
+
+  // ---- 3. The ODE, the monitor, the energy balance ------------------------------------------
+
+  // 3. ODE state: dual (q, v, W) or primal (q, p, W); W = work of non-conservative loads.
+  void initial_ode_state(const VecX& v) {
+    x_.head(nq_) = q_;
+    if (primal_)
+      x_.segment(nq_, n_) = dyn_.ws_.free.M * (dyn_.F_ * v);  // p = M u, eq. (5)
+    else
+      x_.segment(nq_, na_) = v;
+    x_(nx_ - 1) = 0.0;
+  }
+
+  // Change-point monitor (both forms): σ̂ = σ_min(E_RDᵀ S_D)/σ_ref at every accepted, corrected
+  // state (ChartEngine::estimate_sigma_min; S = diag(1/√M_kk), σ_ref the largest mass-scaled
+  // column norm of Eᵀ at the start). Near a change point σ̂ ≈ a |t − t*| (C1), so two states
+  // give the estimate t* = t_k + σ̂_k (t_k − t_{k−1}) / (σ̂_{k−1} − σ̂_k).
+  void start_monitor() {
+    for (int k = 0; k < n_; ++k)
+      sigma_ref_ =
+          std::max(sigma_ref_, dyn_.ws_.constraints.Et.col(k).norm() * dyn_.ws_.free.A_sqrt(k));
+    if (!(sigma_ref_ > 0.0)) sigma_ref_ = 1.0;
+  }
+
+  // The integrator's problem (right-hand side, step acceptance, outputs, step limit) and
+  // options; the rows of f that are angles.
+  void set_up_problem() {
+    problem_.rhs = [this](const VecX& y, VecX& dy, double t) { rhs(y, dy, t); };
+    problem_.autonomous = !model_.general;  // only a general system's forces may depend on t
+    if (!primal_ && dyn_.project_stages_)
+      problem_.jacobian_columns = [this](std::vector<Eigen::Index>& columns) {
+        jacobian_columns(columns);
+      };
+    problem_.output = [this](double t, const VecX& y) { emit(t, y); };
+    problem_.step_limit = [this] { return next_step_limit_; };
+    problem_.accept = [this](double t, VecX& y) { return accept(t, y); };
+    // Rows of f that are angles (joint components "angle", "ratio"): the residual by kind.
+    for (const Joint& j : model_.joints) {
+      const auto names = j.component_names();
+      for (int k = 0; k < j.rows(); ++k)
+        angular_row_[static_cast<size_t>(j.row_offset + k)] =
+            is_angular_row(names[static_cast<size_t>(k)]) ? 1 : 0;
+    }
+    base_.stepper = ode_stepper(options_.integrator);
+    base_.rtol = options_.rtol;
+    base_.atol = options_.atol;
+    base_.max_dt = options_.max_step;
+    base_.max_steps = options_.max_steps;
+  }
+
+  // Initial energy (at the consistent initial state), and σ̂ with its rate at the start
+  // ((C2'') checks the first step too).
+  void start_energy(const VecX& v) {
+    dyn_.state_.q = q_;
+    dyn_.state_.u = dyn_.F_ * v;
+    energy0_ = kinetic_energy(model_, dyn_.state_) + potential_energy(model_, q_);
+    have_energy0_ = true;
+    result_.energy_scale =
+        std::abs(kinetic_energy(model_, dyn_.state_)) + std::abs(potential_energy(model_, q_));
+    saved_prev_.valid = true;
+    saved_prev_.t = T0_;
+    saved_prev_.sigma = chart_quality_rate(q_, dyn_.state_.u, saved_prev_.rate);
+    saved_prev_.spread = primal_ ? 0.0 : dyn_.chart_spread();
+    saved_prev_.x = x_;
+    saved_prev_.chart = dyn_.cs_.chart();
+  }
+
+  // ---- The integrator's callbacks -------------------------------------------------------------
+
+  void rhs(const VecX& y, VecX& dy, double t) {
+    ++evaluations_;
+    dy.resize(nx_);
+    if (primal_) {
+      dyn_.evaluate_primal(t, y.head(nq_), y.segment(nq_, n_));
+      compute_coordinate_rates(model_, y.head(nq_), dyn_.state_.u, dy.head(nq_));  // eq. (100)
+      dy.segment(nq_, n_) = dyn_.pdot_;
+    } else {
+      dyn_.evaluate_dual(t, y.head(nq_), y.segment(nq_, na_));
+      compute_coordinate_rates(model_, y.head(nq_), dyn_.state_.u, dy.head(nq_));  // q̇ = B̃ u
+      dy.segment(nq_, na_) = dyn_.vdot_;
+    }
+    dy(nx_ - 1) = dyn_.nonconservative_power();
+  }
+
+  // With projected stages the right-hand side depends on q through the chart's independent
+  // coordinates only (the dependent ones are solved for): the Jacobian's other position
+  // columns, and the work column, are zero. A planar body's velocity component k is its
+  // coordinate k; a spatial body's rotation moves all four quaternion components.
+  void jacobian_columns(std::vector<Eigen::Index>& columns) const {
+    columns.clear();
+    const Chart& c = dyn_.cs_.chart();
+    for (const int k : c.independent) {
+      if (model_.nq == model_.n) {
+        columns.push_back(k);
+        continue;
+      }
+      for (const Body& b : model_.bodies) {
+        if (k < b.u_offset || k >= b.u_offset + b.nu()) continue;
+        if (b.nq() == b.nu()) {
+          columns.push_back(b.q_offset + (k - b.u_offset));
+        } else {
+          for (int i = 0; i < b.nq(); ++i) columns.push_back(b.q_offset + i);
+        }
+      }
+    }
+    std::sort(columns.begin(), columns.end());
+    columns.erase(std::unique(columns.begin(), columns.end()), columns.end());
+    for (int k = 0; k < na_; ++k) columns.push_back(nq_ + k);
+  }
+
+  // ---- Output grid and samples ----------------------------------------------------------------
+
+  // Output grid T0 + k·dt_out ≤ T1. The integration runs in segments (between change-point
+  // passages and approaches): every output time is emitted once, whatever segment reaches it.
+  [[nodiscard]] double grid_time(long k) const { return T0_ + static_cast<double>(k) * dt_out_; }
+  [[nodiscard]] bool grid_pending() const { return grid_time(next_out_) <= T1_ + grid_slack_; }
+
+  void sample_at(double t, const VecX& y, SimulationSample& smp) {
+    if (primal_) {
+      dyn_.evaluate_primal(t, y.head(nq_), y.segment(nq_, n_));
+      dyn_.udot_ =
+          dyn_.ws_.free.A *
+          (dyn_.pdot_ - (dyn_.ws_.free.constant_mass ? VecX::Zero(n_)
+                                                     : VecX(dyn_.ws_.free.Mdot * dyn_.state_.u)));
+    } else {
+      dyn_.evaluate_dual(t, y.head(nq_), y.segment(nq_, na_));
+    }
+    dyn_.fill_sample(y(nx_ - 1), smp, primal_);
+  }
+
+  // An output at t (a grid time within the slack, not yet emitted); other times (a segment's
+  // start) are ignored.
+  void emit(double t, const VecX& y) {
+    if (!grid_pending() || std::abs(t - grid_time(next_out_)) > grid_slack_) return;
+    if (options_.record_samples) {
+      result_.samples.emplace_back();
+      sample_at(t, y, result_.samples.back());
+    }
+    ++next_out_;
+  }
+
+  void note_residual(const VecX& res) {
+    for (Eigen::Index r = 0; r < res.size(); ++r) {
+      double& to = angular_row_[static_cast<size_t>(r)] ? result_.max_residual_angle
+                                                        : result_.max_residual_length;
+      to = std::max(to, std::abs(res(r)));
+    }
+  }
+
+  // ---- Chart quality σ̂ ----------------------------------------------------------------------
+
+  double chart_quality() {
+    if (model_.nc == 0 || rank_ == 0) return std::numeric_limits<double>::infinity();
+    return dyn_.cs_.estimate_sigma_min(sigma_w_) / sigma_ref_;
+  }
+
   // (C1) σ̂ and its rate dσ̂/dt at (q, u) in the current chart (factorised at q): the rate of a
   // simple singular value is ŷᵀ (dB̃/dt) ŵ with its unit singular vectors [Stewart & Sun 1990,
   // §IV.2], and (dEᵀ/dt) x = H(u, x) is the constraints' second derivative, bilinear in (u, x);
   // H(y, y) = Dᵀy is the constraint rate (compute_constraint_rate), so by polarisation
   // H(u, x) = (D(u + x)ᵀ(u + x) − D(u − x)ᵀ(u − x))/4 (x scaled to |u| against cancellation).
   // Allocation-free after the first call.
-  VecX sigma_left, rate_x = VecX::Zero(n), rate_plus;
-  State rate_state(model);
-  ConstraintWorkspace rate_ws(model);
-  const auto chart_quality_rate = [&](const VecX& qq, const VecX& uu, double& rate) {
+  double chart_quality_rate(const VecX& qq, const VecX& uu, double& rate) {
     rate = 0.0;
-    if (model.nc == 0 || rank == 0) return std::numeric_limits<double>::infinity();
-    const double sigma = dyn.cs_.estimate_sigma_min(sigma_w, &sigma_left) / sigma_ref;
-    const double wn = sigma_w.norm(), un = uu.norm();
+    if (model_.nc == 0 || rank_ == 0) return std::numeric_limits<double>::infinity();
+    const double sigma = dyn_.cs_.estimate_sigma_min(sigma_w_, &sigma_left_) / sigma_ref_;
+    const double wn = sigma_w_.norm(), un = uu.norm();
     if (!(sigma > 0.0) || !(wn > 0.0) || !std::isfinite(wn) || !(un > 0.0)) return sigma;
-    const Chart& c = dyn.cs_.chart();
-    rate_x.setZero();
-    for (int k = 0; k < rank; ++k) {
+    const Chart& c = dyn_.cs_.chart();
+    rate_x_.setZero();
+    for (int k = 0; k < rank_; ++k) {
       const int d = c.dependent[static_cast<size_t>(k)];
-      rate_x(d) = dyn.ws_.free.A_sqrt(d) * sigma_w(k) / wn;  // x = S_D ŵ
+      rate_x_(d) = dyn_.ws_.free.A_sqrt(d) * sigma_w_(k) / wn;  // x = S_D ŵ
     }
-    const double alpha = un / rate_x.norm();
-    rate_state.q = qq;
-    rate_state.u = uu + alpha * rate_x;
-    compute_constraint_rate(model, rate_state, rate_ws);
-    rate_plus = rate_ws.Dtu;
-    rate_state.u = uu - alpha * rate_x;
-    compute_constraint_rate(model, rate_state, rate_ws);
+    const double alpha = un / rate_x_.norm();
+    rate_state_.q = qq;
+    rate_state_.u = uu + alpha * rate_x_;
+    compute_constraint_rate(model_, rate_state_, rate_ws_);
+    rate_plus_ = rate_ws_.Dtu;
+    rate_state_.u = uu - alpha * rate_x_;
+    compute_constraint_rate(model_, rate_state_, rate_ws_);
     double d = 0.0;
-    for (int i = 0; i < rank; ++i) {
+    for (int i = 0; i < rank_; ++i) {
       const int row = c.rows[static_cast<size_t>(i)];
-      d += sigma_left(i) * (rate_plus(row) - rate_ws.Dtu(row));
+      d += sigma_left_(i) * (rate_plus_(row) - rate_ws_.Dtu(row));
     }
-    rate = 0.25 * d / (alpha * sigma_ref);
+    rate = 0.25 * d / (alpha * sigma_ref_);
     return sigma;
-  };
+  }
 
   // (C2'') A change point inside the step just taken (from saved_prev, in the same chart): σ̂
   // fell at the start and rises at the end, and the two tangents σ̂₀ + σ̂'₀ τ and
@@ -724,464 +894,424 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
   // the step's length and whatever the chart did before: the step is undone and the point
   // approached from the step's start, with t* at the tangents' vertex. Returns true when the
   // step must be undone (request set) or the run stopped (stop_message set).
-  std::string stop_message;
-  int crossing_rewinds = 0;
-  double last_crossing_t_star = -std::numeric_limits<double>::infinity();
-  const auto crossed_within_step = [&](double t, double s1, double d1) {
-    if (!monitor_armed || !saved_prev.valid || !(saved_prev.rate < 0.0) || !(d1 > 0.0))
+  bool crossed_within_step(double t, double s1, double d1) {
+    if (!monitor_armed_ || !saved_prev_.valid || !(saved_prev_.rate < 0.0) || !(d1 > 0.0))
       return false;
-    const Chart& c = dyn.cs_.chart();
-    if (saved_prev.chart.independent != c.independent || saved_prev.chart.rows != c.rows)
+    const Chart& c = dyn_.cs_.chart();
+    if (saved_prev_.chart.independent != c.independent || saved_prev_.chart.rows != c.rows)
       return false;
-    const double h = t - saved_prev.t, s0 = saved_prev.sigma, d0 = saved_prev.rate;
+    const double h = t - saved_prev_.t, s0 = saved_prev_.sigma, d0 = saved_prev_.rate;
     if (!(h > 0.0)) return false;
     const double tau = std::clamp((s0 - s1 + d1 * h) / (d1 - d0), 0.0, h);
     const double vertex = std::max(s0 + d0 * tau, s1 + d1 * (tau - h));
     if (!(vertex < kCrossingVertex * std::min(s0, s1))) return false;
-    last_crossing_t_star = saved_prev.t + tau;
-    if (++crossing_rewinds > kMaxCrossingRewinds) {
+    last_crossing_t_star_ = saved_prev_.t + tau;
+    if (++crossing_rewinds_ > kMaxCrossingRewinds) {
       char buf[160];
       std::snprintf(buf, sizeof buf,
                     "the steps keep crossing the change point at t ≈ %.9g s (undone %d times)",
-                    last_crossing_t_star, kMaxCrossingRewinds);
-      stop_message = buf;
+                    last_crossing_t_star_, kMaxCrossingRewinds);
+      stop_message_ = buf;
       return true;
     }
-    rewind_to = 1;
-    request = {true, last_crossing_t_star, s0};
-    last_rewind_t_star = last_crossing_t_star;
+    rewind_to_ = 1;
+    request_ = {true, last_crossing_t_star_, s0};
+    last_rewind_t_star_ = last_crossing_t_star_;
     return true;
-  };
-
-  detail::OdeProblem problem;
-  problem.rhs = [&](const VecX& y, VecX& dy, double t) {
-    ++evaluations;
-    dy.resize(nx);
-    if (primal) {
-      dyn.evaluate_primal(t, y.head(nq), y.segment(nq, n));
-      compute_coordinate_rates(model, y.head(nq), dyn.state_.u, dy.head(nq));  // eq. (100)
-      dy.segment(nq, n) = dyn.pdot_;
-    } else {
-      dyn.evaluate_dual(t, y.head(nq), y.segment(nq, na));
-      compute_coordinate_rates(model, y.head(nq), dyn.state_.u, dy.head(nq));  // q̇ = B̃ u
-      dy.segment(nq, na) = dyn.vdot_;
-    }
-    dy(nx - 1) = dyn.nonconservative_power();
-  };
-
-  problem.autonomous = !model.general;  // only a general system's forces may depend on t
-  // With projected stages the right-hand side depends on q through the chart's independent
-  // coordinates only (the dependent ones are solved for): the Jacobian's other position
-  // columns, and the work column, are zero. A planar body's velocity component k is its
-  // coordinate k; a spatial body's rotation moves all four quaternion components.
-  if (!primal && dyn.project_stages_)
-    problem.jacobian_columns = [&](std::vector<Eigen::Index>& columns) {
-      columns.clear();
-      const Chart& c = dyn.cs_.chart();
-      for (const int k : c.independent) {
-        if (model.nq == model.n) {
-          columns.push_back(k);
-          continue;
-        }
-        for (const Body& b : model.bodies) {
-          if (k < b.u_offset || k >= b.u_offset + b.nu()) continue;
-          if (b.nq() == b.nu()) {
-            columns.push_back(b.q_offset + (k - b.u_offset));
-          } else {
-            for (int i = 0; i < b.nq(); ++i) columns.push_back(b.q_offset + i);
-          }
-        }
-      }
-      std::sort(columns.begin(), columns.end());
-      columns.erase(std::unique(columns.begin(), columns.end()), columns.end());
-      for (int k = 0; k < na; ++k) columns.push_back(nq + k);
-    };
-
-  auto sample_at = [&](double t, const VecX& y, SimulationSample& smp) {
-    if (primal) {
-      dyn.evaluate_primal(t, y.head(nq), y.segment(nq, n));
-      dyn.udot_ = dyn.ws_.free.A * (dyn.pdot_ - (dyn.ws_.free.constant_mass
-                                                     ? VecX::Zero(n)
-                                                     : VecX(dyn.ws_.free.Mdot * dyn.state_.u)));
-    } else {
-      dyn.evaluate_dual(t, y.head(nq), y.segment(nq, na));
-    }
-    dyn.fill_sample(y(nx - 1), smp, primal);
-  };
-
-  // An output at t (a grid time within the slack, not yet emitted); other times (a segment's
-  // start) are ignored.
-  const auto emit = [&](double t, const VecX& y) {
-    if (!grid_pending() || std::abs(t - grid_time(next_out)) > grid_slack) return;
-    if (options.record_samples) {
-      result.samples.emplace_back();
-      sample_at(t, y, result.samples.back());
-    }
-    ++next_out;
-  };
-  problem.output = [&](double t, const VecX& y) { emit(t, y); };
-
-  double spread_now = 0.0;  // the chart's spread after the last acceptance (dual form)
-  double next_step_limit = std::numeric_limits<double>::infinity();
-  problem.step_limit = [&] { return next_step_limit; };
-  // Rows of f that are angles (joint components "angle", "ratio"): the residual by kind.
-  std::vector<char> angular_row(static_cast<size_t>(model.nc), 0);
-  for (const Joint& j : model.joints) {
-    const auto names = j.component_names();
-    for (int k = 0; k < j.rows(); ++k)
-      angular_row[static_cast<size_t>(j.row_offset + k)] =
-          is_angular_row(names[static_cast<size_t>(k)]) ? 1 : 0;
   }
-  const auto note_residual = [&](const VecX& res) {
-    for (Eigen::Index r = 0; r < res.size(); ++r) {
-      double& to = angular_row[static_cast<size_t>(r)] ? result.max_residual_angle
-                                                       : result.max_residual_length;
-      to = std::max(to, std::abs(res(r)));
-    }
-  };
-  problem.accept = [&](double t, VecX& y) {
-    auto qy = y.head(nq);
-    MatX& Et = dyn.ws_.constraints.Et;
-    dyn.chart_ready_ = false;  // Eᵀ, the chart's factors and F change below
+
+  // ---- Step acceptance ------------------------------------------------------------------------
+
+  // After every accepted step: the step's end corrected (positions, velocities, chart), its
+  // residuals and energy booked, and the change-point monitor run. False stops the integrator
+  // (a change point ahead, or a failed check: stop_message set).
+  bool accept(double t, VecX& y) {
+    dyn_.chart_ready_ = false;  // Eᵀ, the chart's factors and F change below
     bool chart_changed = false;
-    // Residual left by the step (before correction), with Eᵀ at the same q. Quaternions are
-    // renormalised first (|e| = 1 is a first integral of q̇ = B̃u; only the step's error moves
-    // it; f and R do not depend on |e|, spatial.md §6.3).
-    normalize_coordinates(model, qy);
-    q = qy;
-    dyn.mass_at(q);
-    compute_constraint_residual_and_jacobian(model, q, f, Et);
-    if (f.size()) {
-      result.max_constraint_residual =
-          std::max(result.max_constraint_residual, f.cwiseAbs().maxCoeff());
-      note_residual(f);
-    }
-    if (primal) {
-      // Invariant J = Eᵀ A p, eq. (105), before the projection.
-      dyn.state_.q = q;
-      dyn.state_.u.noalias() = dyn.ws_.free.A * y.segment(nq, n);
-      if (model.nc) {
-        const double J = (Et * dyn.state_.u).cwiseAbs().maxCoeff();
-        result.max_invariant_J = std::max(result.max_invariant_J, J);
-        result.max_velocity_residual = std::max(result.max_velocity_residual, J);
-      }
-    }
-    // The chart's block at the step's q: the corrector's first Newton step uses it, and (dual)
-    // the step's velocity u = F(q) v before the correction (re-projected below).
-    const bool factored = dyn.factor_chart(Et);
-    if (!primal) {
-      if (factored) {
-        dyn.compute_F();
-        u_step.noalias() = dyn.F_ * y.segment(nq, na);
-      } else {
-        u_step.setZero();  // exactly singular: keep v as it is (below)
-      }
-    }
-    // Position correction in the chart (Newton; independent coordinates fixed). It leaves Eᵀ
-    // at the corrected q factorised in the chart.
-    ChartCorrectionResult corr = dyn.cs_.correct_positions(
-        q, Et, f, dq,
-        {.tolerance = options.position_tolerance,
-         .max_gain = kMaxCorrectionGain,
-         .start = factored ? ChartCorrection::Start::prepared : ChartCorrection::Start::evaluate});
-    if (corr.near_singular) ++result.uncorrected_steps;
-    if (corr.status == SolveStatus::singular) {  // try a fresh chart once
-      compute_constraint_jacobian(model, q, Et);
-      if (dyn.cs_.select(Et, dyn.ws_.free.A_diag))
-        corr = dyn.cs_.correct_positions(q, Et, f, dq, {.tolerance = options.position_tolerance});
-      chart_changed = true;
-    }
-    if (corr.status != SolveStatus::converged) {
-      stop_message =
-          "position correction failed at t = " + time_text(model, t) + ": " + corr.message;
-      return false;
-    }
-    qy = q;
-    dyn.compute_F();
-    dyn.mass_at(q);
-    dyn.state_.q = q;
-    if (primal) dyn.state_.u.noalias() = dyn.ws_.free.A * y.segment(nq, n);
+    book_step_residual(y);
+    if (!correct_step(t, y, chart_changed)) return false;
     // (C2'') σ̂ and its rate at the step's end in the step's chart (the block is factorised at
     // the corrected q): a change point inside the step, whatever the step's length, is undone
     // before anything else looks at the step's end (its velocity check included).
     double rate_end = 0.0;
-    const double sigma_end = chart_quality_rate(q, primal ? dyn.state_.u : u_step, rate_end);
+    const double sigma_end = chart_quality_rate(q_, primal_ ? dyn_.state_.u : u_step_, rate_end);
     if (!chart_changed && crossed_within_step(t, sigma_end, rate_end)) return false;
-    if (primal) {
-      // Momenta: p ← M α u, the mass-orthogonal projection (eq. (44): α = I − A π).
-      dyn.compute_H();
-      const VecX vv = project_velocity(dyn, dyn.state_.u);
-      dyn.state_.u.noalias() = dyn.F_ * vv;
-      y.segment(nq, n) = dyn.ws_.free.M * dyn.state_.u;
-      // A poor chart only slows the corrector: re-select it when it degrades.
-      if (dyn.chart_spread() > kSpreadLimit) {
-        const Chart old = dyn.cs_.chart();
-        dyn.cs_.select_from_tangent(dyn.F_, dyn.M_sqrt());
-        chart_changed = true;
-        if (!dyn.factor_chart(dyn.ws_.constraints.Et)) {
-          dyn.cs_.set_chart(old);
-          (void)dyn.factor_chart(dyn.ws_.constraints.Et);
-        }
-      }
+    if (primal_) {
+      project_momenta(y, chart_changed);
     } else {
-      // v ← H⁻¹ Fᵀ M u_step: the admissible velocity at the corrected position closest to the
-      // step's velocity in the mass metric (eq. (70), u = α u_step), rather than keeping u_I.
-      if (u_step.squaredNorm() > 0.0) {
-        dyn.compute_H();
-        y.segment(nq, na) = project_velocity(dyn, u_step);
-        // The velocity the projection removes is the step's own error; a step that left the
-        // branch (a change point crossed within one step onto another branch) loses a finite
-        // part of it: refused (C6).
-        const VecX du = u_step - dyn.F_ * y.segment(nq, na);
-        const double uu = u_step.dot(dyn.ws_.free.M * u_step);
-        const double jump = uu > 0.0 ? std::sqrt(du.dot(dyn.ws_.free.M * du) / uu) : 0.0;
-        if (jump > kStepVelocityJump) {
-          stop_message = "the step to t = " + time_text(model, t) +
-                         " s left the motion's branch (its velocity changes by " +
-                         std::to_string(jump) +
-                         " relative when made admissible): a change point was crossed within "
-                         "one step";
-          return false;
-        }
-      }
-      // Chart monitor: re-select when F's mass-scaled entries grow; switch if the new chart is
-      // clearly better (hysteresis 2), re-expressing v from u = F v.
-      const double spread = dyn.chart_spread();
+      if (!project_step_velocity(t, y)) return false;
+      const double spread = monitor_chart(t, y, chart_changed);
+      dyn_.state_.u.noalias() = dyn_.F_ * y.segment(nq_, na_);
+      dyn_.chart_q_ = q_;  // Eᵀ, the factors and F are those at the corrected q
+      dyn_.chart_ready_ = true;
+      limit_next_step(t, spread, chart_changed);
+    }
+    book_energy(t, y);
+    return !monitor_change_points(t, y, sigma_end, rate_end, chart_changed);
+  }
 
-      if (spread > spread_limit) {
-        const Chart old = dyn.cs_.chart();
-        const VecX u = dyn.F_ * y.segment(nq, na);
-        dyn.cs_.select_from_tangent(dyn.F_, dyn.M_sqrt());
-        bool switched = false;
-        if (dyn.factor_chart(dyn.ws_.constraints.Et)) {
-          dyn.compute_F();
-          // Take the new chart only if it is clearly better (hysteresis 2): next to a change
-          // point F is inaccurate in every chart and switching would not help.
-          if (dyn.chart_spread() < 0.5 * spread) {
-            for (int k = 0; k < na; ++k)
-              y(nq + k) = u(dyn.cs_.chart().independent[static_cast<size_t>(k)]);
-            result.chart_switches.push_back(
-                {t, chart_name(model, old), chart_name(model, dyn.cs_.chart())});
-            spread_limit = kSpreadLimit;
-            switched = true;
-            chart_changed = true;
-          }
-        }
-        if (!switched) {  // keep the chart; try again only when it degrades further
-          dyn.cs_.set_chart(old);
-          (void)dyn.factor_chart(dyn.ws_.constraints.Et);
-          dyn.compute_F();
-          spread_limit = 2.0 * spread;
-        }
-      } else if (spread < 0.5 * spread_limit) {
-        spread_limit = std::max(kSpreadLimit, 2.0 * spread);
-      }
-      dyn.state_.u.noalias() = dyn.F_ * y.segment(nq, na);
-      dyn.chart_q_ = q;  // Eᵀ, the factors and F are those at the corrected q
-      dyn.chart_ready_ = true;
-      // Ahead of the chart's own singularity (its block singular, F unbounded, E regular: the
-      // spread ~ 1/(t_s − t)): 1/spread is linear in t there, so two values in this chart give
-      // t_s, and the next step ends at most half-way to it (the monitor above switches charts
-      // at a step end; a step that ran into the singularity would have integrated, and been
-      // corrected, where F is ill-conditioned: on the N = 40 bar one Bulirsch–Stoer step at
-      // rtol 1e-8 lost 5e-7 of the energy that way).
-      spread_now = chart_changed ? dyn.chart_spread() : spread;
-      next_step_limit = std::numeric_limits<double>::infinity();
-      if (!chart_changed && saved_prev.valid && saved_prev.spread > 0.0 && t > saved_prev.t &&
-          saved_prev.chart.independent == dyn.cs_.chart().independent) {
-        const double slope = (1.0 / spread_now - 1.0 / saved_prev.spread) / (t - saved_prev.t);
-        if (slope < 0.0) next_step_limit = kChartStepFraction * (1.0 / spread_now) / -slope;
+  // Residual left by the step (before correction), with Eᵀ at the same q. Quaternions are
+  // renormalised first (|e| = 1 is a first integral of q̇ = B̃u; only the step's error moves
+  // it; f and R do not depend on |e|, spatial.md §6.3).
+  void book_step_residual(VecX& y) {
+    auto qy = y.head(nq_);
+    MatX& Et = dyn_.ws_.constraints.Et;
+    normalize_coordinates(model_, qy);
+    q_ = qy;
+    dyn_.mass_at(q_);
+    compute_constraint_residual_and_jacobian(model_, q_, f_, Et);
+    if (f_.size()) {
+      result_.max_constraint_residual =
+          std::max(result_.max_constraint_residual, f_.cwiseAbs().maxCoeff());
+      note_residual(f_);
+    }
+    if (primal_) {
+      // Invariant J = Eᵀ A p, eq. (105), before the projection.
+      dyn_.state_.q = q_;
+      dyn_.state_.u.noalias() = dyn_.ws_.free.A * y.segment(nq_, n_);
+      if (model_.nc) {
+        const double J = (Et * dyn_.state_.u).cwiseAbs().maxCoeff();
+        result_.max_invariant_J = std::max(result_.max_invariant_J, J);
+        result_.max_velocity_residual = std::max(result_.max_velocity_residual, J);
       }
     }
-    // Energy balance T + V − W at the corrected state.
-    const double T = kinetic_energy(model, dyn.state_);
-    const double V = potential_energy(model, q);
-    const double W = y(nx - 1);
+  }
+
+  // The step's position corrected in the chart; (dual) its velocity before the correction in
+  // u_step. False when the correction fails (stop_message set).
+  bool correct_step(double t, VecX& y, bool& chart_changed) {
+    auto qy = y.head(nq_);
+    MatX& Et = dyn_.ws_.constraints.Et;
+    // The chart's block at the step's q: the corrector's first Newton step uses it, and (dual)
+    // the step's velocity u = F(q) v before the correction (re-projected below).
+    const bool factored = dyn_.factor_chart(Et);
+    if (!primal_) {
+      if (factored) {
+        dyn_.compute_F();
+        u_step_.noalias() = dyn_.F_ * y.segment(nq_, na_);
+      } else {
+        u_step_.setZero();  // exactly singular: keep v as it is (below)
+      }
+    }
+    // Position correction in the chart (Newton; independent coordinates fixed). It leaves Eᵀ
+    // at the corrected q factorised in the chart.
+    ChartCorrectionResult corr = dyn_.cs_.correct_positions(
+        q_, Et, f_, dq_,
+        {.tolerance = options_.position_tolerance,
+         .max_gain = kMaxCorrectionGain,
+         .start = factored ? ChartCorrection::Start::prepared : ChartCorrection::Start::evaluate});
+    if (corr.near_singular) ++result_.uncorrected_steps;
+    if (corr.status == SolveStatus::singular) {  // try a fresh chart once
+      compute_constraint_jacobian(model_, q_, Et);
+      if (dyn_.cs_.select(Et, dyn_.ws_.free.A_diag))
+        corr =
+            dyn_.cs_.correct_positions(q_, Et, f_, dq_, {.tolerance = options_.position_tolerance});
+      chart_changed = true;
+    }
+    if (corr.status != SolveStatus::converged) {
+      stop_message_ =
+          "position correction failed at t = " + time_text(model_, t) + ": " + corr.message;
+      return false;
+    }
+    qy = q_;
+    dyn_.compute_F();
+    dyn_.mass_at(q_);
+    dyn_.state_.q = q_;
+    if (primal_) dyn_.state_.u.noalias() = dyn_.ws_.free.A * y.segment(nq_, n_);
+    return true;
+  }
+
+  // Primal form. Momenta: p ← M α u, the mass-orthogonal projection (eq. (44): α = I − A π).
+  void project_momenta(VecX& y, bool& chart_changed) {
+    dyn_.compute_H();
+    const VecX vv = project_velocity(dyn_, dyn_.state_.u);
+    dyn_.state_.u.noalias() = dyn_.F_ * vv;
+    y.segment(nq_, n_) = dyn_.ws_.free.M * dyn_.state_.u;
+    // A poor chart only slows the corrector: re-select it when it degrades.
+    if (dyn_.chart_spread() > kSpreadLimit) {
+      const Chart old = dyn_.cs_.chart();
+      dyn_.cs_.select_from_tangent(dyn_.F_, dyn_.M_sqrt());
+      chart_changed = true;
+      if (!dyn_.factor_chart(dyn_.ws_.constraints.Et)) {
+        dyn_.cs_.set_chart(old);
+        (void)dyn_.factor_chart(dyn_.ws_.constraints.Et);
+      }
+    }
+  }
+
+  // Dual form. v ← H⁻¹ Fᵀ M u_step: the admissible velocity at the corrected position closest
+  // to the step's velocity in the mass metric (eq. (70), u = α u_step), rather than keeping u_I.
+  // False (stop_message set) when the step left the branch.
+  bool project_step_velocity(double t, VecX& y) {
+    if (!(u_step_.squaredNorm() > 0.0)) return true;
+    dyn_.compute_H();
+    y.segment(nq_, na_) = project_velocity(dyn_, u_step_);
+    // The velocity the projection removes is the step's own error; a step that left the
+    // branch (a change point crossed within one step onto another branch) loses a finite
+    // part of it: refused (C6).
+    const VecX du = u_step_ - dyn_.F_ * y.segment(nq_, na_);
+    const double uu = u_step_.dot(dyn_.ws_.free.M * u_step_);
+    const double jump = uu > 0.0 ? std::sqrt(du.dot(dyn_.ws_.free.M * du) / uu) : 0.0;
+    if (jump > kStepVelocityJump) {
+      stop_message_ = "the step to t = " + time_text(model_, t) +
+                      " s left the motion's branch (its velocity changes by " +
+                      std::to_string(jump) +
+                      " relative when made admissible): a change point was crossed within "
+                      "one step";
+      return false;
+    }
+    return true;
+  }
+
+  // Dual form. Chart monitor: re-select when F's mass-scaled entries grow; switch if the new
+  // chart is clearly better (hysteresis 2), re-expressing v from u = F v. Returns the spread
+  // of the chart the step ended in.
+  double monitor_chart(double t, VecX& y, bool& chart_changed) {
+    const double spread = dyn_.chart_spread();
+
+    if (spread > spread_limit_) {
+      const Chart old = dyn_.cs_.chart();
+      const VecX u = dyn_.F_ * y.segment(nq_, na_);
+      dyn_.cs_.select_from_tangent(dyn_.F_, dyn_.M_sqrt());
+      bool switched = false;
+      if (dyn_.factor_chart(dyn_.ws_.constraints.Et)) {
+        dyn_.compute_F();
+        // Take the new chart only if it is clearly better (hysteresis 2): next to a change
+        // point F is inaccurate in every chart and switching would not help.
+        if (dyn_.chart_spread() < 0.5 * spread) {
+          for (int k = 0; k < na_; ++k)
+            y(nq_ + k) = u(dyn_.cs_.chart().independent[static_cast<size_t>(k)]);
+          result_.chart_switches.push_back(
+              {t, chart_name(model_, old), chart_name(model_, dyn_.cs_.chart())});
+          spread_limit_ = kSpreadLimit;
+          switched = true;
+          chart_changed = true;
+        }
+      }
+      if (!switched) {  // keep the chart; try again only when it degrades further
+        dyn_.cs_.set_chart(old);
+        (void)dyn_.factor_chart(dyn_.ws_.constraints.Et);
+        dyn_.compute_F();
+        spread_limit_ = 2.0 * spread;
+      }
+    } else if (spread < 0.5 * spread_limit_) {
+      spread_limit_ = std::max(kSpreadLimit, 2.0 * spread);
+    }
+    return spread;
+  }
+
+  // Dual form. Ahead of the chart's own singularity (its block singular, F unbounded, E
+  // regular: the spread ~ 1/(t_s − t)): 1/spread is linear in t there, so two values in this
+  // chart give t_s, and the next step ends at most half-way to it (the monitor above switches
+  // charts at a step end; a step that ran into the singularity would have integrated, and been
+  // corrected, where F is ill-conditioned: on the N = 40 bar one Bulirsch–Stoer step at
+  // rtol 1e-8 lost 5e-7 of the energy that way).
+  void limit_next_step(double t, double spread, bool chart_changed) {
+    spread_now_ = chart_changed ? dyn_.chart_spread() : spread;
+    next_step_limit_ = std::numeric_limits<double>::infinity();
+    if (!chart_changed && saved_prev_.valid && saved_prev_.spread > 0.0 && t > saved_prev_.t &&
+        saved_prev_.chart.independent == dyn_.cs_.chart().independent) {
+      const double slope = (1.0 / spread_now_ - 1.0 / saved_prev_.spread) / (t - saved_prev_.t);
+      if (slope < 0.0) next_step_limit_ = kChartStepFraction * (1.0 / spread_now_) / -slope;
+    }
+  }
+
+  // Energy balance T + V − W at the corrected state; the step counted.
+  void book_energy(double t, const VecX& y) {
+    const double T = kinetic_energy(model_, dyn_.state_);
+    const double V = potential_energy(model_, q_);
+    const double W = y(nx_ - 1);
     const double E = T + V - W;
-    if (!have_energy0) energy0 = E, have_energy0 = true;
-    result.energy_max_drift = std::max(result.energy_max_drift, std::abs(E - energy0));
-    result.energy_scale = std::max(result.energy_scale, std::abs(T) + std::abs(V) + std::abs(W));
-    ++result.steps;
-    h_last = t - t_last_accept;
-    t_last_accept = t;
-    // Change-point monitor: stop the segment when a change point is within reach of the next
-    // steps (C2) or close enough to be passed (C3); the driver below approaches or passes it.
+    if (!have_energy0_) energy0_ = E, have_energy0_ = true;
+    result_.energy_max_drift = std::max(result_.energy_max_drift, std::abs(E - energy0_));
+    result_.energy_scale = std::max(result_.energy_scale, std::abs(T) + std::abs(V) + std::abs(W));
+    ++result_.steps;
+    h_last_ = t - t_last_accept_;
+    t_last_accept_ = t;
+  }
+
+  // ---- Change-point monitor -------------------------------------------------------------------
+
+  // Change-point monitor: stop the segment when a change point is within reach of the next
+  // steps (C2) or close enough to be passed (C3); the driver approaches or passes it. True:
+  // stop (request set). The corrected state is saved for a rewind.
+  bool monitor_change_points(double t, const VecX& y, double sigma_end, double rate_end,
+                             bool chart_changed) {
     // σ̂ and its rate in the chart the next step uses (another block after a switch).
     double rate = rate_end;
-    const double sigma = chart_changed ? chart_quality_rate(q, dyn.state_.u, rate) : sigma_end;
-    if (chart_changed) monitor.valid = false;  // σ̂ of another chart block: no secant trend
+    const double sigma = chart_changed ? chart_quality_rate(q_, dyn_.state_.u, rate) : sigma_end;
+    if (chart_changed) monitor_.valid = false;  // σ̂ of another chart block: no secant trend
     bool stop = false;
-    // A falling σ̂ that bottoms out above 0 (C1'): the parabola through the last three values.
-    bool minimum_above_zero = false;
-    if (saved_older.valid && saved_prev.valid && monitor.valid && sigma < saved_prev.sigma) {
-      const double t0 = saved_older.t, t1 = saved_prev.t, s0 = saved_older.sigma,
-                   s1 = saved_prev.sigma;
-      const double d01 = (s1 - s0) / (t1 - t0), d12 = (sigma - s1) / (t - t1);
-      const double curv = (d12 - d01) / (t - t0);  // p(τ) = σ + d (τ − t) + curv (τ − t)²
-      if (curv > 0.0) {
-        const double d = d12 + curv * (t - t1);  // slope at t
-        const double p_min = sigma - d * d / (4.0 * curv);
-        minimum_above_zero = p_min > kMinimumAboveZero * sigma;
-      }
-    }
-    if (monitor_quiet && (rate > 0.0 || (monitor.valid && sigma > monitor.sigma)))
-      monitor_quiet = false;
+    const bool minimum_above_zero = bottoms_out_above_zero(t, sigma);
+    if (monitor_quiet_ && (rate > 0.0 || (monitor_.valid && sigma > monitor_.sigma)))
+      monitor_quiet_ = false;
     // (C1) t* from a falling σ̂: the secant through the last two values in this chart and the
     // tangent t − σ̂/σ̂'. Far from the point σ̂ is concave as it falls (~|sin θ| on the
     // N-four-bar) and both are late, the secant more: the earlier is taken. A rising σ̂ (σ̂' > 0)
     // has no point ahead, whatever the secant says.
-    const bool secant_falling = monitor.valid && sigma < monitor.sigma;
+    const bool secant_falling = monitor_.valid && sigma < monitor_.sigma;
     const bool falling = rate < 0.0 || (rate == 0.0 && secant_falling);
-    if (monitor_armed && !monitor_quiet && !minimum_above_zero && falling &&
+    if (monitor_armed_ && !monitor_quiet_ && !minimum_above_zero && falling &&
         sigma < kWatchQuality) {
       double t_star = std::numeric_limits<double>::infinity();
-      if (secant_falling) t_star = t + sigma * (t - monitor.t) / (monitor.sigma - sigma);  // (C1)
+      if (secant_falling) t_star = t + sigma * (t - monitor_.t) / (monitor_.sigma - sigma);  // (C1)
       if (rate < 0.0) t_star = std::min(t_star, t - sigma / rate);
-      if (sigma <= pass_quality || t_star - t < kReachSteps * h_last) {
-        request = {true, t_star, sigma};
+      if (sigma <= pass_quality_ || t_star - t < kReachSteps * h_last_) {
+        request_ = {true, t_star, sigma};
         stop = true;
       }
     }
-    // (C2') σ̂ fell and rose again across the last two steps along a V through 0: a change point
-    // was crossed within one of them without being approached (large steps at a loose rtol).
-    // Both hypotheses: crossing in the last step (zero of the falling line before t) or in the
-    // one before (zero of the rising line after t_{k−2}), each checked against the third σ̂.
-    if (!stop && monitor_armed && saved_older.valid && saved_prev.valid &&
-        saved_older.t > last_rewind_t_star && sigma > saved_prev.sigma &&
-        saved_prev.sigma < saved_older.sigma && saved_prev.sigma < kWatchQuality) {
-      const double t0 = saved_older.t, s0 = saved_older.sigma;
-      const double t1 = saved_prev.t, s1 = saved_prev.sigma;
-      const double a1 = (s0 - s1) / (t1 - t0), z1 = t1 + s1 / a1;
-      const double a2 = (sigma - s1) / (t - t1), z2 = t1 - s1 / a2;
-      if (z1 < t && std::abs(a1 * (t - z1) - sigma) <= kVShapeTolerance * sigma) {
-        rewind_to = 1;
-        request = {true, z1, s1};
-        last_rewind_t_star = z1;
-        stop = true;
-      } else if (z2 > t0 && std::abs(a2 * (z2 - t0) - s0) <= kVShapeTolerance * s0) {
-        rewind_to = 0;
-        request = {true, z2, s0};
-        last_rewind_t_star = z2;
-        stop = true;
-      }
-    }
-    if (t > last_crossing_t_star) crossing_rewinds = 0;
-    saved_older = saved_prev;
-    saved_prev.valid = true;
-    saved_prev.t = t;
-    saved_prev.sigma = sigma;
-    saved_prev.rate = rate;
-    saved_prev.spread = spread_now;
-    saved_prev.x = y;
-    saved_prev.chart = dyn.cs_.chart();
-    monitor = {true, t, sigma};
-    return !stop;
-  };
-
-  // Initial energy (at the consistent initial state).
-  {
-    dyn.state_.q = q;
-    dyn.state_.u = dyn.F_ * v;
-    energy0 = kinetic_energy(model, dyn.state_) + potential_energy(model, q);
-    have_energy0 = true;
-    result.energy_scale =
-        std::abs(kinetic_energy(model, dyn.state_)) + std::abs(potential_energy(model, q));
-    // σ̂ and its rate at the start ((C2'') checks the first step too).
-    saved_prev.valid = true;
-    saved_prev.t = T0;
-    saved_prev.sigma = chart_quality_rate(q, dyn.state_.u, saved_prev.rate);
-    saved_prev.spread = primal ? 0.0 : dyn.chart_spread();
-    saved_prev.x = x;
-    saved_prev.chart = dyn.cs_.chart();
+    if (!stop) stop = crossed_across_two_steps(t, sigma);
+    if (t > last_crossing_t_star_) crossing_rewinds_ = 0;
+    saved_older_ = saved_prev_;
+    saved_prev_.valid = true;
+    saved_prev_.t = t;
+    saved_prev_.sigma = sigma;
+    saved_prev_.rate = rate;
+    saved_prev_.spread = spread_now_;
+    saved_prev_.x = y;
+    saved_prev_.chart = dyn_.cs_.chart();
+    monitor_ = {true, t, sigma};
+    return stop;
   }
 
-  detail::OdeOptions base;
-  base.stepper = ode_stepper(options.integrator);
-  base.rtol = options.rtol;
-  base.atol = options.atol;
-  base.max_dt = options.max_step;
-  base.max_steps = options.max_steps;
+  // A falling σ̂ that bottoms out above 0 (C1'): the parabola through the last three values.
+  [[nodiscard]] bool bottoms_out_above_zero(double t, double sigma) const {
+    if (!(saved_older_.valid && saved_prev_.valid && monitor_.valid && sigma < saved_prev_.sigma))
+      return false;
+    const double t0 = saved_older_.t, t1 = saved_prev_.t, s0 = saved_older_.sigma,
+                 s1 = saved_prev_.sigma;
+    const double d01 = (s1 - s0) / (t1 - t0), d12 = (sigma - s1) / (t - t1);
+    const double curv = (d12 - d01) / (t - t0);  // p(τ) = σ + d (τ − t) + curv (τ − t)²
+    if (!(curv > 0.0)) return false;
+    const double d = d12 + curv * (t - t1);  // slope at t
+    const double p_min = sigma - d * d / (4.0 * curv);
+    return p_min > kMinimumAboveZero * sigma;
+  }
+
+  // (C2') σ̂ fell and rose again across the last two steps along a V through 0: a change point
+  // was crossed within one of them without being approached (large steps at a loose rtol).
+  // Both hypotheses: crossing in the last step (zero of the falling line before t) or in the
+  // one before (zero of the rising line after t_{k−2}), each checked against the third σ̂.
+  // True: the steps are to be undone (request and rewind_to set).
+  bool crossed_across_two_steps(double t, double sigma) {
+    if (!(monitor_armed_ && saved_older_.valid && saved_prev_.valid &&
+          saved_older_.t > last_rewind_t_star_ && sigma > saved_prev_.sigma &&
+          saved_prev_.sigma < saved_older_.sigma && saved_prev_.sigma < kWatchQuality))
+      return false;
+    const double t0 = saved_older_.t, s0 = saved_older_.sigma;
+    const double t1 = saved_prev_.t, s1 = saved_prev_.sigma;
+    const double a1 = (s0 - s1) / (t1 - t0), z1 = t1 + s1 / a1;
+    const double a2 = (sigma - s1) / (t - t1), z2 = t1 - s1 / a2;
+    if (z1 < t && std::abs(a1 * (t - z1) - sigma) <= kVShapeTolerance * sigma) {
+      rewind_to_ = 1;
+      request_ = {true, z1, s1};
+      last_rewind_t_star_ = z1;
+      return true;
+    }
+    if (z2 > t0 && std::abs(a2 * (z2 - t0) - s0) <= kVShapeTolerance * s0) {
+      rewind_to_ = 0;
+      request_ = {true, z2, s0};
+      last_rewind_t_star_ = z2;
+      return true;
+    }
+    return false;
+  }
+
+  // ---- Segments -------------------------------------------------------------------------------
 
   // The integrator from t to t_e in segments that start on the output grid or end on it, so
   // that the integrator's output clock (t0 + k·dt_out) hits the grid times. Stops early when
   // `accept` stops it (a change point ahead, or a failed check).
-  double t_now = T0;
-  long rejected_steps = 0, jacobians = 0;  // summed over the segments
-  const auto run_to = [&](double t_e, double max_dt) {
+  detail::OdeStats run_to(double t_e, double max_dt) {
     detail::OdeStats st;
     st.completed = true;
-    st.t = t_now;
-    while (t_now < t_e - end_slack) {
-      detail::OdeOptions oo = base;
-      oo.t0 = t_now;
+    st.t = t_now_;
+    while (t_now_ < t_e - end_slack_) {
+      detail::OdeOptions oo = base_;
+      oo.t0 = t_now_;
       if (max_dt > 0.0) oo.max_dt = oo.max_dt > 0.0 ? std::min(oo.max_dt, max_dt) : max_dt;
-      oo.dt_init = h_last > 0.0 ? std::min(h_last, next_step_limit) : 0.0;
+      oo.dt_init = h_last_ > 0.0 ? std::min(h_last_, next_step_limit_) : 0.0;
       const bool on_grid =
-          std::abs(t_now - grid_time(next_out)) <= grid_slack ||
-          (next_out > 0 && std::abs(t_now - grid_time(next_out - 1)) <= grid_slack);
+          std::abs(t_now_ - grid_time(next_out_)) <= grid_slack_ ||
+          (next_out_ > 0 && std::abs(t_now_ - grid_time(next_out_ - 1)) <= grid_slack_);
       if (on_grid || !grid_pending()) {
         oo.t_end = t_e;
-        oo.dt_out = on_grid ? dt_out : 2.0 * (t_e - t_now);
+        oo.dt_out = on_grid ? dt_out_ : 2.0 * (t_e - t_now_);
       } else {  // off the grid: to the next output time first
-        const double g = grid_time(next_out);
+        const double g = grid_time(next_out_);
         oo.t_end = std::min(t_e, g);
-        oo.dt_out = g <= t_e ? g - t_now : 2.0 * (t_e - t_now);
+        oo.dt_out = g <= t_e ? g - t_now_ : 2.0 * (t_e - t_now_);
       }
-      if (oo.dt_init > 0.0 && oo.dt_init > oo.t_end - t_now) oo.dt_init = oo.t_end - t_now;
-      st = detail::integrate_ode(problem, x, oo);
-      rejected_steps += st.rejected;
-      jacobians += st.jacobians;
+      if (oo.dt_init > 0.0 && oo.dt_init > oo.t_end - t_now_) oo.dt_init = oo.t_end - t_now_;
+      st = detail::integrate_ode(problem_, x_, oo);
+      rejected_steps_ += st.rejected;
+      jacobians_ += st.jacobians;
       if (st.completed) st.t = oo.t_end;
-      t_now = st.t;
+      t_now_ = st.t;
       // An output time at a stop (accept stopped the integrator before its output there).
-      if (std::abs(t_now - grid_time(next_out)) <= grid_slack && grid_pending()) emit(t_now, x);
+      if (std::abs(t_now_ - grid_time(next_out_)) <= grid_slack_ && grid_pending())
+        emit(t_now_, x_);
       if (!st.completed) return st;
     }
     st.completed = true;
-    st.t = t_now;
+    st.t = t_now_;
     return st;
-  };
+  }
 
-  // The passage step (dual form) from the approached state (t_a, x) over the change point at
-  // t* to t_b = t_a + 2 (t* − t_a), landing at about the same distance beyond it (C3)–(C6).
-  const auto mnorm2 = [&](const VecX& a, const VecX& b) {
-    return dyn.ws_.free.diagonal_mass ? a.dot(dyn.ws_.free.M_diag.cwiseProduct(b))
-                                      : a.dot(dyn.ws_.free.M * b);
-  };
-  // (C4) a state on the branch at time tt from a guess (qq, uu): positions corrected in the
-  // incoming chart (Newton, q_I fixed) and polished to rounding, the velocity made admissible
-  // (u = α uu, eq. (70)); then the dual equations there.
+  // ---- Passage of a change point --------------------------------------------------------------
+
+  // (C4) a state on the branch: positions, velocity, acceleration, power of the loads.
   struct BranchState {
     VecX q, v, u, a;
     double P = 0.0;
   };
-  const auto on_branch = [&](double tt, const VecX& qq, const VecX& uu, BranchState& s,
-                             std::string& why) {
+  // The passage step from t_a to t_b = t_a + h: its Lobatto stages (A = stage[0], the landing
+  // B = stage[3]), the work at both ends, the corrector's last change and the velocity jump.
+  struct PassageStep {
+    double t_a = 0.0, h = 0.0, t_b = 0.0;
+    BranchState stage[4];
+    double W_a = 0.0, W_b = 0.0;
+    double change = std::numeric_limits<double>::infinity(), jump = 0.0;
+    int iterations = 0;
+    double sigma_b = 0.0, rate_b = 0.0;  // σ̂ and its rate at the landing
+  };
+
+  [[nodiscard]] double mnorm2(const VecX& a, const VecX& b) const {
+    return dyn_.ws_.free.diagonal_mass ? a.dot(dyn_.ws_.free.M_diag.cwiseProduct(b))
+                                       : a.dot(dyn_.ws_.free.M * b);
+  }
+
+  // (C4) a state on the branch at time tt from a guess (qq, uu): positions corrected in the
+  // incoming chart (Newton, q_I fixed) and polished to rounding, the velocity made admissible
+  // (u = α uu, eq. (70)); then the dual equations there.
+  bool on_branch(double tt, const VecX& qq, const VecX& uu, BranchState& s, std::string& why) {
     s.q = qq;
-    MatX& Et = dyn.ws_.constraints.Et;
+    MatX& Et = dyn_.ws_.constraints.Et;
     const SolveResult corr =
-        dyn.cs_.correct_positions(s.q, Et, f, dq, {.tolerance = options.position_tolerance});
+        dyn_.cs_.correct_positions(s.q, Et, f_, dq_, {.tolerance = options_.position_tolerance});
     if (corr.status != SolveStatus::converged) {
       why = "a position of the passage does not close (" + corr.message + ")";
       return false;
     }
-    (void)dyn.cs_.polish_positions(s.q, Et, f, dq, 3);
-    dyn.mass_at(s.q);
-    dyn.compute_F();
-    dyn.compute_H();
-    s.v = project_velocity(dyn, uu);  // eq. (70)
-    dyn.chart_q_ = s.q;
-    dyn.chart_ready_ = true;
-    dyn.evaluate_dual(tt, s.q, s.v);
-    s.u = dyn.state_.u;
-    s.a = dyn.udot_;
-    s.P = dyn.nonconservative_power();
+    (void)dyn_.cs_.polish_positions(s.q, Et, f_, dq_, 3);
+    dyn_.mass_at(s.q);
+    dyn_.compute_F();
+    dyn_.compute_H();
+    s.v = project_velocity(dyn_, uu);  // eq. (70)
+    dyn_.chart_q_ = s.q;
+    dyn_.chart_ready_ = true;
+    dyn_.evaluate_dual(tt, s.q, s.v);
+    s.u = dyn_.state_.u;
+    s.a = dyn_.udot_;
+    s.P = dyn_.nonconservative_power();
     return true;
-  };
+  }
+
   // Quintic Hermite through (q, u, u̇) at both ends of [t_a, t_a + h], at s ∈ [0, 1]: q and its
   // derivative u (orders 6 and 5).
-  const auto quintic = [](double s, double h, const BranchState& A, const BranchState& B, VecX& qs,
-                          VecX& us) {
+  static void quintic(double s, double h, const BranchState& A, const BranchState& B, VecX& qs,
+                      VecX& us) {
     const double s2 = s * s, s3 = s2 * s, s4 = s3 * s, s5 = s4 * s;
     const double H0 = 1 - 10 * s3 + 15 * s4 - 6 * s5, H1 = s - 6 * s3 + 8 * s4 - 3 * s5;
     const double H2 = 0.5 * s2 - 1.5 * s3 + 1.5 * s4 - 0.5 * s5, H3 = 0.5 * s3 - s4 + 0.5 * s5;
@@ -1192,161 +1322,188 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
     qs = H0 * A.q + (H1 * h) * A.u + (H2 * h * h) * A.a + (H3 * h * h) * B.a + (H4 * h) * B.u +
          H5 * B.q;
     us = (D0 / h) * A.q + D1 * A.u + (D2 * h) * A.a + (D3 * h) * B.a + D4 * B.u + (D5 / h) * B.q;
-  };
+  }
 
   // Spatial bodies (nq ≠ n): the passage works in local coordinates x about the incoming
   // position, q = q_a ⊕ x (the exponential map), whose rates are ẋ = u except for the rotation
   // of a spatial body, θ̇ = J_r(θ)⁻¹ ω (model/spatial.hpp: exp_right_jacobian). For planar bodies
   // x = q − q_a and ẋ = u, and the passage below keeps its planar arithmetic unchanged.
-  const bool local_passage = nq != n;
-  const auto local_rate = [&](const VecX& xx, const VecX& uu, bool to_x) {
+  [[nodiscard]] VecX local_rate(const VecX& xx, const VecX& uu, bool to_x) const {
     VecX out = uu;
-    for (const Body& b : model.bodies)
+    for (const Body& b : model_.bodies)
       if (b.kind == BodyKind::spatial) {
         const Mat3 Jr = exp_right_jacobian(xx.segment<3>(b.u_offset + 3));
         const Vec3 w = uu.segment<3>(b.u_offset + 3);
         out.segment<3>(b.u_offset + 3) = to_x ? Vec3(Jr.lu().solve(w)) : Vec3(Jr * w);
       }
     return out;
-  };
+  }
   // A branch state in local coordinates about q_a: q ← x, u ← ẋ, a ← ẍ (to first order in θ:
   // ẍ ≈ J_r⁻¹ u̇, exact at x = 0).
-  const auto to_local = [&](const BranchState& S, const VecX& q_a) {
+  [[nodiscard]] BranchState to_local(const BranchState& S, const VecX& q_a) const {
     BranchState L = S;
-    L.q.resize(n);
-    difference_positions(model, S.q, q_a, L.q);
+    L.q.resize(n_);
+    difference_positions(model_, S.q, q_a, L.q);
     L.u = local_rate(L.q, S.u, true);
     L.a = local_rate(L.q, S.a, true);
     return L;
-  };
+  }
 
   // Outputs strictly inside a passage step (t_a, t_b): the quintic Hermite of the step in q and
   // u, u̇ linear (no equations are evaluated next to the point; no reactions: some multipliers
   // are indeterminate there).
-  const auto passage_outputs = [&](double t_a, double t_b, const BranchState& A,
-                                   const BranchState& B, double W_a, double W_b) {
-    const double h = t_b - t_a;
+  void passage_outputs(const PassageStep& p) {
+    const BranchState &A = p.stage[0], &B = p.stage[3];
+    const double t_a = p.t_a, t_b = p.t_b, h = t_b - t_a;
     VecX qs, us;
-    while (grid_pending() && grid_time(next_out) < t_b - grid_slack) {
-      const double to = grid_time(next_out);
-      if (to > t_a + grid_slack && options.record_samples) {
+    while (grid_pending() && grid_time(next_out_) < t_b - grid_slack_) {
+      const double to = grid_time(next_out_);
+      if (to > t_a + grid_slack_ && options_.record_samples) {
         const double s = (to - t_a) / h;
-        if (local_passage) {  // the Hermite in x about q_a, mapped back: q = q_a ⊕ x, u = J ẋ
+        if (local_passage_) {  // the Hermite in x about q_a, mapped back: q = q_a ⊕ x, u = J ẋ
           VecX xs, xd;
           quintic(s, h, to_local(A, A.q), to_local(B, A.q), xs, xd);
           qs = A.q;
-          integrate_positions(model, qs, xs, 1.0);
+          integrate_positions(model_, qs, xs, 1.0);
           us = local_rate(xs, xd, false);
         } else {
           quintic(s, h, A, B, qs, us);
         }
-        dyn.state_.t = to;
-        dyn.state_.q = qs;
-        dyn.state_.u = us;
-        dyn.udot_ = (1 - s) * A.a + s * B.a;
-        SimulationSample& smp = result.samples.emplace_back();
-        smp.t = to;
-        smp.q = qs;
-        smp.u = us;
-        smp.udot = dyn.udot_;
-        smp.kinetic = kinetic_energy(model, dyn.state_);
-        smp.potential = potential_energy(model, qs);
-        smp.work = (1 - s) * W_a + s * W_b;
-        compute_constraint_residual(model, qs, f);
-        smp.residual = model.nc ? f.cwiseAbs().maxCoeff() : 0.0;
-        for (const Measure& m : model.measures)
-          smp.measures.push_back(evaluate_measure(model, m, qs, &us, &dyn.udot_));
+        passage_sample(to, s, qs, us, p);
       }
-      ++next_out;
+      ++next_out_;
     }
-  };
+  }
 
-  const auto pass_change_point = [&](double t_star, double sigma_a, std::string& why) -> bool {
-    const double t_a = t_now;
-    double h = 2.0 * (t_star - t_a);
-    if (t_a + h > T1) h = T1 - t_a;
-    const double t_b = t_a + h;
-    BranchState A, B, S1, S2;
+  // A sample at `to` (the fraction s of the passage step) at the interpolated (qs, us).
+  void passage_sample(double to, double s, const VecX& qs, const VecX& us, const PassageStep& p) {
+    const BranchState &A = p.stage[0], &B = p.stage[3];
+    dyn_.state_.t = to;
+    dyn_.state_.q = qs;
+    dyn_.state_.u = us;
+    dyn_.udot_ = (1 - s) * A.a + s * B.a;
+    SimulationSample& smp = result_.samples.emplace_back();
+    smp.t = to;
+    smp.q = qs;
+    smp.u = us;
+    smp.udot = dyn_.udot_;
+    smp.kinetic = kinetic_energy(model_, dyn_.state_);
+    smp.potential = potential_energy(model_, qs);
+    smp.work = (1 - s) * p.W_a + s * p.W_b;
+    compute_constraint_residual(model_, qs, f_);
+    smp.residual = model_.nc ? f_.cwiseAbs().maxCoeff() : 0.0;
+    for (const Measure& m : model_.measures)
+      smp.measures.push_back(evaluate_measure(model_, m, qs, &us, &dyn_.udot_));
+  }
+
+  // The passage step (dual form) from the approached state (t_a, x) over the change point at
+  // t* to t_b = t_a + 2 (t* − t_a), landing at about the same distance beyond it (C3)–(C6).
+  // False (why set) when a stage does not close or the checks fail.
+  bool pass_change_point(double t_star, double sigma_a, std::string& why) {
+    PassageStep p;
+    p.t_a = t_now_;
+    p.h = 2.0 * (t_star - p.t_a);
+    if (p.t_a + p.h > T1_) p.h = T1_ - p.t_a;
+    p.t_b = p.t_a + p.h;
     // The incoming state, polished (its equations are those the step integrated).
-    if (!on_branch(t_a, x.head(nq), dyn.F_ * x.segment(nq, na), A, why)) return false;
-    const double W_a = x(nx - 1);
-    // (C5) one step of the 4-stage Lobatto IIIA collocation method (order 6) [Hairer, Nørsett
-    // & Wanner, Solving ODEs II, §IV.5] on q̇ = u, u̇ = a(q, u), Ẇ = P, whose stages are states
-    // on the branch (C4): nodes t_a + c_i h, c = (0, (5 ∓ √5)/10, 1). The interior nodes are
-    // 0.45 (t* − t_a) from the point, the last is the landing. Stage values by fixed-point
-    // iteration from the Taylor predictor (C3), q_i = q_a + c_i h u_a + ½ (c_i h)² u̇_a,
-    // u_i = u_a + c_i h u̇_a.
-    const double r5 = std::sqrt(5.0);
-    const double c[4] = {0.0, (5.0 - r5) / 10.0, (5.0 + r5) / 10.0, 1.0};
-    const double L[4][4] = {
-        {0.0, 0.0, 0.0, 0.0},
-        {(11 + r5) / 120, (25 - r5) / 120, (25 - 13 * r5) / 120, (-1 + r5) / 120},
-        {(11 - r5) / 120, (25 + 13 * r5) / 120, (25 + r5) / 120, (-1 - r5) / 120},
-        {1.0 / 12, 5.0 / 12, 5.0 / 12, 1.0 / 12}};
-    BranchState* st[4] = {&A, &S1, &S2, &B};
+    if (!on_branch(p.t_a, x_.head(nq_), dyn_.F_ * x_.segment(nq_, na_), p.stage[0], why))
+      return false;
+    p.W_a = x_(nx_ - 1);
+    p.W_b = p.W_a;
+    const LobattoIIIA lobatto;
+    if (!predict_stages(p, lobatto, why) || !correct_stages(p, lobatto, why)) return false;
+    ChangePointPassage pass;
+    if (!check_passage(p, t_star, sigma_a, pass, why)) return false;
+    land(p, pass);
+    return true;
+  }
+
+  // (C5) one step of the 4-stage Lobatto IIIA collocation method (order 6) [Hairer, Nørsett
+  // & Wanner, Solving ODEs II, §IV.5] on q̇ = u, u̇ = a(q, u), Ẇ = P, whose stages are states
+  // on the branch (C4): nodes t_a + c_i h, c = (0, (5 ∓ √5)/10, 1). The interior nodes are
+  // 0.45 (t* − t_a) from the point, the last is the landing. Stage values by fixed-point
+  // iteration from the Taylor predictor (C3), q_i = q_a + c_i h u_a + ½ (c_i h)² u̇_a,
+  // u_i = u_a + c_i h u̇_a.
+  bool predict_stages(PassageStep& p, const LobattoIIIA& lobatto, std::string& why) {
+    const BranchState& A = p.stage[0];
     VecX q_p, u_p;
     for (int i = 1; i < 4; ++i) {
-      const double ch = c[i] * h;
-      if (local_passage) {
+      const double ch = lobatto.c[i] * p.h;
+      if (local_passage_) {
         q_p = A.q;
-        integrate_positions(model, q_p, VecX(ch * A.u + 0.5 * ch * ch * A.a), 1.0);
+        integrate_positions(model_, q_p, VecX(ch * A.u + 0.5 * ch * ch * A.a), 1.0);
       } else {
         q_p = A.q + ch * A.u + 0.5 * ch * ch * A.a;
       }
       u_p = A.u + ch * A.a;
-      if (i == 3 && options.passage_hook) options.passage_hook(t_b, q_p, u_p);
-      if (!on_branch(t_a + ch, q_p, u_p, *st[i], why)) return false;
+      if (i == 3 && options_.passage_hook) options_.passage_hook(p.t_b, q_p, u_p);
+      if (!on_branch(p.t_a + ch, q_p, u_p, p.stage[i], why)) return false;
     }
-    double change = std::numeric_limits<double>::infinity(), W_b = W_a, jump = 0.0;
-    int it = 0;
+    return true;
+  }
+
+  // The stage values' fixed-point iteration: iterated to a change of u below
+  // kPassageConverged, or until it stalls at the rounding noise (a change not halving);
+  // accepted below kPassageConvergence (C6).
+  bool correct_stages(PassageStep& p, const LobattoIIIA& lobatto, std::string& why) {
+    const BranchState& A = p.stage[0];
+    BranchState& B = p.stage[3];
+    const double h = p.h;
+    const auto& L = lobatto.L;
     std::vector<VecX> Qn(4), Un(4), xdot(4);
-    // Iterated to a change of u below kPassageConverged, or until it stalls at the rounding
-    // noise (a change not halving); accepted below kPassageConvergence (C6).
     double previous_change = std::numeric_limits<double>::infinity();
-    while (it < kPassageIterations && !(change <= kPassageConverged) &&
-           !(change > 0.5 * previous_change)) {
-      ++it;
-      previous_change = change;
-      if (local_passage)  // the stages' rates ẋ_j in local coordinates about q_a
+    while (p.iterations < kPassageIterations && !(p.change <= kPassageConverged) &&
+           !(p.change > 0.5 * previous_change)) {
+      ++p.iterations;
+      previous_change = p.change;
+      if (local_passage_)  // the stages' rates ẋ_j in local coordinates about q_a
         for (int j = 0; j < 4; ++j) {
-          VecX xj(n);
-          difference_positions(model, st[j]->q, A.q, xj);
-          xdot[static_cast<size_t>(j)] = local_rate(xj, st[j]->u, true);
+          VecX xj(n_);
+          difference_positions(model_, p.stage[j].q, A.q, xj);
+          xdot[static_cast<size_t>(j)] = local_rate(xj, p.stage[j].u, true);
         }
       for (int i = 1; i < 4; ++i) {  // q_i = q_a + h Σ L_ij u_j, u_i = u_a + h Σ L_ij u̇_j
         Qn[static_cast<size_t>(i)] = A.q;
         Un[static_cast<size_t>(i)] = A.u;
-        VecX dx = VecX::Zero(local_passage ? n : 0);
+        VecX dx = VecX::Zero(local_passage_ ? n_ : 0);
         for (int j = 0; j < 4; ++j) {
-          if (local_passage)
+          if (local_passage_)
             dx += (h * L[i][j]) * xdot[static_cast<size_t>(j)];  // q_i = q_a ⊕ h Σ L_ij ẋ_j
           else
-            Qn[static_cast<size_t>(i)] += (h * L[i][j]) * st[j]->u;
-          Un[static_cast<size_t>(i)] += (h * L[i][j]) * st[j]->a;
+            Qn[static_cast<size_t>(i)] += (h * L[i][j]) * p.stage[j].u;
+          Un[static_cast<size_t>(i)] += (h * L[i][j]) * p.stage[j].a;
         }
-        if (local_passage) integrate_positions(model, Qn[static_cast<size_t>(i)], dx, 1.0);
+        if (local_passage_) integrate_positions(model_, Qn[static_cast<size_t>(i)], dx, 1.0);
       }
-      W_b = W_a;
-      for (int j = 0; j < 4; ++j) W_b += h * L[3][j] * st[j]->P;
-      if (options.passage_hook) options.passage_hook(t_b, Qn[3], Un[3]);
+      p.W_b = p.W_a;
+      for (int j = 0; j < 4; ++j) p.W_b += h * L[3][j] * p.stage[j].P;
+      if (options_.passage_hook) options_.passage_hook(p.t_b, Qn[3], Un[3]);
       const VecX u_old = B.u;
       for (int i = 1; i < 4; ++i)
-        if (!on_branch(t_a + c[i] * h, Qn[static_cast<size_t>(i)], Un[static_cast<size_t>(i)],
-                       *st[i], why))
+        if (!on_branch(p.t_a + lobatto.c[i] * h, Qn[static_cast<size_t>(i)],
+                       Un[static_cast<size_t>(i)], p.stage[i], why))
           return false;
       const VecX du = B.u - u_old, dj = Un[3] - B.u;
       const double ub2 = std::max(mnorm2(B.u, B.u), 1e-300);
-      change = std::sqrt(mnorm2(du, du) / ub2);
-      jump = std::sqrt(mnorm2(dj, dj) / ub2);
+      p.change = std::sqrt(mnorm2(du, du) / ub2);
+      p.jump = std::sqrt(mnorm2(dj, dj) / ub2);
     }
-    // (C6) the checks: velocity continuity (the quadrature velocity is admissible at the
-    // landing up to the step's truncation error), no reversal, and a regular landing beyond.
+    return true;
+  }
+
+  // (C6) the checks: velocity continuity (the quadrature velocity is admissible at the
+  // landing up to the step's truncation error), no reversal, and a regular landing beyond.
+  // The passage's record and σ̂ with its rate at the landing are set either way.
+  bool check_passage(PassageStep& p, double t_star, double sigma_a, ChangePointPassage& pass,
+                     std::string& why) {
+    const BranchState &A = p.stage[0], &B = p.stage[3];
+    const double jump = p.jump, change = p.change;
     const double ub2 = mnorm2(B.u, B.u), ua2 = mnorm2(A.u, A.u);
     const double cosine = ua2 > 0.0 && ub2 > 0.0 ? mnorm2(A.u, B.u) / std::sqrt(ua2 * ub2) : 1.0;
     (void)chart_quality();  // one more inverse-iteration pair: σ̂ at the landing converged
-    double rate_b = 0.0;
-    const double sigma_b = chart_quality_rate(B.q, B.u, rate_b);
-    const ChangePointPassage pass{t_star, t_a, t_b, sigma_a, sigma_b, jump, cosine, it};
+    p.sigma_b = chart_quality_rate(B.q, B.u, p.rate_b);
+    const double sigma_b = p.sigma_b;
+    pass = {t_star, p.t_a, p.t_b, sigma_a, sigma_b, jump, cosine, p.iterations};
     char buf[200];
     std::snprintf(buf, sizeof buf,
                   " (velocity jump %.3g relative, cosine %.9f, corrector change %.3g, chart "
@@ -1355,7 +1512,7 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
     // The bound, raised to 10× the passage's own rounding noise (the corrector's last change,
     // where it stalled) when that is larger, never above kPassageJumpCeiling.
     const double jump_bound = std::min(
-        kPassageJumpCeiling, std::max(passage_velocity_jump_bound(options.rtol), 10.0 * change));
+        kPassageJumpCeiling, std::max(passage_velocity_jump_bound(options_.rtol), 10.0 * change));
     if (!(cosine > 0.0) || !(jump <= kBranchJump)) {
       why = "the passage would change the velocity discontinuously, leaving the motion's branch" +
             std::string(buf);
@@ -1377,169 +1534,287 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
       why = "the landing is not beyond the change point at a regular position" + std::string(buf);
       return false;
     }
-    passage_outputs(t_a, t_b, A, B, W_a, W_b);
-    x.head(nq) = B.q;
-    x.segment(nq, na) = B.v;
-    x(nx - 1) = W_b;
-    t_now = t_b;
-    t_last_accept = t_b;
-    result.passages.push_back(pass);
-    saved_older.valid = false;  // the next step starts from the landing ((C2''))
-    saved_prev.valid = true;
-    saved_prev.t = t_b;
-    saved_prev.sigma = sigma_b;
-    saved_prev.rate = rate_b;
-    saved_prev.spread = 0.0;  // no trend across the passage
-    next_step_limit = std::numeric_limits<double>::infinity();
-    saved_prev.x = x;
-    saved_prev.chart = dyn.cs_.chart();
-    crossing_rewinds = 0;
-    // Energy balance at the landing, as after every step.
-    dyn.state_.q = B.q;
-    dyn.state_.u = B.u;
-    const double E = kinetic_energy(model, dyn.state_) + potential_energy(model, B.q) - W_b;
-    result.energy_max_drift = std::max(result.energy_max_drift, std::abs(E - energy0));
-    if (std::abs(t_now - grid_time(next_out)) <= grid_slack && grid_pending()) emit(t_now, x);
     return true;
-  };
-
-  const auto change_point_name = [&](double t_star) {
-    return "the change point at t ≈ " + time_text(model, t_star);
-  };
-
-  std::string failure, first_passage_why;
-  SimulateStatus failure_status = SimulateStatus::failed_step;
-  int approaches = 0;
-  try {
-    while (true) {
-      if (!request.pending) {
-        const detail::OdeStats st = run_to(T1, 0.0);
-        if (st.completed && !request.pending) break;
-        if (!request.pending) {
-          failure = !stop_message.empty() ? stop_message : st.message;
-          if (stop_message.empty() && result.uncorrected_steps > 0)
-            failure +=
-                "; steps were left uncorrected next to a change point (E nearly loses rank there)";
-          break;
-        }
-      }
-      const Request rq = request;
-      request.pending = false;
-      if (rewind_to >= 0) {  // (C2') undo the steps that crossed the point unannounced
-        const SavedState& back = rewind_to == 0 ? saved_older : saved_prev;
-        rewind_to = -1;
-        x = back.x;
-        t_now = back.t;
-        t_last_accept = back.t;
-        dyn.cs_.set_chart(back.chart);
-        dyn.chart_ready_ = false;
-        while (!result.samples.empty() && result.samples.back().t > t_now + grid_slack)
-          result.samples.pop_back();
-        while (next_out > 0 && grid_time(next_out - 1) > t_now + grid_slack) --next_out;
-        monitor = {true, back.t, back.sigma};
-        const SavedState start = back;  // the state the next step starts from ((C2''))
-        saved_older.valid = false;
-        saved_prev = start;
-        next_step_limit = std::numeric_limits<double>::infinity();
-        ++result.rewinds;
-      }
-      if (rq.t_star >= T1 - end_slack) {  // the change point lies beyond the end: finish
-        monitor_armed = false;
-        continue;
-      }
-      if (rq.sigma <= pass_quality) {
-        if (primal) {  // G = EᵀAE is singular at the change point: no equation there
-          failure_status = SimulateStatus::singular;
-          failure = change_point_name(rq.t_star) +
-                    " is ahead (E loses rank there, G = EᵀAE is singular): the primal form stops "
-                    "at t = " +
-                    time_text(model, t_now) + "; the dual form passes it";
-          break;
-        }
-        std::string why;
-        const double t_from = t_now;
-        if (!pass_change_point(rq.t_star, rq.sigma, why)) {
-          dyn.chart_ready_ = false;  // the attempt moved the chart's factors elsewhere
-          // The first attempt's reason is kept for the message: the later ones, closer to the
-          // point, are dominated by rounding noise (ε/σ̂²) rather than the step's truncation.
-          if (first_passage_why.empty()) first_passage_why = why;
-          if (rq.sigma / 4.0 >= kPassQualityFloor) {  // try again from closer
-            pass_quality = rq.sigma / 4.0;
-            request = {true, rq.t_star, rq.sigma};
-            approaches = 0;
-            continue;
-          }
-          failure = "cannot pass " + change_point_name(rq.t_star) +
-                    " from t = " + time_text(model, t_from) + ": " + why +
-                    (first_passage_why != why ? "; first attempt: " + first_passage_why : "");
-          break;
-        }
-        first_passage_why.clear();
-        monitor.valid = false;
-        saved_older.valid = false;  // saved_prev: the landing
-        approaches = 0;
-        pass_quality = std::min(kPassQuality, 2.0 * pass_quality);
-        continue;
-      }
-      // (C2) approach: a segment that ends short of the change point (its estimate improves as
-      // σ̂ falls), until σ̂ ≤ pass_quality.
-      if (++approaches > kMaxApproaches) {  // σ̂ does not go to 0 here: not a change point
-        monitor_quiet = true;
-        approaches = 0;
-        continue;
-      }
-      const double fraction =
-          std::min(kApproachFraction, 1.0 - kApproachTarget * pass_quality / rq.sigma);
-      const double dist = rq.t_star - t_now;
-      const detail::OdeStats sa = run_to(t_now + fraction * dist, kApproachStep * dist);
-      if (!sa.completed && !request.pending) {
-        failure = !stop_message.empty() ? stop_message : sa.message;
-        break;
-      }
-      // Completed (its last step raises a new request when the point is near) or stopped by a
-      // newer request: the loop goes on from there.
-    }
-  } catch (const SingularEvaluation& e) {
-    failure_status = SimulateStatus::singular;
-    failure = e.message;
   }
-  result.evaluations = evaluations;
-  result.rejected_steps = rejected_steps;
-  result.jacobians = jacobians;
-  if (!failure.empty()) {
-    result.status = failure_status;
-    result.message = failure;
-    // The final sample at the stop time (the last accepted, corrected state).
+
+  // The run continues from the landing B: outputs inside the step, the ODE state, the monitor's
+  // saved state, the energy balance (as after every step), an output at t_b.
+  void land(const PassageStep& p, const ChangePointPassage& pass) {
+    const BranchState& B = p.stage[3];
+    passage_outputs(p);
+    x_.head(nq_) = B.q;
+    x_.segment(nq_, na_) = B.v;
+    x_(nx_ - 1) = p.W_b;
+    t_now_ = p.t_b;
+    t_last_accept_ = p.t_b;
+    result_.passages.push_back(pass);
+    saved_older_.valid = false;  // the next step starts from the landing ((C2''))
+    saved_prev_.valid = true;
+    saved_prev_.t = p.t_b;
+    saved_prev_.sigma = p.sigma_b;
+    saved_prev_.rate = p.rate_b;
+    saved_prev_.spread = 0.0;  // no trend across the passage
+    next_step_limit_ = std::numeric_limits<double>::infinity();
+    saved_prev_.x = x_;
+    saved_prev_.chart = dyn_.cs_.chart();
+    crossing_rewinds_ = 0;
+    // Energy balance at the landing, as after every step.
+    dyn_.state_.q = B.q;
+    dyn_.state_.u = B.u;
+    const double E = kinetic_energy(model_, dyn_.state_) + potential_energy(model_, B.q) - p.W_b;
+    result_.energy_max_drift = std::max(result_.energy_max_drift, std::abs(E - energy0_));
+    if (std::abs(t_now_ - grid_time(next_out_)) <= grid_slack_ && grid_pending()) emit(t_now_, x_);
+  }
+
+  // ---- The driver -----------------------------------------------------------------------------
+
+  // Integrates to T1 in segments: after a stop by the monitor, undoes the steps that crossed a
+  // change point unannounced (C2'), passes the point (C3)–(C6) or approaches it (C2). Sets
+  // failure_ (and failure_status_) when the run stops early.
+  void drive() {
     try {
-      sample_at(t_last_accept > t_now ? t_last_accept : t_now, x, result.final);
-    } catch (const SingularEvaluation&) {
-      if (!result.samples.empty()) result.final = result.samples.back();
-      result.final.t = std::max(t_now, t_last_accept);
+      while (true) {
+        if (!request_.pending) {
+          const detail::OdeStats st = run_to(T1_, 0.0);
+          if (st.completed && !request_.pending) break;
+          if (!request_.pending) {
+            failure_ = !stop_message_.empty() ? stop_message_ : st.message;
+            if (stop_message_.empty() && result_.uncorrected_steps > 0)
+              failure_ +=
+                  "; steps were left uncorrected next to a change point (E nearly loses rank "
+                  "there)";
+            break;
+          }
+        }
+        const Request rq = request_;
+        request_.pending = false;
+        if (rewind_to_ >= 0) rewind();
+        if (rq.t_star >= T1_ - end_slack_) {  // the change point lies beyond the end: finish
+          monitor_armed_ = false;
+          continue;
+        }
+        if (rq.sigma <= pass_quality_) {
+          if (!pass(rq)) break;
+          continue;
+        }
+        if (!approach(rq)) break;
+      }
+    } catch (const SingularEvaluation& e) {
+      failure_status_ = SimulateStatus::singular;
+      failure_ = e.message;
     }
-    result.energy_initial = energy0;
-    return result;
   }
-  // Final sample at the corrected final state.
-  try {
-    sample_at(t_now, x, result.final);
-  } catch (const SingularEvaluation& e) {
-    result.status = SimulateStatus::singular;
-    result.message = e.message;
-    return result;
+
+  // (C2') undo the steps that crossed the point unannounced: back to the saved state, its
+  // outputs after it removed.
+  void rewind() {
+    const SavedState& back = rewind_to_ == 0 ? saved_older_ : saved_prev_;
+    rewind_to_ = -1;
+    x_ = back.x;
+    t_now_ = back.t;
+    t_last_accept_ = back.t;
+    dyn_.cs_.set_chart(back.chart);
+    dyn_.chart_ready_ = false;
+    while (!result_.samples.empty() && result_.samples.back().t > t_now_ + grid_slack_)
+      result_.samples.pop_back();
+    while (next_out_ > 0 && grid_time(next_out_ - 1) > t_now_ + grid_slack_) --next_out_;
+    monitor_ = {true, back.t, back.sigma};
+    const SavedState start = back;  // the state the next step starts from ((C2''))
+    saved_older_.valid = false;
+    saved_prev_ = start;
+    next_step_limit_ = std::numeric_limits<double>::infinity();
+    ++result_.rewinds;
   }
-  result.energy_initial = energy0;
-  result.energy_final = result.final.kinetic + result.final.potential - result.final.work;
-  result.max_constraint_residual = std::max(result.max_constraint_residual, result.final.residual);
-  if (model.nc) {
-    VecX f_final(model.nc);
-    compute_constraint_residual(model, result.final.q, f_final);
-    note_residual(f_final);
+
+  [[nodiscard]] std::string change_point_name(double t_star) const {
+    return "the change point at t ≈ " + time_text(model_, t_star);
   }
-  if (!primal)
-    for (const auto& smp : result.samples)
-      result.max_velocity_residual = std::max(result.max_velocity_residual, smp.velocity_residual);
-  result.status = SimulateStatus::completed;
-  return result;
+
+  // σ̂ ≤ pass_quality: the passage (dual form), tried again from closer when it fails; the
+  // primal form stops. False: the run stops (failure_ set).
+  bool pass(const Request& rq) {
+    if (primal_) {  // G = EᵀAE is singular at the change point: no equation there
+      failure_status_ = SimulateStatus::singular;
+      failure_ = change_point_name(rq.t_star) +
+                 " is ahead (E loses rank there, G = EᵀAE is singular): the primal form stops "
+                 "at t = " +
+                 time_text(model_, t_now_) + "; the dual form passes it";
+      return false;
+    }
+    std::string why;
+    const double t_from = t_now_;
+    if (!pass_change_point(rq.t_star, rq.sigma, why)) {
+      dyn_.chart_ready_ = false;  // the attempt moved the chart's factors elsewhere
+      // The first attempt's reason is kept for the message: the later ones, closer to the
+      // point, are dominated by rounding noise (ε/σ̂²) rather than the step's truncation.
+      if (first_passage_why_.empty()) first_passage_why_ = why;
+      if (rq.sigma / 4.0 >= kPassQualityFloor) {  // try again from closer
+        pass_quality_ = rq.sigma / 4.0;
+        request_ = {true, rq.t_star, rq.sigma};
+        approaches_ = 0;
+        return true;
+      }
+      failure_ = "cannot pass " + change_point_name(rq.t_star) +
+                 " from t = " + time_text(model_, t_from) + ": " + why +
+                 (first_passage_why_ != why ? "; first attempt: " + first_passage_why_ : "");
+      return false;
+    }
+    first_passage_why_.clear();
+    monitor_.valid = false;
+    saved_older_.valid = false;  // saved_prev: the landing
+    approaches_ = 0;
+    pass_quality_ = std::min(kPassQuality, 2.0 * pass_quality_);
+    return true;
+  }
+
+  // (C2) approach: a segment that ends short of the change point (its estimate improves as
+  // σ̂ falls), until σ̂ ≤ pass_quality. False: the run stops (failure_ set).
+  bool approach(const Request& rq) {
+    if (++approaches_ > kMaxApproaches) {  // σ̂ does not go to 0 here: not a change point
+      monitor_quiet_ = true;
+      approaches_ = 0;
+      return true;
+    }
+    const double fraction =
+        std::min(kApproachFraction, 1.0 - kApproachTarget * pass_quality_ / rq.sigma);
+    const double dist = rq.t_star - t_now_;
+    const detail::OdeStats sa = run_to(t_now_ + fraction * dist, kApproachStep * dist);
+    if (!sa.completed && !request_.pending) {
+      failure_ = !stop_message_.empty() ? stop_message_ : sa.message;
+      return false;
+    }
+    // Completed (its last step raises a new request when the point is near) or stopped by a
+    // newer request: the loop goes on from there.
+    return true;
+  }
+
+  // ---- Final sample and status ----------------------------------------------------------------
+
+  void finish() {
+    result_.evaluations = evaluations_;
+    result_.rejected_steps = rejected_steps_;
+    result_.jacobians = jacobians_;
+    if (!failure_.empty()) {
+      finish_stopped();
+      return;
+    }
+    // Final sample at the corrected final state.
+    try {
+      sample_at(t_now_, x_, result_.final);
+    } catch (const SingularEvaluation& e) {
+      result_.status = SimulateStatus::singular;
+      result_.message = e.message;
+      return;
+    }
+    result_.energy_initial = energy0_;
+    result_.energy_final = result_.final.kinetic + result_.final.potential - result_.final.work;
+    result_.max_constraint_residual =
+        std::max(result_.max_constraint_residual, result_.final.residual);
+    if (model_.nc) {
+      VecX f_final(model_.nc);
+      compute_constraint_residual(model_, result_.final.q, f_final);
+      note_residual(f_final);
+    }
+    if (!primal_)
+      for (const auto& smp : result_.samples)
+        result_.max_velocity_residual =
+            std::max(result_.max_velocity_residual, smp.velocity_residual);
+    result_.status = SimulateStatus::completed;
+  }
+
+  // A run stopped early: its status and message, and the final sample at the stop time (the
+  // last accepted, corrected state).
+  void finish_stopped() {
+    result_.status = failure_status_;
+    result_.message = failure_;
+    try {
+      sample_at(t_last_accept_ > t_now_ ? t_last_accept_ : t_now_, x_, result_.final);
+    } catch (const SingularEvaluation&) {
+      if (!result_.samples.empty()) result_.final = result_.samples.back();
+      result_.final.t = std::max(t_now_, t_last_accept_);
+    }
+    result_.energy_initial = energy0_;
+  }
+
+  // ---- State ----------------------------------------------------------------------------------
+
+  const Model& model_;
+  const State& initial_;
+  const SimulateOptions& options_;
+  SimulateResult result_;
+  bool primal_;
+  int n_, nq_, na_, rank_, nx_;
+  Dynamics dyn_;
+  VecX q_;  // the last corrected position
+  VecX x_;  // the ODE state
+  VecX f_, dq_, u_step_;
+  // Output grid.
+  double T0_, T1_, dt_out_, grid_slack_, end_slack_;
+  long next_out_ = 0;
+  // Energy balance and counters.
+  double energy0_ = 0.0;
+  bool have_energy0_ = false;
+  long evaluations_ = 0;
+  double spread_limit_ = kSpreadLimit;  // chart monitor threshold (raised while no chart helps)
+  // Change-point monitor.
+  VecX sigma_w_;
+  double sigma_ref_ = 0.0;
+  MonitorPoint monitor_;
+  Request request_;
+  SavedState saved_older_, saved_prev_;
+  int rewind_to_ = -1;  // 0: saved_older, 1: saved_prev (with request)
+  double last_rewind_t_star_ = -std::numeric_limits<double>::infinity();
+  bool monitor_armed_ = true;
+  // Set when an approach does not reach σ̂ ≤ pass_quality in kMaxApproaches segments (σ̂ has a
+  // minimum above 0 there, not a change point): no request until σ̂ rises again.
+  bool monitor_quiet_ = false;
+  double pass_quality_ = kPassQuality;  // σ̂ at which the next passage is tried
+  double t_last_accept_, h_last_ = 0.0;
+  // chart_quality_rate's work space.
+  VecX sigma_left_, rate_x_, rate_plus_;
+  State rate_state_;
+  ConstraintWorkspace rate_ws_;
+  std::string stop_message_;  // why accept stopped the integrator
+  int crossing_rewinds_ = 0;
+  double last_crossing_t_star_ = -std::numeric_limits<double>::infinity();
+  detail::OdeProblem problem_;
+  double spread_now_ = 0.0;  // the chart's spread after the last acceptance (dual form)
+  double next_step_limit_ = std::numeric_limits<double>::infinity();
+  std::vector<char> angular_row_;  // rows of f that are angles
+  bool local_passage_;             // passages in local coordinates (spatial bodies)
+  // Segments and the driver.
+  detail::OdeOptions base_;
+  double t_now_;
+  long rejected_steps_ = 0, jacobians_ = 0;  // summed over the segments
+  std::string failure_, first_passage_why_;
+  SimulateStatus failure_status_ = SimulateStatus::failed_step;
+  int approaches_ = 0;
+};
+
+}  // namespace
+
+SimulateResult simulate(const Model& model, const SimulateOptions& options) {
+  State s(model);
+  s.q = model.design_q();
+  if (options.initial_u.size() == model.n) s.u = options.initial_u;
+  if (options.initial_rates.empty() && options.use_file_rates && !model.initial.rates.empty()) {
+    SimulateOptions with_file_rates = options;  // the file's initial rates (Model::initial)
+    for (const InitialRateSpec& r : model.initial.rates)
+      with_file_rates.initial_rates.push_back({r.measure, r.rate});
+    return simulate(model, s, with_file_rates);
+  }
+  return simulate(model, s, options);
+}
+
+SimulateResult simulate(const Model& model, const State& initial, const SimulateOptions& options) {
+  SimulateResult result;
+  result.form = options.form;
+  if (!(options.t_end > 0.0)) throw std::invalid_argument("simulate: t_end must be positive");
+  VecX q;
+  int rank = 0;
+  if (!consistent_start(model, initial, options, q, rank, result)) return result;
+  Simulation simulation(model, initial, options, q, rank, std::move(result));
+  return simulation.run();
 }
 
 }  // namespace orthomech
