@@ -363,6 +363,18 @@ struct CycleRun {
     return w > 2.0 * std::numbers::pi - 1e-9 ? 0.0 : w;
   }
 
+  // The units of the outputs from U (input and speed: the driver's angle or length).
+  void set_output_units() {
+    input_u = output_unit(angular ? Dimension::angle : Dimension::length, U);
+    time_u = output_unit(Dimension::time, U);
+    power_u = output_unit(Dimension::power, U);
+    energy_u = output_unit(Dimension::moment, U);
+    inertia_u = output_unit(Dimension::inertia, U);
+    angle_u = output_unit(Dimension::angle, U);
+    speed_u = output_unit(angular ? Dimension::angular_velocity : Dimension::velocity, U);
+    length_u = output_unit(Dimension::length, U);
+  }
+
   // The output steps (4 to 7 of run_cycle_command), on the members above.
   void log_cycle() const;
   [[nodiscard]] std::string write_files() const;
@@ -986,14 +998,7 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
   // Step 4: the log.
   c.log_cycle();
 
-  c.input_u = output_unit(angular ? Dimension::angle : Dimension::length, U);
-  c.time_u = output_unit(Dimension::time, U);
-  c.power_u = output_unit(Dimension::power, U);
-  c.energy_u = output_unit(Dimension::moment, U);
-  c.inertia_u = output_unit(Dimension::inertia, U);
-  c.angle_u = output_unit(Dimension::angle, U);
-  c.speed_u = output_unit(angular ? Dimension::angular_velocity : Dimension::velocity, U);
-  c.length_u = output_unit(Dimension::length, U);
+  c.set_output_units();
   // The traced points over the cycle's own positions.
   c.sweep = sweep_positions_of(r);
   c.traces = trace_paths(model, trace_request, c.sweep.q, c.sweep.input);
