@@ -753,7 +753,7 @@ void predict(const Model& model, const DrivenPoint& p, double s, VecX& step, Vec
 // mobility read (record_mobility); then a CycleRun reaches the requested start along the branch,
 // sets the time grid, sweeps it by continuation (predictor + locked-input corrector, change
 // points passed, dead points stopped at or reversed), bridges the change points and finishes the
-// result. (C1)–(C4) per position are compute_driven's.
+// result. Each position's kinetostatics are compute_driven's.
 
 // Points next to a change point (E loses rank): every chart of E is ill-conditioned there and
 // the multipliers, which grow without bound, are not meaningful.
