@@ -1001,12 +1001,13 @@ class CycleRun {
   // The time grid (set_time_grid).
   int steps_ = 0, last_index_ = 0, max_positions_ = 0, report_every_ = 1;
   double period_ = 0.0, dt_ = 0.0, omega0_ = 0.0;
-  const VecX scale_;                   // of each velocity component, for kMaxMove
-  VecX trial_;                         // predictor/corrector iterate, reused across positions
-  const std::vector<size_t> wrapped_;  // measures read modulo 2π (wrapped_measures)
-  VecX du_;                            // the predictor's step in velocity space
-  DrivenPoint anchor_;                 // the last converged point: the predictor starts from it
-  VecX good_tangent_;                  // of the last regular point: used next to a change point
+  // The sweep's work buffers (set_time_grid).
+  VecX scale_;                   // of each velocity component, for kMaxMove
+  VecX trial_;                   // predictor/corrector iterate, reused across positions
+  std::vector<size_t> wrapped_;  // measures read modulo 2π (wrapped_measures)
+  VecX du_;                      // the predictor's step in velocity space
+  DrivenPoint anchor_;           // the last converged point: the predictor starts from it
+  VecX good_tangent_;            // of the last regular point: used next to a change point
   DrivenPoint probe_, sub_, check_;
   std::vector<double> null_values_;
   int reversals_ = 0;
@@ -1022,11 +1023,7 @@ CycleRun::CycleRun(const Model& model, const CycleOptions& options, const CycleR
       state_(std::move(start)),
       ws_(model, mob.rank),
       w_(model, mob.rank, idle_body_indices(model, mob)),
-      sweep_{model, request.joint, ws_, w_},
-      scale_(step_scale(model)),
-      trial_(model.nq),
-      wrapped_(wrapped_measures(model)),
-      du_(model.n) {
+      sweep_{model, request.joint, ws_, w_} {
   (void)evaluate_dual(model_, state_, ws_);
   s0_ = compute_scalar(model_, JointCoordinate{request_.joint}, state_.q, nullptr).value;
 }
@@ -1088,8 +1085,8 @@ bool CycleRun::reach_start() {
   return true;
 }
 
-// Period and time grid; the law anchored at the start. False (the message set) for an empty
-// input range.
+// Period and time grid; the law anchored at the start; the storage of the positions and the
+// work buffers sized. False (the message set) for an empty input range.
 bool CycleRun::set_time_grid() {
   const Driver& driver = options_.driver;
   steps_ = std::max(2, options_.steps);
@@ -1113,7 +1110,12 @@ bool CycleRun::set_time_grid() {
   omega0_ = law_.omega;
   max_positions_ = 4 * steps_;  // bound on a reversing sweep that does not close
   report_every_ = std::max(1, steps_ / 100);
+  // The positions' storage, then the sweep's work buffers.
   result_.points.reserve(static_cast<size_t>(steps_));
+  scale_ = step_scale(model_);
+  trial_.resize(model_.nq);
+  wrapped_ = wrapped_measures(model_);
+  du_.resize(model_.n);
   return true;
 }
 
