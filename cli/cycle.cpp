@@ -362,6 +362,46 @@ struct CycleRun {
     if (w < 0.0) w += 2.0 * std::numbers::pi;
     return w > 2.0 * std::numbers::pi - 1e-9 ? 0.0 : w;
   }
+
+  // The units of the outputs from U (input and speed: the driver's angle or length).
+  void set_output_units() {
+    input_u = output_unit(angular ? Dimension::angle : Dimension::length, U);
+    time_u = output_unit(Dimension::time, U);
+    power_u = output_unit(Dimension::power, U);
+    energy_u = output_unit(Dimension::moment, U);
+    inertia_u = output_unit(Dimension::inertia, U);
+    angle_u = output_unit(Dimension::angle, U);
+    speed_u = output_unit(angular ? Dimension::angular_velocity : Dimension::velocity, U);
+    length_u = output_unit(Dimension::length, U);
+  }
+
+  // The output steps (4 to 7 of run_cycle_command), on the members above.
+  void log_cycle() const;
+  [[nodiscard]] std::string write_files() const;
+  [[nodiscard]] nlohmann::json json_document() const;
+  [[nodiscard]] std::string summary_text(const std::string& files_note) const;
+  void write_pictures(const Projection& projection, const std::string& text) const;
+
+ private:
+  // Parts of the JSON document.
+  [[nodiscard]] nlohmann::json extreme_json(const SeriesExtreme& e, const OutputUnit& u) const;
+  [[nodiscard]] nlohmann::json events_json(const std::vector<DeadPoint>& v) const;
+  void add_run_json(nlohmann::json& j) const;
+  [[nodiscard]] nlohmann::json bridges_json() const;
+  [[nodiscard]] nlohmann::json peaks_json() const;
+  [[nodiscard]] nlohmann::json components_json() const;
+  [[nodiscard]] nlohmann::json loops_json() const;
+  void add_power_json(nlohmann::json& j) const;
+  [[nodiscard]] nlohmann::json strokes_json() const;
+  [[nodiscard]] nlohmann::json limits_json() const;
+  [[nodiscard]] nlohmann::json traces_json() const;
+  // Parts of the terminal summary.
+  void summary_run(std::ostream& out) const;
+  void summary_events(std::ostream& out) const;
+  void summary_table(std::ostream& out) const;
+  void summary_metrics(std::ostream& out) const;
+  void summary_traces(std::ostream& out) const;
+  void summary_indeterminate(std::ostream& out) const;
 };
 
 // Step 1: the sweep's request from the options: driver, steps, reversal and the input range
@@ -415,11 +455,7 @@ std::optional<int> check_cycle_outcome(const Model& model, const CycleCliOptions
 
 // Step 4: the log (stderr): a stopped sweep, warnings, idle degrees of freedom, dead and
 // singular points, chart switches.
-void log_cycle(const CycleRun& c) {
-  const Model& model = c.model;
-  const CycleResult& r = c.r;
-  const CycleCliOptions& opt = c.opt;
-  const CycleMetrics& metrics = c.metrics;
+void CycleRun::log_cycle() const {
   if (r.status == CycleStatus::failed)
     spdlog::error("{}: the sweep stopped: {}", model.file, r.message);
   for (const std::string& w : r.warnings) spdlog::warn("{}: {}", model.file, w);
@@ -448,15 +484,7 @@ void log_cycle(const CycleRun& c) {
 // Step 5: the files of --out (cycle.csv, cycle.gp and gnuplot's plots), before anything goes to
 // stdout so that a failure to write is reported first. Returns the note of the files written
 // ("" without --out).
-std::string write_cycle_files(const CycleRun& c) {
-  const Model& model = c.model;
-  const CycleResult& r = c.r;
-  const CycleCliOptions& opt = c.opt;
-  const CycleOptions& co = c.co;
-  const UnitSystem& U = c.U;
-  const bool angular = c.angular;
-  const std::vector<ReactionMagnitude>& magnitudes = c.magnitudes;
-  const std::vector<PointTrace>& traces = c.traces;
+std::string CycleRun::write_files() const {
   std::string files_note;
   if (!opt.out.empty()) {
     const std::filesystem::path dir(opt.out);
@@ -498,27 +526,43 @@ std::string write_cycle_files(const CycleRun& c) {
   return files_note;
 }
 
-// Step 6a: the --json document (docs/cli.md).
-nlohmann::json cycle_json(const CycleRun& c) {
-  const Model& model = c.model;
-  const CycleResult& r = c.r;
-  const CycleCliOptions& opt = c.opt;
-  const CycleOptions& co = c.co;
-  const CycleMetrics& metrics = c.metrics;
-  const UnitSystem& U = c.U;
-  const OutputUnit &input_u = c.input_u, &time_u = c.time_u, &power_u = c.power_u,
-                   &energy_u = c.energy_u, &inertia_u = c.inertia_u, &angle_u = c.angle_u,
-                   &speed_u = c.speed_u, &length_u = c.length_u;
-  const Joint& joint = model.joints[static_cast<size_t>(co.driver.joint)];
-  const NoiseFloor& noise = c.noise;
-  auto unit_of = [&](const std::string& si) { return c.unit_of(si); };
-  const std::string& drive_unit_si = c.drive_unit_si;
-  auto extreme = [&](const SeriesExtreme& e, const OutputUnit& u) {
-    return nlohmann::json{{"value", u.from_si(e.value)},
-                          {"input", input_u.from_si(e.input)},
-                          {"time", time_u.from_si(e.time)}};
-  };
+// Step 6a: the --json document (docs/cli.md): the run, the peaks and components, the design
+// metrics, the positions (--positions) and the traces.
+nlohmann::json CycleRun::json_document() const {
   nlohmann::json j;
+  add_run_json(j);
+  j["bridges"] = bridges_json();
+  j["peaks"] = peaks_json();
+  j["components"] = components_json();
+  // Design metrics.
+  j["loops"] = loops_json();
+  if (metrics.power.available) add_power_json(j);
+  j["strokes"] = strokes_json();
+  j["limits"] = limits_json();
+  if (opt.positions) j["points"] = positions_json(model, r, angular, U, noise);
+  j["traces"] = traces_json();
+  return j;
+}
+
+// A value at an extreme with its input and time.
+nlohmann::json CycleRun::extreme_json(const SeriesExtreme& e, const OutputUnit& u) const {
+  return nlohmann::json{{"value", u.from_si(e.value)},
+                        {"input", input_u.from_si(e.input)},
+                        {"time", time_u.from_si(e.time)}};
+}
+
+nlohmann::json CycleRun::events_json(const std::vector<DeadPoint>& v) const {
+  nlohmann::json a = nlohmann::json::array();
+  for (const DeadPoint& d : v)
+    a.push_back({{"input", input_u.from_si(d.input)},
+                 {"time", time_u.from_si(d.time)},
+                 {"message", d.message}});
+  return a;
+}
+
+// The run: mechanism, units, status, driver, mobility, redundant rows, dead and singular points.
+void CycleRun::add_run_json(nlohmann::json& j) const {
+  const Joint& joint = model.joints[static_cast<size_t>(co.driver.joint)];
   j["mechanism"] = model.name;
   j["file"] = model.file;
   j["units"] = units_json(U);
@@ -543,16 +587,11 @@ nlohmann::json cycle_json(const CycleRun& c) {
   j["indeterminate_rows"] = redundant;
   j["chart_switches"] = r.chart_switches;
   j["reversals"] = r.reversals;
-  auto events = [&](const std::vector<DeadPoint>& v) {
-    nlohmann::json a = nlohmann::json::array();
-    for (const DeadPoint& d : v)
-      a.push_back({{"input", input_u.from_si(d.input)},
-                   {"time", time_u.from_si(d.time)},
-                   {"message", d.message}});
-    return a;
-  };
-  j["dead_points"] = events(r.dead_points);
-  j["singular_positions"] = events(r.singular_positions);
+  j["dead_points"] = events_json(r.dead_points);
+  j["singular_positions"] = events_json(r.singular_positions);
+}
+
+nlohmann::json CycleRun::bridges_json() const {
   const OutputUnit drive_out = unit_of(drive_unit_si);
   nlohmann::json bridges = nlohmann::json::array();
   for (const ChangePointBridge& b : r.bridges) {
@@ -566,12 +605,15 @@ nlohmann::json cycle_json(const CycleRun& c) {
                        {"drive_error", drive_out.from_si(b.drive_error)},
                        {"diverging", div}});
   }
-  j["bridges"] = bridges;
-  // peaks: the drive, every reaction magnitude and every reaction component.
-  // A component zero by construction (a frictionless slide's axial force) is 0, not the
-  // rounding noise of the solve (io/noise.hpp).
+  return bridges;
+}
+
+// peaks: the drive, every reaction magnitude and every reaction component.
+// A component zero by construction (a frictionless slide's axial force) is 0, not the
+// rounding noise of the solve (io/noise.hpp).
+nlohmann::json CycleRun::peaks_json() const {
   nlohmann::json peaks;
-  for (const auto* list : {&c.summary, &c.component_summary})
+  for (const auto* list : {&summary, &component_summary})
     for (const SeriesSummary& s : *list) {
       const OutputUnit u = unit_of(s.unit);
       const Dimension d = dimension_of(s.unit);
@@ -582,13 +624,16 @@ nlohmann::json cycle_json(const CycleRun& c) {
                        {"input", input_u.from_si(s.peak_input)},
                        {"time", time_u.from_si(s.peak_time)},
                        {"rms", u.from_si(noise.clean(d, s.rms))},
-                       {"max", extreme(max, u)},
-                       {"min", extreme(min, u)},
+                       {"max", extreme_json(max, u)},
+                       {"min", extreme_json(min, u)},
                        {"unit", u.name},
                        {"determinate", s.determinate},
                        {"diverges", s.diverges}};
     }
-  j["peaks"] = peaks;
+  return peaks;
+}
+
+nlohmann::json CycleRun::components_json() const {
   nlohmann::json comps = nlohmann::json::array();
   for (size_t i = 0; i < r.components.size(); ++i)
     comps.push_back({{"name", r.components[i].name},
@@ -597,40 +642,47 @@ nlohmann::json cycle_json(const CycleRun& c) {
                      {"unit", unit_of(r.components[i].unit).name},
                      {"determinate", r.determinate[i]},
                      {"diverging", r.diverging.empty() ? false : bool(r.diverging[i])}});
-  j["components"] = comps;
-  // Design metrics.
+  return comps;
+}
+
+nlohmann::json CycleRun::loops_json() const {
   nlohmann::json loops = nlohmann::json::array();
   for (const LoopAngleMetric& l : metrics.loops)
     loops.push_back({{"loop", l.loop},
                      {"kind", l.slider_crank ? "slider-crank" : "four-bar"},
                      {"angle", l.slider_crank ? "pressure" : "transmission"},
-                     {"min", extreme(l.min, angle_u)},
-                     {"max", extreme(l.max, angle_u)},
-                     {"worst", extreme(l.worst, angle_u)}});
-  j["loops"] = loops;
-  if (metrics.power.available) {
-    const PowerMetric& pw = metrics.power;
-    j["power"] = {{"mean", power_u.from_si(pw.mean)},
-                  {"peak", power_u.from_si(pw.peak)},
-                  {"max", extreme(pw.max, power_u)},
-                  {"min", extreme(pw.min, power_u)},
-                  {"unit", power_u.name}};
-    j["energy_fluctuation"] = {{"value", energy_u.from_si(pw.energy_fluctuation)},
-                               {"max", extreme(pw.energy_max, energy_u)},
-                               {"min", extreme(pw.energy_min, energy_u)},
-                               {"unit", energy_u.name},
-                               {"mean_speed", speed_u.from_si(pw.mean_speed)}};
-    if (pw.flywheel_inertia)
-      j["flywheel"] = {{"speed_fluctuation", opt.speed_fluctuation},
-                       {"inertia", inertia_u.from_si(*pw.flywheel_inertia)},
-                       {"unit", inertia_u.name}};
-  }
+                     {"min", extreme_json(l.min, angle_u)},
+                     {"max", extreme_json(l.max, angle_u)},
+                     {"worst", extreme_json(l.worst, angle_u)}});
+  return loops;
+}
+
+// The drive's power, its energy fluctuation and the flywheel (when asked for).
+void CycleRun::add_power_json(nlohmann::json& j) const {
+  const PowerMetric& pw = metrics.power;
+  j["power"] = {{"mean", power_u.from_si(pw.mean)},
+                {"peak", power_u.from_si(pw.peak)},
+                {"max", extreme_json(pw.max, power_u)},
+                {"min", extreme_json(pw.min, power_u)},
+                {"unit", power_u.name}};
+  j["energy_fluctuation"] = {{"value", energy_u.from_si(pw.energy_fluctuation)},
+                             {"max", extreme_json(pw.energy_max, energy_u)},
+                             {"min", extreme_json(pw.energy_min, energy_u)},
+                             {"unit", energy_u.name},
+                             {"mean_speed", speed_u.from_si(pw.mean_speed)}};
+  if (pw.flywheel_inertia)
+    j["flywheel"] = {{"speed_fluctuation", opt.speed_fluctuation},
+                     {"inertia", inertia_u.from_si(*pw.flywheel_inertia)},
+                     {"unit", inertia_u.name}};
+}
+
+nlohmann::json CycleRun::strokes_json() const {
   nlohmann::json strokes = nlohmann::json::array();
   for (const StrokeMetric& st : metrics.strokes) {
     const OutputUnit u = unit_of(st.unit);
     nlohmann::json e = {{"name", st.name},
-                        {"min", extreme(st.min, u)},
-                        {"max", extreme(st.max, u)},
+                        {"min", extreme_json(st.min, u)},
+                        {"max", extreme_json(st.max, u)},
                         {"range", u.from_si(st.range)},
                         {"unit", u.name}};
     if (st.time_ratio)
@@ -639,7 +691,10 @@ nlohmann::json cycle_json(const CycleRun& c) {
                          {"return_time", time_u.from_si(st.return_time)}};
     strokes.push_back(e);
   }
-  j["strokes"] = strokes;
+  return strokes;
+}
+
+nlohmann::json CycleRun::limits_json() const {
   nlohmann::json limits = nlohmann::json::array();
   for (const LimitExcursion& l : metrics.limits) {
     const Joint& lj = model.joints[static_cast<size_t>(l.joint)];
@@ -647,15 +702,17 @@ nlohmann::json cycle_json(const CycleRun& c) {
         std::holds_alternative<Revolute>(lj.kind) ? Dimension::angle : Dimension::length, U);
     limits.push_back({{"joint", lj.name},
                       {"limits", {u.from_si(lj.limits->x()), u.from_si(lj.limits->y())}},
-                      {"first", extreme(l.first, u)},
-                      {"furthest", extreme(l.furthest, u)},
+                      {"first", extreme_json(l.first, u)},
+                      {"furthest", extreme_json(l.furthest, u)},
                       {"positions", l.positions},
                       {"unit", u.name}});
   }
-  j["limits"] = limits;
-  if (opt.positions) j["points"] = positions_json(model, r, c.angular, U, noise);
+  return limits;
+}
+
+nlohmann::json CycleRun::traces_json() const {
   nlohmann::json traced = nlohmann::json::array();
-  for (const PointTrace& t : c.traces) {
+  for (const PointTrace& t : traces) {
     nlohmann::json e = {{"point", t.point}, {"unit", length_u.name}};
     std::vector<double> in, x, y;
     for (size_t k = 0; k < t.path.size(); ++k) {
@@ -673,29 +730,31 @@ nlohmann::json cycle_json(const CycleRun& c) {
     }
     traced.push_back(e);
   }
-  j["traces"] = traced;
-  return j;
+  return traced;
 }
 
 // Step 6b: the terminal summary (also the report's): the run, the table of the drive and the
 // reaction magnitudes, the design metrics, the traces.
-std::string cycle_summary(const CycleRun& c, const std::string& files_note) {
-  const Model& model = c.model;
-  const CycleResult& r = c.r;
-  const CycleCliOptions& opt = c.opt;
-  const CycleOptions& co = c.co;
-  const CycleMetrics& metrics = c.metrics;
-  const UnitSystem& U = c.U;
-  const bool angular = c.angular;
-  const OutputUnit &time_u = c.time_u, &power_u = c.power_u, &energy_u = c.energy_u,
-                   &inertia_u = c.inertia_u, &length_u = c.length_u;
-  const Joint& joint = model.joints[static_cast<size_t>(co.driver.joint)];
-  const NoiseFloor& noise = c.noise;
-  const std::vector<SeriesSummary>& summary = c.summary;
-  auto unit_of = [&](const std::string& si) { return c.unit_of(si); };
-  auto wrapped = [&](double s) { return c.wrapped(s); };
-  const std::string& drive_unit_si = c.drive_unit_si;
+std::string CycleRun::summary_text(const std::string& files_note) const {
   std::ostringstream out;
+  summary_run(out);
+  summary_events(out);
+  if (!files_note.empty()) out << "files           " << files_note << "\n";
+  out << "\n";
+  summary_table(out);
+  summary_metrics(out);
+  summary_traces(out);
+  summary_indeterminate(out);
+  out << "\nconvention: reactions are forces and moments on a joint's first body from its "
+         "second; \"_local\" and joint-frame components are in the joint's frame (the first "
+         "body's, or the second's when the first is the ground). Signed max and min of every "
+         "component: --json.\n";
+  return out.str();
+}
+
+// The run: mechanism, driver, the positions swept, status, mobility.
+void CycleRun::summary_run(std::ostream& out) const {
+  const Joint& joint = model.joints[static_cast<size_t>(co.driver.joint)];
   out << "mechanism       " << model.name << "  (" << model.file << ")\n";
   out << "driver          joint '" << joint.name << "' (" << joint.type_name() << "), "
       << speed_text(co.driver, angular, U) << "\n";
@@ -716,6 +775,10 @@ std::string cycle_summary(const CycleRun& c, const std::string& files_note) {
       << (r.redundant ? std::to_string(r.redundant) + " redundant equation(s)"
                       : std::string("no redundant equations"))
       << "\n";
+}
+
+// Dead points, singular positions (and their bridges), joint limits left.
+void CycleRun::summary_events(std::ostream& out) const {
   out << "dead points     " << (r.dead_points.empty() ? "none" : "") << "\n";
   for (const DeadPoint& d : r.dead_points)
     out << "  t = " << fmt(time_u.from_si(d.time), 6) << " " << time_u.name << ": " << d.message
@@ -743,9 +806,10 @@ std::string cycle_summary(const CycleRun& c, const std::string& files_note) {
         << format_input(wrapped(l.furthest.input), angular, U) << " (" << l.positions
         << " positions outside)\n";
   }
-  if (!files_note.empty()) out << "files           " << files_note << "\n";
-  out << "\n";
-  // The table: columns sized to the longest name.
+}
+
+// The table of the drive and the reaction magnitudes: columns sized to the longest name.
+void CycleRun::summary_table(std::ostream& out) const {
   size_t name_w = 8, unit_w = 4;
   for (const SeriesSummary& s : summary) {
     name_w = std::max(name_w, s.name.size());
@@ -771,7 +835,10 @@ std::string cycle_summary(const CycleRun& c, const std::string& files_note) {
                                 : "   indeterminate (minimum norm)");
     out << line;
   }
-  // Design metrics.
+}
+
+// Design metrics: transmission and pressure angles, drive power and flywheel, strokes.
+void CycleRun::summary_metrics(std::ostream& out) const {
   if (!metrics.loops.empty() || metrics.power.available || !metrics.strokes.empty()) out << "\n";
   for (const LoopAngleMetric& l : metrics.loops) {
     if (l.slider_crank)
@@ -805,7 +872,11 @@ std::string cycle_summary(const CycleRun& c, const std::string& files_note) {
     if (st.time_ratio) out << ", time ratio forward/return " << fmt(*st.time_ratio, 6);
     out << "\n";
   }
-  for (const PointTrace& t : c.traces) {
+}
+
+// The box of every traced point's path.
+void CycleRun::summary_traces(std::ostream& out) const {
+  for (const PointTrace& t : traces) {
     Vec2 lo = Vec2::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
     for (const Vec2& p : t.path) {
       lo = lo.cwiseMin(p);
@@ -820,6 +891,10 @@ std::string cycle_summary(const CycleRun& c, const std::string& files_note) {
     }
     out << " " << length_u.name << "\n";
   }
+}
+
+// The statically indeterminate reaction components, if any.
+void CycleRun::summary_indeterminate(std::ostream& out) const {
   bool any = false;
   for (size_t i = 0; i < r.components.size(); ++i) {
     if (r.determinate[i]) continue;
@@ -830,41 +905,33 @@ std::string cycle_summary(const CycleRun& c, const std::string& files_note) {
     any = true;
   }
   if (any) out << "\n";
-  out << "\nconvention: reactions are forces and moments on a joint's first body from its "
-         "second; \"_local\" and joint-frame components are in the joint's frame (the first "
-         "body's, or the second's when the first is the ground). Signed max and min of every "
-         "component: --json.\n";
-  return out.str();
 }
 
 // Step 7: the pictures of --animate and --report: one animation of the cycle's positions
 // (render's animated_svg), in the report too with the summary and the plots.
-void write_cycle_pictures(const CycleRun& c, const Projection& projection,
-                          const std::string& summary) {
-  const Model& model = c.model;
-  const CycleCliOptions& opt = c.opt;
+void CycleRun::write_pictures(const Projection& projection, const std::string& text) const {
   RenderOptions ro;
-  ro.driver = c.co.driver.joint;
+  ro.driver = co.driver.joint;
   ro.projection = projection;
-  ro.traces = c.traces;
+  ro.traces = traces;
   std::string animation;
   try {
-    animation = animated_svg(model, c.sweep.q, ro, opt.duration);
+    animation = animated_svg(model, sweep.q, ro, opt.duration);
     if (!opt.animate.empty()) {
       write_file_atomically(opt.animate, animation);
-      spdlog::info("wrote {} ({} frames)", opt.animate, c.sweep.q.size());
+      spdlog::info("wrote {} ({} frames)", opt.animate, sweep.q.size());
     }
     if (!opt.report.empty()) {
       CycleReport report;
       report.title = model.name;
-      report.summary = summary;
-      report.input_label = "input [" + c.input_u.name + "]";
-      for (const double s : c.sweep.input) report.input.push_back(c.input_u.from_si(s));
-      report.plots = report_plots(c.r, c.magnitudes, c.angular, c.U);
+      report.summary = text;
+      report.input_label = "input [" + input_u.name + "]";
+      for (const double s : sweep.input) report.input.push_back(input_u.from_si(s));
+      report.plots = report_plots(r, magnitudes, angular, U);
       report.animation = std::move(animation);
       report.duration = opt.duration;
       write_file_atomically(opt.report, cycle_report_html(report));
-      spdlog::info("wrote {} ({} positions)", opt.report, c.sweep.q.size());
+      spdlog::info("wrote {} ({} positions)", opt.report, sweep.q.size());
     }
   } catch (const std::runtime_error& e) {
     release_render_caches();
@@ -929,29 +996,21 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
   // Step 3: a rejected request or an empty sweep ends the run here.
   if (const std::optional<int> code = check_cycle_outcome(model, opt, co, r)) return *code;
   // Step 4: the log.
-  log_cycle(c);
+  c.log_cycle();
 
-  c.input_u = output_unit(angular ? Dimension::angle : Dimension::length, U);
-  c.time_u = output_unit(Dimension::time, U);
-  c.power_u = output_unit(Dimension::power, U);
-  c.energy_u = output_unit(Dimension::moment, U);
-  c.inertia_u = output_unit(Dimension::inertia, U);
-  c.angle_u = output_unit(Dimension::angle, U);
-  c.speed_u = output_unit(angular ? Dimension::angular_velocity : Dimension::velocity, U);
-  c.length_u = output_unit(Dimension::length, U);
+  c.set_output_units();
   // The traced points over the cycle's own positions.
   c.sweep = sweep_positions_of(r);
   c.traces = trace_paths(model, trace_request, c.sweep.q, c.sweep.input);
 
   // Step 5: files first.
-  const std::string files_note = write_cycle_files(c);
+  const std::string files_note = c.write_files();
   // Step 6: the results (stdout): the JSON document or the terminal summary.
   c.noise = cycle_noise_floor(model, r, c.magnitudes, angular);
-  const std::string summary = cycle_summary(c, files_note);
-  const std::string json = opt.json ? cycle_json(c).dump(2) + "\n" : std::string();
+  const std::string summary = c.summary_text(files_note);
+  const std::string json = opt.json ? c.json_document().dump(2) + "\n" : std::string();
   // Step 7: the pictures.
-  if (!opt.animate.empty() || !opt.report.empty())
-    write_cycle_pictures(c, *view.projection, summary);
+  if (!opt.animate.empty() || !opt.report.empty()) c.write_pictures(*view.projection, summary);
   std::cout << (opt.json ? json : summary);  // all at once
   return r.status == CycleStatus::completed               ? kOk
          : r.status == CycleStatus::stopped_at_dead_point ? kCheckFailed

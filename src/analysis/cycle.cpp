@@ -451,6 +451,18 @@ struct InputLaw {
   }
 };
 
+// The law of the driver's input (anchored at s_ref = 0, t_ref = 0).
+InputLaw input_law(const Driver& driver) {
+  InputLaw law;
+  law.profile = driver.profile;
+  law.omega = driver.speed;
+  law.initial = driver.initial;
+  law.amplitude = driver.amplitude;
+  law.frequency = driver.frequency;
+  law.coefficients = &driver.coefficients;
+  return law;
+}
+
 // `value` unwrapped to the turn of `near` (a spatial joint angle is read in (−π, π]).
 double unwrap_near(double value, double near) {
   return near + std::remainder(value - near, 2.0 * std::numbers::pi);
@@ -459,14 +471,8 @@ double unwrap_near(double value, double near) {
 }  // namespace
 
 void driver_law(const Driver& driver, double s0, double t, double& s, double& sdot, double& sddot) {
-  InputLaw law;
-  law.profile = driver.profile;
+  InputLaw law = input_law(driver);
   law.s_ref = s0;
-  law.omega = driver.speed;
-  law.initial = driver.initial;
-  law.amplitude = driver.amplitude;
-  law.frequency = driver.frequency;
-  law.coefficients = &driver.coefficients;
   law.at(t, s, sdot, sddot);
 }
 
@@ -608,77 +614,110 @@ void predict(const Model& model, const DrivenPoint& p, double s, VecX& step, Vec
   integrate_positions(model, q, step, 1.0);
 }
 
-}  // namespace
+// ---- run_cycle, step by step ----------------------------------------------------------------
+// run_cycle: the request checked (request_error), the start assembled (assemble_start) and its
+// mobility read (record_mobility); then a CycleRun reaches the requested start along the branch,
+// sets the time grid, sweeps it by continuation (predictor + locked-input corrector, change
+// points passed, dead points stopped at or reversed), bridges the change points and finishes the
+// result. Each position's kinetostatics are compute_driven's.
 
-CycleResult run_cycle(const Model& model, const CycleOptions& options) {
+// Points next to a change point (E loses rank): every chart of E is ill-conditioned there and
+// the multipliers, which grow without bound, are not meaningful.
+constexpr double kSingularQuality = 1e-4;
+// Scale of each coordinate for step-length control: lengths by the mechanism's size, angles by
+// 1 rad. One internal step may move no coordinate by more than kMaxMove of its scale (5.7°, a
+// tenth of the size); longer grid steps are split into sub-steps that are not output.
+constexpr double kMaxMove = 0.1;
+
+// What the request fixes before any position is known: the driver joint, the law of its input
+// (not yet anchored at the start), and the units in which messages quote inputs.
+struct CycleRequest {
+  int joint;
+  const std::string& joint_name;
+  bool angular;
+  UnitSystem file_units;  // the file's declared units (a model built in code: SI)
+  InputLaw law;
+  bool constant;  // a constant-speed driver
+};
+
+CycleRequest make_request(const Model& model, const CycleOptions& options) {
+  const int joint = options.driver.joint;
+  const Joint& j = model.joints[static_cast<size_t>(joint)];
+  return {joint,
+          j.name,
+          joint_coordinate_kind(j) == CoordinateKind::angle,
+          unit_system(model.units),
+          input_law(options.driver),
+          options.driver.profile == Profile::constant_speed};
+}
+
+// A result with the reaction components and the constraint rows named, each determinate until
+// a redundancy shows otherwise.
+CycleResult named_result(const Model& model) {
   CycleResult result;
   result.components = reaction_components(model);
   result.determinate.assign(result.components.size(), true);
   result.row_determinate.assign(static_cast<size_t>(model.nc), true);
   for (int r = 0; r < model.nc; ++r) result.row_names.push_back(model.constraint_row_name(r));
-  const int joint = options.driver.joint;
-  if (joint < 0 || joint >= static_cast<int>(model.joints.size())) {
-    result.message = "no driver joint";
-    return result;
-  }
-  const std::string& joint_name = model.joints[static_cast<size_t>(joint)].name;
-  const bool angular =
-      joint_coordinate_kind(model.joints[static_cast<size_t>(joint)]) == CoordinateKind::angle;
-  // Messages quote inputs in the file's declared units (a model built in code: SI).
-  const UnitSystem file_units = unit_system(model.units);
+  return result;
+}
+
+// Why the options give no cycle (nullptr when they do): a law without one, a start, end or
+// reversal the law cannot take, a mechanism whose positions do not follow from the input.
+const char* request_error(const Model& model, const CycleOptions& options, bool angular) {
   const Driver& driver = options.driver;
-  InputLaw law;
-  law.profile = driver.profile;
-  law.omega = driver.speed;
-  law.initial = driver.initial;
-  law.amplitude = driver.amplitude;
-  law.frequency = driver.frequency;
-  law.coefficients = &driver.coefficients;
   const bool constant = driver.profile == Profile::constant_speed;
-  if (constant && !(std::abs(driver.speed) > 0.0)) {
-    result.status = CycleStatus::invalid_request;
-    result.message = "the driver's speed must not be zero";
-    return result;
-  }
+  if (constant && !(std::abs(driver.speed) > 0.0)) return "the driver's speed must not be zero";
   if (driver.profile == Profile::harmonic &&
-      !(driver.frequency > 0.0 && std::abs(driver.amplitude) > 0.0)) {
-    result.status = CycleStatus::invalid_request;
-    result.message = "a harmonic driver needs a non-zero amplitude and a positive frequency";
-    return result;
+      !(driver.frequency > 0.0 && std::abs(driver.amplitude) > 0.0))
+    return "a harmonic driver needs a non-zero amplitude and a positive frequency";
+  if (driver.profile == Profile::polynomial)
+    return "a polynomial driver has no cycle to sweep; give a constant speed (--speed)";
+  if (!constant && (!options.full_cycle || options.use_start))
+    return "a start or an end input (--from, --to) needs a constant-speed driver: give --speed "
+           "too";
+  if (!model.knife_edges.empty() || !model.rolling_discs.empty())
+    return "the mechanism has nonholonomic constraints (knife edges, rolling discs): its positions "
+           "do not follow from the input alone, so it has no driven cycle; use simulate";
+  if (options.reverse_at_dead_point && !constant)
+    return "reversing at a dead point needs a constant-speed driver: give --speed too";
+  if (constant && options.full_cycle && !angular)
+    return "a prismatic driver has no full turn: give the end of the input range (--to)";
+  return nullptr;
+}
+
+// Bodies moved from their drawn pose by more than the tolerances to close the joints: listed in
+// result.start_moves and warned about.
+void warn_start_moves(const Model& model, const CycleRequest& request, const VecX& q,
+                      const VecX& drawn, CycleResult& result) {
+  const double size = mechanism_size(model);
+  VecX moved(model.n);
+  difference_positions(model, q, drawn, moved);
+  for (const Body& b : model.bodies) {
+    // Translation and rotation of the body (u-space: planar x, y, φ; spatial v, ω).
+    const int dim = b.kind == BodyKind::spatial ? 3 : 2;
+    const double distance = moved.segment(b.u_offset, dim).norm();
+    const double angle = b.kind == BodyKind::rigid     ? std::abs(moved(b.u_offset + 2))
+                         : b.kind == BodyKind::spatial ? moved.segment<3>(b.u_offset + 3).norm()
+                                                       : 0.0;
+    if (distance <= kStartMoveTolerance * size && angle <= kStartTurnTolerance) continue;
+    result.start_moves.push_back({b.name, distance, angle});
+    result.warnings.push_back("the design position does not close as drawn: body '" + b.name +
+                              "' moved by " + format_input(distance, false, request.file_units) +
+                              " and " + format_input(angle, true, request.file_units) +
+                              " to close the joints");
   }
-  if (driver.profile == Profile::polynomial) {
-    result.status = CycleStatus::invalid_request;
-    result.message = "a polynomial driver has no cycle to sweep; give a constant speed (--speed)";
-    return result;
-  }
-  if (!constant && (!options.full_cycle || options.use_start)) {
-    result.status = CycleStatus::invalid_request;
-    result.message =
-        "a start or an end input (--from, --to) needs a constant-speed driver: give --speed too";
-    return result;
-  }
-  if (!model.knife_edges.empty() || !model.rolling_discs.empty()) {
-    result.status = CycleStatus::invalid_request;
-    result.message =
-        "the mechanism has nonholonomic constraints (knife edges, rolling discs): its positions "
-        "do not follow from the input alone, so it has no driven cycle; use simulate";
-    return result;
-  }
-  if (options.reverse_at_dead_point && !constant) {
-    result.status = CycleStatus::invalid_request;
-    result.message = "reversing at a dead point needs a constant-speed driver: give --speed too";
-    return result;
-  }
-  if (constant && options.full_cycle && !angular) {
-    result.status = CycleStatus::invalid_request;
-    result.message = "a prismatic driver has no full turn: give the end of the input range (--to)";
-    return result;
-  }
-  // Start: the design position projected onto f(q) = 0 with the driven joint held at its drawn
-  // value (as `assemble --lock`); only where it cannot be held (a dead point of the driver, or
-  // the joints close only with the driver moved) is it projected freely. Bodies moved by more
-  // than the tolerances are listed and warned about.
-  State state(model);
+}
+
+// Start: the design position projected onto f(q) = 0 with the driven joint held at its drawn
+// value (as `assemble --lock`); only where it cannot be held (a dead point of the driver, or
+// the joints close only with the driver moved) is it projected freely. Bodies moved by more
+// than the tolerances are listed and warned about. False (the message set) when it does not
+// assemble.
+bool assemble_start(const Model& model, const CycleRequest& request, State& state,
+                    CycleResult& result) {
+  const int joint = request.joint;
+  const UnitSystem& units = request.file_units;
   const VecX drawn = model.design_q();
   state.q = drawn;
   PositionOptions hold;
@@ -690,744 +729,987 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
     assembly = project_positions(model, state.q);
     if (assembly.status == SolveStatus::converged)
       result.warnings.push_back(
-          "the design position closes only with driver joint '" + joint_name +
-          "' moved from its drawn " + format_input(hold.locked_value, angular, file_units) +
+          "the design position closes only with driver joint '" + request.joint_name +
+          "' moved from its drawn " + format_input(hold.locked_value, request.angular, units) +
           " to " +
           format_input(compute_scalar(model, JointCoordinate{joint}, state.q, nullptr).value,
-                       angular, file_units));
+                       request.angular, units));
   }
   if (assembly.status != SolveStatus::converged) {
     const ResidualSplit left = split_residual(model, state.q);
     result.message = "the design position does not assemble (residual " +
-                     format_quantity(left.length, Dimension::length, file_units) + ", " +
-                     format_quantity(left.angle, Dimension::angle, file_units) + ")";
-    return result;
+                     format_quantity(left.length, Dimension::length, units) + ", " +
+                     format_quantity(left.angle, Dimension::angle, units) + ")";
+    return false;
   }
-  {
-    const double size = mechanism_size(model);
-    VecX moved(model.n);
-    difference_positions(model, state.q, drawn, moved);
-    for (const Body& b : model.bodies) {
-      // Translation and rotation of the body (u-space: planar x, y, φ; spatial v, ω).
-      const int dim = b.kind == BodyKind::spatial ? 3 : 2;
-      const double distance = moved.segment(b.u_offset, dim).norm();
-      const double angle = b.kind == BodyKind::rigid     ? std::abs(moved(b.u_offset + 2))
-                           : b.kind == BodyKind::spatial ? moved.segment<3>(b.u_offset + 3).norm()
-                                                         : 0.0;
-      if (distance <= kStartMoveTolerance * size && angle <= kStartTurnTolerance) continue;
-      result.start_moves.push_back({b.name, distance, angle});
-      result.warnings.push_back("the design position does not close as drawn: body '" + b.name +
-                                "' moved by " + format_input(distance, false, file_units) +
-                                " and " + format_input(angle, true, file_units) +
-                                " to close the joints");
-    }
-  }
-  const Mobility mob = compute_mobility(model, state.q);
+  warn_start_moves(model, request, state.q, drawn, result);
+  return true;
+}
+
+// The start's mobility into the result. Idle degrees of freedom (a coupler's spin between two
+// spherical joints) are held at zero rate: the driver moves the others. False (the message set)
+// unless exactly one is left to drive.
+bool record_mobility(const Model& model, const Mobility& mob, CycleResult& result) {
   result.rank = mob.rank;
   result.dof = mob.dof;
   result.redundant = model.nc - mob.rank;
   result.idle = mob.idle;
-  // Idle degrees of freedom (a coupler's spin between two spherical joints) are held at zero
-  // rate: the driver moves the others.
   int idle_dof = 0;
   for (const Mobility::Idle& i : mob.idle) idle_dof += i.count;
-  if (mob.dof - idle_dof != 1) {
-    const int driven = mob.dof - idle_dof;
-    std::string& m = result.message;
-    m = "a single driver needs a mechanism with 1 DOF; this one has ";
-    m.append(std::to_string(mob.dof));
-    if (idle_dof > 0) {
-      m.append(" (").append(std::to_string(idle_dof)).append(" idle, held at zero rate: ");
-      m.append(std::to_string(driven)).append(" to drive)");
-    }
-    if (driven > 1) m.append(" (drive every degree of freedom: cycle --drivers A,B,…)");
-    return result;
+  if (mob.dof - idle_dof == 1) return true;
+  const int driven = mob.dof - idle_dof;
+  std::string& m = result.message;
+  m = "a single driver needs a mechanism with 1 DOF; this one has ";
+  m.append(std::to_string(mob.dof));
+  if (idle_dof > 0) {
+    m.append(" (").append(std::to_string(idle_dof)).append(" idle, held at zero rate: ");
+    m.append(std::to_string(driven)).append(" to drive)");
   }
-  Workspace ws(model, mob.rank);
-  DrivenWorkspace w(model, mob.rank, idle_body_indices(model, mob));
-  Sweep sweep{model, joint, ws, w};
-  const MeasureKind input = JointCoordinate{joint};
-  (void)evaluate_dual(model, state, ws);
-  double s0 = compute_scalar(model, input, state.q, nullptr).value;
-  double start_target = s0;
-  if (!constant) {
-    double sd = 0.0, sdd = 0.0;
-    law.at(0.0, start_target, sd, sdd);
-  } else if (options.use_start) {
-    start_target = options.start;
-  }
-  // A start elsewhere is reached by continuation along the design position's branch (the same
-  // circuit, every angle unwrapped continuously): a range sweep from the design input to it, so
-  // that the cycle from X equals the full cycle at X. For a full turn that is the input the full
-  // cycle has there, X' = s₀ + σ ((σ(X − s₀)) mod 2π) with σ the direction of the drive (so X' may
-  // differ from X by whole turns).
-  if (constant && options.use_start && options.full_cycle && angular) {
-    const double sigma = driver.speed > 0.0 ? 1.0 : -1.0;
-    double ahead = std::fmod(sigma * (start_target - s0), 2.0 * std::numbers::pi);
-    if (ahead < 0.0) ahead += 2.0 * std::numbers::pi;
-    if (ahead < 1e-12 || 2.0 * std::numbers::pi - ahead < 1e-12) ahead = 0.0;
-    start_target = s0 + sigma * ahead;
-  }
-  VecX start_tangent;  // set when the start was reached along the branch
-  if (start_target != s0) {
-    CycleOptions reach;
-    reach.driver = driver;
-    reach.driver.profile = Profile::constant_speed;
-    reach.driver.speed = constant ? std::abs(driver.speed) : 1.0;
-    reach.full_cycle = false;
-    reach.end = start_target;
-    // Positions every 2° (or 1/180 of the range for a prismatic joint): each is converged, and
-    // longer steps are split by the sweep itself.
-    const double per_step = angular ? 2.0 * std::numbers::pi / 180.0 : 0.0;
-    const double span = std::abs(start_target - s0);
-    reach.steps = per_step > 0.0
-                      ? std::clamp(static_cast<int>(std::ceil(span / per_step)) + 1, 2, 100000)
-                      : 181;
-    reach.bridge_change_points = false;  // only its last position (a converged one) is used
-    const CycleResult path = run_cycle(model, reach);
-    if (path.status != CycleStatus::completed || path.points.empty()) {
-      result.message = "cannot reach the start input " +
-                       format_input(start_target, angular, file_units) +
-                       " from the design position along its branch: " + path.message;
-      return result;
-    }
-    state.q = path.points.back().q;
-    // The branch's tangent where the path arrived (its last regular position): the first step
-    // from a start on a change point predicts with it.
-    for (const DrivenPointView& p : path.points)
-      if (!p.singular && p.chart_quality >= 1e-3) start_tangent = p.tangent;
-    s0 = start_target;
-  }
-  // Period and time grid.
-  const int steps = std::max(2, options.steps);
-  double period = 0.0;
-  if (constant && options.full_cycle) {
-    period = 2.0 * std::numbers::pi / std::abs(driver.speed);
-  } else if (constant) {
-    const double span = options.end - s0;
-    if (!(std::abs(span) > 0.0)) {
-      result.status = CycleStatus::invalid_request;
-      result.message = "the input range is empty: the end (--to) equals the start";
-      return result;
-    }
-    law.omega = std::copysign(std::abs(driver.speed), span);
-    period = std::abs(span) / std::abs(driver.speed);
-  } else {
-    period = 1.0 / driver.frequency;
-  }
-  law.s_ref = s0;
-  const double dt = options.full_cycle ? period / steps : period / (steps - 1);
-  const int last_index = steps;  // grid times k = 0 … steps − 1
-  const double omega0 = law.omega;
-  const int max_positions = 4 * steps;  // bound on a reversing sweep that does not close
+  if (driven > 1) m.append(" (drive every degree of freedom: cycle --drivers A,B,…)");
+  return false;
+}
 
-  result.points.reserve(static_cast<size_t>(steps));
-
-  // Scale of each coordinate for step-length control: lengths by the mechanism's size, angles by
-  // 1 rad. One internal step may move no coordinate by more than kMaxMove of its scale (5.7°, a
-  // tenth of the size); longer grid steps are split into sub-steps that are not output.
-  constexpr double kMaxMove = 0.1;
-  // (Of velocity components: the tangent is dq/ds in u-space, planar x, y, φ; spatial v, ω.)
+// The scale of each velocity component for kMaxMove (the tangent is dq/ds in u-space, planar
+// x, y, φ; spatial v, ω): the mechanism's size for lengths, 1 rad for angles.
+VecX step_scale(const Model& model) {
   VecX scale = VecX::Constant(model.n, mechanism_size(model));
   for (const Body& b : model.bodies)
     if (b.kind == BodyKind::rigid)
       scale(b.u_offset + 2) = 1.0;
     else if (b.kind == BodyKind::spatial)
       scale.segment<3>(b.u_offset + 3).setConstant(1.0);
-  auto move_size = [&](const VecX& tangent, double ds) {
-    return (tangent.cwiseAbs().cwiseQuotient(scale)).maxCoeff() * std::abs(ds);
-  };
-  // Points next to a change point (E loses rank): every chart of E is ill-conditioned there and
-  // the multipliers, which grow without bound, are not meaningful.
-  constexpr double kSingularQuality = 1e-4;
+  return scale;
+}
 
-  auto evaluate_at = [&](const VecX& q, double t, DrivenPoint& p,
-                         DrivenJacobian jacobian = DrivenJacobian::evaluate) {
-    double s = 0.0, sdot = 0.0, sddot = 0.0;
-    law.at(t, s, sdot, sddot);
-    state.q = q;
-    state.t = t;
-    if (!compute_driven(model, joint, sdot, sddot, state, ws, w, p, jacobian)) return false;
-    p.input = sweep.input_at(state.q, s);
-    p.time = t;
-    p.chart_quality = ws.dual.engine.quality();
-    // Sign of det of the chart's block and the chart it belongs to: a sign change within one
-    // chart is a change point passed between positions.
-    p.chart_sign = ws.dual.engine.determinant_sign();
-    p.chart_id = ws.dual.engine.switch_count();
-    p.singular = ws.dual.engine.quality() < kSingularQuality;
-    // The rotation table compute_driven filled at this q: no sin/cos in reactions and measures.
-    compute_driven_outputs(model, state, p.lambda, p.udot, w.rotations,
-                           {p.reactions, p.measures, p.kinetic, p.potential, p.dissipated});
-    return true;
-  };
-  // A converged step keeps the branch when the tangent dq/ds keeps its direction (a jump across
-  // a fold reverses it).
-  auto same_branch = [](const VecX& a, const VecX& b) { return a.dot(b) > 0.0; };
-  VecX trial(model.nq);  // predictor/corrector iterate, reused across positions
-  const std::vector<size_t> wrapped = wrapped_measures(model);
-  VecX du(model.n);    // the predictor's step in velocity space
-  DrivenPoint anchor;  // the last converged point: the predictor starts from it
-  VecX good_tangent;   // of the last regular point: used next to a change point
-  DrivenPoint point, probe, sub, check;
-  // One continuation step from a converged point to time t: predictor, corrector with the input
-  // locked, evaluation; false if it does not converge on the same branch or is too long. From a
-  // point next to a change point (whose F is unreliable) the last regular tangent is used.
-  auto try_step = [&](const DrivenPoint& from, double t, DrivenPoint& out) {
-    double target = 0.0, sd = 0.0, sdd = 0.0;
-    law.at(t, target, sd, sdd);
-    const VecX& tangent = from.singular ? good_tangent : from.tangent;
-    const double ds = target - from.input;
-    if (move_size(tangent, ds) > kMaxMove) return false;
-    if (from.singular) {
-      trial = from.q;
-      integrate_positions(model, trial, good_tangent, ds);
-    } else {
-      predict(model, from, target, du, trial);
-    }
-    // Corrections beyond twice the size of the tangent step would leave the branch.
-    const double max_step = 2.0 * std::abs(ds) * tangent.cwiseAbs().maxCoeff() + 1e-12;
-    return sweep.corrector(trial, target, max_step) &&
-           evaluate_at(trial, t, out,
-                       sweep.jacobian_at_q ? DrivenJacobian::current : DrivenJacobian::evaluate) &&
-           same_branch(out.tangent, tangent);
-  };
-  // Determinacy (design §3): component cᵀλ is unique iff Nᵀc = 0 for the null space N of E. The
-  // values of the components for λ = N_j are exactly (Nᵀc)_j; a component is determinate when
-  // they vanish at every regular position of the sweep.
-  std::vector<double> null_values;
-  auto update_determinacy = [&](const DrivenPoint& p) {
-    if (result.redundant == 0 || p.singular) return;
-    for (Eigen::Index j = 0; j < w.N.cols(); ++j) {
-      const double tol = 1e-8 * w.N.col(j).norm();
-      compute_reactions(model, p.q, w.rotations, w.N.col(j), null_values);
-      for (size_t i = 0; i < null_values.size(); ++i)
-        if (std::abs(null_values[i]) > tol) result.determinate[i] = false;
-      for (int r = 0; r < model.nc; ++r)
-        if (std::abs(w.N(r, j)) > tol) result.row_determinate[static_cast<size_t>(r)] = false;
-    }
-  };
+// A converged step keeps the branch when the tangent dq/ds keeps its direction (a jump across
+// a fold reverses it).
+bool same_branch(const VecX& a, const VecX& b) { return a.dot(b) > 0.0; }
 
-  if (!evaluate_at(state.q, 0.0, anchor)) {
-    result.status = CycleStatus::stopped_at_dead_point;
-    result.dead_points.push_back(
-        {s0, 0.0, "the start position is a dead point of driver joint '" + joint_name + "'"});
-    result.message = result.dead_points.back().message;
-    return result;
+// Holding an idle motion at zero rate takes no force when the motion is idle dynamically too
+// (the body's spin about the line of its joints with its centre of mass on it and its inertia
+// symmetric about it). Otherwise the reactions are those of the motion held, not free: warned.
+void warn_idle_hold(CycleResult& result, const UnitSystem& units) {
+  double drive_peak = 0.0;
+  for (const DrivenPointView& p : result.points) {
+    result.idle_hold_peak = std::max(result.idle_hold_peak, std::abs(p.idle_hold));
+    drive_peak = std::max(drive_peak, std::abs(p.drive));
   }
-  if (anchor.singular && start_tangent.size() == 0) {
-    result.message =
+  if (!(result.idle_hold_peak > 1e-8 * drive_peak)) return;
+  std::string bodies;
+  for (const Mobility::Idle& i : result.idle)
+    bodies += (bodies.empty() ? "'" : ", '") + i.body + "'";
+  result.warnings.push_back(
+      "holding the idle motion of " + bodies + " at zero rate takes up to " +
+      format_quantity(result.idle_hold_peak, Dimension::moment, units) +
+      " (a torque about the motion's axis): it is not idle dynamically (a centre of mass off "
+      "the line of its joints, or an inertia not symmetric about it); the reactions are those "
+      "with it held");
+}
+
+class ChangePointBridger;
+
+// One sweep of the driven cycle from an assembled start with one degree of freedom to drive:
+// the former locals of run_cycle as members, its phases as the public methods (in the order
+// run_cycle calls them), the continuation's steps as the private ones. Work buffers are sized
+// in the constructor and set_time_grid; the steps allocate nothing but the stored positions.
+class CycleRun {
+ public:
+  CycleRun(const Model& model, const CycleOptions& options, const CycleRequest& request,
+           State start, const Mobility& mob, CycleResult& result);
+  CycleRun(const CycleRun&) = delete;
+  CycleRun& operator=(const CycleRun&) = delete;
+  CycleRun(CycleRun&&) = delete;
+  CycleRun& operator=(CycleRun&&) = delete;
+  ~CycleRun() = default;
+
+  [[nodiscard]] bool reach_start();
+  [[nodiscard]] bool set_time_grid();
+  [[nodiscard]] bool start_sweep();
+  void sweep();
+  void bridge_change_points();
+  void finish();
+
+ private:
+  friend class ChangePointBridger;
+  enum class Jump { failed, passed, output };
+
+  [[nodiscard]] double start_input() const;
+  [[nodiscard]] double move_size(const VecX& tangent, double ds) const {
+    return (tangent.cwiseAbs().cwiseQuotient(scale_)).maxCoeff() * std::abs(ds);
+  }
+  bool evaluate_at(const VecX& q, double t, DrivenPoint& p,
+                   DrivenJacobian jacobian = DrivenJacobian::evaluate);
+  bool try_step(const DrivenPoint& from, double t, DrivenPoint& out);
+  void update_determinacy(const DrivenPoint& p);
+  void record_singular(double s_at, double t_at);
+  bool closed_after_reversal(double t);
+  bool reach_grid_time(double t, double& h);
+  void locate_sign_change(const DrivenPoint& from);
+  Jump jump_change_point(double t);
+  bool pass_dead_point(double t, double h, long& k);
+  DrivenPoint bisect_dead_point(double t, double h);
+  bool pass_fold(const DrivenPoint& at_lo, double s_dead, VecX& q_cur);
+  bool reverse_input(const DrivenPoint& at_lo, double s_dead, const VecX& q_cur,
+                     const std::string& msg, long& k);
+  void stop_at_dead_point(double s_dead, double t_dead, const std::string& msg);
+
+  const Model& model_;
+  const CycleOptions& options_;
+  const CycleRequest& request_;
+  CycleResult& result_;
+  InputLaw law_;  // anchored at the start by set_time_grid, re-anchored at each reversal
+  State state_;
+  Workspace ws_;
+  DrivenWorkspace w_;
+  Sweep sweep_;
+  double s0_ = 0.0;     // the start's input
+  VecX start_tangent_;  // set when the start was reached along the branch
+  // The time grid (set_time_grid).
+  int steps_ = 0, last_index_ = 0, max_positions_ = 0, report_every_ = 1;
+  double period_ = 0.0, dt_ = 0.0, omega0_ = 0.0;
+  // The sweep's work buffers (set_time_grid).
+  VecX scale_;                   // of each velocity component, for kMaxMove
+  VecX trial_;                   // predictor/corrector iterate, reused across positions
+  std::vector<size_t> wrapped_;  // measures read modulo 2π (wrapped_measures)
+  VecX du_;                      // the predictor's step in velocity space
+  DrivenPoint anchor_;           // the last converged point: the predictor starts from it
+  VecX good_tangent_;            // of the last regular point: used next to a change point
+  DrivenPoint probe_, sub_, check_;
+  std::vector<double> null_values_;
+  int reversals_ = 0;
+};
+
+CycleRun::CycleRun(const Model& model, const CycleOptions& options, const CycleRequest& request,
+                   State start, const Mobility& mob, CycleResult& result)
+    : model_(model),
+      options_(options),
+      request_(request),
+      result_(result),
+      law_(request.law),
+      state_(std::move(start)),
+      ws_(model, mob.rank),
+      w_(model, mob.rank, idle_body_indices(model, mob)),
+      sweep_{model, request.joint, ws_, w_} {
+  (void)evaluate_dual(model_, state_, ws_);
+  s0_ = compute_scalar(model_, JointCoordinate{request_.joint}, state_.q, nullptr).value;
+}
+
+// The input the sweep starts from: the design position's, the law's at t = 0, or the requested
+// one. For a full turn that is the input the full cycle has there, X' = s₀ + σ ((σ(X − s₀)) mod
+// 2π) with σ the direction of the drive (so X' may differ from X by whole turns).
+double CycleRun::start_input() const {
+  double start_target = s0_;
+  if (!request_.constant) {
+    double sd = 0.0, sdd = 0.0;
+    law_.at(0.0, start_target, sd, sdd);
+  } else if (options_.use_start) {
+    start_target = options_.start;
+  }
+  if (request_.constant && options_.use_start && options_.full_cycle && request_.angular) {
+    const double sigma = options_.driver.speed > 0.0 ? 1.0 : -1.0;
+    double ahead = std::fmod(sigma * (start_target - s0_), 2.0 * std::numbers::pi);
+    if (ahead < 0.0) ahead += 2.0 * std::numbers::pi;
+    if (ahead < 1e-12 || 2.0 * std::numbers::pi - ahead < 1e-12) ahead = 0.0;
+    start_target = s0_ + sigma * ahead;
+  }
+  return start_target;
+}
+
+// A start elsewhere is reached by continuation along the design position's branch (the same
+// circuit, every angle unwrapped continuously): a range sweep from the design input to it, so
+// that the cycle from X equals the full cycle at X. False (the message set) when it cannot be.
+bool CycleRun::reach_start() {
+  const double start_target = start_input();
+  if (start_target == s0_) return true;
+  CycleOptions reach;
+  reach.driver = options_.driver;
+  reach.driver.profile = Profile::constant_speed;
+  reach.driver.speed = request_.constant ? std::abs(options_.driver.speed) : 1.0;
+  reach.full_cycle = false;
+  reach.end = start_target;
+  // Positions every 2° (or 1/180 of the range for a prismatic joint): each is converged, and
+  // longer steps are split by the sweep itself.
+  const double per_step = request_.angular ? 2.0 * std::numbers::pi / 180.0 : 0.0;
+  const double span = std::abs(start_target - s0_);
+  reach.steps = per_step > 0.0
+                    ? std::clamp(static_cast<int>(std::ceil(span / per_step)) + 1, 2, 100000)
+                    : 181;
+  reach.bridge_change_points = false;  // only its last position (a converged one) is used
+  const CycleResult path = run_cycle(model_, reach);
+  if (path.status != CycleStatus::completed || path.points.empty()) {
+    result_.message = "cannot reach the start input " +
+                      format_input(start_target, request_.angular, request_.file_units) +
+                      " from the design position along its branch: " + path.message;
+    return false;
+  }
+  state_.q = path.points.back().q;
+  // The branch's tangent where the path arrived (its last regular position): the first step
+  // from a start on a change point predicts with it.
+  for (const DrivenPointView& p : path.points)
+    if (!p.singular && p.chart_quality >= 1e-3) start_tangent_ = p.tangent;
+  s0_ = start_target;
+  return true;
+}
+
+// Period and time grid; the law anchored at the start; the storage of the positions and the
+// work buffers sized. False (the message set) for an empty input range.
+bool CycleRun::set_time_grid() {
+  const Driver& driver = options_.driver;
+  steps_ = std::max(2, options_.steps);
+  if (request_.constant && options_.full_cycle) {
+    period_ = 2.0 * std::numbers::pi / std::abs(driver.speed);
+  } else if (request_.constant) {
+    const double span = options_.end - s0_;
+    if (!(std::abs(span) > 0.0)) {
+      result_.status = CycleStatus::invalid_request;
+      result_.message = "the input range is empty: the end (--to) equals the start";
+      return false;
+    }
+    law_.omega = std::copysign(std::abs(driver.speed), span);
+    period_ = std::abs(span) / std::abs(driver.speed);
+  } else {
+    period_ = 1.0 / driver.frequency;
+  }
+  law_.s_ref = s0_;
+  dt_ = options_.full_cycle ? period_ / steps_ : period_ / (steps_ - 1);
+  last_index_ = steps_;  // grid times k = 0 … steps − 1
+  omega0_ = law_.omega;
+  max_positions_ = 4 * steps_;  // bound on a reversing sweep that does not close
+  report_every_ = std::max(1, steps_ / 100);
+  // The positions' storage, then the sweep's work buffers.
+  result_.points.reserve(static_cast<size_t>(steps_));
+  scale_ = step_scale(model_);
+  trial_.resize(model_.nq);
+  wrapped_ = wrapped_measures(model_);
+  du_.resize(model_.n);
+  return true;
+}
+
+// The driven position at q and time t into p: compute_driven, then the input, the chart's
+// quality, sign and identity, and the outputs (reactions, measures, energies) from the rotation
+// table compute_driven filled at this q (no sin/cos in reactions and measures).
+bool CycleRun::evaluate_at(const VecX& q, double t, DrivenPoint& p, DrivenJacobian jacobian) {
+  double s = 0.0, sdot = 0.0, sddot = 0.0;
+  law_.at(t, s, sdot, sddot);
+  state_.q = q;
+  state_.t = t;
+  if (!compute_driven(model_, request_.joint, sdot, sddot, state_, ws_, w_, p, jacobian))
+    return false;
+  p.input = sweep_.input_at(state_.q, s);
+  p.time = t;
+  p.chart_quality = ws_.dual.engine.quality();
+  // Sign of det of the chart's block and the chart it belongs to: a sign change within one
+  // chart is a change point passed between positions.
+  p.chart_sign = ws_.dual.engine.determinant_sign();
+  p.chart_id = ws_.dual.engine.switch_count();
+  p.singular = ws_.dual.engine.quality() < kSingularQuality;
+  compute_driven_outputs(model_, state_, p.lambda, p.udot, w_.rotations,
+                         {p.reactions, p.measures, p.kinetic, p.potential, p.dissipated});
+  return true;
+}
+
+// One continuation step from a converged point to time t: predictor, corrector with the input
+// locked, evaluation; false if it does not converge on the same branch or is too long. From a
+// point next to a change point (whose F is unreliable) the last regular tangent is used.
+bool CycleRun::try_step(const DrivenPoint& from, double t, DrivenPoint& out) {
+  double target = 0.0, sd = 0.0, sdd = 0.0;
+  law_.at(t, target, sd, sdd);
+  const VecX& tangent = from.singular ? good_tangent_ : from.tangent;
+  const double ds = target - from.input;
+  if (move_size(tangent, ds) > kMaxMove) return false;
+  if (from.singular) {
+    trial_ = from.q;
+    integrate_positions(model_, trial_, good_tangent_, ds);
+  } else {
+    predict(model_, from, target, du_, trial_);
+  }
+  // Corrections beyond twice the size of the tangent step would leave the branch.
+  const double max_step = 2.0 * std::abs(ds) * tangent.cwiseAbs().maxCoeff() + 1e-12;
+  return sweep_.corrector(trial_, target, max_step) &&
+         evaluate_at(trial_, t, out,
+                     sweep_.jacobian_at_q ? DrivenJacobian::current : DrivenJacobian::evaluate) &&
+         same_branch(out.tangent, tangent);
+}
+
+// Determinacy (design §3): component cᵀλ is unique iff Nᵀc = 0 for the null space N of E. The
+// values of the components for λ = N_j are exactly (Nᵀc)_j; a component is determinate when
+// they vanish at every regular position of the sweep.
+void CycleRun::update_determinacy(const DrivenPoint& p) {
+  if (result_.redundant == 0 || p.singular) return;
+  for (Eigen::Index j = 0; j < w_.N.cols(); ++j) {
+    const double tol = 1e-8 * w_.N.col(j).norm();
+    compute_reactions(model_, p.q, w_.rotations, w_.N.col(j), null_values_);
+    for (size_t i = 0; i < null_values_.size(); ++i)
+      if (std::abs(null_values_[i]) > tol) result_.determinate[i] = false;
+    for (int r = 0; r < model_.nc; ++r)
+      if (std::abs(w_.N(r, j)) > tol) result_.row_determinate[static_cast<size_t>(r)] = false;
+  }
+}
+
+// A change point passed at input s_at, time t_at (once per 2 grid steps).
+void CycleRun::record_singular(double s_at, double t_at) {
+  if (!result_.singular_positions.empty() &&
+      std::abs(result_.singular_positions.back().time - t_at) < 2.0 * dt_)
+    return;
+  result_.singular_positions.push_back(
+      {s_at, t_at,
+       "singular position (E loses rank) at input " +
+           format_input(s_at, request_.angular, request_.file_units) +
+           ": passed, branch kept by continuity of the tangent"});
+}
+
+// The first position: a dead point or a singular position (not reached along the branch) stops
+// the sweep before it starts (false, the result says why).
+bool CycleRun::start_sweep() {
+  if (!evaluate_at(state_.q, 0.0, anchor_)) {
+    result_.status = CycleStatus::stopped_at_dead_point;
+    result_.dead_points.push_back(
+        {s0_, 0.0,
+         "the start position is a dead point of driver joint '" + request_.joint_name + "'"});
+    result_.message = result_.dead_points.back().message;
+    return false;
+  }
+  if (anchor_.singular && start_tangent_.size() == 0) {
+    result_.message =
         "the start position is a singular position (E loses rank there); start "
         "the sweep elsewhere";
-    return result;
+    return false;
   }
-  update_determinacy(anchor);
-  result.points.push_back(anchor);
-  good_tangent = anchor.tangent;
-  if (anchor.singular) {  // a start on a change point, reached along the branch: its tangent
-    good_tangent = start_tangent;
-    result.singular_positions.push_back(
-        {s0, 0.0,
-         "singular position (E loses rank) at input " + format_input(s0, angular, file_units) +
+  update_determinacy(anchor_);
+  result_.points.push_back(anchor_);
+  good_tangent_ = anchor_.tangent;
+  if (anchor_.singular) {  // a start on a change point, reached along the branch: its tangent
+    good_tangent_ = start_tangent_;
+    result_.singular_positions.push_back(
+        {s0_, 0.0,
+         "singular position (E loses rank) at input " +
+             format_input(s0_, request_.angular, request_.file_units) +
              ": the start; passed, branch kept by continuity of the tangent"});
   }
-  result.status = CycleStatus::completed;  // unless the loop below says otherwise
-  int reversals = 0;
-  const int report_every = std::max(1, steps / 100);
-  auto record_singular = [&](double s_at, double t_at) {
-    if (!result.singular_positions.empty() &&
-        std::abs(result.singular_positions.back().time - t_at) < 2.0 * dt)
-      return;
-    result.singular_positions.push_back({s_at, t_at,
-                                         "singular position (E loses rank) at input " +
-                                             format_input(s_at, angular, file_units) +
-                                             ": passed, branch kept by continuity of the tangent"});
-  };
+  result_.status = CycleStatus::completed;  // unless the sweep says otherwise
+  return true;
+}
 
+// The sweep over the time grid: each grid time reached from the anchor (reach_grid_time);
+// where that is stuck, a change point is jumped over (jump_change_point) and a dead point
+// stopped at or passed by reversing the input (pass_dead_point).
+void CycleRun::sweep() {
   for (long k = 1;; ++k) {
-    if (reversals == 0 && k >= last_index) break;
-    if (static_cast<int>(result.points.size()) >= max_positions) {
-      result.message = "stopped after " + std::to_string(max_positions) +
-                       " positions: the reversing sweep did not return to its start";
+    if (reversals_ == 0 && k >= last_index_) break;
+    if (static_cast<int>(result_.points.size()) >= max_positions_) {
+      result_.message = "stopped after " + std::to_string(max_positions_) +
+                        " positions: the reversing sweep did not return to its start";
       break;
     }
-    if (options.progress && k % report_every == 0)
-      options.progress(std::min(1.0, static_cast<double>(k) * dt / period));
-    const double t = static_cast<double>(k) * dt;
-    double target = 0.0, sd = 0.0, sdd = 0.0;
-    law.at(t, target, sd, sdd);
-    // After a reversal the cycle closes when the input passes its start again, moving in the
-    // original direction on the starting branch.
-    if (reversals > 0 && law.omega == omega0 && (anchor.input - s0) * omega0 < 0.0 &&
-        (target - s0) * omega0 >= 0.0) {
-      result.message = "the cycle closed after " + std::to_string(reversals) + " reversals";
-      break;
-    }
-    // Reach t from the anchor: the whole step, else sub-steps (halved on failure, doubled again
-    // on success; not output) from `sub`. Stuck means failing within 2h after `from`.
-    const DrivenPoint* from = &anchor;  // the anchor itself until a sub-step is taken (no copy)
-    double h = t - from->time;
-    bool reached = false;
-    while (true) {
-      const double t_next = from->time + h >= t - 1e-9 * dt ? t : from->time + h;
-      if (try_step(*from, t_next, probe)) {
-        if (!from->singular && !probe.singular && from->chart_id == probe.chart_id &&
-            from->chart_sign != probe.chart_sign) {  // |det| ∝ distance: interpolate
-          const double a = from->chart_quality / (from->chart_quality + probe.chart_quality);
-          const double t_a = from->time + a * (probe.time - from->time);
-          // A change point only if E loses rank there: the best chart's quality at t_a is far
-          // below both neighbours' (a chart whose own block degenerated between two positions
-          // of a coarse grid, with E regular, is not one). The check re-selects the chart, so
-          // the next interval is not compared across it.
-          const bool confirmed =
-              !try_step(*from, t_a, check) ||
-              check.chart_quality < 0.1 * std::min(from->chart_quality, probe.chart_quality);
-          if (confirmed) record_singular(from->input + a * (probe.input - from->input), t_a);
-          // The workspace back at the probe (its null space N feeds the determinacy update).
-          trial = probe.q;
-          const long id = probe.chart_id;
-          (void)evaluate_at(trial, probe.time, probe);  // succeeded there a moment ago
-          probe.chart_id = -1 - id;                     // no sign comparison across the check
-        }
-        if (probe.singular)
-          record_singular(probe.input, probe.time);
-        else
-          good_tangent = probe.tangent;
-        if (t_next == t) {
-          reached = true;
-          break;
-        }
-        std::swap(sub, probe);
-        from = &sub;
-        h = std::min(2.0 * h, t - sub.time);
-        continue;
-      }
-      h *= 0.5;
-      if (h < 1e-7 * dt) break;
-    }
-    if (reached) {
-      if (!probe.singular) update_determinacy(probe);
-      result.points.push_back(probe);
-      std::swap(anchor, probe);
+    if (options_.progress && k % report_every_ == 0)
+      options_.progress(std::min(1.0, static_cast<double>(k) * dt_ / period_));
+    const double t = static_cast<double>(k) * dt_;
+    if (closed_after_reversal(t)) break;
+    double h = 0.0;
+    if (reach_grid_time(t, h)) {
+      if (!probe_.singular) update_determinacy(probe_);
+      result_.points.push_back(probe_);
+      std::swap(anchor_, probe_);
       continue;
     }
-    if (from != &sub) sub = anchor;  // stuck at the anchor: what follows works on `sub`
     // Stuck just after `sub`. A change point (E loses rank; the driver still drives: dᵀF stays
     // finite) is jumped over; a fold of the input (dᵀF → 0) is a dead point.
-    const double t_stuck = sub.time;
-    if (std::abs(sub.dTF) > 1e-2) {
-      bool passed = false, output = false;
-      for (const double jump : {1e-5, 1e-4, 1e-3, 1e-2, 0.1}) {
-        const double tj = t_stuck + jump * dt;
-        if (try_step(sub, tj, probe)) {
-          record_singular(sub.input, t_stuck);
-          if (!probe.singular) good_tangent = probe.tangent;
-          // Past the grid time: the grid position is the singular one; it is reported just
-          // past it, flagged (its multipliers are not meaningful there).
-          if (tj >= t) {
-            probe.singular = true;
-            result.points.push_back(probe);
-            output = true;
-          }
-          std::swap(anchor, probe);
-          passed = true;
-          break;
-        }
-      }
-      if (passed) {
-        if (!output) --k;  // continue towards the same grid time from past the point
-        continue;
-      }
-      result.status = CycleStatus::failed;
-      result.message = "the continuation cannot proceed at input " +
-                       format_input(sub.input, angular, file_units) +
-                       " (neither a dead point nor a singular position of E); the positions "
-                       "before it are reported";
-      break;
+    if (std::abs(sub_.dTF) > 1e-2) {
+      const Jump jump = jump_change_point(t);
+      if (jump == Jump::failed) break;
+      if (jump == Jump::passed) --k;  // continue towards the same grid time from past the point
+      continue;
     }
-    // Dead point: bisection in time between the last good time and the failing one.
-    DrivenPoint at_lo = sub;
-    double lo = sub.time, hi = std::min(sub.time + 2.0 * h + 1e-7 * dt, t);
-    while (hi - lo > 1e-15 * (1.0 + std::abs(hi))) {
-      const double mid = 0.5 * (lo + hi);
-      double s_mid = 0.0;
-      law.at(mid, s_mid, sd, sdd);
-      if (std::abs(s_mid - at_lo.input) < options.dead_point_tolerance) break;
-      if (try_step(at_lo, mid, probe)) {
-        lo = mid;
-        std::swap(at_lo, probe);
-      } else {
-        hi = mid;
-      }
-    }
-    const double s_dead = at_lo.input;
-    std::string msg = "dead point of driver joint '" + joint_name + "' at input " +
-                      format_input(s_dead, angular, file_units) +
-                      ": the driver cannot move the mechanism past it";
-    if (!(options.reverse_at_dead_point && constant)) {
-      result.dead_points.push_back({s_dead, at_lo.time, msg});
-      result.status = CycleStatus::stopped_at_dead_point;
-      result.message = msg;
-      break;
-    }
-    // Reverse: pass the fold along the curve (pseudo-arclength steps: predictor along the
-    // direction of motion n, corrector with nᵀ(q − q_pred) = 0) until the input has turned
-    // back, then drive the input the other way.
-    VecX dir = at_lo.tangent * at_lo.input_rate;  // direction of motion dq/dt
-    dir.normalize();
-    difference_positions(model, anchor.q, at_lo.q, du);
-    double arc = std::max(du.norm(), 1e-9);
-    VecX q_cur = at_lo.q, q_pred(model.nq);
-    bool passed = false;
-    for (int attempt = 0; attempt < 40 && !passed; ++attempt) {
-      q_pred = q_cur;
-      integrate_positions(model, q_pred, dir, arc);
-      trial = q_pred;
-      if (!sweep.corrector(trial, 0.0, 0.5 * arc, &dir, &q_pred)) {
-        arc *= 0.5;
-        continue;
-      }
-      // New direction of motion: F at the new point, oriented along the old direction.
-      state.q = trial;
-      compute_constraint_jacobian(model, state.q, ws.constraints.Et);
-      if (compute_basis(model, state, ws) != ProjectionStatus::ok) {
-        arc *= 0.5;
-        continue;
-      }
-      if (!w.idle_bodies.empty() && !hold_idle(model, state.q, ws.dual.F, w)) {
-        arc *= 0.5;
-        continue;
-      }
-      VecX f = (w.idle_bodies.empty() ? VecX(ws.dual.F.col(0)) : w.F_held).normalized();
-      if (f.dot(dir) < 0.0) f = -f;
-      const double s_new = sweep.input_at(trial, s_dead);
-      q_cur = trial;
-      dir = f;
-      if ((s_new - s_dead) * law.omega < -options.dead_point_tolerance) passed = true;
-    }
-    if (!passed) {
-      msg += "; could not pass it to reverse";
-      result.dead_points.push_back({s_dead, at_lo.time, msg});
-      result.status = CycleStatus::stopped_at_dead_point;
-      result.message = msg;
-      break;
-    }
-    ++reversals;
-    result.dead_points.push_back({s_dead, at_lo.time, msg + "; the input reverses"});
-    law.s_ref = s_dead;
-    law.t_ref = at_lo.time;
-    law.omega = -law.omega;
-    // Re-anchor on the far side: its time on the reversed law, then resume on the time grid.
-    const double s_p = sweep.input_at(q_cur, s_dead);
-    const double t_p = at_lo.time + (s_p - s_dead) / law.omega;
-    if (!evaluate_at(q_cur, t_p, anchor)) {
-      result.status = CycleStatus::failed;
-      result.message = msg + "; lost the branch after reversing";
-      break;
-    }
-    if (!anchor.singular) good_tangent = anchor.tangent;
-    k = static_cast<long>(std::floor(t_p / dt));  // the loop's ++k gives the next grid time
+    if (!pass_dead_point(t, h, k)) break;
   }
-  // ---- Change points bridged on the branch -----------------------------------------------
-  // Next to a change point the direct evaluation at the computed q loses accuracy like
-  // ε/quality³: q satisfies f(q) = O(ε), and the level set through it is, near the crossing of
-  // two branches, a hyperbola whose curvature at a distance δ is ε/δ³ — what u̇, and so the drive
-  // and the reactions, are computed from (measured on the triple-crank: 3e-5 N·m 0.01° from the
-  // change point, 0.16 N·m at 0.001°). The branch itself is smooth there. So the positions with
-  // quality < kBridgeQuality take their values from the branch (ChangePointBridge): a degree-7
-  // polynomial in time through 8 positions at t* ± {1, 2, 3, 4} ρ, reached by continuation from
-  // the stored positions on each side, where the quality is ≥ kBridgeQuality and every value is
-  // accurate. With the nodes outside the gap on both sides its Lebesgue constant is 2.7 and its
-  // error ~ (4ρ)⁸ f⁽⁸⁾/8!. (L1)
-  result.diverging.assign(result.components.size(), false);
-  if (reversals == 0 && options.bridge_change_points) {
-    // Reaches time t on the branch from a regular position: whole step, else sub-steps (halved on
-    // failure, doubled again on success).
-    DrivenPoint cur, nxt;
-    auto advance = [&](const DrivenPoint& from, double t, DrivenPoint& out) {
-      cur = from;
-      double h = t - cur.time;
-      for (int guard = 0; guard < 200; ++guard) {
-        const bool last = std::abs(t - cur.time) <= std::abs(h) * (1.0 + 1e-12);
-        const double t_next = last ? t : cur.time + h;
-        if (try_step(cur, t_next, nxt) && !nxt.singular) {
-          if (last) {
-            out = nxt;
-            return true;
-          }
-          std::swap(cur, nxt);
-          h = std::copysign(std::min(2.0 * std::abs(h), std::abs(t - cur.time)), h);
-          continue;
-        }
-        h *= 0.5;
-        if (std::abs(h) < 1e-7 * dt) return false;
-      }
-      return false;
-    };
-    // Every value of a position as one vector (and back), for the interpolation.
-    auto pack = [&](const DrivenPoint& p, VecX& v) {
-      const Eigen::Index nr = static_cast<Eigen::Index>(p.reactions.size());
-      const Eigen::Index nm = static_cast<Eigen::Index>(p.measures.size());
-      v.resize(p.q.size() + 3 * p.u.size() + p.lambda.size() + nr + nm + 4);
-      Eigen::Index at = 0;
-      auto put = [&](const auto& x) {
-        for (Eigen::Index i = 0; i < static_cast<Eigen::Index>(x.size()); ++i)
-          v(at++) = x[static_cast<size_t>(i)];
-      };
-      put(p.q), put(p.u), put(p.udot), put(p.tangent), put(p.lambda);
-      put(p.reactions), put(p.measures);
-      v(at++) = p.drive, v(at++) = p.kinetic, v(at++) = p.potential, v(at++) = p.dissipated;
-    };
-    auto unpack = [&](const VecX& v, DrivenPoint& p) {
-      Eigen::Index at = 0;
-      auto get = [&](auto& x) {
-        for (Eigen::Index i = 0; i < static_cast<Eigen::Index>(x.size()); ++i)
-          x[static_cast<size_t>(i)] = v(at++);
-      };
-      get(p.q), get(p.u), get(p.udot), get(p.tangent), get(p.lambda);
-      get(p.reactions), get(p.measures);
-      p.drive = v(at++), p.kinetic = v(at++), p.potential = v(at++), p.dissipated = v(at++);
-    };
-    const Eigen::Index reactions_at = model.nq + 3 * model.n + model.nc;
-    constexpr int kNodes = 8;
-    constexpr double kNodeDistance[4] = {1.0, 2.0, 3.0, 4.0};
-    // Lagrange basis at `at` of the nodes whose bit is set in `used`.
-    constexpr unsigned kAll = (1u << kNodes) - 1;
-    auto basis = [&](const double* x, double at, unsigned used, double* l) {
-      for (int i = 0; i < kNodes; ++i) {
-        l[i] = 0.0;
-        if (!(used >> i & 1u)) continue;
-        double li = 1.0;
-        for (int j = 0; j < kNodes; ++j)
-          if (j != i && (used >> j & 1u)) li *= (at - x[j]) / (x[i] - x[j]);
-        l[i] = li;
-      }
-    };
-    std::vector<VecX> node_values(kNodes);
-    VecX value, loo_error;
-    DrivenPoint base, node, bridged;
-    const size_t np = result.points.size();
-    // One change point: false when it cannot be bridged (its positions then stay as they are:
-    // flagged singular ones are not reported).
-    // The change points to bridge: those the sweep listed, and any other dip of the chart
-    // quality well below kBridgeQuality among the stored positions (a change point passed within
-    // one step together with a chart switch, or a near one: the direct values are as inaccurate).
-    struct Candidate {
-      double time, input;
-      bool listed;  // a change point the sweep located (else a dip of the quality)
-    };
-    std::vector<Candidate> candidates;
-    for (const DeadPoint& sp : result.singular_positions)
-      candidates.push_back({sp.time, sp.input, true});
-    for (size_t k = 0; k < np; ++k) {
-      const DrivenPointView p = result.points[k];
-      // (Below a fifth of it: a chart about to be switched can sit just below kBridgeQuality.)
-      if (!(p.chart_quality < 0.2 * kBridgeQuality)) continue;
-      if ((k > 0 && result.points[k - 1].chart_quality < p.chart_quality) ||
-          (k + 1 < np && result.points[k + 1].chart_quality < p.chart_quality))
-        continue;             // not the dip's lowest position
-      size_t lo = k, hi = k;  // the run of poor positions around it
-      while (lo > 0 && result.points[lo - 1].chart_quality < kBridgeQuality) --lo;
-      while (hi + 1 < np && result.points[hi + 1].chart_quality < kBridgeQuality) ++hi;
-      const double t_lo = result.points[lo].time - dt, t_hi = result.points[hi].time + dt;
-      bool listed = false;
-      for (const Candidate& c : candidates) listed = listed || (c.time > t_lo && c.time < t_hi);
-      if (!listed) candidates.push_back({p.time, p.input, false});
+}
+
+// After a reversal the cycle closes when the input passes its start again, moving in the
+// original direction on the starting branch.
+bool CycleRun::closed_after_reversal(double t) {
+  double target = 0.0, sd = 0.0, sdd = 0.0;
+  law_.at(t, target, sd, sdd);
+  if (reversals_ > 0 && law_.omega == omega0_ && (anchor_.input - s0_) * omega0_ < 0.0 &&
+      (target - s0_) * omega0_ >= 0.0) {
+    result_.message = "the cycle closed after " + std::to_string(reversals_) + " reversals";
+    return true;
+  }
+  return false;
+}
+
+// Reach t from the anchor: the whole step, else sub-steps (halved on failure, doubled again
+// on success; not output) from `sub`. True with the position at t in probe_; else stuck, failing
+// within 2h (h the last step tried) after sub_.
+bool CycleRun::reach_grid_time(double t, double& h) {
+  const DrivenPoint* from = &anchor_;  // the anchor itself until a sub-step is taken (no copy)
+  h = t - from->time;
+  while (true) {
+    const double t_next = from->time + h >= t - 1e-9 * dt_ ? t : from->time + h;
+    if (try_step(*from, t_next, probe_)) {
+      if (!from->singular && !probe_.singular && from->chart_id == probe_.chart_id &&
+          from->chart_sign != probe_.chart_sign)
+        locate_sign_change(*from);
+      if (probe_.singular)
+        record_singular(probe_.input, probe_.time);
+      else
+        good_tangent_ = probe_.tangent;
+      if (t_next == t) return true;
+      std::swap(sub_, probe_);
+      from = &sub_;
+      h = std::min(2.0 * h, t - sub_.time);
+      continue;
     }
-    auto bridge_at = [&](size_t j, double radius_factor) -> bool {
-      const double ts = candidates[j].time;
-      // ρ: where the quality, ∝ the distance to the change point, reaches kBridgeQuality
-      // (slope from the nearest stored position on each side whose quality is ≥ 1e-3).
-      double slope = std::numeric_limits<double>::infinity();
-      for (const int side : {-1, 1}) {
-        double best = std::numeric_limits<double>::infinity(), q_at = 0.0;
-        for (const DrivenPointView& p : result.points) {
-          const double d = (p.time - ts) * side;
-          if (d > 0.0 && d < best && p.chart_quality >= 1e-3) best = d, q_at = p.chart_quality;
-        }
-        // A position's quality is that of its chart, within the hysteresis factor of the best
-        // one below the switching threshold: the larger slope is the better estimate.
-        if (std::isfinite(best))
-          slope = std::isfinite(slope) ? std::max(slope, q_at / best) : q_at / best;
-      }
-      if (!std::isfinite(slope) || !(slope > 0.0)) return false;
-      double rho = radius_factor * kBridgeQuality / slope;
-      for (const DrivenPointView& p : result.points)  // a dip locates ts only to about this
-        if (!candidates[j].listed && std::abs(p.time - ts) < dt && p.chart_quality < kBridgeQuality)
-          rho = std::max(rho, radius_factor * kBridgeQuality / slope + p.chart_quality / slope);
-      // Every position of the run of poor ones around ts lies in the gap.
-      size_t nearest = 0;
-      for (size_t k = 1; k < np; ++k)
-        if (std::abs(result.points[k].time - ts) < std::abs(result.points[nearest].time - ts))
-          nearest = k;
-      for (const int step : {-1, 1})
-        for (long k = static_cast<long>(nearest);
-             k >= 0 && k < static_cast<long>(np) &&
-             result.points[static_cast<size_t>(k)].chart_quality < kBridgeQuality;
-             k += step)
-          rho = std::max(rho, 1.05 * std::abs(result.points[static_cast<size_t>(k)].time - ts));
-      // Only where a stored position needs it: one in the gap whose quality is below
-      // kBridgeQuality (a coarse grid that passes the change point far from every position, or a
-      // chart that degenerated between two positions, has none: its values are accurate as
-      // they are, and nothing is flagged).
-      bool needed = false;
-      for (const DrivenPointView& p : result.points)
-        needed = needed || (std::abs(p.time - ts) < rho && p.chart_quality < kBridgeQuality);
-      if (!needed) return true;                       // nothing to do: not an attempt that failed
-      for (size_t i = 0; i < candidates.size(); ++i)  // one change point only
-        if (i != j && std::abs(candidates[i].time - ts) < 6.0 * rho) return false;
-      // The nodes: by continuation from the stored position on each side nearest to them (any
-      // not next to the change point will do: the corrector makes each node exact). A side with
-      // no stored position (a sweep that ends or starts next to the change point) is reached
-      // from the other side's inner node, across the change point (the step the sweep itself
-      // takes there: predictor along the tangent, bounded corrector, same branch).
-      double x[kNodes];
-      long from[2] = {-1, -1};
-      for (const int side : {-1, 1}) {
-        double best = std::numeric_limits<double>::infinity();
-        for (size_t k = 0; k < np; ++k) {
-          const DrivenPointView p = result.points[k];
-          const double d = (p.time - ts) * side;
-          const double off = std::max({0.0, rho - d, d - 4.0 * rho});
-          if (d > 0.0 && off < best && p.chart_quality >= 1e-3 && !p.singular)
-            best = off, from[side > 0] = static_cast<long>(k);
-        }
-      }
-      if (from[0] < 0 && from[1] < 0) return false;
-      const int first_side = from[0] >= 0 ? -1 : 1;
-      DrivenPoint first_inner;  // the first side's inner node
-      for (const int side : {first_side, -first_side}) {
-        const long f = from[side > 0];
-        if (f >= 0) {
-          const DrivenPointView p = result.points[static_cast<size_t>(f)];
-          if (!evaluate_at(VecX(p.q), p.time, base)) return false;
-        } else {
-          base = first_inner;
-        }
-        for (int a = 0; a < 4; ++a) {
-          const int i = side < 0 ? 3 - a : 4 + a;  // nodes in increasing time
-          x[i] = ts + side * kNodeDistance[a] * rho;
-          // (The quality is that of the chart's block, relative to its own largest pivot: on a
-          // long chain such as the N-four-bar with N = 40 it stays below kBridgeQuality well
-          // away from a change point. A node's accuracy is checked by the error estimate below.)
-          if (!advance(base, x[i], node) || node.chart_quality < 0.1 * kBridgeQuality) return false;
-          pack(node, node_values[static_cast<size_t>(i)]);
-          if (a == 0 && side == first_side) first_inner = node;
-        }
-      }
-      // Wrapped angles (spatial joints) on one turn across the nodes.
-      const Eigen::Index measures_at =
-          reactions_at + static_cast<Eigen::Index>(result.components.size());
-      for (const size_t m : wrapped)
-        for (int i = 1; i < kNodes; ++i) {
-          const Eigen::Index at = measures_at + static_cast<Eigen::Index>(m);
-          node_values[static_cast<size_t>(i)](at) =
-              unwrap_near(node_values[static_cast<size_t>(i)](at), node_values[0](at));
-        }
-      // Error estimate per value: the two inner nodes against the degree-6 interpolant through
-      // the other seven.
-      double l[kNodes];
-      loo_error = VecX::Zero(node_values[0].size());
-      VecX node_scale = VecX::Zero(node_values[0].size());
-      for (int i = 0; i < kNodes; ++i)
-        node_scale = node_scale.cwiseMax(node_values[static_cast<size_t>(i)].cwiseAbs());
-      auto interpolate = [&](double at, unsigned used, VecX& out) {
-        basis(x, at, used, l);
-        out = VecX::Zero(node_values[0].size());
-        for (int i = 0; i < kNodes; ++i) out += l[i] * node_values[static_cast<size_t>(i)];
-      };
-      for (const int inner : {3, 4}) {
-        interpolate(x[inner], kAll & ~(1u << inner), value);
-        loo_error =
-            loo_error.cwiseMax((value - node_values[static_cast<size_t>(inner)]).cwiseAbs());
-      }
-      // At the change point itself: against the degree-5 interpolant through the six inner
-      // nodes (the error of the lower degree, so an upper estimate).
-      VecX centre;
-      interpolate(ts, kAll, centre);
-      interpolate(ts, kAll & ~1u & ~(1u << (kNodes - 1)), value);
-      const Eigen::Index drive_centre = node_values[0].size() - 4;
-      loo_error(drive_centre) =
-          std::max(loo_error(drive_centre), std::abs(centre(drive_centre) - value(drive_centre)));
-      const Eigen::Index drive_at = node_values[0].size() - 4;
-      if (!(loo_error(drive_at) <= kBridgeTolerance * node_scale(drive_at) + 1e-300)) return false;
-      ChangePointBridge b;
-      b.input = candidates[j].input;
-      b.time = ts;
-      b.time_from = ts - rho;
-      b.time_to = ts + rho;
-      b.drive_error = loo_error(drive_at);
-      // A component diverges when its estimate exceeds kBridgeTolerance of its size at the
-      // nodes (floored at 1e-6 of the largest component of the same unit, so that components
-      // at rounding level are not called diverging).
-      std::map<std::string, double> unit_scale;
-      for (size_t c = 0; c < result.components.size(); ++c) {
-        double& us = unit_scale[result.components[c].unit];
-        us = std::max(us, node_scale(reactions_at + static_cast<Eigen::Index>(c)));
-      }
-      b.diverging.assign(result.components.size(), false);
-      for (size_t c = 0; c < result.components.size(); ++c) {
-        const Eigen::Index at = reactions_at + static_cast<Eigen::Index>(c);
-        const double size_c =
-            std::max(node_scale(at), 1e-6 * unit_scale[result.components[c].unit]);
-        b.diverging[c] = !(loo_error(at) <= kBridgeTolerance * size_c);
-      }
-      // The positions in the gap: their values at their grid time from the polynomial.
-      const int index = static_cast<int>(result.bridges.size());
-      for (size_t k = 0; k < np; ++k) {
-        const DrivenPointView p = result.points[k];
-        if (!(std::abs(p.time - ts) < rho)) continue;
-        const double t = static_cast<double>(k) * dt;  // its grid time (exactly on a change
-                                                       // point it was evaluated just past it)
-        bridged = anchor;                              // sizes
-        bridged.time = t;
-        law.at(t, bridged.input, bridged.input_rate, bridged.input_acceleration);
-        interpolate(t, kAll, value);
-        unpack(value, bridged);
-        normalize_coordinates(model, bridged.q);  // unit quaternions again
-        bridged.chart_quality = p.chart_quality;
-        bridged.chart_sign = p.chart_sign;
-        bridged.chart_id = p.chart_id;
-        bridged.dTF = p.dTF;
-        bridged.idle_hold = p.idle_hold;
-        bridged.singular = p.singular;
-        bridged.bridge = index;
-        result.points.assign(k, bridged);
-      }
-      for (size_t c = 0; c < result.components.size(); ++c)
-        if (b.diverging[c]) result.diverging[c] = true;
-      result.bridges.push_back(std::move(b));
-      return true;
-    };
-    for (size_t j = 0; j < candidates.size(); ++j)
+    h *= 0.5;
+    if (h < 1e-7 * dt_) break;
+  }
+  if (from != &sub_) sub_ = anchor_;  // stuck at the anchor: what follows works on `sub`
+  return false;
+}
+
+// The chart's determinant changed sign between `from` and probe_ (one chart): |det| ∝ distance,
+// so the change point is interpolated between them.
+void CycleRun::locate_sign_change(const DrivenPoint& from) {
+  const double a = from.chart_quality / (from.chart_quality + probe_.chart_quality);
+  const double t_a = from.time + a * (probe_.time - from.time);
+  // A change point only if E loses rank there: the best chart's quality at t_a is far
+  // below both neighbours' (a chart whose own block degenerated between two positions
+  // of a coarse grid, with E regular, is not one). The check re-selects the chart, so
+  // the next interval is not compared across it.
+  const bool confirmed =
+      !try_step(from, t_a, check_) ||
+      check_.chart_quality < 0.1 * std::min(from.chart_quality, probe_.chart_quality);
+  if (confirmed) record_singular(from.input + a * (probe_.input - from.input), t_a);
+  // The workspace back at the probe (its null space N feeds the determinacy update).
+  trial_ = probe_.q;
+  const long id = probe_.chart_id;
+  (void)evaluate_at(trial_, probe_.time, probe_);  // succeeded there a moment ago
+  probe_.chart_id = -1 - id;                       // no sign comparison across the check
+}
+
+// A change point just after sub_ jumped over: the first of growing jumps that converges becomes
+// the anchor (output when past the grid time t); failed (the result says why) when none does.
+CycleRun::Jump CycleRun::jump_change_point(double t) {
+  const double t_stuck = sub_.time;
+  for (const double jump : {1e-5, 1e-4, 1e-3, 1e-2, 0.1}) {
+    const double tj = t_stuck + jump * dt_;
+    if (!try_step(sub_, tj, probe_)) continue;
+    record_singular(sub_.input, t_stuck);
+    if (!probe_.singular) good_tangent_ = probe_.tangent;
+    // Past the grid time: the grid position is the singular one; it is reported just
+    // past it, flagged (its multipliers are not meaningful there).
+    const bool output = tj >= t;
+    if (output) {
+      probe_.singular = true;
+      result_.points.push_back(probe_);
+    }
+    std::swap(anchor_, probe_);
+    return output ? Jump::output : Jump::passed;
+  }
+  result_.status = CycleStatus::failed;
+  result_.message = "the continuation cannot proceed at input " +
+                    format_input(sub_.input, request_.angular, request_.file_units) +
+                    " (neither a dead point nor a singular position of E); the positions "
+                    "before it are reported";
+  return Jump::failed;
+}
+
+// A dead point just after sub_ (the grid time t, h the last step tried): located, then the sweep
+// stops there, or, reversing at dead points, passes the fold and drives the input back (k: the
+// grid index the sweep resumes after). False when the sweep stops.
+bool CycleRun::pass_dead_point(double t, double h, long& k) {
+  const DrivenPoint at_lo = bisect_dead_point(t, h);
+  const double s_dead = at_lo.input;
+  std::string msg = "dead point of driver joint '" + request_.joint_name + "' at input " +
+                    format_input(s_dead, request_.angular, request_.file_units) +
+                    ": the driver cannot move the mechanism past it";
+  if (!(options_.reverse_at_dead_point && request_.constant)) {
+    stop_at_dead_point(s_dead, at_lo.time, msg);
+    return false;
+  }
+  VecX q_cur = at_lo.q;
+  if (!pass_fold(at_lo, s_dead, q_cur)) {
+    msg += "; could not pass it to reverse";
+    stop_at_dead_point(s_dead, at_lo.time, msg);
+    return false;
+  }
+  return reverse_input(at_lo, s_dead, q_cur, msg, k);
+}
+
+void CycleRun::stop_at_dead_point(double s_dead, double t_dead, const std::string& msg) {
+  result_.dead_points.push_back({s_dead, t_dead, msg});
+  result_.status = CycleStatus::stopped_at_dead_point;
+  result_.message = msg;
+}
+
+// Dead point: bisection in time between the last good time and the failing one. The last
+// position reached before it.
+DrivenPoint CycleRun::bisect_dead_point(double t, double h) {
+  DrivenPoint at_lo = sub_;
+  double lo = sub_.time, hi = std::min(sub_.time + 2.0 * h + 1e-7 * dt_, t);
+  while (hi - lo > 1e-15 * (1.0 + std::abs(hi))) {
+    const double mid = 0.5 * (lo + hi);
+    double s_mid = 0.0, sd = 0.0, sdd = 0.0;
+    law_.at(mid, s_mid, sd, sdd);
+    if (std::abs(s_mid - at_lo.input) < options_.dead_point_tolerance) break;
+    if (try_step(at_lo, mid, probe_)) {
+      lo = mid;
+      std::swap(at_lo, probe_);
+    } else {
+      hi = mid;
+    }
+  }
+  return at_lo;
+}
+
+// Reverse: pass the fold along the curve (pseudo-arclength steps: predictor along the
+// direction of motion n, corrector with nᵀ(q − q_pred) = 0) from q_cur until the input has
+// turned back. False when it does not within 40 steps.
+bool CycleRun::pass_fold(const DrivenPoint& at_lo, double s_dead, VecX& q_cur) {
+  VecX dir = at_lo.tangent * at_lo.input_rate;  // direction of motion dq/dt
+  dir.normalize();
+  difference_positions(model_, anchor_.q, at_lo.q, du_);
+  double arc = std::max(du_.norm(), 1e-9);
+  VecX q_pred(model_.nq);
+  for (int attempt = 0; attempt < 40; ++attempt) {
+    q_pred = q_cur;
+    integrate_positions(model_, q_pred, dir, arc);
+    trial_ = q_pred;
+    if (!sweep_.corrector(trial_, 0.0, 0.5 * arc, &dir, &q_pred)) {
+      arc *= 0.5;
+      continue;
+    }
+    // New direction of motion: F at the new point, oriented along the old direction.
+    state_.q = trial_;
+    compute_constraint_jacobian(model_, state_.q, ws_.constraints.Et);
+    if (compute_basis(model_, state_, ws_) != ProjectionStatus::ok) {
+      arc *= 0.5;
+      continue;
+    }
+    if (!w_.idle_bodies.empty() && !hold_idle(model_, state_.q, ws_.dual.F, w_)) {
+      arc *= 0.5;
+      continue;
+    }
+    VecX f = (w_.idle_bodies.empty() ? VecX(ws_.dual.F.col(0)) : w_.F_held).normalized();
+    if (f.dot(dir) < 0.0) f = -f;
+    const double s_new = sweep_.input_at(trial_, s_dead);
+    q_cur = trial_;
+    dir = f;
+    if ((s_new - s_dead) * law_.omega < -options_.dead_point_tolerance) return true;
+  }
+  return false;
+}
+
+// The input reversed at the dead point (s_dead at at_lo.time): the law re-anchored there, the
+// anchor on the far side (q_cur) at its time on the reversed law, the grid resumed after it.
+bool CycleRun::reverse_input(const DrivenPoint& at_lo, double s_dead, const VecX& q_cur,
+                             const std::string& msg, long& k) {
+  ++reversals_;
+  result_.dead_points.push_back({s_dead, at_lo.time, msg + "; the input reverses"});
+  law_.s_ref = s_dead;
+  law_.t_ref = at_lo.time;
+  law_.omega = -law_.omega;
+  // Re-anchor on the far side: its time on the reversed law, then resume on the time grid.
+  const double s_p = sweep_.input_at(q_cur, s_dead);
+  const double t_p = at_lo.time + (s_p - s_dead) / law_.omega;
+  if (!evaluate_at(q_cur, t_p, anchor_)) {
+    result_.status = CycleStatus::failed;
+    result_.message = msg + "; lost the branch after reversing";
+    return false;
+  }
+  if (!anchor_.singular) good_tangent_ = anchor_.tangent;
+  k = static_cast<long>(std::floor(t_p / dt_));  // the loop's ++k gives the next grid time
+  return true;
+}
+
+// ---- Change points bridged on the branch -----------------------------------------------
+// Next to a change point the direct evaluation at the computed q loses accuracy like
+// ε/quality³: q satisfies f(q) = O(ε), and the level set through it is, near the crossing of
+// two branches, a hyperbola whose curvature at a distance δ is ε/δ³ — what u̇, and so the drive
+// and the reactions, are computed from (measured on the triple-crank: 3e-5 N·m 0.01° from the
+// change point, 0.16 N·m at 0.001°). The branch itself is smooth there. So the positions with
+// quality < kBridgeQuality take their values from the branch (ChangePointBridge): a degree-7
+// polynomial in time through 8 positions at t* ± {1, 2, 3, 4} ρ, reached by continuation from
+// the stored positions on each side, where the quality is ≥ kBridgeQuality and every value is
+// accurate. With the nodes outside the gap on both sides its Lebesgue constant is 2.7 and its
+// error ~ (4ρ)⁸ f⁽⁸⁾/8!. (L1)
+
+constexpr int kNodes = 8;
+constexpr double kNodeDistance[4] = {1.0, 2.0, 3.0, 4.0};
+constexpr unsigned kAll = (1u << kNodes) - 1;
+
+// Every value of a position as one vector (and back), for the interpolation.
+void pack(const DrivenPoint& p, VecX& v) {
+  const Eigen::Index nr = static_cast<Eigen::Index>(p.reactions.size());
+  const Eigen::Index nm = static_cast<Eigen::Index>(p.measures.size());
+  v.resize(p.q.size() + 3 * p.u.size() + p.lambda.size() + nr + nm + 4);
+  Eigen::Index at = 0;
+  auto put = [&](const auto& x) {
+    for (Eigen::Index i = 0; i < static_cast<Eigen::Index>(x.size()); ++i)
+      v(at++) = x[static_cast<size_t>(i)];
+  };
+  put(p.q), put(p.u), put(p.udot), put(p.tangent), put(p.lambda);
+  put(p.reactions), put(p.measures);
+  v(at++) = p.drive, v(at++) = p.kinetic, v(at++) = p.potential, v(at++) = p.dissipated;
+}
+
+void unpack(const VecX& v, DrivenPoint& p) {
+  Eigen::Index at = 0;
+  auto get = [&](auto& x) {
+    for (Eigen::Index i = 0; i < static_cast<Eigen::Index>(x.size()); ++i)
+      x[static_cast<size_t>(i)] = v(at++);
+  };
+  get(p.q), get(p.u), get(p.udot), get(p.tangent), get(p.lambda);
+  get(p.reactions), get(p.measures);
+  p.drive = v(at++), p.kinetic = v(at++), p.potential = v(at++), p.dissipated = v(at++);
+}
+
+// Lagrange basis at `at` of the nodes x whose bit is set in `used`.
+void lagrange_basis(const double* x, double at, unsigned used, double* l) {
+  for (int i = 0; i < kNodes; ++i) {
+    l[i] = 0.0;
+    if (!(used >> i & 1u)) continue;
+    double li = 1.0;
+    for (int j = 0; j < kNodes; ++j)
+      if (j != i && (used >> j & 1u)) li *= (at - x[j]) / (x[i] - x[j]);
+    l[i] = li;
+  }
+}
+
+// The bridging of a finished sweep (without reversals): its candidates (find_candidates), and
+// for each the first radius factor whose bridge has a consistent drive (bridge_at).
+class ChangePointBridger {
+ public:
+  explicit ChangePointBridger(CycleRun& run)
+      : run_(run),
+        model_(run.model_),
+        result_(run.result_),
+        np_(result_.points.size()),
+        reactions_at_(model_.nq + 3 * model_.n + model_.nc) {}
+
+  void bridge() {
+    find_candidates();
+    for (size_t j = 0; j < candidates_.size(); ++j)
       for (const double factor : {1.0, 0.5, 2.0, 4.0})  // the first with a consistent drive
         if (bridge_at(j, factor)) break;
   }
-  unwrap_measures(result, wrapped);
-  if (!result.idle.empty()) {
-    // Holding an idle motion at zero rate takes no force when the motion is idle dynamically too
-    // (the body's spin about the line of its joints with its centre of mass on it and its inertia
-    // symmetric about it). Otherwise the reactions are those of the motion held, not free.
-    double drive_peak = 0.0;
-    for (const DrivenPointView& p : result.points) {
-      result.idle_hold_peak = std::max(result.idle_hold_peak, std::abs(p.idle_hold));
-      drive_peak = std::max(drive_peak, std::abs(p.drive));
+
+ private:
+  struct Candidate {
+    double time, input;
+    bool listed;  // a change point the sweep located (else a dip of the quality)
+  };
+
+  void find_candidates();
+  bool advance(const DrivenPoint& from, double t, DrivenPoint& out);
+  bool bridge_at(size_t j, double radius_factor);
+  [[nodiscard]] double quality_slope(double ts) const;
+  [[nodiscard]] double bridge_radius(size_t j, double radius_factor, double slope) const;
+  bool compute_nodes(double ts, double rho);
+  void unwrap_nodes();
+  void interpolate(double at, unsigned used, VecX& out);
+  bool estimate_errors(double ts);
+  void mark_diverging(ChangePointBridge& b);
+  void write_bridged(double ts, double rho, int index);
+
+  CycleRun& run_;
+  const Model& model_;
+  CycleResult& result_;
+  const size_t np_;  // the stored positions
+  const Eigen::Index reactions_at_;
+  std::vector<Candidate> candidates_;
+  DrivenPoint cur_, nxt_;
+  std::vector<VecX> node_values_ = std::vector<VecX>(kNodes);
+  VecX value_, loo_error_, node_scale_;
+  DrivenPoint base_, node_, bridged_;
+  double x_[kNodes] = {};  // the nodes' times, increasing
+  double l_[kNodes] = {};  // a Lagrange basis at them
+};
+
+// The change points to bridge: those the sweep listed, and any other dip of the chart
+// quality well below kBridgeQuality among the stored positions (a change point passed within
+// one step together with a chart switch, or a near one: the direct values are as inaccurate).
+void ChangePointBridger::find_candidates() {
+  for (const DeadPoint& sp : result_.singular_positions)
+    candidates_.push_back({sp.time, sp.input, true});
+  for (size_t k = 0; k < np_; ++k) {
+    const DrivenPointView p = result_.points[k];
+    // (Below a fifth of it: a chart about to be switched can sit just below kBridgeQuality.)
+    if (!(p.chart_quality < 0.2 * kBridgeQuality)) continue;
+    if ((k > 0 && result_.points[k - 1].chart_quality < p.chart_quality) ||
+        (k + 1 < np_ && result_.points[k + 1].chart_quality < p.chart_quality))
+      continue;             // not the dip's lowest position
+    size_t lo = k, hi = k;  // the run of poor positions around it
+    while (lo > 0 && result_.points[lo - 1].chart_quality < kBridgeQuality) --lo;
+    while (hi + 1 < np_ && result_.points[hi + 1].chart_quality < kBridgeQuality) ++hi;
+    const double t_lo = result_.points[lo].time - run_.dt_,
+                 t_hi = result_.points[hi].time + run_.dt_;
+    bool listed = false;
+    for (const Candidate& c : candidates_) listed = listed || (c.time > t_lo && c.time < t_hi);
+    if (!listed) candidates_.push_back({p.time, p.input, false});
+  }
+}
+
+// Reaches time t on the branch from a regular position: whole step, else sub-steps (halved on
+// failure, doubled again on success).
+bool ChangePointBridger::advance(const DrivenPoint& from, double t, DrivenPoint& out) {
+  cur_ = from;
+  double h = t - cur_.time;
+  for (int guard = 0; guard < 200; ++guard) {
+    const bool last = std::abs(t - cur_.time) <= std::abs(h) * (1.0 + 1e-12);
+    const double t_next = last ? t : cur_.time + h;
+    if (run_.try_step(cur_, t_next, nxt_) && !nxt_.singular) {
+      if (last) {
+        out = nxt_;
+        return true;
+      }
+      std::swap(cur_, nxt_);
+      h = std::copysign(std::min(2.0 * std::abs(h), std::abs(t - cur_.time)), h);
+      continue;
     }
-    if (result.idle_hold_peak > 1e-8 * drive_peak) {
-      std::string bodies;
-      for (const Mobility::Idle& i : result.idle)
-        bodies += (bodies.empty() ? "'" : ", '") + i.body + "'";
-      result.warnings.push_back(
-          "holding the idle motion of " + bodies + " at zero rate takes up to " +
-          format_quantity(result.idle_hold_peak, Dimension::moment, file_units) +
-          " (a torque about the motion's axis): it is not idle dynamically (a centre of mass off "
-          "the line of its joints, or an inertia not symmetric about it); the reactions are those "
-          "with it held");
+    h *= 0.5;
+    if (std::abs(h) < 1e-7 * run_.dt_) return false;
+  }
+  return false;
+}
+
+// One change point: false when it cannot be bridged (its positions then stay as they are:
+// flagged singular ones are not reported).
+bool ChangePointBridger::bridge_at(size_t j, double radius_factor) {
+  const double ts = candidates_[j].time;
+  const double slope = quality_slope(ts);
+  if (!std::isfinite(slope) || !(slope > 0.0)) return false;
+  const double rho = bridge_radius(j, radius_factor, slope);
+  // Only where a stored position needs it: one in the gap whose quality is below
+  // kBridgeQuality (a coarse grid that passes the change point far from every position, or a
+  // chart that degenerated between two positions, has none: its values are accurate as
+  // they are, and nothing is flagged).
+  bool needed = false;
+  for (const DrivenPointView& p : result_.points)
+    needed = needed || (std::abs(p.time - ts) < rho && p.chart_quality < kBridgeQuality);
+  if (!needed) return true;                        // nothing to do: not an attempt that failed
+  for (size_t i = 0; i < candidates_.size(); ++i)  // one change point only
+    if (i != j && std::abs(candidates_[i].time - ts) < 6.0 * rho) return false;
+  if (!compute_nodes(ts, rho)) return false;
+  unwrap_nodes();
+  if (!estimate_errors(ts)) return false;
+  ChangePointBridge b;
+  b.input = candidates_[j].input;
+  b.time = ts;
+  b.time_from = ts - rho;
+  b.time_to = ts + rho;
+  b.drive_error = loo_error_(node_values_[0].size() - 4);
+  mark_diverging(b);
+  write_bridged(ts, rho, static_cast<int>(result_.bridges.size()));
+  for (size_t c = 0; c < result_.components.size(); ++c)
+    if (b.diverging[c]) result_.diverging[c] = true;
+  result_.bridges.push_back(std::move(b));
+  return true;
+}
+
+// The rate at which the chart quality, ∝ the distance to the change point at ts, grows: from
+// the nearest stored position on each side whose quality is ≥ 1e-3 (infinite: none).
+double ChangePointBridger::quality_slope(double ts) const {
+  double slope = std::numeric_limits<double>::infinity();
+  for (const int side : {-1, 1}) {
+    double best = std::numeric_limits<double>::infinity(), q_at = 0.0;
+    for (const DrivenPointView& p : result_.points) {
+      const double d = (p.time - ts) * side;
+      if (d > 0.0 && d < best && p.chart_quality >= 1e-3) best = d, q_at = p.chart_quality;
+    }
+    // A position's quality is that of its chart, within the hysteresis factor of the best
+    // one below the switching threshold: the larger slope is the better estimate.
+    if (std::isfinite(best))
+      slope = std::isfinite(slope) ? std::max(slope, q_at / best) : q_at / best;
+  }
+  return slope;
+}
+
+// ρ: where the quality reaches kBridgeQuality (times radius_factor), widened so that every
+// position of the run of poor ones around ts lies in the gap.
+double ChangePointBridger::bridge_radius(size_t j, double radius_factor, double slope) const {
+  const double ts = candidates_[j].time;
+  double rho = radius_factor * kBridgeQuality / slope;
+  for (const DrivenPointView& p : result_.points)  // a dip locates ts only to about this
+    if (!candidates_[j].listed && std::abs(p.time - ts) < run_.dt_ &&
+        p.chart_quality < kBridgeQuality)
+      rho = std::max(rho, radius_factor * kBridgeQuality / slope + p.chart_quality / slope);
+  size_t nearest = 0;
+  for (size_t k = 1; k < np_; ++k)
+    if (std::abs(result_.points[k].time - ts) < std::abs(result_.points[nearest].time - ts))
+      nearest = k;
+  for (const int step : {-1, 1})
+    for (long k = static_cast<long>(nearest);
+         k >= 0 && k < static_cast<long>(np_) &&
+         result_.points[static_cast<size_t>(k)].chart_quality < kBridgeQuality;
+         k += step)
+      rho = std::max(rho, 1.05 * std::abs(result_.points[static_cast<size_t>(k)].time - ts));
+  return rho;
+}
+
+// The nodes: by continuation from the stored position on each side nearest to them (any
+// not next to the change point will do: the corrector makes each node exact). A side with
+// no stored position (a sweep that ends or starts next to the change point) is reached
+// from the other side's inner node, across the change point (the step the sweep itself
+// takes there: predictor along the tangent, bounded corrector, same branch).
+bool ChangePointBridger::compute_nodes(double ts, double rho) {
+  long from[2] = {-1, -1};
+  for (const int side : {-1, 1}) {
+    double best = std::numeric_limits<double>::infinity();
+    for (size_t k = 0; k < np_; ++k) {
+      const DrivenPointView p = result_.points[k];
+      const double d = (p.time - ts) * side;
+      const double off = std::max({0.0, rho - d, d - 4.0 * rho});
+      if (d > 0.0 && off < best && p.chart_quality >= 1e-3 && !p.singular)
+        best = off, from[side > 0] = static_cast<long>(k);
     }
   }
-  result.chart_switches = ws.dual.engine.switch_count();
-  result.reversals = reversals;
-  if (options.progress) options.progress(1.0);
+  if (from[0] < 0 && from[1] < 0) return false;
+  const int first_side = from[0] >= 0 ? -1 : 1;
+  DrivenPoint first_inner;  // the first side's inner node
+  for (const int side : {first_side, -first_side}) {
+    const long f = from[side > 0];
+    if (f >= 0) {
+      const DrivenPointView p = result_.points[static_cast<size_t>(f)];
+      if (!run_.evaluate_at(VecX(p.q), p.time, base_)) return false;
+    } else {
+      base_ = first_inner;
+    }
+    for (int a = 0; a < 4; ++a) {
+      const int i = side < 0 ? 3 - a : 4 + a;  // nodes in increasing time
+      x_[i] = ts + side * kNodeDistance[a] * rho;
+      // (The quality is that of the chart's block, relative to its own largest pivot: on a
+      // long chain such as the N-four-bar with N = 40 it stays below kBridgeQuality well
+      // away from a change point. A node's accuracy is checked by the error estimate below.)
+      if (!advance(base_, x_[i], node_) || node_.chart_quality < 0.1 * kBridgeQuality) return false;
+      pack(node_, node_values_[static_cast<size_t>(i)]);
+      if (a == 0 && side == first_side) first_inner = node_;
+    }
+  }
+  return true;
+}
+
+// Wrapped angles (spatial joints) on one turn across the nodes.
+void ChangePointBridger::unwrap_nodes() {
+  const Eigen::Index measures_at =
+      reactions_at_ + static_cast<Eigen::Index>(result_.components.size());
+  for (const size_t m : run_.wrapped_)
+    for (int i = 1; i < kNodes; ++i) {
+      const Eigen::Index at = measures_at + static_cast<Eigen::Index>(m);
+      node_values_[static_cast<size_t>(i)](at) =
+          unwrap_near(node_values_[static_cast<size_t>(i)](at), node_values_[0](at));
+    }
+}
+
+void ChangePointBridger::interpolate(double at, unsigned used, VecX& out) {
+  lagrange_basis(x_, at, used, l_);
+  out = VecX::Zero(node_values_[0].size());
+  for (int i = 0; i < kNodes; ++i) out += l_[i] * node_values_[static_cast<size_t>(i)];
+}
+
+// Error estimate per value (loo_error_; node_scale_ their sizes at the nodes): the two inner
+// nodes against the degree-6 interpolant through the other seven. False when the drive's
+// exceeds kBridgeTolerance of its size.
+bool ChangePointBridger::estimate_errors(double ts) {
+  loo_error_ = VecX::Zero(node_values_[0].size());
+  node_scale_ = VecX::Zero(node_values_[0].size());
+  for (int i = 0; i < kNodes; ++i)
+    node_scale_ = node_scale_.cwiseMax(node_values_[static_cast<size_t>(i)].cwiseAbs());
+  for (const int inner : {3, 4}) {
+    interpolate(x_[inner], kAll & ~(1u << inner), value_);
+    loo_error_ =
+        loo_error_.cwiseMax((value_ - node_values_[static_cast<size_t>(inner)]).cwiseAbs());
+  }
+  // At the change point itself: against the degree-5 interpolant through the six inner
+  // nodes (the error of the lower degree, so an upper estimate).
+  VecX centre;
+  interpolate(ts, kAll, centre);
+  interpolate(ts, kAll & ~1u & ~(1u << (kNodes - 1)), value_);
+  const Eigen::Index drive_at = node_values_[0].size() - 4;
+  loo_error_(drive_at) =
+      std::max(loo_error_(drive_at), std::abs(centre(drive_at) - value_(drive_at)));
+  return loo_error_(drive_at) <= kBridgeTolerance * node_scale_(drive_at) + 1e-300;
+}
+
+// A component diverges when its estimate exceeds kBridgeTolerance of its size at the
+// nodes (floored at 1e-6 of the largest component of the same unit, so that components
+// at rounding level are not called diverging).
+void ChangePointBridger::mark_diverging(ChangePointBridge& b) {
+  std::map<std::string, double> unit_scale;
+  for (size_t c = 0; c < result_.components.size(); ++c) {
+    double& us = unit_scale[result_.components[c].unit];
+    us = std::max(us, node_scale_(reactions_at_ + static_cast<Eigen::Index>(c)));
+  }
+  b.diverging.assign(result_.components.size(), false);
+  for (size_t c = 0; c < result_.components.size(); ++c) {
+    const Eigen::Index at = reactions_at_ + static_cast<Eigen::Index>(c);
+    const double size_c = std::max(node_scale_(at), 1e-6 * unit_scale[result_.components[c].unit]);
+    b.diverging[c] = !(loo_error_(at) <= kBridgeTolerance * size_c);
+  }
+}
+
+// The positions in the gap: their values at their grid time from the polynomial.
+void ChangePointBridger::write_bridged(double ts, double rho, int index) {
+  for (size_t k = 0; k < np_; ++k) {
+    const DrivenPointView p = result_.points[k];
+    if (!(std::abs(p.time - ts) < rho)) continue;
+    const double t = static_cast<double>(k) * run_.dt_;  // its grid time (exactly on a change
+                                                         // point it was evaluated just past it)
+    bridged_ = run_.anchor_;                             // sizes
+    bridged_.time = t;
+    run_.law_.at(t, bridged_.input, bridged_.input_rate, bridged_.input_acceleration);
+    interpolate(t, kAll, value_);
+    unpack(value_, bridged_);
+    normalize_coordinates(model_, bridged_.q);  // unit quaternions again
+    bridged_.chart_quality = p.chart_quality;
+    bridged_.chart_sign = p.chart_sign;
+    bridged_.chart_id = p.chart_id;
+    bridged_.dTF = p.dTF;
+    bridged_.idle_hold = p.idle_hold;
+    bridged_.singular = p.singular;
+    bridged_.bridge = index;
+    result_.points.assign(k, bridged_);
+  }
+}
+
+void CycleRun::bridge_change_points() {
+  result_.diverging.assign(result_.components.size(), false);
+  if (reversals_ != 0 || !options_.bridge_change_points) return;
+  ChangePointBridger(*this).bridge();
+}
+
+// Angles unwrapped over the sweep, the idle motions' hold checked, the counts recorded.
+void CycleRun::finish() {
+  unwrap_measures(result_, wrapped_);
+  if (!result_.idle.empty()) warn_idle_hold(result_, request_.file_units);
+  result_.chart_switches = ws_.dual.engine.switch_count();
+  result_.reversals = reversals_;
+  if (options_.progress) options_.progress(1.0);
+}
+
+}  // namespace
+
+CycleResult run_cycle(const Model& model, const CycleOptions& options) {
+  CycleResult result = named_result(model);
+  const int joint = options.driver.joint;
+  if (joint < 0 || joint >= static_cast<int>(model.joints.size())) {
+    result.message = "no driver joint";
+    return result;
+  }
+  const CycleRequest request = make_request(model, options);
+  if (const char* error = request_error(model, options, request.angular)) {
+    result.status = CycleStatus::invalid_request;
+    result.message = error;
+    return result;
+  }
+  State state(model);
+  if (!assemble_start(model, request, state, result)) return result;
+  const Mobility mob = compute_mobility(model, state.q);
+  if (!record_mobility(model, mob, result)) return result;
+  CycleRun run(model, options, request, std::move(state), mob, result);
+  if (!run.reach_start() || !run.set_time_grid() || !run.start_sweep()) return result;
+  run.sweep();
+  run.bridge_change_points();
+  run.finish();
   return result;
 }
 
