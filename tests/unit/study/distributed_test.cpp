@@ -1,7 +1,7 @@
-// A study shared among MPI ranks (src/study/distributed.cpp): a process not started by mpirun
-// with two or more ranks is not an MPI study, whatever the build. The ranks themselves are
-// exercised end to end by SweepCli.MpirunGivesTheFilesOfOneProcess* (cli/sweep_cli_test.cpp:
-// mpirun -n 2 and -n 3 write the files of one process).
+// A study shared among MPI ranks (src/study/distributed.cpp): a process is an MPI study exactly
+// when a launcher (Open MPI, PMI, PMIx) says it has two or more ranks and the library has MPI. The
+// ranks themselves are exercised end to end by SweepCli.MpirunGivesTheFilesOfOneProcess*
+// (cli/sweep_cli_test.cpp: mpirun -n 2 and -n 3 write the files of one process).
 #include "orthomech/study/distributed.hpp"
 
 #include <gtest/gtest.h>
@@ -46,6 +46,20 @@ TEST(Distributed, NotLaunchedByMpirunIsNotAnMpiStudy) {
   for (const char* v : Environment::kVariables) {
     ::setenv(v, "1", 1);  // one rank: the study runs in this process alone
     EXPECT_FALSE(mpi_launched()) << v;
+    ::unsetenv(v);
+  }
+}
+
+TEST(Distributed, TwoOrMoreRanksAreAnMpiStudyWhenTheLibraryHasMpi) {
+#ifdef ORTHOMECH_TEST_LIBRARY_HAS_MPI
+  constexpr bool kHasMpi = true;
+#else
+  constexpr bool kHasMpi = false;
+#endif
+  const Environment env;
+  for (const char* v : Environment::kVariables) {
+    ::setenv(v, "3", 1);
+    EXPECT_EQ(mpi_launched(), kHasMpi) << v;
     ::unsetenv(v);
   }
 }
