@@ -71,7 +71,7 @@ std::string four_bar_text(int N) {
          "  - {name: B0_y, type: point, point: link0.B, component: y}\n";
 }
 
-// Exact reduction on the parallelogram branch (tests/unit/dynamics/iftomm_test.cpp): RK4.
+// Exact reduction on the parallelogram branch (tests/unit/dynamics/simulate_test.cpp): RK4.
 std::array<double, 2> four_bar_reference(int N, double t_end) {
   const double I = (N + 1) / 3.0 + N, c = 9.81 * ((N + 1) / 2.0 + N);
   auto acc = [&](double th) { return -c * std::cos(th) / I; };

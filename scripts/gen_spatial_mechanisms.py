@@ -787,7 +787,7 @@ def double_wishbone():
 # Input: the lower-arm angle ψ (joint LA, measure `psi`; > 0 moves the wheel up, bump).
 # Measures (docs/file-format.md): camber = −asin(s_z) (> 0: top of the wheel outboard), toe =
 #   atan2(s_x, s_y) (> 0: toe-in), s the spin axis; wheel_z = the wheel centre's height (travel).
-# Facts tests rely on (tests/unit/analysis/double_wishbone_test.cpp):
+# Facts tests rely on (tests/unit/analysis/positions_double_wishbone_test.cpp):
 #   - 3 moving bodies: n = 18, n_c = 5 + 5 + 3 + 3 + 1 = 17, Grübler 1, rank 17: DOF 1.
 #   - Design pose ψ = 0: camber 0, toe 0, wheel_z 0.27 m (every joint holds exactly).
 #   - An independent loop solve (Newton in the upper-arm angle and the upright's rotation,

@@ -197,7 +197,8 @@ struct Rodas4 {
   static constexpr double gamma = 0.25;
   // NOTE(RODAS d4): Boost 1.74's default_rosenbrock_coefficients has d4 = +0.0362; rodas.f has
   // D4 = −0.0362…, and only that sign gives order 4 on a non-autonomous problem (order 1 with
-  // +0.0362: tests/unit/dynamics/rosenbrock_test.cpp, Rosenbrock4.OrderFour_NonAutonomous).
+  // +0.0362: tests/unit/dynamics/integrator_rosenbrock_test.cpp,
+  // Rosenbrock4.OrderFour_NonAutonomous).
   static constexpr double d1 = 0.25, d2 = -0.1043, d3 = 0.1035, d4 = -0.3620000000000023e-01;
   static constexpr double c2 = 0.386, c3 = 0.21, c4 = 0.63;
   static constexpr double c21 = -0.5668800000000000e+01, a21 = 0.1544000000000000e+01;

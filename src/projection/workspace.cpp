@@ -32,11 +32,17 @@ FreeSystemWorkspace::FreeSystemWorkspace(const Model& model)
       Q(VecX::Zero(model.n)),
       constant_mass(mass_matrix_is_constant(model)) {}
 
-Workspace::Workspace(const Model& m, int rank)
-    : free(m), constraints(m), primal(m), dual(m, rank), model(&m) {
+namespace {
+// The rank, checked before any matrix is sized by it (a negative size is not a matrix).
+int checked_rank(const Model& m, int rank) {
   if (rank < 0 || rank > m.nc || rank > m.n)
     throw std::invalid_argument("Workspace: rank out of range");
+  return rank;
 }
+}  // namespace
+
+Workspace::Workspace(const Model& m, int rank)
+    : free(m), constraints(m), primal(m), dual(m, checked_rank(m, rank)), model(&m) {}
 
 void compute_free_system(const Model& model, const State& state, Workspace& ws) {
   if (ws.model != &model) throw std::invalid_argument("Workspace built for another Model");

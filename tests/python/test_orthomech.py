@@ -168,7 +168,7 @@ def test_check_failed_carries_the_report():
     assert orthomech.to_json(e.value.result) == doc
 
 
-# A four-bar whose links (1 + 2 + 3 < 10) cannot close (tests/unit/cli/assemble_validate_cli_test).
+# A four-bar whose links (1 + 2 + 3 < 10) cannot close (tests/unit/cli/assemble_cli_test.cpp).
 SHORT_FOUR_BAR = """orthomech: 1
 name: short
 ground:

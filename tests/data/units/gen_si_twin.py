@@ -78,7 +78,7 @@ def main(src, dst):
     with open(dst, "w") as f:
         f.write("# SI twin of %s, written by tests/data/units/gen_si_twin.py (do not edit).\n" % src)
         f.write("# The same mechanism in m, rad, kg, s, N: every output must equal the mm/deg\n")
-        f.write("# file's converted (tests/unit/cli/units_cli_test.cpp).\n")
+        f.write("# file's converted (tests/unit/cli/common_trust_cli_test.cpp).\n")
         yaml.safe_dump(doc, f, sort_keys=False, default_flow_style=None, width=100)
 
 

@@ -317,26 +317,6 @@ TEST(Assembly, ProjectWithLocks_CrankRockerAtP2) {
   EXPECT_NEAR(measure(m, "P_y", q), 51.965546e-3, 1e-9);
 }
 
-TEST(MechanismWriter, ReplacedPosesReadBackAndCommentsKept) {
-  for (const char* name : {"andrews-squeezer", "crank-rocker"}) {
-    const std::string path = test::source_path(std::string("mechanisms/") + name + ".yaml");
-    std::ifstream in(path);
-    std::stringstream text;
-    text << in.rdbuf();
-    Model m = load_mechanism(path);
-    // Move every body (as if assembled elsewhere) and write.
-    VecX q = m.design_q();
-    for (Eigen::Index i = 0; i < q.size(); ++i) q(i) += 1e-3 * static_cast<double>(i % 5);
-    // A UTF-8 comment first: positions in the text are byte offsets.
-    const std::string original = "# Grübler — λ, µ\n" + text.str();
-    const std::string out = replace_design_poses(original, path, m, q);
-    EXPECT_EQ(out.substr(0, 80), original.substr(0, 80));  // header comment kept
-    const Model back = parse_mechanism(out, "back");
-    const VecX qb = back.design_q();
-    EXPECT_LE((qb - q).cwiseAbs().maxCoeff(), 1e-14) << name;
-  }
-}
-
 }  // namespace
 }  // namespace orthomech
 

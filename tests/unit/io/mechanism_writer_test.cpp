@@ -9,11 +9,13 @@
 
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 
 #include "orthomech/error.hpp"
 #include "orthomech/io/mechanism_file.hpp"
 #include "support/cli_runner.hpp"
+#include "support/fixtures.hpp"
 
 namespace orthomech {
 namespace {
@@ -147,6 +149,28 @@ TEST(MechanismWriter, InPlaceOnAnAliasedPoseLeavesTheInputUntouched) {
   EXPECT_NE(r.err.find("alias"), std::string::npos) << r.err;
   EXPECT_EQ(r.err.find("error:"), r.err.rfind("error:")) << r.err;  // one prefix
   EXPECT_EQ(r.out, "");
+}
+
+// Poses replaced in the text of a bundled file read back as the positions written, and the
+// text around them (a UTF-8 comment first: positions are byte offsets) is kept.
+TEST(MechanismWriter, ReplacedPosesReadBackAndCommentsKept) {
+  for (const char* name : {"andrews-squeezer", "crank-rocker"}) {
+    const std::string path = test::source_path(std::string("mechanisms/") + name + ".yaml");
+    std::ifstream in(path);
+    std::stringstream text;
+    text << in.rdbuf();
+    Model m = load_mechanism(path);
+    // Move every body (as if assembled elsewhere) and write.
+    VecX q = m.design_q();
+    for (Eigen::Index i = 0; i < q.size(); ++i) q(i) += 1e-3 * static_cast<double>(i % 5);
+    // A UTF-8 comment first: positions in the text are byte offsets.
+    const std::string original = "# Grübler — λ, µ\n" + text.str();
+    const std::string out = replace_design_poses(original, path, m, q);
+    EXPECT_EQ(out.substr(0, 80), original.substr(0, 80));  // header comment kept
+    const Model back = parse_mechanism(out, "back");
+    const VecX qb = back.design_q();
+    EXPECT_LE((qb - q).cwiseAbs().maxCoeff(), 1e-14) << name;
+  }
 }
 
 }  // namespace

@@ -2,7 +2,7 @@
 // self-contained file (nothing it would fetch: no src, no link, no URL but the SVG namespaces),
 // with one animation frame per position and the plotted drive and reaction magnitudes equal to
 // `cycle --json --positions` of the same sweep, in the same units. The page running in a browser:
-// tests/unit/browser/report_browser_test.cpp.
+// tests/unit/io/report_browser_test.cpp.
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -1,6 +1,6 @@
 // `orthomech cycle` on spatial files (issue 13 item 1): the table, JSON and CSV (the pictures:
-// spatial_pictures_cli_test.cpp).
-// The numbers themselves are checked against closed forms in analysis/spatial_cycle_test.cpp;
+// render_spatial_cli_test.cpp).
+// The numbers themselves are checked against closed forms in analysis/cycle_spatial_test.cpp;
 // here the CLI's outputs agree with each other and with the library's determinacy.
 #include <gtest/gtest.h>
 

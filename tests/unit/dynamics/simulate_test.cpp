@@ -1,6 +1,8 @@
 // IFToMM benchmarks A01 (simple pendulum) and A02 (N four-bar through its singular positions)
 // (IFToMM Library of Computational Benchmark Problems; González, Dopico, Lugrís, Cuadrado,
 // Multibody System Dynamics 16, 2006; /work/shared/references.md §2–3).
+#include "orthomech/dynamics/simulate.hpp"
+
 #include <gtest/gtest.h>
 
 #include <boost/math/special_functions/ellint_1.hpp>
@@ -8,7 +10,6 @@
 #include <cmath>
 #include <string>
 
-#include "orthomech/dynamics/simulate.hpp"
 #include "orthomech/model/free_system.hpp"
 #include "support/fixtures.hpp"
 

@@ -1,13 +1,13 @@
 // Study statistics (study.hpp): quantiles against numpy's default rule computed here by hand, the
 // least-squares sensitivities against the normal equations solved independently (Cramer's rule)
 // and an exactly linear metric, and the variants' values (grid order, reproducible draws).
+#include "orthomech/study/study.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <random>
 #include <vector>
-
-#include "orthomech/study/study.hpp"
 
 namespace orthomech {
 namespace {

@@ -86,7 +86,7 @@ TEST(IntegratorOutputs, LinearOscillator_EveryOutputAtFullAccuracy) {
 
 // ---- IFToMM A01 pendulum against its exact solution, every integrator and both forms ------
 // sin(θ/2) = k sn(K − √(g/L) t, k²), k = sin 45°, θ from the downward vertical; released at
-// (−1, 0), so the mass is at (−sin θ, −cos θ) (tests/unit/dynamics/iftomm_test.cpp has the same
+// (−1, 0), so the mass is at (−sin θ, −cos θ) (tests/unit/dynamics/simulate_test.cpp has the same
 // oracle checked against the published samples).
 Vec2 pendulum_exact(double t) {
   const double k = std::sin(M_PI / 4.0);

@@ -21,7 +21,7 @@ using test::run_cli;
 
 TEST(SpatialValidateCli, EverySpatialFileRunsWithPlanarChecksNotApplicable) {
   // With a transmission loop (3 entries: the planar checks) or without (a 4th: the index). The
-  // RSSR's index at its design position is 0.3976 (spatial_validate_test.cpp): a bound of 0.3
+  // RSSR's index at its design position is 0.3976 (validate_spatial_test.cpp): a bound of 0.3
   // lets every file pass.
   for (const auto& [name, loops] : {std::pair<const char*, bool>{"rssr", true},
                                     {"bennett", false},
@@ -72,9 +72,9 @@ TEST(SpatialValidateCli, EverySpatialFileRunsWithPlanarChecksNotApplicable) {
 }
 
 // The RSSR's one position (crank 30°): DOF 1, rank 17, rocker angle on (M1)'s branch (checked in
-// spatial_validate_test.cpp); the text table says n/a for the transmission angle.
+// validate_spatial_test.cpp); the text table says n/a for the transmission angle.
 // Its Sutherland–Roth transmission index there, 0.3976 (the closed form:
-// spatial_validate_test.cpp), is below the default bound sin 30° = 0.5: exit 1 naming the loop; 0
+// validate_spatial_test.cpp), is below the default bound sin 30° = 0.5: exit 1 naming the loop; 0
 // with a bound of 0.3.
 TEST(SpatialValidateCli, RssrReportInTextAndJson) {
   const std::string rssr = test::bundled_file("rssr");

@@ -4,6 +4,8 @@
 // eqs. (91) and (99) (Ṁ = 0 for the mechanism files' absolute coordinates). Oracles: the
 // published values (references.md §1), central differences, and the dual form against the
 // primal (and the built-in crosscheck's identities).
+#include "orthomech/dynamics/equations.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -12,7 +14,6 @@
 #include "orthomech/analysis/mobility.hpp"
 #include "orthomech/constraints/joints.hpp"
 #include "orthomech/dynamics/crosscheck.hpp"
-#include "orthomech/dynamics/equations.hpp"
 #include "orthomech/dynamics/simulate.hpp"
 #include "orthomech/model/free_system.hpp"
 #include "orthomech/model/general_system.hpp"

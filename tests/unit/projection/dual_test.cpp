@@ -1,66 +1,33 @@
-// The paper's theorems as tests, on every bundled mechanism (issue 2 §3). Oracles: the
-// identities themselves (Theorems 1–4, 2′), the other formulation (primal α, β = dual α, β),
-// and central differences along admissible motion on the constraint manifold (ω = π̇, eq. (79);
-// θ = ψ̇, eq. (84); Ḟ, eq. (83)).
+// The dual form (src/projection/dual.cpp): the paper's theorems as tests, on every bundled
+// mechanism (issue 2 §3). Oracles: the identities themselves (Theorems 1–4, 2′), central
+// differences along admissible motion on the constraint manifold (θ = ψ̇, eq. (84); Ḟ, eq. (83)),
+// and a full crank turn through chart switches that must close the loop.
+#include "orthomech/projection/dual.hpp"
+
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
-#include <Eigen/SVD>
-#include <memory>
+#include <algorithm>
+#include <cmath>
+#include <string>
 
 #include "orthomech/analysis/mobility.hpp"
-#include "orthomech/analysis/positions.hpp"
-#include "orthomech/projection/dual.hpp"
 #include "orthomech/projection/primal.hpp"
 #include "support/fixtures.hpp"
+#include "support/projection_fixture.hpp"
 
 namespace orthomech {
 namespace {
 
-// Identities hold to rounding: entries of α, β are O(1)…O(100) (they mix m and rad), products
-// of a few n × n matrices lose ~n·eps·‖·‖²; 1e-9 relative is far above that and far below any
-// formula error.
-constexpr double kIdentityTol = 1e-9;
-// Central differences on the manifold: step 1e-6 s at |u| ~ 1; truncation ~1e-12, rounding of
-// the re-projection (1e-14) / h ~ 1e-8 relative.
-constexpr double kFdStep = 1e-6;
-constexpr double kFdTol = 1e-6;
-
-double rel(const MatX& a, const MatX& b) { return (a - b).norm() / (1.0 + b.norm()); }
-int numeric_rank(const MatX& m) {
-  Eigen::JacobiSVD<MatX> svd(m);
-  svd.setThreshold(1e-9);
-  return static_cast<int>(svd.rank());
-}
-
-struct Evaluated {
-  Model model;
-  VecX q;
-  Mobility mob;
-  State state;
-  std::unique_ptr<Workspace> ws;
-  bool primal_ok = false;
-  explicit Evaluated(const std::string& name, unsigned seed = 1)
-      : model(test::load_bundled(name)),
-        q(test::assembled_q(model)),
-        mob(compute_mobility(model, q)) {
-    state = State(model);
-    state.q = q;
-    state.u = test::admissible_velocity(model, q, seed);
-    ws = std::make_unique<Workspace>(model, mob.rank);
-    EXPECT_EQ(evaluate_dual(model, state, *ws), ProjectionStatus::ok);
-    primal_ok = evaluate_primal(model, state, *ws) == ProjectionStatus::ok;
-  }
-  const MatX& M() const { return ws->free.M; }
-  const MatX& A() const { return ws->free.A; }
-  const MatX& Et() const { return ws->constraints.Et; }
-};
-
-const char* const kAll[] = {"crank-rocker",       "double-rocker", "slider-crank", "watt-six-bar",
-                            "stephenson-six-bar", "quick-return",  "n-four-bar-2", "pendulum",
-                            "andrews-squeezer",   "triple-crank"};
-
-class Projection : public ::testing::TestWithParam<const char*> {};
+using test::Evaluated;
+using test::kAll;
+using test::kFdStep;
+using test::kFdTol;
+using test::kIdentityTol;
+using test::numeric_rank;
+using test::on_manifold;
+using test::Projection;
+using test::rel;
 
 // ---- dual form: holds on every mechanism, redundant or not ------------------------------------
 TEST_P(Projection, Eq68_HSymmetricPositiveDefiniteAndEtFZero) {
@@ -119,61 +86,6 @@ TEST_P(Projection, Eq71_72_DualMassAndInfluenceMatricesAndTheorem4) {
   EXPECT_LT(rel(Maa * Aaa, d.alpha.transpose()), kIdentityTol);  // eq. (58)
   EXPECT_LT(rel(Abb * Mbb, d.beta), kIdentityTol);               // eq. (59)
   EXPECT_LT(rel(Mbb * Abb, d.beta.transpose()), kIdentityTol);   // eq. (59)
-}
-
-// ---- primal form: only where G is regular ------------------------------------------------------
-TEST_P(Projection, Eq42_44_PrimalProjectionsEqualDualOnes) {
-  const Evaluated e(GetParam());
-  if (e.mob.rank < e.model.nc) {
-    // Redundant constraints: G = EᵀAE is singular and the primal form must say so.
-    EXPECT_FALSE(e.primal_ok);
-    EXPECT_EQ(e.ws->primal.status, ProjectionStatus::singular_G);
-    return;  // the primal form rightly produces no numbers here
-  }
-  ASSERT_TRUE(e.primal_ok);
-  const auto& p = e.ws->primal;
-  const auto& d = e.ws->dual;
-  EXPECT_LT(rel(p.G, p.G.transpose()), kIdentityTol);  // eq. (42)
-  EXPECT_GT(Eigen::SelfAdjointEigenSolver<MatX>(p.G).eigenvalues().minCoeff(), 0.0);
-  EXPECT_LT(rel(p.pi, e.M() * p.beta), kIdentityTol);       // eq. (43)
-  EXPECT_LT(rel(p.pi * e.A() * p.pi, p.pi), kIdentityTol);  // eq. (60)
-  EXPECT_LT(rel(p.alpha, d.alpha), kIdentityTol) << "primal α ≠ dual α";
-  EXPECT_LT(rel(p.beta, d.beta), kIdentityTol) << "primal β ≠ dual β";
-  const MatX& M = e.M();
-  const MatX& A = e.A();
-  EXPECT_LT(rel(p.alpha.transpose() * M * p.alpha, M - p.pi), kIdentityTol);          // eq. (56)
-  EXPECT_LT(rel(p.beta.transpose() * M * p.beta, p.pi), kIdentityTol);                // eq. (56)
-  EXPECT_LT(rel(p.alpha * A * p.alpha.transpose(), A - A * p.pi * A), kIdentityTol);  // eq. (57)
-  EXPECT_LT(rel(p.beta * A * p.beta.transpose(), A * p.pi * A), kIdentityTol);        // eq. (57)
-  EXPECT_LT((p.Omega.transpose() * p.alpha).norm() / (1.0 + p.Omega.norm() * p.alpha.norm()),
-            kIdentityTol);  // eq. (103)
-}
-
-// ---- derivatives along admissible motion, by central differences on the manifold -------------
-// q(t): step along u, then re-project with the chart corrector (independent coordinates held),
-// so q(t) stays on f = 0 and q̇(0) = u.
-VecX on_manifold(const Model& model, const VecX& q, const VecX& u, double t, Workspace& chart_ws) {
-  VecX qt = q + t * u;
-  const SolveResult r =
-      correct_positions_in_chart(model, qt, chart_ws, {.tolerance = 1e-15, .max_iterations = 50});
-  EXPECT_NE(r.status, SolveStatus::singular);
-  return qt;
-}
-
-TEST_P(Projection, Eq79_OmegaEqualsTimeDerivativeOfPi) {
-  Evaluated e(GetParam());
-  if (!e.primal_ok) GTEST_SKIP() << "redundant constraints: no primal form";
-  Workspace probe(e.model, e.mob.rank);
-  Workspace chart_ws(e.model, e.mob.rank);
-  (void)evaluate_dual(e.model, e.state, chart_ws);
-  State s = e.state;
-  s.q = on_manifold(e.model, e.q, e.state.u, kFdStep, chart_ws);
-  ASSERT_EQ(evaluate_primal(e.model, s, probe), ProjectionStatus::ok);
-  const MatX pi_plus = probe.primal.pi;
-  s.q = on_manifold(e.model, e.q, e.state.u, -kFdStep, chart_ws);
-  ASSERT_EQ(evaluate_primal(e.model, s, probe), ProjectionStatus::ok);
-  const MatX pi_dot = (pi_plus - probe.primal.pi) / (2.0 * kFdStep);
-  EXPECT_LT(rel(e.ws->primal.omega, pi_dot), kFdTol) << "ω ≠ π̇";
 }
 
 TEST_P(Projection, Eq83_84_ThetaAndFdotAgainstDifferences) {
@@ -264,39 +176,6 @@ TEST(Charts, SwitchAtRockerLimitsAndCloseTheLoopAfterOneTurn) {
   VecX back = s.q;
   back(crank_phi) -= 2.0 * M_PI;
   EXPECT_LT((back - q0).cwiseAbs().maxCoeff(), 1e-3);
-}
-
-// ---- redundancy --------------------------------------------------------------------------------
-TEST(Redundancy, TripleCrankHasOneRedundantEquationAndSingularG) {
-  const Model model = test::load_bundled("triple-crank");
-  const VecX q = test::assembled_q(model);
-  const Mobility mob = compute_mobility(model, q);
-  EXPECT_EQ(mob.grubler, 0);
-  EXPECT_EQ(mob.dof, 1);
-  EXPECT_EQ(mob.rank, model.nc - 1);
-  EXPECT_EQ(mob.rank, test::svd_rank(model, q));  // QR rank = SVD rank (independent oracle)
-  ASSERT_EQ(mob.redundant.size(), 1u);
-  EXPECT_NE(mob.redundant[0].find("joint '"), std::string::npos);
-  // The primal form cannot invert G = EᵀAE here and says so.
-  State s(model);
-  s.q = q;
-  Workspace ws(model, mob.rank);
-  EXPECT_EQ(evaluate_primal(model, s, ws), ProjectionStatus::singular_G);
-  // Away from the manifold's parallel configuration the redundancy disappears: rank is full.
-  VecX off = q;
-  off(2) += 0.05;  // turn the first crank alone
-  EXPECT_EQ(compute_mobility(model, off).rank, model.nc);
-}
-
-TEST(Mobility, RankAgreesWithSvdOnEveryBundledMechanism) {
-  for (const char* name : kAll) {
-    const Model model = test::load_bundled(name);
-    const VecX q = test::assembled_q(model);
-    const Mobility mob = compute_mobility(model, q);
-    EXPECT_EQ(mob.rank, test::svd_rank(model, q)) << name;
-    EXPECT_EQ(mob.dof, 1) << name;
-    EXPECT_EQ(mob.grubler, model.n - model.nc) << name;
-  }
 }
 
 }  // namespace

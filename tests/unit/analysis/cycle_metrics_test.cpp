@@ -1,0 +1,85 @@
+// Design metrics of a sweep (src/analysis/cycle_metrics.cpp) on the crank-rocker (crank a = 30,
+// coupler b = 80, rocker c = 60 on a ground d = 70 mm; 300 rpm, gravity only) over one turn,
+// against the four-bar's closed forms written here:
+//   - transmission angle: cos μ = (b² + c² − BD²) / (2bc) with BD² = a² + d² − 2ad cos θ; its
+//     worst deviation from 90° is at θ = 0 (BD = d − a), μ = acos(0.875) (a sample at θ = 0);
+//   - rocker stroke: the limit positions are the crank and coupler collinear (A0B = b ± a); in
+//     the triangle A0 B0 B the rocker's angle is π − ∠A0B0B; the time ratio is the ratio of the
+//     crank angles turned between them (constant crank speed);
+//   - drive power of a conservative system over a period has zero mean.
+#include "orthomech/analysis/cycle_metrics.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "support/fixtures.hpp"
+
+namespace orthomech {
+namespace {
+
+constexpr double a = 0.03, b = 0.08, c = 0.06, d = 0.07;
+constexpr double kPi = std::numbers::pi;
+
+TEST(CycleMetrics, CrankRockerAgainstTheFourBarsClosedForms) {
+  const Model model = test::load_bundled("crank-rocker");
+  const CycleResult result = test::full_cycle(model, 360);
+  CycleMetricsOptions options;
+  options.driver_joint = model.find_joint("A0");
+  options.speed_fluctuation = 0.05;
+  const CycleMetrics m = compute_cycle_metrics(model, result, options);
+
+  // Transmission angle.
+  ASSERT_EQ(m.loops.size(), 1u);
+  EXPECT_FALSE(m.loops[0].slider_crank);
+  const double mu_min = std::acos((b * b + c * c - (d - a) * (d - a)) / (2.0 * b * c));
+  EXPECT_NEAR(m.loops[0].worst.value, mu_min, 1e-6);
+  EXPECT_NEAR(m.loops[0].min.value, mu_min, 1e-6);
+  // μ_max where BD² = b² + c² − … is largest, at θ = π: BD = d + a, cos μ = (b² + c² − (a +
+  // d)²)/2bc.
+  const double mu_max = std::acos((b * b + c * c - (a + d) * (a + d)) / (2.0 * b * c));
+  EXPECT_NEAR(m.loops[0].max.value, mu_max, 1e-6);
+
+  // Rocker stroke and time ratio.
+  const auto it = std::find_if(m.strokes.begin(), m.strokes.end(),
+                               [](const StrokeMetric& s) { return s.name == "rocker_angle"; });
+  ASSERT_NE(it, m.strokes.end());
+  const auto rocker_angle = [](double l) {  // A0B = l: π − ∠A0B0B
+    return kPi - std::acos((d * d + c * c - l * l) / (2.0 * d * c));
+  };
+  const double psi_ext = rocker_angle(a + b), psi_fold = rocker_angle(b - a);
+  EXPECT_NEAR(it->range, std::abs(psi_ext - psi_fold), 1e-6);
+  // Crank angles at the limits: along A0→B (extended) and opposite to it (folded).
+  const auto crank_angle = [&](double psi, bool extended) {
+    const double bx = d + c * std::cos(psi), by = c * std::sin(psi);
+    const double along = std::atan2(by, bx);
+    return extended ? along : along + kPi;
+  };
+  const double th_ext = crank_angle(psi_ext, true);
+  const double th_fold = crank_angle(psi_fold, false);
+  double turn = std::fmod(th_fold - th_ext, 2.0 * kPi);  // extended → folded (crank forward)
+  if (turn < 0) turn += 2.0 * kPi;
+  const double ratio = turn / (2.0 * kPi - turn);
+  ASSERT_TRUE(it->time_ratio.has_value());
+  const double got = *it->time_ratio;
+  // Which of the two is "forward" depends on the rocker's sense: either ratio or its inverse.
+  EXPECT_NEAR(std::min(got, 1.0 / got), std::min(ratio, 1.0 / ratio), 1e-3);
+  EXPECT_NEAR(it->forward_time + it->return_time, 60.0 / 300.0, 1e-9);  // one turn at 300 rpm
+
+  // Power of a conservative system over a period.
+  ASSERT_TRUE(m.power.available);
+  EXPECT_GT(m.power.peak, 0.0);
+  EXPECT_LT(std::abs(m.power.mean), 1e-3 * m.power.peak);
+  EXPECT_NEAR(m.power.mean_speed, 300.0 * 2.0 * kPi / 60.0, 1e-9);
+  EXPECT_NEAR(m.power.energy_fluctuation, m.power.energy_max.value - m.power.energy_min.value,
+              1e-15);
+  ASSERT_TRUE(m.power.flywheel_inertia.has_value());
+  const double w = m.power.mean_speed;
+  EXPECT_NEAR(*m.power.flywheel_inertia, m.power.energy_fluctuation / (0.05 * w * w), 1e-15);
+  EXPECT_TRUE(m.limits.empty());  // no joint has limits
+}
+
+}  // namespace
+}  // namespace orthomech

@@ -1,0 +1,50 @@
+// Mobility (src/analysis/mobility.cpp): rank of Eᵀ against an SVD, Grübler count, redundant
+// equations named.
+#include "orthomech/analysis/mobility.hpp"
+
+#include <gtest/gtest.h>
+
+#include "orthomech/projection/primal.hpp"
+#include "support/fixtures.hpp"
+#include "support/projection_fixture.hpp"
+
+namespace orthomech {
+namespace {
+
+using test::kAll;
+
+// ---- redundancy --------------------------------------------------------------------------------
+TEST(Redundancy, TripleCrankHasOneRedundantEquationAndSingularG) {
+  const Model model = test::load_bundled("triple-crank");
+  const VecX q = test::assembled_q(model);
+  const Mobility mob = compute_mobility(model, q);
+  EXPECT_EQ(mob.grubler, 0);
+  EXPECT_EQ(mob.dof, 1);
+  EXPECT_EQ(mob.rank, model.nc - 1);
+  EXPECT_EQ(mob.rank, test::svd_rank(model, q));  // QR rank = SVD rank (independent oracle)
+  ASSERT_EQ(mob.redundant.size(), 1u);
+  EXPECT_NE(mob.redundant[0].find("joint '"), std::string::npos);
+  // The primal form cannot invert G = EᵀAE here and says so.
+  State s(model);
+  s.q = q;
+  Workspace ws(model, mob.rank);
+  EXPECT_EQ(evaluate_primal(model, s, ws), ProjectionStatus::singular_G);
+  // Away from the manifold's parallel configuration the redundancy disappears: rank is full.
+  VecX off = q;
+  off(2) += 0.05;  // turn the first crank alone
+  EXPECT_EQ(compute_mobility(model, off).rank, model.nc);
+}
+
+TEST(Mobility, RankAgreesWithSvdOnEveryBundledMechanism) {
+  for (const char* name : kAll) {
+    const Model model = test::load_bundled(name);
+    const VecX q = test::assembled_q(model);
+    const Mobility mob = compute_mobility(model, q);
+    EXPECT_EQ(mob.rank, test::svd_rank(model, q)) << name;
+    EXPECT_EQ(mob.dof, 1) << name;
+    EXPECT_EQ(mob.grubler, model.n - model.nc) << name;
+  }
+}
+
+}  // namespace
+}  // namespace orthomech
