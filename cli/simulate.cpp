@@ -209,7 +209,8 @@ nlohmann::json sample_json(const Model& model, const SimulateResult& res, const 
   nlohmann::json j;
   j["t"] = U.time.from_si(s.t);
   nlohmann::json m = nlohmann::json::object();
-  for (size_t k = 0; k < model.measures.size(); ++k)
+  // (A final sample at a stop where no equation holds carries no measures: written as none.)
+  for (size_t k = 0; k < model.measures.size() && k < s.measures.size(); ++k)
     m[model.measures[k].name] = U.measure(k, s.measures[k]);
   j["measures"] = m;
   nlohmann::json r = nlohmann::json::object();

@@ -833,7 +833,12 @@ class Simulation {
     if (!grid_pending() || std::abs(t - grid_time(next_out_)) > grid_slack_) return;
     if (options_.record_samples) {
       result_.samples.emplace_back();
-      sample_at(t, y, result_.samples.back());
+      try {
+        sample_at(t, y, result_.samples.back());
+      } catch (...) {  // no equation there (a singular G or chart): no half-filled sample
+        result_.samples.pop_back();
+        throw;
+      }
     }
     ++next_out_;
   }
@@ -1730,7 +1735,16 @@ class Simulation {
     try {
       sample_at(t_last_accept_ > t_now_ ? t_last_accept_ : t_now_, x_, result_.final);
     } catch (const SingularEvaluation&) {
-      if (!result_.samples.empty()) result_.final = result_.samples.back();
+      // No equation at the stop (G or the chart singular there): the last output, or, when the
+      // run stopped before its first one, the stop's position and velocity alone (no
+      // accelerations, multipliers or measures: they cannot be vouched for there).
+      if (!result_.samples.empty()) {
+        result_.final = result_.samples.back();
+      } else {
+        result_.final = SimulationSample{};
+        result_.final.q = x_.head(nq_);
+        result_.final.u = dyn_.state_.u.size() == n_ ? dyn_.state_.u : VecX::Zero(n_);
+      }
       result_.final.t = std::max(t_now_, t_last_accept_);
     }
     result_.energy_initial = energy0_;

@@ -66,6 +66,22 @@ TEST(SimulateCli, PrimalFormAndCsv) {
   std::filesystem::remove_all(dir);
 }
 
+// The primal form where G = EᵀAE is singular at the start (the triple-crank's redundant rows, a
+// spatial loop): exit 3 with the reason and a whole JSON document (it crashed reading the final
+// sample's measures), never a crash.
+TEST(SimulateCli, PrimalFormSingularAtTheStartExitsThreeWithJson) {
+  for (const char* name : {"triple-crank", "hooke-joint"}) {
+    const auto r =
+        run_cli({"simulate", test::source_path(std::string("mechanisms/") + name + ".yaml"),
+                 "--t-end", "1", "--form", "primal", "--json"});
+    ASSERT_EQ(r.status, 3) << name << ": " << r.err;
+    EXPECT_NE(r.err.find("G = EᵀAE is singular at t = 0"), std::string::npos) << r.err;
+    const nlohmann::json j = nlohmann::json::parse(r.out);
+    EXPECT_EQ(j.at("status"), "singular") << name;
+    EXPECT_EQ(j.at("final").at("t"), 0.0) << name;
+  }
+}
+
 TEST(SimulateCli, BadRateIsBadInput) {
   const auto r = run_cli({"simulate", test::source_path("mechanisms/pendulum.yaml"), "--t-end", "1",
                           "--rate", "nosuch=1"});

@@ -143,3 +143,30 @@ TEST(IftommA02, NFourBar40_20s_ThroughSingularPositions) { run_four_bar(40, 20.0
 
 }  // namespace
 }  // namespace orthomech
+
+namespace orthomech {
+namespace {
+
+// The primal form on mechanisms where G = EᵀAE is singular from the start (redundant rows: the
+// triple-crank, Bennett; a spatial loop) or becomes so: a stop with a status and a message, never
+// a crash, and every sample (and the final one) a whole state of the model.
+TEST(SimulatePrimal, SingularStartOrRedundancyStopsWithWholeSamples) {
+  for (const char* name : {"triple-crank", "bennett", "hooke-joint", "crank-rocker-3d"}) {
+    const Model model = test::load_bundled(name);
+    SimulateOptions o;
+    o.t_end = 1.0;
+    o.form = DynamicsForm::primal;
+    const SimulateResult r = simulate(model, o);
+    for (const SimulationSample& s : r.samples) {
+      ASSERT_EQ(s.q.size(), model.nq) << name << " at t = " << s.t;
+      ASSERT_EQ(s.u.size(), model.n) << name << " at t = " << s.t;
+    }
+    if (r.status != SimulateStatus::completed) {
+      EXPECT_FALSE(r.message.empty()) << name;
+    }
+    EXPECT_EQ(r.final.q.size(), model.nq) << name << ": " << r.message;
+  }
+}
+
+}  // namespace
+}  // namespace orthomech
