@@ -11,6 +11,7 @@
 
 #include "orthomech/io/mechanism_file.hpp"
 #include "support/fixtures.hpp"
+#include "support/short_four_bar.hpp"
 
 namespace orthomech {
 namespace {
@@ -59,21 +60,7 @@ TEST(Positions, LockedJointHoldsItsAngleAndTheLoopCloses) {
 
 // Links 1 + 2 + 3 m on a 10 m ground cannot close: a status with the residual, no exception.
 TEST(Positions, ALoopThatCannotCloseIsReported) {
-  const Model model = parse_mechanism(R"(orthomech: 1
-name: short
-ground:
-  points: {A0: [0, 0], B0: [10, 0]}
-bodies:
-  - {name: crank, mass: 1, inertia: 0.1, pose: [0, 0, 0.5], points: {A0: [0, 0], A: [1, 0]}}
-  - {name: coupler, mass: 1, inertia: 0.1, pose: [1, 0, 0.2], points: {A: [0, 0], B: [2, 0]}}
-  - {name: rocker, mass: 1, inertia: 0.1, pose: [10, 0, 2.5], points: {B0: [0, 0], B: [3, 0]}}
-joints:
-  - {name: A0, type: revolute, connects: [ground.A0, crank.A0]}
-  - {name: A, type: revolute, connects: [crank.A, coupler.A]}
-  - {name: B, type: revolute, connects: [coupler.B, rocker.B]}
-  - {name: B0, type: revolute, connects: [rocker.B0, ground.B0]}
-)",
-                                      "short.yaml");
+  const Model model = parse_mechanism(test::kShortFourBar, "short.yaml");
   VecX q = model.design_q();
   const SolveResult r = project_positions(model, q);
   EXPECT_NE(r.status, SolveStatus::converged);

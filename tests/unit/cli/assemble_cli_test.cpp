@@ -11,6 +11,7 @@
 
 #include "support/cli_runner.hpp"
 #include "support/fixtures.hpp"
+#include "support/short_four_bar.hpp"
 
 namespace orthomech {
 namespace {
@@ -23,22 +24,6 @@ fs::path temp_path(const std::string& leaf) {
   return fs::temp_directory_path() / ("orthomech_asm_" + std::to_string(::getpid()) + "_" +
                                       std::to_string(counter++) + "_" + leaf);
 }
-
-// A four-bar whose links are too short to close: 1 + 2 + 3 < 10 (gap 4 m = 4000 mm).
-const char* const kShortFourBar = R"(orthomech: 1
-name: short
-ground:
-  points: {A0: [0, 0], B0: [10, 0]}
-bodies:
-  - {name: crank, mass: 1, inertia: 0.1, pose: [0, 0, 0.5], points: {A0: [0, 0], A: [1, 0]}}
-  - {name: coupler, mass: 1, inertia: 0.1, pose: [1, 0, 0.2], points: {A: [0, 0], B: [2, 0]}}
-  - {name: rocker, mass: 1, inertia: 0.1, pose: [10, 0, 2.5], points: {B0: [0, 0], B: [3, 0]}}
-joints:
-  - {name: A0, type: revolute, connects: [ground.A0, crank.A0]}
-  - {name: A, type: revolute, connects: [crank.A, coupler.A]}
-  - {name: B, type: revolute, connects: [coupler.B, rocker.B]}
-  - {name: B0, type: revolute, connects: [rocker.B0, ground.B0]}
-)";
 
 // Crank-rocker of the CLI tests drawn slightly off (coupler 3° and rocker 2° off).
 const char* const kRoughFourBar = R"(orthomech: 1
@@ -83,7 +68,7 @@ TEST(AssembleCli, Json_StatusAndMeasures_LockedCrank) {
 }
 
 TEST(AssembleCli, CannotClose_Exit3_NamesJointsAndGap) {
-  const std::string file = write_temp(kShortFourBar, "short.yaml");
+  const std::string file = write_temp(test::kShortFourBar, "short.yaml");
   const auto r = run_cli({"assemble", file});
   EXPECT_EQ(r.status, 3);
   EXPECT_NE(r.err.find("cannot close"), std::string::npos) << r.err;
