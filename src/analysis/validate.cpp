@@ -991,44 +991,18 @@ double spatial_transmission_index(const Model& model, const SpatialTransmissionL
 
 namespace {
 
-// The design's assembly mode at the locks, limits ignored: the design pose is closed (no lock),
-// then the locked coordinates are moved from their values there to the locked ones in steps of
-// at most 2° (revolute) or 2 % of the mechanism's size (prismatic), each step projected from the
-// previous position (mass-metric Gauss–Newton). Small steps keep the mode of the design (the same
-// branch, as `cycle` follows it); a projection of the design pose straight onto the locks may
-// land on another mode. Empty when a step does not converge (a dead point in between).
-// With `secant`, each step is predicted along the previous one (q_k ⊕ (q_k ⊖ q_{k−1}), equal
-// input steps) before the projection: through a change point, where two branches cross, it
-// stays on the branch it came along (a projection from the previous position alone may turn onto
-// the other one).
+// The design's assembly mode at the locks, limits ignored: assemble's continuation (follow_locks)
+// from the design pose in steps of at most 2° (revolute) or 2 % of the mechanism's size
+// (prismatic), each step projected from the previous position (mass-metric Gauss–Newton). Small
+// steps keep the mode of the design (the same branch, as `cycle` follows it); a projection of the
+// design pose straight onto the locks may land on another mode. Empty when a step does not
+// converge (a dead point in between). With `secant`, each step is predicted along the previous
+// one before the projection: through a change point, where two branches cross, it stays on the
+// branch it came along (a projection from the previous position alone may turn onto the other
+// one).
 std::optional<VecX> continue_to_locks(const Model& model, const VecX& q_guess,
                                       const std::vector<JointLock>& locks, bool secant = false) {
-  VecX q = q_guess;
-  if (!project_with_locks(model, q, {}, 1e-12, 60)) return std::nullopt;
-  const double L = length_scale(model);
-  std::vector<double> from, to;
-  double steps = 1.0;
-  for (const JointLock& l : locks) {
-    const bool rev = is_revolute(model, l.joint);
-    const double s = joint_coordinate(model, l.joint, q);
-    // A revolute lock is matched modulo 2π nearest the design (as `assemble` does).
-    const double target = rev ? l.value + kTwoPi * std::round((s - l.value) / kTwoPi) : l.value;
-    from.push_back(s);
-    to.push_back(target);
-    steps = std::max(steps, std::ceil(std::abs(target - s) / (rev ? 2.0 * kPi / 180.0 : 0.02 * L)));
-  }
-  const int n = static_cast<int>(std::min(steps, 1000.0));
-  std::vector<JointLock> at = locks;
-  VecX q_prev = q;
-  for (int k = 1; k <= n; ++k) {
-    for (size_t i = 0; i < locks.size(); ++i)
-      at[i].value = from[i] + (to[i] - from[i]) * static_cast<double>(k) / n;
-    const VecX q_last = q;
-    if (secant && k > 1) q = moved(model, q, difference(model, q, q_prev), 1.0);
-    if (!project_with_locks(model, q, at, 1e-12, 60)) return std::nullopt;
-    q_prev = q_last;
-  }
-  return q;
+  return follow_locks(model, q_guess, locks, 1e-12, {secant, length_scale(model)});
 }
 
 // A spatial joint's coordinate at q, an angle taken modulo 2π nearest the middle of its limits.
