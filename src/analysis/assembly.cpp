@@ -832,6 +832,8 @@ double spatial_length_scale(const Model& model) {
   return L > 0.0 ? L : 1.0;
 }
 
+}  // namespace
+
 // The start of the spatial (A1) with locks, on the branch of the guess: the guess closed without
 // the locks (mass-metric Gauss–Newton, q ⊕ Δu), then each locked coordinate moved from its value
 // there to the lock (an angle the short way round, (L4)) in equal steps of at most 2° or 2 % of
@@ -841,10 +843,11 @@ double spatial_length_scale(const Model& model) {
 // projection straight onto the locks may land on another mode. Empty when a step does not
 // converge (a dead point of the locked coordinate on the way, or a lock out of reach).
 std::optional<VecX> follow_locks(const Model& model, const VecX& q_guess,
-                                 const std::vector<JointLock>& locks, double tol) {
+                                 const std::vector<JointLock>& locks, double tol,
+                                 const LockContinuation& how) {
   VecX q = q_guess;
   if (!project_with_locks(model, q, {}, tol, 60)) return std::nullopt;
-  const double L = spatial_length_scale(model);
+  const double L = how.length_scale > 0.0 ? how.length_scale : spatial_length_scale(model);
   constexpr double kAngleStep = std::numbers::pi / 90.0;  // 2°
   std::vector<double> from, to;
   double steps = 1.0;
@@ -865,7 +868,7 @@ std::optional<VecX> follow_locks(const Model& model, const VecX& q_guess,
     for (size_t i = 0; i < locks.size(); ++i)
       at[i].value = from[i] + (to[i] - from[i]) * static_cast<double>(k) / n;
     const VecX q_last = q;
-    if (k > 1) {  // secant predictor
+    if (how.secant && k > 1) {  // secant predictor
       difference_positions(model, q, q_prev, dq);
       integrate_positions(model, q, dq, 1.0);
     }
@@ -874,6 +877,8 @@ std::optional<VecX> follow_locks(const Model& model, const VecX& q_guess,
   }
   return q;
 }
+
+namespace {
 
 // Feasibility to the rounding level after Ipopt (optimality is Ipopt's): the mass-metric
 // Gauss–Newton in velocity space, Δu = −A Cᵀ (C A Cᵀ)⁺ c, q ← q ⊕ Δu (spatial.md §6.3), on the

@@ -44,9 +44,17 @@ SolveResult project_positions(const Model& model, VecX& q, const PositionOptions
   VecX row(model.n);
   double previous = std::numeric_limits<double>::infinity();
   int stalled = 0;
+  // Off the manifold the redundant rows of an overconstrained mechanism (Bennett's) regain rank:
+  // the constraint rows ranked alone may then span every direction, the lock rows included, and
+  // the step is singular although the lock can move the mechanism. Then (and from there on) the
+  // lock rows are kept first and only the constraint rows independent of them are ranked (a
+  // stacked rank-revealing selection): at most n − nl of them, as on the manifold.
+  bool lock_first = false;
+  MatX Et_free;
   for (int it = 0;; ++it) {
     compute_constraint_residual(model, q, f);
-    result.residual = f.size() ? f.cwiseAbs().maxCoeff() : 0.0;
+    const double f_residual = f.size() ? f.cwiseAbs().maxCoeff() : 0.0;
+    result.residual = f_residual;
     for (int i = 0; i < nl; ++i) {
       const PositionOptions::Lock& l = locks[static_cast<size_t>(i)];
       double gap = compute_scalar(model, JointCoordinate{l.joint}, q, nullptr, row).value - l.value;
@@ -80,7 +88,12 @@ SolveResult project_positions(const Model& model, VecX& q, const PositionOptions
       A_diag = A.diagonal();
     }
     compute_constraint_jacobian(model, q, Et);
-    const int r = selector.select(Et, A_diag, chart_options, chart);
+    if (lock_first) {  // the constraint rows' parts A-orthogonal to the lock rows
+      const MatX AD = A * d.transpose();
+      const Eigen::LDLT<MatX> dad(d * AD);
+      Et_free = Et - (Et * AD) * dad.solve(d);
+    }
+    const int r = selector.select(lock_first ? Et_free : Et, A_diag, chart_options, chart);
     if (r == 0) {
       result.status = SolveStatus::singular;
       result.message = "constraint Jacobian is zero";
@@ -103,6 +116,12 @@ SolveResult project_positions(const Model& model, VecX& q, const PositionOptions
     if (locked) {  // the held row must be independent of the constraints' rows
       const VecX D = ldlt.vectorD().cwiseAbs();
       if (!(D.minCoeff() > 1e-12 * D.maxCoeff())) {
+        if (!lock_first && f_residual > options.tolerance) {  // off the manifold: rank anew
+          lock_first = true;
+          previous = std::numeric_limits<double>::infinity();
+          stalled = 0;
+          continue;
+        }
         result.status = SolveStatus::singular;
         result.message = "the held joint cannot move the mechanism here";
         return result;

@@ -173,58 +173,6 @@ bool on_drawn_branch(const Model& model, const VecX& q) {
   return true;
 }
 
-// Mass-metric Gauss–Newton with locked inputs. Planar: project_with_locks. Spatial
-// (spatial.md §6.3): residual [f; wrap(s_k(q) − value_k)] (angles compared modulo 2π, slides as
-// they are), minimum-norm step Δu = −A Cᵀ (C A Cᵀ)⁺ c in velocity space, q ← q ⊕ Δu with
-// backtracking on the max residual.
-bool project_locked(const Model& model, VecX& q, const std::vector<JointLock>& locks,
-                    double tolerance = 1e-12, int max_iterations = 50) {
-  if (model.dimension != 3) return project_with_locks(model, q, locks, tolerance, max_iterations);
-  const int nl = static_cast<int>(locks.size());
-  MatX C(model.nc + nl, model.n), Et(model.nc, model.n), A(model.n, model.n);
-  VecX c(model.nc + nl), f(model.nc), d(model.n);
-  compute_inverse_mass_matrix(model, q, A);
-  auto residual = [&](const VecX& x) {
-    compute_constraint_residual(model, x, f);
-    c.head(model.nc) = f;
-    for (int k = 0; k < nl; ++k) {
-      const JointLock& l = locks[static_cast<size_t>(k)];
-      const double s = joint_coordinate(model, l.joint, x) - l.value;
-      c(model.nc + k) = is_revolute(model, l.joint) ? wrap(s) : s;
-    }
-    const double r = c.size() ? c.cwiseAbs().maxCoeff() : 0.0;
-    return std::isfinite(r) ? r : std::numeric_limits<double>::infinity();
-  };
-  double r = residual(q);
-  for (int it = 0; it < max_iterations && r > tolerance; ++it) {
-    compute_constraint_jacobian(model, q, Et);
-    C.topRows(model.nc) = Et;
-    for (int k = 0; k < nl; ++k) {
-      d.setZero();
-      (void)compute_scalar(model, JointCoordinate{locks[static_cast<size_t>(k)].joint}, q, nullptr,
-                           d);
-      C.row(model.nc + k) = d.transpose();
-    }
-    residual(q);
-    const MatX ACt = A * C.transpose();
-    const Eigen::CompleteOrthogonalDecomposition<MatX> cod(C * ACt);
-    const VecX du = -ACt * cod.solve(c);
-    if (!du.allFinite()) return false;
-    double step = 1.0;
-    VecX trial = moved(model, q, du, step);
-    double rt = residual(trial);
-    for (int k = 0; k < 8 && !(rt < r); ++k) {
-      step *= 0.5;
-      trial = moved(model, q, du, step);
-      rt = residual(trial);
-    }
-    if (!(rt < r)) return false;
-    q = trial;
-    r = rt;
-  }
-  return r <= tolerance;
-}
-
 // A spatial target's errors at q: |P − at| (m) and, with an orientation target, the angle of the
 // rotation from the target frame to the body's, 2·atan2(|vec δ|, |δ₀|) with δ = e_t* ⊗ e (accurate
 // near 0); with a direction target, the angle between R·b and the world direction w,
@@ -493,7 +441,7 @@ class Tracer {
       if (target < lo - 1e-12 || target > hi + 1e-12) continue;
       const double frac = hi > lo ? (target - S[i].s) / (S[i + 1].s - S[i].s) : 0.0;
       VecX x = moved(m_, S[i].q, difference(m_, S[i + 1].q, S[i].q), frac);
-      if (!project_locked(m_, x, {{input_, target}}, 1e-12, 30)) continue;
+      if (!project_with_locks(m_, x, {{input_, target}}, 1e-12, 30)) continue;
       if (scaled_distance(m_, x, q, L_, idle_) < kSamePosition)
         return S[i].l + frac * (S[i + 1].l - S[i].l);
     }
@@ -564,7 +512,7 @@ std::vector<VecX> assembly_modes(const Model& model, const std::vector<JointLock
       q(b.q_offset + 1) += L * u(gen);
       if (b.kind == BodyKind::rigid) q(b.q_offset + 2) = kPi * u(gen);
     }
-    if (!project_locked(model, q, locks, 1e-12, 60)) continue;
+    if (!project_with_locks(model, q, locks, 1e-12, 60)) continue;
     if (model.dimension == 3 && !on_drawn_branch(model, q)) continue;
     bool known = false;
     for (const VecX& m : modes)
@@ -1043,44 +991,18 @@ double spatial_transmission_index(const Model& model, const SpatialTransmissionL
 
 namespace {
 
-// The design's assembly mode at the locks, limits ignored: the design pose is closed (no lock),
-// then the locked coordinates are moved from their values there to the locked ones in steps of
-// at most 2° (revolute) or 2 % of the mechanism's size (prismatic), each step projected from the
-// previous position (mass-metric Gauss–Newton). Small steps keep the mode of the design (the same
-// branch, as `cycle` follows it); a projection of the design pose straight onto the locks may
-// land on another mode. Empty when a step does not converge (a dead point in between).
-// With `secant`, each step is predicted along the previous one (q_k ⊕ (q_k ⊖ q_{k−1}), equal
-// input steps) before the projection: through a change point, where two branches cross, it
-// stays on the branch it came along (a projection from the previous position alone may turn onto
-// the other one).
+// The design's assembly mode at the locks, limits ignored: assemble's continuation (follow_locks)
+// from the design pose in steps of at most 2° (revolute) or 2 % of the mechanism's size
+// (prismatic), each step projected from the previous position (mass-metric Gauss–Newton). Small
+// steps keep the mode of the design (the same branch, as `cycle` follows it); a projection of the
+// design pose straight onto the locks may land on another mode. Empty when a step does not
+// converge (a dead point in between). With `secant`, each step is predicted along the previous
+// one before the projection: through a change point, where two branches cross, it stays on the
+// branch it came along (a projection from the previous position alone may turn onto the other
+// one).
 std::optional<VecX> continue_to_locks(const Model& model, const VecX& q_guess,
                                       const std::vector<JointLock>& locks, bool secant = false) {
-  VecX q = q_guess;
-  if (!project_locked(model, q, {}, 1e-12, 60)) return std::nullopt;
-  const double L = length_scale(model);
-  std::vector<double> from, to;
-  double steps = 1.0;
-  for (const JointLock& l : locks) {
-    const bool rev = is_revolute(model, l.joint);
-    const double s = joint_coordinate(model, l.joint, q);
-    // A revolute lock is matched modulo 2π nearest the design (as `assemble` does).
-    const double target = rev ? l.value + kTwoPi * std::round((s - l.value) / kTwoPi) : l.value;
-    from.push_back(s);
-    to.push_back(target);
-    steps = std::max(steps, std::ceil(std::abs(target - s) / (rev ? 2.0 * kPi / 180.0 : 0.02 * L)));
-  }
-  const int n = static_cast<int>(std::min(steps, 1000.0));
-  std::vector<JointLock> at = locks;
-  VecX q_prev = q;
-  for (int k = 1; k <= n; ++k) {
-    for (size_t i = 0; i < locks.size(); ++i)
-      at[i].value = from[i] + (to[i] - from[i]) * static_cast<double>(k) / n;
-    const VecX q_last = q;
-    if (secant && k > 1) q = moved(model, q, difference(model, q, q_prev), 1.0);
-    if (!project_locked(model, q, at, 1e-12, 60)) return std::nullopt;
-    q_prev = q_last;
-  }
-  return q;
+  return follow_locks(model, q_guess, locks, 1e-12, {secant, length_scale(model)});
 }
 
 // A spatial joint's coordinate at q, an angle taken modulo 2π nearest the middle of its limits.
@@ -1117,7 +1039,7 @@ AssemblyResult assemble_spatial_at(const Model& model, const VecX& q_design,
   std::string how = "continued from there to the inputs";
   if (!q) {
     VecX x = a.q;
-    if (project_locked(model, x, locks, 1e-12, 200)) {
+    if (project_with_locks(model, x, locks, 1e-12, 200)) {
       q = x;
       how = "projected from there onto the inputs (the continuation did not reach them)";
     }

@@ -16,6 +16,7 @@
 // the kinetic energy removed is ½ (βu₀)ᵀ M (βu₀) = T(u₀) − T(u) (mass-orthogonality).
 //
 // Results are data (house style): never an exception for a numerical outcome.
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -117,6 +118,20 @@ struct VelocityProjection {
 // by multi-start and continuation. Returns true when max residual ≤ tolerance.
 bool project_with_locks(const Model& model, VecX& q, const std::vector<JointLock>& locks,
                         double tolerance = 1e-12, int max_iterations = 50);
+
+// The locks reached by continuation from q_guess on its branch (assembly.cpp, docs/theory.md):
+// q_guess closed without the locks (project_with_locks), then each locked coordinate moved from
+// its value there to the lock (an angle the short way round) in equal steps of at most 2° or 2 %
+// of the length scale, each corrected by project_with_locks at the step's values. Empty when a
+// step does not converge. Used by `assemble` (spatial) and `validate`.
+struct LockContinuation {
+  bool secant = true;  // predict each step along the previous one (q_k ⊕ (q_k ⊖ q_{k−1}))
+  double length_scale = 0.0;  // m, for the 2 % slide step; 0: the largest joint-point offset
+};
+[[nodiscard]] std::optional<VecX> follow_locks(const Model& model, const VecX& q_guess,
+                                               const std::vector<JointLock>& locks,
+                                               double tolerance = 1e-12,
+                                               const LockContinuation& how = {});
 
 // Joint coordinate s(q) of a revolute (φ_j − φ_i) or prismatic (slide) joint.
 [[nodiscard]] double joint_coordinate(const Model& model, int joint, const VecX& q);

@@ -30,7 +30,9 @@ struct PositionOptions {
 // norm. Moves every body; works with redundant constraints. For one-off projections. With
 // options.locked_joint (and each of options.locks), the joint's coordinate s(q) = locked_value is
 // one more row (its gradient d appended to E_R); if those rows depend on the constraints' (the
-// joints cannot move there, a dead point of them), the result is `singular`.
+// joints cannot move there, a dead point of them), the result is `singular`. Off the manifold,
+// where the redundant rows of an overconstrained mechanism regain rank, the lock rows are kept
+// first and the constraint rows independent of them are ranked (docs/theory.md).
 SolveResult project_positions(const Model& model, VecX& q, const PositionOptions& options = {});
 
 }  // namespace orthomech
