@@ -208,8 +208,7 @@ std::string chart_name(const Model& model, const Chart& c) {
 // 14 812 steps (2·10⁻⁶ s next to the change points) on n-four-bar-2 over 10 s at rtol 1e-6,
 // 1057 with it (issue 10; docs/theory.md, "Rosenbrock on the chart's ODE").
 bool projects_stages(const SimulateOptions& options) {
-  return options.project_stages ||
-         (options.form == DynamicsForm::dual && options.integrator == Integrator::rosenbrock4);
+  return options.project_stages || options.integrator == Integrator::rosenbrock4;
 }
 
 // Everything the two forms share: the free system, constraints, the chart solver for F and for
@@ -252,6 +251,7 @@ class Dynamics {
           std::holds_alternative<SpatialPointForce>(l.kind) ||
           std::holds_alternative<SpatialTorque>(l.kind))
         nonconservative_.push_back(&l);
+    v_stage_.resize(na_);
   }
 
   // ---- Shared pieces ----------------------------------------------------------------------
@@ -339,26 +339,30 @@ class Dynamics {
     H_llt_.compute(H_);
   }
 
+  // A stage's position projected onto f(q) = 0 in the chart, its independent coordinates fixed
+  // (L4), with Eᵀ factorised in the chart and F at the projected q: the right-hand side is then
+  // the ODE on the constraint manifold in chart coordinates, smooth even next to a change point,
+  // where F off the manifold is very sensitive to the stage's constraint error (IFToMM A02).
+  void project_stage_position(double t) {
+    const SolveResult pr = cs_.correct_positions(state_.q, ws_.constraints.Et, ws_.constraints.f,
+                                                 dq_, {.tolerance = options_.position_tolerance});
+    if (pr.status != SolveStatus::converged) {  // factorise at the q it stopped at
+      compute_constraint_jacobian(model_, state_.q, ws_.constraints.Et);
+      if (pr.status == SolveStatus::singular || !factor_chart(ws_.constraints.Et))
+        throw SingularEvaluation{"the chart's dependent block is singular at t = " +
+                                 time_text(model_, t) + " (a change point: E loses rank)"};
+    }
+    compute_F();
+    chart_ready_ = false;
+  }
+
   // Dual form at (t, q, v): u = F v, Ḟ v from Eᵀ (Ḟ v) = −Dᵀ u, H v̇ = Fᵀ (Q̂ − Ṁ u − M Ḟ v).
   void evaluate_dual(double t, const Eigen::Ref<const VecX>& q, const Eigen::Ref<const VecX>& v) {
     state_.t = t;
     state_.q = q;
-    // 0. The stage's position projected onto f(q) = 0 with its independent coordinates fixed
-    //    (L4): the right-hand side is then the ODE on the constraint manifold in the chart
-    //    coordinates, smooth even next to a change point, where F off the manifold is very
-    //    sensitive to the stage's constraint error (IFToMM A02).
+    // 0. The stage's position projected onto f(q) = 0 in the chart (project_stage_position).
     if (project_stages_) {
-      // Leaves Eᵀ at the projected q factorised in the chart.
-      const SolveResult pr = cs_.correct_positions(state_.q, ws_.constraints.Et, ws_.constraints.f,
-                                                   dq_, {.tolerance = options_.position_tolerance});
-      if (pr.status != SolveStatus::converged) {  // factorise at the q it stopped at
-        compute_constraint_jacobian(model_, state_.q, ws_.constraints.Et);
-        if (pr.status == SolveStatus::singular || !factor_chart(ws_.constraints.Et))
-          throw SingularEvaluation{"the chart's dependent block is singular at t = " +
-                                   time_text(model_, t) + " (a change point: E loses rank)"};
-      }
-      compute_F();
-      chart_ready_ = false;
+      project_stage_position(t);
       rotations_.update(model_, state_.q);
     } else if (!(chart_ready_ && state_.q == chart_q_)) {
       // 1. Eᵀ(q), the chart's dependent block, F, unless they are already those at q (the
@@ -403,22 +407,39 @@ class Dynamics {
   void evaluate_primal(double t, const Eigen::Ref<const VecX>& q, const Eigen::Ref<const VecX>& p) {
     state_.t = t;
     state_.q = q;
+    if (project_stages_) project_stage_position(t);
     if (!ws_.free.mass_ready || !ws_.free.constant_mass) {
       state_.u.setZero();
       free_system();
     }
     state_.u.noalias() = ws_.free.A * p;  // eq. (100)
+    if (project_stages_) {
+      // The stage's velocity admissible at the projected q with its independent components
+      // kept, u = F u_I (the momenta p = M u implied): the right-hand side then depends on p
+      // through A p's independent components only.
+      for (int k = 0; k < na_; ++k)
+        v_stage_(k) = state_.u(cs_.chart().independent[static_cast<size_t>(k)]);
+      state_.u.noalias() = F_ * v_stage_;
+    }
     compute_constraints(model_, state_, ws_.constraints);
     free_system();
     tmp_ = ws_.free.Q;
     if (!ws_.free.constant_mass) tmp_.noalias() -= ws_.free.Mdot * state_.u;
     factor_G();
-    b_.noalias() = ws_.constraints.Et * (ws_.free.A * tmp_);
+    if (sparse_G_) {  // diagonal M: A = diag(A_diag)
+      tmp_.array() *= ws_.free.A_diag.array();
+      b_.noalias() = Es_ * tmp_;
+    } else {
+      b_.noalias() = ws_.constraints.Et * (ws_.free.A * tmp_);
+    }
     b_ += ws_.constraints.Dtu;
     solve_G(b_, lambda_);
     lambda_ = -lambda_;  // (L3)
     pdot_ = ws_.free.Q;
-    pdot_.noalias() += ws_.constraints.Et.transpose() * lambda_;  // eq. (99) as (L3)
+    if (sparse_G_)
+      pdot_.noalias() += Es_.transpose() * lambda_;
+    else
+      pdot_.noalias() += ws_.constraints.Et.transpose() * lambda_;  // eq. (99) as (L3)
   }
 
   // G = Eᵀ A E (eq. (42)) at ws_.constraints.Et: dense Cholesky, or sparse for large diagonal-
@@ -426,9 +447,13 @@ class Dynamics {
   void factor_G() {
     const MatX& Et = ws_.constraints.Et;
     if (nc_ > 48 && ws_.free.diagonal_mass) {
-      Es_ = Et.sparseView();
+      sparse_constraint_jacobian(Et);
       Gs_ = Es_ * ws_.free.A_diag.asDiagonal() * Es_.transpose();  // eq. (42)
-      Gs_ldlt_.compute(Gs_);
+      if (!G_analyzed_) {  // Eᵀ's structural pattern, hence G's, is fixed: one ordering
+        Gs_ldlt_.analyzePattern(Gs_);
+        G_analyzed_ = true;
+      }
+      Gs_ldlt_.factorize(Gs_);
       if (Gs_ldlt_.info() != Eigen::Success || Gs_ldlt_.vectorD().minCoeff() <= 0.0)
         throw SingularEvaluation{"G = EᵀAE is singular at t = " + time_text(model_, state_.t)};
       sparse_G_ = true;
@@ -444,6 +469,21 @@ class Dynamics {
         !(Ld.minCoeff() * Ld.minCoeff() > kSingularG * Ld.maxCoeff() * Ld.maxCoeff()))
       throw SingularEvaluation{"G = EᵀAE is singular at t = " + time_text(model_, state_.t) +
                                " (redundant constraints or a change point)"};
+  }
+  // Es_ = Eᵀ on its structural pattern (ChartEngine::structural_rows, zeros kept): the
+  // pattern is set once, then only the values are read from the dense Eᵀ.
+  void sparse_constraint_jacobian(const MatX& Et) {
+    if (Es_.nonZeros() == 0) {
+      std::vector<Eigen::Triplet<double>> entries;
+      const auto& rows = cs_.structural_rows();
+      for (int i = 0; i < nc_; ++i)
+        for (const int j : rows[static_cast<size_t>(i)]) entries.emplace_back(i, j, 1.0);
+      Es_.resize(nc_, n_);
+      Es_.setFromTriplets(entries.begin(), entries.end());
+    }
+    for (Eigen::Index j = 0; j < Es_.outerSize(); ++j)
+      for (Eigen::SparseMatrix<double>::InnerIterator it(Es_, j); it; ++it)
+        it.valueRef() = Et(it.row(), j);
   }
   void solve_G(const VecX& b, VecX& x) {
     if (sparse_G_)
@@ -498,11 +538,13 @@ class Dynamics {
   Eigen::LLT<MatX> H_llt_;
   VecX Fdv_, b_, col_, rhs_, vdot_, udot_, tmp_, Qnc_, lambda_;
   VecX pdot_;
+  VecX v_stage_;  // a projected primal stage's independent velocities (evaluate_primal)
   MatX AEt_, G_;
   Eigen::LLT<MatX> G_llt_;
   Eigen::SparseMatrix<double> Es_, Gs_;
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> Gs_ldlt_;
   bool sparse_G_ = false;
+  bool G_analyzed_ = false;  // Gs_ldlt_ has the ordering of G's (fixed) pattern
   VecX dq_;
   // Eᵀ (ws_.constraints.Et), the chart's factors and F_ are those at chart_q_ in the current
   // chart: an evaluation at chart_q_ need not compute them again. Whoever changes one of them
@@ -726,7 +768,7 @@ class Simulation {
   void set_up_problem() {
     problem_.rhs = [this](const VecX& y, VecX& dy, double t) { rhs(y, dy, t); };
     problem_.autonomous = !model_.general;  // only a general system's forces may depend on t
-    if (!primal_ && dyn_.project_stages_)
+    if (dyn_.project_stages_)
       problem_.jacobian_columns = [this](std::vector<Eigen::Index>& columns) {
         jacobian_columns(columns);
       };
@@ -804,7 +846,17 @@ class Simulation {
     }
     std::sort(columns.begin(), columns.end());
     columns.erase(std::unique(columns.begin(), columns.end()), columns.end());
-    for (int k = 0; k < na_; ++k) columns.push_back(nq_ + k);
+    if (!primal_) {
+      for (int k = 0; k < na_; ++k) columns.push_back(nq_ + k);
+      return;
+    }
+    // Primal: the stage's u = F (A p)_I. With a diagonal M, (A p)_I are the momenta's
+    // independent components; otherwise every momentum column is differenced.
+    if (dyn_.ws_.free.diagonal_mass) {
+      for (const int k : c.independent) columns.push_back(nq_ + k);
+    } else {
+      for (int k = 0; k < n_; ++k) columns.push_back(nq_ + k);
+    }
   }
 
   // ---- Output grid and samples ----------------------------------------------------------------

@@ -64,9 +64,10 @@ struct SimulateOptions {
   bool record_samples = true;         // keep every output sample (else only the final one)
   bool reactions = true;              // compute λ and joint reactions at the samples
   double position_tolerance = 1e-12;  // max |f| after the per-step correction (m, rad)
-  // Dual form: evaluate every stage at its position projected onto f(q) = 0 in the chart
-  // (independent coordinates fixed). Needed to pass change points (IFToMM A02) at a sane step
-  // size; costs about one Newton iteration per evaluation.
+  // Evaluate every stage at its position projected onto f(q) = 0 in the chart (independent
+  // coordinates fixed; primal form: and its velocity onto the admissible ones, independent
+  // components kept). Needed to pass change points (IFToMM A02) at a sane step size; costs
+  // about one Newton iteration per evaluation. Always on for rosenbrock4.
   bool project_stages = false;
   long max_steps = 100'000'000;
   // For tests only: called with the predicted landing state (t, q, u) of every change-point

@@ -128,6 +128,12 @@ class ChartEngine {
   [[nodiscard]] int rank() const { return r_; }
   [[nodiscard]] int na() const { return n_ - r_; }
   [[nodiscard]] bool sparse() const { return sparse_; }
+  // Structural pattern of Eᵀ: the columns each constraint row can have non-zero (computed on
+  // first use when the engine factorises dense).
+  [[nodiscard]] const std::vector<std::vector<int>>& structural_rows() {
+    if (row_columns_.empty() && nc_ > 0) structural_pattern();
+    return row_columns_;
+  }
 
   // Above this rank a `sparse_when_large` engine factorises sparse (dense LU is cheaper for the
   // small blocks of ordinary linkages; measured in bench/simulate_bench.cpp).
