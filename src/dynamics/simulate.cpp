@@ -421,7 +421,12 @@ class Dynamics {
         v_stage_(k) = state_.u(cs_.chart().independent[static_cast<size_t>(k)]);
       state_.u.noalias() = F_ * v_stage_;
     }
-    compute_constraints(model_, state_, ws_.constraints);
+    if (project_stages_) {  // Eᵀ is that of the projected q: only Dᵀ u
+      rotations_.update(model_, state_.q);
+      compute_constraint_rate(model_, state_, rotations_, ws_.constraints);
+    } else {
+      compute_constraints(model_, state_, ws_.constraints);
+    }
     free_system();
     tmp_ = ws_.free.Q;
     if (!ws_.free.constant_mass) tmp_.noalias() -= ws_.free.Mdot * state_.u;
