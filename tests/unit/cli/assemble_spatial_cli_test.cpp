@@ -1,7 +1,8 @@
 // The commands on spatial files (issue 12 item 6): simulate writes every body's pose (origin and
 // quaternion) and named points in 3D, reactions with force and moment components, and chart
-// names of spatial velocity components; crosscheck passes; the commands not yet available on
-// spatial mechanisms refuse them with exit 2.
+// names of spatial velocity components; crosscheck passes; assemble locks spatial joints and
+// writes the assembled poses (--write); the commands not yet available on spatial mechanisms
+// refuse them with exit 2.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -208,6 +209,24 @@ void check_spatial_write(const std::string& in, const std::filesystem::path& out
     EXPECT_LE((rotation_matrix(s.design_orientation) - rotation_matrix(e)).cwiseAbs().maxCoeff(),
               1e-12)
         << in << " " << back.bodies[b].name;
+  }
+  // `q` of --json: each body's centre of mass (length unit) and unit quaternion (unit-free), as
+  // the re-read model's design coordinates.
+  const VecX q = back.design_q();
+  ASSERT_EQ(j["q"].size(), static_cast<size_t>(q.size()));
+  for (const Body& body : back.bodies) {
+    const auto at = [&](int k) {
+      return j["q"][static_cast<size_t>(body.q_offset + k)].get<double>();
+    };
+    for (int k = 0; k < 3; ++k)
+      EXPECT_NEAR(at(k) * length, q(body.q_offset + k), 1e-12) << in << " " << body.name;
+    const Quat e(at(3), at(4), at(5), at(6));
+    EXPECT_NEAR(e.norm(), 1.0, 1e-14) << in << " " << body.name;
+    EXPECT_LE((rotation_matrix(e) - rotation_matrix(q.segment<4>(body.q_offset + 3)))
+                  .cwiseAbs()
+                  .maxCoeff(),
+              1e-12)
+        << in << " " << body.name;
   }
   // (c) assembling the written file again moves nothing.
   const CliResult again = run_cli({"assemble", out.string(), "--json"});
