@@ -23,6 +23,7 @@
 #include "orthomech/io/noise.hpp"
 #include "orthomech/io/units.hpp"
 #include "orthomech/model/measures.hpp"
+#include "orthomech/model/spatial.hpp"
 
 namespace orthomech::cli {
 
@@ -164,9 +165,6 @@ int run_assemble(const AssembleOptions& opt) {
   if (!opt.sets.empty() && (opt.in_place || !write_to.empty()))
     bad("--set cannot be combined with --write or --in-place: they write the file as it is on "
         "disk; change the file itself to keep a change");
-  if (model.dimension == 3 && (opt.in_place || !write_to.empty()))
-    bad("--write and --in-place are not available for spatial mechanisms yet (the assembled "
-        "pose is in --json)");
   if (opt.in_place) {
     if (!write_to.empty()) bad("--in-place and --write are exclusive");
     write_to = opt.file;
@@ -275,6 +273,20 @@ int run_assemble(const AssembleOptions& opt) {
                                : nlohmann::json(nullptr);
     j["measures"] = measures;
     j["q"] = coordinates_out(model, res.q, U);
+    if (model.dimension ==
+        3) {  // each body frame: its origin and orientation (what --write writes)
+      nlohmann::json poses = nlohmann::json::array();
+      for (const Body& b : model.bodies) {
+        const Quat e = res.q.segment<4>(b.q_offset + 3) / res.q.segment<4>(b.q_offset + 3).norm();
+        const Vec3 r = res.q.segment<3>(b.q_offset) - rotation_matrix(e) * b.spatial.com_local;
+        poses.push_back(
+            {{"name", b.name},
+             {"position",
+              {length_u.from_si(r.x()), length_u.from_si(r.y()), length_u.from_si(r.z())}},
+             {"orientation", {e(0), e(1), e(2), e(3)}}});
+      }
+      j["poses"] = poses;
+    }
     if (ok)
       j["velocities"] = {{"u", coordinates_out(model, vel.u, U, true)},
                          {"kinetic_initial", energy_u.from_si(vel.kinetic_initial)},

@@ -148,19 +148,27 @@ std::vector<double> coordinates_out(const Model& model, const VecX& v, const Uni
       output_unit(rates ? Dimension::angular_velocity : Dimension::angle, units);
   const Dimension dims[] = {rates ? Dimension::velocity : Dimension::length,
                             rates ? Dimension::angular_velocity : Dimension::angle};
+  // Which of them coordinate k of a body is: 0 length, 1 angle, 2 neither (a spatial body's
+  // q = (x, y, z, e0..e3): the quaternion is unit-free; its u = (vx, vy, vz, ωx, ωy, ωz)).
+  auto kind = [&](const Body& b, int k) {
+    const int lengths = b.kind == BodyKind::spatial ? 3 : 2;
+    if (k < lengths) return 0;
+    return b.kind == BodyKind::spatial && !rates ? 2 : 1;
+  };
   // Rounding noise (a slider's y on a horizontal guide) as 0: io/noise.hpp.
   NoiseFloor noise;
   for (const Body& b : model.bodies) {
     const int offset = rates ? b.u_offset : b.q_offset;
     for (int k = 0; k < (rates ? b.nu() : b.nq()); ++k)
-      noise.see(dims[k < 2 ? 0 : 1], v(offset + k));
+      if (kind(b, k) < 2) noise.see(dims[kind(b, k)], v(offset + k));
   }
   std::vector<double> out(v.data(), v.data() + v.size());
   for (const Body& b : model.bodies) {
     const int offset = rates ? b.u_offset : b.q_offset;
     for (int k = 0; k < (rates ? b.nu() : b.nq()); ++k) {
       double& x = out[static_cast<size_t>(offset + k)];
-      x = (k < 2 ? length : angle).from_si(noise.clean(dims[k < 2 ? 0 : 1], x));
+      const int c = kind(b, k);
+      if (c < 2) x = (c == 0 ? length : angle).from_si(noise.clean(dims[c], x));
     }
   }
   return out;

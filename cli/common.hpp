@@ -70,7 +70,8 @@ void add_units_option(CLI::App* cmd, std::string& choice);
 // The chosen output units of a loaded model.
 [[nodiscard]] UnitSystem resolve_units(const Model& model, const std::string& choice);
 // Body coordinates q (centre of mass x, y and angle per body) or velocities u (vx, vy, ω; with
-// `rates`) in the output units: length (per time), angle (per time).
+// `rates`) in the output units: length (per time), angle (per time). A spatial body: q = centre
+// of mass x, y, z and the unit quaternion e0..e3 (unit-free, as is); u = vx, vy, vz, ωx, ωy, ωz.
 [[nodiscard]] std::vector<double> coordinates_out(const Model& model, const VecX& v,
                                                   const UnitSystem& units, bool rates = false);
 // The unit of the mass-metric distance √((q − q₀)ᵀ M (q − q₀)): √mass·length, e.g.

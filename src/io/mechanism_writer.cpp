@@ -19,9 +19,11 @@
 #include <vector>
 
 #include "orthomech/check.hpp"
+#include "orthomech/constraints/joints.hpp"
 #include "orthomech/error.hpp"
 #include "orthomech/io/mechanism_file.hpp"
 #include "orthomech/io/noise.hpp"
+#include "orthomech/model/spatial.hpp"
 
 namespace orthomech {
 
@@ -85,8 +87,8 @@ void count_uses(const YAML::Node& node, std::map<int, int>& uses, int depth = 0)
 // All of it far below 1e-12 (m or rad) for the limits of docs/file-format.md (|x| <= 1e6).
 constexpr double kRoundTrip = 1e-12;
 
-void verify_written(const std::string& written, const std::string& origin, const Model& model,
-                    const std::vector<Vec3>& frames) {
+Model verify_written(const std::string& written, const std::string& origin, const Model& model,
+                     const std::vector<Vec3>& frames) {
   Model back;
   try {
     back = parse_mechanism(written, origin);
@@ -111,6 +113,7 @@ void verify_written(const std::string& written, const std::string& origin, const
     if (x.name != y.name || x.kind != y.kind || x.mass != y.mass || x.inertia != y.inertia ||
         x.com_local != y.com_local || x.points != y.points)
       differ("body '" + x.name + "'");
+    if (x.kind == BodyKind::spatial) continue;  // verify_spatial
     const Vec3 d = y.design_pose - frames[b];
     const double scale = std::max(1.0, frames[b].head<2>().cwiseAbs().maxCoeff());
     if (!(std::abs(d.x()) <= kRoundTrip * scale && std::abs(d.y()) <= kRoundTrip * scale &&
@@ -121,6 +124,225 @@ void verify_written(const std::string& written, const std::string& origin, const
     if (model.joints[j].name != back.joints[j].name ||
         model.joints[j].type_name() != back.joints[j].type_name())
       differ("joint '" + model.joints[j].name + "'");
+  return back;
+}
+
+// A spatial body's frame as written: its origin in world and its orientation (unit quaternion).
+struct WrittenFrame {
+  Vec3 origin;
+  Quat orientation;
+};
+
+// The spatial part of verify_written: every body's inertia and points bit for bit, its frame
+// within kRoundTrip (origin against the mechanism's size, orientation as the largest change of an
+// entry of R), and the joints closed at the written design pose as well as at q: a spatial
+// joint's frame in its second body is read from the design pose (docs/file-format.md "Joints"),
+// so a pose that does not hold the joints would change the joints themselves.
+void verify_spatial(const Model& back, const std::string& origin, const Model& model, const VecX& q,
+                    const std::vector<WrittenFrame>& frames, double length_scale) {
+  const auto differ = [&](const std::string& what) {
+    throw InputError({origin, 1, 1}, "file",
+                     "the edited file would not read back as the assembled mechanism (" + what +
+                         " differs); nothing was written");
+  };
+  for (size_t b = 0; b < model.bodies.size(); ++b) {
+    const SpatialBodyData &x = model.bodies[b].spatial, &y = back.bodies[b].spatial;
+    const std::string name = "body '" + model.bodies[b].name + "'";
+    if (x.inertia != y.inertia || x.com_local != y.com_local || x.points != y.points) differ(name);
+    const double scale = std::max(1.0, length_scale);
+    if (!((y.design_position - frames[b].origin).cwiseAbs().maxCoeff() <= kRoundTrip * scale))
+      differ("the position of " + name);
+    const Mat3 dR = rotation_matrix(y.design_orientation) - rotation_matrix(frames[b].orientation);
+    if (!(dR.cwiseAbs().maxCoeff() <= kRoundTrip)) differ("the orientation of " + name);
+  }
+  VecX f_model = VecX::Zero(model.nc), f_back = VecX::Zero(back.nc);
+  compute_constraint_residual(model, q, f_model);
+  compute_constraint_residual(back, back.design_q(), f_back);
+  const double allowed = f_model.size() == 0 ? 0.0 : f_model.cwiseAbs().maxCoeff();
+  if (f_back.size() != f_model.size() ||
+      !(f_back.size() == 0 ||
+        f_back.cwiseAbs().maxCoeff() <= allowed + kRoundTrip * std::max(1.0, length_scale)))
+    differ("the joint closure at the design pose");
+}
+
+// The offset just past the text of a node: a plain scalar's last character, a flow collection's
+// closing bracket, a block collection's last entry. Throws (a --write message) when the text is
+// not where the parser says (quoted or unusual YAML).
+size_t node_end(const std::string& text, const YAML::Node& node, const std::string& origin,
+                const std::string& element, int depth = 0) {
+  const YAML::Mark m = node.Mark();
+  auto cannot = [&] {
+    throw InputError({origin, m.line + 1, m.column + 1}, element,
+                     "cannot locate the pose in the file text (quoted or unusual YAML); --write "
+                     "needs plain numbers");
+  };
+  if (depth > 50 || m.is_null() || m.pos < 0 || static_cast<size_t>(m.pos) >= text.size()) cannot();
+  const auto pos = static_cast<size_t>(m.pos);
+  if (node.IsScalar()) {
+    const std::string& scalar = node.Scalar();
+    if (pos + scalar.size() > text.size() || text.compare(pos, scalar.size(), scalar) != 0)
+      cannot();
+    return pos + scalar.size();
+  }
+  if (text[pos] == '{' || text[pos] == '[') {  // the matching bracket; strings and comments skipped
+    int open = 0;
+    for (size_t i = pos; i < text.size(); ++i) {
+      const char c = text[i];
+      if (c == '#' &&
+          (i == 0 || text[i - 1] == ' ' || text[i - 1] == '\t' || text[i - 1] == '\n')) {
+        i = text.find('\n', i);
+        if (i == std::string::npos) break;
+      } else if (c == '"' || c == '\'') {
+        for (++i; i < text.size() && text[i] != c; ++i)
+          if (c == '"' && text[i] == '\\') ++i;
+      } else if (c == '{' || c == '[') {
+        ++open;
+      } else if ((c == '}' || c == ']') && --open == 0) {
+        return i + 1;
+      }
+    }
+    cannot();
+  }
+  size_t end = pos;
+  if (node.IsSequence())
+    for (const auto& item : node)
+      end = std::max(end, node_end(text, item, origin, element, depth + 1));
+  else if (node.IsMap())
+    for (const auto& kv : node) {
+      end = std::max(end, node_end(text, kv.first, origin, element, depth + 1));
+      if (!kv.second.IsNull())
+        end = std::max(end, node_end(text, kv.second, origin, element, depth + 1));
+    }
+  else
+    cannot();
+  return end;
+}
+
+// Every scalar under `node` is reached once from the root (none shared through an anchor and
+// alias: editing it would change the other uses too).
+void check_unshared(const YAML::Node& node, const std::map<int, int>& uses,
+                    const std::string& origin, const std::string& element, int depth = 0) {
+  if (depth > 50) return;
+  if (node.IsScalar()) {
+    const auto it = uses.find(node.Mark().pos);
+    if (it == uses.end() || it->second != 1) {
+      const YAML::Mark m = node.Mark();
+      throw InputError({origin, m.line + 1, m.column + 1}, element,
+                       "the pose is shared with another place through a YAML anchor and alias; "
+                       "--write edits numbers in place and would change the other uses too: "
+                       "write this pose out in full");
+    }
+  } else if (node.IsSequence()) {
+    for (const auto& item : node) check_unshared(item, uses, origin, element, depth + 1);
+  } else if (node.IsMap()) {
+    for (const auto& kv : node) {
+      check_unshared(kv.first, uses, origin, element, depth + 1);
+      check_unshared(kv.second, uses, origin, element, depth + 1);
+    }
+  }
+}
+
+// The text with the edits made (from the last to the first: the offsets stay valid).
+std::string apply(const std::string& text, std::vector<Edit> edits) {
+  std::sort(edits.begin(), edits.end(),
+            [](const Edit& a, const Edit& b) { return a.begin > b.begin; });
+  std::string out = text;
+  for (const Edit& e : edits) out.replace(e.begin, e.end - e.begin, e.text);
+  return out;
+}
+
+// The edit that writes `value` over the plain number `v` of the text.
+Edit number_edit(const std::string& text, const YAML::Node& v, const std::map<int, int>& uses,
+                 const std::string& origin, const std::string& element, double value) {
+  const size_t end = node_end(text, v, origin, element);
+  if (!v.IsScalar())
+    throw InputError({origin, v.Mark().line + 1, v.Mark().column + 1}, element,
+                     "the pose has the wrong shape");
+  check_unshared(v, uses, origin, element);
+  return {static_cast<size_t>(v.Mark().pos), end, written_number(value)};
+}
+
+std::string quaternion_text(const Quat& e) {
+  return "{quaternion: [" + written_number(e(0)) + ", " + written_number(e(1)) + ", " +
+         written_number(e(2)) + ", " + written_number(e(3)) + "]}";
+}
+
+// The edits of a spatial file (docs/cli.md "assemble"): each body's `position` numbers in place;
+// its orientation as a quaternion, `{quaternion: [e0, e1, e2, e3]}`: the four numbers in place
+// when the file gives that form, the whole `orientation` value replaced when it gives another
+// (axis–angle, two axes, Euler angles), the key added when it has none. A body whose orientation
+// is the one read (bit for bit) keeps its orientation text. The written frames in `frames`.
+void spatial_pose_edits(const std::string& text, const YAML::Node& bodies,
+                        const std::map<int, int>& uses, const std::string& origin,
+                        const Model& model, const VecX& q, double length, std::vector<Edit>& edits,
+                        std::vector<WrittenFrame>& frames) {
+  // Rounding noise as 0 (io/noise.hpp): lengths against the largest coordinate of the mechanism;
+  // quaternion components (at most 1) against 1.
+  NoiseFloor noise;
+  std::vector<WrittenFrame> exact;
+  for (const Body& body : model.bodies) {
+    const Quat e = q.segment<4>(body.q_offset + 3) / q.segment<4>(body.q_offset + 3).norm();
+    const Vec3 r = q.segment<3>(body.q_offset) - rotation_matrix(e) * body.spatial.com_local;
+    for (int k = 0; k < 3; ++k) {
+      noise.see(Dimension::length, r(k));
+      noise.see(Dimension::length, q(body.q_offset + k));
+    }
+    exact.push_back({r, e});
+  }
+  const bool crlf = text.find("\r\n") != std::string::npos;
+  for (size_t b = 0; b < model.bodies.size(); ++b) {
+    const Body& body = model.bodies[b];
+    const std::string element = "body '" + body.name + "'";
+    const YAML::Node item = bodies[b];
+    const YAML::Node pose = item["pose"];
+    const YAML::Node position = pose ? pose["position"] : YAML::Node();
+    if (!item["name"] || item["name"].Scalar() != body.name || !pose || !pose.IsMap() ||
+        !position || !position.IsSequence() || position.size() != 3)
+      throw InputError({origin, 0, 0}, element, "the file does not match the model");
+    WrittenFrame frame;
+    for (int k = 0; k < 3; ++k) {
+      frame.origin(k) = noise.clean(Dimension::length, exact[b].origin(k));
+      edits.push_back(number_edit(text, position[static_cast<size_t>(k)], uses, origin, element,
+                                  frame.origin(k) / length));
+    }
+    const Quat& e = exact[b].orientation;
+    for (int k = 0; k < 4; ++k)
+      frame.orientation(k) = std::abs(e(k)) <= kNoiseRelative ? 0.0 : e(k);
+    const YAML::Node o = pose["orientation"];
+    const bool unchanged =
+        q.segment<4>(body.q_offset + 3) == body.spatial.design_orientation.normalized();
+    if (unchanged) {
+      frame.orientation = body.spatial.design_orientation;
+    } else if (o && o.IsMap() && o["quaternion"]) {
+      const YAML::Node v = o["quaternion"];
+      if (!v.IsSequence() || v.size() != 4)
+        throw InputError({origin, 0, 0}, element, "the file does not match the model");
+      for (int k = 0; k < 4; ++k)
+        edits.push_back(number_edit(text, v[static_cast<size_t>(k)], uses, origin, element,
+                                    frame.orientation(k)));
+    } else if (o) {
+      check_unshared(o, uses, origin, element);
+      const size_t end = node_end(text, o, origin, element);
+      edits.push_back({static_cast<size_t>(o.Mark().pos), end, quaternion_text(frame.orientation)});
+    } else {  // no orientation (the identity): the key added after the position
+      const size_t end = node_end(text, position, origin, element);
+      if (text[static_cast<size_t>(pose.Mark().pos)] == '{') {
+        edits.push_back({end, end, ", orientation: " + quaternion_text(frame.orientation)});
+      } else {  // a block mapping: a line after the position's, at the key's indentation
+        size_t eol = text.find('\n', end);
+        if (eol == std::string::npos) eol = text.size();
+        if (eol > end && text[eol - 1] == '\r') --eol;
+        const YAML::Mark key = pose.begin()->first.Mark();
+        if (key.column < 0)
+          throw InputError({origin, 0, 0}, element, "the file does not match the model");
+        edits.push_back({eol, eol,
+                         std::string(crlf ? "\r\n" : "\n") +
+                             std::string(static_cast<size_t>(key.column), ' ') +
+                             "orientation: " + quaternion_text(frame.orientation)});
+      }
+    }
+    frames.push_back(frame);
+  }
 }
 
 }  // namespace
@@ -150,6 +372,18 @@ std::string replace_design_poses(const std::string& file_text, const std::string
   // Rounding noise of the assembled pose (a slider's y on a horizontal guide, 1e-18 m; the frame
   // origin of a crank turning about it) is written as 0 (io/noise.hpp): lengths against the
   // largest coordinate of the mechanism, angles against half a turn.
+  if (model.dimension == 3) {
+    std::vector<WrittenFrame> spatial_frames;
+    std::vector<Edit> edits;
+    spatial_pose_edits(text, bodies, uses, origin, model, q, length, edits, spatial_frames);
+    const std::string out = apply(text, edits);
+    double scale = 0.0;
+    for (const WrittenFrame& f : spatial_frames)
+      scale = std::max(scale, f.origin.cwiseAbs().maxCoeff());
+    verify_spatial(verify_written(out, origin, model, frames), origin, model, q, spatial_frames,
+                   scale);
+    return has_bom ? bom + out : out;
+  }
   NoiseFloor noise;
   for (const Body& body : model.bodies) {
     noise.see(Dimension::length, q(body.q_offset));
@@ -194,11 +428,8 @@ std::string replace_design_poses(const std::string& file_text, const std::string
       edits.push_back({begin, begin + scalar.size(), written_number(values[k])});
     }
   }
-  std::sort(edits.begin(), edits.end(),
-            [](const Edit& a, const Edit& b) { return a.begin > b.begin; });
-  std::string out = text;
-  for (const Edit& e : edits) out.replace(e.begin, e.end - e.begin, e.text);
-  verify_written(out, origin, model, frames);
+  const std::string out = apply(text, edits);
+  (void)verify_written(out, origin, model, frames);
   return has_bom ? bom + out : out;
 }
 

@@ -3,7 +3,9 @@
 // only the numbers of each body's `pose:` change, so comments, units, order and every other key
 // stay as the user wrote them. Poses are written in the file's declared units with 17
 // significant digits (reading them back gives the same doubles up to one rounding of the unit
-// conversion).
+// conversion). A spatial file (dimension 3) gets each body's `position` numbers and its
+// orientation as `{quaternion: [e0, e1, e2, e3]}` (another orientation form is replaced by it, a
+// missing one added; docs/cli.md "Writing a spatial file").
 #include <string>
 
 #include "orthomech/model/model.hpp"
@@ -13,7 +15,8 @@ namespace orthomech {
 // The text of a mechanism file (`text`, parsed from `origin`) with every body pose replaced by
 // the pose in q. Throws InputError when the text is not the file the model was read from, when a
 // pose is shared through a YAML alias (editing it would change the other uses), or when the
-// edited text would not re-read as the model with the new poses (checked by reading it back).
+// edited text would not re-read as the model with the new poses (checked by reading it back; a
+// spatial file must also close its joints at the written pose).
 // A UTF-8 byte order mark and CRLF line ends are kept.
 [[nodiscard]] std::string replace_design_poses(const std::string& text, const std::string& origin,
                                                const Model& model, const VecX& q);

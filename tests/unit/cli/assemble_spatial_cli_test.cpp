@@ -1,7 +1,8 @@
 // The commands on spatial files (issue 12 item 6): simulate writes every body's pose (origin and
 // quaternion) and named points in 3D, reactions with force and moment components, and chart
-// names of spatial velocity components; crosscheck passes; the commands not yet available on
-// spatial mechanisms refuse them with exit 2.
+// names of spatial velocity components; crosscheck passes; assemble locks spatial joints and
+// writes the assembled poses (--write); the commands not yet available on spatial mechanisms
+// refuse them with exit 2.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -10,6 +11,9 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "orthomech/constraints/joints.hpp"
+#include "orthomech/io/mechanism_file.hpp"
+#include "orthomech/model/spatial.hpp"
 #include "support/cli_runner.hpp"
 #include "support/spatial_oracles.hpp"
 
@@ -117,7 +121,7 @@ TEST(SpatialCli, CommandsNotYetSpatialRefuseWithExitTwo) {
 // assemble on a spatial file with a lock on a spatial joint's coordinate: exit 0, the rocker at
 // (M1) (spatial.md §4.1) on the file's branch, in the file's degrees; limits are bounds (the
 // crank limited to [0°, 20°] from its drawn 30° ends at 20°); an unreachable lock is exit 3
-// naming it; a joint without a coordinate is exit 2; --write is still refused.
+// naming it; a joint without a coordinate is exit 2.
 TEST(SpatialCli, AssembleLocksSpatialJointsAndHonoursLimits) {
   const std::string rssr = test::bundled_file("rssr");
   auto rocker_deg = [](double theta_deg) {  // (M1), the file's branch
@@ -171,13 +175,129 @@ TEST(SpatialCli, AssembleLocksSpatialJointsAndHonoursLimits) {
   const CliResult none = run_cli({"assemble", rssr, "--lock", "A=10"});
   EXPECT_EQ(none.status, 2) << none.err;
   EXPECT_NE(none.err.find("--lock: joint 'A' has no coordinate"), std::string::npos) << none.err;
+}
 
+// `assemble --write` on a spatial file, checked against the library: the written file, read back
+// by the reader, (a) closes its joints at its design pose (the constraint residual evaluated here,
+// ≤ 1e-10), (b) holds the assembled poses of --json (origin in m and R to 1e-12), and (c)
+// assembles again without moving (every body ≤ 1e-12). The orientations are written as
+// quaternions whatever form the file used.
+void check_spatial_write(const std::string& in, const std::filesystem::path& out) {
+  const CliResult r = run_cli({"assemble", in, "--write", out.string(), "--json"});
+  ASSERT_EQ(r.status, 0) << in << ": " << r.err;
+  const json j = json::parse(r.out);
+  ASSERT_EQ(j["written"], out.string());
+  const Model back = load_mechanism(out.string());
+  const double length = back.units.length == "mm" ? 1e-3 : 1.0;
+  ASSERT_TRUE(back.units.length == "mm" || back.units.length == "m") << back.units.length;
+  // (a) an independent check of the closure: the residual function on the re-read model.
+  VecX f = VecX::Zero(back.nc);
+  compute_constraint_residual(back, back.design_q(), f);
+  EXPECT_LE(f.cwiseAbs().maxCoeff(), 1e-10) << in;
+  // (b) the written poses are the assembled ones.
+  ASSERT_EQ(j["poses"].size(), back.bodies.size());
+  for (size_t b = 0; b < back.bodies.size(); ++b) {
+    const json& p = j["poses"][b];
+    const SpatialBodyData& s = back.bodies[b].spatial;
+    EXPECT_EQ(p["name"], back.bodies[b].name);
+    for (int k = 0; k < 3; ++k)
+      EXPECT_NEAR(s.design_position(k),
+                  p["position"][static_cast<size_t>(k)].get<double>() * length, 1e-12)
+          << in << " " << back.bodies[b].name;
+    const Quat e(p["orientation"][0].get<double>(), p["orientation"][1].get<double>(),
+                 p["orientation"][2].get<double>(), p["orientation"][3].get<double>());
+    EXPECT_LE((rotation_matrix(s.design_orientation) - rotation_matrix(e)).cwiseAbs().maxCoeff(),
+              1e-12)
+        << in << " " << back.bodies[b].name;
+  }
+  // `q` of --json: each body's centre of mass (length unit) and unit quaternion (unit-free), as
+  // the re-read model's design coordinates.
+  const VecX q = back.design_q();
+  ASSERT_EQ(j["q"].size(), static_cast<size_t>(q.size()));
+  for (const Body& body : back.bodies) {
+    const auto at = [&](int k) {
+      return j["q"][static_cast<size_t>(body.q_offset + k)].get<double>();
+    };
+    for (int k = 0; k < 3; ++k)
+      EXPECT_NEAR(at(k) * length, q(body.q_offset + k), 1e-12) << in << " " << body.name;
+    const Quat e(at(3), at(4), at(5), at(6));
+    EXPECT_NEAR(e.norm(), 1.0, 1e-14) << in << " " << body.name;
+    EXPECT_LE((rotation_matrix(e) - rotation_matrix(q.segment<4>(body.q_offset + 3)))
+                  .cwiseAbs()
+                  .maxCoeff(),
+              1e-12)
+        << in << " " << body.name;
+  }
+  // (c) assembling the written file again moves nothing.
+  const CliResult again = run_cli({"assemble", out.string(), "--json"});
+  ASSERT_EQ(again.status, 0) << again.err;
+  const json a = json::parse(again.out);
+  for (const json& b : a["bodies"]) {
+    EXPECT_LE(b["translation"].get<double>() * length, 1e-12) << out << " " << b["name"];
+    EXPECT_LE(b["rotation"].get<double>(), 1e-12) << out << " " << b["name"];
+  }
+}
+
+TEST(SpatialCli, AssembleWritesTheAssembledPoses) {
   const test::TempDir dir("orthomech_spatial_write_");
-  const CliResult write = run_cli({"assemble", rssr, "--write", (dir.path / "out.yaml").string()});
-  EXPECT_EQ(write.status, 2) << write.err;
-  EXPECT_NE(write.err.find("not available for spatial mechanisms yet"), std::string::npos)
-      << write.err;
-  EXPECT_FALSE(std::filesystem::exists(dir.path / "out.yaml"));
+  // rssr: axis–angle and two-axes orientations; bennett: two axes; bricard: none (the identity).
+  for (const char* name : {"rssr", "bennett", "bricard"})
+    check_spatial_write(test::bundled_file(name), dir.path / (std::string(name) + ".yaml"));
+  const std::string rssr = test::read_text(dir.path / "rssr.yaml");
+  EXPECT_EQ(rssr.find("axis: [0, 0, 1], angle"), std::string::npos) << rssr;
+  EXPECT_NE(rssr.find("orientation: {quaternion: ["), std::string::npos) << rssr;
+  EXPECT_NE(rssr.find("# rssr.yaml"), std::string::npos);  // comments kept
+
+  // Other forms and layouts: Euler angles in a block mapping (replaced by the quaternion form, the
+  // comment kept), a quaternion (its numbers edited), bodies moved off the drawn Bricard with no
+  // orientation (the key added, in the flow and the block layout), CRLF line ends.
+  std::string text = test::read_text(test::bundled_file("rssr"));
+  auto replace = [](std::string& t, const std::string& from, const std::string& to) {
+    const auto at = t.find(from);
+    ASSERT_NE(at, std::string::npos) << from;
+    t.replace(at, from.size(), to);
+  };
+  replace(text, "pose: {position: [0, 0, 0], orientation: {axis: [0, 0, 1], angle: 30}}",
+          "pose:\n      position: [0, 0, 0]\n      orientation:\n        euler: [30, 0, 0]\n"
+          "        sequence: zyx   # yaw only");
+  replace(text, "orientation: {x: [0, -0.92802728, 0.37251223], z: [1, 0, 0]}",
+          "orientation: {quaternion: [0.3960706, -0.5857713, 0.3960706, -0.5857713]}");
+  const std::filesystem::path forms = dir.path / "forms.yaml";
+  std::ofstream(forms) << text;
+  check_spatial_write(forms.string(), dir.path / "forms-out.yaml");
+  const std::string written = test::read_text(dir.path / "forms-out.yaml");
+  EXPECT_EQ(written.find("euler"), std::string::npos) << written;
+  EXPECT_NE(written.find("{quaternion: ["), std::string::npos) << written;
+  EXPECT_NE(written.find("# yaw only"), std::string::npos) << written;
+
+  std::string bricard = test::read_text(test::bundled_file("bricard"));
+  replace(bricard, "pose: {position: [1, 0, 0]}", "pose: {position: [1.01, 0, 0]}");
+  replace(bricard, "pose: {position: [1, -1, 0]}", "pose:\n      position: [1, -1, 0.01]  # moved");
+  for (size_t at = bricard.find('\n'); at != std::string::npos; at = bricard.find('\n', at + 2))
+    bricard.replace(at, 1, "\r\n");
+  const std::filesystem::path moved = dir.path / "moved.yaml";
+  std::ofstream(moved, std::ios::binary) << bricard;
+  check_spatial_write(moved.string(), dir.path / "moved-out.yaml");
+  const std::string m = test::read_text(dir.path / "moved-out.yaml");
+  EXPECT_NE(m.find("# moved\r\n      orientation: {quaternion: ["), std::string::npos) << m;
+  EXPECT_EQ(std::count(m.begin(), m.end(), '\n'),
+            std::count(bricard.begin(), bricard.end(), '\n') + 1);  // the one added line
+  for (size_t at = m.find('\n'); at != std::string::npos; at = m.find('\n', at + 1))
+    EXPECT_TRUE(at > 0 && m[at - 1] == '\r') << "a bare LF at offset " << at;
+
+  // --in-place on a copy; --write with --set stays refused (the file is written as on disk).
+  const std::filesystem::path copy = dir.path / "copy.yaml";
+  std::filesystem::copy_file(test::bundled_file("rssr"), copy);
+  const CliResult in_place = run_cli({"assemble", copy.string(), "--in-place"});
+  EXPECT_EQ(in_place.status, 0) << in_place.err;
+  EXPECT_EQ(test::read_text(copy), rssr);
+  const CliResult set =
+      run_cli({"assemble", test::bundled_file("rssr"), "--set", "joints.A0.limits=[0, 20]",
+               "--write", (dir.path / "set.yaml").string()});
+  EXPECT_EQ(set.status, 2) << set.err;
+  EXPECT_NE(set.err.find("--set cannot be combined with --write"), std::string::npos) << set.err;
+  EXPECT_EQ(set.err.find("not available for spatial"), std::string::npos) << set.err;
+  EXPECT_FALSE(std::filesystem::exists(dir.path / "set.yaml"));
 }
 
 }  // namespace

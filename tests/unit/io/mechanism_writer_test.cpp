@@ -2,7 +2,8 @@
 // YAML feature the edited text is either re-read (here, by the reader, independently of the
 // writer's own check) as exactly the mechanism with the new poses, or refused with a reason and
 // nothing written. One test per feature: flow and block style, anchors without and with aliases,
-// merge keys, a UTF-8 byte order mark, CRLF line ends.
+// merge keys, a UTF-8 byte order mark, CRLF line ends; spatial files: every orientation form
+// written as a quaternion, an aliased orientation refused.
 #include "orthomech/io/mechanism_writer.hpp"
 
 #include <gtest/gtest.h>
@@ -170,6 +171,81 @@ TEST(MechanismWriter, ReplacedPosesReadBackAndCommentsKept) {
     const Model back = parse_mechanism(out, "back");
     const VecX qb = back.design_q();
     EXPECT_LE((qb - q).cwiseAbs().maxCoeff(), 1e-14) << name;
+  }
+}
+
+// Spatial files (dimension 3): five free bodies, one per orientation form (axis–angle, Euler
+// angles in a block mapping, a quaternion, two body axes, none), mm and degrees. Every body is
+// moved and turned; the re-read file gives q (the quaternion up to its sign) and every
+// orientation is written as a quaternion.
+std::string spatial_bodies(const std::string& orientation_a) {
+  auto body = [](const std::string& name, const std::string& pose) {
+    return "  - name: " + name + "\n    mass: 1\n    inertia: [1, 2, 2]\n    com: [10, 0, 5]\n" +
+           "    pose: " + pose + "\n";
+  };
+  return "orthomech: 1\ndimension: 3\nunits: {length: mm, angle: deg}\nbodies:\n" +
+         body("a", "{position: [0, 0, 0], orientation: " + orientation_a + "}") +
+         body("b",
+              "\n      position: [1, 2, 3]\n      orientation:\n        euler: [10, 20, 30]\n"
+              "        sequence: zyx   # kept\n") +
+         body("c", "{position: [4, 5, 6], orientation: {quaternion: [1, 0.1, 0.2, 0.3]}}") +
+         body("d", "{position: [7, 8, 9], orientation: {x: [0, 1, 0], z: [0, 0, 1]}}") +
+         body("e", "\n      position: [1, 1, 1]  # no orientation");
+}
+
+VecX turned(const Model& m) {
+  VecX q = m.design_q();
+  for (const Body& b : m.bodies) {
+    const double k = static_cast<double>(b.q_offset) / 7.0;
+    q.segment<3>(b.q_offset) += Vec3(0.01 + 0.001 * k, -0.002, 0.003 * k);
+    Quat e = q.segment<4>(b.q_offset + 3) + Quat(0.0, 0.1 + 0.01 * k, -0.05, 0.02 * k);
+    q.segment<4>(b.q_offset + 3) = e / e.norm();
+  }
+  return q;
+}
+
+TEST(MechanismWriter, SpatialPosesRoundTripWithQuaternionOrientations) {
+  const std::string text = spatial_bodies("{axis: [0, 0, 1], angle: 30}");
+  const Model m = parse_mechanism(text, "s.yaml");
+  const VecX q = turned(m);
+  const std::string out = replace_design_poses(text, "s.yaml", m, q);
+  const Model back = parse_mechanism(out, "s.yaml");
+  const VecX r = back.design_q();
+  for (const Body& b : m.bodies) {
+    EXPECT_LE((r.segment<3>(b.q_offset) - q.segment<3>(b.q_offset)).cwiseAbs().maxCoeff(), 1e-14)
+        << b.name << "\n"
+        << out;
+    const double dot = r.segment<4>(b.q_offset + 3).dot(q.segment<4>(b.q_offset + 3));
+    EXPECT_NEAR(std::abs(dot), 1.0, 1e-14) << b.name << "\n" << out;
+  }
+  EXPECT_EQ(out.find("axis:"), std::string::npos) << out;
+  EXPECT_EQ(out.find("euler"), std::string::npos) << out;
+  EXPECT_EQ(out.find("x: [0, 1, 0]"), std::string::npos) << out;
+  size_t count = 0;
+  for (size_t at = out.find("{quaternion: ["); at != std::string::npos;
+       at = out.find("{quaternion: [", at + 1))
+    ++count;
+  EXPECT_EQ(count, 5u) << out;
+  EXPECT_NE(out.find("# kept"), std::string::npos) << out;
+  EXPECT_NE(out.find("# no orientation\n      orientation: {quaternion: ["), std::string::npos)
+      << out;
+  // Unmoved coordinates keep the orientation text (bit for bit the one read).
+  const std::string same = replace_design_poses(text, "s.yaml", m, m.design_q());
+  EXPECT_NE(same.find("euler: [10, 20, 30]"), std::string::npos) << same;
+  EXPECT_EQ(same.find("# no orientation\n      orientation"), std::string::npos) << same;
+}
+
+// An orientation shared through an alias: replacing it would turn the other body too; refused.
+TEST(MechanismWriter, SpatialOrientationSharedThroughAnAliasIsRefused) {
+  std::string text = spatial_bodies("&o {axis: [0, 0, 1], angle: 30}");
+  const std::string from = "orientation: {quaternion: [1, 0.1, 0.2, 0.3]}";
+  text.replace(text.find(from), from.size(), "orientation: *o");
+  const Model m = parse_mechanism(text, "s.yaml");
+  try {
+    (void)replace_design_poses(text, "s.yaml", m, turned(m));
+    FAIL() << "an aliased orientation was edited";
+  } catch (const InputError& e) {
+    EXPECT_NE(e.message().find("alias"), std::string::npos) << e.message();
   }
 }
 
