@@ -273,8 +273,8 @@ int run_assemble(const AssembleOptions& opt) {
                                : nlohmann::json(nullptr);
     j["measures"] = measures;
     j["q"] = coordinates_out(model, res.q, U);
-    if (model.dimension ==
-        3) {  // each body frame: its origin and orientation (what --write writes)
+    // Spatial: each body frame, its origin and orientation (what --write writes).
+    if (model.dimension == 3) {
       nlohmann::json poses = nlohmann::json::array();
       for (const Body& b : model.bodies) {
         const Quat e = res.q.segment<4>(b.q_offset + 3) / res.q.segment<4>(b.q_offset + 3).norm();
