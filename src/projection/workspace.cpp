@@ -46,7 +46,10 @@ Workspace::Workspace(const Model& m, int rank)
 
 void compute_free_system(const Model& model, const State& state, Workspace& ws) {
   if (ws.model != &model) throw std::invalid_argument("Workspace built for another Model");
-  auto& fs = ws.free;
+  compute_free_system(model, state, ws.free);
+}
+
+void compute_free_system(const Model& model, const State& state, FreeSystemWorkspace& fs) {
   if (!fs.constant_mass || !fs.mass_ready) {
     compute_mass_matrix(model, state.q, fs.M);          // eq. (4)
     compute_inverse_mass_matrix(model, state.q, fs.A);  // eq. (6)

@@ -63,6 +63,29 @@ TEST(Workspace, FreeSystemStageMassInverseAndAppliedForces) {
   EXPECT_LT((ws.free.Q - Q_expected).cwiseAbs().maxCoeff(), 1e-12);
 }
 
+// The stage alone (simulate holds no projection matrices) against the same oracle.
+TEST(Workspace, FreeSystemStageAloneMassAndAppliedForces) {
+  const Model model = parse_mechanism(kTwoBodies, "two-bodies");
+  FreeSystemWorkspace fs(model);
+  State s(model);
+  s.q = model.design_q();
+  compute_free_system(model, s, fs);
+  const Body& bar = model.bodies[static_cast<size_t>(model.find_body("bar"))];
+  const Body& p = model.bodies[static_cast<size_t>(model.find_body("p"))];
+  VecX m_expected = VecX::Zero(model.n);
+  m_expected(bar.u_offset) = m_expected(bar.u_offset + 1) = 2.5;
+  m_expected(bar.u_offset + 2) = 0.3;
+  m_expected(p.u_offset) = m_expected(p.u_offset + 1) = 0.8;
+  EXPECT_LT((fs.M - MatX(m_expected.asDiagonal())).cwiseAbs().maxCoeff(), 1e-15);
+  EXPECT_LT((fs.A * fs.M - MatX::Identity(model.n, model.n)).cwiseAbs().maxCoeff(), 1e-14);
+  EXPECT_TRUE(fs.diagonal_mass && fs.mass_ready);
+  VecX Q_expected = VecX::Zero(model.n);
+  Q_expected(bar.u_offset + 1) = -9.81 * 2.5;
+  Q_expected(bar.u_offset + 2) = 1.7;
+  Q_expected(p.u_offset + 1) = -9.81 * 0.8;
+  EXPECT_LT((fs.Q - Q_expected).cwiseAbs().maxCoeff(), 1e-12);
+}
+
 TEST(Workspace, RefusesARankOutOfRangeAndAnotherModel) {
   const Model model = parse_mechanism(kTwoBodies, "two-bodies");
   EXPECT_THROW(Workspace(model, -1), std::invalid_argument);
