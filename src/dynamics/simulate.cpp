@@ -412,7 +412,10 @@ class Dynamics {
       state_.u.setZero();
       free_system();
     }
-    state_.u.noalias() = ws_.free.A * p;  // eq. (100)
+    if (ws_.free.diagonal_mass)
+      state_.u = ws_.free.A_diag.cwiseProduct(p);
+    else
+      state_.u.noalias() = ws_.free.A * p;  // eq. (100)
     if (project_stages_) {
       // The stage's velocity admissible at the projected q with its independent components
       // kept, u = F u_I (the momenta p = M u implied): the right-hand side then depends on p
