@@ -19,6 +19,8 @@
 #include "orthomech/model/measures.hpp"
 #include "orthomech/model/spatial.hpp"
 #include "orthomech/model/state.hpp"
+#include "orthomech/projection/dual.hpp"
+#include "orthomech/projection/free_system_stage.hpp"
 
 namespace orthomech {
 
@@ -630,7 +632,7 @@ bool project_with_locks(const Model& model, VecX& q, const std::vector<JointLock
 
 VelocityProjection project_velocities(const Model& model, const VecX& q, const VecX& u0) {
   VelocityProjection v;
-  MatX M(model.n, model.n), A(model.n, model.n), Et(model.nc, model.n);
+  MatX M(model.n, model.n);
   compute_mass_matrix(model, q, M);
   if (model.nc == 0) {  // no constraint: α = I, nothing removed (and no empty factorisation)
     v.ok = true;
@@ -639,15 +641,29 @@ VelocityProjection project_velocities(const Model& model, const VecX& q, const V
     v.kinetic_removed = 0.0;
     return v;
   }
-  compute_inverse_mass_matrix(model, q, A);
-  compute_constraint_jacobian(model, q, Et);
-  const MatX AE = A * Et.transpose();
-  const MatX G = Et * AE;  // eq. (42)
-  const Eigen::CompleteOrthogonalDecomposition<MatX> cod(G);
-  v.ok = cod.rank() == G.rows();
-  const VecX Ginv_Et_u0 = cod.solve(Et * u0);  // G⁺ Eᵀ u₀: E times it is π u₀, eq. (43)
-  const VecX beta_u0 = AE * Ginv_Et_u0;  // β u₀ = A π u₀ = (A E) G⁺ Eᵀ u₀, eq. (44)
-  v.u = u0 - beta_u0;                    // α u₀ = (I − A π) u₀, eq. (44)
+  // The dual form's projection (projection/dual.hpp) in a chart of the rank at q, so that
+  // redundant constraints need no pseudo-inverse.
+  const Mobility mob = compute_mobility(model, q);
+  Workspace ws(model, mob.rank);
+  State s(model);
+  s.q = q;
+  s.u.setZero();
+  compute_free_system(model, s, ws);
+  compute_constraints(model, s, ws.constraints);
+  auto& d = ws.dual;
+  v.ok = compute_basis(model, s, ws) == ProjectionStatus::ok;
+  if (v.ok) {
+    d.MF.noalias() = ws.free.M * d.F;
+    d.H.noalias() = d.F.transpose() * d.MF;  // eq. (68)
+    d.H_llt.compute(d.H);
+    v.ok = d.H_llt.info() == Eigen::Success;
+  }
+  if (!v.ok) {  // no regular chart at q (cannot happen at the rank of q): nothing admissible
+    v.u = VecX::Zero(model.n);
+  } else {
+    v.u.noalias() = d.F * project_velocity(d.MF, d.H_llt, u0);  // α u₀
+  }
+  const VecX beta_u0 = u0 - v.u;  // β u₀ = (I − α) u₀
   v.kinetic_initial = 0.5 * u0.dot(M * u0);
   v.kinetic = 0.5 * v.u.dot(M * v.u);
   v.kinetic_removed = 0.5 * beta_u0.dot(M * beta_u0);

@@ -23,6 +23,7 @@
 #include "orthomech/model/loads.hpp"
 #include "orthomech/model/measures.hpp"
 #include "orthomech/model/spatial.hpp"
+#include "orthomech/projection/dual.hpp"
 #include "orthomech/projection/free_system_stage.hpp"
 #include "orthomech/projection/primal.hpp"
 
@@ -569,12 +570,6 @@ class Dynamics {
   std::vector<const Load*> nonconservative_;
 };
 
-// Mass-orthogonal projection of u₀ onto the admissible velocities, u = α u₀ = ψ M u₀ with
-// ψ = F H⁻¹ Fᵀ (eq. (69), eq. (70)); v = H⁻¹ Fᵀ M u₀ are its chart coordinates.
-VecX project_velocity(Dynamics& d, const VecX& u0) {
-  return d.H_llt_.solve(d.MF_.transpose() * u0);  // eq. (70): α u₀ = F (H⁻¹ Fᵀ M u₀)
-}
-
 // ---- The run, step by step -------------------------------------------------------------------
 
 // 1. Consistent positions: mass-metric Gauss–Newton projection of the given position (q), and
@@ -725,7 +720,7 @@ class Simulation {
   VecX consistent_velocities() {
     dyn_.compute_H();
     const VecX u0 = initial_.u.size() == n_ ? initial_.u : VecX::Zero(n_);
-    VecX v = project_velocity(dyn_, u0);
+    VecX v = project_velocity(dyn_.MF_, dyn_.H_llt_, u0);
     {
       const VecX du = u0 - dyn_.F_ * v;
       result_.kinetic_removed = 0.5 * du.dot(dyn_.ws_.free.M * du);
@@ -1095,7 +1090,7 @@ class Simulation {
   // Primal form. Momenta: p ← M α u, the mass-orthogonal projection (eq. (44): α = I − A π).
   void project_momenta(VecX& y, bool& chart_changed) {
     dyn_.compute_H();
-    const VecX vv = project_velocity(dyn_, dyn_.state_.u);
+    const VecX vv = project_velocity(dyn_.MF_, dyn_.H_llt_, dyn_.state_.u);
     dyn_.state_.u.noalias() = dyn_.F_ * vv;
     y.segment(nq_, n_) = dyn_.ws_.free.M * dyn_.state_.u;
     // A poor chart only slows the corrector: re-select it when it degrades.
@@ -1116,7 +1111,7 @@ class Simulation {
   bool project_step_velocity(double t, VecX& y) {
     if (!(u_step_.squaredNorm() > 0.0)) return true;
     dyn_.compute_H();
-    y.segment(nq_, na_) = project_velocity(dyn_, u_step_);
+    y.segment(nq_, na_) = project_velocity(dyn_.MF_, dyn_.H_llt_, u_step_);
     // The velocity the projection removes is the step's own error; a step that left the
     // branch (a change point crossed within one step onto another branch) loses a finite
     // part of it: refused (C6).
@@ -1369,7 +1364,7 @@ class Simulation {
     dyn_.mass_at(s.q);
     dyn_.compute_F();
     dyn_.compute_H();
-    s.v = project_velocity(dyn_, uu);  // eq. (70)
+    s.v = project_velocity(dyn_.MF_, dyn_.H_llt_, uu);  // eq. (70)
     dyn_.chart_q_ = s.q;
     dyn_.chart_ready_ = true;
     dyn_.evaluate_dual(tt, s.q, s.v);

@@ -32,6 +32,10 @@ DualWorkspace::DualWorkspace(const Model& model, int rank)
 
 void reset_chart(Workspace& ws) { ws.dual.engine.reset(); }
 
+VecX project_velocity(const MatX& MF, const Eigen::LLT<MatX>& H_llt, const VecX& u0) {
+  return H_llt.solve(MF.transpose() * u0);  // eq. (70): α u₀ = F (H⁻¹ Fᵀ M u₀)
+}
+
 ProjectionStatus compute_basis(const Model& /*model*/, const State& state, Workspace& ws) {
   auto& d = ws.dual;
   const MatX& Et = ws.constraints.Et;

@@ -103,14 +103,16 @@ struct ResidualSplit {
 [[nodiscard]] std::vector<JointResidual> joint_residuals(const Model& model, const VecX& q);
 
 struct VelocityProjection {
-  VecX u;                  // α u₀, eq. (44)
+  VecX u;                  // α u₀
   double kinetic_initial;  // T(u₀)
   double kinetic;          // T(u)
   double kinetic_removed;  // T(β u₀) = T(u₀) − T(u)
-  bool ok = true;          // false when G is singular and the pseudo-inverse was used
+  bool ok = true;          // false when no chart of the rank at q is regular (u = 0 then)
 };
-// Mass-orthogonal projection of a velocity guess: u = u₀ − A E G⁺ Eᵀ u₀ (G of eq. (42), π of
-// eq. (43), α of eq. (44); G⁺ the pseudo-inverse so that redundant constraints are handled).
+// Mass-orthogonal projection of a velocity guess, u = α u₀ = F H⁻¹ Fᵀ M u₀: the dual form's
+// projection (project_velocity in projection/dual.hpp, the one simulate uses) in a chart of the
+// rank of Eᵀ at q, so that redundant constraints are handled. α is the same operator as the
+// primal form's I − A π (eq. (44)); the tests check it against an SVD null-space projection.
 [[nodiscard]] VelocityProjection project_velocities(const Model& model, const VecX& q,
                                                     const VecX& u0);
 

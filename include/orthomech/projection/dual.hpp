@@ -35,4 +35,9 @@ ChartCorrectionResult correct_positions_in_chart(const Model& model, VecX& q, Wo
 // Forces a fresh chart choice at the current Eᵀ (e.g. at the start of an analysis).
 void reset_chart(Workspace& ws);
 
+// The one velocity projection: the admissible velocity closest to u₀ in the mass metric,
+// u = α u₀ = F H⁻¹ Fᵀ M u₀ (eq. (70)), returned as its coefficients v (u = F v) from M F and the
+// Cholesky factor of H = Fᵀ M F. Used by simulate (initial state, every step) and assemble.
+[[nodiscard]] VecX project_velocity(const MatX& MF, const Eigen::LLT<MatX>& H_llt, const VecX& u0);
+
 }  // namespace orthomech
