@@ -3,19 +3,26 @@
 #include "orthomech/dynamics/simulate.hpp"
 
 #include <spdlog/spdlog.h>
+#include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iostream>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <stdexcept>
 #include <vector>
 
 #include "commands.hpp"
 #include "common.hpp"
 #include "orthomech/analysis/assembly.hpp"
+#include "orthomech/analysis/reactions.hpp"
 #include "orthomech/io/cycle_output.hpp"
 #include "orthomech/io/noise.hpp"
 #include "orthomech/io/units.hpp"
@@ -44,7 +51,8 @@ struct SimulateUnits {
   OutputUnit time, energy, length;
   std::vector<OutputUnit> measures, components, positions;
   std::vector<PositionColumn> position_columns;
-  SimulateUnits(const Model& model, const SimulateResult& res, const UnitSystem& u)
+  SimulateUnits(const Model& model, const std::vector<ReactionComponent>& reaction_components,
+                const UnitSystem& u)
       : system(u),
         time(output_unit(Dimension::time, u)),
         energy(output_unit(Dimension::moment, u)),
@@ -52,26 +60,17 @@ struct SimulateUnits {
         position_columns(orthomech::position_columns(model)) {
     for (const Measure& m : model.measures)
       measures.push_back(output_unit(dimension_of(m.unit), u));
-    for (const auto& c : res.components) components.push_back(output_unit(dimension_of(c.unit), u));
+    for (const auto& c : reaction_components)
+      components.push_back(output_unit(dimension_of(c.unit), u));
     for (const PositionColumn& c : position_columns)
       positions.push_back(output_unit(c.dimension, u));
     angle = output_unit(Dimension::angle, u);
-    // The scale of every dimension over the samples: rounding noise is written as 0
-    // (io/noise.hpp; a slider's y on a horizontal guide, a frictionless slide's axial force).
-    std::vector<double> pose;
-    for (const SimulationSample& s : res.samples) {
-      for (size_t k = 0; k < s.measures.size(); ++k)
-        noise.see(dimension_of(model.measures[k].unit), s.measures[k]);
-      for (size_t k = 0; k < s.reactions.size() && k < res.components.size(); ++k)
-        noise.see(dimension_of(res.components[k].unit), s.reactions[k]);
-      compute_output_positions(model, s.q, pose);
-      for (size_t k = 0; k < pose.size(); ++k) noise.see(position_columns[k].dimension, pose[k]);
-      for (const double e : {s.kinetic, s.potential, s.work}) noise.see(Dimension::moment, e);
-    }
     for (const Measure& m : model.measures) measure_dims.push_back(dimension_of(m.unit));
-    for (const auto& c : res.components) component_dims.push_back(dimension_of(c.unit));
+    for (const auto& c : reaction_components) component_dims.push_back(dimension_of(c.unit));
   }
   OutputUnit angle;
+  // The scale of every dimension over the samples (SampleSpool::add): rounding noise is written
+  // as 0 (io/noise.hpp; a slider's y on a horizontal guide, a frictionless slide's axial force).
   NoiseFloor noise;
   std::vector<Dimension> measure_dims, component_dims;
   // SI values to output values, rounding noise as 0: measure k, reaction component k, position
@@ -88,6 +87,104 @@ struct SimulateUnits {
   [[nodiscard]] double energy_of(double v) const {
     return energy.from_si(noise.clean(Dimension::moment, v));
   }
+};
+
+// The output samples, streamed out of the library (SimulateOptions::on_sample) into a temporary
+// file, one row of SI values per sample, so that the memory does not grow with the number of
+// outputs (issue 18 item 2: 1e6 samples held as SimulationSample cost 1.5 GB). The rounding-noise
+// scale is gathered as the rows arrive; the outputs (table, CSV, JSON columns) are written from
+// the file when the run is over, once that scale, which is the whole output's, is known.
+// Row: t, the number of reactions of the sample, the measures, the positions (every body's pose
+// and named point), the reaction components (NaN past that number), kinetic, potential, work,
+// residual_length, residual_angle.
+class SampleSpool {
+ public:
+  SampleSpool(const Model& model, SimulateUnits& units)
+      : model_(model),
+        U_(units),
+        nm_(model.measures.size()),
+        np_(units.position_columns.size()),
+        nr_(units.components.size()),
+        file_(temporary_file(), &std::fclose) {
+    row_.resize(width());
+  }
+  [[nodiscard]] size_t width() const { return 2 + nm_ + np_ + nr_ + 5; }
+  [[nodiscard]] size_t measure(size_t k) const { return 2 + k; }
+  [[nodiscard]] size_t position(size_t k) const { return 2 + nm_ + k; }
+  [[nodiscard]] size_t component(size_t k) const { return 2 + nm_ + np_ + k; }
+  [[nodiscard]] size_t kinetic() const { return 2 + nm_ + np_ + nr_; }
+
+  void add(const SimulationSample& s) {
+    const double nan = std::nan("");
+    row_[0] = s.t;
+    row_[1] = static_cast<double>(s.reactions.size());
+    for (size_t k = 0; k < nm_; ++k) {
+      row_[measure(k)] = k < s.measures.size() ? s.measures[k] : nan;
+      U_.noise.see(dimension_of(model_.measures[k].unit), row_[measure(k)]);
+    }
+    compute_output_positions(model_, s.q, pose_);
+    for (size_t k = 0; k < np_; ++k) {
+      row_[position(k)] = pose_[k];
+      U_.noise.see(U_.position_columns[k].dimension, pose_[k]);
+    }
+    for (size_t k = 0; k < nr_; ++k) {
+      row_[component(k)] = k < s.reactions.size() ? s.reactions[k] : nan;
+      U_.noise.see(U_.component_dims[k], row_[component(k)]);
+    }
+    const ResidualSplit r = split_residual(model_, s.q);
+    const size_t e = kinetic();
+    row_[e] = s.kinetic;
+    row_[e + 1] = s.potential;
+    row_[e + 2] = s.work;
+    row_[e + 3] = r.length;
+    row_[e + 4] = r.angle;
+    for (const double v : {s.kinetic, s.potential, s.work}) U_.noise.see(Dimension::moment, v);
+    if (std::fwrite(row_.data(), sizeof(double), row_.size(), file_.get()) != row_.size())
+      throw std::runtime_error("simulate: cannot write the samples' temporary file");
+    ++rows_;
+  }
+
+  // Calls f(row) for every row, in time order (read in blocks of about 1 MB).
+  template <class F>
+  void for_each(F&& f) const {
+    std::fflush(file_.get());
+    std::rewind(file_.get());
+    const size_t w = width();
+    const size_t block_rows = std::max<size_t>(1, kBlockBytes / (sizeof(double) * w));
+    block_.resize(w * std::min(block_rows, static_cast<size_t>(rows_)));
+    for (long done = 0; done < rows_;) {
+      const size_t n = std::min(block_rows, static_cast<size_t>(rows_ - done));
+      if (std::fread(block_.data(), sizeof(double) * w, n, file_.get()) != n)
+        throw std::runtime_error("simulate: cannot read the samples' temporary file");
+      for (size_t i = 0; i < n; ++i) f(block_.data() + i * w);
+      done += static_cast<long>(n);
+    }
+  }
+
+ private:
+  // A file in the temporary directory ($TMPDIR, else /tmp), unlinked at once: it goes with the
+  // process, however that ends.
+  static std::FILE* temporary_file() {
+    std::string path =
+        (std::filesystem::temp_directory_path() / "orthomech-simulate-XXXXXX").string();
+    const int fd = ::mkstemp(path.data());
+    std::FILE* f = fd >= 0 ? ::fdopen(fd, "w+b") : nullptr;
+    if (fd >= 0) ::unlink(path.c_str());
+    if (f == nullptr) {
+      if (fd >= 0) ::close(fd);
+      throw std::runtime_error("simulate: cannot create a temporary file for the samples in " +
+                               std::filesystem::temp_directory_path().string());
+    }
+    return f;
+  }
+  static constexpr size_t kBlockBytes = size_t{1} << 20;
+  const Model& model_;
+  SimulateUnits& U_;
+  size_t nm_, np_, nr_;
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> file_;
+  std::vector<double> row_, pose_;
+  mutable std::vector<double> block_;  // for_each's buffer
+  long rows_ = 0;
 };
 
 std::string g(double v, int precision = 10) {
@@ -118,7 +215,7 @@ InitialRate parse_rate(const Model& model, const std::string& text) {
 // simulate.csv: every column with its unit in the header (the output units), every body's pose
 // and named point; chart_switches.csv.
 void write_csv(const std::filesystem::path& dir, const Model& model, const SimulateResult& res,
-               const SimulateUnits& U) {
+               const SampleSpool& spool, const SimulateUnits& U) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec)
@@ -135,19 +232,20 @@ void write_csv(const std::filesystem::path& dir, const Model& model, const Simul
   const std::string e = " [" + U.energy.name + "]";
   out << ",kinetic" << e << ",potential" << e << ",work" << e << ",energy" << e
       << ",residual_length [" << U.length.name << "],residual_angle [" << U.angle.name << "]\n";
-  std::vector<double> pose;
-  for (const SimulationSample& s : res.samples) {
-    out << U.time.from_si(s.t);
-    for (size_t k = 0; k < s.measures.size(); ++k) out << "," << U.measure(k, s.measures[k]);
-    compute_output_positions(model, s.q, pose);
-    for (size_t k = 0; k < pose.size(); ++k) out << "," << U.position(k, pose[k]);
+  spool.for_each([&](const double* row) {
+    out << U.time.from_si(row[0]);
+    for (size_t k = 0; k < model.measures.size(); ++k)
+      out << "," << U.measure(k, row[spool.measure(k)]);
+    for (size_t k = 0; k < U.position_columns.size(); ++k)
+      out << "," << U.position(k, row[spool.position(k)]);
     for (size_t k = 0; k < res.components.size(); ++k)
-      out << "," << (k < s.reactions.size() ? U.component(k, s.reactions[k]) : 0.0);
-    const ResidualSplit r = split_residual(model, s.q);
-    out << "," << U.energy_of(s.kinetic) << "," << U.energy_of(s.potential) << ","
-        << U.energy_of(s.work) << "," << U.energy_of(s.kinetic + s.potential - s.work) << ","
-        << U.length.from_si(r.length) << "," << U.angle.from_si(r.angle) << "\n";
-  }
+      out << ","
+          << (static_cast<double>(k) < row[1] ? U.component(k, row[spool.component(k)]) : 0.0);
+    const double* E = row + spool.kinetic();
+    out << "," << U.energy_of(E[0]) << "," << U.energy_of(E[1]) << "," << U.energy_of(E[2]) << ","
+        << U.energy_of(E[0] + E[1] - E[2]) << "," << U.length.from_si(E[3]) << ","
+        << U.angle.from_si(E[4]) << "\n";
+  });
   std::ofstream sw(dir / "chart_switches.csv");
   sw << "t [" << U.time.name << "],from,to\n";
   for (const ChartSwitch& c : res.chart_switches)
@@ -157,51 +255,82 @@ void write_csv(const std::filesystem::path& dir, const Model& model, const Simul
   if (!out || !sw) throw CLI::ValidationError("--out", "cannot write the files in " + dir.string());
 }
 
-// The time histories, one array per quantity over the output times (columns, as plotting tools
+// The time histories as columns, one array per quantity over the output times (as plotting tools
 // read them; a tenth of the objects of one record per sample, measured: 100 samples of Andrews
-// cost about 2.5 ms as records). With `positions`: every body's pose and named point too.
-nlohmann::json series_json(const Model& model, const SimulateResult& res, const SimulateUnits& U,
-                           bool positions) {
-  const size_t ns = res.samples.size();
-  const auto column = [&](auto&& value) {
-    std::vector<double> c;
-    c.reserve(ns);
-    for (const SimulationSample& s : res.samples) c.push_back(value(s));
-    return nlohmann::json(c);
+// cost about 2.5 ms as records). With `positions`: every body's pose and named point too. Each
+// column is a function of a spool row (output units, rounding noise as 0).
+using SampleColumn = std::function<double(const double*)>;
+
+// A placeholder string no text of the document can hold (control characters around a tag).
+std::string column_placeholder(size_t k) {
+  return "\x01orthomech.samples." + std::to_string(k) + "\x02";
+}
+
+// The `samples` object with every array a placeholder (column_placeholder(k), k the index of
+// its column in `columns`).
+nlohmann::json series_columns(std::vector<SampleColumn>& columns, const Model& model,
+                              const SimulateResult& res, const SampleSpool& spool,
+                              const SimulateUnits& U, bool positions) {
+  const auto column = [&](SampleColumn f) {
+    columns.push_back(std::move(f));
+    return nlohmann::json(column_placeholder(columns.size() - 1));
   };
   nlohmann::json j;
-  j["t"] = column([&](const SimulationSample& s) { return U.time.from_si(s.t); });
+  j["t"] = column([&](const double* r) { return U.time.from_si(r[0]); });
   nlohmann::json m = nlohmann::json::object();
   for (size_t k = 0; k < model.measures.size(); ++k)
     m[model.measures[k].name] =
-        column([&, k](const SimulationSample& s) { return U.measure(k, s.measures[k]); });
+        column([&, k](const double* r) { return U.measure(k, r[spool.measure(k)]); });
   j["measures"] = m;
-  nlohmann::json r = nlohmann::json::object();
+  nlohmann::json rc = nlohmann::json::object();
   for (size_t k = 0; k < res.components.size(); ++k)
-    r[res.components[k].name] = column([&, k](const SimulationSample& s) {
-      return k < s.reactions.size() ? U.component(k, s.reactions[k]) : std::nan("");
+    rc[res.components[k].name] = column([&, k](const double* r) {
+      return static_cast<double>(k) < r[1] ? U.component(k, r[spool.component(k)]) : std::nan("");
     });
-  j["reactions"] = r;
-  j["kinetic"] = column([&](const SimulationSample& s) { return U.energy_of(s.kinetic); });
-  j["potential"] = column([&](const SimulationSample& s) { return U.energy_of(s.potential); });
-  j["work"] = column([&](const SimulationSample& s) { return U.energy_of(s.work); });
-  j["residual_length"] = column([&](const SimulationSample& s) {
-    return U.length.from_si(split_residual(model, s.q).length);
-  });
-  j["residual_angle"] = column(
-      [&](const SimulationSample& s) { return U.angle.from_si(split_residual(model, s.q).angle); });
+  j["reactions"] = rc;
+  const size_t e = spool.kinetic();
+  j["kinetic"] = column([&, e](const double* r) { return U.energy_of(r[e]); });
+  j["potential"] = column([&, e](const double* r) { return U.energy_of(r[e + 1]); });
+  j["work"] = column([&, e](const double* r) { return U.energy_of(r[e + 2]); });
+  j["residual_length"] = column([&, e](const double* r) { return U.length.from_si(r[e + 3]); });
+  j["residual_angle"] = column([&, e](const double* r) { return U.angle.from_si(r[e + 4]); });
   if (positions) {
-    std::vector<std::vector<double>> cols(U.position_columns.size());
-    std::vector<double> pose;
-    for (const SimulationSample& s : res.samples) {
-      compute_output_positions(model, s.q, pose);
-      for (size_t k = 0; k < pose.size(); ++k) cols[k].push_back(U.position(k, pose[k]));
-    }
     nlohmann::json p = nlohmann::json::object();
-    for (size_t k = 0; k < cols.size(); ++k) p[U.position_columns[k].name] = cols[k];
+    for (size_t k = 0; k < U.position_columns.size(); ++k)
+      p[U.position_columns[k].name] =
+          column([&, k](const double* r) { return U.position(k, r[spool.position(k)]); });
     j["positions"] = p;
   }
   return j;
+}
+
+// Writes `text` (a JSON document dumped with indent 2 whose sample arrays are placeholders) to
+// out with every placeholder replaced by its column, read from the spool and written value by
+// value as nlohmann::json writes an array (one value a line, indented one level further).
+void write_with_columns(std::ostream& out, const std::string& text,
+                        const std::vector<SampleColumn>& columns, const SampleSpool& spool) {
+  // A placeholder as dumped: "\u0001orthomech.samples.<k>\u0002".
+  const std::string mark = "\"\\u0001orthomech.samples.", end = "\\u0002\"";
+  size_t at = 0;
+  while (true) {
+    const size_t p = text.find(mark, at);
+    if (p == std::string::npos) break;
+    const size_t digits = p + mark.size();
+    const size_t close = text.find(end, digits);
+    const size_t k = std::stoul(text.substr(digits, close - digits));
+    out << text.substr(at, p - at);
+    const size_t line = text.rfind('\n', p) + 1;
+    const size_t indent = text.find_first_not_of(' ', line) - line;
+    const std::string pad(indent + 2, ' ');
+    bool first = true;
+    spool.for_each([&](const double* row) {
+      out << (first ? "[\n" : ",\n") << pad << nlohmann::json(columns[k](row)).dump();
+      first = false;
+    });
+    out << (first ? "[]" : "\n" + std::string(indent, ' ') + "]");
+    at = close + end.size();
+  }
+  out << text.substr(at);
 }
 
 nlohmann::json sample_json(const Model& model, const SimulateResult& res, const SimulationSample& s,
@@ -239,7 +368,7 @@ SimulateOptions simulate_options(const Model& model, const SimulateCliOptions& o
   if (!parse_integrator(opt.integrator, so.integrator))  // CLI::IsMember checked the name
     throw std::logic_error("simulate: integrator '" + opt.integrator + "' has no stepper");
   for (const std::string& r : opt.rates) so.initial_rates.push_back(parse_rate(model, r));
-  so.record_samples = true;
+  so.record_samples = false;  // streamed into a SampleSpool (run_simulate)
   return so;
 }
 
@@ -267,9 +396,10 @@ nlohmann::json passages_json(const SimulateResult& res, const SimulateUnits& U) 
   return cp;
 }
 
-// The --json document.
+// The --json document; its `samples` arrays are placeholders (write_with_columns).
 nlohmann::json result_json(const Model& model, const UnitSystem& system, const SimulateOptions& so,
-                           const SimulateResult& res, const SimulateUnits& U, bool positions) {
+                           const SimulateResult& res, const SimulateUnits& U,
+                           const nlohmann::json& samples) {
   nlohmann::json j;
   j["mechanism"] = model.name;
   j["units"] = units_json(system);
@@ -296,13 +426,14 @@ nlohmann::json result_json(const Model& model, const UnitSystem& system, const S
   j["chart_switches"] = chart_switches_json(res, U);
   j["change_points_passed"] = res.passages.size();
   j["change_points"] = passages_json(res, U);
-  j["samples"] = series_json(model, res, U, positions);
+  j["samples"] = samples;
   return j;
 }
 
 // The text report: a summary, then one line per output time.
 void write_text(std::ostream& out, const Model& model, const SimulateCliOptions& opt,
-                const SimulateOptions& so, const SimulateResult& res, const SimulateUnits& U) {
+                const SimulateOptions& so, const SimulateResult& res, const SampleSpool& spool,
+                const SimulateUnits& U) {
   out << "mechanism   " << model.name << "  (" << model.file << ")\n";
   out << "form        " << opt.form << ", " << opt.integrator << ", rtol " << g(so.rtol, 3)
       << ", atol " << g(so.atol, 3) << "\n";
@@ -326,35 +457,43 @@ void write_text(std::ostream& out, const Model& model, const SimulateCliOptions&
   for (size_t k = 0; k < model.measures.size(); ++k)
     out << "\t" << model.measures[k].name << " [" << U.measures[k].name << "]";
   out << "\tenergy [" << U.energy.name << "]\n";
-  for (const SimulationSample& s : res.samples) {
-    out << g(U.time.from_si(s.t), 6);
-    for (size_t k = 0; k < s.measures.size(); ++k) out << "\t" << g(U.measure(k, s.measures[k]), 8);
-    out << "\t" << g(U.energy_of(s.kinetic + s.potential - s.work), 8) << "\n";
-  }
+  spool.for_each([&](const double* row) {
+    out << g(U.time.from_si(row[0]), 6);
+    for (size_t k = 0; k < model.measures.size(); ++k)
+      out << "\t" << g(U.measure(k, row[spool.measure(k)]), 8);
+    const double* E = row + spool.kinetic();
+    out << "\t" << g(U.energy_of(E[0] + E[1] - E[2]), 8) << "\n";
+  });
 }
 
 int run_simulate(const SimulateCliOptions& opt) {
   const Model model = load(opt.file, opt.sets);
   const UnitSystem system = resolve_units(model, opt.units);
-  const SimulateOptions so = simulate_options(model, opt);
+  SimulateOptions so = simulate_options(model, opt);
+  SimulateUnits U(model, reaction_components(model), system);
+  SampleSpool spool(model, U);
+  so.on_sample = [&spool](const SimulationSample& s) { spool.add(s); };
   const SimulateResult res = simulate(model, so);
-  const SimulateUnits U(model, res, system);
   if (res.kinetic_removed > 0.0)
     spdlog::info("initial velocity projection removed {:.6g} {} of kinetic energy",
                  U.energy.from_si(res.kinetic_removed), U.energy.name);
-  if (!opt.out_dir.empty()) write_csv(opt.out_dir, model, res, U);
+  if (!opt.out_dir.empty()) write_csv(opt.out_dir, model, res, spool, U);
   spdlog::info(
       "{} chart switches: the dual form changed its independent velocities {} times (bookkeeping "
       "of the method; the results do not depend on it)",
       model.file, res.chart_switches.size());
 
-  std::ostringstream out;
   const bool ok = res.status == SimulateStatus::completed;
-  if (opt.json)
-    out << result_json(model, system, so, res, U, opt.positions).dump(2) << '\n';
-  else
-    write_text(out, model, opt, so, res, U);
-  std::cout << out.str();
+  if (opt.json) {
+    std::vector<SampleColumn> columns;
+    const nlohmann::json skeleton = series_columns(columns, model, res, spool, U, opt.positions);
+    write_with_columns(std::cout, result_json(model, system, so, res, U, skeleton).dump(2), columns,
+                       spool);
+    std::cout << '\n';
+  } else {
+    write_text(std::cout, model, opt, so, res, spool, U);
+  }
+  std::cout.flush();
   if (!ok) spdlog::error("simulate: {}: {}", to_string(res.status), res.message);
   return ok ? kOk : kNumerical;
 }

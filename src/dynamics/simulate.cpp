@@ -675,6 +675,7 @@ class Simulation {
     start_energy(v);
     drive();
     finish();
+    deliver(true);
     return std::move(result_);
   }
 
@@ -892,7 +893,7 @@ class Simulation {
   // start) are ignored.
   void emit(double t, const VecX& y) {
     if (!grid_pending() || std::abs(t - grid_time(next_out_)) > grid_slack_) return;
-    if (options_.record_samples) {
+    if (options_.record_samples || options_.on_sample) {
       result_.samples.emplace_back();
       try {
         sample_at(t, y, result_.samples.back());
@@ -900,8 +901,32 @@ class Simulation {
         result_.samples.pop_back();
         throw;
       }
+      deliver(false);
     }
     ++next_out_;
+  }
+
+  // The outputs that no rewind can undo any more (at or before the oldest state saved for a
+  // rewind; `all`: every one, the run is over) go to options_.on_sample, in time order. Without
+  // record_samples only the last of them is kept (finish_stopped's fallback), none at the end.
+  void deliver(bool all) {
+    if (!options_.on_sample) return;
+    constexpr double kInf = std::numeric_limits<double>::infinity();
+    const double t_safe = all                  ? kInf
+                          : saved_older_.valid ? saved_older_.t
+                          : saved_prev_.valid  ? saved_prev_.t
+                                               : -kInf;
+    std::vector<SimulationSample>& s = result_.samples;
+    for (; delivered_ < s.size() && s[delivered_].t <= t_safe + grid_slack_; ++delivered_) {
+      options_.on_sample(s[delivered_]);
+      if (!primal_)  // as finish() does over the kept samples
+        result_.max_velocity_residual =
+            std::max(result_.max_velocity_residual, s[delivered_].velocity_residual);
+    }
+    if (options_.record_samples || delivered_ == 0) return;
+    const size_t drop = all ? delivered_ : delivered_ - 1;
+    s.erase(s.begin(), s.begin() + static_cast<std::ptrdiff_t>(drop));
+    delivered_ -= drop;
   }
 
   void note_residual(const VecX& res) {
@@ -1424,7 +1449,7 @@ class Simulation {
     VecX qs, us;
     while (grid_pending() && grid_time(next_out_) < t_b - grid_slack_) {
       const double to = grid_time(next_out_);
-      if (to > t_a + grid_slack_ && options_.record_samples) {
+      if (to > t_a + grid_slack_ && (options_.record_samples || options_.on_sample)) {
         const double s = (to - t_a) / h;
         if (local_passage_) {  // the Hermite in x about q_a, mapped back: q = q_a ⊕ x, u = J ẋ
           VecX xs, xd;
@@ -1837,7 +1862,8 @@ class Simulation {
   MonitorPoint monitor_;
   Request request_;
   SavedState saved_older_, saved_prev_;
-  int rewind_to_ = -1;  // 0: saved_older, 1: saved_prev (with request)
+  int rewind_to_ = -1;    // 0: saved_older, 1: saved_prev (with request)
+  size_t delivered_ = 0;  // result_.samples[0, delivered_) went to options_.on_sample
   double last_rewind_t_star_ = -std::numeric_limits<double>::infinity();
   bool monitor_armed_ = true;
   // Set when an approach does not reach σ̂ ≤ pass_quality in kMaxApproaches segments (σ̂ has a

@@ -48,6 +48,8 @@ struct InitialRate {
   double rate = 0.0;  // SI: m/s or rad/s
 };
 
+struct SimulationSample;
+
 struct SimulateOptions {
   DynamicsForm form = DynamicsForm::dual;
   Integrator integrator = Integrator::dopri5;
@@ -74,6 +76,11 @@ struct SimulateOptions {
   // passage before it is corrected, so that a test can force a passage onto a wrong branch and
   // see it refused. Empty in every normal run.
   std::function<void(double t, VecX& q, VecX& u)> passage_hook;
+  // Called once per output sample, in time order (the outputs inside a change-point passage
+  // included), as soon as no rewind can undo it (a few steps behind the integrator). With
+  // record_samples false the result then keeps no samples (only `final` and the summary): the
+  // memory does not grow with the number of outputs (`simulate --json`, `--out`).
+  std::function<void(const SimulationSample&)> on_sample;
 };
 
 enum class SimulateStatus { completed, failed_assembly, failed_step, singular };
