@@ -632,9 +632,9 @@ bool project_with_locks(const Model& model, VecX& q, const std::vector<JointLock
 
 VelocityProjection project_velocities(const Model& model, const VecX& q, const VecX& u0) {
   VelocityProjection v;
-  MatX M(model.n, model.n);
-  compute_mass_matrix(model, q, M);
   if (model.nc == 0) {  // no constraint: α = I, nothing removed (and no empty factorisation)
+    MatX M(model.n, model.n);
+    compute_mass_matrix(model, q, M);
     v.ok = true;
     v.u = u0;
     v.kinetic_initial = v.kinetic = 0.5 * u0.dot(M * u0);
@@ -650,19 +650,13 @@ VelocityProjection project_velocities(const Model& model, const VecX& q, const V
   s.u.setZero();
   compute_free_system(model, s, ws);
   compute_constraints(model, s, ws.constraints);
-  auto& d = ws.dual;
-  v.ok = compute_basis(model, s, ws) == ProjectionStatus::ok;
-  if (v.ok) {
-    d.MF.noalias() = ws.free.M * d.F;
-    d.H.noalias() = d.F.transpose() * d.MF;  // eq. (68)
-    d.H_llt.compute(d.H);
-    v.ok = d.H_llt.info() == Eigen::Success;
-  }
-  if (!v.ok) {  // no regular chart at q (cannot happen at the rank of q): nothing admissible
+  const DualWorkspace& d = ws.dual;
+  v.ok = compute_dual(model, s, ws) == ProjectionStatus::ok;  // F, M F, H (eq. (68))
+  if (!v.ok)  // no regular chart at q (cannot happen at the rank of q): nothing admissible
     v.u = VecX::Zero(model.n);
-  } else {
+  else
     v.u.noalias() = d.F * project_velocity(d.MF, d.H_llt, u0);  // α u₀
-  }
+  const MatX& M = ws.free.M;
   const VecX beta_u0 = u0 - v.u;  // β u₀ = (I − α) u₀
   v.kinetic_initial = 0.5 * u0.dot(M * u0);
   v.kinetic = 0.5 * v.u.dot(M * v.u);
