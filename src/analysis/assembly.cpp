@@ -650,8 +650,15 @@ VelocityProjection project_velocities(const Model& model, const VecX& q, const V
   s.u.setZero();
   compute_free_system(model, s, ws);
   compute_constraints(model, s, ws.constraints);
-  const DualWorkspace& d = ws.dual;
-  v.ok = compute_dual(model, s, ws) == ProjectionStatus::ok;  // F, M F, H (eq. (68))
+  auto& d = ws.dual;
+  // F in a chart, then H = Fᵀ M F alone: compute_dual's other products (ψ, α, Θ) are not needed.
+  v.ok = compute_basis(model, s, ws) == ProjectionStatus::ok;
+  if (v.ok) {
+    d.MF.noalias() = ws.free.M * d.F;
+    d.H.noalias() = d.F.transpose() * d.MF;  // eq. (68)
+    d.H_llt.compute(d.H);
+    v.ok = d.H_llt.info() == Eigen::Success;
+  }
   if (!v.ok)  // no regular chart at q (cannot happen at the rank of q): nothing admissible
     v.u = VecX::Zero(model.n);
   else
