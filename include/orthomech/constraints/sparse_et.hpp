@@ -1,0 +1,82 @@
+#pragma once
+// Eᵀ (n_c × n, eq. (23)) stored on its structural pattern (issue 18: the sparse dual form).
+// The pattern is recorded once from the joints' own writers (SparseEt(model)): every entry a
+// writer can touch is in it, whatever q, so no write ever falls outside it, and no entry is
+// guessed from sample positions. Refreshing the values costs O(non-zeros): nothing of size
+// n_c · n is zeroed or stored (the dense Eᵀ of the N = 400 four-bar is 46 MB, zeroed at every
+// evaluation), which keeps a large mechanism's evaluation linear in its size.
+// Planar and spatial models (joints, knife edges, rolling discs); a general system (M(q) given by
+// functions) has no structure to record and is refused.
+#include <Eigen/SparseCore>
+#include <span>
+#include <vector>
+
+#include "orthomech/model/free_system.hpp"
+#include "orthomech/model/model.hpp"
+#include "orthomech/model/state.hpp"
+
+namespace orthomech {
+
+class SparseEt {
+ public:
+  using Matrix = Eigen::SparseMatrix<double, Eigen::RowMajor, int>;
+  // An entry of a column: its row and the position of its value in values().
+  struct Entry {
+    int row;
+    int index;
+  };
+  // The writers' view of one row: row(j) += x adds into entry (i, j). j must be in the row's
+  // pattern (it always is for the writers that recorded it; anything else throws
+  // std::logic_error). Linear search over the row's columns (≤ 6 planar, ≤ 12 spatial).
+  struct Row {
+    double* values;
+    const int* columns;
+    int count;
+    double& operator()(Eigen::Index j) const;
+  };
+
+  SparseEt() = default;
+  // Records the pattern of the model's Eᵀ; the values are zero. Throws std::invalid_argument
+  // for a general system.
+  explicit SparseEt(const Model& model);
+
+  [[nodiscard]] int rows() const { return static_cast<int>(m_.rows()); }
+  [[nodiscard]] int cols() const { return static_cast<int>(m_.cols()); }
+  [[nodiscard]] int nonZeros() const { return static_cast<int>(m_.nonZeros()); }
+  // n_c × n, row-major, compressed; the values of the last evaluation (zeros of the pattern
+  // kept). Products: matrix() * u = Eᵀu, matrix().transpose() * λ = E λ.
+  [[nodiscard]] const Matrix& matrix() const { return m_; }
+  // Row i's columns, ascending, and its values (same order).
+  [[nodiscard]] std::span<const int> row_columns(int i) const;
+  [[nodiscard]] std::span<const double> row_values(int i) const;
+  // Column j's entries, rows ascending.
+  [[nodiscard]] std::span<const Entry> column(int j) const;
+  [[nodiscard]] const double* values() const { return m_.valuePtr(); }
+  // Entry (i, j); 0 outside the pattern.
+  [[nodiscard]] double coeff(int i, int j) const;
+  // Zeroes the values (the writers accumulate), keeps the pattern.
+  void set_zero();
+  // Et (resized to n_c × n) ← this matrix, zeros outside the pattern.
+  void to_dense(MatX& Et) const;
+  [[nodiscard]] Row row(int i);
+
+ private:
+  Matrix m_;
+  std::vector<int> column_start_;      // n + 1: column j's entries are column_entries_[start…)
+  std::vector<Entry> column_entries_;  // non-zeros, by column
+};
+
+// Eᵀ(q) into its pattern (Et from SparseEt(model)). Allocation-free.
+void compute_constraint_jacobian(const Model& model, const VecX& q, SparseEt& Et);
+// f(q) and Eᵀ(q) in one pass. Allocation-free.
+void compute_constraint_residual_and_jacobian(const Model& model, const VecX& q, VecX& f,
+                                              SparseEt& Et);
+// The same with the bodies' rotations at q already computed (rotations.update(model, q)).
+void compute_constraint_residual_and_jacobian(const Model& model, const VecX& q,
+                                              const BodyRotations& rotations, VecX& f,
+                                              SparseEt& Et);
+// Dᵀu only (size n_c), each row's product with u formed directly (no n_c × n storage).
+void compute_constraint_rate(const Model& model, const State& state, const BodyRotations& rotations,
+                             VecX& Dtu);
+
+}  // namespace orthomech
