@@ -1,9 +1,13 @@
 #include "orthomech/constraints/joints.hpp"
 
 #include <array>
+#include <stdexcept>
+#include <string>
+#include <type_traits>
 
 #include "../model/dot_row.hpp"
 #include "orthomech/constraints/rolling_disc.hpp"
+#include "orthomech/constraints/sparse_et.hpp"
 #include "orthomech/constraints/spatial_joints.hpp"
 #include "orthomech/model/free_system.hpp"
 #include "orthomech/model/general_system.hpp"
@@ -30,13 +34,16 @@ void add_angle(const Model& model, int body, double scale, Row&& row) {
 // Dᵀ (if Dt), which are zero on entry (evaluate).
 // Revolute and fixed x/y rows are written (point on i) − (point on j); the slot-normal, angle,
 // gear and distance rows are written for j relative to i (docs/notation.md gives each row).
+// EtT: MatX (dense Eᵀ), SparseEt (its structural pattern) or EtRecorder (records the pattern):
+// every write goes through EtT::row(i)(j) += …, so one writer serves the three.
+template <typename EtT>
 struct JointEvaluator {
   const Model& model;
   const VecX& q;
   const VecX* u;  // null when only f or Eᵀ are wanted
   int r;          // first row
   VecX* f;
-  MatX* Et;
+  EtT* Et;
   MatX* Dt;
   VecX* Dtu;                   // Dᵀu row by row, without Dt (needs u)
   const Eigen::Matrix2d* rot;  // R(φ_b) per body at q, or null
@@ -197,8 +204,9 @@ struct JointEvaluator {
 //   f = 0 (no geometric residual: design §3);
 //   Eᵀ = nᵀ ∂r_P/∂u;
 //   Dᵀ = ṅᵀ ∂r_P/∂u + nᵀ d/dt(∂r_P/∂u), ṅ = φ̇ perp(n)                                   (L3)
+template <typename EtT>
 void knife_edge(const Model& model, const KnifeEdge& k, const VecX& q, const VecX* u, VecX* f,
-                MatX* Et, MatX* Dt, VecX* Dtu) {
+                EtT* Et, MatX* Dt, VecX* Dtu) {
   const PointKinematics kp = point_kinematics(model, k.at, q, u);
   const Vec2 n = rotation(body_angle(model, k.at.body, q)) * perp(k.axis_local);
   if (f) (*f)(k.row_offset) = 0.0;
@@ -223,11 +231,18 @@ void knife_edge(const Model& model, const KnifeEdge& k, const VecX& q, const Vec
 
 // Dtu: Dᵀu row by row (needs u), without forming Dᵀ.
 // rotations: the caller's table of R(φ_b) at q, if any.
-void evaluate(const Model& model, const VecX& q, const VecX* u, VecX* f, MatX* Et, MatX* Dt,
+template <typename EtT = MatX>
+void evaluate(const Model& model, const VecX& q, const VecX* u, VecX* f, EtT* Et, MatX* Dt,
               VecX* Dtu = nullptr, const Eigen::Matrix2d* rotations = nullptr) {
   if (model.general) {  // a free system given by functions (model/general_system.hpp)
     if (f) model.general->residual(q, *f);
-    if (Et) model.general->jacobian(q, *Et);
+    if (Et) {
+      if constexpr (std::is_same_v<EtT, MatX>) {
+        model.general->jacobian(q, *Et);
+      } else if constexpr (std::is_same_v<EtT, SparseEt>) {
+        Et->set_from_general(model, q);
+      }
+    }
     if (Dt) model.general->jacobian_rate(q, *u, *Dt);
     if (Dtu) {
       MatX D(model.nc, model.n);
@@ -239,7 +254,7 @@ void evaluate(const Model& model, const VecX& q, const VecX* u, VecX* f, MatX* E
   // The writers below accumulate into their rows: Eᵀ and Dᵀ are zeroed here, once and
   // contiguously (a row of a column-major matrix is strided: zeroing it row by row cost 30 % of
   // a projected rosenbrock4 step on the N = 40 four-bar).
-  if (Et) Et->setZero();
+  if (Et) Et->setZero();  // SparseEt: its pattern's values only
   if (Dt) Dt->setZero();
   // Each body's rotation once (sin/cos dominate small evaluations); particles keep the identity.
   constexpr size_t kTable = 64;
@@ -250,7 +265,7 @@ void evaluate(const Model& model, const VecX& q, const VecX* u, VecX* f, MatX* E
     rot = table.data();
   }
   for (const Joint& joint : model.joints) {
-    JointEvaluator ev{model, q, u, joint.row_offset, f, Et, Dt, Dtu, rot};
+    JointEvaluator<EtT> ev{model, q, u, joint.row_offset, f, Et, Dt, Dtu, rot};
     std::visit(ev, joint.kind);
   }
   for (const KnifeEdge& k : model.knife_edges) knife_edge(model, k, q, u, f, Et, Dt, Dtu);
@@ -261,7 +276,7 @@ void evaluate(const Model& model, const VecX& q, const VecX* u, VecX* f, MatX* E
 }  // namespace
 
 void compute_constraint_residual(const Model& model, const VecX& q, VecX& f) {
-  evaluate(model, q, nullptr, &f, nullptr, nullptr);
+  evaluate<MatX>(model, q, nullptr, &f, nullptr, nullptr);
 }
 
 void compute_constraint_jacobian(const Model& model, const VecX& q, MatX& Et) {
@@ -278,14 +293,56 @@ void compute_constraint_residual_and_jacobian(const Model& model, const VecX& q,
   evaluate(model, q, nullptr, &f, &Et, nullptr, nullptr, rotations.table().data());
 }
 
+namespace {
+// A SparseEt of another model would be written out of its rows: refused.
+void check_shape(const Model& model, const SparseEt& Et, const VecX* f) {
+  if (Et.rows() != model.nc || Et.cols() != model.n || (f && f->size() != model.nc))
+    throw std::invalid_argument("constraint evaluation: Eᵀ is " + std::to_string(Et.rows()) +
+                                " × " + std::to_string(Et.cols()) + ", the model's " +
+                                std::to_string(model.nc) + " × " + std::to_string(model.n));
+}
+}  // namespace
+
+void compute_constraint_jacobian(const Model& model, const VecX& q, SparseEt& Et) {
+  check_shape(model, Et, nullptr);
+  evaluate(model, q, nullptr, nullptr, &Et, nullptr);
+}
+
+void compute_constraint_residual_and_jacobian(const Model& model, const VecX& q, VecX& f,
+                                              SparseEt& Et) {
+  check_shape(model, Et, &f);
+  evaluate(model, q, nullptr, &f, &Et, nullptr);
+}
+
+void compute_constraint_residual_and_jacobian(const Model& model, const VecX& q,
+                                              const BodyRotations& rotations, VecX& f,
+                                              SparseEt& Et) {
+  check_shape(model, Et, &f);
+  evaluate(model, q, nullptr, &f, &Et, nullptr, nullptr, rotations.table().data());
+}
+
+void compute_constraint_rate(const Model& model, const State& state, const BodyRotations& rotations,
+                             VecX& Dtu) {
+  if (Dtu.size() != model.nc)
+    throw std::invalid_argument("compute_constraint_rate: Dtu has " + std::to_string(Dtu.size()) +
+                                " entries, the model " + std::to_string(model.nc) + " rows");
+  evaluate<MatX>(model, state.q, &state.u, nullptr, nullptr, nullptr, &Dtu,
+                 rotations.table().data());
+}
+
+void record_constraint_pattern(const Model& model, EtRecorder& recorder) {
+  evaluate(model, model.design_q(), nullptr, nullptr, &recorder, nullptr);
+}
+
 void compute_constraint_rate(const Model& model, const State& state, ConstraintWorkspace& ws) {
   // The convective term Dᵀu, eq. (76), row by row: Dᵀ itself is not formed (ws.Dt untouched).
-  evaluate(model, state.q, &state.u, nullptr, nullptr, nullptr, &ws.Dtu);
+  evaluate<MatX>(model, state.q, &state.u, nullptr, nullptr, nullptr, &ws.Dtu);
 }
 
 void compute_constraint_rate(const Model& model, const State& state, const BodyRotations& rotations,
                              ConstraintWorkspace& ws) {
-  evaluate(model, state.q, &state.u, nullptr, nullptr, nullptr, &ws.Dtu, rotations.table().data());
+  evaluate<MatX>(model, state.q, &state.u, nullptr, nullptr, nullptr, &ws.Dtu,
+                 rotations.table().data());
 }
 
 void compute_constraints(const Model& model, const State& state, ConstraintWorkspace& ws) {

@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "orthomech/constraints/sparse_et.hpp"
+
 namespace orthomech {
 
 RollingDiscKinematics rolling_disc_kinematics(const Model& model, const RollingDisc& disc,
@@ -25,8 +27,9 @@ RollingDiscKinematics rolling_disc_kinematics(const Model& model, const RollingD
   return x;
 }
 
+template <typename EtT>
 void evaluate_rolling_disc(const Model& model, const RollingDisc& disc, const VecX& q,
-                           const VecX* u, VecX* f, MatX* Et, MatX* Dt, VecX* Dtu) {
+                           const VecX* u, VecX* f, EtT* Et, MatX* Dt, VecX* Dtu) {
   const RollingDiscKinematics x = rolling_disc_kinematics(model, disc, q, u);
   const Vec3 t2 = disc.normal.cross(disc.t1);
   const Vec3* directions[3] = {&disc.t1, &t2, &disc.normal};
@@ -47,6 +50,14 @@ void evaluate_rolling_disc(const Model& model, const RollingDisc& disc, const Ve
     if (Dtu) (*Dtu)(r) = hdot.dot(x.frame.w);  // (R3): ġ = 0
   }
 }
+
+// The three targets of the writers (constraints/sparse_et.hpp).
+template void evaluate_rolling_disc<MatX>(const Model&, const RollingDisc&, const VecX&,
+                                          const VecX*, VecX*, MatX*, MatX*, VecX*);
+template void evaluate_rolling_disc<SparseEt>(const Model&, const RollingDisc&, const VecX&,
+                                              const VecX*, VecX*, SparseEt*, MatX*, VecX*);
+template void evaluate_rolling_disc<EtRecorder>(const Model&, const RollingDisc&, const VecX&,
+                                                const VecX*, VecX*, EtRecorder*, MatX*, VecX*);
 
 Vec3 rolling_disc_contact_force(const RollingDisc& disc, const Eigen::Ref<const VecX>& lambda) {
   return lambda(0) * disc.t1 + lambda(1) * disc.normal.cross(disc.t1) + lambda(2) * disc.normal;

@@ -5,6 +5,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "orthomech/constraints/sparse_et.hpp"
+
 namespace orthomech {
 
 namespace {
@@ -185,8 +187,9 @@ TwistAngle twist_angle(const Vec3& fi, const Vec3& gi, const Vec3& fj, const Vec
   return a;
 }
 
+template <typename EtT>
 void evaluate_spatial_joint(const Model& model, const SpatialJoint& joint, const VecX& q,
-                            const VecX* u, int r, VecX* f, MatX* Et, MatX* Dt, VecX* Dtu) {
+                            const VecX* u, int r, VecX* f, EtT* Et, MatX* Dt, VecX* Dtu) {
   const JointKinematics x(model, joint, q, u);
   const SpatialJointSpec& spec = spatial_joint_spec(joint.type);
   for (int k = 0; k < spec.rows; ++k) {
@@ -208,6 +211,15 @@ void evaluate_spatial_joint(const Model& model, const SpatialJoint& joint, const
     }
   }
 }
+
+// The three targets of the writers (constraints/sparse_et.hpp).
+template void evaluate_spatial_joint<MatX>(const Model&, const SpatialJoint&, const VecX&,
+                                           const VecX*, int, VecX*, MatX*, MatX*, VecX*);
+template void evaluate_spatial_joint<SparseEt>(const Model&, const SpatialJoint&, const VecX&,
+                                               const VecX*, int, VecX*, SparseEt*, MatX*, VecX*);
+template void evaluate_spatial_joint<EtRecorder>(const Model&, const SpatialJoint&, const VecX&,
+                                                 const VecX*, int, VecX*, EtRecorder*, MatX*,
+                                                 VecX*);
 
 SpatialWrench spatial_joint_reaction(const Model& model, const SpatialJoint& joint, const VecX& q,
                                      const Eigen::Ref<const VecX>& lambda) {

@@ -16,6 +16,7 @@
 #include "orthomech/analysis/assembly.hpp"
 #include "orthomech/analysis/mobility.hpp"
 #include "orthomech/constraints/joints.hpp"
+#include "orthomech/constraints/sparse_et.hpp"
 #include "orthomech/dynamics/equations.hpp"
 #include "orthomech/io/units.hpp"
 #include "orthomech/model/free_system.hpp"
@@ -300,15 +301,16 @@ class Dynamics {
   }
 
   // The chart's block at Eᵀ (scaled to the free system's metric). False when it is singular.
-  bool factor_chart(const MatX& Et) { return cs_.factor(Et, ws_.free.A_sqrt) > kSingularBlock; }
+  bool factor_chart(const SparseEt& Et) { return cs_.factor(Et, ws_.free.A_sqrt) > kSingularBlock; }
 
   // F in the current chart at Eᵀ = ws_.constraints.Et (factorised): F = P [I; −(E_RDᵀ)⁻¹ E_RIᵀ].
   void compute_F() {
     const Chart& c = cs_.chart();
-    const MatX& Et = ws_.constraints.Et;
+    const SparseEt& Et = ws_.constraints.Et;
     for (int k = 0; k < na_; ++k) {
       const int ik = c.independent[static_cast<size_t>(k)];
-      b_ = -Et.col(ik);
+      b_.setZero();
+      for (const SparseEt::Entry& e : Et.column(ik)) b_(e.row) = -Et.values()[e.index];
       cs_.solve(b_, col_);
       col_(ik) = 1.0;
       F_.col(k) = col_;
@@ -329,6 +331,22 @@ class Dynamics {
   }
 
   VecX M_sqrt() const { return ws_.free.M_diag.cwiseSqrt(); }
+
+  // u = A p (eq. (100)) into state_.u.
+  void velocity_from_momentum(const Eigen::Ref<const VecX>& p) {
+    if (ws_.free.diagonal_mass)
+      state_.u = ws_.free.A_diag.cwiseProduct(p);
+    else
+      state_.u.noalias() = ws_.free.A * p;  // eq. (100)
+  }
+
+  // p ← M u (eq. (5)) from state_.u.
+  void momentum_from_velocity(Eigen::Ref<VecX> p) const {
+    if (ws_.free.diagonal_mass)
+      p = ws_.free.M_diag.cwiseProduct(state_.u);
+    else
+      p.noalias() = ws_.free.M * state_.u;
+  }
 
   // H = Fᵀ M F (eq. (68)) and its Cholesky factor.
   void compute_H() {
@@ -383,7 +401,7 @@ class Dynamics {
     }
     // 2. u = F v; then Dᵀ u and Ḟ v (design §4: Eᵀ Ḟ v = −Dᵀ u, independent rows of Ḟ zero).
     state_.u.noalias() = F_ * v;
-    compute_constraint_rate(model_, state_, rotations_, ws_.constraints);  // Dᵀ u
+    compute_constraint_rate(model_, state_, rotations_, ws_.constraints.Dtu);  // Dᵀ u
     b_ = -ws_.constraints.Dtu;
     cs_.solve(b_, Fdv_);
     // 3. Free system, H (eq. (68)) and v̇.
@@ -413,10 +431,7 @@ class Dynamics {
       state_.u.setZero();
       free_system();
     }
-    if (ws_.free.diagonal_mass)
-      state_.u = ws_.free.A_diag.cwiseProduct(p);
-    else
-      state_.u.noalias() = ws_.free.A * p;  // eq. (100)
+    velocity_from_momentum(p);
     if (project_stages_) {
       // The stage's velocity admissible at the projected q with its independent components
       // kept, u = F u_I (the momenta p = M u implied): the right-hand side then depends on p
@@ -426,37 +441,38 @@ class Dynamics {
       state_.u.noalias() = F_ * v_stage_;
       // Eᵀ is that of the projected q: only Dᵀ u.
       rotations_.update(model_, state_.q);
-      compute_constraint_rate(model_, state_, rotations_, ws_.constraints);
+      compute_constraint_rate(model_, state_, rotations_, ws_.constraints.Dtu);
     } else {
-      compute_constraints(model_, state_, ws_.constraints);
+      rotations_.update(model_, state_.q);
+      compute_constraint_residual_and_jacobian(model_, state_.q, rotations_, ws_.constraints.f,
+                                               ws_.constraints.Et);
+      compute_constraint_rate(model_, state_, rotations_, ws_.constraints.Dtu);
     }
     free_system();
     tmp_ = ws_.free.Q;
     if (!ws_.free.constant_mass) tmp_.noalias() -= ws_.free.Mdot * state_.u;
     factor_G();
-    if (sparse_G_) {  // diagonal M: A = diag(A_diag)
+    const SparseEt::Matrix& E = ws_.constraints.Et.matrix();  // Eᵀ
+    if (ws_.free.diagonal_mass) {                             // A = diag(A_diag)
       tmp_.array() *= ws_.free.A_diag.array();
-      b_.noalias() = Es_ * tmp_;
+      b_.noalias() = E * tmp_;
     } else {
-      b_.noalias() = ws_.constraints.Et * (ws_.free.A * tmp_);
+      col_.noalias() = ws_.free.A * tmp_;
+      b_.noalias() = E * col_;
     }
     b_ += ws_.constraints.Dtu;
     solve_G(b_, lambda_);
     lambda_ = -lambda_;  // (L3)
     pdot_ = ws_.free.Q;
-    if (sparse_G_)
-      pdot_.noalias() += Es_.transpose() * lambda_;
-    else
-      pdot_.noalias() += ws_.constraints.Et.transpose() * lambda_;  // eq. (99) as (L3)
+    pdot_.noalias() += E.transpose() * lambda_;  // eq. (99) as (L3)
   }
 
   // G = Eᵀ A E (eq. (42)) at ws_.constraints.Et: dense Cholesky, or sparse for large diagonal-
   // mass systems.
   void factor_G() {
-    const MatX& Et = ws_.constraints.Et;
+    const SparseEt::Matrix& E = ws_.constraints.Et.matrix();  // Eᵀ
     if (nc_ > 48 && ws_.free.diagonal_mass) {
-      sparse_constraint_jacobian(Et);
-      Gs_ = Es_ * ws_.free.A_diag.asDiagonal() * Es_.transpose();  // eq. (42)
+      Gs_ = E * ws_.free.A_diag.asDiagonal() * E.transpose();  // eq. (42)
       if (!G_analyzed_) {  // Eᵀ's structural pattern, hence G's, is fixed: one ordering
         Gs_ldlt_.analyzePattern(Gs_);
         G_analyzed_ = true;
@@ -468,8 +484,8 @@ class Dynamics {
       return;
     }
     sparse_G_ = false;
-    AEt_.noalias() = ws_.free.A * Et.transpose();
-    G_.noalias() = Et * AEt_;  // eq. (42)
+    AEt_.noalias() = ws_.free.A * E.transpose();
+    G_.noalias() = E * AEt_;  // eq. (42)
     G_llt_.compute(G_);
     const auto Ld = G_llt_.matrixLLT().diagonal();
     constexpr double kSingularG = 1e-12;  // as in projection/primal.cpp
@@ -477,21 +493,6 @@ class Dynamics {
         !(Ld.minCoeff() * Ld.minCoeff() > kSingularG * Ld.maxCoeff() * Ld.maxCoeff()))
       throw SingularEvaluation{"G = EᵀAE is singular at t = " + time_text(model_, state_.t) +
                                " (redundant constraints or a change point)"};
-  }
-  // Es_ = Eᵀ on its structural pattern (ChartEngine::structural_rows, zeros kept): the
-  // pattern is set once, then only the values are read from the dense Eᵀ.
-  void sparse_constraint_jacobian(const MatX& Et) {
-    if (Es_.nonZeros() == 0) {
-      std::vector<Eigen::Triplet<double>> entries;
-      const auto& rows = cs_.structural_rows();
-      for (int i = 0; i < nc_; ++i)
-        for (const int j : rows[static_cast<size_t>(i)]) entries.emplace_back(i, j, 1.0);
-      Es_.resize(nc_, n_);
-      Es_.setFromTriplets(entries.begin(), entries.end());
-    }
-    for (Eigen::Index j = 0; j < Es_.outerSize(); ++j)
-      for (Eigen::SparseMatrix<double>::InnerIterator it(Es_, j); it; ++it)
-        it.valueRef() = Et(it.row(), j);
   }
   void solve_G(const VecX& b, VecX& x) {
     if (sparse_G_)
@@ -513,7 +514,8 @@ class Dynamics {
     s.work = work;
     compute_constraint_residual(model_, state_.q, ws_.constraints.f);
     s.residual = nc_ ? ws_.constraints.f.cwiseAbs().maxCoeff() : 0.0;
-    s.velocity_residual = nc_ ? (ws_.constraints.Et * state_.u).cwiseAbs().maxCoeff() : 0.0;
+    s.velocity_residual =
+        nc_ ? (ws_.constraints.Et.matrix() * state_.u).cwiseAbs().maxCoeff() : 0.0;
     s.measures.clear();
     for (const Measure& m : model_.measures)
       s.measures.push_back(evaluate_measure(model_, m, state_.q, &state_.u, &udot_));
@@ -524,12 +526,17 @@ class Dynamics {
       s.lambda = lambda_;
     } else {
       // R = M u̇ + Ṁ u − Q̂ = E λ.
-      tmp_ = ws_.free.M * udot_ - ws_.free.Q;
+      if (ws_.free.diagonal_mass)
+        tmp_ = ws_.free.M_diag.cwiseProduct(udot_) - ws_.free.Q;
+      else
+        tmp_ = ws_.free.M * udot_ - ws_.free.Q;
       if (!ws_.free.constant_mass) tmp_ += ws_.free.Mdot * state_.u;
       if (r_ == nc_)
         solve_transposed(tmp_, lambda_);
-      else
-        compute_multipliers(ws_.constraints.Et, tmp_, lambda_);  // minimum-norm (redundant)
+      else {  // minimum-norm (redundant): on the dense Eᵀ (a small mechanism's)
+        ws_.constraints.Et.to_dense(Et_dense_);
+        compute_multipliers(Et_dense_, tmp_, lambda_);
+      }
       s.lambda = lambda_;
     }
     compute_reactions(model_, state_.q, s.lambda, s.reactions);
@@ -541,9 +548,16 @@ class Dynamics {
   bool project_stages_;
   // The stages simulate uses (the projections' n × n matrices are not allocated: heap peak
   // 400 MB → 178 MB on the N = 200 four-bar, valgrind massif).
+  struct Constraints {
+    VecX f;       // nc: geometric residual, eq. (20)
+    SparseEt Et;  // nc × n on its structural pattern: Eᵀ, eq. (23)
+    VecX Dtu;     // nc: Dᵀu, eq. (76)
+    explicit Constraints(const Model& model)
+        : f(VecX::Zero(model.nc)), Et(model), Dtu(VecX::Zero(model.nc)) {}
+  };
   struct Stages {
     FreeSystemWorkspace free;
-    ConstraintWorkspace constraints;
+    Constraints constraints;
     explicit Stages(const Model& model) : free(model), constraints(model) {}
   } ws_;
   ChartEngine cs_;
@@ -555,7 +569,8 @@ class Dynamics {
   VecX v_stage_;  // a projected primal stage's independent velocities (evaluate_primal)
   MatX AEt_, G_;
   Eigen::LLT<MatX> G_llt_;
-  Eigen::SparseMatrix<double> Es_, Gs_;
+  Eigen::SparseMatrix<double> Gs_;
+  MatX Et_dense_;  // fill_sample's minimum-norm multipliers (redundant constraints) only
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> Gs_ldlt_;
   bool sparse_G_ = false;
   bool G_analyzed_ = false;  // Gs_ldlt_ has the ordering of G's (fixed) pattern
@@ -652,8 +667,10 @@ class Simulation {
         end_slack_(1e-14 * std::max(1.0, std::abs(T1_))),
         t_last_accept_(initial.t),
         rate_x_(VecX::Zero(model.n)),
+        rate_plus_(VecX::Zero(model.nc)),
+        rate_minus_(VecX::Zero(model.nc)),
         rate_state_(model),
-        rate_ws_(model),
+        rate_rotations_(model),
         angular_row_(static_cast<size_t>(model.nc), 0),
         local_passage_(model.nq != model.n),
         t_now_(initial.t) {
@@ -766,9 +783,13 @@ class Simulation {
   // column norm of Eᵀ at the start). Near a change point σ̂ ≈ a |t − t*| (C1), so two states
   // give the estimate t* = t_k + σ̂_k (t_k − t_{k−1}) / (σ̂_{k−1} − σ̂_k).
   void start_monitor() {
-    for (int k = 0; k < n_; ++k)
-      sigma_ref_ =
-          std::max(sigma_ref_, dyn_.ws_.constraints.Et.col(k).norm() * dyn_.ws_.free.A_sqrt(k));
+    const SparseEt& Et = dyn_.ws_.constraints.Et;
+    for (int k = 0; k < n_; ++k) {
+      double norm2 = 0.0;
+      for (const SparseEt::Entry& e : Et.column(k))
+        norm2 += Et.values()[e.index] * Et.values()[e.index];
+      sigma_ref_ = std::max(sigma_ref_, std::sqrt(norm2) * dyn_.ws_.free.A_sqrt(k));
+    }
     if (!(sigma_ref_ > 0.0)) sigma_ref_ = 1.0;
   }
 
@@ -878,10 +899,13 @@ class Simulation {
   void sample_at(double t, const VecX& y, SimulationSample& smp) {
     if (primal_) {
       dyn_.evaluate_primal(t, y.head(nq_), y.segment(nq_, n_));
-      dyn_.udot_ =
-          dyn_.ws_.free.A *
-          (dyn_.pdot_ - (dyn_.ws_.free.constant_mass ? VecX::Zero(n_)
-                                                     : VecX(dyn_.ws_.free.Mdot * dyn_.state_.u)));
+      // u̇ = A (ṗ − Ṁ u)
+      dyn_.tmp_ = dyn_.pdot_;
+      if (!dyn_.ws_.free.constant_mass) dyn_.tmp_.noalias() -= dyn_.ws_.free.Mdot * dyn_.state_.u;
+      if (dyn_.ws_.free.diagonal_mass)
+        dyn_.udot_ = dyn_.ws_.free.A_diag.cwiseProduct(dyn_.tmp_);
+      else
+        dyn_.udot_.noalias() = dyn_.ws_.free.A * dyn_.tmp_;
     } else {
       dyn_.evaluate_dual(t, y.head(nq_), y.segment(nq_, na_));
     }
@@ -963,15 +987,15 @@ class Simulation {
     }
     const double alpha = un / rate_x_.norm();
     rate_state_.q = qq;
+    rate_rotations_.update(model_, qq);
     rate_state_.u = uu + alpha * rate_x_;
-    compute_constraint_rate(model_, rate_state_, rate_ws_);
-    rate_plus_ = rate_ws_.Dtu;
+    compute_constraint_rate(model_, rate_state_, rate_rotations_, rate_plus_);
     rate_state_.u = uu - alpha * rate_x_;
-    compute_constraint_rate(model_, rate_state_, rate_ws_);
+    compute_constraint_rate(model_, rate_state_, rate_rotations_, rate_minus_);
     double d = 0.0;
     for (int i = 0; i < rank_; ++i) {
       const int row = c.rows[static_cast<size_t>(i)];
-      d += sigma_left_(i) * (rate_plus_(row) - rate_ws_.Dtu(row));
+      d += sigma_left_(i) * (rate_plus_(row) - rate_minus_(row));
     }
     rate = 0.25 * d / (alpha * sigma_ref_);
     return sigma;
@@ -1045,7 +1069,7 @@ class Simulation {
   // it; f and R do not depend on |e|, spatial.md §6.3).
   void book_step_residual(VecX& y) {
     auto qy = y.head(nq_);
-    MatX& Et = dyn_.ws_.constraints.Et;
+    SparseEt& Et = dyn_.ws_.constraints.Et;
     normalize_coordinates(model_, qy);
     q_ = qy;
     dyn_.mass_at(q_);
@@ -1058,9 +1082,9 @@ class Simulation {
     if (primal_) {
       // Invariant J = Eᵀ A p, eq. (105), before the projection.
       dyn_.state_.q = q_;
-      dyn_.state_.u.noalias() = dyn_.ws_.free.A * y.segment(nq_, n_);
+      dyn_.velocity_from_momentum(y.segment(nq_, n_));
       if (model_.nc) {
-        const double J = (Et * dyn_.state_.u).cwiseAbs().maxCoeff();
+        const double J = (Et.matrix() * dyn_.state_.u).cwiseAbs().maxCoeff();
         result_.max_invariant_J = std::max(result_.max_invariant_J, J);
         result_.max_velocity_residual = std::max(result_.max_velocity_residual, J);
       }
@@ -1071,7 +1095,7 @@ class Simulation {
   // u_step. False when the correction fails (stop_message set).
   bool correct_step(double t, VecX& y, bool& chart_changed) {
     auto qy = y.head(nq_);
-    MatX& Et = dyn_.ws_.constraints.Et;
+    SparseEt& Et = dyn_.ws_.constraints.Et;
     // The chart's block at the step's q: the corrector's first Newton step uses it, and (dual)
     // the step's velocity u = F(q) v before the correction (re-projected below).
     const bool factored = dyn_.factor_chart(Et);
@@ -1107,7 +1131,7 @@ class Simulation {
     dyn_.compute_F();
     dyn_.mass_at(q_);
     dyn_.state_.q = q_;
-    if (primal_) dyn_.state_.u.noalias() = dyn_.ws_.free.A * y.segment(nq_, n_);
+    if (primal_) dyn_.velocity_from_momentum(y.segment(nq_, n_));
     return true;
   }
 
@@ -1116,7 +1140,7 @@ class Simulation {
     dyn_.compute_H();
     const VecX vv = project_velocity(dyn_.MF_, dyn_.H_llt_, dyn_.state_.u);
     dyn_.state_.u.noalias() = dyn_.F_ * vv;
-    y.segment(nq_, n_) = dyn_.ws_.free.M * dyn_.state_.u;
+    dyn_.momentum_from_velocity(y.segment(nq_, n_));
     // A poor chart only slows the corrector: re-select it when it degrades.
     if (dyn_.chart_spread() > kSpreadLimit) {
       const Chart old = dyn_.cs_.chart();
@@ -1140,8 +1164,8 @@ class Simulation {
     // branch (a change point crossed within one step onto another branch) loses a finite
     // part of it: refused (C6).
     const VecX du = u_step_ - dyn_.F_ * y.segment(nq_, na_);
-    const double uu = u_step_.dot(dyn_.ws_.free.M * u_step_);
-    const double jump = uu > 0.0 ? std::sqrt(du.dot(dyn_.ws_.free.M * du) / uu) : 0.0;
+    const double uu = mnorm2(u_step_, u_step_);
+    const double jump = uu > 0.0 ? std::sqrt(mnorm2(du, du) / uu) : 0.0;
     if (jump > kStepVelocityJump) {
       stop_message_ = "the step to t = " + time_text(model_, t) +
                       " s left the motion's branch (its velocity changes by " +
@@ -1377,7 +1401,7 @@ class Simulation {
   // (u = α uu, eq. (70)); then the dual equations there.
   bool on_branch(double tt, const VecX& qq, const VecX& uu, BranchState& s, std::string& why) {
     s.q = qq;
-    MatX& Et = dyn_.ws_.constraints.Et;
+    SparseEt& Et = dyn_.ws_.constraints.Et;
     const SolveResult corr =
         dyn_.cs_.correct_positions(s.q, Et, f_, dq_, {.tolerance = options_.position_tolerance});
     if (corr.status != SolveStatus::converged) {
@@ -1871,9 +1895,9 @@ class Simulation {
   double pass_quality_ = kPassQuality;  // σ̂ at which the next passage is tried
   double t_last_accept_, h_last_ = 0.0;
   // chart_quality_rate's work space.
-  VecX sigma_left_, rate_x_, rate_plus_;
+  VecX sigma_left_, rate_x_, rate_plus_, rate_minus_;
   State rate_state_;
-  ConstraintWorkspace rate_ws_;
+  BodyRotations rate_rotations_;
   std::string stop_message_;  // why accept stopped the integrator
   int crossing_rewinds_ = 0;
   double last_crossing_t_star_ = -std::numeric_limits<double>::infinity();

@@ -5,8 +5,10 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <stdexcept>
 
 #include "orthomech/constraints/joints.hpp"
+#include "orthomech/constraints/sparse_et.hpp"
 #include "orthomech/model/free_system.hpp"
 #include "orthomech/numerics/small_lu.hpp"
 
@@ -22,7 +24,8 @@ ChartEngine::ChartEngine(const Model& model, int rank, ChartFactorisation factor
       n_(model.n),
       nc_(model.nc),
       r_(rank),
-      sparse_(factorisation == ChartFactorisation::sparse_when_large && rank > kSparseAbove),
+      sparse_(factorisation == ChartFactorisation::sparse_when_large && rank > kSparseAbove &&
+              !model.general),
       selector_(model.nc, model.n),
       dep_pos_(static_cast<size_t>(model.n), -1),
       metric_(VecX::Ones(model.n)),
@@ -40,24 +43,12 @@ ChartEngine::ChartEngine(const Model& model, int rank, ChartFactorisation factor
 }
 
 void ChartEngine::structural_pattern() {
-  MatX Et(nc_, n_);
+  pattern_ = SparseEt(*model_);  // the entries the joints' writers touch, whatever q
   row_columns_.assign(static_cast<size_t>(nc_), {});
-  std::vector<std::vector<char>> seen(static_cast<size_t>(nc_),
-                                      std::vector<char>(static_cast<size_t>(n_), 0));
-  for (const double scale : {0.0137, -0.0291}) {  // two generic positions near the design
-    VecX q = model_->design_q();
-    VecX du(n_);
-    for (int k = 0; k < n_; ++k) du(k) = scale * (1.0 + std::sin(1.7 * k + 0.3));
-    integrate_positions(*model_, q, du, 1.0);
-    compute_constraint_jacobian(*model_, q, Et);
-    for (int i = 0; i < nc_; ++i)
-      for (int j = 0; j < n_; ++j)
-        if (Et(i, j) != 0.0) seen[static_cast<size_t>(i)][static_cast<size_t>(j)] = 1;
+  for (int i = 0; i < nc_; ++i) {
+    const auto cols = pattern_.row_columns(i);
+    row_columns_[static_cast<size_t>(i)].assign(cols.begin(), cols.end());
   }
-  for (int i = 0; i < nc_; ++i)
-    for (int j = 0; j < n_; ++j)
-      if (seen[static_cast<size_t>(i)][static_cast<size_t>(j)])
-        row_columns_[static_cast<size_t>(i)].push_back(j);
 }
 
 // ---- Choosing a chart ---------------------------------------------------------------------------
@@ -75,16 +66,39 @@ void ChartEngine::index_chart() {
     dep_pos_[static_cast<size_t>(chart_.dependent[k])] = static_cast<int>(k);
   block_entries_.clear();
   if (!sparse_) return;
-  for (int i = 0; i < r_; ++i)
-    for (const int j : row_columns_[static_cast<size_t>(chart_.rows[static_cast<size_t>(i)])])
-      if (const int k = dep_pos_[static_cast<size_t>(j)]; k >= 0)
-        block_entries_.push_back({i, k, j});
+  // The block's structural entries in this chart, and Gs_ on that pattern (values written by
+  // factor, the ordering computed once per chart).
+  const int* row_start = pattern_.matrix().outerIndexPtr();
+  triplets_.clear();
+  for (int i = 0; i < r_; ++i) {
+    const int row = chart_.rows[static_cast<size_t>(i)];
+    const auto cols = pattern_.row_columns(row);
+    for (size_t t = 0; t < cols.size(); ++t)
+      if (const int k = dep_pos_[static_cast<size_t>(cols[t])]; k >= 0) {
+        block_entries_.push_back({i, k, cols[t], row_start[row] + static_cast<int>(t), 0});
+        triplets_.emplace_back(i, k, 1.0);
+      }
+  }
+  Gs_.resize(r_, r_);
+  Gs_.setFromTriplets(triplets_.begin(), triplets_.end());
+  Gs_.makeCompressed();
+  for (BlockEntry& e : block_entries_) {  // e.slot: the entry's place in Gs_'s values
+    const int* begin = Gs_.innerIndexPtr() + Gs_.outerIndexPtr()[e.k];
+    const int* end = Gs_.innerIndexPtr() + Gs_.outerIndexPtr()[e.k + 1];
+    e.slot = static_cast<int>(std::lower_bound(begin, end, e.i) - Gs_.innerIndexPtr());
+  }
 }
 
 bool ChartEngine::select(const MatX& Et, const VecX& A_diag) {
   if (selector_.select(Et, A_diag, options_, candidate_) != r_) return false;
   set_chart(candidate_);
   return true;
+}
+
+bool ChartEngine::select(const SparseEt& Et, const VecX& A_diag) {
+  MatX dense;  // (the start and a singular block's fallback only: not a hot path)
+  Et.to_dense(dense);
+  return select(dense, A_diag);
 }
 
 void ChartEngine::select_from_tangent(const MatX& F, const VecX& M_sqrt) {
@@ -104,11 +118,16 @@ void ChartEngine::select_from_tangent(const MatX& F, const VecX& M_sqrt) {
 
 // ---- Factorising --------------------------------------------------------------------------------
 
-double ChartEngine::factor(const MatX& Et, const VecX& A_sqrt) {
+bool ChartEngine::begin_factor(const VecX& A_sqrt) {
   metric_ = A_sqrt;
-  if (r_ == 0) return quality_ = 1.0;
+  if (r_ == 0) return false;
   row_s_ = chart_.row_scale;
   col_s_ = metric_;
+  return true;
+}
+
+double ChartEngine::factor(const MatX& Et, const VecX& A_sqrt) {
+  if (!begin_factor(A_sqrt)) return quality_ = 1.0;
   const VecX& S_R = row_s_;
   const VecX& S_D = col_s_;
   if (!sparse_) {
@@ -121,27 +140,40 @@ double ChartEngine::factor(const MatX& Et, const VecX& A_sqrt) {
     // factorisation itself at r ≈ 20, measured with bench/simulate_bench.cpp).
     return quality_ = lu_factor(G_, piv_);
   }
-  triplets_.clear();
-  for (const BlockEntry& e : block_entries_) {  // the structural entries, zero or not
-    const int dk = chart_.dependent[static_cast<size_t>(e.k)];
-    triplets_.emplace_back(
-        e.i, e.k, S_R(e.i) * Et(chart_.rows[static_cast<size_t>(e.i)], e.column) * S_D(dk));
+  double* g = Gs_.valuePtr();
+  for (const BlockEntry& e : block_entries_)  // the structural entries, zero or not
+    g[e.slot] = S_R(e.i) * Et(chart_.rows[static_cast<size_t>(e.i)], e.column) * S_D(e.column);
+  return factor_sparse();
+}
+
+double ChartEngine::factor(const SparseEt& Et, const VecX& A_sqrt) {
+  if (!begin_factor(A_sqrt)) return quality_ = 1.0;
+  const VecX& S_R = row_s_;
+  const VecX& S_D = col_s_;
+  if (!sparse_) {  // the chart's rows of Eᵀ scattered into the dense block
+    G_.setZero();
+    for (int i = 0; i < r_; ++i) {
+      const int row = chart_.rows[static_cast<size_t>(i)];
+      const auto cols = Et.row_columns(row);
+      const auto vals = Et.row_values(row);
+      for (size_t t = 0; t < cols.size(); ++t)
+        if (const int k = dep_pos_[static_cast<size_t>(cols[t])]; k >= 0)
+          G_(i, k) = S_R(i) * vals[t] * S_D(cols[t]);
+    }
+    return quality_ = lu_factor(G_, piv_);
   }
-  Gs_.setFromTriplets(triplets_.begin(), triplets_.end());
-  // The ordering (COLAMD) is computed once per pattern: the structural pattern is the same
-  // within a chart.
-  const auto nnz = Gs_.nonZeros();
-  bool same = analyzed_ && nnz == static_cast<Eigen::Index>(pattern_inner_.size());
-  if (same) {
-    for (Eigen::Index k = 0; k < nnz && same; ++k)
-      same = Gs_.innerIndexPtr()[k] == pattern_inner_[static_cast<size_t>(k)];
-    for (Eigen::Index k = 0; k <= r_ && same; ++k)
-      same = Gs_.outerIndexPtr()[k] == pattern_outer_[static_cast<size_t>(k)];
-  }
-  if (!same) {
+  if (Et.nonZeros() != pattern_.nonZeros())
+    throw std::logic_error("ChartEngine::factor: Eᵀ is not on the model's pattern");
+  const double* v = Et.values();
+  double* g = Gs_.valuePtr();
+  for (const BlockEntry& e : block_entries_) g[e.slot] = S_R(e.i) * v[e.value] * S_D(e.column);
+  return factor_sparse();
+}
+
+double ChartEngine::factor_sparse() {
+  // The pattern, hence the ordering (COLAMD), is fixed within a chart: analysed once per chart.
+  if (!analyzed_) {
     slu_.analyzePattern(Gs_);
-    pattern_inner_.assign(Gs_.innerIndexPtr(), Gs_.innerIndexPtr() + nnz);
-    pattern_outer_.assign(Gs_.outerIndexPtr(), Gs_.outerIndexPtr() + r_ + 1);
     analyzed_ = true;
   }
   slu_.factorize(Gs_);
@@ -264,7 +296,8 @@ double ChartEngine::estimate_sigma_min(VecX& w, VecX* left) {
 
 // ---- Correcting positions -----------------------------------------------------------------------
 
-double ChartEngine::polish_positions(VecX& q, MatX& Et, VecX& f, VecX& dq, int iterations) {
+template <typename Jacobian>
+double ChartEngine::polish(VecX& q, Jacobian& Et, VecX& f, VecX& dq, int iterations) {
   const VecX A_sqrt = metric_;  // (set-up of a passage only: not a hot path)
   compute_constraint_residual_and_jacobian(*model_, q, f, Et);
   double residual = f.size() ? f.cwiseAbs().maxCoeff() : 0.0;
@@ -274,7 +307,7 @@ double ChartEngine::polish_positions(VecX& q, MatX& Et, VecX& f, VecX& dq, int i
     VecX trial = q;
     integrate_positions(*model_, trial, dq, -1.0);
     VecX f_trial(f.size());
-    MatX Et_trial(Et.rows(), Et.cols());
+    Jacobian Et_trial = Et;
     compute_constraint_residual_and_jacobian(*model_, trial, f_trial, Et_trial);
     const double r_trial = f_trial.cwiseAbs().maxCoeff();
     if (!(r_trial <= 0.5 * residual)) break;
@@ -288,8 +321,9 @@ double ChartEngine::polish_positions(VecX& q, MatX& Et, VecX& f, VecX& dq, int i
   return residual;
 }
 
-ChartCorrectionResult ChartEngine::correct_positions(VecX& q, MatX& Et, VecX& f, VecX& dq,
-                                                     const ChartCorrection& options) {
+template <typename Jacobian>
+ChartCorrectionResult ChartEngine::correct(VecX& q, Jacobian& Et, VecX& f, VecX& dq,
+                                           const ChartCorrection& options) {
   ChartCorrectionResult result;
   // Newton stalled at the rounding level: an iteration that does not halve the residual. Next
   // to a change point the chart's block is ill-conditioned (σ̂ ~ 1e-4 … 1e-6) and rounding in
@@ -339,6 +373,21 @@ ChartCorrectionResult ChartEngine::correct_positions(VecX& q, MatX& Et, VecX& f,
     }
     integrate_positions(*model_, q, dq, -1.0);  // q_D ← q_D − Δq_D
   }
+}
+
+double ChartEngine::polish_positions(VecX& q, MatX& Et, VecX& f, VecX& dq, int iterations) {
+  return polish(q, Et, f, dq, iterations);
+}
+double ChartEngine::polish_positions(VecX& q, SparseEt& Et, VecX& f, VecX& dq, int iterations) {
+  return polish(q, Et, f, dq, iterations);
+}
+ChartCorrectionResult ChartEngine::correct_positions(VecX& q, MatX& Et, VecX& f, VecX& dq,
+                                                     const ChartCorrection& options) {
+  return correct(q, Et, f, dq, options);
+}
+ChartCorrectionResult ChartEngine::correct_positions(VecX& q, SparseEt& Et, VecX& f, VecX& dq,
+                                                     const ChartCorrection& options) {
+  return correct(q, Et, f, dq, options);
 }
 
 }  // namespace orthomech

@@ -12,6 +12,7 @@
 #include "orthomech/analysis/mobility.hpp"
 #include "orthomech/analysis/positions.hpp"
 #include "orthomech/constraints/joints.hpp"
+#include "orthomech/constraints/sparse_et.hpp"
 #include "orthomech/model/free_system.hpp"
 #include "orthomech/model/measures.hpp"
 #include "orthomech/projection/dual.hpp"
@@ -207,6 +208,31 @@ TEST(NoAllocationSpatial, RollingDiscAllocatesNothingAfterSetUp) {
     (void)correct_positions_in_chart(model, q_work, ws);
   }
   EXPECT_EQ(g_allocations.load() - before, 0);
+}
+
+// Eᵀ on its structural pattern (simulate's Eᵀ, issue 18): f, Eᵀ and Dᵀu allocate nothing after
+// the pattern is recorded, planar (four-bar chain) and spatial (rolling disc, Bennett).
+TEST(NoAllocationSparseEt, EvaluationsAllocateNothingAfterSetUp) {
+  for (const char* name : {"n-four-bar-40", "rolling-disc", "bennett", "andrews-squeezer"}) {
+    const Model model = test::load_bundled(name);
+    const VecX q = model.design_q();
+    SparseEt Et(model);
+    BodyRotations rotations(model);
+    VecX f(model.nc), Dtu(model.nc);
+    State s(model);
+    s.q = q;
+    s.u = VecX::Ones(model.n);
+    const long before = g_allocations.load();
+    for (int k = 0; k < 100; ++k) {
+      s.q(0) = q(0) + 1e-9 * k;
+      rotations.update(model, s.q);
+      compute_constraint_residual_and_jacobian(model, s.q, rotations, f, Et);
+      compute_constraint_jacobian(model, s.q, Et);
+      compute_constraint_rate(model, s, rotations, Dtu);
+    }
+    EXPECT_EQ(g_allocations.load() - before, 0) << name;
+    EXPECT_TRUE(f.allFinite() && Dtu.allFinite()) << name;
+  }
 }
 
 TEST(NoAllocationIntegrators, RosenbrockStepsAllocateNothing) {

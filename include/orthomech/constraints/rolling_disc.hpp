@@ -29,8 +29,10 @@ struct RollingDiscKinematics {
 // The disc's rows (from disc.row_offset): f (if f), Eᵀ (if Et), Dᵀ (if Dt), Dᵀu (if Dtu, needs u).
 // Its rows of Eᵀ and Dᵀ are added into: they must be zero on entry (compute_constraints zeroes
 // the matrices once). Allocation-free.
+// EtT: MatX, SparseEt or EtRecorder (constraints/sparse_et.hpp; instantiated for the three).
+template <typename EtT>
 void evaluate_rolling_disc(const Model& model, const RollingDisc& disc, const VecX& q,
-                           const VecX* u, VecX* f, MatX* Et, MatX* Dt, VecX* Dtu);
+                           const VecX* u, VecX* f, EtT* Et, MatX* Dt, VecX* Dtu);
 
 // The contact force of the ground on the disc (world), from the multipliers of its three rows
 // (t1, t2, n): λ_t1 t1 + λ_t2 t2 + λ_n k, acting at the contact point.

@@ -5,10 +5,12 @@
 // guessed from sample positions. Refreshing the values costs O(non-zeros): nothing of size
 // n_c · n is zeroed or stored (the dense Eᵀ of the N = 400 four-bar is 46 MB, zeroed at every
 // evaluation), which keeps a large mechanism's evaluation linear in its size.
-// Planar and spatial models (joints, knife edges, rolling discs); a general system (M(q) given by
-// functions) has no structure to record and is refused.
+// Planar and spatial models (joints, knife edges, rolling discs) get their structural pattern; a
+// general system (Eᵀ given by a function, model/general_system.hpp) has no structure to record and
+// gets the full n_c × n pattern (its values copied from the function's dense Eᵀ).
 #include <Eigen/SparseCore>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "orthomech/model/free_system.hpp"
@@ -36,8 +38,7 @@ class SparseEt {
   };
 
   SparseEt() = default;
-  // Records the pattern of the model's Eᵀ; the values are zero. Throws std::invalid_argument
-  // for a general system.
+  // Records the pattern of the model's Eᵀ; the values are zero.
   explicit SparseEt(const Model& model);
 
   [[nodiscard]] int rows() const { return static_cast<int>(m_.rows()); }
@@ -54,8 +55,11 @@ class SparseEt {
   [[nodiscard]] const double* values() const { return m_.valuePtr(); }
   // Entry (i, j); 0 outside the pattern.
   [[nodiscard]] double coeff(int i, int j) const;
-  // Zeroes the values (the writers accumulate), keeps the pattern.
-  void set_zero();
+  // Zeroes the values (the writers accumulate), keeps the pattern. Named as Eigen's, so one
+  // writer serves a dense MatX and a SparseEt.
+  void setZero();
+  // A general system: the values ← its jacobian(q), through a dense scratch kept here.
+  void set_from_general(const Model& model, const VecX& q);
   // Et (resized to n_c × n) ← this matrix, zeros outside the pattern.
   void to_dense(MatX& Et) const;
   [[nodiscard]] Row row(int i);
@@ -64,7 +68,29 @@ class SparseEt {
   Matrix m_;
   std::vector<int> column_start_;      // n + 1: column j's entries are column_entries_[start…)
   std::vector<Entry> column_entries_;  // non-zeros, by column
+  MatX general_;                       // a general system's dense Eᵀ (empty otherwise)
 };
+
+// Records the entries the writers touch (SparseEt(model) builds its pattern with it): the same
+// writers as for a dense Eᵀ, with row(i)(j) noting (i, j) and returning a sink for the value.
+class EtRecorder {
+ public:
+  struct Row {
+    EtRecorder* recorder;
+    int i;
+    double& operator()(Eigen::Index j) const {
+      recorder->entries.emplace_back(i, static_cast<int>(j));
+      return recorder->sink;
+    }
+  };
+  void setZero() {}
+  [[nodiscard]] Row row(int i) { return {this, i}; }
+  std::vector<std::pair<int, int>> entries;  // (row, column), in writing order, repeats kept
+  double sink = 0.0;
+};
+
+// The writers of every joint, knife edge and rolling disc at the design q, recorded.
+void record_constraint_pattern(const Model& model, EtRecorder& recorder);
 
 // Eᵀ(q) into its pattern (Et from SparseEt(model)). Allocation-free.
 void compute_constraint_jacobian(const Model& model, const VecX& q, SparseEt& Et);

@@ -22,6 +22,7 @@
 #include <Eigen/SparseLU>
 #include <vector>
 
+#include "orthomech/constraints/sparse_et.hpp"
 #include "orthomech/model/model.hpp"
 #include "orthomech/numerics/solve_result.hpp"
 #include "orthomech/projection/chart.hpp"
@@ -66,6 +67,7 @@ class ChartEngine {
   // At Eᵀ by the scaled rank-revealing QR (projection/chart.hpp). False when the rank found
   // differs from the branch's rank (the chart is then unchanged).
   bool select(const MatX& Et, const VecX& A_diag);
+  bool select(const SparseEt& Et, const VecX& A_diag);
   // Keeps the rows R and chooses I from a basis F of the admissible velocities: the n_a
   // components where F, scaled to the mass metric (rows × √M_kk), is best conditioned (QR with
   // column pivoting of (S F)ᵀ). For n_a = 1 this is the component that moves most, so every
@@ -79,6 +81,8 @@ class ChartEngine {
   // Factorises G = S_R E_RDᵀ S_D at Eᵀ with S_D = diag(A_sqrt) (kept for the solves and the
   // corrector). Returns the quality (1 on the sparse path), 0 when singular.
   double factor(const MatX& Et, const VecX& A_sqrt);
+  // The same from Eᵀ on its structural pattern (SparseEt of the same model).
+  double factor(const SparseEt& Et, const VecX& A_sqrt);
   // The switching policy (compute_basis): a fresh QR choice when no chart is ready; otherwise the
   // chart is kept while its quality ≥ options().switch_below, and left for the QR's best one
   // when that is better by the factor options().hysteresis (recorded in switches(), at t).
@@ -110,10 +114,13 @@ class ChartEngine {
   // Scratch: f (nc), dq (n).
   ChartCorrectionResult correct_positions(VecX& q, MatX& Et, VecX& f, VecX& dq,
                                           const ChartCorrection& options);
+  ChartCorrectionResult correct_positions(VecX& q, SparseEt& Et, VecX& f, VecX& dq,
+                                          const ChartCorrection& options);
   // Newton beyond a tolerance: from a corrected q while max |f| falls by at least half per
   // iteration (at most `iterations`), down to rounding. Leaves f, Eᵀ at the returned q,
   // factorised in the chart. Returns max |f|.
   double polish_positions(VecX& q, MatX& Et, VecX& f, VecX& dq, int iterations);
+  double polish_positions(VecX& q, SparseEt& Et, VecX& f, VecX& dq, int iterations);
 
   // ---- State
   [[nodiscard]] const Chart& chart() const { return chart_; }
@@ -140,8 +147,15 @@ class ChartEngine {
   static constexpr int kSparseAbove = 48;
 
  private:
-  void structural_pattern();  // fills row_columns_ (sparse path)
-  void index_chart();         // dep_pos_, block_entries_ of chart_
+  void structural_pattern();              // fills pattern_ and row_columns_
+  bool begin_factor(const VecX& A_sqrt);  // the scalings; false when r = 0
+  double factor_sparse();                 // Gs_ (values written) → slu_
+  template <typename Jacobian>
+  ChartCorrectionResult correct(VecX& q, Jacobian& Et, VecX& f, VecX& dq,
+                                const ChartCorrection& options);
+  template <typename Jacobian>
+  double polish(VecX& q, Jacobian& Et, VecX& f, VecX& dq, int iterations);
+  void index_chart();  // dep_pos_, block_entries_ of chart_
   void solve_in_place(Eigen::Ref<VecX> x);
   void solve_transposed_in_place(Eigen::Ref<VecX> x);
 
@@ -165,20 +179,20 @@ class ChartEngine {
   Eigen::SparseMatrix<double> Gs_;
   Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>> slu_;
   std::vector<Eigen::Triplet<double>> triplets_;
-  // Structural pattern of Eᵀ (sparse path): the columns each row can have non-zero, from Eᵀ at
-  // two generic positions (an entry that vanishes at one position, sin 0, does not at the
-  // other). block_entries_: (row of the block, column of the block, column of Eᵀ) of the block's
-  // structural entries in the current chart, so that factor reads O(non-zeros) entries and the
-  // block's pattern, hence its ordering, stays the same within a chart.
+  // Structural pattern of Eᵀ (SparseEt: the entries the joints' writers touch) and the columns
+  // of each row. block_entries_: (row of the block, column of the block, column of Eᵀ, index of
+  // the entry in a SparseEt's values, index in Gs_'s values) of the block's structural entries in
+  // the current chart, so that factor writes O(non-zeros) values into a pattern fixed within the
+  // chart, hence one ordering per chart.
+  SparseEt pattern_;
   std::vector<std::vector<int>> row_columns_;
   struct BlockEntry {
-    int i, k, column;
+    int i, k, column, value, slot;
   };
   std::vector<BlockEntry> block_entries_;
-  bool analyzed_ = false;  // slu_ has the ordering of pattern_*
-  std::vector<int> pattern_inner_, pattern_outer_;
-  VecX br_, xd_;  // r
-  VecX sw_;       // r: work vector of estimate_sigma_min
+  bool analyzed_ = false;  // slu_ has the ordering of Gs_'s pattern in this chart
+  VecX br_, xd_;           // r
+  VecX sw_;                // r: work vector of estimate_sigma_min
 };
 
 }  // namespace orthomech
