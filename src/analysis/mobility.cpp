@@ -1,12 +1,11 @@
 #include "orthomech/analysis/mobility.hpp"
 
 #include <Eigen/LU>
-#include <Eigen/OrderingMethods>
 #include <Eigen/SparseCore>
-#include <Eigen/SparseQR>
 #include <algorithm>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "orthomech/constraints/joints.hpp"
 #include "orthomech/model/free_system.hpp"
@@ -108,91 +107,16 @@ void dense_rank(const Model& model, const MatX& Et, const VecX& A_diag, const Ch
   }
 }
 
-// Rank and redundant rows by a sparse QR of the same scaled matrix as the chart selector's step 1
-// (docs/theory.md, "Rank and redundancy"):
-//   (L1) S = diag(√A) E (n × n_c), each column (a constraint row) normalised to unit length;
-//   (L2) columns in the COLAMD fill-reducing order; rows matched to columns (column j takes an
-//        unmatched row of its own pattern, the one that enters earliest) and placed in that order,
-//        the unmatched rows after them, the empty rows left out. Eigen's SparseQR reflects column
-//        j onto row j (it does not order rows), so without the matching the rows a tall S has in
-//        excess of its columns fill Q and R: 1000-link chain 669 000 entries in R, 7 000 with it;
-//   (L3) S P = Q R, left-looking Householder QR; a column whose part orthogonal to the columns
-//        kept before it, |R_kk|, is below the tolerance is dropped (moved to the end of P):
-//        Eigen's SparseQR, as SuiteSparseQR's rank detection [Davis 2011, Algorithm 915, §2];
-//   (L4) r = the number kept; the dropped columns are the redundant rows. Each is within the
-//        tolerance of the span of the kept ones, ‖(Qᵀ s_c)_{r…}‖ ≤ tolerance: largest_dropped.
-// The columns are unit vectors (|R_11| = 1 in the dense QR), so the same tolerance applies to
-// |R_kk| directly. Without column pivoting R's diagonal is not ordered: smallest_pivot is the
-// smallest kept |R_kk|.
+// Rank and redundant rows by the sparse QR (projection/chart.hpp: sparse_row_rank).
 void sparse_rank(const Model& model, const SparseJacobian& J, const VecX& A_diag,
                  const ChartOptions& options, Mobility& m) {
   m.sparse = true;
   if (model.nc == 0) return;
-  const int n = model.n, nc = model.nc;
-  SparseMat S = J.Et.transpose();  // n × n_c
-  const VecX sqrt_A = A_diag.cwiseSqrt();
-  for (Eigen::Index c = 0; c < S.outerSize(); ++c) {  // (L1)
-    double norm2 = 0.0;
-    for (SparseMat::InnerIterator it(S, c); it; ++it) {
-      it.valueRef() *= sqrt_A(it.row());
-      norm2 += it.value() * it.value();
-    }
-    if (norm2 > 0.0) S.col(c) /= std::sqrt(norm2);
-  }
-  S.makeCompressed();
-  // (L2) Column order: column j of SP is column col_at[j] of S.
-  Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> colamd;
-  Eigen::COLAMDOrdering<int>()(S, colamd);
-  std::vector<int> col_at(static_cast<size_t>(nc));
-  for (int i = 0; i < nc; ++i) col_at[static_cast<size_t>(colamd.indices()(i))] = i;
-  std::vector<int> first(static_cast<size_t>(n), nc);  // first column of each row in that order
-  for (int j = 0; j < nc; ++j)
-    for (SparseMat::InnerIterator it(S, col_at[static_cast<size_t>(j)]); it; ++it)
-      first[static_cast<size_t>(it.row())] = std::min(first[static_cast<size_t>(it.row())], j);
-  std::vector<int> row_at(static_cast<size_t>(n), -1);  // new row of each row of S (−1: empty)
-  int rows = 0;
-  for (int j = 0; j < nc; ++j) {  // matched rows, in column order
-    int best = -1;
-    for (SparseMat::InnerIterator it(S, col_at[static_cast<size_t>(j)]); it; ++it) {
-      const int r = static_cast<int>(it.row());
-      if (row_at[static_cast<size_t>(r)] >= 0) continue;
-      if (best < 0 || first[static_cast<size_t>(r)] < first[static_cast<size_t>(best)]) best = r;
-    }
-    if (best >= 0) row_at[static_cast<size_t>(best)] = rows++;
-  }
-  std::vector<int> rest;  // the unmatched nonempty rows, by the column they enter
-  for (int r = 0; r < n; ++r)
-    if (row_at[static_cast<size_t>(r)] < 0 && first[static_cast<size_t>(r)] < nc) rest.push_back(r);
-  std::stable_sort(rest.begin(), rest.end(), [&](int a, int b) {
-    return first[static_cast<size_t>(a)] < first[static_cast<size_t>(b)];
-  });
-  for (const int r : rest) row_at[static_cast<size_t>(r)] = rows++;
-  std::vector<Eigen::Triplet<double>> entries;
-  entries.reserve(static_cast<size_t>(S.nonZeros()));
-  for (int j = 0; j < nc; ++j)
-    for (SparseMat::InnerIterator it(S, col_at[static_cast<size_t>(j)]); it; ++it)
-      entries.emplace_back(row_at[static_cast<size_t>(it.row())], j, it.value());
-  SparseMat SP(rows, nc);
-  SP.setFromTriplets(entries.begin(), entries.end());
-  SP.makeCompressed();
-  Eigen::SparseQR<SparseMat, Eigen::NaturalOrdering<int>> qr;  // (L3)
-  qr.setPivotThreshold(options.rank_tolerance);
-  qr.compute(SP);
-  if (qr.info() != Eigen::Success)
-    throw std::runtime_error(std::string(__FILE__) + ":" + std::to_string(__LINE__) +
-                             ": sparse QR of E failed: " + qr.lastErrorMessage());
-  m.rank = static_cast<int>(qr.rank());  // (L4)
-  const auto& order = qr.colsPermutation().indices();
-  const SparseMat& R = qr.matrixR();
-  m.smallest_pivot = m.rank > 0 ? 1.0 : 0.0;
-  for (int k = 0; k < m.rank; ++k)
-    m.smallest_pivot = std::min(m.smallest_pivot, std::abs(R.coeff(k, k)));
-  for (int k = m.rank; k < nc; ++k) {
-    const int j = order(k);
-    m.redundant_rows.push_back(col_at[static_cast<size_t>(j)]);
-    const VecX Qt_s = qr.matrixQ().adjoint() * VecX(SP.col(j));
-    m.largest_dropped = std::max(m.largest_dropped, Qt_s.tail(rows - m.rank).norm());
-  }
+  SparseRowRank s = sparse_row_rank(J.Et, A_diag, options.rank_tolerance, false);
+  m.rank = s.rank;
+  m.smallest_pivot = s.smallest_pivot;
+  m.largest_dropped = s.largest_dropped;
+  m.redundant_rows = std::move(s.redundant_rows);
 }
 
 }  // namespace

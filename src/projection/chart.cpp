@@ -1,8 +1,30 @@
 #include "orthomech/projection/chart.hpp"
 
+#include <Eigen/OrderingMethods>
+#include <Eigen/SparseQR>
 #include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
 
 namespace orthomech {
+
+namespace {
+
+using SparseMat = Eigen::SparseMatrix<double>;  // column-major
+
+// No constraints: every velocity component is independent.
+int unconstrained_chart(Eigen::Index n, Chart& chart) {
+  chart.rows.clear();
+  chart.dependent.clear();
+  chart.independent.resize(static_cast<size_t>(n));
+  for (Eigen::Index k = 0; k < n; ++k)
+    chart.independent[static_cast<size_t>(k)] = static_cast<int>(k);
+  chart.row_scale.resize(0);
+  return 0;
+}
+
+}  // namespace
 
 ChartSelector::ChartSelector(int nc, int n)
     : scaled_E_(n, nc),
@@ -15,15 +37,7 @@ ChartSelector::ChartSelector(int nc, int n)
 int ChartSelector::select(const MatX& Et, const VecX& A_diag, const ChartOptions& options,
                           Chart& chart) {
   const Eigen::Index nc = Et.rows(), n = Et.cols();
-  if (nc == 0) {  // no constraints: every velocity component is independent
-    chart.rows.clear();
-    chart.dependent.clear();
-    chart.independent.resize(static_cast<size_t>(n));
-    for (Eigen::Index k = 0; k < n; ++k)
-      chart.independent[static_cast<size_t>(k)] = static_cast<int>(k);
-    chart.row_scale.resize(0);
-    return 0;
-  }
+  if (nc == 0) return unconstrained_chart(n, chart);
   // 1. Rows: QR with column pivoting of E = (Eᵀ)ᵀ in the metric A (each constraint row scaled
   //    by 1/‖row‖_A so that units and joint sizes do not bias the choice).
   VecX& scale = chart.row_scale;
@@ -66,6 +80,152 @@ int ChartSelector::select(const MatX& Et, const VecX& A_diag, const ChartOptions
   std::sort(chart.dependent.begin(), chart.dependent.end());
   std::sort(chart.independent.begin(), chart.independent.end());
   return rank;
+}
+
+int ChartSelector::select_sparse(const SparseMat& Et, const VecX& A_diag,
+                                 const ChartOptions& options, Chart& chart) {
+  const Eigen::Index n = Et.cols();
+  if (Et.rows() == 0) return unconstrained_chart(n, chart);
+  // 1. Rows: those the sparse QR keeps (the same scaled matrix as the dense step 1).
+  const SparseRowRank s = sparse_row_rank(Et, A_diag, options.rank_tolerance, true);
+  std::vector<char> redundant(static_cast<size_t>(Et.rows()), 0);
+  for (const int row : s.redundant_rows) redundant[static_cast<size_t>(row)] = 1;
+  chart.rows.clear();
+  for (int row = 0; row < Et.rows(); ++row)
+    if (!redundant[static_cast<size_t>(row)]) chart.rows.push_back(row);
+  const int rank = s.rank;
+  VecX norm2 = VecX::Zero(Et.rows());  // ‖row‖² in the metric A
+  for (Eigen::Index k = 0; k < Et.outerSize(); ++k)
+    for (SparseMat::InnerIterator it(Et, k); it; ++it)
+      norm2(it.row()) += it.value() * it.value() * A_diag(k);
+  chart.row_scale.resize(rank);
+  for (int k = 0; k < rank; ++k) {
+    const double norm = std::sqrt(norm2(chart.rows[static_cast<size_t>(k)]));
+    chart.row_scale(k) = norm > 0.0 ? 1.0 / norm : 1.0;
+  }
+  // 2. Columns: the n_a independent components where the orthonormal tangent basis (mass
+  //    metric) is best conditioned: the first n_a pivots of the QR of its transpose.
+  const Eigen::Index na = n - rank;
+  std::vector<int> order(static_cast<size_t>(n));
+  if (na > 0) {
+    const Eigen::ColPivHouseholderQR<MatX> qr(s.tangent.transpose());
+    for (Eigen::Index k = 0; k < n; ++k)
+      order[static_cast<size_t>(k)] = qr.colsPermutation().indices()(k);
+  } else {
+    for (Eigen::Index k = 0; k < n; ++k) order[static_cast<size_t>(k)] = static_cast<int>(k);
+  }
+  chart.independent.assign(order.begin(), order.begin() + na);
+  chart.dependent.assign(order.begin() + na, order.end());
+  std::sort(chart.dependent.begin(), chart.dependent.end());
+  std::sort(chart.independent.begin(), chart.independent.end());
+  return rank;
+}
+
+// Rank and redundant rows by a sparse QR of the same scaled matrix as ChartSelector::select's step
+// 1 (docs/theory.md, "Rank and redundancy"):
+//   (L1) S = diag(√A) E (n × n_c), each column (a constraint row) normalised to unit length;
+//   (L2) columns in the COLAMD fill-reducing order; rows matched to columns (column j takes an
+//        unmatched row of its own pattern, the one that enters earliest) and placed in that order,
+//        the unmatched rows after them, the empty rows left out. Eigen's SparseQR reflects column
+//        j onto row j (it does not order rows), so without the matching the rows a tall S has in
+//        excess of its columns fill Q and R: 1000-link chain 669 000 entries in R, 7 000 with it;
+//   (L3) S P = Q R, left-looking Householder QR; a column whose part orthogonal to the columns
+//        kept before it, |R_kk|, is below the tolerance is dropped (moved to the end of P):
+//        Eigen's SparseQR, as SuiteSparseQR's rank detection [Davis 2011, Algorithm 915, §2];
+//   (L4) r = the number kept; the dropped columns are the redundant rows. Each is within the
+//        tolerance of the span of the kept ones, ‖(Qᵀ s_c)_{r…}‖ ≤ tolerance: largest_dropped.
+// The columns are unit vectors (|R_11| = 1 in the dense QR), so the same tolerance applies to
+// |R_kk| directly. Without column pivoting R's diagonal is not ordered: smallest_pivot is the
+// smallest kept |R_kk|.
+//   (L5) with `tangent`: Q's columns r … of the nonempty rows, and a unit vector for each empty
+//        row (a component no constraint touches), span {x : Sᵀx = 0}.
+SparseRowRank sparse_row_rank(const SparseMat& Et, const VecX& A_diag, double tolerance,
+                              bool tangent) {
+  SparseRowRank m;
+  const int n = static_cast<int>(Et.cols());
+  const int nc = static_cast<int>(Et.rows());
+  if (nc == 0) {
+    if (tangent) m.tangent = MatX::Identity(n, n);
+    return m;
+  }
+  SparseMat S = Et.transpose();  // n × n_c
+  const VecX sqrt_A = A_diag.cwiseSqrt();
+  for (Eigen::Index c = 0; c < S.outerSize(); ++c) {  // (L1)
+    double norm2 = 0.0;
+    for (SparseMat::InnerIterator it(S, c); it; ++it) {
+      it.valueRef() *= sqrt_A(it.row());
+      norm2 += it.value() * it.value();
+    }
+    if (norm2 > 0.0) S.col(c) /= std::sqrt(norm2);
+  }
+  S.makeCompressed();
+  // (L2) Column order: column j of SP is column col_at[j] of S.
+  Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> colamd;
+  Eigen::COLAMDOrdering<int>()(S, colamd);
+  std::vector<int> col_at(static_cast<size_t>(nc));
+  for (int i = 0; i < nc; ++i) col_at[static_cast<size_t>(colamd.indices()(i))] = i;
+  std::vector<int> first(static_cast<size_t>(n), nc);  // first column of each row in that order
+  for (int j = 0; j < nc; ++j)
+    for (SparseMat::InnerIterator it(S, col_at[static_cast<size_t>(j)]); it; ++it)
+      first[static_cast<size_t>(it.row())] = std::min(first[static_cast<size_t>(it.row())], j);
+  std::vector<int> row_at(static_cast<size_t>(n), -1);  // new row of each row of S (−1: empty)
+  int rows = 0;
+  for (int j = 0; j < nc; ++j) {  // matched rows, in column order
+    int best = -1;
+    for (SparseMat::InnerIterator it(S, col_at[static_cast<size_t>(j)]); it; ++it) {
+      const int r = static_cast<int>(it.row());
+      if (row_at[static_cast<size_t>(r)] >= 0) continue;
+      if (best < 0 || first[static_cast<size_t>(r)] < first[static_cast<size_t>(best)]) best = r;
+    }
+    if (best >= 0) row_at[static_cast<size_t>(best)] = rows++;
+  }
+  std::vector<int> rest;  // the unmatched nonempty rows, by the column they enter
+  for (int r = 0; r < n; ++r)
+    if (row_at[static_cast<size_t>(r)] < 0 && first[static_cast<size_t>(r)] < nc) rest.push_back(r);
+  std::stable_sort(rest.begin(), rest.end(), [&](int a, int b) {
+    return first[static_cast<size_t>(a)] < first[static_cast<size_t>(b)];
+  });
+  for (const int r : rest) row_at[static_cast<size_t>(r)] = rows++;
+  std::vector<Eigen::Triplet<double>> entries;
+  entries.reserve(static_cast<size_t>(S.nonZeros()));
+  for (int j = 0; j < nc; ++j)
+    for (SparseMat::InnerIterator it(S, col_at[static_cast<size_t>(j)]); it; ++it)
+      entries.emplace_back(row_at[static_cast<size_t>(it.row())], j, it.value());
+  SparseMat SP(rows, nc);
+  SP.setFromTriplets(entries.begin(), entries.end());
+  SP.makeCompressed();
+  Eigen::SparseQR<SparseMat, Eigen::NaturalOrdering<int>> qr;  // (L3)
+  qr.setPivotThreshold(tolerance);
+  qr.compute(SP);
+  if (qr.info() != Eigen::Success)
+    throw std::runtime_error(std::string(__FILE__) + ":" + std::to_string(__LINE__) +
+                             ": sparse QR of E failed: " + qr.lastErrorMessage());
+  m.rank = static_cast<int>(qr.rank());  // (L4)
+  const auto& order = qr.colsPermutation().indices();
+  const SparseMat& R = qr.matrixR();
+  m.smallest_pivot = m.rank > 0 ? 1.0 : 0.0;
+  for (int k = 0; k < m.rank; ++k)
+    m.smallest_pivot = std::min(m.smallest_pivot, std::abs(R.coeff(k, k)));
+  for (int k = m.rank; k < nc; ++k) {
+    const int j = order(k);
+    m.redundant_rows.push_back(col_at[static_cast<size_t>(j)]);
+    const VecX Qt_s = qr.matrixQ().adjoint() * VecX(SP.col(j));
+    m.largest_dropped = std::max(m.largest_dropped, Qt_s.tail(rows - m.rank).norm());
+  }
+  if (!tangent) return m;
+  m.tangent = MatX::Zero(n, n - m.rank);  // (L5)
+  int c = 0;
+  VecX e(rows);
+  for (int k = m.rank; k < rows; ++k, ++c) {
+    e.setZero();
+    e(k) = 1.0;
+    const VecX y = qr.matrixQ() * e;
+    for (int r = 0; r < n; ++r)
+      if (row_at[static_cast<size_t>(r)] >= 0) m.tangent(r, c) = y(row_at[static_cast<size_t>(r)]);
+  }
+  for (int r = 0; r < n; ++r)
+    if (row_at[static_cast<size_t>(r)] < 0) m.tangent(r, c++) = 1.0;
+  return m;
 }
 
 }  // namespace orthomech

@@ -96,7 +96,14 @@ bool ChartEngine::select(const MatX& Et, const VecX& A_diag) {
 }
 
 bool ChartEngine::select(const SparseEt& Et, const VecX& A_diag) {
-  MatX dense;  // (the start and a singular block's fallback only: not a hot path)
+  // (The start and a singular block's fallback only: not a hot path.)
+  if (sparse_ && n_ >= kSparseSelectFrom) {
+    const Eigen::SparseMatrix<double> E(Et.matrix());
+    if (selector_.select_sparse(E, A_diag, options_, candidate_) != r_) return false;
+    set_chart(candidate_);
+    return true;
+  }
+  MatX dense;
   Et.to_dense(dense);
   return select(dense, A_diag);
 }

@@ -8,6 +8,7 @@
 // Both choices come from rank-revealing QR with column pivoting on Eᵀ scaled to the mass metric
 // (columns by 1/√M_kk, rows to unit length), so they do not depend on units.
 #include <Eigen/QR>
+#include <Eigen/SparseCore>
 #include <vector>
 
 #include "orthomech/model/model.hpp"
@@ -41,7 +42,14 @@ class ChartSelector {
   // Returns the rank. Allocation-free for a given (nc, n) after construction, except for the
   // index vectors of `chart` (resized only if the rank changed).
   int select(const MatX& Et, const VecX& A_diag, const ChartOptions& options, Chart& chart);
-  // |R_kk| / |R_11| of the last row selection (size nc, in pivot order), for reports.
+  // The same by a sparse QR (sparse_row_rank) for large mechanisms, where the two dense QRs cost
+  // O(n³) (n = 1203: 8 s): rows = those the sparse QR keeps; dependent components = all but the
+  // n_a where an orthonormal basis of the admissible velocities in the mass metric is best
+  // conditioned (QR with column pivoting of its transpose, as ChartEngine::select_from_tangent).
+  // Allocates (a start or a fallback, not a hot path); row_pivots()/row_order() are not updated.
+  int select_sparse(const Eigen::SparseMatrix<double>& Et, const VecX& A_diag,
+                    const ChartOptions& options, Chart& chart);
+  // |R_kk| / |R_11| of the last dense row selection (size nc, in pivot order), for reports.
   [[nodiscard]] const VecX& row_pivots() const { return row_pivots_; }
   [[nodiscard]] const std::vector<int>& row_order() const { return row_order_; }
 
@@ -53,5 +61,19 @@ class ChartSelector {
   VecX row_pivots_;
   std::vector<int> row_order_;
 };
+
+// Rank and redundant rows of Eᵀ (n_c × n) by a sparse QR of S = diag(√A) E with unit columns
+// (docs/theory.md, "Rank and redundancy"; compute_mobility's sparse path and select_sparse).
+struct SparseRowRank {
+  int rank = 0;
+  std::vector<int> redundant_rows;  // the rows the QR dropped, in the order dropped
+  double smallest_pivot = 0.0;      // smallest kept |R_kk| (the columns have unit length)
+  double largest_dropped = 0.0;     // largest part of a dropped row outside the kept ones' span
+  // With `tangent`: n × (n − rank), an orthonormal basis of {x : Sᵀx = 0}, i.e. of the admissible
+  // velocities u = diag(√A) x in the mass metric (x = √M u for a diagonal M).
+  MatX tangent;
+};
+[[nodiscard]] SparseRowRank sparse_row_rank(const Eigen::SparseMatrix<double>& Et,
+                                            const VecX& A_diag, double tolerance, bool tangent);
 
 }  // namespace orthomech

@@ -145,6 +145,10 @@ class ChartEngine {
   // Above this rank a `sparse_when_large` engine factorises sparse (dense LU is cheaper for the
   // small blocks of ordinary linkages; measured in bench/simulate_bench.cpp).
   static constexpr int kSparseAbove = 48;
+  // select(SparseEt) chooses by the sparse QR (ChartSelector::select_sparse) from n = 600 on
+  // (n-four-bar-100: n = 603), where the dense QRs' O(n³) dominates a run's start; below, the
+  // dense choice (the charts every test of smaller mechanisms was validated with) is kept.
+  static constexpr int kSparseSelectFrom = 600;
 
  private:
   void structural_pattern();              // fills pattern_ and row_columns_

@@ -7,9 +7,15 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/LU>
+#include <Eigen/SVD>
 #include <algorithm>
 #include <numeric>
 #include <vector>
+
+#include "orthomech/analysis/mobility.hpp"
+#include "orthomech/constraints/joints.hpp"
+#include "orthomech/io/mechanism_file.hpp"
+#include "unit/analysis/large_mechanisms.hpp"
 
 namespace orthomech {
 namespace {
@@ -87,6 +93,104 @@ TEST(Chart, NoConstraintsEveryComponentIndependent) {
   EXPECT_TRUE(c.rows.empty());
   EXPECT_TRUE(c.dependent.empty());
   EXPECT_EQ(c.independent, (std::vector<int>{0, 1, 2}));
+}
+
+// ---- The sparse selection (select_sparse, sparse_row_rank) ----------------------------------
+
+using SparseMat = Eigen::SparseMatrix<double>;
+
+// The tangent basis is orthonormal and admissible: (E ⊙ √A) x = 0, computed here densely.
+void expect_tangent(const MatX& Et, const VecX& A_diag, const SparseRowRank& s) {
+  const Eigen::Index n = Et.cols();
+  ASSERT_EQ(s.tangent.rows(), n);
+  ASSERT_EQ(s.tangent.cols(), n - s.rank);
+  const MatX I = MatX::Identity(s.tangent.cols(), s.tangent.cols());
+  EXPECT_LT((s.tangent.transpose() * s.tangent - I).cwiseAbs().maxCoeff(), 1e-12);
+  const MatX S = Et * A_diag.cwiseSqrt().asDiagonal();
+  EXPECT_LT((S * s.tangent).cwiseAbs().maxCoeff(), 1e-12 * std::max(1.0, S.cwiseAbs().maxCoeff()));
+}
+
+TEST(ChartSparse, DependentRowIsDroppedAndTheTangentIsTheNullSpace) {
+  MatX Et(3, 4);
+  Et << 1, 2, 0, -1,  //
+      0, 1, 3, 0.2,   //
+      1, 3, 3, -0.8;  // row 0 + row 1
+  VecX A_diag(4);
+  A_diag << 1.0, 0.5, 2.0, 0.25;
+  const SparseRowRank s = sparse_row_rank(Et.sparseView(), A_diag, 1e-8, true);
+  EXPECT_EQ(s.rank, 2);
+  ASSERT_EQ(s.redundant_rows.size(), 1U);
+  EXPECT_LE(s.largest_dropped, 1e-12);
+  expect_tangent(Et, A_diag, s);
+  ChartSelector selector(3, 4);
+  Chart c;
+  ASSERT_EQ(selector.select_sparse(Et.sparseView(), A_diag, ChartOptions{}, c), 2);
+  expect_partition(c, 4);
+  MatX block(2, 2);  // the chart's block is nonsingular
+  for (int i = 0; i < 2; ++i)
+    for (int k = 0; k < 2; ++k)
+      block(i, k) = Et(c.rows[static_cast<size_t>(i)], c.dependent[static_cast<size_t>(k)]);
+  EXPECT_EQ(Eigen::FullPivLU<MatX>(block).rank(), 2);
+  for (int k = 0; k < 2; ++k) {
+    const int row = c.rows[static_cast<size_t>(k)];
+    EXPECT_NEAR(c.row_scale(k),
+                1.0 / Et.row(row).cwiseProduct(A_diag.cwiseSqrt().transpose()).norm(), 1e-15);
+  }
+}
+
+// The same choice as the dense QR on one row: the dependent component has the largest
+// |E_k| √A_k, and a heavier component 0 moves it.
+TEST(ChartSparse, DependentComponentIsBestConditionedInTheMassMetric) {
+  MatX Et(1, 3);
+  Et << 1.0, 0.0, 0.01;
+  ChartSelector selector(1, 3);
+  Chart c;
+  ASSERT_EQ(selector.select_sparse(Et.sparseView(), VecX::Ones(3), ChartOptions{}, c), 1);
+  EXPECT_EQ(c.dependent, std::vector<int>{0});
+  VecX A_diag(3);
+  A_diag << 1e-6, 1.0, 1.0;
+  ASSERT_EQ(selector.select_sparse(Et.sparseView(), A_diag, ChartOptions{}, c), 1);
+  EXPECT_EQ(c.dependent, std::vector<int>{2});
+  ASSERT_EQ(selector.select_sparse(SparseMat(0, 3), VecX::Ones(3), ChartOptions{}, c), 0);
+  EXPECT_EQ(c.independent, (std::vector<int>{0, 1, 2}));
+}
+
+// 2-norm condition number of the chart's scaled block S_R E_RD S_D (an SVD here).
+double block_condition(const MatX& Et, const VecX& A_diag, const Chart& c) {
+  const auto r = static_cast<Eigen::Index>(c.rows.size());
+  MatX G(r, r);
+  for (Eigen::Index i = 0; i < r; ++i)
+    for (Eigen::Index k = 0; k < r; ++k) {
+      const int d = c.dependent[static_cast<size_t>(k)];
+      G(i, k) = c.row_scale(i) * Et(c.rows[static_cast<size_t>(i)], d) * std::sqrt(A_diag(d));
+    }
+  const VecX sv = Eigen::BDCSVD<MatX>(G).singularValues();
+  return sv(0) / sv(sv.size() - 1);
+}
+
+// A large mechanism (the N-four-bar N = 100, n = 603, where simulate uses the sparse choice):
+// the sparse chart has the dense chart's rank, and its block is within 20× of the dense block's
+// conditioning, at a regular position and next to the change point (links at 2°).
+TEST(ChartSparse, LargeFourBarBlockAsWellConditionedAsTheDenseChoice) {
+  for (const double theta : {0.7, 0.035}) {
+    const Model model = parse_mechanism(test::n_four_bar_yaml(100, theta), "n-four-bar-100");
+    ASSERT_GE(model.n, 600);
+    const VecX q = model.design_q();
+    MatX Et(model.nc, model.n);
+    compute_constraint_jacobian(model, q, Et);
+    const VecX A_diag = inverse_mass_diagonal(model, q);
+    ChartSelector selector(model.nc, model.n);
+    Chart dense, sparse;
+    const int rank = selector.select(Et, A_diag, ChartOptions{}, dense);
+    ASSERT_EQ(selector.select_sparse(Et.sparseView(), A_diag, ChartOptions{}, sparse), rank);
+    expect_partition(sparse, model.n);
+    EXPECT_EQ(sparse.rows, dense.rows);
+    const double k_dense = block_condition(Et, A_diag, dense);
+    const double k_sparse = block_condition(Et, A_diag, sparse);
+    EXPECT_LT(k_sparse, 20.0 * k_dense) << "theta " << theta << ": dense " << k_dense;
+    const SparseRowRank s = sparse_row_rank(Et.sparseView(), A_diag, 1e-8, true);
+    expect_tangent(Et, A_diag, s);
+  }
 }
 
 }  // namespace
