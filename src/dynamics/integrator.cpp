@@ -40,6 +40,10 @@ std::string underflow_message(double t, double dt) {
 double first_step(const OdeOptions& o) {
   const double span = o.t_end - o.t0;
   double dt = o.dt_init > 0.0 ? o.dt_init : 1e-6 * span;
+  // Not at the rounding level of t (step_underflow): 1e-6 of a short run's span is (t_end = 1e-9
+  // stopped at its first step with "step size underflow at t = 0").
+  const double t_scale = std::max({1.0, std::abs(o.t0), std::abs(o.t_end)});
+  dt = std::max(dt, 1024.0 * std::numeric_limits<double>::epsilon() * t_scale);
   if (o.max_dt > 0.0) dt = std::min(dt, o.max_dt);
   return std::min(dt, span);
 }

@@ -60,5 +60,30 @@ TEST(Integrator, SmoothProblemCompletes) {
   EXPECT_NEAR(x(0), std::exp(1.0), 1e-10);
 }
 
+// A short run (t_end = 1e-9) completes with every stepper: its first step is not at the rounding
+// level of t (it was 1e-6 of the span, 1e-15: "step size underflow at t = 0"). ẋ = x: e^(1e-9).
+TEST(Integrator, AShortRunCompletesWithEveryStepper) {
+  OdeProblem p;
+  p.rhs = [](const VecX& x, VecX& dx, double) { dx = x; };
+  p.accept = [](double, VecX&) { return true; };
+  p.output = [](double, const VecX&) {};
+  for (const OdeStepper stepper : {OdeStepper::dopri5, OdeStepper::rkf78,
+                                   OdeStepper::bulirsch_stoer, OdeStepper::rosenbrock4}) {
+    for (const double t_end : {1e-9, 1e-12}) {
+      OdeOptions o;
+      o.stepper = stepper;
+      o.t_end = t_end;
+      o.dt_out = t_end;
+      o.rtol = 1e-10;
+      o.atol = 1e-12;
+      VecX x = VecX::Ones(1);
+      const OdeStats s = integrate_ode(p, x, o);
+      EXPECT_TRUE(s.completed) << static_cast<int>(stepper) << " t_end " << t_end << ": "
+                               << s.message;
+      EXPECT_NEAR(x(0), std::exp(t_end), 1e-15) << static_cast<int>(stepper);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace orthomech::detail
