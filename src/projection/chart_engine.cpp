@@ -22,7 +22,6 @@ constexpr size_t kMaxRecordedSwitches = 1024;
 ChartEngine::ChartEngine(const Model& model, int rank, ChartFactorisation factorisation)
     : model_(&model),
       n_(model.n),
-      nc_(model.nc),
       r_(rank),
       sparse_(factorisation == ChartFactorisation::sparse_when_large && rank > kSparseAbove &&
               !model.general),
@@ -39,16 +38,7 @@ ChartEngine::ChartEngine(const Model& model, int rank, ChartFactorisation factor
       sw_(rank) {
   switches_.reserve(kMaxRecordedSwitches);
   triplets_.reserve(static_cast<size_t>(8 * rank + 8));
-  if (sparse_) structural_pattern();
-}
-
-void ChartEngine::structural_pattern() {
-  pattern_ = SparseEt(*model_);  // the entries the joints' writers touch, whatever q
-  row_columns_.assign(static_cast<size_t>(nc_), {});
-  for (int i = 0; i < nc_; ++i) {
-    const auto cols = pattern_.row_columns(i);
-    row_columns_[static_cast<size_t>(i)].assign(cols.begin(), cols.end());
-  }
+  if (sparse_) pattern_ = SparseEt(model);  // the entries the joints' writers touch, whatever q
 }
 
 // ---- Choosing a chart ---------------------------------------------------------------------------
@@ -252,7 +242,8 @@ void ChartEngine::solve(const VecX& b, VecX& x) {
 }
 
 void ChartEngine::solve_dependent(MatX& rhs, MatX& out) {
-  if (r_ == 0) return;
+  // No columns (DOF 0): nothing to solve, and rows of an empty matrix would offset a null pointer.
+  if (r_ == 0 || out.cols() == 0) return;
   for (int i = 0; i < r_; ++i) rhs.row(i) *= row_s_(i);
   // Column by column (vector solves are far cheaper than blocked matrix paths for the small
   // blocks of linkages).

@@ -135,12 +135,6 @@ class ChartEngine {
   [[nodiscard]] int rank() const { return r_; }
   [[nodiscard]] int na() const { return n_ - r_; }
   [[nodiscard]] bool sparse() const { return sparse_; }
-  // Structural pattern of Eᵀ: the columns each constraint row can have non-zero (computed on
-  // first use when the engine factorises dense).
-  [[nodiscard]] const std::vector<std::vector<int>>& structural_rows() {
-    if (row_columns_.empty() && nc_ > 0) structural_pattern();
-    return row_columns_;
-  }
 
   // Above this rank a `sparse_when_large` engine factorises sparse (dense LU is cheaper for the
   // small blocks of ordinary linkages; measured in bench/simulate_bench.cpp).
@@ -151,7 +145,6 @@ class ChartEngine {
   static constexpr int kSparseSelectFrom = 600;
 
  private:
-  void structural_pattern();              // fills pattern_ and row_columns_
   bool begin_factor(const VecX& A_sqrt);  // the scalings; false when r = 0
   double factor_sparse();                 // Gs_ (values written) → slu_
   template <typename Jacobian>
@@ -164,7 +157,7 @@ class ChartEngine {
   void solve_transposed_in_place(Eigen::Ref<VecX> x);
 
   const Model* model_;
-  int n_, nc_, r_;
+  int n_, r_;
   bool sparse_;
   Chart chart_;
   Chart candidate_;  // update's QR choice (kept: no allocation once sized)
@@ -183,13 +176,12 @@ class ChartEngine {
   Eigen::SparseMatrix<double> Gs_;
   Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>> slu_;
   std::vector<Eigen::Triplet<double>> triplets_;
-  // Structural pattern of Eᵀ (SparseEt: the entries the joints' writers touch) and the columns
-  // of each row. block_entries_: (row of the block, column of the block, column of Eᵀ, index of
+  // Structural pattern of Eᵀ (SparseEt: the entries the joints' writers touch, sparse engines
+  // only). block_entries_: (row of the block, column of the block, column of Eᵀ, index of
   // the entry in a SparseEt's values, index in Gs_'s values) of the block's structural entries in
   // the current chart, so that factor writes O(non-zeros) values into a pattern fixed within the
   // chart, hence one ordering per chart.
   SparseEt pattern_;
-  std::vector<std::vector<int>> row_columns_;
   struct BlockEntry {
     int i, k, column, value, slot;
   };
