@@ -11,6 +11,7 @@
 #include "commands.hpp"
 #include "common.hpp"
 #include "orthomech/error.hpp"
+#include "orthomech/projection/workspace.hpp"
 #include "orthomech_git_revision.hpp"
 
 namespace orthomech::cli {
@@ -45,6 +46,10 @@ int run(int argc, const char* const* argv) {
   } catch (const orthomech::InputError& e) {
     std::fflush(stdout);
     std::cerr << e.what() << '\n';
+    return kBadInput;
+  } catch (const orthomech::ModelTooLarge& e) {  // for a command's dense matrices (workspace.hpp)
+    std::fflush(stdout);
+    std::cerr << "orthomech: " << e.what() << '\n';
     return kBadInput;
   } catch (const std::exception& e) {
     std::cerr << "orthomech: internal error: " << e.what() << '\n';

@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "orthomech/constraints/joints.hpp"
+#include "orthomech/constraints/sparse_et.hpp"
 #include "orthomech/model/free_system.hpp"
 
 namespace orthomech {
@@ -39,15 +40,39 @@ struct SparseJacobian {
   VecX row_norm;
 };
 
-SparseJacobian sparse_jacobian(const MatX& Et) {
-  SparseJacobian J;
-  J.Et = Et.sparseView(0.0, 0.0);  // exact zeros only: every computed entry is kept
-  J.Et.makeCompressed();
-  J.row_norm = VecX::Zero(Et.rows());
+// ‖row‖ of every constraint row of J.Et.
+void compute_row_norms(SparseJacobian& J) {
+  J.row_norm = VecX::Zero(J.Et.rows());
   for (Eigen::Index k = 0; k < J.Et.outerSize(); ++k)
     for (SparseMat::InnerIterator it(J.Et, k); it; ++it)
       J.row_norm(it.row()) += it.value() * it.value();
   J.row_norm = J.row_norm.cwiseSqrt();
+}
+
+SparseJacobian sparse_jacobian(const MatX& Et) {
+  SparseJacobian J;
+  J.Et = Et.sparseView(0.0, 0.0);  // exact zeros only: every computed entry is kept
+  J.Et.makeCompressed();
+  compute_row_norms(J);
+  return J;
+}
+
+// The same from the joints' writers into Eᵀ's structural pattern (SparseEt; the values are those
+// of the dense Eᵀ bit for bit), without the dense n_c × n matrix (46 MB at N-four-bar-400).
+// Exact zeros of the pattern are dropped, as sparseView drops them above.
+SparseJacobian sparse_jacobian(const Model& model, const VecX& q) {
+  if (model.general) {
+    MatX Et(model.nc, model.n);
+    compute_constraint_jacobian(model, q, Et);
+    return sparse_jacobian(Et);
+  }
+  SparseEt pattern(model);
+  compute_constraint_jacobian(model, q, pattern);
+  SparseJacobian J;
+  J.Et = pattern.matrix();  // row-major to column-major
+  J.Et.prune([](Eigen::Index, Eigen::Index, double v) { return v != 0.0; });
+  J.Et.makeCompressed();
+  compute_row_norms(J);
   return J;
 }
 
@@ -121,26 +146,6 @@ void sparse_rank(const Model& model, const SparseJacobian& J, const VecX& A_diag
 
 }  // namespace
 
-VecX inverse_mass_diagonal(const Model& model, const VecX& q) {
-  if (model.general) {
-    MatX A(model.n, model.n);
-    compute_inverse_mass_matrix(model, q, A);
-    return A.diagonal();
-  }
-  VecX d(model.n);
-  for (const Body& b : model.bodies) {  // eq. (6): A is block diagonal, A_b = M_b⁻¹
-    const int o = b.u_offset;
-    d(o) = 1.0 / b.mass;
-    d(o + 1) = 1.0 / b.mass;
-    if (b.kind == BodyKind::rigid) d(o + 2) = 1.0 / b.inertia;
-    if (b.kind == BodyKind::spatial) {  // A_b = diag(I₃/m, J⁻¹)
-      d(o + 2) = 1.0 / b.mass;
-      d.segment<3>(o + 3) = b.spatial.inertia.inverse().diagonal();
-    }
-  }
-  return d;
-}
-
 Mobility compute_mobility(const Model& model, const VecX& q, const ChartOptions& options,
                           RankMethod method) {
   Mobility m;
@@ -152,14 +157,15 @@ Mobility compute_mobility(const Model& model, const VecX& q, const ChartOptions&
   if (method == RankMethod::automatic)
     method =
         !model.general && model.n >= kSparseMobilityFrom ? RankMethod::sparse : RankMethod::dense;
-  MatX Et(model.nc, model.n);
-  compute_constraint_jacobian(model, q, Et);
   const VecX A_diag = inverse_mass_diagonal(model, q);
-  const SparseJacobian J = sparse_jacobian(Et);
-  if (method == RankMethod::sparse) {
-    Et.resize(0, 0);  // the sparse path needs only J
+  SparseJacobian J;
+  if (method == RankMethod::sparse) {  // no dense Eᵀ
+    J = sparse_jacobian(model, q);
     sparse_rank(model, J, A_diag, options, m);
   } else {
+    MatX Et(model.nc, model.n);
+    compute_constraint_jacobian(model, q, Et);
+    J = sparse_jacobian(Et);
     dense_rank(model, Et, A_diag, options, m);
   }
   m.dof = model.n - m.rank;
@@ -184,9 +190,7 @@ std::vector<int> idle_body_indices(const Model& model, const Mobility& m) {
 
 MatX idle_motions(const Model& model, const VecX& q, const std::vector<int>& idle) {
   if (idle.empty()) return MatX(model.n, 0);
-  MatX Et(model.nc, model.n);
-  compute_constraint_jacobian(model, q, Et);
-  const SparseJacobian J = sparse_jacobian(Et);
+  const SparseJacobian J = sparse_jacobian(model, q);
   const VecX A_diag = inverse_mass_diagonal(model, q);
   std::vector<VecX> motions;
   for (const int b : idle) {

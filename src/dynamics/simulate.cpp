@@ -332,6 +332,12 @@ class Dynamics {
 
   VecX M_sqrt() const { return ws_.free.M_diag.cwiseSqrt(); }
 
+  // M x, whichever way the stage stores M (set-up only: allocates).
+  [[nodiscard]] VecX mass_times(const VecX& x) const {
+    if (ws_.free.diagonal_mass) return ws_.free.M_diag.cwiseProduct(x);
+    return ws_.free.M * x;
+  }
+
   // u = A p (eq. (100)) into state_.u.
   void velocity_from_momentum(const Eigen::Ref<const VecX>& p) {
     if (ws_.free.diagonal_mass)
@@ -484,7 +490,12 @@ class Dynamics {
       return;
     }
     sparse_G_ = false;
-    AEt_.noalias() = ws_.free.A * E.transpose();
+    if (ws_.free.diagonal_mass) {
+      AEt_ = E.transpose();
+      AEt_.array().colwise() *= ws_.free.A_diag.array();  // A Eᵀ with A = diag(A_diag)
+    } else {
+      AEt_.noalias() = ws_.free.A * E.transpose();
+    }
     G_.noalias() = E * AEt_;  // eq. (42)
     G_llt_.compute(G_);
     const auto Ld = G_llt_.matrixLLT().diagonal();
@@ -558,7 +569,8 @@ class Dynamics {
   struct Stages {
     FreeSystemWorkspace free;
     Constraints constraints;
-    explicit Stages(const Model& model) : free(model), constraints(model) {}
+    explicit Stages(const Model& model)
+        : free(model, MassStorage::diagonal_if_possible), constraints(model) {}
   } ws_;
   ChartEngine cs_;
   State state_;
@@ -740,7 +752,7 @@ class Simulation {
     VecX v = project_velocity(dyn_.MF_, dyn_.H_llt_, u0);
     {
       const VecX du = u0 - dyn_.F_ * v;
-      result_.kinetic_removed = 0.5 * du.dot(dyn_.ws_.free.M * du);
+      result_.kinetic_removed = 0.5 * du.dot(dyn_.mass_times(du));
     }
     if (!options_.initial_rates.empty()) apply_initial_rates(v);
     return v;
@@ -772,7 +784,7 @@ class Simulation {
   void initial_ode_state(const VecX& v) {
     x_.head(nq_) = q_;
     if (primal_)
-      x_.segment(nq_, n_) = dyn_.ws_.free.M * (dyn_.F_ * v);  // p = M u, eq. (5)
+      x_.segment(nq_, n_) = dyn_.mass_times(dyn_.F_ * v);  // p = M u, eq. (5)
     else
       x_.segment(nq_, na_) = v;
     x_(nx_ - 1) = 0.0;

@@ -18,7 +18,9 @@
 namespace orthomech::detail {
 
 // Limits of the file beyond the numbers' (docs/file-format.md "Limits").
-constexpr size_t kMaxBodies = 1000;      // the dense rank of E (info) stays within seconds
+// Bodies: simulate and info are linear in them (sparse Eᵀ, charts, mobility); the commands with
+// dense n × n matrices refuse a model too large for them (ModelTooLarge, projection/workspace.hpp).
+constexpr size_t kMaxBodies = 2500;
 constexpr size_t kMaxCoefficients = 16;  // a polynomial driver of degree 15 at most
 constexpr size_t kMaxListItems = 10000;  // joints, loads, measures, drivers, design positions
 

@@ -56,6 +56,58 @@ void compute_mass_matrix_rate(const Model& model, const VecX& q, const VecX& u, 
 
 bool mass_matrix_is_constant(const Model& model) { return !model.general; }
 
+bool mass_matrix_is_diagonal(const Model& model) {
+  if (model.general) return false;
+  for (const Body& b : model.bodies) {
+    if (b.kind != BodyKind::spatial) continue;
+    const Mat3& J = b.spatial.inertia;
+    if (J(0, 1) != 0.0 || J(0, 2) != 0.0 || J(1, 2) != 0.0 || J(1, 0) != 0.0 || J(2, 0) != 0.0 ||
+        J(2, 1) != 0.0)
+      return false;
+  }
+  return true;
+}
+
+VecX mass_matrix_diagonal(const Model& model, const VecX& q) {
+  if (model.general) {
+    MatX M(model.n, model.n);
+    model.general->mass(q, M);
+    return M.diagonal();
+  }
+  VecX d(model.n);
+  for (const Body& b : model.bodies) {  // eq. (4): M is block diagonal, as compute_mass_matrix
+    const int o = b.u_offset;
+    d(o) = b.mass;
+    d(o + 1) = b.mass;
+    if (b.kind == BodyKind::rigid) d(o + 2) = b.inertia;
+    if (b.kind == BodyKind::spatial) {  // M_b = diag(m I₃, J)
+      d(o + 2) = b.mass;
+      d.segment<3>(o + 3) = b.spatial.inertia.diagonal();
+    }
+  }
+  return d;
+}
+
+VecX inverse_mass_diagonal(const Model& model, const VecX& q) {
+  if (model.general) {
+    MatX A(model.n, model.n);
+    compute_inverse_mass_matrix(model, q, A);
+    return A.diagonal();
+  }
+  VecX d(model.n);
+  for (const Body& b : model.bodies) {  // eq. (6): A is block diagonal, A_b = M_b⁻¹
+    const int o = b.u_offset;
+    d(o) = 1.0 / b.mass;
+    d(o + 1) = 1.0 / b.mass;
+    if (b.kind == BodyKind::rigid) d(o + 2) = 1.0 / b.inertia;
+    if (b.kind == BodyKind::spatial) {  // A_b = diag(I₃/m, J⁻¹)
+      d(o + 2) = 1.0 / b.mass;
+      d.segment<3>(o + 3) = b.spatial.inertia.inverse().diagonal();
+    }
+  }
+  return d;
+}
+
 void integrate_positions(const Model& model, VecX& q, const VecX& du, double h) {
   if (model.general) {
     q += h * du;  // q̇ = u

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "orthomech/model/free_system.hpp"  // inverse_mass_diagonal
 #include "orthomech/model/model.hpp"
 #include "orthomech/projection/chart.hpp"
 
@@ -44,10 +45,6 @@ inline constexpr int kSparseMobilityFrom = 600;
 [[nodiscard]] Mobility compute_mobility(const Model& model, const VecX& q,
                                         const ChartOptions& options = {},
                                         RankMethod method = RankMethod::automatic);
-
-// The diagonal of A = M⁻¹ (eq. (6)) at q, without forming the n × n matrix (except for a model
-// given by functions, Model::general). Equal to compute_inverse_mass_matrix(…).diagonal().
-[[nodiscard]] VecX inverse_mass_diagonal(const Model& model, const VecX& q);
 
 // The indices (Model::bodies) of the bodies of m.idle.
 [[nodiscard]] std::vector<int> idle_body_indices(const Model& model, const Mobility& m);

@@ -20,6 +20,13 @@ void compute_inverse_mass_matrix(const Model& model, const VecX& q, MatX& A);
 // Ṁ = dM/dt along u (zero for bodies in absolute coordinates).
 void compute_mass_matrix_rate(const Model& model, const VecX& q, const VecX& u, MatX& Mdot);
 [[nodiscard]] bool mass_matrix_is_constant(const Model& model);
+// True when M is diagonal whatever q, known from the model alone: bodies (not a model given by
+// functions, Model::general) whose spatial inertias, if any, are diagonal in the body frame.
+[[nodiscard]] bool mass_matrix_is_diagonal(const Model& model);
+// The diagonal of M (eq. (4)) and of A = M⁻¹ (eq. (6)) at q, without forming the n × n matrix
+// (except for a model given by functions). Equal, bit for bit, to the dense matrices' diagonals.
+[[nodiscard]] VecX mass_matrix_diagonal(const Model& model, const VecX& q);
+[[nodiscard]] VecX inverse_mass_diagonal(const Model& model, const VecX& q);
 // q ← q ⊕ h·du: moves the coordinates along a velocity (exact for planar bodies; the exponential
 // map for spatial bodies' quaternions, renormalised). Every change of q by a velocity-sized
 // vector goes through this (nq ≠ n for spatial bodies).

@@ -4,6 +4,7 @@
 // compute_x(const Model&, const State&, Workspace&).
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
+#include <stdexcept>
 #include <vector>
 
 #include "orthomech/constraints/joints.hpp"
@@ -12,19 +13,26 @@
 
 namespace orthomech {
 
+// How the free-system stage stores M and A: always as n × n matrices (`dense`, what the
+// projections' n × n products need), or, when the model's M is diagonal whatever q
+// (mass_matrix_is_diagonal), as their diagonals alone (`diagonal_if_possible`: M, A and Ṁ are
+// then 0 × 0, so a large planar model holds no n × n matrix; simulate, issue 18).
+enum class MassStorage { dense, diagonal_if_possible };
+
 // Stage 1: the free system at q (paper §2).
 struct FreeSystemWorkspace {
-  MatX M;                      // n × n: mass matrix, eq. (4)
-  MatX A;                      // n × n: A = M⁻¹, eq. (6)
+  MatX M;                      // n × n: mass matrix, eq. (4) (0 × 0 unless dense_mass)
+  MatX A;                      // n × n: A = M⁻¹, eq. (6) (0 × 0 unless dense_mass)
   VecX A_diag;                 // n: diagonal of A (chart scaling)
   VecX A_sqrt;                 // n: √A_kk (chart scaling)
   VecX M_diag;                 // n: diagonal of M
   bool diagonal_mass = false;  // M diagonal (planar bodies): products with M become scalings
-  MatX Mdot;                   // n × n: Ṁ along u
+  bool dense_mass = true;      // M, A, Ṁ held as n × n matrices (else only the diagonals)
+  MatX Mdot;                   // n × n: Ṁ along u (0 × 0 unless dense_mass)
   VecX Q;                      // n: applied generalized forces Q̂, eq. (17)
   bool constant_mass = true;
   bool mass_ready = false;  // M, A filled (once, when constant)
-  explicit FreeSystemWorkspace(const Model& model);
+  explicit FreeSystemWorkspace(const Model& model, MassStorage storage = MassStorage::dense);
 };
 
 enum class ProjectionStatus {
@@ -77,6 +85,17 @@ struct DualWorkspace {
   VecX dq;        // n: scratch of the chart position corrector
   ProjectionStatus status = ProjectionStatus::ok;
   DualWorkspace(const Model& model, int rank);
+};
+
+// The dense projections' matrices (13 of n × n, 5 of n_c × n, G) take 8 (13 n² + 5 n_c n + n_c²)
+// bytes; a Workspace larger than kMaxDenseWorkspaceBytes is refused with ModelTooLarge before
+// anything is allocated (a 2500-body planar model would need 8.6 GB: the system would kill the
+// process instead of reporting). Commands on the sparse path (simulate, info) build none.
+inline constexpr double kMaxDenseWorkspaceBytes = 4.0 * 1024 * 1024 * 1024;
+[[nodiscard]] double dense_workspace_bytes(const Model& model);
+class ModelTooLarge : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
 };
 
 struct Workspace {

@@ -8,12 +8,16 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <set>
 #include <stdexcept>
 #include <string>
 
 #include "orthomech/io/mechanism_file.hpp"
+#include "orthomech/model/free_system.hpp"
 #include "orthomech/projection/free_system_stage.hpp"
+#include "support/fixtures.hpp"
+#include "unit/analysis/large_mechanisms.hpp"
 
 namespace orthomech {
 namespace {
@@ -84,6 +88,88 @@ TEST(Workspace, FreeSystemStageAloneMassAndAppliedForces) {
   Q_expected(bar.u_offset + 2) = 1.7;
   Q_expected(p.u_offset + 1) = -9.81 * 0.8;
   EXPECT_LT((fs.Q - Q_expected).cwiseAbs().maxCoeff(), 1e-12);
+}
+
+// MassStorage::diagonal_if_possible (simulate's stage): on a model whose M is diagonal whatever q,
+// M, A and Ṁ are not held (0 × 0) and the diagonals, the square roots and Q̂ are those of the dense
+// stage bit for bit; on any other model (a spatial inertia with a product of inertia) the stage is
+// the dense one. Oracle: the dense stage (compute_mass_matrix, compute_inverse_mass_matrix) and its
+// own off-diagonal test of M.
+void expect_storage_agrees(const Model& model, const std::string& name) {
+  SCOPED_TRACE(name);
+  State s(model);
+  s.q = model.design_q();
+  s.u = VecX::LinSpaced(model.n, -0.3, 0.7);
+  FreeSystemWorkspace dense(model), diagonal(model, MassStorage::diagonal_if_possible);
+  compute_free_system(model, s, dense);
+  compute_free_system(model, s, diagonal);
+  const bool off_diagonal_zero =
+      (dense.M - MatX(dense.M.diagonal().asDiagonal())).cwiseAbs().maxCoeff() == 0.0;
+  EXPECT_EQ(mass_matrix_is_diagonal(model), off_diagonal_zero);
+  EXPECT_EQ(diagonal.dense_mass, !off_diagonal_zero);
+  EXPECT_EQ(diagonal.diagonal_mass, dense.diagonal_mass);
+  if (!diagonal.dense_mass) {
+    EXPECT_EQ(diagonal.M.size() + diagonal.A.size() + diagonal.Mdot.size(), 0);
+  } else {
+    EXPECT_EQ(diagonal.M, dense.M);
+    EXPECT_EQ(diagonal.A, dense.A);
+  }
+  EXPECT_EQ(diagonal.M_diag, VecX(dense.M.diagonal()));
+  EXPECT_EQ(diagonal.A_diag, VecX(dense.A.diagonal()));
+  EXPECT_EQ(diagonal.A_sqrt, dense.A_sqrt);
+  EXPECT_EQ(diagonal.Q, dense.Q);
+  EXPECT_TRUE(diagonal.mass_ready);
+}
+
+TEST(Workspace, DiagonalMassStorageEqualsTheDenseStageOnEveryBundledMechanism) {
+  int diagonal = 0, total = 0;
+  for (const auto& e : std::filesystem::directory_iterator(test::source_path("mechanisms"))) {
+    if (e.path().extension() != ".yaml") continue;
+    const Model model = test::load_bundled(e.path().stem().string());
+    expect_storage_agrees(model, e.path().stem().string());
+    diagonal += mass_matrix_is_diagonal(model) ? 1 : 0;
+    ++total;
+  }
+  EXPECT_GE(total, 20);
+  EXPECT_EQ(diagonal, total - 1);  // all but the double wishbone, whose bodies have products
+  EXPECT_FALSE(mass_matrix_is_diagonal(test::load_bundled("double-wishbone")));
+  Model top = test::load_bundled("heavy-top");
+  Body& b = top.bodies[static_cast<size_t>(top.find_body("top"))];
+  b.spatial.inertia(0, 1) = b.spatial.inertia(1, 0) = -1e-4;  // a product of inertia
+  expect_storage_agrees(top, "heavy-top with J_xy");
+  EXPECT_FALSE(mass_matrix_is_diagonal(top));
+}
+
+// dense_workspace_bytes counts the Workspace's n × n, n_c × n and n_c × n_c matrices (oracle: their
+// sizes as allocated); a model whose count exceeds kMaxDenseWorkspaceBytes is refused with
+// ModelTooLarge, naming its file and sizes. A 1900-link chain (n = 5700, n_c = 3800: 4.58 GB) is
+// over the limit; the loader itself takes it (at most 2500 bodies).
+TEST(Workspace, DenseBytesCountTheMatricesAndATooLargeModelIsRefused) {
+  const Model model = parse_mechanism(kTwoBodies, "two-bodies");
+  const Workspace ws(model, model.nc);
+  const Eigen::Index counted =
+      ws.free.M.size() + ws.free.A.size() + ws.free.Mdot.size() + ws.constraints.Et.size() +
+      ws.constraints.Dt.size() + ws.primal.AE.size() + ws.primal.G.size() +
+      ws.primal.GinvEt.size() + ws.primal.pi.size() + ws.primal.alpha.size() +
+      ws.primal.beta.size() + ws.primal.GinvDt.size() + ws.primal.Omega.size() +
+      ws.primal.omega.size() + ws.dual.psi.size() + ws.dual.alpha.size() + ws.dual.beta.size() +
+      ws.dual.Theta.size() + ws.dual.theta.size();
+  EXPECT_EQ(dense_workspace_bytes(model), 8.0 * static_cast<double>(counted));
+
+  const Model chain = parse_mechanism(test::pendulum_chain_yaml(1900), "chain-1900.yaml");
+  ASSERT_EQ(chain.n, 5700);
+  EXPECT_GT(dense_workspace_bytes(chain), kMaxDenseWorkspaceBytes);
+  try {
+    const Workspace too_large(chain, chain.nc);
+    ADD_FAILURE() << "a 1900-link chain's dense workspace was built";
+  } catch (const ModelTooLarge& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("chain-1900.yaml"), std::string::npos) << what;
+    EXPECT_NE(what.find("5700 velocity components"), std::string::npos) << what;
+  }
+  const Model n_four_bar = parse_mechanism(test::n_four_bar_yaml(1000, 0.5), "n-four-bar.yaml");
+  EXPECT_EQ(n_four_bar.bodies.size(), 2001u);  // IFToMM A02 at N = 1000 loads
+  EXPECT_GT(dense_workspace_bytes(n_four_bar), kMaxDenseWorkspaceBytes);
 }
 
 TEST(Workspace, RefusesARankOutOfRangeAndAnotherModel) {
