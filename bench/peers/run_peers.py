@@ -121,6 +121,8 @@ def main():
     ap.add_argument("--build", default=os.path.join(ROOT, "build"))
     ap.add_argument("--cap", type=float, default=30.0, help="CPU seconds per Simbody run")
     ap.add_argument("--quick", action="store_true", help="N = 10 to 5 s only (a smoke run)")
+    ap.add_argument("--growth-only", action="store_true",
+                    help="only the growth with N (N = 2 … 1000), not the work-precision table")
     a = ap.parse_args()
     peers = os.path.join(a.build, "bench", "peers")
     have_mujoco = os.path.exists(os.path.join(peers, "peer_mujoco_n_four_bar"))
@@ -131,30 +133,39 @@ def main():
             print(f"note: {name} rows left out: its peer binary was not built ({pkg} missing)")
     n40, t40 = (10, 5.0) if a.quick else (40, 20.0)
     with tempfile.TemporaryDirectory() as tmp:
-        print(f"\n## Work-precision: N = {n40}, t = 0 … {t40:g} s\n")
-        header()
+        if not a.growth_only:
+            work_precision(a, n40, t40, have_mujoco, have_simbody, tmp)
+        growth(a, have_mujoco, have_simbody, tmp)
+
+
+def work_precision(a, n40, t40, have_mujoco, have_simbody, tmp):
+    print(f"\n## Work-precision: N = {n40}, t = 0 … {t40:g} s\n")
+    header()
+    if have_mujoco:
+        for dt, method, sol in ((1e-3, "euler", "default"), (1e-3, "euler", "tight"),
+                                (1e-3, "rk4", "default"), (1e-3, "rk4", "tight"),
+                                (1e-4, "euler", "tight")):
+            row(mujoco_row(a.build, n40, t40, dt, method, sol))
+    if have_simbody:
+        for acc in (1e-4, 1e-6, 1e-8):
+            row(simbody_row(a.build, n40, t40, acc, "rkm", a.cap))
+        row(simbody_row(a.build, n40, t40, 1e-6, "rkm", a.cap, "ball"))
+        row(simbody_row(a.build, n40, t40, 1e-6, "cpodes", a.cap))
+    for integrator, rtol in (("dopri5", 1e-7), ("dopri5", 1e-9), ("rkf78", 1e-8),
+                             ("rkf78", 1e-10)):
+        row(orthomech_row(a.build, n40, t40, integrator, rtol, tmp))
+
+
+def growth(a, have_mujoco, have_simbody, tmp):
+    t_g = 2.0 if a.quick else 5.0
+    print(f"\n## Growth with N: CPU s per simulated s, t = 0 … {t_g:g} s\n")
+    header()
+    for n in ((2, 10) if a.quick else (2, 10, 40, 100, 200, 400, 1000)):
         if have_mujoco:
-            for dt, method, sol in ((1e-3, "euler", "default"), (1e-3, "euler", "tight"),
-                                    (1e-3, "rk4", "default"), (1e-3, "rk4", "tight"),
-                                    (1e-4, "euler", "tight")):
-                row(mujoco_row(a.build, n40, t40, dt, method, sol))
-        if have_simbody:
-            for acc in (1e-4, 1e-6, 1e-8):
-                row(simbody_row(a.build, n40, t40, acc, "rkm", a.cap))
-            row(simbody_row(a.build, n40, t40, 1e-6, "rkm", a.cap, "ball"))
-            row(simbody_row(a.build, n40, t40, 1e-6, "cpodes", a.cap))
-        for integrator, rtol in (("dopri5", 1e-7), ("dopri5", 1e-9), ("rkf78", 1e-8),
-                                 ("rkf78", 1e-10)):
-            row(orthomech_row(a.build, n40, t40, integrator, rtol, tmp))
-        t_g = 2.0 if a.quick else 5.0
-        print(f"\n## Growth with N: CPU s per simulated s, t = 0 … {t_g:g} s\n")
-        header()
-        for n in ((2, 10) if a.quick else (2, 10, 40, 100, 400)):
-            if have_mujoco:
-                row(mujoco_row(a.build, n, t_g, 1e-3, "euler", "tight"))
-            if have_simbody:
-                row(simbody_row(a.build, n, t_g, 1e-6, "rkm", a.cap))
-            row(orthomech_row(a.build, n, t_g, "rkf78", 1e-8, tmp))
+            row(mujoco_row(a.build, n, t_g, 1e-3, "euler", "tight"))
+        if have_simbody and n <= 400:  # Simbody is 300 s per simulated s at N = 400
+            row(simbody_row(a.build, n, t_g, 1e-6, "rkm", a.cap))
+        row(orthomech_row(a.build, n, t_g, "rkf78", 1e-8, tmp))
 
 
 if __name__ == "__main__":
