@@ -8,22 +8,45 @@
 
 namespace orthomech {
 
+namespace {
+// One body's block of M (eq. (4)) or of A = M⁻¹ (eq. (6)) in the top-left nu × nu corner: the
+// one place that lays out a body's masses, read by the dense matrices and by their diagonals.
+using BodyBlock = Eigen::Matrix<double, 6, 6>;
+BodyBlock body_mass_block(const Body& b, bool inverse) {
+  BodyBlock B = BodyBlock::Zero();
+  const double m = inverse ? 1.0 / b.mass : b.mass;
+  B(0, 0) = B(1, 1) = m;  // eq. (4): T = ½ m |v|² + ½ J φ̇²
+  if (b.kind == BodyKind::rigid) B(2, 2) = inverse ? 1.0 / b.inertia : b.inertia;
+  if (b.kind == BodyKind::spatial) {  // M_b = diag(m I₃, J), A_b = diag(I₃/m, J⁻¹)
+    B(2, 2) = m;
+    B.block<3, 3>(3, 3) = inverse ? Mat3(b.spatial.inertia.inverse()) : b.spatial.inertia;
+  }
+  return B;
+}
+
+// The bodies' blocks into the n × n matrix X.
+void fill_block_diagonal(const Model& model, bool inverse, MatX& X) {
+  X.setZero();
+  for (const Body& b : model.bodies)
+    X.block(b.u_offset, b.u_offset, b.nu(), b.nu()) =
+        body_mass_block(b, inverse).topLeftCorner(b.nu(), b.nu());
+}
+
+// Their diagonals (size n).
+VecX block_diagonal_entries(const Model& model, bool inverse) {
+  VecX d(model.n);
+  for (const Body& b : model.bodies)
+    d.segment(b.u_offset, b.nu()) = body_mass_block(b, inverse).diagonal().head(b.nu());
+  return d;
+}
+}  // namespace
+
 void compute_mass_matrix(const Model& model, const VecX& q, MatX& M) {
   if (model.general) {
     model.general->mass(q, M);  // eq. (4): M(q)
     return;
   }
-  M.setZero();
-  for (const Body& b : model.bodies) {
-    const int o = b.u_offset;
-    M(o, o) = b.mass;  // eq. (4): T = ½ m |v|² + ½ J φ̇²
-    M(o + 1, o + 1) = b.mass;
-    if (b.kind == BodyKind::rigid) M(o + 2, o + 2) = b.inertia;
-    if (b.kind == BodyKind::spatial) {  // eq. (4): T = ½ m vᵀv + ½ ωᵀJω, M_b = diag(m I₃, J)
-      M(o + 2, o + 2) = b.mass;
-      M.block<3, 3>(o + 3, o + 3) = b.spatial.inertia;
-    }
-  }
+  fill_block_diagonal(model, false, M);
 }
 
 void compute_inverse_mass_matrix(const Model& model, const VecX& q, MatX& A) {
@@ -33,17 +56,7 @@ void compute_inverse_mass_matrix(const Model& model, const VecX& q, MatX& A) {
     A = M.llt().solve(MatX::Identity(model.n, model.n));  // eq. (6)
     return;
   }
-  A.setZero();
-  for (const Body& b : model.bodies) {
-    const int o = b.u_offset;
-    A(o, o) = 1.0 / b.mass;  // eq. (6): block-diagonal inverse
-    A(o + 1, o + 1) = 1.0 / b.mass;
-    if (b.kind == BodyKind::rigid) A(o + 2, o + 2) = 1.0 / b.inertia;
-    if (b.kind == BodyKind::spatial) {  // A_b = diag(I₃/m, J⁻¹)
-      A(o + 2, o + 2) = 1.0 / b.mass;
-      A.block<3, 3>(o + 3, o + 3) = b.spatial.inertia.inverse();
-    }
-  }
+  fill_block_diagonal(model, true, A);  // eq. (6): block-diagonal inverse
 }
 
 void compute_mass_matrix_rate(const Model& model, const VecX& q, const VecX& u, MatX& Mdot) {
@@ -74,18 +87,7 @@ VecX mass_matrix_diagonal(const Model& model, const VecX& q) {
     model.general->mass(q, M);
     return M.diagonal();
   }
-  VecX d(model.n);
-  for (const Body& b : model.bodies) {  // eq. (4): M is block diagonal, as compute_mass_matrix
-    const int o = b.u_offset;
-    d(o) = b.mass;
-    d(o + 1) = b.mass;
-    if (b.kind == BodyKind::rigid) d(o + 2) = b.inertia;
-    if (b.kind == BodyKind::spatial) {  // M_b = diag(m I₃, J)
-      d(o + 2) = b.mass;
-      d.segment<3>(o + 3) = b.spatial.inertia.diagonal();
-    }
-  }
-  return d;
+  return block_diagonal_entries(model, false);
 }
 
 VecX inverse_mass_diagonal(const Model& model, const VecX& q) {
@@ -94,18 +96,7 @@ VecX inverse_mass_diagonal(const Model& model, const VecX& q) {
     compute_inverse_mass_matrix(model, q, A);
     return A.diagonal();
   }
-  VecX d(model.n);
-  for (const Body& b : model.bodies) {  // eq. (6): A is block diagonal, A_b = M_b⁻¹
-    const int o = b.u_offset;
-    d(o) = 1.0 / b.mass;
-    d(o + 1) = 1.0 / b.mass;
-    if (b.kind == BodyKind::rigid) d(o + 2) = 1.0 / b.inertia;
-    if (b.kind == BodyKind::spatial) {  // A_b = diag(I₃/m, J⁻¹)
-      d(o + 2) = 1.0 / b.mass;
-      d.segment<3>(o + 3) = b.spatial.inertia.inverse().diagonal();
-    }
-  }
-  return d;
+  return block_diagonal_entries(model, true);
 }
 
 void integrate_positions(const Model& model, VecX& q, const VecX& du, double h) {
