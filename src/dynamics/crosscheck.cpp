@@ -10,6 +10,7 @@
 #include "orthomech/model/free_system.hpp"
 #include "orthomech/projection/dual.hpp"
 #include "orthomech/projection/primal.hpp"
+#include "orthomech/projection/workspace.hpp"
 
 namespace orthomech {
 
@@ -55,6 +56,9 @@ CrosscheckResult run_crosscheck(const Model& model, const CrosscheckOptions& opt
   result.tolerance = options.tolerance;
   result.nc = model.nc;
   const int n = model.n;
+  // Its two dense Workspaces: a model too large for them is refused before the motion is
+  // simulated, not after.
+  check_dense_workspace_size(model);
 
   // 1. The motion: dual form from the design position, seeded initial velocity guess.
   SimulateOptions so;

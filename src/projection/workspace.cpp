@@ -65,10 +65,7 @@ FreeSystemWorkspace::FreeSystemWorkspace(const Model& model, MassStorage storage
       Q(VecX::Zero(model.n)),
       constant_mass(mass_matrix_is_constant(model)) {}
 
-namespace {
-// The model, once the size of the whole workspace is checked (ModelTooLarge), before its first
-// stage allocates anything.
-const Model& checked_size(const Model& m) {
+void check_dense_workspace_size(const Model& m) {
   const double bytes = dense_workspace_bytes(m);
   if (bytes > kMaxDenseWorkspaceBytes) {
     std::ostringstream text;
@@ -81,6 +78,13 @@ const Model& checked_size(const Model& m) {
             "this limit";
     throw ModelTooLarge(text.str());
   }
+}
+
+namespace {
+// The model, once the size of the whole workspace is checked (ModelTooLarge), before its first
+// stage allocates anything.
+const Model& checked_size(const Model& m) {
+  check_dense_workspace_size(m);
   return m;
 }
 

@@ -97,6 +97,10 @@ class ModelTooLarge : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
 };
+// Throws ModelTooLarge (the message names the file, n, n_c and the bytes) when a Workspace of
+// this model would exceed kMaxDenseWorkspaceBytes: what the Workspace constructor checks, for a
+// command to refuse before it does other work (crosscheck: before simulating the motion).
+void check_dense_workspace_size(const Model& model);
 
 struct Workspace {
   FreeSystemWorkspace free;

@@ -6,7 +6,10 @@
 
 #include <string>
 
+#include "orthomech/io/mechanism_file.hpp"
+#include "orthomech/projection/workspace.hpp"
 #include "support/fixtures.hpp"
+#include "unit/analysis/large_mechanisms.hpp"
 
 namespace orthomech {
 namespace {
@@ -56,6 +59,25 @@ TEST(CrosscheckRedundant, TripleCrank_PrimalSkippedWithReason) {
       << r.primal_skipped_reason;
   EXPECT_NE(r.primal_skipped_reason.find("singular"), std::string::npos);
   EXPECT_FALSE(r.items.empty());
+}
+
+// A model too large for the two dense Workspaces (IFToMM A02 at N = 1000: 5.5 GB) is refused
+// before its motion is simulated. The motion here cannot be simulated at all (t_end < 0:
+// simulate throws std::invalid_argument): the refusal (ModelTooLarge) must come first — with the
+// check after the motion, simulate's exception escapes and the test fails.
+TEST(CrosscheckLarge, TooLargeModelIsRefusedBeforeTheMotion) {
+  const Model model = parse_mechanism(test::n_four_bar_yaml(1000, 0.5), "n-four-bar-1000.yaml");
+  ASSERT_GT(dense_workspace_bytes(model), kMaxDenseWorkspaceBytes);
+  CrosscheckOptions o;
+  o.t_end = -1.0;
+  try {
+    const CrosscheckResult r = run_crosscheck(model, o);
+    ADD_FAILURE() << "not refused; message: " << r.message;
+  } catch (const ModelTooLarge& e) {
+    EXPECT_NE(std::string(e.what()).find("n-four-bar-1000.yaml: 6003 velocity components"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 }  // namespace
