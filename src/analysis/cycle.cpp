@@ -484,6 +484,7 @@ struct Sweep {
   Workspace& ws;
   DrivenWorkspace& w;
   bool jacobian_at_q = false;  // ws.constraints.Et holds Eᵀ at the q the corrector returned
+  long factorisations = 0;     // of the corrector's own Jacobian (chord steps use the chart's)
   VecX offset = VecX::Zero(model.n);  // q − q_ref for the linear lock
   MatX idle_at = MatX(0, 0);          // idle rows at the corrector's first iterate
   // The input's coordinate at q, on the turn of `near` where it is read modulo 2π.
@@ -494,15 +495,58 @@ struct Sweep {
                : value;
   }
 
+  // The corrector's first steps: chord steps with the chart's factorisation where compute_driven
+  // left it (the previous position) and that position's tangent τ (E_Rᵀ τ = 0, dᵀτ = 1 there).
+  // The step solving [E_Rᵀ; dᵀ] Δq = [f_R; s − target] with E_R from there is
+  // x + τ (s − target − dᵀx)/(dᵀτ), x = (E_RDᵀ)⁻¹ f_R on D (x_I = 0): one chart solve, no
+  // factorisation. Convergence is judged on every row of f at the iterate, as in `corrector`.
+  // Returns 1: converged (f, Eᵀ, the rotation table and d at the returned q); −1: q not finite
+  // (fails as in `corrector`); 0: the residual did not fall tenfold in an iteration, a step would
+  // be longer than max_step (not taken), or dᵀτ is far from 1 (the previous position is not a
+  // good model here) — q is the last iterate and `corrector` goes on from it with its own
+  // factorisation.
+  int chord(VecX& q, double target, double max_step, const VecX& tau) {
+    const MeasureKind input = JointCoordinate{joint};
+    double previous = std::numeric_limits<double>::infinity();
+    for (int it = 0; it < 4; ++it) {
+      w.rotations.update(model, q);
+      compute_constraint_residual_and_jacobian(model, q, w.rotations, ws.constraints.f,
+                                               ws.constraints.Et);
+      jacobian_at_q = true;
+      double s = compute_scalar(model, input, q, nullptr, w.d).value;
+      if (joint_coordinate_wraps(model.joints[static_cast<size_t>(joint)]))
+        s = unwrap_near(s, target);
+      const double res = std::max(std::abs(s - target), ws.constraints.f.cwiseAbs().maxCoeff());
+      if (res < 1e-14 * (1.0 + q.cwiseAbs().maxCoeff())) return 1;
+      if (!(res <= 0.1 * previous)) return 0;
+      previous = res;
+      ws.dual.engine.solve(ws.constraints.f, w.dq);
+      const double dtau = w.d.dot(tau);  // 1 at the previous position
+      if (!(std::abs(dtau - 1.0) < 0.5)) return 0;
+      w.dq += ((s - target - w.d.dot(w.dq)) / dtau) * tau;
+      if (!(w.dq.cwiseAbs().maxCoeff() <= max_step)) return 0;
+      integrate_positions(model, q, w.dq, -1.0);
+      jacobian_at_q = false;
+      if (!q.allFinite()) return -1;
+    }
+    return 0;
+  }
+
   // Newton on [f_R(q); s(q) − target] = 0 with Jacobian [E_Rᵀ; dᵀ] (the input locked), or, when
   // `row` is given, on [f_R(q); rowᵀ(q − q_ref) − target] (a linear lock, for the pseudo-arclength
   // step across a dead point). A step longer than max_step (a jump towards another branch or
   // another turn of an angle) fails. Idle degrees of freedom (w.idle_bodies): rows I of their
   // motions, taken at the first iterate, with zero right-hand side (the steps do not move along
-  // them; spatial.md §6.5).
+  // them; spatial.md §6.5). With `tau` (the previous position's tangent, the chart factorised
+  // there) the chord steps above come first; the Jacobian is factorised here only when they do
+  // not converge (CycleResult::corrector_factorisations counts those).
   bool corrector(VecX& q, double target, double max_step, const VecX* row = nullptr,
-                 const VecX* q_ref = nullptr) {
+                 const VecX* q_ref = nullptr, const VecX* tau = nullptr) {
     const MeasureKind input = JointCoordinate{joint};
+    if (tau && !row && w.idle_bodies.empty() && ws.dual.engine.ready()) {
+      const int c = chord(q, target, max_step, *tau);
+      if (c != 0) return c > 0;
+    }
     const Chart& c = ws.dual.engine.chart();
     const int r = c.rank();
     const int nc = model.nc;
@@ -554,6 +598,7 @@ struct Sweep {
             w.J.row(r) = w.d.transpose();
           if (k > 0) w.J.bottomRows(k) = idle_at;
         }
+        ++factorisations;
         if (!(lu_factor(w.J, w.J_piv) > (all_rows ? 1e-26 : 1e-13))) return false;
         factored = true;
       }
@@ -1025,7 +1070,8 @@ bool CycleRun::try_step(const DrivenPoint& from, double t, DrivenPoint& out) {
   }
   // Corrections beyond twice the size of the tangent step would leave the branch.
   const double max_step = 2.0 * std::abs(ds) * tangent.cwiseAbs().maxCoeff() + 1e-12;
-  return sweep_.corrector(trial_, target, max_step) &&
+  return sweep_.corrector(trial_, target, max_step, nullptr, nullptr,
+                          from.singular ? nullptr : &from.tangent) &&
          evaluate_at(trial_, t, out,
                      sweep_.jacobian_at_q ? DrivenJacobian::current : DrivenJacobian::evaluate) &&
          same_branch(out.tangent, tangent);
@@ -1682,6 +1728,7 @@ void CycleRun::finish() {
   unwrap_measures(result_, wrapped_);
   if (!result_.idle.empty()) warn_idle_hold(result_, request_.file_units);
   result_.chart_switches = ws_.dual.engine.switch_count();
+  result_.corrector_factorisations = sweep_.factorisations;
   result_.reversals = reversals_;
   if (options_.progress) options_.progress(1.0);
 }

@@ -250,6 +250,10 @@ struct CycleResult {
   // bridges): its peak over the cycle depends on how close the grid comes to the change point.
   std::vector<bool> diverging;
   long chart_switches = 0;
+  // LU factorisations of the locked-input corrector's own Jacobian. Its steps are chord steps
+  // with the chart's factorisation at the previous position while they converge fast (the usual
+  // case: a few per sweep); this counts the fallbacks (next to change points, redundant rows).
+  long corrector_factorisations = 0;
   int reversals = 0;  // dead points passed by reversing the input (reverse_at_dead_point)
   int rank = 0, dof = 0, redundant = 0;
   // Idle degrees of freedom (counted in dof), held at zero rate: dof − Σ count = 1 (the driver).

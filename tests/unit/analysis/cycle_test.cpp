@@ -495,6 +495,40 @@ TEST(Cycle, StoredPositionsEqualAFreshEvaluationAtTheirPosition) {
   EXPECT_EQ(points.back().reactions[1], 2.0);
 }
 
+// The locked-input corrector's steps are chord steps with the chart's factorisation at the
+// previous position and its tangent (no factorisation of their own while they converge tenfold
+// per iteration). Every stored position must still be on the mechanism, f(q) = 0, and on the
+// input's law, s(q) = s₀ + ω (t − t₀) (both evaluated here, independently of the corrector), and
+// the corrector must have fallen back to its own factorisation at no more than 1 % of them (a
+// wrong chord step does not converge: every step would fall back). Planar (crank-rocker, n = 9;
+// slider-crank; Andrews, n = 21, beyond the fixed-order LU kernels), redundant (crank-rocker-3d:
+// spatial bodies, 3 redundant rows) and with change points (triple-crank).
+TEST(Cycle, ChordStepsKeepEveryPositionOnTheMechanismAndTheInputLaw) {
+  for (const char* name :
+       {"crank-rocker", "slider-crank", "andrews-squeezer", "crank-rocker-3d", "triple-crank"}) {
+    const Model model = test::load_bundled(name);
+    const int steps = 3600;
+    const CycleOptions o = options_for(model, steps);
+    const CycleResult r = run_cycle(model, o);
+    ASSERT_EQ(r.status, CycleStatus::completed) << name << ": " << r.message;
+    ASSERT_EQ(r.points.size(), static_cast<size_t>(steps)) << name;
+    EXPECT_LE(r.corrector_factorisations, steps / 100) << name;
+    const DrivenPointView first = r.points[0];
+    VecX f(model.nc);
+    double worst_f = 0.0, worst_input = 0.0;
+    for (const DrivenPointView& v : r.points) {
+      const VecX q = v.q;
+      compute_constraint_residual(model, q, f);
+      worst_f = std::max(worst_f, f.cwiseAbs().maxCoeff() / (1.0 + q.cwiseAbs().maxCoeff()));
+      const double s = compute_scalar(model, JointCoordinate{o.driver.joint}, q, nullptr).value;
+      const double law = first.input + o.driver.speed * (v.time - first.time);
+      worst_input = std::max(worst_input, std::abs(std::remainder(s - law, 2.0 * M_PI)));
+    }
+    EXPECT_LT(worst_f, 1e-13) << name;
+    EXPECT_LT(worst_input, 1e-11) << name;
+  }
+}
+
 // Peaks and RMS against a direct computation from the positions where the drive is reported
 // (all of them: the two on change points are bridged on the branch, issue 10 item 3); a revolute
 // joint's magnitude is |(Fx, Fy)|.
