@@ -495,6 +495,31 @@ struct Sweep {
                : value;
   }
 
+  // One iterate of the locked-input corrector: f, Eᵀ (and the rotation table) at q in one pass —
+  // at the converged q they are then ready for compute_driven — and the lock's value s: the input
+  // (its gradient into w.d) or, with `row`, rowᵀ(q − q_ref). Returns max(|s − target|, max |f|).
+  double evaluate_iterate(const VecX& q, double target, double& s, const VecX* row = nullptr,
+                          const VecX* q_ref = nullptr) {
+    w.rotations.update(model, q);
+    compute_constraint_residual_and_jacobian(model, q, w.rotations, ws.constraints.f,
+                                             ws.constraints.Et);
+    jacobian_at_q = true;
+    if (row) {
+      difference_positions(model, q, *q_ref, offset);
+      s = row->dot(offset);
+    } else {
+      s = compute_scalar(model, JointCoordinate{joint}, q, nullptr, w.d).value;
+      if (joint_coordinate_wraps(model.joints[static_cast<size_t>(joint)]))
+        s = unwrap_near(s, target);
+    }
+    return std::max(std::abs(s - target), ws.constraints.f.cwiseAbs().maxCoeff());
+  }
+  // The corrector's tolerance: a few ulps of the coordinates (next to a singular position a
+  // residual of 1e-12 still leaves q 1e-10 off the branch along the nearly singular direction).
+  [[nodiscard]] static bool converged(double residual, const VecX& q) {
+    return residual < 1e-14 * (1.0 + q.cwiseAbs().maxCoeff());
+  }
+
   // The corrector's first steps: chord steps with the chart's factorisation where compute_driven
   // left it (the previous position) and that position's tangent τ (E_Rᵀ τ = 0, dᵀτ = 1 there).
   // The step solving [E_Rᵀ; dᵀ] Δq = [f_R; s − target] with E_R from there is
@@ -506,18 +531,11 @@ struct Sweep {
   // good model here) — q is the last iterate and `corrector` goes on from it with its own
   // factorisation.
   int chord(VecX& q, double target, double max_step, const VecX& tau) {
-    const MeasureKind input = JointCoordinate{joint};
     double previous = std::numeric_limits<double>::infinity();
     for (int it = 0; it < 4; ++it) {
-      w.rotations.update(model, q);
-      compute_constraint_residual_and_jacobian(model, q, w.rotations, ws.constraints.f,
-                                               ws.constraints.Et);
-      jacobian_at_q = true;
-      double s = compute_scalar(model, input, q, nullptr, w.d).value;
-      if (joint_coordinate_wraps(model.joints[static_cast<size_t>(joint)]))
-        s = unwrap_near(s, target);
-      const double res = std::max(std::abs(s - target), ws.constraints.f.cwiseAbs().maxCoeff());
-      if (res < 1e-14 * (1.0 + q.cwiseAbs().maxCoeff())) return 1;
+      double s = 0.0;
+      const double res = evaluate_iterate(q, target, s);
+      if (converged(res, q)) return 1;
       if (!(res <= 0.1 * previous)) return 0;
       previous = res;
       ws.dual.engine.solve(ws.constraints.f, w.dq);
@@ -542,7 +560,6 @@ struct Sweep {
   // not converge (CycleResult::corrector_factorisations counts those).
   bool corrector(VecX& q, double target, double max_step, const VecX* row = nullptr,
                  const VecX* q_ref = nullptr, const VecX* tau = nullptr) {
-    const MeasureKind input = JointCoordinate{joint};
     if (tau && !row && w.idle_bodies.empty() && ws.dual.engine.ready()) {
       const int c = chord(q, target, max_step, *tau);
       if (c != 0) return c > 0;
@@ -562,25 +579,9 @@ struct Sweep {
     bool factored = false;
     double previous = std::numeric_limits<double>::infinity();
     for (int it = 0; it < 30; ++it) {
-      // f and Eᵀ in one pass: Eᵀ (and the rotation table) at the converged q are then ready for
-      // compute_driven.
-      w.rotations.update(model, q);
-      compute_constraint_residual_and_jacobian(model, q, w.rotations, ws.constraints.f,
-                                               ws.constraints.Et);
-      jacobian_at_q = true;
       double s = 0.0;
-      if (row) {
-        difference_positions(model, q, *q_ref, offset);
-        s = row->dot(offset);
-      } else {
-        s = compute_scalar(model, input, q, nullptr, w.d).value;
-        if (joint_coordinate_wraps(model.joints[static_cast<size_t>(joint)]))
-          s = unwrap_near(s, target);
-      }
-      double res = std::max(std::abs(s - target), ws.constraints.f.cwiseAbs().maxCoeff());
-      // The tolerance is a few ulps of the coordinates: next to a singular position a residual
-      // of 1e-12 still leaves q 1e-10 off the branch along the nearly singular direction.
-      if (res < 1e-14 * (1.0 + q.cwiseAbs().maxCoeff())) return true;
+      const double res = evaluate_iterate(q, target, s, row, q_ref);
+      if (converged(res, q)) return true;
       if (!factored || res > 0.1 * previous) {
         if (all_rows) {  // normal equations of [Eᵀ; dᵀ]
           w.J.noalias() = ws.constraints.Et.transpose() * ws.constraints.Et;
