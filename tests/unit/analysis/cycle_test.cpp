@@ -500,9 +500,12 @@ TEST(Cycle, StoredPositionsEqualAFreshEvaluationAtTheirPosition) {
 // per iteration). Every stored position must still be on the mechanism, f(q) = 0, and on the
 // input's law, s(q) = s₀ + ω (t − t₀) (both evaluated here, independently of the corrector), and
 // the corrector must have fallen back to its own factorisation at no more than 1 % of them (a
-// wrong chord step does not converge: every step would fall back). Planar (crank-rocker, n = 9;
-// slider-crank; Andrews, n = 21, beyond the fixed-order LU kernels), redundant (crank-rocker-3d:
-// spatial bodies, 3 redundant rows) and with change points (triple-crank).
+// wrong chord step does not converge: every step would fall back). The corrector stops at
+// 1e-14 (1 + max |q|); the bounds below leave a factor 10 on f and, on the input, room for the
+// rounding of s₀ + ω (t − t₀) and of the joint angle over a turn (≲ 1e-14 rad). Planar
+// (crank-rocker, n = 9; slider-crank; Andrews, n = 21, beyond the fixed-order LU kernels),
+// redundant (crank-rocker-3d: spatial bodies, 3 redundant rows) and with change points
+// (triple-crank).
 TEST(Cycle, ChordStepsKeepEveryPositionOnTheMechanismAndTheInputLaw) {
   for (const char* name :
        {"crank-rocker", "slider-crank", "andrews-squeezer", "crank-rocker-3d", "triple-crank"}) {
