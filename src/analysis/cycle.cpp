@@ -296,13 +296,14 @@ bool compute_driven(const Model& model, int driver_joint, double sdot, double sd
     compute_constraint_jacobian(model, state.q, ws.constraints.Et);
     dws.rotations.update(model, state.q);
   }
+  if (jacobian != DrivenJacobian::current_with_gradient)
+    (void)compute_scalar(model, input, state.q, nullptr, dws.d);  // d: the input's gradient
   if (compute_basis(model, state, ws) != ProjectionStatus::ok) return false;
   // With idle degrees of freedom, the basis that holds them: F z, I F z = 0 (spatial.md §6.5).
   const bool idle = !dws.idle_bodies.empty();
   if (idle && !hold_idle(model, state.q, ws.dual.F, dws)) return false;
   const Eigen::Ref<const VecX> F =
       idle ? Eigen::Ref<const VecX>(dws.F_held) : Eigen::Ref<const VecX>(ws.dual.F.col(0));
-  (void)compute_scalar(model, input, state.q, nullptr, dws.d);
   const double dTF = dws.d.dot(F);
   const double scale = dws.d.norm() * F.norm();
   out.dTF = scale > 0.0 ? dTF / scale : 0.0;
@@ -315,6 +316,7 @@ bool compute_driven(const Model& model, int driver_joint, double sdot, double sd
   compute_constraint_rate(model, state, dws.rotations, ws.constraints);
   compute_free_system(model, state, ws);
   const ScalarKinematics sk = compute_scalar(model, input, state.q, &state.u, dws.d);
+  out.input = sk.value;
   solve_chart(ws, ws.constraints.Dtu, dws.Fdot_v);  // x_D = (E_RDᵀ)⁻¹ (Dᵀu)_R
   dws.Fdot_v = -dws.Fdot_v;                         // Eᵀ (Ḟ v) = −Dᵀ u
   if (idle) {  // and I (Ḟ v) = −İ u: add F y with (I F) y = −İ u − I (Ḟ v), y the least-norm one
@@ -463,6 +465,21 @@ InputLaw input_law(const Driver& driver) {
   return law;
 }
 
+// max |v_i| (NaN if an entry is NaN): the corrector's tolerances and step bounds. A plain loop:
+// Eigen's vectorised cwiseAbs().maxCoeff() took 81 instructions per call at n = 9 (callgrind),
+// 5 calls per position of the sweep.
+double max_abs(const VecX& v) {
+  double m = 0.0;
+  for (Eigen::Index i = 0; i < v.size(); ++i) {
+    const double a = std::abs(v(i));
+    if (!(a <= m)) {
+      if (std::isnan(a)) return a;
+      m = a;
+    }
+  }
+  return m;
+}
+
 // `value` unwrapped to the turn of `near` (a spatial joint angle is read in (−π, π]).
 double unwrap_near(double value, double near) {
   return near + std::remainder(value - near, 2.0 * std::numbers::pi);
@@ -483,13 +500,19 @@ struct Sweep {
   int joint;
   Workspace& ws;
   DrivenWorkspace& w;
-  bool jacobian_at_q = false;  // ws.constraints.Et holds Eᵀ at the q the corrector returned
-  long factorisations = 0;     // of the corrector's own Jacobian (chord steps use the chart's)
+  // What the corrector's last evaluation left at the q it returned, for compute_driven: nothing
+  // (`evaluate`), Eᵀ and the rotation table (`current`), and also the input's gradient in w.d
+  // (`current_with_gradient`).
+  DrivenJacobian at_q = DrivenJacobian::evaluate;
+  long factorisations = 0;  // of the corrector's own Jacobian (chord steps use the chart's)
   VecX offset = VecX::Zero(model.n);  // q − q_ref for the linear lock
   MatX idle_at = MatX(0, 0);          // idle rows at the corrector's first iterate
   // The input's coordinate at q, on the turn of `near` where it is read modulo 2π.
   [[nodiscard]] double input_at(const VecX& q, double near) const {
-    const double value = compute_scalar(model, JointCoordinate{joint}, q, nullptr).value;
+    return on_turn(compute_scalar(model, JointCoordinate{joint}, q, nullptr).value, near);
+  }
+  // A value of the input's coordinate as the joint reads it, on the turn of `near`.
+  [[nodiscard]] double on_turn(double value, double near) const {
     return joint_coordinate_wraps(model.joints[static_cast<size_t>(joint)])
                ? unwrap_near(value, near)
                : value;
@@ -498,12 +521,19 @@ struct Sweep {
   // One iterate of the locked-input corrector: f, Eᵀ (and the rotation table) at q in one pass —
   // at the converged q they are then ready for compute_driven — and the lock's value s: the input
   // (its gradient into w.d) or, with `row`, rowᵀ(q − q_ref). Returns max(|s − target|, max |f|).
+  // `jacobian` false: f without Eᵀ (a chord's first iterate, the predictor's: unless the predictor
+  // is already exact it is not the last one, and only the last one's Eᵀ is used).
   double evaluate_iterate(const VecX& q, double target, double& s, const VecX* row = nullptr,
-                          const VecX* q_ref = nullptr) {
+                          const VecX* q_ref = nullptr, bool jacobian = true) {
     w.rotations.update(model, q);
-    compute_constraint_residual_and_jacobian(model, q, w.rotations, ws.constraints.f,
-                                             ws.constraints.Et);
-    jacobian_at_q = true;
+    if (jacobian)
+      compute_constraint_residual_and_jacobian(model, q, w.rotations, ws.constraints.f,
+                                               ws.constraints.Et);
+    else
+      compute_constraint_residual(model, q, w.rotations, ws.constraints.f);
+    at_q = !jacobian ? DrivenJacobian::evaluate
+           : row     ? DrivenJacobian::current
+                     : DrivenJacobian::current_with_gradient;
     if (row) {
       difference_positions(model, q, *q_ref, offset);
       s = row->dot(offset);
@@ -512,12 +542,13 @@ struct Sweep {
       if (joint_coordinate_wraps(model.joints[static_cast<size_t>(joint)]))
         s = unwrap_near(s, target);
     }
-    return std::max(std::abs(s - target), ws.constraints.f.cwiseAbs().maxCoeff());
+    const double f_max = max_abs(ws.constraints.f);  // NaN stays NaN (never converged)
+    return std::isnan(f_max) ? f_max : std::max(std::abs(s - target), f_max);
   }
   // The corrector's tolerance: a few ulps of the coordinates (next to a singular position a
   // residual of 1e-12 still leaves q 1e-10 off the branch along the nearly singular direction).
   [[nodiscard]] static bool converged(double residual, const VecX& q) {
-    return residual < 1e-14 * (1.0 + q.cwiseAbs().maxCoeff());
+    return residual < 1e-14 * (1.0 + max_abs(q));
   }
 
   // The corrector's first steps: chord steps with the chart's factorisation where compute_driven
@@ -534,7 +565,7 @@ struct Sweep {
     double previous = std::numeric_limits<double>::infinity();
     for (int it = 0; it < 4; ++it) {
       double s = 0.0;
-      const double res = evaluate_iterate(q, target, s);
+      const double res = evaluate_iterate(q, target, s, nullptr, nullptr, it > 0);
       if (converged(res, q)) return 1;
       if (!(res <= 0.1 * previous)) return 0;
       previous = res;
@@ -542,9 +573,9 @@ struct Sweep {
       const double dtau = w.d.dot(tau);  // 1 at the previous position
       if (!(std::abs(dtau - 1.0) < 0.5)) return 0;
       w.dq += ((s - target - w.d.dot(w.dq)) / dtau) * tau;
-      if (!(w.dq.cwiseAbs().maxCoeff() <= max_step)) return 0;
+      if (!(max_abs(w.dq) <= max_step)) return 0;
       integrate_positions(model, q, w.dq, -1.0);
-      jacobian_at_q = false;
+      at_q = DrivenJacobian::evaluate;
       if (!q.allFinite()) return -1;
     }
     return 0;
@@ -616,9 +647,9 @@ struct Sweep {
         w.dq.tail(k).setZero();  // the idle rows
       }
       lu_solve(w.J, w.J_piv, w.dq);
-      if (!(w.dq.cwiseAbs().maxCoeff() <= max_step)) return false;
+      if (!(max_abs(w.dq) <= max_step)) return false;
       integrate_positions(model, q, w.dq, -1.0);
-      jacobian_at_q = false;
+      at_q = DrivenJacobian::evaluate;
       if (!q.allFinite()) return false;
     }
     return false;
@@ -1041,7 +1072,7 @@ bool CycleRun::evaluate_at(const VecX& q, double t, DrivenPoint& p, DrivenJacobi
   state_.t = t;
   if (!compute_driven(model_, request_.joint, sdot, sddot, state_, ws_, w_, p, jacobian))
     return false;
-  p.input = sweep_.input_at(state_.q, s);
+  p.input = sweep_.on_turn(p.input, s);  // compute_driven read it at q
   p.time = t;
   p.chart_quality = ws_.dual.engine.quality();
   // Sign of det of the chart's block and the chart it belongs to: a sign change within one
@@ -1070,12 +1101,10 @@ bool CycleRun::try_step(const DrivenPoint& from, double t, DrivenPoint& out) {
     predict(model_, from, target, du_, trial_);
   }
   // Corrections beyond twice the size of the tangent step would leave the branch.
-  const double max_step = 2.0 * std::abs(ds) * tangent.cwiseAbs().maxCoeff() + 1e-12;
+  const double max_step = 2.0 * std::abs(ds) * max_abs(tangent) + 1e-12;
   return sweep_.corrector(trial_, target, max_step, nullptr, nullptr,
                           from.singular ? nullptr : &from.tangent) &&
-         evaluate_at(trial_, t, out,
-                     sweep_.jacobian_at_q ? DrivenJacobian::current : DrivenJacobian::evaluate) &&
-         same_branch(out.tangent, tangent);
+         evaluate_at(trial_, t, out, sweep_.at_q) && same_branch(out.tangent, tangent);
 }
 
 // Determinacy (design §3): component cᵀλ is unique iff Nᵀc = 0 for the null space N of E. The

@@ -148,6 +148,15 @@ struct JointEvaluator {
       add(pi, ki, 1.0);
       add(pj, kj, -1.0);
     }
+    if (Dtu && !Dt) {  // Dᵀu alone: J̇_P u = −φ̇² R s per point, the products of the rows below
+      for (int a = 0; a < 2; ++a) {  // in their order (the same bits as through rate_row)
+        double sum = 0.0;
+        if (ki.rotates) sum += (-ki.phidot * ki.Rs(a)) * ki.phidot;
+        if (kj.rotates) sum += (kj.phidot * kj.Rs(a)) * kj.phidot;
+        (*Dtu)(r + a) = sum;
+      }
+      return;
+    }
     for (int a = 0; a < 2; ++a) {
       const Vec2 c = a == 0 ? Vec2::UnitX() : Vec2::UnitY();
       if (rate())
@@ -277,6 +286,11 @@ void evaluate(const Model& model, const VecX& q, const VecX* u, VecX* f, EtT* Et
 
 void compute_constraint_residual(const Model& model, const VecX& q, VecX& f) {
   evaluate<MatX>(model, q, nullptr, &f, nullptr, nullptr);
+}
+
+void compute_constraint_residual(const Model& model, const VecX& q, const BodyRotations& rotations,
+                                 VecX& f) {
+  evaluate<MatX>(model, q, nullptr, &f, nullptr, nullptr, nullptr, rotations.table().data());
 }
 
 void compute_constraint_jacobian(const Model& model, const VecX& q, MatX& Et) {

@@ -191,16 +191,4 @@ void body_rotations(const Model& model, const VecX& q, std::span<Eigen::Matrix2d
 BodyRotations::BodyRotations(const Model& model)
     : R_(model.bodies.size(), Eigen::Matrix2d::Identity()) {}
 
-double body_angle(const Model& model, int body, const VecX& q) {
-  if (body == kGround) return 0.0;
-  const Body& b = model.bodies[static_cast<size_t>(body)];
-  return b.kind == BodyKind::rigid ? q(b.q_offset + 2) : 0.0;
-}
-
-double body_angular_velocity(const Model& model, int body, const VecX& u) {
-  if (body == kGround) return 0.0;
-  const Body& b = model.bodies[static_cast<size_t>(body)];
-  return b.kind == BodyKind::rigid ? u(b.u_offset + 2) : 0.0;
-}
-
 }  // namespace orthomech

@@ -128,10 +128,13 @@ double ChartEngine::factor(const MatX& Et, const VecX& A_sqrt) {
   const VecX& S_R = row_s_;
   const VecX& S_D = col_s_;
   if (!sparse_) {
+    const int* rows = chart_.rows.data();
     for (int k = 0; k < r_; ++k) {
       const int dk = chart_.dependent[static_cast<size_t>(k)];
-      for (int i = 0; i < r_; ++i)
-        G_(i, k) = S_R(i) * Et(chart_.rows[static_cast<size_t>(i)], dk) * S_D(dk);
+      const auto column = Et.col(dk);  // (the loop reads it at the chart's rows)
+      const double s_d = S_D(dk);
+      auto g = G_.col(k);
+      for (int i = 0; i < r_; ++i) g(i) = S_R(i) * column(rows[i]) * s_d;
     }
     // Unblocked in-place LU (numerics/small_lu.hpp; Eigen's blocked path costs more than the
     // factorisation itself at r ≈ 20, measured with bench/simulate_bench.cpp).
@@ -244,13 +247,16 @@ void ChartEngine::solve(const VecX& b, VecX& x) {
 void ChartEngine::solve_dependent(MatX& rhs, MatX& out) {
   // No columns (DOF 0): nothing to solve, and rows of an empty matrix would offset a null pointer.
   if (r_ == 0 || out.cols() == 0) return;
-  for (int i = 0; i < r_; ++i) rhs.row(i) *= row_s_(i);
   // Column by column (vector solves are far cheaper than blocked matrix paths for the small
-  // blocks of linkages).
-  for (Eigen::Index k = 0; k < out.cols(); ++k) solve_in_place(rhs.col(k).head(r_));
-  for (int k = 0; k < r_; ++k) {
-    const int dk = chart_.dependent[static_cast<size_t>(k)];
-    out.row(dk) = col_s_(dk) * rhs.row(k).head(out.cols());
+  // blocks of linkages; plain loops: a linkage's F has one column or a few).
+  for (Eigen::Index c = 0; c < out.cols(); ++c) {
+    auto b = rhs.col(c).head(r_);
+    for (int i = 0; i < r_; ++i) b(i) *= row_s_(i);
+    solve_in_place(b);
+    for (int k = 0; k < r_; ++k) {
+      const int dk = chart_.dependent[static_cast<size_t>(k)];
+      out(dk, c) = col_s_(dk) * b(k);
+    }
   }
 }
 

@@ -334,10 +334,12 @@ bool compute_multi_driven(const Model& model, const std::vector<int>& joints, co
 // Velocities, accelerations, drive and multipliers at a position q on f(q) = 0 where the input
 // moves with rate sdot and acceleration sddot (C1)–(C4). Returns false at a dead point (dᵀF = 0).
 // DrivenJacobian::current: ws.constraints.Et already holds Eᵀ(q) and dws.rotations R(φ_b) at q
-// (the corrector's last evaluation); `evaluate` computes them. With dws.idle_bodies the idle
+// (the corrector's last evaluation); `current_with_gradient`: and dws.d the gradient of the
+// driver's coordinate at q; `evaluate` computes them. out.input is the driver's coordinate at q
+// as the joint reads it (a spatial joint's angle in (−π, π]). With dws.idle_bodies the idle
 // motions are held at zero rate (dᵀF is then that of the held basis F z). Allocation-free after
 // set-up (without idle bodies).
-enum class DrivenJacobian { evaluate, current };
+enum class DrivenJacobian { evaluate, current, current_with_gradient };
 bool compute_driven(const Model& model, int driver_joint, double sdot, double sddot, State& state,
                     Workspace& ws, DrivenWorkspace& dws, DrivenPoint& out,
                     DrivenJacobian jacobian = DrivenJacobian::evaluate);

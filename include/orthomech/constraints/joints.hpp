@@ -21,6 +21,9 @@ struct ConstraintWorkspace {
 
 // f(q) only (cheap: used by position solvers).
 void compute_constraint_residual(const Model& model, const VecX& q, VecX& f);
+// The same with the bodies' rotations at q already computed (rotations.update(model, q)).
+void compute_constraint_residual(const Model& model, const VecX& q, const BodyRotations& rotations,
+                                 VecX& f);
 // Eᵀ(q) only.
 void compute_constraint_jacobian(const Model& model, const VecX& q, MatX& Et);
 // f(q) and Eᵀ(q) in one pass (the point kinematics shared).

@@ -92,8 +92,17 @@ namespace detail {
                                                       const BodyRotations& rotations) {
   return detail::point_kinematics_at(model, p, q, u, rotations.table().data());
 }
-[[nodiscard]] double body_angle(const Model& model, int body, const VecX& q);
-[[nodiscard]] double body_angular_velocity(const Model& model, int body, const VecX& u);
+// Inline: read for every angle row, measure and reaction (a call cost more than the read).
+[[nodiscard]] inline double body_angle(const Model& model, int body, const VecX& q) {
+  if (body == kGround) return 0.0;
+  const Body& b = model.bodies[static_cast<size_t>(body)];
+  return b.kind == BodyKind::rigid ? q(b.q_offset + 2) : 0.0;
+}
+[[nodiscard]] inline double body_angular_velocity(const Model& model, int body, const VecX& u) {
+  if (body == kGround) return 0.0;
+  const Body& b = model.bodies[static_cast<size_t>(body)];
+  return b.kind == BodyKind::rigid ? u(b.u_offset + 2) : 0.0;
+}
 [[nodiscard]] inline Vec2 perp(const Vec2& a) { return Vec2(-a.y(), a.x()); }  // rotate by +90°
 [[nodiscard]] inline Eigen::Matrix2d rotation(double phi) {
   Eigen::Matrix2d R;

@@ -146,6 +146,44 @@ INSTANTIATE_TEST_SUITE_P(Bundled, CycleReactions,
                            return s;
                          });
 
+// compute_driven with the caller's Eᵀ, rotation table and input gradient at q
+// (DrivenJacobian::current_with_gradient, what the sweep's corrector leaves) gives bit for bit what
+// it computes itself (`evaluate`); it does use the caller's gradient (a wrong one changes the
+// result), and out.input is the driver's coordinate at q as compute_scalar reads it.
+TEST(Cycle, ComputeDrivenWithTheCallersGradientIsBitForBitItsOwn) {
+  for (const char* name : {"crank-rocker", "andrews-squeezer", "rssr", "spatial-slider-crank"}) {
+    const Model model = test::load_bundled(name);
+    const int joint = model.drivers[0].joint;
+    State s(model);
+    s.q = test::assembled_q(model);
+    const int rank = compute_mobility(model, s.q).rank;
+    Workspace ws1(model, rank), ws2(model, rank), ws3(model, rank);
+    DrivenWorkspace w1(model, rank), w2(model, rank), w3(model, rank);
+    DrivenPoint own, given, wrong;
+    State s1 = s, s2 = s, s3 = s;
+    ASSERT_TRUE(compute_driven(model, joint, 2.0, 0.5, s1, ws1, w1, own)) << name;
+    for (auto* c : {&ws2, &ws3}) compute_constraint_jacobian(model, s.q, c->constraints.Et);
+    w2.rotations.update(model, s.q);
+    w3.rotations.update(model, s.q);
+    const double input = compute_scalar(model, JointCoordinate{joint}, s.q, nullptr, w2.d).value;
+    w3.d = 1.1 * w2.d;  // a gradient that is not the input's
+    ASSERT_TRUE(compute_driven(model, joint, 2.0, 0.5, s2, ws2, w2, given,
+                               DrivenJacobian::current_with_gradient))
+        << name;
+    EXPECT_EQ(own.input, input) << name;
+    EXPECT_EQ(given.input, input) << name;
+    EXPECT_EQ(given.drive, own.drive) << name;
+    EXPECT_EQ(given.u, own.u) << name;
+    EXPECT_EQ(given.udot, own.udot) << name;
+    EXPECT_EQ(given.lambda, own.lambda) << name;
+    EXPECT_EQ(given.tangent, own.tangent) << name;
+    if (compute_driven(model, joint, 2.0, 0.5, s3, ws3, w3, wrong,
+                       DrivenJacobian::current_with_gradient)) {
+      EXPECT_GT(std::abs(wrong.drive - own.drive), 1e-6 * std::abs(own.drive)) << name;
+    }
+  }
+}
+
 // In-line slider-crank, quasi-static (ω → 0) and without gravity: virtual work gives
 // τ = −F_x dx/dθ with x = r cos θ + √(l² − r² sin² θ) [e.g. Norton, Design of Machinery, §13]
 // and F_x the gas force on the piston. Inertia terms scale with ω² and vanish.
