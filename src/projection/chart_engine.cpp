@@ -34,7 +34,6 @@ ChartEngine::ChartEngine(const Model& model, int rank, ChartFactorisation factor
       piv_(Eigen::VectorXi::Zero(rank)),
       Gs_(rank, rank),
       br_(rank),
-      xd_(rank),
       sw_(rank) {
   switches_.reserve(kMaxRecordedSwitches);
   triplets_.reserve(static_cast<size_t>(8 * rank + 8));
@@ -171,13 +170,13 @@ double ChartEngine::factor(const SparseEt& Et, const VecX& A_sqrt) {
 }
 
 double ChartEngine::factor_sparse() {
-  // The pattern, hence the ordering (COLAMD), is fixed within a chart: analysed once per chart.
+  // The pattern, hence the ordering (KLU's BTF and AMD), is fixed within a chart: analysed once
+  // per chart.
   if (!analyzed_) {
-    slu_.analyzePattern(Gs_);
+    if (!slu_.analyze(Gs_)) return quality_ = 0.0;  // structurally singular
     analyzed_ = true;
   }
-  slu_.factorize(Gs_);
-  return quality_ = slu_.info() == Eigen::Success ? 1.0 : 0.0;
+  return quality_ = slu_.factorize(Gs_) ? 1.0 : 0.0;
 }
 
 double ChartEngine::update(const MatX& Et, const VecX& A_diag, const VecX& A_sqrt, double t) {
@@ -217,8 +216,7 @@ int ChartEngine::determinant_sign() const {
 
 void ChartEngine::solve_in_place(Eigen::Ref<VecX> x) {
   if (sparse_) {
-    xd_ = slu_.solve(x);
-    x = xd_;
+    slu_.solve_in_place(x.data());
   } else {
     lu_solve(G_, piv_, x);
   }
@@ -226,8 +224,7 @@ void ChartEngine::solve_in_place(Eigen::Ref<VecX> x) {
 
 void ChartEngine::solve_transposed_in_place(Eigen::Ref<VecX> x) {
   if (sparse_) {
-    xd_ = slu_.transpose().solve(x);
-    x = xd_;
+    slu_.solve_transposed_in_place(x.data());
   } else {
     lu_solve_transposed(G_, piv_, x);
   }

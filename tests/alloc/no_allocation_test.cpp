@@ -2,6 +2,7 @@
 // friends are interposed by counting versions; the counter must not move across evaluations.
 #include <gtest/gtest.h>
 
+#include <Eigen/LU>
 #include <atomic>
 #include <cmath>
 #include <cstdlib>
@@ -15,6 +16,7 @@
 #include "orthomech/constraints/sparse_et.hpp"
 #include "orthomech/model/free_system.hpp"
 #include "orthomech/model/measures.hpp"
+#include "orthomech/projection/chart_engine.hpp"
 #include "orthomech/projection/dual.hpp"
 #include "orthomech/projection/primal.hpp"
 #include "support/fixtures.hpp"
@@ -233,6 +235,35 @@ TEST(NoAllocationSparseEt, EvaluationsAllocateNothingAfterSetUp) {
     EXPECT_EQ(g_allocations.load() - before, 0) << name;
     EXPECT_TRUE(f.allFinite() && Dtu.allFinite()) << name;
   }
+}
+
+// The sparse chart engine (simulate's on large mechanisms): after the chart's first
+// factorisation, factorisations at new positions (KLU reusing its pivots) and the solves
+// allocate nothing.
+TEST(NoAllocationSparseEngine, FactorisationsAndSolvesAllocateNothingAfterTheFirst) {
+  const Model model = test::load_bundled("n-four-bar-40");
+  SparseEt Et(model);
+  VecX q = model.design_q();
+  compute_constraint_jacobian(model, q, Et);
+  const int r = static_cast<int>(Eigen::FullPivLU<MatX>(MatX(Et.matrix())).rank());
+  ChartEngine engine(model, r, ChartFactorisation::sparse_when_large);
+  ASSERT_TRUE(engine.sparse());
+  const VecX ones = VecX::Ones(model.n);
+  ASSERT_TRUE(engine.select(Et, ones));
+  ASSERT_EQ(engine.factor(Et, ones), 1.0);
+  const VecX b = VecX::Ones(model.nc), c = VecX::Ones(model.n);
+  VecX x(model.n), lambda(r);
+  const double q0 = q(0);
+  const long before = g_allocations.load();
+  for (int k = 1; k <= 100; ++k) {
+    q(0) = q0 + 1e-4 * k;
+    compute_constraint_jacobian(model, q, Et);
+    EXPECT_EQ(engine.factor(Et, ones), 1.0);
+    engine.solve(b, x);
+    engine.solve_transposed(c, lambda);
+  }
+  EXPECT_EQ(g_allocations.load() - before, 0);
+  EXPECT_TRUE(x.allFinite() && lambda.allFinite());
 }
 
 TEST(NoAllocationIntegrators, RosenbrockStepsAllocateNothing) {

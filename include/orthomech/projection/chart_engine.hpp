@@ -19,12 +19,12 @@
 // Allocation-free after set-up on the dense path, except when a chart is switched.
 #include <Eigen/LU>
 #include <Eigen/SparseCore>
-#include <Eigen/SparseLU>
 #include <vector>
 
 #include "orthomech/constraints/sparse_et.hpp"
 #include "orthomech/model/model.hpp"
 #include "orthomech/numerics/solve_result.hpp"
+#include "orthomech/numerics/sparse_lu.hpp"
 #include "orthomech/projection/chart.hpp"
 
 namespace orthomech {
@@ -174,7 +174,7 @@ class ChartEngine {
   MatX G_;                    // r × r (dense path): G, then its LU factors (small_lu.hpp)
   Eigen::VectorXi piv_;       // r: row interchanges of the dense LU
   Eigen::SparseMatrix<double> Gs_;
-  Eigen::SparseLU<Eigen::SparseMatrix<double>, Eigen::COLAMDOrdering<int>> slu_;
+  SparseLu slu_;  // the sparse path's LU (KLU: pivots reused while they stay good)
   std::vector<Eigen::Triplet<double>> triplets_;
   // Structural pattern of Eᵀ (SparseEt: the entries the joints' writers touch, sparse engines
   // only). block_entries_: (row of the block, column of the block, column of Eᵀ, index of
@@ -187,7 +187,7 @@ class ChartEngine {
   };
   std::vector<BlockEntry> block_entries_;
   bool analyzed_ = false;  // slu_ has the ordering of Gs_'s pattern in this chart
-  VecX br_, xd_;           // r
+  VecX br_;                // r
   VecX sw_;                // r: work vector of estimate_sigma_min
 };
 

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "orthomech/constraints/joints.hpp"
+#include "orthomech/constraints/sparse_et.hpp"
 #include "orthomech/io/mechanism_file.hpp"
 #include "support/fixtures.hpp"
 
@@ -434,6 +435,49 @@ TEST(ChartEngine, SelectFromTangentMakesTheFastestComponentIndependent) {
   // In the mass metric: √M scales the components, u_0 now dominates.
   engine.select_from_tangent(F, (VecX(3) << 100.0, 1.0, 1.0).finished());
   EXPECT_EQ(engine.chart().independent, std::vector<int>{0});
+}
+
+// The sparse path (large mechanisms in simulate: the block factorised by KLU, whose pivots are
+// reused while the chart holds) against the dense path in the same chart, on the N = 40 four-bar
+// chain: solve, solve_transposed and the σ_min estimate agree at six positions along a motion of
+// the first coordinate (the engines read Eᵀ(q) only: the positions need not close the loops).
+TEST(ChartEngine, SparsePathSolvesAsTheDensePathInTheSameChart) {
+  const Model model = test::load_bundled("n-four-bar-40");
+  SparseEt Et(model);
+  const VecX q0 = model.design_q();
+  compute_constraint_jacobian(model, q0, Et);
+  const int r = static_cast<int>(Eigen::FullPivLU<MatX>(MatX(Et.matrix())).rank());
+  ASSERT_GT(r, ChartEngine::kSparseAbove);
+  const VecX A_diag = random_positive(model.n, 7);
+  const VecX A_sqrt = A_diag.cwiseSqrt();
+  ChartEngine dense(model, r);
+  ChartEngine sparse(model, r, ChartFactorisation::sparse_when_large);
+  ASSERT_FALSE(dense.sparse());
+  ASSERT_TRUE(sparse.sparse());
+  ASSERT_TRUE(dense.select(MatX(Et.matrix()), A_diag));
+  sparse.set_chart(dense.chart());
+  VecX w_dense = VecX::Ones(r), w_sparse = VecX::Ones(r);
+  for (int k = 0; k < 6; ++k) {
+    VecX q = q0;
+    q(0) += 0.02 * k;
+    compute_constraint_jacobian(model, q, Et);
+    const MatX Ed = MatX(Et.matrix());
+    ASSERT_GT(dense.factor(Ed, A_sqrt), 0.0) << k;
+    ASSERT_EQ(sparse.factor(Et, A_sqrt), 1.0) << k;
+    const VecX b = random_matrix(model.nc, 1, 40 + static_cast<unsigned>(k));
+    VecX xd(model.n), xs(model.n);
+    dense.solve(b, xd);
+    sparse.solve(b, xs);
+    EXPECT_LT((xs - xd).norm(), 1e-10 * (1.0 + xd.norm())) << k;
+    const VecX c = random_matrix(model.n, 1, 60 + static_cast<unsigned>(k));
+    VecX ld(r), ls(r);
+    dense.solve_transposed(c, ld);
+    sparse.solve_transposed(c, ls);
+    EXPECT_LT((ls - ld).norm(), 1e-10 * (1.0 + ld.norm())) << k;
+    const double sd = dense.estimate_sigma_min(w_dense);
+    const double ss = sparse.estimate_sigma_min(w_sparse);
+    EXPECT_NEAR(ss, sd, 1e-10 * sd) << k;
+  }
 }
 
 }  // namespace
