@@ -77,11 +77,18 @@ OdeStats integrate_ode(const OdeProblem& problem, VecX& x, const OdeOptions& opt
 // smooth f) [Nocedal & Wright 2006, §8.1]. Costs 2·(dim x + 1) evaluations of f. Buffers are the
 // caller's (no allocation after the first call with a given size). With
 // problem.jacobian_columns, only the columns it names are differenced (2 evaluations each); the
-// others are set to zero.
+// others are set to zero (when J is the matrix the last call filled, of the same size, only that
+// call's columns are cleared: the caller must not write J between calls).
 struct FiniteDifferenceJacobian {
   VecX xp, fp, fm;
   std::vector<Eigen::Index> columns;
   void compute(const OdeProblem& problem, const VecX& x, double t, MatX& J, VecX& dfdt);
+
+ private:
+  // The storage and size of the J that the last call with jacobian_columns left zero outside
+  // `columns`.
+  const double* cleared_ = nullptr;
+  Eigen::Index cleared_size_ = 0;
 };
 
 }  // namespace orthomech::detail

@@ -2,7 +2,6 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/QR>
-#include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -24,6 +23,7 @@
 #include "orthomech/model/loads.hpp"
 #include "orthomech/model/measures.hpp"
 #include "orthomech/model/spatial.hpp"
+#include "orthomech/numerics/weighted_gram.hpp"
 #include "orthomech/projection/dual.hpp"
 #include "orthomech/projection/free_system_stage.hpp"
 #include "orthomech/projection/primal.hpp"
@@ -473,18 +473,16 @@ class Dynamics {
     pdot_.noalias() += E.transpose() * lambda_;  // eq. (99) as (L3)
   }
 
-  // G = Eᵀ A E (eq. (42)) at ws_.constraints.Et: dense Cholesky, or sparse for large diagonal-
-  // mass systems.
+  // G = Eᵀ A E at ws_.constraints.Et: dense Cholesky, or for large diagonal-mass systems formed
+  // on its fixed sparse pattern and factorised by a sparse LDLᵀ (numerics/weighted_gram.hpp).
   void factor_G() {
     const SparseEt::Matrix& E = ws_.constraints.Et.matrix();  // Eᵀ
     if (nc_ > 48 && ws_.free.diagonal_mass) {
-      Gs_ = E * ws_.free.A_diag.asDiagonal() * E.transpose();  // eq. (42)
-      if (!G_analyzed_) {  // Eᵀ's structural pattern, hence G's, is fixed: one ordering
-        Gs_ldlt_.analyzePattern(Gs_);
+      if (!G_analyzed_) {  // Eᵀ's structural pattern, hence G's, is fixed: one analysis
+        G_sparse_.analyze(E);
         G_analyzed_ = true;
       }
-      Gs_ldlt_.factorize(Gs_);
-      if (Gs_ldlt_.info() != Eigen::Success || Gs_ldlt_.vectorD().minCoeff() <= 0.0)
+      if (!G_sparse_.factorize(E, ws_.free.A_diag))
         throw SingularEvaluation{"G = EᵀAE is singular at t = " + time_text(model_, state_.t)};
       sparse_G_ = true;
       return;
@@ -507,7 +505,7 @@ class Dynamics {
   }
   void solve_G(const VecX& b, VecX& x) {
     if (sparse_G_)
-      x = Gs_ldlt_.solve(b);
+      G_sparse_.solve(b, x);
     else
       x = G_llt_.solve(b);
   }
@@ -581,11 +579,10 @@ class Dynamics {
   VecX v_stage_;  // a projected primal stage's independent velocities (evaluate_primal)
   MatX AEt_, G_;
   Eigen::LLT<MatX> G_llt_;
-  Eigen::SparseMatrix<double> Gs_;
-  MatX Et_dense_;  // fill_sample's minimum-norm multipliers (redundant constraints) only
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> Gs_ldlt_;
+  MatX Et_dense_;          // fill_sample's minimum-norm multipliers (redundant constraints) only
+  WeightedGram G_sparse_;  // G = Eᵀ A E on its pattern (large diagonal-mass systems)
   bool sparse_G_ = false;
-  bool G_analyzed_ = false;  // Gs_ldlt_ has the ordering of G's (fixed) pattern
+  bool G_analyzed_ = false;  // G_sparse_ has G's (fixed) pattern
   VecX dq_;
   // Eᵀ (ws_.constraints.Et), the chart's factors and F_ are those at chart_q_ in the current
   // chart: an evaluation at chart_q_ need not compute them again. Whoever changes one of them

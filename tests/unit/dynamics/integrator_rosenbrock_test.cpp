@@ -59,6 +59,12 @@ TEST(FiniteDifferenceJacobian, ListedColumnsOnly_OthersZero) {
   EXPECT_EQ(J_cols.col(1), VecX::Zero(3));
   EXPECT_NE(J_full.col(1), VecX::Zero(3));  // the omitted column is not zero in truth
   EXPECT_EQ(ft_cols, ft_full);
+  // Other columns into the same J: the previous call's columns are zero again.
+  p.jacobian_columns = [](std::vector<Eigen::Index>& c) { c = {1}; };
+  fd.compute(p, x, 0.4, J_cols, ft_cols);
+  EXPECT_EQ(J_cols.col(1), J_full.col(1));
+  EXPECT_EQ(J_cols.col(0), VecX::Zero(3));
+  EXPECT_EQ(J_cols.col(2), VecX::Zero(3));
   // An autonomous problem's ∂f/∂t is not differenced: zero.
   p.autonomous = true;
   fd.compute(p, x, 0.4, J_cols, ft_cols);
