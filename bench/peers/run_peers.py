@@ -3,12 +3,15 @@
 orthomech, MuJoCo and Simbody against the same exact one-DOF reduction.
 
     cmake --build build --target orthomech peer_reference_n_four_bar \
-        peer_mujoco_n_four_bar peer_simbody_n_four_bar      # the peers need libmujoco-dev,
+        peer_mujoco_n_four_bar peer_simbody_n_four_bar \
+        peer_reference_crank_rocker peer_mujoco_crank_rocker # the peers need libmujoco-dev,
     python3 bench/peers/run_peers.py [--build build]        # libsimbody-dev
 
-Prints two Markdown tables: the work-precision table at N = 40 to t = 20 s (error of B0 at the
-end against the reduction, the largest loop-closure gap, CPU time per simulated second) and the
-growth of the CPU time per simulated second with N at one setting per tool. A peer whose binary
+Prints three Markdown tables: the work-precision table at N = 40 to t = 20 s (error of B0 at the
+end against the reduction, the largest loop-closure gap, CPU time per simulated second), the
+growth of the CPU time per simulated second with N at one setting per tool, and the crank-rocker
+released under gravity to t = 10 s (error of the crank angle against crank_rocker_reference.hpp;
+MuJoCo only). --growth-only, --work-precision-only, --crank-rocker-only: one of them. A peer whose binary
 was not built (its package missing) is left out with a note. orthomech's rows time the whole
 `orthomech simulate` process (user + sys, getrusage of the child); the peers time their
 integration loop (process CPU clock), so orthomech's numbers include parsing and setup (a few
@@ -103,8 +106,8 @@ def simbody_row(build, n, t_end, acc, method, cap, closure="plane"):
             "gap": float(f["gap"]), "note": f.get("stop", "") + f" ({f['steps']} steps)"}
 
 
-def header():
-    print("| tool | setting | N | reached t (s) | CPU s per simulated s | error of B0 (m) | "
+def header(error="error of B0 (m)"):
+    print(f"| tool | setting | N | reached t (s) | CPU s per simulated s | {error} | "
           "loop gap (m) | note |")
     print("|---|---|---|---|---|---|---|---|")
     sys.stdout.flush()
@@ -125,6 +128,8 @@ def main():
                     help="only the growth with N (N = 2 … 1000), not the work-precision table")
     ap.add_argument("--work-precision-only", action="store_true",
                     help="only the work-precision table, not the growth with N")
+    ap.add_argument("--crank-rocker-only", action="store_true",
+                    help="only the crank-rocker swinging under gravity")
     a = ap.parse_args()
     peers = os.path.join(a.build, "bench", "peers")
     have_mujoco = os.path.exists(os.path.join(peers, "peer_mujoco_n_four_bar"))
@@ -134,11 +139,15 @@ def main():
         if not ok:
             print(f"note: {name} rows left out: its peer binary was not built ({pkg} missing)")
     n40, t40 = (10, 5.0) if a.quick else (40, 20.0)
+    only = a.growth_only or a.work_precision_only or a.crank_rocker_only
     with tempfile.TemporaryDirectory() as tmp:
-        if not a.growth_only:
+        if a.work_precision_only or not only:
             work_precision(a, n40, t40, have_mujoco, have_simbody, tmp)
-        if not a.work_precision_only:
+        if a.growth_only or not only:
             growth(a, have_mujoco, have_simbody, tmp)
+    if a.crank_rocker_only or not only:
+        crank_rocker(a, 2.0 if a.quick else 10.0,
+                     os.path.exists(os.path.join(peers, "peer_mujoco_crank_rocker")))
 
 
 def work_precision(a, n40, t40, have_mujoco, have_simbody, tmp):
@@ -157,6 +166,42 @@ def work_precision(a, n40, t40, have_mujoco, have_simbody, tmp):
     for integrator, rtol in (("dopri5", 1e-7), ("dopri5", 1e-9), ("rkf78", 1e-6),
                              ("rkf78", 1e-7), ("rkf78", 1e-8), ("rkf78", 1e-10)):
         row(orthomech_row(a.build, n40, t40, integrator, rtol, tmp))
+
+
+def crank_rocker(a, t_end, have_mujoco):
+    """The crank-rocker released at rest under gravity (its crank turns over and over): error of
+    the crank angle at t_end against crank_rocker_reference.hpp (rad), loop gap (m)."""
+    print(f"\n## Crank-rocker under gravity, t = 0 … {t_end:g} s\n")
+    header("error of the crank angle (rad)")
+    if have_mujoco:
+        exe = os.path.join(a.build, "bench", "peers", "peer_mujoco_crank_rocker")
+        for dt, method, sol in ((1e-3, "euler", "default"), (1e-3, "euler", "tight"),
+                                (1e-4, "euler", "tight"), (1e-5, "euler", "tight"),
+                                (1e-3, "rk4", "tight"), (1e-4, "rk4", "tight"),
+                                (1e-5, "rk4", "tight")):
+            lines = run([exe, str(t_end), str(dt), method, sol]).splitlines()
+            f = parse_line([x for x in lines if x.startswith("mujoco ")][-1])
+            row({"tool": "MuJoCo " + f["raw"].split()[1], "setting": f"{method} dt {dt:g} {sol}",
+                 "N": "—", "t": float(f["t"]), "cpu_per_s": float(f["cpu_per_s"]),
+                 "err": float(f["err"]), "gap": float(f["gap"]), "note": ""})
+    reference = os.path.join(a.build, "bench", "peers", "peer_reference_crank_rocker")
+    exact = float(run([reference, str(t_end)]))
+    mech = os.path.join(ROOT, "mechanisms", "crank-rocker.yaml")
+    for integrator, rtol in (("dopri5", 1e-6), ("dopri5", 1e-8), ("rkf78", 1e-8),
+                             ("rkf78", 1e-10)):
+        cmd = [os.path.join(a.build, "orthomech"), "simulate", mech, "--t-end", str(t_end),
+               "--rtol", str(rtol), "--atol", "1e-12", "--integrator", integrator, "--dt-out",
+               str(t_end), "--json", "-q"]
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
+        r = subprocess.run(cmd, capture_output=True, text=True)
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+        j = json.loads(r.stdout)
+        row({"tool": "orthomech", "setting": f"{integrator} rtol {rtol:g}", "N": "—",
+             "t": j["final"]["t"], "cpu_per_s": cpu / t_end,
+             "err": abs(math.radians(j["final"]["measures"]["crank_angle"]) - exact),
+             "gap": 1e-3 * j["max_residual_length"],  # the file's lengths are in mm
+             "note": j["status"]})
 
 
 def growth(a, have_mujoco, have_simbody, tmp):
