@@ -1,8 +1,9 @@
 #pragma once
-// An independent reference for the crank-rocker swinging under gravity (mechanisms/crank-rocker.yaml
-// without its drive: released at rest at crank angle 60°, open assembly). The four-bar has one
-// degree of freedom, the crank angle θ; with the loop closed in closed form and the velocity and
-// acceleration analysis of the loop written out, Lagrange's equation is
+// An independent reference for the crank-rocker swinging under gravity
+// (mechanisms/crank-rocker.yaml without its drive: released at rest at crank angle 60°, open
+// assembly). The four-bar has one degree of freedom, the crank angle θ; with the loop closed in
+// closed form and the velocity and acceleration analysis of the loop written out, Lagrange's
+// equation is
 //   m(θ) θ̈ + ½ m'(θ) θ̇² + V'(θ) = 0,                                                       (R2)
 //   m(θ) = Σ_k m_k |G_k'|² + J_k φ_k'²,  ½ m'(θ) = Σ_k m_k G_k'·G_k'' + J_k φ_k' φ_k'',
 //   V'(θ) = g Σ_k m_k (G_k')_y,

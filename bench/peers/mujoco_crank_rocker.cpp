@@ -8,41 +8,33 @@
 // end).   usage: peer_mujoco_crank_rocker T_END DT euler|rk4 default|tight
 // `tight` as in mujoco_n_four_bar.cpp: solref = (2 dt, 1), solimp = (0.9999, 0.9999, 0.001).
 #include <mujoco/mujoco.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <ctime>
-#include <fstream>
 #include <sstream>
 #include <string>
 
 #include "crank_rocker_reference.hpp"
+#include "mujoco_support.hpp"
 
 namespace {
-
-double cpu_seconds() {
-  timespec t{};
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
-  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
-}
 
 std::string model_xml(const orthomech::peers::CrankRocker& cr, double dt, bool rk4, bool tight) {
   double t3 = 0.0, t4 = 0.0;
   cr.angles(cr.theta0, t3, t4);
   std::ostringstream x;
   x.precision(17);
-  const double tiny = 1e-12;  // the rods' axial inertia
+  const double tiny = 1e-12;                  // the rods' axial inertia
   const auto rod = [&](double m, double L) {  // inertial of a rod along local x from the origin
     const double J = m * L * L / 12.0;
     x << "<inertial pos='" << L / 2 << " 0 0' mass='" << m << "' diaginertia='" << tiny << " " << J
       << " " << J << "'/>";
   };
   x << "<mujoco model='crank-rocker'>\n  <compiler angle='radian'/>\n"
-    << "  <option timestep='" << dt << "' integrator='" << (rk4 ? "RK4" : "Euler") << "' gravity='0 0 "
-    << -cr.g << "'><flag contact='disable'/></option>\n  <worldbody>\n"
+    << "  <option timestep='" << dt << "' integrator='" << (rk4 ? "RK4" : "Euler")
+    << "' gravity='0 0 " << -cr.g << "'><flag contact='disable'/></option>\n  <worldbody>\n"
     << "    <body name='crank' pos='0 0 0' axisangle='0 -1 0 " << cr.theta0 << "'>\n"
     << "      <joint name='A0' type='hinge' axis='0 -1 0'/>\n      ";
   rod(cr.m2, cr.a);
@@ -70,18 +62,8 @@ int main(int argc, char** argv) {
   const double t_end = std::atof(argv[1]), dt = std::atof(argv[2]);
   const bool rk4 = std::string(argv[3]) == "rk4", tight = std::string(argv[4]) == "tight";
   const orthomech::peers::CrankRocker cr;
-  char path[] = "/tmp/peer_mujoco_XXXXXX.xml";
-  const int fd = mkstemps(path, 4);
-  if (fd < 0) return 2;
-  close(fd);
-  std::ofstream(path) << model_xml(cr, dt, rk4, tight);
-  char error[1000] = "";
-  mjModel* m = mj_loadXML(path, nullptr, error, sizeof error);
-  std::remove(path);
-  if (!m) {
-    std::fprintf(stderr, "MuJoCo: %s\n", error);
-    return 2;
-  }
+  mjModel* m = orthomech::peers::load_mjcf(model_xml(cr, dt, rk4, tight));
+  if (!m) return 2;
   mjData* d = mj_makeData(m);
   mj_forward(m, d);
   const int bc = mj_name2id(m, mjOBJ_SITE, "Bc"), br = mj_name2id(m, mjOBJ_SITE, "Br");
@@ -94,12 +76,12 @@ int main(int argc, char** argv) {
   const long steps = std::lround(t_end / dt);
   const long sample = std::max(1L, std::lround(0.01 / dt));
   double max_gap = gap();
-  const double c0 = cpu_seconds();  // the loop, with its gap samples
+  const double c0 = orthomech::peers::cpu_seconds();  // the loop, with its gap samples
   for (long i = 0; i < steps; ++i) {
     mj_step(m, d);
     if (i % sample == 0) max_gap = std::fmax(max_gap, gap());  // sites at the step's start
   }
-  const double cpu = cpu_seconds() - c0;
+  const double cpu = orthomech::peers::cpu_seconds() - c0;
   mj_forward(m, d);  // kinematics at t_end
   max_gap = std::fmax(max_gap, gap());
   const double err = std::abs(cr.theta0 + d->qpos[crank] - cr.crank_angle(t_end));

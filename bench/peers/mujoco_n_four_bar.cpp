@@ -8,27 +8,19 @@
 // `tight`: solref = (2 dt, 1) (the stiffest time constant MuJoCo takes, critical damping),
 // solimp = (0.9999, 0.9999, 0.001): the constraint as hard as MuJoCo's soft model allows.
 #include <mujoco/mujoco.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <ctime>
-#include <fstream>
 #include <sstream>
 #include <string>
 
+#include "mujoco_support.hpp"
 #include "nfourbar_reference.hpp"
 
 namespace {
-
-double cpu_seconds() {
-  timespec t{};
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
-  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
-}
 
 std::string model_xml(int N, double dt, bool rk4, bool tight) {
   std::ostringstream x;
@@ -74,18 +66,8 @@ int main(int argc, char** argv) {
   const int N = std::atoi(argv[1]);
   const double t_end = std::atof(argv[2]), dt = std::atof(argv[3]);
   const bool rk4 = std::string(argv[4]) == "rk4", tight = std::string(argv[5]) == "tight";
-  char path[] = "/tmp/peer_mujoco_XXXXXX.xml";
-  const int fd = mkstemps(path, 4);
-  if (fd < 0) return 2;
-  close(fd);
-  std::ofstream(path) << model_xml(N, dt, rk4, tight);
-  char error[1000] = "";
-  mjModel* m = mj_loadXML(path, nullptr, error, sizeof error);
-  std::remove(path);
-  if (!m) {
-    std::fprintf(stderr, "MuJoCo: %s\n", error);
-    return 2;
-  }
+  mjModel* m = orthomech::peers::load_mjcf(model_xml(N, dt, rk4, tight));
+  if (!m) return 2;
   mjData* d = mj_makeData(m);
   // The benchmark's initial velocity: every link at φ̇ = +1 about y (B0 moves at x' = 1 m/s),
   // every coupler at −1 relative to its link (it translates).
@@ -107,12 +89,13 @@ int main(int argc, char** argv) {
   const long steps = std::lround(t_end / dt);
   const long sample = std::max(1L, std::lround(0.01 / dt));
   double max_gap = 0.0;
-  const double c0 = cpu_seconds();  // the loop, with its gap samples (< 1 % of the steps)
+  const double c0 =
+      orthomech::peers::cpu_seconds();  // the loop, with its gap samples (< 1 % of the steps)
   for (long i = 0; i < steps; ++i) {
     mj_step(m, d);
     if (i % sample == 0) max_gap = std::fmax(max_gap, gap());  // sites at the step's start
   }
-  const double cpu = cpu_seconds() - c0;
+  const double cpu = orthomech::peers::cpu_seconds() - c0;
   mj_forward(m, d);  // kinematics at t_end
   max_gap = std::fmax(max_gap, gap());
   const std::array<double, 2> ref = orthomech::peers::n_four_bar_b0(N, t_end);

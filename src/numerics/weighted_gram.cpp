@@ -22,20 +22,35 @@ std::vector<std::vector<Entry>> entries_by_column(const WeightedGram::RowMajorMa
   return columns;
 }
 
-// The fill-reducing order of a symmetric pattern: position[i] is row i's place.
-std::vector<int> amd_positions(int m, const std::vector<std::vector<Entry>>& columns) {
-  std::vector<Eigen::Triplet<double>> pattern;
+// G's pattern, upper triangle, with row i of G at row position[i] (the diagonal always: G is
+// then structurally regular).
+std::vector<Eigen::Triplet<double>> upper_pattern(const std::vector<std::vector<Entry>>& columns,
+                                                  const std::vector<int>& position) {
+  std::vector<Eigen::Triplet<double>> upper;
   size_t pairs = 0;
   for (const auto& c : columns) pairs += c.size() * c.size();
-  pattern.reserve(static_cast<size_t>(m) + pairs);
-  for (int i = 0; i < m; ++i) pattern.emplace_back(i, i, 1.0);
+  upper.reserve(position.size() + pairs);
+  for (int i = 0; i < static_cast<int>(position.size()); ++i) upper.emplace_back(i, i, 1.0);
   for (const auto& c : columns)
     for (const Entry& x : c)
-      for (const Entry& y : c) pattern.emplace_back(x.row, y.row, 1.0);
+      for (const Entry& y : c) {
+        const int r = position[static_cast<size_t>(x.row)];
+        const int s = position[static_cast<size_t>(y.row)];
+        if (r <= s) upper.emplace_back(r, s, 1.0);
+      }
+  return upper;
+}
+
+// The fill-reducing order of G's pattern: position[i] is row i's place.
+std::vector<int> amd_positions(int m, const std::vector<std::vector<Entry>>& columns) {
+  std::vector<int> identity(static_cast<size_t>(m));
+  for (int i = 0; i < m; ++i) identity[static_cast<size_t>(i)] = i;
+  const auto upper = upper_pattern(columns, identity);
   Eigen::SparseMatrix<double> S(m, m);
-  S.setFromTriplets(pattern.begin(), pattern.end());
+  S.setFromTriplets(upper.begin(), upper.end());
   Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> order;
-  Eigen::AMDOrdering<int>()(S, order);  // order(j): the row eliminated j-th
+  Eigen::AMDOrdering<int>()(S,
+                            order);  // (on the pattern of S + Sᵀ) order(j): the row eliminated j-th
   std::vector<int> position(static_cast<size_t>(m));
   for (int j = 0; j < m; ++j) position[static_cast<size_t>(order.indices()(j))] = j;
   return position;
@@ -46,19 +61,7 @@ void WeightedGram::analyze(const RowMajorMatrix& B) {
   const int m = static_cast<int>(B.rows());
   const auto columns = entries_by_column(B);
   position_ = amd_positions(m, columns);
-  // The upper triangle of P G Pᵀ (the diagonal always: G is then structurally regular).
-  std::vector<Eigen::Triplet<double>> upper;
-  size_t pairs = 0;
-  for (const auto& c : columns) pairs += c.size() * c.size();
-  upper.reserve(static_cast<size_t>(m) + pairs);
-  for (int i = 0; i < m; ++i) upper.emplace_back(i, i, 1.0);
-  for (const auto& c : columns)
-    for (const Entry& x : c)
-      for (const Entry& y : c) {
-        const int r = position_[static_cast<size_t>(x.row)];
-        const int s = position_[static_cast<size_t>(y.row)];
-        if (r <= s) upper.emplace_back(r, s, 1.0);
-      }
+  const auto upper = upper_pattern(columns, position_);  // of P G Pᵀ
   G_.resize(m, m);
   G_.setFromTriplets(upper.begin(), upper.end());
   G_.makeCompressed();
