@@ -7,8 +7,10 @@
 // ordering once per pattern (analyze), a left-looking Gilbert–Peierls LU with partial pivoting
 // (fresh factorisation), and a refactorisation with the same pivot sequence, which neither
 // searches for pivots nor allocates. A refactorisation whose pivots are no longer good (pivot
-// growth above kMaxGrowth, or a zero pivot) is replaced by a fresh factorisation, so that reusing
-// the pivots never costs accuracy. KLU's header stays in the implementation (src/numerics/).
+// growth above kMaxGrowth, or a zero pivot) is replaced by a fresh factorisation, which bounds
+// what reusing the pivots can cost in accuracy (on the N-four-bar's charts the growth stayed
+// below 10: N = 40 runs with a limit of 10 and of 1e3 are bit for bit the same). KLU's header
+// stays in the implementation (src/numerics/).
 #include <Eigen/SparseCore>
 #include <memory>
 
