@@ -1,4 +1,4 @@
-// The stiff integrator's pieces (src/dynamics/integrator.hpp, private): the central-difference
+// The stiff integrator's pieces (src/dynamics/integrator.hpp, private): the finite-difference
 // Jacobian against analytic derivatives, and RODAS 4(3)'s order of convergence at fixed steps
 // against closed-form solutions (a wrong coefficient lowers the order).
 #include <gtest/gtest.h>
@@ -31,11 +31,35 @@ TEST(FiniteDifferenceJacobian, CentralDifferencesMatchAnalyticDerivatives) {
   J_exact(2, 0) = t;
   VecX ft_exact(3);
   ft_exact << 0.0, 2.0 * t, x(0);
-  // Central differences with h = ∛ε·max(1, |x|): truncation h²·|f'''|/6 + rounding ε|f|/h,
-  // both ~1e-10 here.
+  // The fourth-order stencil with h = ∛ε·max(1, |x|): truncation h⁴·|f⁽⁵⁾|/30 ~1e-21, rounding
+  // ~1.5 ε|f|/h ~1e-10 here.
   constexpr double kFdTol = 1e-9;
   EXPECT_LT((J - J_exact).cwiseAbs().maxCoeff(), kFdTol);
   EXPECT_LT((ft - ft_exact).cwiseAbs().maxCoeff(), kFdTol);
+}
+
+// Far from the origin the step h = ∛ε·|x| is large (1.2e-4 at x = 20): a two-point central
+// difference of sin(10 x) errs by h²·|f'''|/6 = 1.2e-6 there, the fourth-order stencil by
+// h⁴·|f⁽⁵⁾|/30 + 1.5 ε|f|/h ~ 2e-12. Same in t (∂f/∂t of sin(10 t) at t = 20).
+TEST(FiniteDifferenceJacobian, FourthOrderWhereTheStepIsLarge) {
+  OdeProblem p;
+  p.rhs = [](const VecX& x, VecX& f, double t) {
+    f.resize(2);
+    f << std::sin(10.0 * x(0)), std::sin(10.0 * t) + x(1);
+  };
+  VecX x(2);
+  x << 20.0, 0.3;
+  const double t = 20.0;
+  MatX J;
+  VecX ft;
+  FiniteDifferenceJacobian fd;
+  fd.compute(p, x, t, J, ft);
+  constexpr double kTol = 1e-10;  // 1e4 below the two-point difference's error
+  EXPECT_NEAR(J(0, 0), 10.0 * std::cos(10.0 * x(0)), kTol);
+  EXPECT_NEAR(J(1, 1), 1.0, kTol);
+  EXPECT_NEAR(ft(1), 10.0 * std::cos(10.0 * t), kTol);
+  EXPECT_EQ(J(0, 1), 0.0);
+  EXPECT_EQ(J(1, 0), 0.0);
 }
 
 // With jacobian_columns only the listed columns are differenced; the others are zero. The
