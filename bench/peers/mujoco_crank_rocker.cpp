@@ -73,17 +73,7 @@ int main(int argc, char** argv) {
     return std::hypot(std::hypot(p[3 * bc] - p[3 * br], p[3 * bc + 1] - p[3 * br + 1]),
                       p[3 * bc + 2] - p[3 * br + 2]);
   };
-  const long steps = std::lround(t_end / dt);
-  const long sample = std::max(1L, std::lround(0.01 / dt));
-  double max_gap = gap();
-  const double c0 = orthomech::peers::cpu_seconds();  // the loop, with its gap samples
-  for (long i = 0; i < steps; ++i) {
-    mj_step(m, d);
-    if (i % sample == 0) max_gap = std::fmax(max_gap, gap());  // sites at the step's start
-  }
-  const double cpu = orthomech::peers::cpu_seconds() - c0;
-  mj_forward(m, d);  // kinematics at t_end
-  max_gap = std::fmax(max_gap, gap());
+  const auto [cpu, max_gap] = orthomech::peers::run_timed(m, d, t_end, dt, gap);
   const double err = std::abs(cr.theta0 + d->qpos[crank] - cr.crank_angle(t_end));
   std::printf("mujoco %s crank-rocker dt=%g %s %s t=%g cpu_per_s=%.4g err=%.2e gap=%.1e\n",
               mj_versionString(), dt, rk4 ? "rk4" : "euler", tight ? "tight" : "default", d->time,

@@ -86,18 +86,7 @@ int main(int argc, char** argv) {
     }
     return g;
   };
-  const long steps = std::lround(t_end / dt);
-  const long sample = std::max(1L, std::lround(0.01 / dt));
-  double max_gap = 0.0;
-  const double c0 =
-      orthomech::peers::cpu_seconds();  // the loop, with its gap samples (< 1 % of the steps)
-  for (long i = 0; i < steps; ++i) {
-    mj_step(m, d);
-    if (i % sample == 0) max_gap = std::fmax(max_gap, gap());  // sites at the step's start
-  }
-  const double cpu = orthomech::peers::cpu_seconds() - c0;
-  mj_forward(m, d);  // kinematics at t_end
-  max_gap = std::fmax(max_gap, gap());
+  const auto [cpu, max_gap] = orthomech::peers::run_timed(m, d, t_end, dt, gap);
   const std::array<double, 2> ref = orthomech::peers::n_four_bar_b0(N, t_end);
   const double err =
       std::hypot(d->site_xpos[3 * site_b0] - ref[0], d->site_xpos[3 * site_b0 + 2] - ref[1]);
