@@ -469,7 +469,8 @@ nlohmann::json passages_json(const SimulateResult& res, const SimulateUnits& U) 
                   {"quality_from", c.sigma_from},
                   {"quality_to", c.sigma_to},
                   {"velocity_jump", c.velocity_jump},
-                  {"tangent_cosine", c.tangent_cosine}});
+                  {"tangent_cosine", c.tangent_cosine},
+                  {"energy_balance", c.energy_balance}});
   return cp;
 }
 

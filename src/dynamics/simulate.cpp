@@ -124,6 +124,11 @@ constexpr double kReachSteps = 6.0;
 // the passage's own noise grows as σ̂ falls.
 constexpr double kPassQuality = 1e-3;
 constexpr double kPassQualityFloor = 1e-6;
+constexpr double kRetry = 0.25;  // 4 times closer (above)
+// A passage that fails only its energy balance (C6 (v)) is tried again from 2 times closer: its
+// step halves, its truncation error (O(h⁷)) falls ~128-fold, its rounding noise (~ε/σ̂²) grows
+// only 4-fold.
+constexpr double kTruncationRetry = 0.5;
 // Approach: each approach segment covers at most this fraction of the way to t* and aims at
 // kApproachTarget · pass_quality.
 constexpr double kApproachFraction = 0.75;
@@ -1615,7 +1620,10 @@ class Simulation {
   }
 
   // (C6) the checks: velocity continuity (the quadrature velocity is admissible at the
-  // landing up to the step's truncation error), no reversal, and a regular landing beyond.
+  // landing up to the step's truncation error), no reversal, a regular landing beyond, and (v)
+  // the energy balance across the step within the velocity jump's bound (the truncation error
+  // along the energy: on n-four-bar-40 at rtol 1e-11 it grew as h⁷, to 2.4e-9 of T on the
+  // longest passages, h = 0.037 s, and B0 ended up to 1.2e-6 off at 20 s; docs/theory.md, (C6)).
   // The passage's record and σ̂ with its rate at the landing are set either way.
   bool check_passage(PassageStep& p, double t_star, double sigma_a, ChangePointPassage& pass,
                      std::string& why) {
@@ -1627,6 +1635,7 @@ class Simulation {
     p.sigma_b = chart_quality_rate(B.q, B.u, p.rate_b);
     const double sigma_b = p.sigma_b;
     pass = {t_star, p.t_a, p.t_b, sigma_a, sigma_b, jump, cosine, p.iterations};
+    pass.energy_balance = passage_energy_balance(p);
     char buf[200];
     std::snprintf(buf, sizeof buf,
                   " (velocity jump %.3g relative, cosine %.9f, corrector change %.3g, chart "
@@ -1653,11 +1662,39 @@ class Simulation {
       why = "the passage step's corrector did not converge" + std::string(buf);
       return false;
     }
+    if (!(pass.energy_balance <= jump_bound)) {  // (v): retried from closer (pass())
+      truncation_failure_ = true;
+      char eb[112];
+      std::snprintf(eb, sizeof eb, "; its energy balance is off by %.3g of the kinetic energy",
+                    pass.energy_balance);
+      why = "the passage step's truncation error is above the bound" + std::string(buf) + eb;
+      return false;
+    }
     if (!(sigma_b >= kLandingQualityRatio * sigma_a)) {
       why = "the landing is not beyond the change point at a regular position" + std::string(buf);
       return false;
     }
     return true;
+  }
+
+  // |Δ(T + V − W)| across the passage step relative to the larger kinetic energy at its ends: 0
+  // for the exact motion (dE/dt = P); the step's truncation error along the energy. Less the
+  // rounding of the energies' terms (1024 ε of their magnitudes), so that a slow passage
+  // (T ≪ |V|) is not refused for the rounding of V.
+  double passage_energy_balance(const PassageStep& p) {
+    const BranchState &A = p.stage[0], &B = p.stage[3];
+    dyn_.state_.q = A.q;
+    dyn_.state_.u = A.u;
+    const double T_a = kinetic_energy(model_, dyn_.state_), V_a = potential_energy(model_, A.q);
+    dyn_.state_.q = B.q;
+    dyn_.state_.u = B.u;
+    const double T_b = kinetic_energy(model_, dyn_.state_), V_b = potential_energy(model_, B.q);
+    const double rounding = 1024.0 * std::numeric_limits<double>::epsilon() *
+                            (std::abs(T_a) + std::abs(V_a) + std::abs(p.W_a) + std::abs(T_b) +
+                             std::abs(V_b) + std::abs(p.W_b));
+    const double imbalance = std::abs((T_b + V_b - p.W_b) - (T_a + V_a - p.W_a));
+    const double T = std::max(T_a, T_b);
+    return T > 0.0 ? std::max(0.0, imbalance - rounding) / T : 0.0;
   }
 
   // The run continues from the landing B: outputs inside the step, the ODE state, the monitor's
@@ -1771,8 +1808,10 @@ class Simulation {
       // The first attempt's reason is kept for the message: the later ones, closer to the
       // point, are dominated by rounding noise (ε/σ̂²) rather than the step's truncation.
       if (first_passage_why_.empty()) first_passage_why_ = why;
-      if (rq.sigma / 4.0 >= kPassQualityFloor) {  // try again from closer
-        pass_quality_ = rq.sigma / 4.0;
+      const double closer = truncation_failure_ ? kTruncationRetry : kRetry;
+      truncation_failure_ = false;
+      if (rq.sigma * closer >= kPassQualityFloor) {  // try again from closer
+        pass_quality_ = rq.sigma * closer;
         request_ = {true, rq.t_star, rq.sigma};
         approaches_ = 0;
         return true;
@@ -1902,6 +1941,7 @@ class Simulation {
   // minimum above 0 there, not a change point): no request until σ̂ rises again.
   bool monitor_quiet_ = false;
   double pass_quality_ = kPassQuality;  // σ̂ at which the next passage is tried
+  bool truncation_failure_ = false;     // the last passage failed its energy balance
   double t_last_accept_, h_last_ = 0.0;
   // chart_quality_rate's work space.
   VecX sigma_left_, rate_x_, rate_plus_, rate_minus_;

@@ -113,6 +113,7 @@ struct ChangePointPassage {
   double velocity_jump = 0.0;               // ‖u_pred − u_to‖_M / ‖u_to‖_M
   double tangent_cosine = 0.0;              // ⟨u_from, u_to⟩_M / (‖u_from‖_M ‖u_to‖_M)
   int iterations = 0;                       // corrector iterations of the passage step
+  double energy_balance = 0.0;              // |Δ(T + V − W)| / max(T_from, T_to) over the step
 };
 
 struct SimulateResult {

@@ -153,7 +153,8 @@ struct Reference {
                                     {"quality_from", c.sigma_from},
                                     {"quality_to", c.sigma_to},
                                     {"velocity_jump", c.velocity_jump},
-                                    {"tangent_cosine", c.tangent_cosine}});
+                                    {"tangent_cosine", c.tangent_cosine},
+                                    {"energy_balance", c.energy_balance}});
     j["samples"] = series();
     return json::parse(j.dump());  // as written: NaN as null, numbers round-tripped
   }
