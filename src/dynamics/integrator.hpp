@@ -80,8 +80,9 @@ OdeStats integrate_ode(const OdeProblem& problem, VecX& x, const OdeOptions& opt
 // origin on the N = 40 four-bar: h up to 2.4e-4) and next to a change point the chart's ODE
 // bends sharply, and a Rosenbrock method's order assumes the exact Jacobian. Measured on that bar
 // at rtol 1e-10 with steps ≤ 1e-3 s: the energy drifted ~4e-5 J/s as a change point neared and
-// B0 ended 1.5e-6 off at 20 s; with this stencil the drift is gone and B0 ends 3.0e-7 off
-// (docs/theory.md, "Rosenbrock on the chart's ODE"). Costs 4·(dim x + 1) evaluations of f.
+// B0 ended 1.5e-6 off at 20 s; with this stencil the drift is gone and B0 ends 2.7e-8 off
+// (2.5e-8 … 7.1e-7 over five variants of the output grid and atol; docs/theory.md, "Change
+// points" and "Rosenbrock on the chart's ODE"). Costs 4·(dim x + 1) evaluations of f.
 // Buffers are the caller's (no allocation after the first call with a given size). With
 // problem.jacobian_columns, only the columns it names are differenced (4 evaluations each); the
 // others are set to zero (when J is the matrix the last call filled, of the same size, only that
