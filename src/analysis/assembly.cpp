@@ -21,6 +21,7 @@
 #include "orthomech/model/state.hpp"
 #include "orthomech/projection/dual.hpp"
 #include "orthomech/projection/free_system_stage.hpp"
+#include "orthomech/projection/gauss_newton.hpp"
 
 namespace orthomech {
 
@@ -583,51 +584,22 @@ bool project_with_locks(const Model& model, VecX& q, const std::vector<JointLock
   o.locks = locks;
   o.use_limits = false;
   const std::vector<CoordinateRow> rows = coordinate_rows(model, q, o);
-  const int nl = static_cast<int>(rows.size());
-  MatX C(model.nc + nl, model.n), Et(model.nc, model.n);
-  VecX c(model.nc + nl), f(model.nc), d(model.n);
-  MatX A(model.n, model.n);
-  compute_inverse_mass_matrix(model, q, A);
-  auto residual = [&](const VecX& x) {
-    compute_constraint_residual(model, x, f);
-    c.head(model.nc) = f;
-    for (int k = 0; k < nl; ++k)
-      c(model.nc + k) = eval_coordinate(model, rows[static_cast<size_t>(k)], x, d) -
-                        rows[static_cast<size_t>(k)].lo;
-    const double r = c.size() ? c.cwiseAbs().maxCoeff() : 0.0;
-    return std::isfinite(r) ? r : std::numeric_limits<double>::infinity();
-  };
-  double r = residual(q);
-  for (int it = 0; it < max_iterations && r > tolerance; ++it) {
-    compute_constraint_jacobian(model, q, Et);
-    C.topRows(model.nc) = Et;
-    for (int k = 0; k < nl; ++k) {
-      eval_coordinate(model, rows[static_cast<size_t>(k)], q, d);
-      C.row(model.nc + k) = d.transpose();
-    }
-    // Mass-metric minimum-norm step: Δq = −A Cᵀ (C A Cᵀ)⁺ c.
-    const MatX ACt = A * C.transpose();
-    const MatX G = C * ACt;
-    const Eigen::CompleteOrthogonalDecomposition<MatX> cod(G);
-    const VecX dq = -ACt * cod.solve(c);
-    if (!dq.allFinite()) return false;
-    // Backtracking on the max residual keeps wild starts (multi-start) from diverging.
-    double step = 1.0;
-    VecX trial = q;
-    integrate_positions(model, trial, dq, step);  // q ⊕ Δu (nq ≠ n for spatial bodies)
-    double rt = residual(trial);
-    for (int k = 0; k < 8 && !(rt < r); ++k) {
-      step *= 0.5;
-      trial = q;
-      integrate_positions(model, trial, dq, step);
-      rt = residual(trial);
-    }
-    if (!(rt < r)) return false;
-    q = trial;
-    r = rt;
-    residual(q);
-  }
-  return r <= tolerance;
+  VecX d(model.n);
+  // The locks' rows: s_k(q) − value_k and ∇s_k.
+  const ExtraRows lock_rows{static_cast<int>(rows.size()),
+                            [&](const VecX& x, Eigen::Ref<VecX> g, Eigen::Ref<MatX> G) {
+                              for (size_t k = 0; k < rows.size(); ++k) {
+                                const auto i = static_cast<Eigen::Index>(k);
+                                g(i) = eval_coordinate(model, rows[k], x, d) - rows[k].lo;
+                                G.row(i) = d.transpose();
+                              }
+                            }};
+  GaussNewtonOptions gn;
+  gn.tolerance = tolerance;
+  gn.max_iterations = max_iterations;
+  gn.metric = GaussNewtonOptions::Metric::mass;  // mass-metric minimum-norm steps
+  gn.descent = GaussNewtonOptions::Descent::backtrack;
+  return gauss_newton_positions(model, q, lock_rows, gn).converged;
 }
 
 VelocityProjection project_velocities(const Model& model, const VecX& q, const VecX& u0) {
@@ -912,40 +884,25 @@ int polish_spatial(const Model& model, VecX& q, const std::vector<int>& f_rows,
     const double band = std::max(1e-8, 1e3 * tol);
     if (c.lock || s - c.lo < band || c.hi - s < band) held.push_back(&c);
   }
-  const int nf = static_cast<int>(f_rows.size());
-  const int m = nf + static_cast<int>(held.size());
-  MatX C(m, model.n), Et(model.nc, model.n), A(model.n, model.n);
-  VecX c(m), du(model.n);
-  compute_inverse_mass_matrix(model, q, A);
-  double r = total_residual(model, q, coords, f, d);
-  int steps = 0;
-  for (int it = 0; it < 10 && r > tol; ++it) {
-    compute_constraint_residual(model, q, f);
-    compute_constraint_jacobian(model, q, Et);
-    for (int k = 0; k < nf; ++k) {
-      C.row(k) = Et.row(f_rows[static_cast<size_t>(k)]);
-      c(k) = f(f_rows[static_cast<size_t>(k)]);
-    }
-    for (size_t k = 0; k < held.size(); ++k) {
-      const CoordinateRow& h = *held[k];
-      const double s = eval_coordinate(model, h, q, d);
-      const Eigen::Index row = nf + static_cast<Eigen::Index>(k);
-      C.row(row) = d.transpose();
-      c(row) = s - (h.lock || s - h.lo < h.hi - s ? h.lo : h.hi);
-    }
-    const MatX ACt = A * C.transpose();
-    const Eigen::CompleteOrthogonalDecomposition<MatX> cod(C * ACt);
-    du = -ACt * cod.solve(c);
-    if (!du.allFinite()) break;
-    VecX trial = q;
-    integrate_positions(model, trial, du, 1.0);
-    const double rt = total_residual(model, trial, coords, f, d);
-    if (!(rt < r)) break;
-    q = trial;
-    r = rt;
-    ++steps;
-  }
-  return steps;
+  // The held rows: a lock at its value, a limit at its nearer bound.
+  const ExtraRows held_rows{static_cast<int>(held.size()),
+                            [&](const VecX& x, Eigen::Ref<VecX> g, Eigen::Ref<MatX> G) {
+                              for (size_t k = 0; k < held.size(); ++k) {
+                                const CoordinateRow& h = *held[k];
+                                const auto i = static_cast<Eigen::Index>(k);
+                                const double s = eval_coordinate(model, h, x, d);
+                                g(i) = s - (h.lock || s - h.lo < h.hi - s ? h.lo : h.hi);
+                                G.row(i) = d.transpose();
+                              }
+                            }};
+  GaussNewtonOptions gn;
+  gn.tolerance = tol;
+  gn.max_iterations = 10;
+  gn.metric = GaussNewtonOptions::Metric::mass;
+  gn.descent = GaussNewtonOptions::Descent::monotone;
+  gn.f_rows = f_rows;
+  gn.residual = [&](const VecX& x) { return total_residual(model, x, coords, f, d); };
+  return gauss_newton_positions(model, q, held_rows, gn).steps;
 }
 
 // (A1) for spatial models in local coordinates (LocalProblem), from the guess closed and moved to

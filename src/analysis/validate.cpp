@@ -23,6 +23,7 @@
 #include "orthomech/model/free_system.hpp"
 #include "orthomech/model/measures.hpp"
 #include "orthomech/model/spatial.hpp"
+#include "orthomech/projection/gauss_newton.hpp"
 
 namespace orthomech {
 
@@ -250,7 +251,6 @@ class Tracer {
         opt_(o),
         L_(length_scale(model)),
         Et_(model.nc, model.n),
-        f_(model.nc),
         d_(model.n) {}
 
   double L() const { return L_; }
@@ -287,32 +287,26 @@ class Tracer {
   // σ_r / σ_1 of the scaled Eᵀ.
   double sigma(const VecX& q) { return singularity_measures(m_, q, {}, rank_).sigma_min; }
 
-  // Newton on [f(q) = 0; tᵀ(q ⊖ q_pred) = 0] (minimum-norm steps in velocity space, q ← q ⊕ −δu;
-  // idle bodies' own motions held by rows with zero residual).
+  // Newton on [f(q) = 0; tᵀ(q ⊖ q_pred) = 0] (the one Gauss–Newton corrector,
+  // projection/gauss_newton.hpp: minimum-norm steps in velocity space, q ← q ⊕ −δu; idle bodies'
+  // own motions held by rows with zero residual).
   bool correct(VecX& q, const VecX& q_pred, const VecX& t) {
     const MatX I = idle_rows(m_, q_pred, idle_);
-    const Eigen::Index ni = I.rows();
-    MatX J(m_.nc + ni + 1, m_.n);
-    VecX r = VecX::Zero(m_.nc + ni + 1);
-    J.middleRows(m_.nc, ni) = I;
-    J.row(m_.nc + ni) = t.transpose();
-    for (int it = 0; it < 12; ++it) {
-      compute_constraint_residual(m_, q, f_);
-      r.head(m_.nc) = f_;
-      r(m_.nc + ni) = t.dot(difference(m_, q, q_pred));
-      const double res = r.cwiseAbs().maxCoeff();
-      if (!std::isfinite(res)) return false;
-      if (f_.cwiseAbs().maxCoeff() <= 1e-12 * std::max(1.0, L_) && std::abs(r(m_.nc + ni)) < 1e-10)
-        return true;
-      compute_constraint_jacobian(m_, q, Et_);
-      J.topRows(m_.nc) = Et_;
-      const Eigen::CompleteOrthogonalDecomposition<MatX> cod(J);
-      const VecX dq = cod.solve(r);
-      if (!dq.allFinite()) return false;
-      integrate_positions(m_, q, dq, -1.0);  // q ⊕ (−δu)
-    }
-    compute_constraint_residual(m_, q, f_);
-    return f_.cwiseAbs().maxCoeff() <= 1e-10 * std::max(1.0, L_);
+    const auto ni = static_cast<int>(I.rows());
+    const ExtraRows rows{ni + 1, [&](const VecX& x, Eigen::Ref<VecX> g, Eigen::Ref<MatX> G) {
+                           g.head(ni).setZero();
+                           G.topRows(ni) = I;
+                           g(ni) = t.dot(difference(m_, x, q_pred));
+                           G.row(ni) = t.transpose();
+                         }};
+    GaussNewtonOptions gn;
+    gn.tolerance = 1e-12 * std::max(1.0, L_);
+    gn.extra_tolerance = 1e-10;
+    gn.max_iterations = 12;
+    gn.accept = 1e-10 * std::max(1.0, L_);
+    gn.metric = GaussNewtonOptions::Metric::euclidean;
+    gn.descent = GaussNewtonOptions::Descent::free;
+    return gauss_newton_positions(m_, q, rows, gn).converged;
   }
 
   // Point on the curve at parameter τ from sample `a` along its tangent.
@@ -456,7 +450,7 @@ class Tracer {
   ValidateOptions opt_;
   double L_;
   MatX Et_;
-  VecX f_, d_;
+  VecX d_;
 };
 
 // Distinct solutions of f = 0 with the inputs locked: the given one plus multi-start
