@@ -254,7 +254,7 @@ bool idle_rows_rate(const Model& model, const VecX& q, const VecX& u, const VecX
   w.idle_Idot_u = VecX::Zero(k);
   double speed = 0.0;
   for (const Body& b : model.bodies) {
-    const int nt = b.kind == BodyKind::spatial ? 3 : 2;
+    const int nt = b.translations();
     speed = std::max(speed, u.segment(b.u_offset, nt).cwiseAbs().maxCoeff() / w.length_scale);
     for (int c = nt; c < b.nu(); ++c) speed = std::max(speed, std::abs(u(b.u_offset + c)));
   }
@@ -772,11 +772,8 @@ void warn_start_moves(const Model& model, const CycleRequest& request, const Vec
   difference_positions(model, q, drawn, moved);
   for (const Body& b : model.bodies) {
     // Translation and rotation of the body (u-space: planar x, y, φ; spatial v, ω).
-    const int dim = b.kind == BodyKind::spatial ? 3 : 2;
-    const double distance = moved.segment(b.u_offset, dim).norm();
-    const double angle = b.kind == BodyKind::rigid     ? std::abs(moved(b.u_offset + 2))
-                         : b.kind == BodyKind::spatial ? moved.segment<3>(b.u_offset + 3).norm()
-                                                       : 0.0;
+    const double distance = moved.segment(b.u_offset, b.translations()).norm();
+    const double angle = moved.segment(b.u_offset + b.translations(), b.rotations()).norm();
     if (distance <= kStartMoveTolerance * size && angle <= kStartTurnTolerance) continue;
     result.start_moves.push_back({b.name, distance, angle});
     result.warnings.push_back("the design position does not close as drawn: body '" + b.name +
@@ -851,10 +848,7 @@ bool record_mobility(const Model& model, const Mobility& mob, CycleResult& resul
 VecX step_scale(const Model& model) {
   VecX scale = VecX::Constant(model.n, mechanism_size(model));
   for (const Body& b : model.bodies)
-    if (b.kind == BodyKind::rigid)
-      scale(b.u_offset + 2) = 1.0;
-    else if (b.kind == BodyKind::spatial)
-      scale.segment<3>(b.u_offset + 3).setConstant(1.0);
+    scale.segment(b.u_offset + b.translations(), b.rotations()).setConstant(1.0);
   return scale;
 }
 

@@ -201,8 +201,8 @@ MatX idle_motions(const Model& model, const VecX& q, const std::vector<int>& idl
     if (lu.rank() == body.nu()) continue;
     const MatX K = lu.kernel();
     // The rotation components of the body's velocity (planar φ̇; spatial ω).
-    const int rot_at = body.kind == BodyKind::spatial ? 3 : 2;
-    const int rot_count = body.kind == BodyKind::spatial ? 3 : body.kind == BodyKind::rigid ? 1 : 0;
+    const int rot_at = body.translations();
+    const int rot_count = body.rotations();
     for (Eigen::Index c = 0; c < K.cols(); ++c) {
       VecX v = VecX::Zero(model.n);
       v.segment(body.u_offset, body.nu()) = sa.asDiagonal() * K.col(c);

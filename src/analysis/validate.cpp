@@ -134,8 +134,7 @@ double scaled_distance(const Model& model, const VecX& a, const VecX& b, double 
 VecX scale_vector(const Model& model, const VecX& v, double L) {
   VecX s = v;
   for (const Body& body : model.bodies) {
-    const int nt = body.kind == BodyKind::spatial ? 3 : 2;
-    for (int c = 0; c < nt; ++c) s(body.u_offset + c) /= L;
+    for (int c = 0; c < body.translations(); ++c) s(body.u_offset + c) /= L;
   }
   return s;
 }

@@ -183,19 +183,7 @@ struct SingularEvaluation {
 
 // "K1.phi": the user's name of a velocity component.
 std::string velocity_name(const Model& model, int k) {
-  if (model.general) return model.general->coordinates[static_cast<size_t>(k)];
-  for (const Body& b : model.bodies) {
-    if (k >= b.u_offset && k < b.u_offset + b.nu()) {
-      static const char* const kPlanar[] = {"x", "y", "phi"};
-      static const char* const kSpatial[] = {"vx", "vy", "vz", "wx", "wy", "wz"};
-      const char* const* kNames = b.kind == BodyKind::spatial ? kSpatial : kPlanar;
-      std::string name = b.name;
-      name.push_back('.');
-      name.append(kNames[k - b.u_offset]);
-      return name;
-    }
-  }
-  return "?";
+  return free_system(model).velocity_name(model, k);
 }
 
 std::string chart_name(const Model& model, const Chart& c) {

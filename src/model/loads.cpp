@@ -5,6 +5,7 @@
 #include <numbers>
 
 #include "orthomech/constraints/spatial_joints.hpp"
+#include "orthomech/model/body_kinds.hpp"
 #include "orthomech/model/free_system.hpp"
 #include "orthomech/model/general_system.hpp"
 #include "orthomech/model/measures.hpp"
@@ -157,17 +158,11 @@ void add_load(const Model& model, const Load& load, const State& st, VecX& Q) {
       load.kind);
 }
 
-// Spatial bodies (spatial.md §1.3): T = ½ m vᵀv + ½ ωᵀJω does not depend on q, so
-// ∂T/∂q̃ = 0 (eq. (9)); the structure coefficients of the frame B̃ are
-// C^{3+c}_{3+a,3+b} = ε_abc and zero otherwise (eq. (10), checked against differences of B in
-// SpatialBody.EquationTenFromDifferencesOfBIsTheGyroscopicTerm), so the Euler–Lagrange equations,
-// eq. (13), become Euler's J ω̇ + ω × Jω = n and m v̇ = F.
+// The velocity-dependent forces of each body's kind (model/body_kinds.hpp: the spatial body's
+// gyroscopic term, eq. (16); none for planar bodies).
 void add_velocity_terms(const Model& model, const State& state, VecX& Q) {
-  for (const Body& b : model.bodies) {
-    if (b.kind != BodyKind::spatial) continue;
-    const Vec3 w = state.u.segment<3>(b.u_offset + 3);
-    Q.segment<3>(b.u_offset + 3) -= w.cross(b.spatial.inertia * w);  // eq. (16): −C p u (S5)
-  }
+  for (const Body& b : model.bodies)
+    visit_kind(b, [&](auto kind) { kind.add_velocity_forces(b, state.u, Q); });
 }
 
 void compute_applied_forces(const Model& model, const State& state, VecX& Q) {

@@ -4,6 +4,7 @@
 
 #include "orthomech/check.hpp"
 #include "orthomech/constraints/spatial_joints.hpp"
+#include "orthomech/model/free_system.hpp"
 #include "orthomech/model/general_system.hpp"
 #include "orthomech/model/spatial.hpp"
 
@@ -71,27 +72,7 @@ int Model::find_measure(const std::string& measure) const {
   return -1;
 }
 
-VecX Model::design_q() const {
-  if (general) return general->q0;
-  VecX q(nq);
-  for (const Body& b : bodies) {
-    if (b.kind == BodyKind::spatial) {  // q = (r, e): the centre of mass and the orientation
-      const Quat e = b.spatial.design_orientation.normalized();
-      q.segment<3>(b.q_offset) =
-          b.spatial.design_position + rotation_matrix(e) * b.spatial.com_local;
-      q.segment<4>(b.q_offset + 3) = e;
-      continue;
-    }
-    const double phi = b.design_pose.z();
-    const double c = std::cos(phi), s = std::sin(phi);
-    const Vec2 com(b.design_pose.x() + c * b.com_local.x() - s * b.com_local.y(),
-                   b.design_pose.y() + s * b.com_local.x() + c * b.com_local.y());
-    q(b.q_offset) = com.x();
-    q(b.q_offset + 1) = com.y();
-    if (b.kind == BodyKind::rigid) q(b.q_offset + 2) = phi;
-  }
-  return q;
-}
+VecX Model::design_q() const { return free_system(*this).design_q(*this); }
 
 std::string Model::constraint_row_name(int row) const {
   if (general) {

@@ -2,16 +2,45 @@
 // The free system (paper §2): M(q) (eq. (4)), A = M⁻¹ (eq. (6)), Ṁ, q̇ = B̃ u (eq. (19)), and the
 // kinematics of points fixed on bodies, shared by joints, loads and measures.
 //
-// For the planar bodies implemented here B̃ = I and M is constant, but every function takes q
-// (and u) so that configuration-dependent systems fit the same calls.
+// Bodies have a constant M; planar bodies have B̃ = I, spatial ones do not (nq = 7, n = 6). Every
+// function takes q (and u) so that configuration-dependent systems fit the same calls.
 #include <Eigen/Core>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "orthomech/model/model.hpp"
 #include "orthomech/model/state.hpp"
 
 namespace orthomech {
+
+// The free system is one of two alternatives, fixed when the Model is built: bodies, each of
+// its kind (model/body_kinds.hpp), or a general system given by functions with M(q)
+// (model/general_system.hpp, Model::general). free_system(model) is the one place that
+// chooses; the functions below go through it. Every member takes the Model (the bodies'
+// implementation is stateless, so copies of a Model need nothing rebound).
+class FreeSystem {
+ public:
+  virtual ~FreeSystem() = default;
+  virtual void mass(const Model& model, const VecX& q, MatX& M) const = 0;          // eq. (4)
+  virtual void inverse_mass(const Model& model, const VecX& q, MatX& A) const = 0;  // eq. (6)
+  virtual void mass_rate(const Model& model, const VecX& q, const VecX& u, MatX& Mdot) const = 0;
+  [[nodiscard]] virtual bool mass_constant(const Model& model) const = 0;
+  [[nodiscard]] virtual bool mass_diagonal(const Model& model) const = 0;
+  // The diagonal of M (inverse: of A) at q.
+  [[nodiscard]] virtual VecX mass_diagonal_entries(const Model& model, const VecX& q,
+                                                   bool inverse) const = 0;
+  virtual void integrate(const Model& model, VecX& q, const VecX& du, double h) const = 0;
+  virtual void difference(const Model& model, const VecX& q1, const VecX& q0, VecX& du) const = 0;
+  virtual void coordinate_rates(const Model& model, const Eigen::Ref<const VecX>& q, const VecX& u,
+                                Eigen::Ref<VecX> qdot) const = 0;
+  virtual void normalize(const Model& model, Eigen::Ref<VecX> q) const = 0;
+  [[nodiscard]] virtual double kinetic_energy(const Model& model, const State& state) const = 0;
+  [[nodiscard]] virtual VecX design_q(const Model& model) const = 0;
+  // "crank.phi", "top.wz", or a general system's coordinate name: velocity component k.
+  [[nodiscard]] virtual std::string velocity_name(const Model& model, int k) const = 0;
+};
+[[nodiscard]] const FreeSystem& free_system(const Model& model);
 
 // M(q), eq. (4) (dense n × n; block diagonal for bodies).
 void compute_mass_matrix(const Model& model, const VecX& q, MatX& M);

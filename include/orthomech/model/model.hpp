@@ -36,6 +36,23 @@ inline constexpr int kGround = -1;  // body index of the ground (fixed frame = w
 
 enum class BodyKind { rigid, particle, spatial };
 
+// The layout of a kind's coordinates: nq entries of q; nu velocity parameters, the translations
+// first, then the rotations (model/body_kinds.hpp defines each kind).
+struct BodyLayout {
+  int nq, nu, translations, rotations;
+};
+[[nodiscard]] constexpr BodyLayout body_layout(BodyKind kind) {
+  switch (kind) {
+    case BodyKind::rigid:
+      return {3, 3, 2, 1};  // (x, y, φ)
+    case BodyKind::particle:
+      return {2, 2, 2, 0};  // (x, y)
+    case BodyKind::spatial:
+      break;
+  }
+  return {7, 6, 3, 3};  // q = (r, e), u = (v, ω)
+}
+
 // What a spatial body (BodyKind::spatial) adds: its frame, inertia and points in three dimensions.
 struct SpatialBodyData {
   Mat3 inertia = Mat3::Identity();      // kg·m², about the centre of mass, body axes (symmetric)
@@ -58,12 +75,11 @@ struct Body {
   int u_offset = 0;                                  // first velocity parameter of this body in u
   SourceLocation where;
   SpatialBodyData spatial;  // BodyKind::spatial only (the planar fields above are then unused)
-  [[nodiscard]] int nq() const {
-    return kind == BodyKind::spatial ? 7 : kind == BodyKind::rigid ? 3 : 2;
-  }
-  [[nodiscard]] int nu() const {
-    return kind == BodyKind::spatial ? 6 : kind == BodyKind::rigid ? 3 : 2;
-  }
+  [[nodiscard]] int nq() const { return body_layout(kind).nq; }
+  [[nodiscard]] int nu() const { return body_layout(kind).nu; }
+  // u's translation components (2 planar, 3 spatial), then its rotation components (0, 1, 3).
+  [[nodiscard]] int translations() const { return body_layout(kind).translations; }
+  [[nodiscard]] int rotations() const { return body_layout(kind).rotations; }
 };
 
 // A point fixed on a body (or on the ground). s is measured from the centre of mass, in the body
