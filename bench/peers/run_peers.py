@@ -4,14 +4,17 @@ orthomech, MuJoCo and Simbody against the same exact one-DOF reduction.
 
     cmake --build build --target orthomech peer_reference_n_four_bar \
         peer_mujoco_n_four_bar peer_simbody_n_four_bar \
-        peer_reference_crank_rocker peer_mujoco_crank_rocker # the peers need libmujoco-dev,
+        peer_reference_crank_rocker peer_mujoco_crank_rocker \
+        peer_mujoco_andrews                                  # the peers need libmujoco-dev,
     python3 bench/peers/run_peers.py [--build build]        # libsimbody-dev
 
 Prints three Markdown tables: the work-precision table at N = 40 to t = 20 s (error of B0 at the
 end against the reduction, the largest loop-closure gap, CPU time per simulated second), the
 growth of the CPU time per simulated second with N at one setting per tool, and the crank-rocker
 released under gravity to t = 10 s (error of the crank angle against crank_rocker_reference.hpp;
-MuJoCo only). --growth-only, --work-precision-only, --crank-rocker-only: one of them. A peer whose binary
+MuJoCo only), and Andrews' squeezer to t = 0.03 s (the largest error of its seven angles against
+the published solution; MuJoCo only). --growth-only, --work-precision-only, --crank-rocker-only,
+--andrews-only: one of them. A peer whose binary
 was not built (its package missing) is left out with a note. orthomech's rows time the whole
 `orthomech simulate` process (user + sys, getrusage of the child); the peers time their
 integration loop (process CPU clock), so orthomech's numbers include parsing and setup (a few
@@ -106,8 +109,8 @@ def simbody_row(build, n, t_end, acc, method, cap, closure="plane"):
             "gap": float(f["gap"]), "note": f.get("stop", "") + f" ({f['steps']} steps)"}
 
 
-def header(error="error of B0 (m)"):
-    print(f"| tool | setting | N | reached t (s) | CPU s per simulated s | {error} | "
+def header(error="error of B0 (m)", cpu="CPU s per simulated s"):
+    print(f"| tool | setting | N | reached t (s) | {cpu} | {error} | "
           "loop gap (m) | note |")
     print("|---|---|---|---|---|---|---|---|")
     sys.stdout.flush()
@@ -130,6 +133,7 @@ def main():
                     help="only the work-precision table, not the growth with N")
     ap.add_argument("--crank-rocker-only", action="store_true",
                     help="only the crank-rocker swinging under gravity")
+    ap.add_argument("--andrews-only", action="store_true", help="only Andrews' squeezer")
     a = ap.parse_args()
     peers = os.path.join(a.build, "bench", "peers")
     have_mujoco = os.path.exists(os.path.join(peers, "peer_mujoco_n_four_bar"))
@@ -139,7 +143,7 @@ def main():
         if not ok:
             print(f"note: {name} rows left out: its peer binary was not built ({pkg} missing)")
     n40, t40 = (10, 5.0) if a.quick else (40, 20.0)
-    only = a.growth_only or a.work_precision_only or a.crank_rocker_only
+    only = a.growth_only or a.work_precision_only or a.crank_rocker_only or a.andrews_only
     with tempfile.TemporaryDirectory() as tmp:
         if a.work_precision_only or not only:
             work_precision(a, n40, t40, have_mujoco, have_simbody, tmp)
@@ -148,6 +152,8 @@ def main():
     if a.crank_rocker_only or not only:
         crank_rocker(a, 2.0 if a.quick else 10.0,
                      os.path.exists(os.path.join(peers, "peer_mujoco_crank_rocker")))
+    if a.andrews_only or not only:
+        andrews(a, os.path.exists(os.path.join(peers, "peer_mujoco_andrews")))
 
 
 def work_precision(a, n40, t40, have_mujoco, have_simbody, tmp):
@@ -202,6 +208,56 @@ def crank_rocker(a, t_end, have_mujoco):
              "err": abs(math.radians(j["final"]["measures"]["crank_angle"]) - exact),
              "gap": 1e-3 * j["max_residual_length"],  # the file's lengths are in mm
              "note": j["status"]})
+
+
+# The published angles at t = 0.03 s (tests/support/andrews_published.hpp: PSIDE, rtol = atol =
+# 1e-14), read from the header so that there is one copy.
+def andrews_reference():
+    path = os.path.join(ROOT, "tests", "support", "andrews_published.hpp")
+    text = open(path, encoding="utf-8").read()
+    block = text.split("kAnglesT003 = {", 1)[1].split("}", 1)[0]
+    return [float(x) for x in block.replace("\n", " ").split(",") if x.strip()]
+
+
+def andrews(a, have_mujoco):
+    """Andrews' squeezer (test set, IFToMM A03) to t = 0.03 s: the largest error of the seven
+    angles against the published solution (rad), the loop gap at E (m), the CPU time of the run
+    (orthomech: the whole process; MuJoCo: its stepping loop)."""
+    t_end = 0.03
+    print(f"\n## Andrews' squeezer, t = 0 … {t_end:g} s\n")
+    header("largest error of the 7 angles (rad)", f"CPU s for {t_end:g} s")
+    if have_mujoco:
+        exe = os.path.join(a.build, "bench", "peers", "peer_mujoco_andrews")
+        for dt, method, sol in ((1e-5, "euler", "default"), (1e-4, "euler", "tight"),
+                                (1e-5, "euler", "tight"), (1e-6, "euler", "tight"),
+                                (1e-7, "euler", "tight"), (1e-5, "rk4", "tight"),
+                                (1e-6, "rk4", "tight")):
+            lines = run([exe, str(dt), method, sol]).splitlines()
+            f = parse_line([x for x in lines if x.startswith("mujoco ")][-1])
+            row({"tool": "MuJoCo " + f["raw"].split()[1], "setting": f"{method} dt {dt:g} {sol}",
+                 "N": "—", "t": float(f["t"]), "cpu_per_s": float(f["cpu_per_s"]) * t_end,
+                 "err": float(f["err"]), "gap": float(f["gap"]), "note": ""})
+    reference = andrews_reference()
+    names = ("beta", "Theta", "gamma", "Phi", "delta", "Omega", "epsilon")
+    mech = os.path.join(ROOT, "mechanisms", "andrews-squeezer.yaml")
+    # One untimed run first: the rows take milliseconds, a cold start (page cache) 30 ms more.
+    subprocess.run([os.path.join(a.build, "orthomech"), "simulate", mech, "--t-end", "0.03",
+                    "--json", "-q"], capture_output=True, check=False)
+    for integrator, rtol in (("dopri5", 1e-6), ("dopri5", 1e-8), ("dopri5", 1e-10),
+                             ("rkf78", 1e-10), ("bulirsch-stoer", 1e-10)):
+        cmd = [os.path.join(a.build, "orthomech"), "simulate", mech, "--t-end", str(t_end),
+               "--rtol", str(rtol), "--atol", "1e-12", "--integrator", integrator, "--dt-out",
+               str(t_end), "--json", "-q"]
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
+        r = subprocess.run(cmd, capture_output=True, text=True)
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+        j = json.loads(r.stdout)
+        m = j["final"]["measures"]
+        row({"tool": "orthomech", "setting": f"{integrator} rtol {rtol:g}", "N": "—",
+             "t": j["final"]["t"], "cpu_per_s": cpu,
+             "err": max(abs(m[k] - ref) for k, ref in zip(names, reference)),
+             "gap": j["max_residual_length"], "note": j["status"]})
 
 
 def growth(a, have_mujoco, have_simbody, tmp):
