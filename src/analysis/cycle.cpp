@@ -354,7 +354,7 @@ bool compute_driven(const Model& model, int driver_joint, double sdot, double sd
 }
 
 void compute_driven_outputs(const Model& model, const State& state, const VecX& lambda,
-                            const VecX& udot, const BodyRotations& rotations, DrivenOutputs out) {
+                            const VecX& udot, const BodyPoses& rotations, DrivenOutputs out) {
   compute_reactions(model, state.q, rotations, lambda, out.reactions);
   out.measures.clear();
   for (const Measure& m : model.measures)

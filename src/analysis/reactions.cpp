@@ -149,7 +149,7 @@ void compute_reactions(const Model& model, const VecX& q, const Eigen::Ref<const
   compute_reactions_at(model, q, lambda, out, nullptr);
 }
 
-void compute_reactions(const Model& model, const VecX& q, const BodyRotations& rotations,
+void compute_reactions(const Model& model, const VecX& q, const BodyPoses& rotations,
                        const Eigen::Ref<const VecX>& lambda, std::vector<double>& out) {
   compute_reactions_at(model, q, lambda, out, rotations.table().data());
 }

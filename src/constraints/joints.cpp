@@ -18,7 +18,8 @@ ConstraintWorkspace::ConstraintWorkspace(const Model& model)
     : f(VecX::Zero(model.nc)),
       Et(MatX::Zero(model.nc, model.n)),
       Dt(MatX::Zero(model.nc, model.n)),
-      Dtu(VecX::Zero(model.nc)) {}
+      Dtu(VecX::Zero(model.nc)),
+      poses(model) {}
 
 namespace {
 
@@ -47,6 +48,7 @@ struct JointEvaluator {
   MatX* Dt;
   VecX* Dtu;                   // Dᵀu row by row, without Dt (needs u)
   const Eigen::Matrix2d* rot;  // R(φ_b) per body at q, or null
+  const Mat3* rot3;            // R(e_b) per body at q (spatial), or null
 
   template <typename Rows>
   auto row(Rows* m, int k) {
@@ -87,7 +89,7 @@ struct JointEvaluator {
 
   // Spatial joints: rows from the primitives (constraints/spatial_joints.hpp).
   void operator()(const SpatialJoint& j) {
-    evaluate_spatial_joint(model, j, q, u, r, f, Et, Dt, Dtu);
+    evaluate_spatial_joint(model, j, q, u, r, f, Et, Dt, Dtu, rot3);
   }
 
   // Gear pair: f = (φ_j − φ_c) − k (φ_i − φ_c) − c0; Eᵀ constant, Dᵀ = 0.
@@ -239,10 +241,10 @@ void knife_edge(const Model& model, const KnifeEdge& k, const VecX& q, const Vec
 }
 
 // Dtu: Dᵀu row by row (needs u), without forming Dᵀ.
-// rotations: the caller's table of R(φ_b) at q, if any.
+// poses: the caller's kinematics stage at q (the bodies' rotations), if any.
 template <typename EtT = MatX>
 void evaluate(const Model& model, const VecX& q, const VecX* u, VecX* f, EtT* Et, MatX* Dt,
-              VecX* Dtu = nullptr, const Eigen::Matrix2d* rotations = nullptr) {
+              VecX* Dtu = nullptr, const BodyPoses* poses = nullptr) {
   if (model.general) {  // a free system given by functions (model/general_system.hpp)
     if (f) model.general->residual(q, *f);
     if (Et) {
@@ -268,13 +270,14 @@ void evaluate(const Model& model, const VecX& q, const VecX* u, VecX* f, EtT* Et
   // Each body's rotation once (sin/cos dominate small evaluations); particles keep the identity.
   constexpr size_t kTable = 64;
   std::array<Eigen::Matrix2d, kTable> table;
-  const Eigen::Matrix2d* rot = rotations;
+  const Eigen::Matrix2d* rot = poses ? poses->table().data() : nullptr;
+  const Mat3* rot3 = poses ? poses->spatial_table() : nullptr;
   if (!rot && model.bodies.size() <= kTable) {
     body_rotations(model, q, std::span(table.data(), model.bodies.size()));
     rot = table.data();
   }
   for (const Joint& joint : model.joints) {
-    JointEvaluator<EtT> ev{model, q, u, joint.row_offset, f, Et, Dt, Dtu, rot};
+    JointEvaluator<EtT> ev{model, q, u, joint.row_offset, f, Et, Dt, Dtu, rot, rot3};
     std::visit(ev, joint.kind);
   }
   for (const KnifeEdge& k : model.knife_edges) knife_edge(model, k, q, u, f, Et, Dt, Dtu);
@@ -288,9 +291,9 @@ void compute_constraint_residual(const Model& model, const VecX& q, VecX& f) {
   evaluate<MatX>(model, q, nullptr, &f, nullptr, nullptr);
 }
 
-void compute_constraint_residual(const Model& model, const VecX& q, const BodyRotations& rotations,
+void compute_constraint_residual(const Model& model, const VecX& q, const BodyPoses& rotations,
                                  VecX& f) {
-  evaluate<MatX>(model, q, nullptr, &f, nullptr, nullptr, nullptr, rotations.table().data());
+  evaluate<MatX>(model, q, nullptr, &f, nullptr, nullptr, nullptr, &rotations);
 }
 
 void compute_constraint_jacobian(const Model& model, const VecX& q, MatX& Et) {
@@ -303,8 +306,8 @@ void compute_constraint_residual_and_jacobian(const Model& model, const VecX& q,
 }
 
 void compute_constraint_residual_and_jacobian(const Model& model, const VecX& q,
-                                              const BodyRotations& rotations, VecX& f, MatX& Et) {
-  evaluate(model, q, nullptr, &f, &Et, nullptr, nullptr, rotations.table().data());
+                                              const BodyPoses& rotations, VecX& f, MatX& Et) {
+  evaluate(model, q, nullptr, &f, &Et, nullptr, nullptr, &rotations);
 }
 
 namespace {
@@ -329,19 +332,17 @@ void compute_constraint_residual_and_jacobian(const Model& model, const VecX& q,
 }
 
 void compute_constraint_residual_and_jacobian(const Model& model, const VecX& q,
-                                              const BodyRotations& rotations, VecX& f,
-                                              SparseEt& Et) {
+                                              const BodyPoses& rotations, VecX& f, SparseEt& Et) {
   check_shape(model, Et, &f);
-  evaluate(model, q, nullptr, &f, &Et, nullptr, nullptr, rotations.table().data());
+  evaluate(model, q, nullptr, &f, &Et, nullptr, nullptr, &rotations);
 }
 
-void compute_constraint_rate(const Model& model, const State& state, const BodyRotations& rotations,
+void compute_constraint_rate(const Model& model, const State& state, const BodyPoses& rotations,
                              VecX& Dtu) {
   if (Dtu.size() != model.nc)
     throw std::invalid_argument("compute_constraint_rate: Dtu has " + std::to_string(Dtu.size()) +
                                 " entries, the model " + std::to_string(model.nc) + " rows");
-  evaluate<MatX>(model, state.q, &state.u, nullptr, nullptr, nullptr, &Dtu,
-                 rotations.table().data());
+  evaluate<MatX>(model, state.q, &state.u, nullptr, nullptr, nullptr, &Dtu, &rotations);
 }
 
 void record_constraint_pattern(const Model& model, EtRecorder& recorder) {
@@ -350,17 +351,18 @@ void record_constraint_pattern(const Model& model, EtRecorder& recorder) {
 
 void compute_constraint_rate(const Model& model, const State& state, ConstraintWorkspace& ws) {
   // The convective term Dᵀu, eq. (76), row by row: Dᵀ itself is not formed (ws.Dt untouched).
-  evaluate<MatX>(model, state.q, &state.u, nullptr, nullptr, nullptr, &ws.Dtu);
+  ws.poses.update(model, state.q);
+  evaluate<MatX>(model, state.q, &state.u, nullptr, nullptr, nullptr, &ws.Dtu, &ws.poses);
 }
 
-void compute_constraint_rate(const Model& model, const State& state, const BodyRotations& rotations,
+void compute_constraint_rate(const Model& model, const State& state, const BodyPoses& rotations,
                              ConstraintWorkspace& ws) {
-  evaluate<MatX>(model, state.q, &state.u, nullptr, nullptr, nullptr, &ws.Dtu,
-                 rotations.table().data());
+  evaluate<MatX>(model, state.q, &state.u, nullptr, nullptr, nullptr, &ws.Dtu, &rotations);
 }
 
 void compute_constraints(const Model& model, const State& state, ConstraintWorkspace& ws) {
-  evaluate(model, state.q, &state.u, &ws.f, &ws.Et, &ws.Dt);
+  ws.poses.update(model, state.q);
+  evaluate(model, state.q, &state.u, &ws.f, &ws.Et, &ws.Dt, nullptr, &ws.poses);
   ws.Dtu.noalias() = ws.Dt * state.u;  // convective term Dᵀu, eq. (76)
 }
 

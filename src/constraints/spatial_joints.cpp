@@ -50,8 +50,10 @@ struct JointKinematics {
   Mat3 Ai_dot, Aj_dot;  // their rates w × a
   Vec3 d, ddot;         // r_Pj − r_Pi and its rate
 
-  JointKinematics(const Model& model, const SpatialJoint& j, const VecX& q, const VecX* u)
-      : k{spatial_frame(model, j.pi.body, q, u), spatial_frame(model, j.pj.body, q, u)} {
+  JointKinematics(const Model& model, const SpatialJoint& j, const VecX& q, const VecX* u,
+                  const Mat3* rotations = nullptr)
+      : k{spatial_frame(model, j.pi.body, q, u, rotations),
+          spatial_frame(model, j.pj.body, q, u, rotations)} {
     p[0] = spatial_point(k[0], j.pi.s);
     p[1] = spatial_point(k[1], j.pj.s);
     Ai = k[0].R * j.frame_i;
@@ -189,8 +191,9 @@ TwistAngle twist_angle(const Vec3& fi, const Vec3& gi, const Vec3& fj, const Vec
 
 template <typename EtT>
 void evaluate_spatial_joint(const Model& model, const SpatialJoint& joint, const VecX& q,
-                            const VecX* u, int r, VecX* f, EtT* Et, MatX* Dt, VecX* Dtu) {
-  const JointKinematics x(model, joint, q, u);
+                            const VecX* u, int r, VecX* f, EtT* Et, MatX* Dt, VecX* Dtu,
+                            const Mat3* rotations) {
+  const JointKinematics x(model, joint, q, u, rotations);
   const SpatialJointSpec& spec = spatial_joint_spec(joint.type);
   for (int k = 0; k < spec.rows; ++k) {
     const RowTerms t = row_terms(x, joint, spec.row[static_cast<size_t>(k)]);
@@ -214,12 +217,14 @@ void evaluate_spatial_joint(const Model& model, const SpatialJoint& joint, const
 
 // The three targets of the writers (constraints/sparse_et.hpp).
 template void evaluate_spatial_joint<MatX>(const Model&, const SpatialJoint&, const VecX&,
-                                           const VecX*, int, VecX*, MatX*, MatX*, VecX*);
+                                           const VecX*, int, VecX*, MatX*, MatX*, VecX*,
+                                           const Mat3*);
 template void evaluate_spatial_joint<SparseEt>(const Model&, const SpatialJoint&, const VecX&,
-                                               const VecX*, int, VecX*, SparseEt*, MatX*, VecX*);
+                                               const VecX*, int, VecX*, SparseEt*, MatX*, VecX*,
+                                               const Mat3*);
 template void evaluate_spatial_joint<EtRecorder>(const Model&, const SpatialJoint&, const VecX&,
-                                                 const VecX*, int, VecX*, EtRecorder*, MatX*,
-                                                 VecX*);
+                                                 const VecX*, int, VecX*, EtRecorder*, MatX*, VecX*,
+                                                 const Mat3*);
 
 SpatialWrench spatial_joint_reaction(const Model& model, const SpatialJoint& joint, const VecX& q,
                                      const Eigen::Ref<const VecX>& lambda) {

@@ -239,8 +239,7 @@ class Dynamics {
         G_(model.nc, model.nc),
         G_llt_(model.nc),
         dq_(VecX::Zero(model.n)),
-        chart_q_(VecX::Zero(model.nq)),
-        rotations_(model) {
+        chart_q_(VecX::Zero(model.nq)) {
     for (const Load& l : model.loads)
       if (std::holds_alternative<PointForce>(l.kind) || std::holds_alternative<Torque>(l.kind) ||
           std::holds_alternative<SpatialPointForce>(l.kind) ||
@@ -381,14 +380,14 @@ class Dynamics {
     // 0. The stage's position projected onto f(q) = 0 in the chart (project_stage_position).
     if (project_stages_) {
       project_stage_position(t);
-      rotations_.update(model_, state_.q);
+      ws_.constraints.poses.update(model_, state_.q);
     } else if (!(chart_ready_ && state_.q == chart_q_)) {
       // 1. Eᵀ(q), the chart's dependent block, F, unless they are already those at q (the
       //    stepper restarts at the accepted state, where the acceptance has just computed them).
       //    The bodies' rotations at q come along for the constraint rate below.
-      rotations_.update(model_, state_.q);
-      compute_constraint_residual_and_jacobian(model_, state_.q, rotations_, ws_.constraints.f,
-                                               ws_.constraints.Et);
+      ws_.constraints.poses.update(model_, state_.q);
+      compute_constraint_residual_and_jacobian(model_, state_.q, ws_.constraints.poses,
+                                               ws_.constraints.f, ws_.constraints.Et);
       if (!factor_chart(ws_.constraints.Et))
         throw SingularEvaluation{"the chart's dependent block is singular at t = " +
                                  time_text(model_, t) + " (a change point: E loses rank)"};
@@ -396,11 +395,11 @@ class Dynamics {
       chart_q_ = state_.q;
       chart_ready_ = true;
     } else {
-      rotations_.update(model_, state_.q);
+      ws_.constraints.poses.update(model_, state_.q);
     }
     // 2. u = F v; then Dᵀ u and Ḟ v (design §4: Eᵀ Ḟ v = −Dᵀ u, independent rows of Ḟ zero).
     state_.u.noalias() = F_ * v;
-    compute_constraint_rate(model_, state_, rotations_, ws_.constraints.Dtu);  // Dᵀ u
+    compute_constraint_rate(model_, state_, ws_.constraints.poses, ws_.constraints.Dtu);  // Dᵀ u
     b_ = -ws_.constraints.Dtu;
     cs_.solve(b_, Fdv_);
     // 3. Free system, H (eq. (68)) and v̇.
@@ -439,13 +438,13 @@ class Dynamics {
         v_stage_(k) = state_.u(cs_.chart().independent[static_cast<size_t>(k)]);
       state_.u.noalias() = F_ * v_stage_;
       // Eᵀ is that of the projected q: only Dᵀ u.
-      rotations_.update(model_, state_.q);
-      compute_constraint_rate(model_, state_, rotations_, ws_.constraints.Dtu);
+      ws_.constraints.poses.update(model_, state_.q);
+      compute_constraint_rate(model_, state_, ws_.constraints.poses, ws_.constraints.Dtu);
     } else {
-      rotations_.update(model_, state_.q);
-      compute_constraint_residual_and_jacobian(model_, state_.q, rotations_, ws_.constraints.f,
-                                               ws_.constraints.Et);
-      compute_constraint_rate(model_, state_, rotations_, ws_.constraints.Dtu);
+      ws_.constraints.poses.update(model_, state_.q);
+      compute_constraint_residual_and_jacobian(model_, state_.q, ws_.constraints.poses,
+                                               ws_.constraints.f, ws_.constraints.Et);
+      compute_constraint_rate(model_, state_, ws_.constraints.poses, ws_.constraints.Dtu);
     }
     free_system();
     tmp_ = ws_.free.Q;
@@ -551,11 +550,12 @@ class Dynamics {
   // The stages simulate uses (the projections' n × n matrices are not allocated: heap peak
   // 400 MB → 178 MB on the N = 200 four-bar, valgrind massif).
   struct Constraints {
-    VecX f;       // nc: geometric residual, eq. (20)
-    SparseEt Et;  // nc × n on its structural pattern: Eᵀ, eq. (23)
-    VecX Dtu;     // nc: Dᵀu, eq. (76)
+    VecX f;           // nc: geometric residual, eq. (20)
+    SparseEt Et;      // nc × n on its structural pattern: Eᵀ, eq. (23)
+    VecX Dtu;         // nc: Dᵀu, eq. (76)
+    BodyPoses poses;  // the kinematics stage at state_.q (the bodies' rotations)
     explicit Constraints(const Model& model)
-        : f(VecX::Zero(model.nc)), Et(model), Dtu(VecX::Zero(model.nc)) {}
+        : f(VecX::Zero(model.nc)), Et(model), Dtu(VecX::Zero(model.nc)), poses(model) {}
   };
   struct Stages {
     FreeSystemWorkspace free;
@@ -582,7 +582,6 @@ class Dynamics {
   // (the step's acceptance, the stage projection) clears it or sets it anew.
   bool chart_ready_ = false;
   VecX chart_q_;
-  BodyRotations rotations_;  // R(φ_b) of every body at state_.q (evaluate_dual)
   std::vector<const Load*> nonconservative_;
 };
 
@@ -1934,7 +1933,7 @@ class Simulation {
   // chart_quality_rate's work space.
   VecX sigma_left_, rate_x_, rate_plus_, rate_minus_;
   State rate_state_;
-  BodyRotations rate_rotations_;
+  BodyPoses rate_rotations_;
   std::string stop_message_;  // why accept stopped the integrator
   int crossing_rewinds_ = 0;
   double last_crossing_t_star_ = -std::numeric_limits<double>::infinity();

@@ -204,7 +204,17 @@ void body_rotations(const Model& model, const VecX& q, std::span<Eigen::Matrix2d
   }
 }
 
-BodyRotations::BodyRotations(const Model& model)
-    : R_(model.bodies.size(), Eigen::Matrix2d::Identity()) {}
+BodyPoses::BodyPoses(const Model& model)
+    : R_(model.bodies.size(), Eigen::Matrix2d::Identity()),
+      S_(model.dimension == 3 ? model.bodies.size() : 0, Mat3::Identity()) {}
+
+void BodyPoses::update(const Model& model, const VecX& q) {
+  body_rotations(model, q, R_);
+  if (S_.empty()) return;
+  for (size_t b = 0; b < model.bodies.size(); ++b) {
+    const Body& body = model.bodies[b];
+    if (body.kind == BodyKind::spatial) S_[b] = rotation_matrix(q.segment<4>(body.q_offset + 3));
+  }
+}
 
 }  // namespace orthomech

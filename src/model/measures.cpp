@@ -22,6 +22,11 @@ struct Evaluator {
   const VecX* u;
   Sink* d;                           // may be null
   const Eigen::Matrix2d* rotations;  // R(φ_b) per body at q, or null
+  const Mat3* rotations3 = nullptr;  // R(e_b) per body at q (spatial), or null
+
+  [[nodiscard]] SpatialFrame frame(int body) const {
+    return spatial_frame(model, body, q, u, rotations3);
+  }
 
   [[nodiscard]] PointKinematics point(const PointRef& p) const {
     return detail::point_kinematics_at(model, p, q, u, rotations);
@@ -94,7 +99,7 @@ struct Evaluator {
   // World x, y or z of a spatial point: g = c, h = ρ × c, ḣ = (w × ρ) × c.
   ScalarKinematics operator()(const SpatialPointCoordinate& m) const {
     SpatialScalar x;
-    x.frame[0] = spatial_frame(model, m.point.body, q, u);
+    x.frame[0] = frame(m.point.body);
     const SpatialPoint p = spatial_point(x.frame[0], m.point.s);
     const Vec3 c = Vec3::Unit(m.axis);
     x.value = c.dot(p.r);
@@ -108,7 +113,7 @@ struct Evaluator {
   // for i). Coincident points: the one-sided limit along ḋ, as the planar measure.
   ScalarKinematics operator()(const SpatialPointDistance& m) const {
     SpatialScalar x;
-    x.frame = {spatial_frame(model, m.pi.body, q, u), spatial_frame(model, m.pj.body, q, u)};
+    x.frame = {frame(m.pi.body), frame(m.pj.body)};
     const std::array<SpatialPoint, 2> p{spatial_point(x.frame[0], m.pi.s),
                                         spatial_point(x.frame[1], m.pj.s)};
     const Vec3 dv = p[1].r - p[0].r, dd = p[1].v - p[0].v;
@@ -133,7 +138,7 @@ struct Evaluator {
   // θ̇ = (w_i − w_j)·k with k = −c/|c| (undefined where the vectors are parallel).
   ScalarKinematics operator()(const VectorAngle& m) const {
     SpatialScalar x;
-    x.frame = {spatial_frame(model, m.bi, q, u), spatial_frame(model, m.bj, q, u)};
+    x.frame = {frame(m.bi), frame(m.bj)};
     const Vec3 ai = x.frame[0].R * m.ai, aj = x.frame[1].R * m.aj;
     const Vec3 c = ai.cross(aj);
     const double sn = c.norm();
@@ -151,7 +156,7 @@ struct Evaluator {
   // r² = s_x² + s_y² (the (P5) pattern of atan2). ḣ by differentiating h along ṡ.
   ScalarKinematics operator()(const WheelAngle& m) const {
     SpatialScalar x;
-    x.frame[0] = spatial_frame(model, m.body, q, u);
+    x.frame[0] = frame(m.body);
     const Vec3 s = x.frame[0].R * m.axis;
     const Vec3 sd = x.frame[0].w.cross(s);
     const Vec3 z = Vec3::UnitZ();
@@ -221,14 +226,15 @@ ScalarKinematics compute_scalar(const Model& model, const MeasureKind& kind, con
 
 namespace {
 double evaluate_measure_at(const Model& model, const Measure& m, const VecX& q, const VecX* u,
-                           const VecX* udot, const Eigen::Matrix2d* rotations) {
+                           const VecX* udot, const BodyPoses* poses) {
   using Plain = Evaluator<Eigen::Ref<VecX>>;
-  if (m.derivative == 0)
-    return std::visit(Plain{model, q, nullptr, nullptr, rotations}, m.kind).value;
-  if (m.derivative == 1) return std::visit(Plain{model, q, u, nullptr, rotations}, m.kind).rate;
+  const Eigen::Matrix2d* r2 = poses ? poses->table().data() : nullptr;
+  const Mat3* r3 = poses ? poses->spatial_table() : nullptr;
+  if (m.derivative == 0) return std::visit(Plain{model, q, nullptr, nullptr, r2, r3}, m.kind).value;
+  if (m.derivative == 1) return std::visit(Plain{model, q, u, nullptr, r2, r3}, m.kind).rate;
   // s̈ = d u̇ + ḋu, with d u̇ accumulated as d is written (no row buffer).
   DotRow d_udot{*udot};
-  const ScalarKinematics s = std::visit(Evaluator<DotRow>{model, q, u, &d_udot, rotations}, m.kind);
+  const ScalarKinematics s = std::visit(Evaluator<DotRow>{model, q, u, &d_udot, r2, r3}, m.kind);
   return d_udot.sum + s.ddot_u;
 }
 }  // namespace
@@ -239,8 +245,8 @@ double evaluate_measure(const Model& model, const Measure& m, const VecX& q, con
 }
 
 double evaluate_measure(const Model& model, const Measure& m, const VecX& q, const VecX* u,
-                        const VecX* udot, const BodyRotations& rotations) {
-  return evaluate_measure_at(model, m, q, u, udot, rotations.table().data());
+                        const VecX* udot, const BodyPoses& rotations) {
+  return evaluate_measure_at(model, m, q, u, udot, &rotations);
 }
 
 }  // namespace orthomech

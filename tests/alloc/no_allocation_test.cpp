@@ -219,7 +219,7 @@ TEST(NoAllocationSparseEt, EvaluationsAllocateNothingAfterSetUp) {
     const Model model = test::load_bundled(name);
     const VecX q = model.design_q();
     SparseEt Et(model);
-    BodyRotations rotations(model);
+    BodyPoses rotations(model);
     VecX f(model.nc), Dtu(model.nc);
     State s(model);
     s.q = q;

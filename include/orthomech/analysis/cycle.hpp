@@ -279,7 +279,7 @@ struct DrivenWorkspace {
   VecX g;                 // n: scratch (a row of Eᵀ, for the null space N)
   VecX dq;                // n: right-hand side, then Newton step, of the corrector
   // R(φ_b) of every body at the q of the last compute_driven; the corrector updates it with Eᵀ.
-  BodyRotations rotations;
+  BodyPoses rotations;
   // Idle degrees of freedom held at zero rate (empty: none): their bodies (Mobility::idle), and
   // at the q of the last compute_driven the idle rows I (k × n), the idle motions V (n × k), I F
   // (k × n_a), the held basis F z (n), İ u (k) and the holding forces μ (k). Not allocation-free.
@@ -301,7 +301,7 @@ struct DrivenOutputs {
   double& dissipated;
 };
 void compute_driven_outputs(const Model& model, const State& state, const VecX& lambda,
-                            const VecX& udot, const BodyRotations& rotations, DrivenOutputs out);
+                            const VecX& udot, const BodyPoses& rotations, DrivenOutputs out);
 
 // A driver's input s(t), ṡ(t), s̈(t) (SI): constant speed s0 + ω t, harmonic initial + a sin(2π f
 // t), polynomial Σ c_k t^k.

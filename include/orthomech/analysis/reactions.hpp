@@ -25,7 +25,7 @@ void compute_reactions(const Model& model, const VecX& q, const Eigen::Ref<const
                        std::vector<double>& out);
 // The same with the bodies' rotations at q already computed (e.g. DrivenWorkspace::rotations
 // after compute_driven): no sin/cos.
-void compute_reactions(const Model& model, const VecX& q, const BodyRotations& rotations,
+void compute_reactions(const Model& model, const VecX& q, const BodyPoses& rotations,
                        const Eigen::Ref<const VecX>& lambda, std::vector<double>& out);
 
 }  // namespace orthomech

@@ -16,13 +16,16 @@ struct ConstraintWorkspace {
   MatX Et;   // nc × n:  Eᵀ, eq. (23)
   MatX Dt;   // nc × n:  Dᵀ = Ėᵀ, eq. (76)
   VecX Dtu;  // nc:      Dᵀ u
+  // The kinematics stage at the q of the last compute_constraints / compute_constraint_rate
+  // (the bodies' rotations, computed once for every row).
+  BodyPoses poses;
   explicit ConstraintWorkspace(const Model& model);
 };
 
 // f(q) only (cheap: used by position solvers).
 void compute_constraint_residual(const Model& model, const VecX& q, VecX& f);
 // The same with the bodies' rotations at q already computed (rotations.update(model, q)).
-void compute_constraint_residual(const Model& model, const VecX& q, const BodyRotations& rotations,
+void compute_constraint_residual(const Model& model, const VecX& q, const BodyPoses& rotations,
                                  VecX& f);
 // Eᵀ(q) only.
 void compute_constraint_jacobian(const Model& model, const VecX& q, MatX& Et);
@@ -30,12 +33,12 @@ void compute_constraint_jacobian(const Model& model, const VecX& q, MatX& Et);
 void compute_constraint_residual_and_jacobian(const Model& model, const VecX& q, VecX& f, MatX& Et);
 // The same with the bodies' rotations at q already computed (rotations.update(model, q)).
 void compute_constraint_residual_and_jacobian(const Model& model, const VecX& q,
-                                              const BodyRotations& rotations, VecX& f, MatX& Et);
+                                              const BodyPoses& rotations, VecX& f, MatX& Et);
 // Dᵀu only (when Eᵀ at the same q is already there), each row's product with u formed directly:
 // ws.Dt is neither formed nor changed. Allocation-free.
 void compute_constraint_rate(const Model& model, const State& state, ConstraintWorkspace& ws);
 // The same with the bodies' rotations at state.q already computed.
-void compute_constraint_rate(const Model& model, const State& state, const BodyRotations& rotations,
+void compute_constraint_rate(const Model& model, const State& state, const BodyPoses& rotations,
                              ConstraintWorkspace& ws);
 // f, Eᵀ, Dᵀ and Dᵀu at a state. Allocation-free.
 void compute_constraints(const Model& model, const State& state, ConstraintWorkspace& ws);

@@ -99,10 +99,9 @@ void compute_constraint_residual_and_jacobian(const Model& model, const VecX& q,
                                               SparseEt& Et);
 // The same with the bodies' rotations at q already computed (rotations.update(model, q)).
 void compute_constraint_residual_and_jacobian(const Model& model, const VecX& q,
-                                              const BodyRotations& rotations, VecX& f,
-                                              SparseEt& Et);
+                                              const BodyPoses& rotations, VecX& f, SparseEt& Et);
 // Dᵀu only (size n_c), each row's product with u formed directly (no n_c × n storage).
-void compute_constraint_rate(const Model& model, const State& state, const BodyRotations& rotations,
+void compute_constraint_rate(const Model& model, const State& state, const BodyPoses& rotations,
                              VecX& Dtu);
 
 }  // namespace orthomech

@@ -55,9 +55,11 @@ struct TwistAngle {
 // u). Its rows of Eᵀ and Dᵀ are added into: they must be zero on entry (compute_constraints
 // zeroes the matrices once). Allocation-free.
 // EtT: MatX, SparseEt or EtRecorder (constraints/sparse_et.hpp; instantiated for the three).
+// rotations: R(e_b) of every body at q (BodyPoses::spatial_table), or null.
 template <typename EtT>
 void evaluate_spatial_joint(const Model& model, const SpatialJoint& joint, const VecX& q,
-                            const VecX* u, int r, VecX* f, EtT* Et, MatX* Dt, VecX* Dtu);
+                            const VecX* u, int r, VecX* f, EtT* Et, MatX* Dt, VecX* Dtu,
+                            const Mat3* rotations = nullptr);
 
 // The joint's coordinate at (q, u) (u may be null): the angle (revolute, cylindrical, screw: the
 // twist angle of ref_j about h_i from f_i, in (−π, π]) or the slide h_i·d (prismatic). Throws

@@ -81,24 +81,35 @@ struct PointKinematics {
   bool rotates = false;    // body has an angle coordinate
   bool moving = false;     // not the ground
 };
-// R(φ_b) of every body b at q into rotations[0 … bodies.size()) (the identity for particles).
-// Allocation-free; rotations.size() must be model.bodies.size().
+// R(φ_b) of every body b at q into rotations[0 … bodies.size()) (the identity for particles and
+// spatial bodies). Allocation-free; rotations.size() must be model.bodies.size().
 void body_rotations(const Model& model, const VecX& q, std::span<Eigen::Matrix2d> rotations);
 
-// The kinematics stage of one position: R(φ_b) of every body at q, computed once (update) and
-// read by every point of every joint row, measure and reaction at that q, instead of a sin/cos
-// per point. Sized at construction (its only allocation); update is allocation-free.
-class BodyRotations {
+// The kinematics stage of one position: the rotation of every body at q — R(φ_b) (2 × 2) of a
+// planar body, R(e_b) (3 × 3, eq. (S1)) of a spatial one — computed once (update) and read by
+// every point of every joint row, measure and reaction at that q, instead of a sin/cos or a
+// quaternion product per point. With the positions in q they are the bodies' poses; their
+// twists follow from u where a row reads them (planar: u itself; spatial: v and the world
+// ω = R ω_b, spatial_frame). Sized at construction (its only allocation: the 3 × 3 table only
+// for a spatial model); update is allocation-free. ConstraintWorkspace holds one
+// (compute_constraints), cycle's DrivenWorkspace and simulate theirs.
+class BodyPoses {
  public:
-  explicit BodyRotations(const Model& model);
-  void update(const Model& model, const VecX& q) { body_rotations(model, q, R_); }
+  explicit BodyPoses(const Model& model);
+  void update(const Model& model, const VecX& q);
+  // R(φ_b) of a planar body (the identity for a particle).
   [[nodiscard]] const Eigen::Matrix2d& operator[](int body) const {
     return R_[static_cast<size_t>(body)];
   }
+  // R(e_b) of a spatial body (its model must be spatial).
+  [[nodiscard]] const Mat3& spatial(int body) const { return S_[static_cast<size_t>(body)]; }
+  // The spatial table, or null for a planar model (spatial_frame's argument).
+  [[nodiscard]] const Mat3* spatial_table() const { return S_.empty() ? nullptr : S_.data(); }
   [[nodiscard]] std::span<const Eigen::Matrix2d> table() const { return R_; }
 
  private:
   std::vector<Eigen::Matrix2d> R_;
+  std::vector<Mat3> S_;  // spatial bodies' rotations (empty for a planar model)
 };
 
 namespace detail {
@@ -118,7 +129,7 @@ namespace detail {
 // The same with the bodies' rotations at this q already computed (no sin/cos).
 [[nodiscard]] inline PointKinematics point_kinematics(const Model& model, const PointRef& p,
                                                       const VecX& q, const VecX* u,
-                                                      const BodyRotations& rotations) {
+                                                      const BodyPoses& rotations) {
   return detail::point_kinematics_at(model, p, q, u, rotations.table().data());
 }
 // Inline: read for every angle row, measure and reaction (a call cost more than the read).

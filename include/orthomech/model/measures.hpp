@@ -25,7 +25,6 @@ ScalarKinematics compute_scalar(const Model& model, const MeasureKind& kind, con
                                       const VecX* u, const VecX* udot);
 // The same with the bodies' rotations at q already computed (no sin/cos).
 [[nodiscard]] double evaluate_measure(const Model& model, const Measure& m, const VecX& q,
-                                      const VecX* u, const VecX* udot,
-                                      const BodyRotations& rotations);
+                                      const VecX* u, const VecX* udot, const BodyPoses& rotations);
 
 }  // namespace orthomech

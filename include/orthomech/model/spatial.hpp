@@ -99,15 +99,16 @@ struct SpatialFrame {
   [[nodiscard]] bool moving() const { return u_offset >= 0; }
 };
 
-// u may be null (velocities zero).
+// u may be null (velocities zero). rotations: R(e_b) of every body at this q (BodyPoses, the
+// kinematics stage), or null to compute R here.
 [[nodiscard]] inline SpatialFrame spatial_frame(const Model& model, int body, const VecX& q,
-                                                const VecX* u) {
+                                                const VecX* u, const Mat3* rotations = nullptr) {
   SpatialFrame k;
   if (body == kGround) return k;
   const Body& b = model.bodies[static_cast<size_t>(body)];
   k.u_offset = b.u_offset;
   k.r = q.segment<3>(b.q_offset);
-  k.R = rotation_matrix(q.segment<4>(b.q_offset + 3));
+  k.R = rotations ? rotations[body] : rotation_matrix(q.segment<4>(b.q_offset + 3));
   if (u) {
     k.v = u->segment<3>(b.u_offset);
     k.w = k.R * u->segment<3>(b.u_offset + 3);

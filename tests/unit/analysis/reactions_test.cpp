@@ -151,11 +151,11 @@ TEST(Reactions, LocalComponentsAreTheForceInTheJointsFrame) {
 }
 
 // With the bodies' rotations at q already computed the values are the same as without.
-TEST(Reactions, WithTheBodyRotationsTheSameValues) {
+TEST(Reactions, WithTheBodyPosesTheSameValues) {
   const Model model = parse_mechanism(test::kZooYaml, "zoo");
   const VecX q = model.design_q();
   const VecX lambda = seeded_lambda(model.nc);
-  BodyRotations rotations(model);
+  BodyPoses rotations(model);
   rotations.update(model, q);
   std::vector<double> plain, with_table;
   compute_reactions(model, q, lambda, plain);

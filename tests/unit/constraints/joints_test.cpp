@@ -85,7 +85,7 @@ TEST(Joints, Eq76_ConstraintRateGivesDtuWithoutFormingDt) {
     ConstraintWorkspace full(model);
     compute_constraints(model, s, full);
     const VecX oracle = full.Dt * s.u;
-    BodyRotations rotations(model);
+    BodyPoses rotations(model);
     rotations.update(model, s.q);
     for (const bool with_table : {false, true}) {
       ConstraintWorkspace ws(model);
@@ -110,7 +110,7 @@ TEST(Joints, ResidualAndJacobianWithTheRotationTable) {
   const State s = zoo_state(model, 1);
   VecX f(model.nc), f_ref(model.nc);
   MatX Et(model.nc, model.n), Et_ref(model.nc, model.n);
-  BodyRotations rotations(model);
+  BodyPoses rotations(model);
   rotations.update(model, s.q);
   compute_constraint_residual(model, s.q, f_ref);
   compute_constraint_jacobian(model, s.q, Et_ref);

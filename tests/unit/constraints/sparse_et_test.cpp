@@ -64,7 +64,7 @@ int expect_same_as_dense(const Model& model, const VecX& q, const std::string& w
   EXPECT_EQ(f_sparse, f_dense) << what;
   // The overload with the rotations computed by the caller writes the same values.
   SparseEt again(model);
-  BodyRotations rotations(model);
+  BodyPoses rotations(model);
   rotations.update(model, q);
   compute_constraint_residual_and_jacobian(model, q, rotations, f_sparse, again);
   for (int k = 0; k < Et.nonZeros(); ++k) EXPECT_EQ(again.values()[k], Et.values()[k]) << what;
@@ -186,7 +186,7 @@ TEST(SparseEt, AnotherModelsMatrixOrAWrongSizeIsRefused) {
                std::invalid_argument);
   State s(large);
   s.q = large.design_q();
-  BodyRotations rotations(large);
+  BodyPoses rotations(large);
   rotations.update(large, s.q);
   VecX Dtu(small.nc);
   EXPECT_THROW(compute_constraint_rate(large, s, rotations, Dtu), std::invalid_argument);

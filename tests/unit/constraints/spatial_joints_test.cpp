@@ -10,6 +10,7 @@
 #include <random>
 
 #include "orthomech/constraints/joints.hpp"
+#include "orthomech/constraints/sparse_et.hpp"
 #include "orthomech/model/free_system.hpp"
 #include "orthomech/model/loads.hpp"
 #include "orthomech/model/measures.hpp"
@@ -275,6 +276,57 @@ TEST(SpatialJointReaction, EqualsEλAndIsSelfEquilibratedAndHasTheJointsZeros) {
         case SpatialJointType::fixed:
           break;
       }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace orthomech
+
+namespace orthomech {
+namespace {
+
+// The kinematics stage (BodyPoses) on spatial bodies: R(e_b) of each body equals the rotation
+// of its quaternion (eq. (S1), evaluated here from e independently of the stage: R v = e ⊗ v ⊗ e*),
+// and f, Eᵀ and Dᵀu evaluated with the stage are the values without it, bit for bit, for every
+// joint type and body pair (the stage only saves the per-row quaternion products).
+TEST(SpatialKinematicsStage, RotationsAndRowsEqualTheDirectEvaluation) {
+  std::mt19937_64 rng(29);
+  for (const SpatialJointType type : kAll) {
+    for (int pair = 0; pair < 3; ++pair) {
+      const Model m = two_body_model(type, pair);
+      const State s = random_state(m, rng, 0.3);
+      BodyPoses poses(m);
+      poses.update(m, s.q);
+      for (size_t b = 0; b < m.bodies.size(); ++b) {
+        const Quat e = s.q.segment<4>(m.bodies[b].q_offset + 3);
+        Quat conj = e;
+        conj.tail<3>() = -conj.tail<3>();
+        for (int c = 0; c < 3; ++c) {
+          Quat v = Quat::Zero();
+          v(1 + c) = 1.0;
+          const Quat rotated = quaternion_multiply(quaternion_multiply(e, v), conj);
+          EXPECT_LT((poses.spatial(static_cast<int>(b)).col(c) - rotated.tail<3>()).norm(), 1e-15)
+              << spatial_joint_spec(type).type << " body " << b;
+        }
+      }
+      VecX f(m.nc), f_stage(m.nc), Dtu(m.nc), Dtu_stage(m.nc);
+      MatX Et(m.nc, m.n), Et_stage(m.nc, m.n);
+      compute_constraint_residual_and_jacobian(m, s.q, f, Et);  // no stage
+      compute_constraint_residual_and_jacobian(m, s.q, poses, f_stage, Et_stage);
+      const auto& joint = std::get<SpatialJoint>(m.joints[0].kind);
+      evaluate_spatial_joint<MatX>(m, joint, s.q, &s.u, 0, nullptr, nullptr, nullptr, &Dtu);
+      compute_constraint_rate(m, s, poses, Dtu_stage);
+      ConstraintWorkspace ws(m);  // the workspace's own stage
+      compute_constraints(m, s, ws);
+      const std::string type_name = spatial_joint_spec(type).type;
+      EXPECT_EQ(f, f_stage) << type_name;
+      EXPECT_EQ(Et, Et_stage) << type_name;
+      EXPECT_EQ(Dtu, Dtu_stage) << type_name;
+      EXPECT_EQ(ws.f, f) << type_name;
+      EXPECT_EQ(ws.Et, Et) << type_name;
+      compute_constraint_rate(m, s, ws);
+      EXPECT_EQ(ws.Dtu, Dtu) << type_name;
     }
   }
 }

@@ -45,14 +45,14 @@ TEST(Measures, JacobianRateAndConvectiveTermAgainstDifferences) {
 }
 
 // evaluate_measure at every derivative order against compute_scalar (checked above against
-// differences): s, ṡ = d u and s̈ = d u̇ + ḋu, with and without a rotation table (BodyRotations
+// differences): s, ṡ = d u and s̈ = d u̇ + ḋu, with and without a rotation table (BodyPoses
 // against rotation(φ) of each body's angle).
 TEST(Measures, EvaluateMeasureAtEveryOrderWithAndWithoutRotationTable) {
   const Model model = parse_mechanism(test::kZooYaml, "zoo");
   const State s = zoo_state(model);
   VecX udot(model.n);
   for (int k = 0; k < model.n; ++k) udot(k) = 0.7 * std::sin(1.1 * k + 0.2);
-  BodyRotations rotations(model);
+  BodyPoses rotations(model);
   rotations.update(model, s.q);
   for (size_t b = 0; b < model.bodies.size(); ++b)
     EXPECT_LT(
