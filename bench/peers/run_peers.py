@@ -63,8 +63,9 @@ def mechanism_file(n, tmp):
     return os.path.join(tmp, f"n-four-bar-{n}.yaml")
 
 
-def orthomech_row(build, n, t_end, integrator, rtol, tmp):
-    mech = mechanism_file(n, tmp)
+def orthomech_simulate(build, mech, t_end, integrator, rtol):
+    """`orthomech simulate` to t_end with one output at the end: its JSON and the CPU seconds
+    of the whole process (user + sys, getrusage of the child)."""
     cmd = [os.path.join(build, "orthomech"), "simulate", mech,
            "--t-end", str(t_end), "--rtol", str(rtol), "--atol", "1e-12", "--integrator",
            integrator, "--dt-out", str(t_end), "--json", "-q"]
@@ -72,7 +73,11 @@ def orthomech_row(build, n, t_end, integrator, rtol, tmp):
     r = subprocess.run(cmd, capture_output=True, text=True)
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-    j = json.loads(r.stdout)
+    return json.loads(r.stdout), cpu
+
+
+def orthomech_row(build, n, t_end, integrator, rtol, tmp):
+    j, cpu = orthomech_simulate(build, mechanism_file(n, tmp), t_end, integrator, rtol)
     reference = os.path.join(build, "bench", "peers", "peer_reference_n_four_bar")
     ref = [float(x) for x in run([reference, str(n), str(j["final"]["t"])]).split()]
     m = j["final"]["measures"]
@@ -195,14 +200,7 @@ def crank_rocker(a, t_end, have_mujoco):
     mech = os.path.join(ROOT, "mechanisms", "crank-rocker.yaml")
     for integrator, rtol in (("dopri5", 1e-6), ("dopri5", 1e-8), ("rkf78", 1e-8),
                              ("rkf78", 1e-10)):
-        cmd = [os.path.join(a.build, "orthomech"), "simulate", mech, "--t-end", str(t_end),
-               "--rtol", str(rtol), "--atol", "1e-12", "--integrator", integrator, "--dt-out",
-               str(t_end), "--json", "-q"]
-        before = resource.getrusage(resource.RUSAGE_CHILDREN)
-        r = subprocess.run(cmd, capture_output=True, text=True)
-        after = resource.getrusage(resource.RUSAGE_CHILDREN)
-        cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-        j = json.loads(r.stdout)
+        j, cpu = orthomech_simulate(a.build, mech, t_end, integrator, rtol)
         row({"tool": "orthomech", "setting": f"{integrator} rtol {rtol:g}", "N": "—",
              "t": j["final"]["t"], "cpu_per_s": cpu / t_end,
              "err": abs(math.radians(j["final"]["measures"]["crank_angle"]) - exact),
@@ -245,14 +243,7 @@ def andrews(a, have_mujoco):
                     "--json", "-q"], capture_output=True, check=False)
     for integrator, rtol in (("dopri5", 1e-6), ("dopri5", 1e-8), ("dopri5", 1e-10),
                              ("rkf78", 1e-10), ("bulirsch-stoer", 1e-10)):
-        cmd = [os.path.join(a.build, "orthomech"), "simulate", mech, "--t-end", str(t_end),
-               "--rtol", str(rtol), "--atol", "1e-12", "--integrator", integrator, "--dt-out",
-               str(t_end), "--json", "-q"]
-        before = resource.getrusage(resource.RUSAGE_CHILDREN)
-        r = subprocess.run(cmd, capture_output=True, text=True)
-        after = resource.getrusage(resource.RUSAGE_CHILDREN)
-        cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-        j = json.loads(r.stdout)
+        j, cpu = orthomech_simulate(a.build, mech, t_end, integrator, rtol)
         m = j["final"]["measures"]
         row({"tool": "orthomech", "setting": f"{integrator} rtol {rtol:g}", "N": "—",
              "t": j["final"]["t"], "cpu_per_s": cpu,
