@@ -88,13 +88,19 @@ def orthomech_row(build, n, t_end, integrator, rtol, tmp):
             "note": j["status"] + (f" ({j['message']})" if j["message"] else "")}
 
 
-def mujoco_row(build, n, t_end, dt, method, sol):
-    exe = os.path.join(build, "bench", "peers", "peer_mujoco_n_four_bar")
-    lines = run([exe, str(n), str(t_end), str(dt), method, sol]).splitlines()
-    f = parse_line([x for x in lines if x.startswith("mujoco ")][-1])  # not MuJoCo's warnings
+def mujoco_peer_row(build, program, args, dt, method, sol, n="—", cpu_scale=1.0):
+    """One run of a MuJoCo peer program (its last line starting "mujoco ": MuJoCo may print
+    warnings first) as a table row; cpu_per_s is multiplied by cpu_scale."""
+    exe = os.path.join(build, "bench", "peers", program)
+    lines = run([exe] + [str(x) for x in args] + [str(dt), method, sol]).splitlines()
+    f = parse_line([x for x in lines if x.startswith("mujoco ")][-1])
     return {"tool": "MuJoCo " + f["raw"].split()[1], "setting": f"{method} dt {dt:g} {sol}",
-            "N": n, "t": float(f["t"]), "cpu_per_s": float(f["cpu_per_s"]),
+            "N": n, "t": float(f["t"]), "cpu_per_s": float(f["cpu_per_s"]) * cpu_scale,
             "err": float(f["err"]), "gap": float(f["gap"]), "note": ""}
+
+
+def mujoco_row(build, n, t_end, dt, method, sol):
+    return mujoco_peer_row(build, "peer_mujoco_n_four_bar", [n, t_end], dt, method, sol, n)
 
 
 def simbody_row(build, n, t_end, acc, method, cap, closure="plane"):
@@ -185,16 +191,11 @@ def crank_rocker(a, t_end, have_mujoco):
     print(f"\n## Crank-rocker under gravity, t = 0 … {t_end:g} s\n")
     header("error of the crank angle (rad)")
     if have_mujoco:
-        exe = os.path.join(a.build, "bench", "peers", "peer_mujoco_crank_rocker")
         for dt, method, sol in ((1e-3, "euler", "default"), (1e-3, "euler", "tight"),
                                 (1e-4, "euler", "tight"), (1e-5, "euler", "tight"),
                                 (1e-3, "rk4", "tight"), (1e-4, "rk4", "tight"),
                                 (1e-5, "rk4", "tight")):
-            lines = run([exe, str(t_end), str(dt), method, sol]).splitlines()
-            f = parse_line([x for x in lines if x.startswith("mujoco ")][-1])
-            row({"tool": "MuJoCo " + f["raw"].split()[1], "setting": f"{method} dt {dt:g} {sol}",
-                 "N": "—", "t": float(f["t"]), "cpu_per_s": float(f["cpu_per_s"]),
-                 "err": float(f["err"]), "gap": float(f["gap"]), "note": ""})
+            row(mujoco_peer_row(a.build, "peer_mujoco_crank_rocker", [t_end], dt, method, sol))
     reference = os.path.join(a.build, "bench", "peers", "peer_reference_crank_rocker")
     exact = float(run([reference, str(t_end)]))
     mech = os.path.join(ROOT, "mechanisms", "crank-rocker.yaml")
@@ -225,16 +226,12 @@ def andrews(a, have_mujoco):
     print(f"\n## Andrews' squeezer, t = 0 … {t_end:g} s\n")
     header("largest error of the 7 angles (rad)", f"CPU s for {t_end:g} s")
     if have_mujoco:
-        exe = os.path.join(a.build, "bench", "peers", "peer_mujoco_andrews")
         for dt, method, sol in ((1e-5, "euler", "default"), (1e-4, "euler", "tight"),
                                 (1e-5, "euler", "tight"), (1e-6, "euler", "tight"),
                                 (1e-7, "euler", "tight"), (1e-5, "rk4", "tight"),
                                 (1e-6, "rk4", "tight")):
-            lines = run([exe, str(dt), method, sol]).splitlines()
-            f = parse_line([x for x in lines if x.startswith("mujoco ")][-1])
-            row({"tool": "MuJoCo " + f["raw"].split()[1], "setting": f"{method} dt {dt:g} {sol}",
-                 "N": "—", "t": float(f["t"]), "cpu_per_s": float(f["cpu_per_s"]) * t_end,
-                 "err": float(f["err"]), "gap": float(f["gap"]), "note": ""})
+            row(mujoco_peer_row(a.build, "peer_mujoco_andrews", [], dt, method, sol,
+                                cpu_scale=t_end))  # CPU of the whole 0.03 s run
     reference = andrews_reference()
     names = ("beta", "Theta", "gamma", "Phi", "delta", "Omega", "epsilon")
     mech = os.path.join(ROOT, "mechanisms", "andrews-squeezer.yaml")

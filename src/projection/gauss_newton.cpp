@@ -142,8 +142,8 @@ GaussNewtonResult gauss_newton_positions(const Model& model, VecX& q, const Extr
     if (options.stall_limit > 0 && stalled >= options.stall_limit) return stop(Stop::stalled);
     if (it >= options.max_iterations) break;
     previous = r;
-    const bool metric = options.metric == GaussNewtonOptions::Metric::mass;
-    if (metric || options.choose_f_rows) ensure_inverse_mass(model, q, A);
+    const bool mass_metric = options.metric == GaussNewtonOptions::Metric::mass;
+    if (mass_metric || options.choose_f_rows) ensure_inverse_mass(model, q, A);
     if (!rows.assemble(q, A)) return stop(Stop::no_rows);
     if (!minimum_norm_step(rows.C(), rows.c(), A, options, x)) return stop(Stop::dependent_rows);
     if (!x.allFinite()) return stop(Stop::not_finite);

@@ -208,18 +208,21 @@ TEST(GaussNewton, BacktrackingFromNearTheCentreReachesTheCircle) {
 TEST(GaussNewton, AcceptAfterTheLastIteration) {
   const Model m = parse_mechanism(kCircle, "circle.yaml");
   GaussNewtonOptions o;
-  o.tolerance = 0.0;  // not reachable in general
+  o.tolerance = -1.0;  // unreachable: only the acceptance can end it converged
   o.max_iterations = 6;
   o.descent = GaussNewtonOptions::Descent::free;
   VecX q = m.design_q();
-  EXPECT_FALSE(gauss_newton_positions(m, q, kNone, o).converged && max_abs_f(m, q) > 0.0);
+  const GaussNewtonResult none = gauss_newton_positions(m, q, kNone, o);
+  EXPECT_FALSE(none.converged);
+  EXPECT_EQ(none.stop, GaussNewtonResult::Stop::iterations);
+  EXPECT_EQ(none.steps, 6);
   o.accept = 1e-12;
   q = m.design_q();
   const GaussNewtonResult r = gauss_newton_positions(m, q, kNone, o);
   EXPECT_TRUE(r.converged);
+  EXPECT_EQ(r.stop, GaussNewtonResult::Stop::converged);
   EXPECT_LE(max_abs_f(m, q), 1e-12);
-  o.accept = -1.0;
-  o.tolerance = -1.0;  // unreachable: never converged, whatever the last q
+  o.accept = -1.0;  // and without it: never converged, whatever the last q
   q = m.design_q();
   EXPECT_FALSE(gauss_newton_positions(m, q, kNone, o).converged);
 }
