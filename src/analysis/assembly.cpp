@@ -13,6 +13,7 @@
 #include "orthomech/analysis/positions.hpp"
 #include "orthomech/check.hpp"
 #include "orthomech/constraints/joints.hpp"
+#include "orthomech/constraints/sparse_et.hpp"
 #include "orthomech/constraints/spatial_joints.hpp"
 #include "orthomech/io/units.hpp"
 #include "orthomech/model/free_system.hpp"
@@ -602,6 +603,54 @@ bool project_with_locks(const Model& model, VecX& q, const std::vector<JointLock
   return gauss_newton_positions(model, q, lock_rows, gn).converged;
 }
 
+namespace {
+
+// The kinetic energies of u₀, of α u₀ (v.u) and of β u₀ = u₀ − α u₀, with M x given as a function.
+template <class MassTimes>
+void projected_energies(const VecX& u0, VelocityProjection& v, const MassTimes& mass_times) {
+  const VecX beta_u0 = u0 - v.u;  // β u₀ = (I − α) u₀
+  v.kinetic_initial = 0.5 * u0.dot(mass_times(u0));
+  v.kinetic = 0.5 * v.u.dot(mass_times(v.u));
+  v.kinetic_removed = 0.5 * beta_u0.dot(mass_times(beta_u0));
+}
+
+// The same projection on the chart engine's sparse path, for a large model with a diagonal M
+// (issue 18 item 2): Eᵀ on its pattern, the chart chosen and its block factorised sparse, F
+// (n × n_a) column by column, H = Fᵀ M F; nothing of size n × n (the dense path's Workspace at
+// N = 400 of the N-four-bar is 436 MB and its QR chart choice O(n³)). False when the model is not
+// such a model (the dense path then answers); v.ok false when no chart is regular at q.
+bool project_velocities_sparse(const Model& model, const VecX& q, int rank, const VecX& u0,
+                               VelocityProjection& v) {
+  if (model.n < ChartEngine::kSparseSelectFrom) return false;
+  ChartEngine engine(model, rank, ChartFactorisation::sparse_when_large);
+  if (!engine.sparse()) return false;
+  FreeSystemWorkspace free(model, MassStorage::diagonal_if_possible);
+  State s(model);
+  s.q = q;
+  s.u.setZero();
+  compute_free_system(model, s, free);
+  if (!free.diagonal_mass) return false;
+  SparseEt Et(model);
+  compute_constraint_jacobian(model, q, Et);
+  v.ok = engine.select(Et, free.A_diag) && engine.factor(Et, free.A_sqrt) > 0.0;
+  const auto mass_times = [&](const VecX& x) -> VecX { return free.M_diag.cwiseProduct(x); };
+  if (v.ok) {
+    MatX F = MatX::Zero(model.n, engine.na());
+    VecX b(model.nc), x(model.n);
+    engine.basis(Et, b, x, F);
+    const MatX MF = free.M_diag.asDiagonal() * F;
+    const MatX H = F.transpose() * MF;  // H = Fᵀ M F, as in compute_dual
+    const Eigen::LLT<MatX> H_llt(H);
+    v.ok = H_llt.info() == Eigen::Success;
+    if (v.ok) v.u = F * project_velocity(MF, H_llt, u0);  // α u₀
+  }
+  if (!v.ok) v.u = VecX::Zero(model.n);
+  projected_energies(u0, v, mass_times);
+  return true;
+}
+
+}  // namespace
+
 VelocityProjection project_velocities(const Model& model, const VecX& q, const VecX& u0) {
   VelocityProjection v;
   if (model.nc == 0) {  // no constraint: α = I, nothing removed (and no empty factorisation)
@@ -616,6 +665,7 @@ VelocityProjection project_velocities(const Model& model, const VecX& q, const V
   // The dual form's projection (projection/dual.hpp) in a chart of the rank at q, so that
   // redundant constraints need no pseudo-inverse.
   const Mobility mob = compute_mobility(model, q);
+  if (project_velocities_sparse(model, q, mob.rank, u0, v)) return v;
   Workspace ws(model, mob.rank);
   State s(model);
   s.q = q;
@@ -636,10 +686,7 @@ VelocityProjection project_velocities(const Model& model, const VecX& q, const V
   else
     v.u.noalias() = d.F * project_velocity(d.MF, d.H_llt, u0);  // α u₀
   const MatX& M = ws.free.M;
-  const VecX beta_u0 = u0 - v.u;  // β u₀ = (I − α) u₀
-  v.kinetic_initial = 0.5 * u0.dot(M * u0);
-  v.kinetic = 0.5 * v.u.dot(M * v.u);
-  v.kinetic_removed = 0.5 * beta_u0.dot(M * beta_u0);
+  projected_energies(u0, v, [&](const VecX& x) -> VecX { return M * x; });
   return v;
 }
 

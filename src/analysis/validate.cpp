@@ -609,64 +609,86 @@ std::vector<FourBarLoop> find_four_bar_loops(const Model& model, int input_joint
       ends.push_back({static_cast<int>(j), r->pi.body, r->pi});
       ends.push_back({static_cast<int>(j), r->pj.body, r->pj});
     }
-  std::vector<int> parent(ends.size());
-  for (size_t k = 0; k < parent.size(); ++k) parent[k] = static_cast<int>(k);
-  std::function<int(int)> root = [&](int k) {
-    return parent[static_cast<size_t>(k)] == k
-               ? k
-               : parent[static_cast<size_t>(k)] = root(parent[static_cast<size_t>(k)]);
+  // Union–find (path halving); a pin is named by its root's index among the ends. The unions
+  // come in a fixed order (joints, then same-point pairs by ascending end index), so the names,
+  // and with them the order in which loops are found, depend only on the model.
+  const size_t n_ends = ends.size();
+  std::vector<int> parent(n_ends);
+  for (size_t k = 0; k < n_ends; ++k) parent[k] = static_cast<int>(k);
+  auto root = [&](int k) {
+    while (parent[static_cast<size_t>(k)] != k) {
+      auto& p = parent[static_cast<size_t>(k)];
+      p = parent[static_cast<size_t>(p)];
+      k = p;
+    }
+    return k;
   };
   auto unite = [&](int a, int b) { parent[static_cast<size_t>(root(a))] = root(b); };
   constexpr double kSamePoint = 1e-12;  // m: one pin
-  for (size_t k = 0; k + 1 < ends.size(); k += 2)
-    unite(static_cast<int>(k), static_cast<int>(k + 1));
-  for (size_t a = 0; a < ends.size(); ++a)
-    for (size_t b = a + 1; b < ends.size(); ++b)
-      if (ends[a].body == ends[b].body && (ends[a].ref.s - ends[b].ref.s).norm() < kSamePoint)
-        unite(static_cast<int>(a), static_cast<int>(b));
-  // 2. The links: for each body, its pins and the point of each on it.
+  for (size_t k = 0; k + 1 < n_ends; k += 2) unite(static_cast<int>(k), static_cast<int>(k + 1));
+  std::map<int, std::vector<int>> ends_of_body;  // ascending end indices of each body
+  for (size_t k = 0; k < n_ends; ++k) ends_of_body[ends[k].body].push_back(static_cast<int>(k));
+  for (size_t a = 0; a < n_ends; ++a)
+    for (const int b : ends_of_body[ends[a].body])
+      if (b > static_cast<int>(a) &&
+          (ends[a].ref.s - ends[static_cast<size_t>(b)].ref.s).norm() < kSamePoint)
+        unite(static_cast<int>(a), b);
+  // 2. The links: for each pin its ends (ascending) and bodies (ascending, the ground first); for
+  //    each body its pins (ascending) and the point of each on it.
+  std::vector<int> pin_of(n_ends);
+  std::vector<std::vector<int>> ends_at(n_ends), bodies_at(n_ends);  // indexed by pin
+  for (size_t k = 0; k < n_ends; ++k) {
+    pin_of[k] = root(static_cast<int>(k));
+    ends_at[static_cast<size_t>(pin_of[k])].push_back(static_cast<int>(k));
+  }
+  std::vector<int> pin_set;  // ascending
+  for (size_t p = 0; p < n_ends; ++p)
+    if (!ends_at[p].empty()) {
+      pin_set.push_back(static_cast<int>(p));
+      for (const int k : ends_at[p]) bodies_at[p].push_back(ends[static_cast<size_t>(k)].body);
+      std::sort(bodies_at[p].begin(), bodies_at[p].end());
+      bodies_at[p].erase(std::unique(bodies_at[p].begin(), bodies_at[p].end()), bodies_at[p].end());
+    }
+  // The first end of `pin` on `body` (nullptr: none).
   auto on = [&](int pin, int body) -> const End* {
-    for (size_t k = 0; k < ends.size(); ++k)
-      if (root(static_cast<int>(k)) == pin && ends[k].body == body) return &ends[k];
+    for (const int k : ends_at[static_cast<size_t>(pin)])
+      if (ends[static_cast<size_t>(k)].body == body) return &ends[static_cast<size_t>(k)];
     return nullptr;
   };
   // A joint at a pin for its name: one that connects the two links meeting there if any.
   auto joint_at = [&](int pin, int b1, int b2) {
     int any = -1;
-    for (size_t k = 0; k < ends.size(); ++k) {
-      if (root(static_cast<int>(k)) != pin) continue;
-      const End& e = ends[k];
-      const End& other = ends[k ^ 1U];
+    for (const int k : ends_at[static_cast<size_t>(pin)]) {
+      const End& e = ends[static_cast<size_t>(k)];
+      const End& other = ends[static_cast<size_t>(k) ^ 1U];
       if ((e.body == b1 && other.body == b2) || (e.body == b2 && other.body == b1)) return e.joint;
       if (any < 0 || ((e.body == b1 || e.body == b2) && any > e.joint)) any = e.joint;
     }
     return any;
   };
-  std::set<int> pin_set;
-  for (size_t k = 0; k < ends.size(); ++k) pin_set.insert(root(static_cast<int>(k)));
   std::vector<int> bodies_all = {kGround};
   for (size_t b = 0; b < model.bodies.size(); ++b) bodies_all.push_back(static_cast<int>(b));
   std::vector<std::vector<int>> pins_of(bodies_all.size());  // index b + 1
-  for (const int b : bodies_all)
-    for (const int p : pin_set)
-      if (on(p, b)) pins_of[static_cast<size_t>(b + 1)].push_back(p);
+  for (const int p : pin_set)
+    for (const int b : bodies_at[static_cast<size_t>(p)])
+      pins_of[static_cast<size_t>(b + 1)].push_back(p);
   auto has = [&](int body, int pin) {
     const auto& v = pins_of[static_cast<size_t>(body + 1)];
     return std::find(v.begin(), v.end(), pin) != v.end();
   };
-  // 3. Distance of every body from the ground in the joint graph (for a floating loop's frame).
+  // 3. Distance of every body from the ground in the joint graph (for a floating loop's frame):
+  //    breadth first, two bodies adjacent when they share a pin.
   std::vector<int> dist(bodies_all.size(), 1 << 20);
   dist[0] = 0;
-  for (bool changed = true; changed;) {
-    changed = false;
-    for (const int p : pin_set)
-      for (const int a : bodies_all)
-        for (const int b : bodies_all)
-          if (has(a, p) && has(b, p) &&
-              dist[static_cast<size_t>(a + 1)] + 1 < dist[static_cast<size_t>(b + 1)]) {
-            dist[static_cast<size_t>(b + 1)] = dist[static_cast<size_t>(a + 1)] + 1;
-            changed = true;
-          }
+  std::vector<int> queue = {kGround};
+  for (size_t head = 0; head < queue.size(); ++head) {
+    const int a = queue[head];
+    for (const int p : pins_of[static_cast<size_t>(a + 1)])
+      for (const int b : bodies_at[static_cast<size_t>(p)])
+        if (dist[static_cast<size_t>(b + 1)] > dist[static_cast<size_t>(a + 1)] + 1) {
+          dist[static_cast<size_t>(b + 1)] = dist[static_cast<size_t>(a + 1)] + 1;
+          queue.push_back(b);
+        }
   }
   // 4. Every cycle of four pins through four distinct links.
   std::vector<FourBarLoop> loops;
@@ -676,16 +698,16 @@ std::vector<FourBarLoop> find_four_bar_loops(const Model& model, int input_joint
     for (const int p0 : pins_of[static_cast<size_t>(b0 + 1)])
       for (const int p1 : pins_of[static_cast<size_t>(b0 + 1)]) {
         if (p1 == p0) continue;
-        for (const int b1 : bodies_all) {
-          if (b1 == b0 || !has(b1, p1)) continue;
+        for (const int b1 : bodies_at[static_cast<size_t>(p1)]) {
+          if (b1 == b0) continue;
           for (const int p2 : pins_of[static_cast<size_t>(b1 + 1)]) {
             if (p2 == p1 || p2 == p0) continue;
-            for (const int b2 : bodies_all) {
-              if (b2 == b0 || b2 == b1 || !has(b2, p2)) continue;
+            for (const int b2 : bodies_at[static_cast<size_t>(p2)]) {
+              if (b2 == b0 || b2 == b1) continue;
               for (const int p3 : pins_of[static_cast<size_t>(b2 + 1)]) {
                 if (p3 == p2 || p3 == p1 || p3 == p0) continue;
-                for (const int b3 : bodies_all) {
-                  if (b3 == b0 || b3 == b1 || b3 == b2 || !has(b3, p3) || !has(b3, p0)) continue;
+                for (const int b3 : bodies_at[static_cast<size_t>(p3)]) {
+                  if (b3 == b0 || b3 == b1 || b3 == b2 || !has(b3, p0)) continue;
                   std::vector<int> key = {p0, p1, p2, p3};
                   std::sort(key.begin(), key.end());
                   std::vector<int> kb = {b0, b1, b2, b3};
@@ -712,9 +734,8 @@ std::vector<FourBarLoop> find_four_bar_loops(const Model& model, int input_joint
                   int J[4] = {joint_at(P[0], B[0], B[1]), joint_at(P[1], B[1], B[2]),
                               joint_at(P[2], B[2], B[3]), joint_at(P[3], B[3], B[0])};
                   auto input_at = [&](int pin) {
-                    for (size_t k = 0; k < ends.size(); ++k)
-                      if (ends[k].joint == input_joint && root(static_cast<int>(k)) == pin)
-                        return true;
+                    for (const int k : ends_at[static_cast<size_t>(pin)])
+                      if (ends[static_cast<size_t>(k)].joint == input_joint) return true;
                     return false;
                   };
                   const bool input_at_3 = input_joint >= 0 && input_at(P[3]);

@@ -296,18 +296,7 @@ class Dynamics {
   bool factor_chart(const SparseEt& Et) { return cs_.factor(Et, ws_.free.A_sqrt) > kSingularBlock; }
 
   // F in the current chart at Eᵀ = ws_.constraints.Et (factorised): F = P [I; −(E_RDᵀ)⁻¹ E_RIᵀ].
-  void compute_F() {
-    const Chart& c = cs_.chart();
-    const SparseEt& Et = ws_.constraints.Et;
-    for (int k = 0; k < na_; ++k) {
-      const int ik = c.independent[static_cast<size_t>(k)];
-      b_.setZero();
-      for (const SparseEt::Entry& e : Et.column(ik)) b_(e.row) = -Et.values()[e.index];
-      cs_.solve(b_, col_);
-      col_(ik) = 1.0;
-      F_.col(k) = col_;
-    }
-  }
+  void compute_F() { cs_.basis(ws_.constraints.Et, b_, col_, F_); }
 
   // Largest entry of F in the mass metric, |F_dk| √M_dd / √M_ii (i = independent k): it grows
   // without bound as the chart's dependent block degrades (design §4: the chart monitor).

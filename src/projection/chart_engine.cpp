@@ -241,6 +241,17 @@ void ChartEngine::solve(const VecX& b, VecX& x) {
   }
 }
 
+void ChartEngine::basis(const SparseEt& Et, VecX& b, VecX& x, MatX& F) {
+  for (int k = 0; k < n_ - r_; ++k) {
+    const int ik = chart_.independent[static_cast<size_t>(k)];
+    b.setZero();
+    for (const SparseEt::Entry& e : Et.column(ik)) b(e.row) = -Et.values()[e.index];
+    solve(b, x);
+    x(ik) = 1.0;
+    F.col(k) = x;
+  }
+}
+
 void ChartEngine::solve_dependent(MatX& rhs, MatX& out) {
   // No columns (DOF 0): nothing to solve, and rows of an empty matrix would offset a null pointer.
   if (r_ == 0 || out.cols() == 0) return;

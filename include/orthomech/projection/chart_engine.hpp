@@ -93,6 +93,10 @@ class ChartEngine {
   // ---- Solving (after factor)
   // x (size n): x_D = (E_RDᵀ)⁻¹ b_R, x_I = 0 (b of size nc).
   void solve(const VecX& b, VecX& x);
+  // F (n × n_a) = P [I; −(E_RDᵀ)⁻¹ E_RIᵀ] at Eᵀ (factorised there): column k is one solve with
+  // −(Eᵀ's column of the independent coordinate k), 1 at that coordinate. Eᵀ F = 0 on the chart's
+  // rows, hence on all rows. Scratch: b (nc), x (n). Allocation-free.
+  void basis(const SparseEt& Et, VecX& b, VecX& x, MatX& F);
   // rhs (r × m, rows in chart order) ← (E_RDᵀ)⁻¹ rhs, written into the dependent rows of out
   // (n × m; its other rows untouched). rhs is overwritten.
   void solve_dependent(MatX& rhs, MatX& out);

@@ -16,6 +16,8 @@
 #include <numbers>
 #include <random>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "orthomech/analysis/positions.hpp"
 #include "orthomech/constraints/joints.hpp"
@@ -23,9 +25,11 @@
 #include "orthomech/io/mechanism_writer.hpp"
 #include "orthomech/model/free_system.hpp"
 #include "orthomech/model/measures.hpp"
+#include "orthomech/projection/chart_engine.hpp"
 #include "support/andrews_reference.hpp"
 #include "support/fixtures.hpp"
 #include "support/zoo.hpp"
+#include "unit/analysis/large_mechanisms.hpp"
 
 namespace orthomech {
 namespace {
@@ -303,6 +307,47 @@ TEST(Assembly, InitialVelocities_MassOrthogonalProjection) {
     EXPECT_LE((v.u - u_star).cwiseAbs().maxCoeff(), 1e-9 * (1 + u0.norm())) << name;
     EXPECT_NEAR(v.kinetic_initial, v.kinetic + v.kinetic_removed, 1e-12 * v.kinetic_initial)
         << name;
+  }
+}
+
+// Large models take the chart engine's sparse path (n ≥ ChartEngine::kSparseSelectFrom, a
+// diagonal M): the N-four-bar N = 100 (n = 603) at a regular pose (E of full column rank) and at
+// its change point (all links on the x axis: N redundant rows, DOF N + 1), and a 250-link chain
+// (n_a = 250). Oracle, dense and independent of the charts: the mass-metric projection onto the
+// null space of Eᵀ from an SVD, u* = N (Nᵀ M N)⁻¹ Nᵀ M u₀ (the test above).
+TEST(Assembly, InitialVelocities_LargeModelsOnTheSparsePath) {
+  struct Case {
+    std::string name, yaml;
+    int dof;
+  };
+  const std::vector<Case> cases{{"n-four-bar-100 at 1.1 rad", test::n_four_bar_yaml(100, 1.1), 1},
+                                {"n-four-bar-100 flat", test::n_four_bar_yaml(100, 0.0), 101},
+                                {"chain-250", test::pendulum_chain_yaml(250), 250}};
+  for (const Case& c : cases) {
+    const Model m = parse_mechanism(c.yaml, c.name + ".yaml");
+    ASSERT_GE(m.n, ChartEngine::kSparseSelectFrom) << c.name;
+    const VecX q = m.design_q();
+    std::mt19937 gen(5);
+    std::uniform_real_distribution<double> dist(-1, 1);
+    VecX u0(m.n);
+    for (Eigen::Index i = 0; i < u0.size(); ++i) u0(i) = dist(gen);
+    const VelocityProjection v = project_velocities(m, q, u0);
+    ASSERT_TRUE(v.ok) << c.name;
+    MatX Et(m.nc, m.n), M(m.n, m.n);
+    compute_constraint_jacobian(m, q, Et);
+    compute_mass_matrix(m, q, M);
+    EXPECT_LE((Et * v.u).cwiseAbs().maxCoeff(), 1e-10 * (1 + u0.norm())) << c.name;
+    Eigen::BDCSVD<MatX> svd(Et, Eigen::ComputeFullV);
+    svd.setThreshold(1e-9);
+    ASSERT_EQ(m.n - svd.rank(), c.dof) << c.name;
+    const MatX N = svd.matrixV().rightCols(c.dof);
+    const MatX H = N.transpose() * M * N;
+    const VecX u_star = N * H.ldlt().solve(N.transpose() * M * u0);
+    EXPECT_LE((v.u - u_star).cwiseAbs().maxCoeff(), 1e-9 * (1 + u0.norm())) << c.name;
+    EXPECT_NEAR(v.kinetic_initial, 0.5 * u0.dot(M * u0), 1e-12 * v.kinetic_initial) << c.name;
+    EXPECT_NEAR(v.kinetic, 0.5 * u_star.dot(M * u_star), 1e-9 * v.kinetic_initial) << c.name;
+    EXPECT_NEAR(v.kinetic_initial, v.kinetic + v.kinetic_removed, 1e-12 * v.kinetic_initial)
+        << c.name;
   }
 }
 
