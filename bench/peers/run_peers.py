@@ -4,18 +4,18 @@ orthomech, MuJoCo and Simbody against the same exact one-DOF reduction.
 
     cmake --build build --target orthomech peer_reference_n_four_bar \
         peer_mujoco_n_four_bar peer_simbody_n_four_bar \
-        peer_reference_crank_rocker peer_mujoco_crank_rocker \
-        peer_mujoco_andrews                                  # the peers need libmujoco-dev,
+        peer_reference_crank_rocker peer_mujoco_crank_rocker peer_simbody_crank_rocker \
+        peer_mujoco_andrews peer_simbody_andrews            # the peers need libmujoco-dev,
     python3 bench/peers/run_peers.py [--build build]        # libsimbody-dev
 
 Prints three Markdown tables: the work-precision table at N = 40 to t = 20 s (error of B0 at the
 end against the reduction, the largest loop-closure gap, CPU time per simulated second), the
 growth of the CPU time per simulated second with N at one setting per tool, and the crank-rocker
-released under gravity to t = 10 s (error of the crank angle against crank_rocker_reference.hpp;
-MuJoCo only), and Andrews' squeezer to t = 0.03 s (the largest error of its seven angles against
-the published solution; MuJoCo only). --growth-only, --work-precision-only, --crank-rocker-only,
---andrews-only: one of them. A peer whose binary
-was not built (its package missing) is left out with a note. orthomech's rows time the whole
+released under gravity to t = 10 s (error of the crank angle against crank_rocker_reference.hpp),
+and Andrews' squeezer to t = 0.03 s (the largest error of its seven angles against the published
+solution). --growth-only, --work-precision-only, --crank-rocker-only, --andrews-only: one of
+them. --build: the build directory (default build/). A peer whose binary was not built (its
+package missing) is left out with a note. orthomech's rows time the whole
 `orthomech simulate` process (user + sys, getrusage of the child); the peers time their
 integration loop (process CPU clock), so orthomech's numbers include parsing and setup (a few
 ms). Each row is one run.
@@ -103,21 +103,36 @@ def mujoco_row(build, n, t_end, dt, method, sol):
     return mujoco_peer_row(build, "peer_mujoco_n_four_bar", [n, t_end], dt, method, sol, n)
 
 
-def simbody_row(build, n, t_end, acc, method, cap, closure="plane"):
-    exe = os.path.join(build, "bench", "peers", "peer_simbody_n_four_bar")
-    name = f"{method} accuracy {acc:g}" + (", Ball" if closure == "ball" else "")
+def simbody_peer_row(build, program, args, setting, cap, n="—", cpu_scale=1.0):
+    """One run of a Simbody peer program (its CPU cap `cap` among args) as a table row;
+    cpu_per_s is multiplied by cpu_scale."""
+    exe = os.path.join(build, "bench", "peers", program)
     # The program checks its CPU cap every 0.01 s of simulated time; an integrator stuck on
     # tiny steps inside one interval is stopped here (wall clock: 4 × the cap).
     try:
-        f = parse_line(run([exe, str(n), str(t_end), str(acc), method, str(cap), closure],
-                           4 * cap))
+        f = parse_line(run([exe] + [str(x) for x in args], 4 * cap))
     except subprocess.TimeoutExpired:
-        return {"tool": "Simbody 3.7", "setting": name, "N": n, "t": float("nan"),
+        return {"tool": "Simbody 3.7", "setting": setting, "N": n, "t": float("nan"),
                 "cpu_per_s": float("nan"), "err": float("nan"),
                 "gap": float("nan"), "note": f"stopped after {4 * cap:g} s wall, no result"}
-    return {"tool": "Simbody 3.7", "setting": name, "N": n, "t": float(f["t"]),
-            "cpu_per_s": float(f["cpu_per_s"]), "err": float(f["err"]),
-            "gap": float(f["gap"]), "note": f.get("stop", "") + f" ({f['steps']} steps)"}
+    return {"tool": "Simbody " + f["raw"].split()[1], "setting": setting, "N": n,
+            "t": float(f["t"]), "cpu_per_s": float(f["cpu_per_s"]) * cpu_scale,
+            "err": float(f["err"]), "gap": float(f["gap"]),
+            "note": f.get("stop", "") + f" ({f['steps']} steps)"}
+
+
+def simbody_row(build, n, t_end, acc, method, cap, closure="plane"):
+    name = f"{method} accuracy {acc:g}" + (", Ball" if closure == "ball" else "")
+    return simbody_peer_row(build, "peer_simbody_n_four_bar",
+                            [n, t_end, acc, method, cap, closure], name, cap, n)
+
+
+def built(build, program):
+    """Whether the peer program was built (a note when it was not: its rows are left out)."""
+    ok = os.path.exists(os.path.join(build, "bench", "peers", program))
+    if not ok:
+        print(f"note: {program} rows left out: it was not built")
+    return ok
 
 
 def header(error="error of B0 (m)", cpu="CPU s per simulated s"):
@@ -161,10 +176,10 @@ def main():
         if a.growth_only or not only:
             growth(a, have_mujoco, have_simbody, tmp)
     if a.crank_rocker_only or not only:
-        crank_rocker(a, 2.0 if a.quick else 10.0,
-                     os.path.exists(os.path.join(peers, "peer_mujoco_crank_rocker")))
+        crank_rocker(a, 2.0 if a.quick else 10.0, built(a.build, "peer_mujoco_crank_rocker"),
+                     built(a.build, "peer_simbody_crank_rocker"))
     if a.andrews_only or not only:
-        andrews(a, os.path.exists(os.path.join(peers, "peer_mujoco_andrews")))
+        andrews(a, built(a.build, "peer_mujoco_andrews"), built(a.build, "peer_simbody_andrews"))
 
 
 def work_precision(a, n40, t40, have_mujoco, have_simbody, tmp):
@@ -185,7 +200,7 @@ def work_precision(a, n40, t40, have_mujoco, have_simbody, tmp):
         row(orthomech_row(a.build, n40, t40, integrator, rtol, tmp))
 
 
-def crank_rocker(a, t_end, have_mujoco):
+def crank_rocker(a, t_end, have_mujoco, have_simbody):
     """The crank-rocker released at rest under gravity (its crank turns over and over): error of
     the crank angle at t_end against crank_rocker_reference.hpp (rad), loop gap (m)."""
     print(f"\n## Crank-rocker under gravity, t = 0 … {t_end:g} s\n")
@@ -196,6 +211,12 @@ def crank_rocker(a, t_end, have_mujoco):
                                 (1e-3, "rk4", "tight"), (1e-4, "rk4", "tight"),
                                 (1e-5, "rk4", "tight")):
             row(mujoco_peer_row(a.build, "peer_mujoco_crank_rocker", [t_end], dt, method, sol))
+    if have_simbody:
+        for method, acc in (("rkm", 1e-4), ("rkm", 1e-6), ("rkm", 1e-8), ("cpodes", 1e-6),
+                            ("cpodes", 1e-8)):
+            row(simbody_peer_row(a.build, "peer_simbody_crank_rocker",
+                                 [method, acc, t_end, a.cap], f"{method} accuracy {acc:g}",
+                                 a.cap))
     reference = os.path.join(a.build, "bench", "peers", "peer_reference_crank_rocker")
     exact = float(run([reference, str(t_end)]))
     mech = os.path.join(ROOT, "mechanisms", "crank-rocker.yaml")
@@ -218,10 +239,10 @@ def andrews_reference():
     return [float(x) for x in block.replace("\n", " ").split(",") if x.strip()]
 
 
-def andrews(a, have_mujoco):
+def andrews(a, have_mujoco, have_simbody):
     """Andrews' squeezer (test set, IFToMM A03) to t = 0.03 s: the largest error of the seven
     angles against the published solution (rad), the loop gap at E (m), the CPU time of the run
-    (orthomech: the whole process; MuJoCo: its stepping loop)."""
+    (orthomech: the whole process; MuJoCo, Simbody: the stepping loop)."""
     t_end = 0.03
     print(f"\n## Andrews' squeezer, t = 0 … {t_end:g} s\n")
     header("largest error of the 7 angles (rad)", f"CPU s for {t_end:g} s")
@@ -232,6 +253,11 @@ def andrews(a, have_mujoco):
                                 (1e-6, "rk4", "tight")):
             row(mujoco_peer_row(a.build, "peer_mujoco_andrews", [], dt, method, sol,
                                 cpu_scale=t_end))  # CPU of the whole 0.03 s run
+    if have_simbody:
+        for method, acc in (("rkm", 1e-4), ("rkm", 1e-6), ("rkm", 1e-8), ("rkm", 1e-10),
+                            ("cpodes", 1e-6), ("cpodes", 1e-8)):
+            row(simbody_peer_row(a.build, "peer_simbody_andrews", [method, acc, a.cap],
+                                 f"{method} accuracy {acc:g}", a.cap, cpu_scale=t_end))
     reference = andrews_reference()
     names = ("beta", "Theta", "gamma", "Phi", "delta", "Omega", "epsilon")
     mech = os.path.join(ROOT, "mechanisms", "andrews-squeezer.yaml")

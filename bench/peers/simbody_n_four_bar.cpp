@@ -4,33 +4,28 @@
 // x = 0 and y = 1 of link k + 1: the point coincidence in the plane, two equations, none
 // redundant). Integrated by one of Simbody's error-controlled integrators with its accuracy and
 // constraint tolerance set to ACC. Prints one line: N, the setting, CPU time per simulated second,
-// |B0 − exact| at t_end (m; nfourbar_reference.hpp), the largest loop gap seen (sampled every
-// 0.01 s), or where and why the integration stopped. CPU time is capped at CPU_CAP seconds.
+// |B0 − exact| at t_end (m; nfourbar_reference.hpp), the largest loop gap seen (sampled at the
+// start and every 0.01 s), or where and why the integration stopped. CPU time is capped at
+// CPU_CAP seconds. The timed loop, the integrators and the stop note: simbody_support.hpp.
 // With `ball` the loops are closed by Constraint::Ball instead (three equations, the one along z
 // redundant: Simbody's least-squares projection has to cope with it).
 //   usage: peer_simbody_n_four_bar N T_END ACC rkm|rkf|rk3|cpodes [CPU_CAP [plane|ball]]
 #include <Simbody.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <ctime>
-#include <memory>
 #include <string>
 #include <vector>
 
 #include "nfourbar_reference.hpp"
+#include "simbody_support.hpp"
 
 using namespace SimTK;
 
 namespace {
-
-double cpu_seconds() {
-  timespec t{};
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
-  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
-}
 
 // A uniform rod of 1 kg, 1 m along `axis` from the body origin: mass properties about the origin.
 MassProperties rod(const Vec3& axis) {
@@ -80,20 +75,7 @@ int main(int argc, char** argv) {
   for (auto& c : couplers) c.setRate(state, 1.0);
   system.realize(state, Stage::Velocity);
 
-  std::unique_ptr<Integrator> integ;
-  if (method == "rkm")
-    integ = std::make_unique<RungeKuttaMersonIntegrator>(system);
-  else if (method == "rkf")
-    integ = std::make_unique<RungeKuttaFeldbergIntegrator>(system);
-  else if (method == "rk3")
-    integ = std::make_unique<RungeKutta3Integrator>(system);
-  else
-    integ = std::make_unique<CPodesIntegrator>(system);
-  integ->setAccuracy(accuracy);
-  integ->setConstraintTolerance(accuracy);
-  TimeStepper ts(system, *integ);
-  ts.initialize(state);
-
+  const auto integ = orthomech::peers::make_integrator(system, method, accuracy);
   const auto gap = [&](const State& s) {
     double g = 0.0;
     for (int k = 0; k < N; ++k)
@@ -102,44 +84,16 @@ int main(int argc, char** argv) {
                           .norm());
     return g;
   };
-  double max_gap = 0.0, cpu = 0.0;
-  std::string stop;
-  State last = ts.getState();  // the last state reached (after a failure: the one before it)
-  const int samples = static_cast<int>(std::lround(t_end / 0.01));
-  for (int i = 1; i <= samples && stop.empty(); ++i) {
-    const double c0 = cpu_seconds();
-    try {
-      ts.stepTo(t_end * i / samples);
-      last = ts.getState();
-    } catch (const std::exception& e) {
-      stop = std::string("integrator failure: ") + e.what();
-    }
-    cpu += cpu_seconds() - c0;
-    system.realize(last, Stage::Position);
-    max_gap = std::max(max_gap, gap(last));
-    if (cpu > cap && stop.empty()) stop = "CPU cap reached";
-  }
-  const State& s = last;
+  const orthomech::peers::SimbodyRun run =
+      orthomech::peers::run_timed(system, *integ, state, t_end, cap, gap);
+  const State& s = run.last;
   const double t = s.getTime();
   const Vec3 b0 = links[0].findStationLocationInGround(s, Vec3(0, 1, 0));
   const std::array<double, 2> ref = orthomech::peers::n_four_bar_b0(N, t);
   const double err = std::hypot(b0[0] - ref[0], b0[1] - ref[1]);
-  // The exception's text: its last non-empty line (Simbody nests "thrown at FILE:LINE" blocks;
-  // the innermost reason comes last); the whole text on stderr.
-  std::string first;
-  if (!stop.empty()) {
-    std::fprintf(stderr, "%s\n", stop.c_str());
-    size_t end = stop.find_last_not_of(" \n");
-    const size_t begin = stop.rfind('\n', end);
-    first = stop.substr(begin == std::string::npos ? 0 : begin + 1, end - begin);
-    first = first.substr(first.find_first_not_of(' '));
-    if (const size_t u = stop.find("Unable to"); u != std::string::npos)
-      first = stop.substr(u, stop.find('\n', u) - u);  // "Unable to advance time past 2.68212."
-    if (stop.rfind("integrator failure", 0) == 0) first = "integrator failure: " + first;
-  }
-  std::printf("simbody %s%s N=%d acc=%g %s t=%g cpu_per_s=%.4g err=%.2e gap=%.1e steps=%d%s%s\n",
-              "3.7", ball ? " ball" : "", N, accuracy, method.c_str(), t, cpu / std::max(t, 1e-12),
-              err, max_gap, integ->getNumStepsTaken(),
-              stop.empty() ? "" : " STOP: ", first.c_str());
+  std::printf("simbody %s%s N=%d acc=%g %s t=%g cpu_per_s=%.4g err=%.2e gap=%.1e steps=%d%s\n",
+              orthomech::peers::simbody_version().c_str(), ball ? " ball" : "", N, accuracy,
+              method.c_str(), t, run.cpu / std::max(t, 1e-12), err, run.max_gap,
+              integ->getNumStepsTaken(), orthomech::peers::stop_note(run.stop).c_str());
   return 0;
 }
