@@ -1,24 +1,19 @@
 #pragma once
-// What the MuJoCo peers share: the process CPU clock, a model loaded from MJCF text (MuJoCo 2.2
-// reads models from files only: the text goes through a temporary file), and the timed stepping
-// loop with its loop-gap samples.
+// What the MuJoCo peers share: the process CPU clock (cpu_clock.hpp), a model loaded from MJCF
+// text (MuJoCo 2.2 reads models from files only: the text goes through a temporary file), and the
+// timed stepping loop with its loop-gap samples.
 #include <mujoco/mujoco.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <ctime>
 #include <fstream>
 #include <string>
 
-namespace orthomech::peers {
+#include "cpu_clock.hpp"
 
-inline double cpu_seconds() {
-  timespec t{};
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
-  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
-}
+namespace orthomech::peers {
 
 // The model, or nullptr after printing MuJoCo's error on stderr.
 inline mjModel* load_mjcf(const std::string& xml) {

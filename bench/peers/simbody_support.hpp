@@ -1,5 +1,5 @@
 #pragma once
-// What the Simbody peers share: the process CPU clock, Simbody's version, the integrator named on
+// What the Simbody peers share: the process CPU clock (cpu_clock.hpp), Simbody's version, the integrator named on
 // the command line (its accuracy and constraint tolerance both ACC), the timed stepping loop with
 // its CPU cap and loop-gap samples, and the one-line reason of a stop.
 #include <Simbody.h>
@@ -7,18 +7,13 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <ctime>
 #include <exception>
 #include <memory>
 #include <string>
 
-namespace orthomech::peers {
+#include "cpu_clock.hpp"
 
-inline double cpu_seconds() {
-  timespec t{};
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
-  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
-}
+namespace orthomech::peers {
 
 // "major.minor" of the Simbody library linked (3.7 from Debian's libsimbody-dev).
 inline std::string simbody_version() {

@@ -5,7 +5,6 @@
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
-#include <functional>
 #include <limits>
 #include <map>
 #include <numbers>
