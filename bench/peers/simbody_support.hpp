@@ -1,7 +1,7 @@
 #pragma once
-// What the Simbody peers share: the process CPU clock (cpu_clock.hpp), Simbody's version, the integrator named on
-// the command line (its accuracy and constraint tolerance both ACC), the timed stepping loop with
-// its CPU cap and loop-gap samples, and the one-line reason of a stop.
+// What the Simbody peers share: the process CPU clock (cpu_clock.hpp), Simbody's version, the
+// integrator named on the command line (its accuracy and constraint tolerance both ACC), the timed
+// stepping loop with its CPU cap and loop-gap samples, and the one-line reason of a stop.
 #include <Simbody.h>
 
 #include <algorithm>
