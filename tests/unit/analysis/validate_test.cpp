@@ -94,14 +94,20 @@ TEST(FourBarLoops, EveryCellOfTheNFourBarOnce) {
   const int O0 = m.find_joint("O0");
   const auto loops = find_four_bar_loops(m, O0);
   ASSERT_EQ(loops.size(), static_cast<size_t>(N));
+  // Names built by append: g++ 12 reports a false -Wrestrict on `"O" + std::to_string(c)` here.
+  const auto joint = [](char letter, int c) {
+    std::string name(1, letter);
+    name += std::to_string(c);
+    return name;
+  };
   std::set<int> cells;
   for (const FourBarLoop& l : loops) {
     std::set<std::string> names;
     for (const int j : l.joints) names.insert(m.joints[static_cast<size_t>(j)].name);
     int k = -1;
     for (int c = 0; c < N && k < 0; ++c)
-      if (names == std::set<std::string>{"O" + std::to_string(c), "L" + std::to_string(c),
-                                         "R" + std::to_string(c), "O" + std::to_string(c + 1)})
+      if (names ==
+          std::set<std::string>{joint('O', c), joint('L', c), joint('R', c), joint('O', c + 1)})
         k = c;
     ASSERT_GE(k, 0) << "a loop that is not a cell";
     cells.insert(k);
@@ -109,7 +115,9 @@ TEST(FourBarLoops, EveryCellOfTheNFourBarOnce) {
     for (const double len : {l.ground, l.crank, l.coupler, l.follower})
       EXPECT_NEAR(len, 1.0, 1e-12);
     EXPECT_EQ(l.type, GrashofType::change_point);
-    if (k == 0) EXPECT_EQ(l.joints[0], O0);
+    if (k == 0) {
+      EXPECT_EQ(l.joints[0], O0);
+    }
   }
   EXPECT_EQ(cells.size(), static_cast<size_t>(N));
 }
