@@ -7,6 +7,7 @@
 #include <string>
 #include <utility>
 
+#include "orthomech/constraints/constraint_system.hpp"
 #include "orthomech/constraints/joints.hpp"
 #include "orthomech/constraints/sparse_et.hpp"
 #include "orthomech/model/free_system.hpp"
@@ -61,11 +62,6 @@ SparseJacobian sparse_jacobian(const MatX& Et) {
 // of the dense Eᵀ bit for bit), without the dense n_c × n matrix (46 MB at N-four-bar-400).
 // Exact zeros of the pattern are dropped, as sparseView drops them above.
 SparseJacobian sparse_jacobian(const Model& model, const VecX& q) {
-  if (model.general) {
-    MatX Et(model.nc, model.n);
-    compute_constraint_jacobian(model, q, Et);
-    return sparse_jacobian(Et);
-  }
   SparseEt pattern(model);
   compute_constraint_jacobian(model, q, pattern);
   SparseJacobian J;
@@ -155,8 +151,9 @@ Mobility compute_mobility(const Model& model, const VecX& q, const ChartOptions&
   m.grubler = model.n - model.nc;
   m.tolerance = options.rank_tolerance;
   if (method == RankMethod::automatic)
-    method =
-        !model.general && model.n >= kSparseMobilityFrom ? RankMethod::sparse : RankMethod::dense;
+    method = constraint_system(model).structurally_sparse() && model.n >= kSparseMobilityFrom
+                 ? RankMethod::sparse
+                 : RankMethod::dense;
   const VecX A_diag = inverse_mass_diagonal(model, q);
   SparseJacobian J;
   if (method == RankMethod::sparse) {  // no dense Eᵀ
@@ -171,13 +168,11 @@ Mobility compute_mobility(const Model& model, const VecX& q, const ChartOptions&
   m.dof = model.n - m.rank;
   std::sort(m.redundant_rows.begin(), m.redundant_rows.end());
   for (int row : m.redundant_rows) m.redundant.push_back(model.constraint_row_name(row));
-  if (!model.general) {
-    const std::vector<int> joints = joints_per_body(model);
-    for (size_t b = 0; b < model.bodies.size(); ++b) {
-      if (joints[b] < 2) continue;
-      const int count = own_motions(model.bodies[b], J, A_diag, options.rank_tolerance);
-      if (count > 0) m.idle.push_back({model.bodies[b].name, count});
-    }
+  const std::vector<int> joints = joints_per_body(model);  // none for a general system
+  for (size_t b = 0; b < model.bodies.size(); ++b) {
+    if (joints[b] < 2) continue;
+    const int count = own_motions(model.bodies[b], J, A_diag, options.rank_tolerance);
+    if (count > 0) m.idle.push_back({model.bodies[b].name, count});
   }
   return m;
 }

@@ -6,11 +6,12 @@
 #include <type_traits>
 
 #include "../model/dot_row.hpp"
+#include "orthomech/check.hpp"
+#include "orthomech/constraints/constraint_system.hpp"
 #include "orthomech/constraints/rolling_disc.hpp"
 #include "orthomech/constraints/sparse_et.hpp"
 #include "orthomech/constraints/spatial_joints.hpp"
 #include "orthomech/model/free_system.hpp"
-#include "orthomech/model/general_system.hpp"
 
 namespace orthomech {
 
@@ -240,28 +241,12 @@ void knife_edge(const Model& model, const KnifeEdge& k, const VecX& q, const Vec
   }
 }
 
+// The joints, knife edges and rolling discs of a model of bodies (the ConstraintSystem below).
 // Dtu: Dᵀu row by row (needs u), without forming Dᵀ.
 // poses: the caller's kinematics stage at q (the bodies' rotations), if any.
-template <typename EtT = MatX>
-void evaluate(const Model& model, const VecX& q, const VecX* u, VecX* f, EtT* Et, MatX* Dt,
-              VecX* Dtu = nullptr, const BodyPoses* poses = nullptr) {
-  if (model.general) {  // a free system given by functions (model/general_system.hpp)
-    if (f) model.general->residual(q, *f);
-    if (Et) {
-      if constexpr (std::is_same_v<EtT, MatX>) {
-        model.general->jacobian(q, *Et);
-      } else if constexpr (std::is_same_v<EtT, SparseEt>) {
-        Et->set_from_general(model, q);
-      }
-    }
-    if (Dt) model.general->jacobian_rate(q, *u, *Dt);
-    if (Dtu) {
-      MatX D(model.nc, model.n);
-      model.general->jacobian_rate(q, *u, D);
-      *Dtu = D * *u;  // eq. (76)
-    }
-    return;
-  }
+template <typename EtT>
+void evaluate_joints(const Model& model, const VecX& q, const VecX* u, VecX* f, EtT* Et, MatX* Dt,
+                     VecX* Dtu, const BodyPoses* poses) {
   // The writers below accumulate into their rows: Eᵀ and Dᵀ are zeroed here, once and
   // contiguously (a row of a column-major matrix is strided: zeroing it row by row cost 30 % of
   // a projected rosenbrock4 step on the N = 40 four-bar).
@@ -285,7 +270,58 @@ void evaluate(const Model& model, const VecX& q, const VecX* u, VecX* f, EtT* Et
     evaluate_rolling_disc(model, d, q, u, f, Et, Dt, Dtu);
 }
 
+class JointConstraints final : public ConstraintSystem {
+ public:
+  void evaluate(const Model& model, const VecX& q, const VecX* u, VecX* f, MatX* Et, MatX* Dt,
+                VecX* Dtu, const BodyPoses* poses) const override {
+    evaluate_joints(model, q, u, f, Et, Dt, Dtu, poses);
+  }
+  void evaluate(const Model& model, const VecX& q, const VecX* u, VecX* f, SparseEt* Et, MatX* Dt,
+                VecX* Dtu, const BodyPoses* poses) const override {
+    evaluate_joints(model, q, u, f, Et, Dt, Dtu, poses);
+  }
+  void record_pattern(const Model& model, EtRecorder& recorder) const override {
+    evaluate_joints(model, model.design_q(), nullptr, nullptr, &recorder, nullptr, nullptr,
+                    nullptr);
+  }
+  bool structurally_sparse() const override { return true; }
+  std::string row_name(const Model& model, int row) const override {
+    for (const Joint& j : model.joints) {
+      if (row >= j.row_offset && row < j.row_offset + j.rows()) {
+        return "joint '" + j.name + "', " +
+               j.component_names()[static_cast<size_t>(row - j.row_offset)];
+      }
+    }
+    for (const KnifeEdge& k : model.knife_edges)
+      if (row == k.row_offset) return "knife edge '" + k.name + "', lateral";
+    for (const RollingDisc& d : model.rolling_discs) {
+      static const char* rows[] = {"t1", "t2", "n"};
+      if (row >= d.row_offset && row < d.row_offset + 3)
+        return "rolling disc '" + d.name + "', " + rows[row - d.row_offset];
+    }
+    throw_invalid_argument("constraint_row_name", "row", "is out of range [0, nc)");
+  }
+};
+
+const JointConstraints kJointConstraints;
+
+template <typename EtT>
+void evaluate(const Model& model, const VecX& q, const VecX* u, VecX* f, EtT* Et, MatX* Dt,
+              VecX* Dtu = nullptr, const BodyPoses* poses = nullptr) {
+  constraint_system(model).evaluate(model, q, u, f, Et, Dt, Dtu, poses);
+}
+
+// A SparseEt of another model would be written out of its rows: refused.
+void check_shape(const Model& model, const SparseEt& Et, const VecX* f) {
+  if (Et.rows() != model.nc || Et.cols() != model.n || (f && f->size() != model.nc))
+    throw std::invalid_argument("constraint evaluation: Eᵀ is " + std::to_string(Et.rows()) +
+                                " × " + std::to_string(Et.cols()) + ", the model's " +
+                                std::to_string(model.nc) + " × " + std::to_string(model.n));
+}
+
 }  // namespace
+
+const ConstraintSystem& joint_constraints() { return kJointConstraints; }
 
 void compute_constraint_residual(const Model& model, const VecX& q, VecX& f) {
   evaluate<MatX>(model, q, nullptr, &f, nullptr, nullptr);
@@ -309,16 +345,6 @@ void compute_constraint_residual_and_jacobian(const Model& model, const VecX& q,
                                               const BodyPoses& rotations, VecX& f, MatX& Et) {
   evaluate(model, q, nullptr, &f, &Et, nullptr, nullptr, &rotations);
 }
-
-namespace {
-// A SparseEt of another model would be written out of its rows: refused.
-void check_shape(const Model& model, const SparseEt& Et, const VecX* f) {
-  if (Et.rows() != model.nc || Et.cols() != model.n || (f && f->size() != model.nc))
-    throw std::invalid_argument("constraint evaluation: Eᵀ is " + std::to_string(Et.rows()) +
-                                " × " + std::to_string(Et.cols()) + ", the model's " +
-                                std::to_string(model.nc) + " × " + std::to_string(model.n));
-}
-}  // namespace
 
 void compute_constraint_jacobian(const Model& model, const VecX& q, SparseEt& Et) {
   check_shape(model, Et, nullptr);
@@ -346,7 +372,7 @@ void compute_constraint_rate(const Model& model, const State& state, const BodyP
 }
 
 void record_constraint_pattern(const Model& model, EtRecorder& recorder) {
-  evaluate(model, model.design_q(), nullptr, nullptr, &recorder, nullptr);
+  constraint_system(model).record_pattern(model, recorder);
 }
 
 void compute_constraint_rate(const Model& model, const State& state, ConstraintWorkspace& ws) {

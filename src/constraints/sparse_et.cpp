@@ -21,12 +21,7 @@ namespace {
 // The (row, column) pairs of the model's Eᵀ, sorted by row then column, without repeats.
 std::vector<std::pair<int, int>> structural_entries(const Model& model) {
   EtRecorder recorder;
-  if (model.general) {
-    for (int i = 0; i < model.nc; ++i)
-      for (int j = 0; j < model.n; ++j) recorder.entries.emplace_back(i, j);
-  } else {
-    record_constraint_pattern(model, recorder);
-  }
+  record_constraint_pattern(model, recorder);
   std::vector<std::pair<int, int>>& e = recorder.entries;
   std::sort(e.begin(), e.end());
   e.erase(std::unique(e.begin(), e.end()), e.end());
@@ -59,7 +54,6 @@ SparseEt::SparseEt(const Model& model) {
     for (int k = m_.outerIndexPtr()[i]; k < m_.outerIndexPtr()[i + 1]; ++k)
       column_entries_[static_cast<size_t>(next[static_cast<size_t>(m_.innerIndexPtr()[k])]++)] = {
           i, k};
-  if (model.general) general_.resize(model.nc, model.n);
 }
 
 std::span<const int> SparseEt::row_columns(int i) const {
@@ -85,6 +79,7 @@ double SparseEt::coeff(int i, int j) const { return m_.coeff(i, j); }
 void SparseEt::setZero() { std::fill(m_.valuePtr(), m_.valuePtr() + m_.nonZeros(), 0.0); }
 
 void SparseEt::set_from_general(const Model& model, const VecX& q) {
+  general_.resize(model.nc, model.n);  // allocates on the first call only
   model.general->jacobian(q, general_);
   // The full pattern, row-major: values in the order of general_'s rows.
   double* v = m_.valuePtr();

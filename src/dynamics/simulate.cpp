@@ -19,7 +19,6 @@
 #include "orthomech/dynamics/equations.hpp"
 #include "orthomech/io/units.hpp"
 #include "orthomech/model/free_system.hpp"
-#include "orthomech/model/general_system.hpp"
 #include "orthomech/model/loads.hpp"
 #include "orthomech/model/measures.hpp"
 #include "orthomech/model/spatial.hpp"
@@ -240,11 +239,6 @@ class Dynamics {
         G_llt_(model.nc),
         dq_(VecX::Zero(model.n)),
         chart_q_(VecX::Zero(model.nq)) {
-    for (const Load& l : model.loads)
-      if (std::holds_alternative<PointForce>(l.kind) || std::holds_alternative<Torque>(l.kind) ||
-          std::holds_alternative<SpatialPointForce>(l.kind) ||
-          std::holds_alternative<SpatialTorque>(l.kind))
-        nonconservative_.push_back(&l);
     v_stage_.resize(na_);
   }
 
@@ -259,28 +253,11 @@ class Dynamics {
     free_system();
   }
 
-  // Power of the non-conservative loads at state_: Q_ncᵀ u − dissipated power.
+  // Power of the non-conservative forces at state_ (Q̂, Ṁ there: ws_.free), as the free system
+  // defines it (free_system.hpp): Q_ncᵀ u − dissipated power for bodies.
   double nonconservative_power() {
-    // General system (general_system.hpp): Q̂ = Q + ∂T/∂q and ∂T/∂q · u = ½ uᵀṀu, so the
-    // power of the applied forces is Q̂ᵀu − ½ uᵀṀu (dT/dt = uᵀṗ − ½ uᵀṀu, uᵀR = 0).
-    if (model_.general)
-      return ws_.free.Q.dot(state_.u) - 0.5 * state_.u.dot(ws_.free.Mdot * state_.u);
-    if (nonconservative_.empty() && !has_dampers()) return 0.0;
-    Qnc_.setZero();
-    for (const Load* l : nonconservative_) add_load(model_, *l, state_, Qnc_);
-    return Qnc_.dot(state_.u) - dissipated_power(model_, state_);
-  }
-  bool has_dampers() const {
-    for (const Load& l : model_.loads) {
-      if (const auto* s = std::get_if<SpringDamper>(&l.kind); s && s->damping != 0.0) return true;
-      if (const auto* s = std::get_if<RotarySpringDamper>(&l.kind); s && s->damping != 0.0)
-        return true;
-      if (const auto* s = std::get_if<SpatialSpringDamper>(&l.kind); s && s->damping != 0.0)
-        return true;
-      if (const auto* s = std::get_if<JointSpringDamper>(&l.kind); s && s->damping != 0.0)
-        return true;
-    }
-    return false;
+    return orthomech::free_system(model_).nonconservative_power(model_, state_, ws_.free.Q,
+                                                                ws_.free.Mdot, Qnc_);
   }
 
   // λ (size nc): λ_R = (E_RD)⁻¹ c_D on the chart's rows, 0 on the others: the unique λ of
@@ -571,7 +548,6 @@ class Dynamics {
   // (the step's acceptance, the stage projection) clears it or sets it anew.
   bool chart_ready_ = false;
   VecX chart_q_;
-  std::vector<const Load*> nonconservative_;
 };
 
 // ---- The run, step by step -------------------------------------------------------------------
@@ -787,7 +763,7 @@ class Simulation {
   // options; the rows of f that are angles.
   void set_up_problem() {
     problem_.rhs = [this](const VecX& y, VecX& dy, double t) { rhs(y, dy, t); };
-    problem_.autonomous = !model_.general;  // only a general system's forces may depend on t
+    problem_.autonomous = orthomech::free_system(model_).forces_time_invariant();
     if (dyn_.project_stages_)
       problem_.jacobian_columns = [this](std::vector<Eigen::Index>& columns) {
         jacobian_columns(columns);

@@ -1,10 +1,14 @@
 #include "orthomech/model/free_system.hpp"
 
 #include <Eigen/Cholesky>
+#include <algorithm>
+#include <variant>
 
 #include "orthomech/check.hpp"
+#include "orthomech/constraints/constraint_system.hpp"
 #include "orthomech/model/body_kinds.hpp"
 #include "orthomech/model/general_system.hpp"
+#include "orthomech/model/loads.hpp"
 #include "orthomech/model/spatial.hpp"
 
 namespace orthomech {
@@ -79,8 +83,43 @@ class BodySystem final : public FreeSystem {
     }
     return "?";
   }
+  void applied_forces(const Model& model, const State& state, VecX& Q) const override {
+    Q.setZero();
+    for (const Load& load : model.loads) add_load(model, load, state, Q);
+    add_velocity_terms(model, state, Q);
+  }
+  // The point forces and torques (given functions of time, not of q) and the dampers.
+  double nonconservative_power(const Model& model, const State& state, const VecX& /*Q*/,
+                               const MatX& /*Mdot*/, VecX& scratch) const override {
+    if (!has_dampers(model) &&
+        std::none_of(model.loads.begin(), model.loads.end(), load_is_nonconservative))
+      return 0.0;  // conservative: nothing to add up
+    scratch.setZero();
+    for (const Load& l : model.loads)
+      if (load_is_nonconservative(l)) add_load(model, l, state, scratch);
+    return scratch.dot(state.u) - dissipated_power(model, state);
+  }
+  bool forces_time_invariant() const override { return true; }
+  const ConstraintSystem& constraints() const override { return joint_constraints(); }
 
  private:
+  static bool load_is_nonconservative(const Load& l) {
+    return std::holds_alternative<PointForce>(l.kind) || std::holds_alternative<Torque>(l.kind) ||
+           std::holds_alternative<SpatialPointForce>(l.kind) ||
+           std::holds_alternative<SpatialTorque>(l.kind);
+  }
+  static bool has_dampers(const Model& model) {
+    for (const Load& l : model.loads) {
+      if (const auto* s = std::get_if<SpringDamper>(&l.kind); s && s->damping != 0.0) return true;
+      if (const auto* s = std::get_if<RotarySpringDamper>(&l.kind); s && s->damping != 0.0)
+        return true;
+      if (const auto* s = std::get_if<SpatialSpringDamper>(&l.kind); s && s->damping != 0.0)
+        return true;
+      if (const auto* s = std::get_if<JointSpringDamper>(&l.kind); s && s->damping != 0.0)
+        return true;
+    }
+    return false;
+  }
   static BodyBlock block(const Body& b, bool inverse) {
     return visit_kind(b, [&](auto kind) { return kind.mass_block(b, inverse); });
   }
@@ -138,6 +177,18 @@ class GeneralFreeSystem final : public FreeSystem {
   std::string velocity_name(const Model& model, int k) const override {
     return model.general->coordinates[static_cast<size_t>(k)];
   }
+  void applied_forces(const Model& model, const State& state, VecX& Q) const override {
+    model.general->forces(state.q, state.u, state.t, Q);  // its Q̂(q, u, t)
+  }
+  // Q̂ = Q + ∂T/∂q and ∂T/∂q · u = ½ uᵀṀu, so the power of the applied forces is
+  // Q̂ᵀu − ½ uᵀṀu (dT/dt = uᵀṗ − ½ uᵀṀu, uᵀR = 0); all of Q counts as non-conservative.
+  double nonconservative_power(const Model& /*model*/, const State& state, const VecX& Q,
+                               const MatX& Mdot, VecX& scratch) const override {
+    scratch.noalias() = Mdot * state.u;
+    return Q.dot(state.u) - 0.5 * state.u.dot(scratch);
+  }
+  bool forces_time_invariant() const override { return false; }
+  const ConstraintSystem& constraints() const override { return general_constraints(); }
 };
 
 const BodySystem kBodies;
@@ -148,6 +199,10 @@ const GeneralFreeSystem kGeneral;
 const FreeSystem& free_system(const Model& model) {
   if (model.general) return kGeneral;
   return kBodies;
+}
+
+const ConstraintSystem& constraint_system(const Model& model) {
+  return free_system(model).constraints();
 }
 
 void compute_mass_matrix(const Model& model, const VecX& q, MatX& M) {

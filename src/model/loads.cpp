@@ -166,13 +166,7 @@ void add_velocity_terms(const Model& model, const State& state, VecX& Q) {
 }
 
 void compute_applied_forces(const Model& model, const State& state, VecX& Q) {
-  if (model.general) {
-    model.general->forces(state.q, state.u, state.t, Q);  // eq. (17)
-    return;
-  }
-  Q.setZero();
-  for (const Load& load : model.loads) add_load(model, load, state, Q);
-  add_velocity_terms(model, state, Q);
+  free_system(model).applied_forces(model, state, Q);
 }
 
 double potential_energy(const Model& model, const VecX& q) {

@@ -3,6 +3,7 @@
 #include <stdexcept>
 
 #include "orthomech/check.hpp"
+#include "orthomech/constraints/constraint_system.hpp"
 #include "orthomech/constraints/spatial_joints.hpp"
 #include "orthomech/model/free_system.hpp"
 #include "orthomech/model/general_system.hpp"
@@ -75,24 +76,7 @@ int Model::find_measure(const std::string& measure) const {
 VecX Model::design_q() const { return free_system(*this).design_q(*this); }
 
 std::string Model::constraint_row_name(int row) const {
-  if (general) {
-    check_argument(row >= 0 && row < nc, "constraint_row_name", "row", "is out of range [0, nc)");
-    return "constraint '" + general->rows[static_cast<size_t>(row)] + "'";
-  }
-  for (const Joint& j : joints) {
-    if (row >= j.row_offset && row < j.row_offset + j.rows()) {
-      return "joint '" + j.name + "', " +
-             j.component_names()[static_cast<size_t>(row - j.row_offset)];
-    }
-  }
-  for (const KnifeEdge& k : knife_edges)
-    if (row == k.row_offset) return "knife edge '" + k.name + "', lateral";
-  for (const RollingDisc& d : rolling_discs) {
-    static const char* rows[] = {"t1", "t2", "n"};
-    if (row >= d.row_offset && row < d.row_offset + 3)
-      return "rolling disc '" + d.name + "', " + rows[row - d.row_offset];
-  }
-  throw_invalid_argument("constraint_row_name", "row", "is out of range [0, nc)");
+  return constraint_system(*this).row_name(*this, row);
 }
 
 void finalize_model(Model& model) {

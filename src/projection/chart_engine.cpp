@@ -7,6 +7,7 @@
 #include <limits>
 #include <stdexcept>
 
+#include "orthomech/constraints/constraint_system.hpp"
 #include "orthomech/constraints/joints.hpp"
 #include "orthomech/constraints/sparse_et.hpp"
 #include "orthomech/model/free_system.hpp"
@@ -24,7 +25,7 @@ ChartEngine::ChartEngine(const Model& model, int rank, ChartFactorisation factor
       n_(model.n),
       r_(rank),
       sparse_(factorisation == ChartFactorisation::sparse_when_large && rank > kSparseAbove &&
-              !model.general),
+              constraint_system(model).structurally_sparse()),
       selector_(model.nc, model.n),
       dep_pos_(static_cast<size_t>(model.n), -1),
       metric_(VecX::Ones(model.n)),

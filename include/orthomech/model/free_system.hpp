@@ -14,6 +14,8 @@
 
 namespace orthomech {
 
+class ConstraintSystem;  // constraints/constraint_system.hpp
+
 // The free system is one of two alternatives, fixed when the Model is built: bodies, each of
 // its kind (model/body_kinds.hpp), or a general system given by functions with M(q)
 // (model/general_system.hpp, Model::general). free_system(model) is the one place that
@@ -39,6 +41,19 @@ class FreeSystem {
   [[nodiscard]] virtual VecX design_q(const Model& model) const = 0;
   // "crank.phi", "top.wz", or a general system's coordinate name: velocity component k.
   [[nodiscard]] virtual std::string velocity_name(const Model& model, int k) const = 0;
+  // Q̂(q, u, t) of eq. (17) without the constraint forces: the loads and each body's velocity
+  // terms (loads.hpp), or a general system's forces function.
+  virtual void applied_forces(const Model& model, const State& state, VecX& Q) const = 0;
+  // The power of the non-conservative forces at the state (simulate's energy balance), given
+  // Q̂ and Ṁ there; scratch is an n-vector of work space.
+  [[nodiscard]] virtual double nonconservative_power(const Model& model, const State& state,
+                                                     const VecX& Q, const MatX& Mdot,
+                                                     VecX& scratch) const = 0;
+  // True when Q̂ does not depend on t (the loads of bodies; a general system's forces may).
+  [[nodiscard]] virtual bool forces_time_invariant() const = 0;
+  // The constraints of the same alternative (the joints of the bodies, or the general system's
+  // functions).
+  [[nodiscard]] virtual const ConstraintSystem& constraints() const = 0;
 };
 [[nodiscard]] const FreeSystem& free_system(const Model& model);
 
