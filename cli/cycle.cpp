@@ -213,9 +213,12 @@ nlohmann::json positions_json(const Model& model, const CycleResult& r, bool ang
     j["singular"] = p.singular;
     j["bridged"] = p.bridge >= 0;
     nlohmann::json m = nlohmann::json::object();
-    for (size_t i = 0; i < model.measures.size(); ++i)
+    for (size_t i = 0; i < model.measures.size(); ++i)  // null: not reported (rates_reported)
       m[model.measures[i].name] =
-          out(measure_u[i], dimension_of(model.measures[i].unit), p.measures[i]);
+          measure_reported(model, p, i)
+              ? nlohmann::json(
+                    out(measure_u[i], dimension_of(model.measures[i].unit), p.measures[i]))
+              : nlohmann::json(nullptr);
     j["measures"] = m;
     // Pose of every body's frame ([x, y, angle]; a particle [x, y]; a spatial body [x, y, z, e0,
     // e1, e2, e3], its unit quaternion) and every named point ([x, y] or [x, y, z]), in
@@ -233,9 +236,11 @@ nlohmann::json positions_json(const Model& model, const CycleResult& r, bool ang
     }
     j["poses"] = poses;
     j["named_points"] = points;
-    // Velocities and accelerations of every body's centre of mass (and angular ones).
+    // Velocities and accelerations of every body's centre of mass (and angular ones); none at a
+    // change point that could not be bridged (rates_reported).
     nlohmann::json bodies = nlohmann::json::object();
     for (const Body& b : model.bodies) {
+      if (!rates_reported(p)) break;
       std::vector<double> v, a;
       for (int i = 0; i < b.nu(); ++i) {
         const VelocityComponent& c = velocity_component(b, i);

@@ -1786,6 +1786,12 @@ CycleResult run_cycle(const Model& model, const CycleOptions& options) {
 
 bool drive_reported(const DrivenPointView& p) { return p.bridge >= 0 || !p.singular; }
 
+bool rates_reported(const DrivenPointView& p) { return drive_reported(p); }
+
+bool measure_reported(const Model& model, const DrivenPointView& p, std::size_t measure) {
+  return model.measures.at(measure).derivative == 0 || rates_reported(p);
+}
+
 bool component_reported(const CycleResult& result, const DrivenPointView& p,
                         std::size_t component) {
   if (p.bridge < 0) return !p.singular;

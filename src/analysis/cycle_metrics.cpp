@@ -201,7 +201,8 @@ CycleMetrics compute_cycle_metrics(const Model& model, const CycleResult& r,
       for (int k = 0; k < b.nq(); ++k)
         noise.see(k < 2 ? Dimension::length : Dimension::angle, p.q(b.q_offset + k));
     for (size_t i = 0; i < p.measures.size(); ++i)
-      noise.see(dimension_of(model.measures[i].unit), p.measures[i]);
+      if (measure_reported(model, p, i))
+        noise.see(dimension_of(model.measures[i].unit), p.measures[i]);
   }
   // An angle that turns fully over the sweep (a crank's, sampled over 359° of 360°) has no
   // stroke either: its extremes are the ends of the sweep, not turning points.

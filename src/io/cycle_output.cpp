@@ -48,15 +48,16 @@ void for_each_cell(const Model& model, const CycleResult& result,
   emit(angular ? Dimension::angle : Dimension::length, p.input, true);
   emit(Dimension::time, p.time, true);
   for (size_t i = 0; i < p.measures.size(); ++i)
-    emit(dimension_of(model.measures[i].unit), p.measures[i], true);
+    emit(dimension_of(model.measures[i].unit), p.measures[i], measure_reported(model, p, i));
   const std::vector<PositionColumn> columns = position_columns(model);
   compute_output_positions(model, VecX(p.q), pose);
   for (size_t i = 0; i < pose.size(); ++i) emit(columns[i].dimension, pose[i], true);
+  const bool rates = rates_reported(p);
   for (const Body& b : model.bodies) {
     for (int i = 0; i < b.nu(); ++i)
-      emit(velocity_component(b, i).velocity_dimension, p.u(b.u_offset + i), true);
+      emit(velocity_component(b, i).velocity_dimension, p.u(b.u_offset + i), rates);
     for (int i = 0; i < b.nu(); ++i)
-      emit(velocity_component(b, i).acceleration_dimension, p.udot(b.u_offset + i), true);
+      emit(velocity_component(b, i).acceleration_dimension, p.udot(b.u_offset + i), rates);
   }
   emit(angular ? Dimension::moment : Dimension::force, p.drive, drive_reported(p));
   for (size_t i = 0; i < p.reactions.size(); ++i)

@@ -351,6 +351,14 @@ bool compute_driven(const Model& model, int driver_joint, double sdot, double sd
 // summaries): everywhere except at a change point that could not be bridged (singular and not
 // bridged), and except a component diverging at the bridge the position belongs to.
 [[nodiscard]] bool drive_reported(const DrivenPointView& p);
+// The same for the position's velocities and accelerations (the bodies', and every measure of a
+// velocity or an acceleration): u = F v and u̇ come from the chart that fails at a change point
+// that could not be bridged, so they are not reported there (its position q is). Before, they
+// were written, up to 1e15 m/s² on an N-four-bar of N = 60, and that value set the acceleration
+// column's noise floor, which printed every other acceleration of the cycle as 0.
+[[nodiscard]] bool rates_reported(const DrivenPointView& p);
+[[nodiscard]] bool measure_reported(const Model& model, const DrivenPointView& p,
+                                    std::size_t measure);
 [[nodiscard]] bool component_reported(const CycleResult& result, const DrivenPointView& p,
                                       std::size_t component);
 

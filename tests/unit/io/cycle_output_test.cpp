@@ -8,12 +8,18 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "orthomech/analysis/cycle.hpp"
+#include "orthomech/io/mechanism_file.hpp"
 #include "support/cli_runner.hpp"
 #include "support/fixtures.hpp"
+#include "unit/analysis/large_mechanisms.hpp"
 
 namespace orthomech {
 namespace {
@@ -48,6 +54,72 @@ TEST(CycleOutput, PositionColumnsAreTheBodyFramesAndNamedPoints) {
   for (const PositionColumn& c : cols)
     EXPECT_EQ(c.dimension, c.name.ends_with(".angle") ? Dimension::angle : Dimension::length)
         << c.name;
+}
+
+// At a change point the sweep does not bridge (here: bridging switched off) the velocities and
+// accelerations come from a failing chart: their cells are empty, as the drive's, and every other
+// position keeps its values. Before, they were written (garbage of up to 1e15 m/s² on the
+// N = 60 four-bar), set the column's noise floor and printed every acceleration of the cycle as
+// 0. Reference: the N-four-bar driven at constant ω by link0 translates every coupler on a circle
+// of 1 m and turns every link about its pivot: a = −ω² (cos θ, sin θ) for a coupler's centre,
+// half of it for a link's, θ the input.
+TEST(CycleOutput, RatesAtAnUnbridgedChangePointAreEmptyAndEveryOtherPositionKeepsItsValues) {
+  const double omega = 2.0 * std::numbers::pi;  // 60 rpm
+  const Model model = parse_mechanism(
+      test::n_four_bar_yaml(2, std::numbers::pi / 2) +
+          "measures:\n  - {name: B0_vx, type: point, point: link0.B, component: x, derivative: "
+          "1}\n  - {name: B0_x, type: point, point: link0.B, component: x}\n"
+          "drivers:\n  - {name: motor, joint: O0, speed: 60 rpm}\n",
+      "n-four-bar-2 (test)");
+  CycleOptions o;
+  o.driver = model.drivers[0];
+  o.steps = 36;
+  o.bridge_change_points = false;
+  const CycleResult r = run_cycle(model, o);
+  ASSERT_EQ(r.status, CycleStatus::completed) << r.message;
+  const test::TempDir dir("orthomech_cycle_rates_", true);
+  const auto file = dir.path / "cycle.csv";
+  (void)write_cycle_csv(file, model, r, reaction_magnitudes(r), true, UnitSystem{});
+  std::istringstream text(test::read_text(file));
+  std::string line;
+  std::getline(text, line);
+  std::vector<std::string> header;
+  {
+    std::istringstream h(line);
+    for (std::string cell; std::getline(h, cell, ',');) header.push_back(cell);
+  }
+  const auto column = [&](const std::string& name) {
+    for (size_t i = 0; i < header.size(); ++i)
+      if (header[i] == name) return i;
+    ADD_FAILURE() << "no column " << name;
+    return size_t{0};
+  };
+  const size_t ax = column("coupler1.ax [m/s^2]"), ay = column("coupler1.ay [m/s^2]");
+  const size_t lx = column("link0.ax [m/s^2]"), vx = column("link0.vx [m/s]");
+  const size_t mv = column("B0_vx [m/s]"), mx = column("B0_x [m]");
+  int singular = 0, checked = 0;
+  for (size_t k = 0; std::getline(text, line); ++k) {
+    std::vector<std::string> cells;
+    std::istringstream row(line);
+    for (std::string cell; std::getline(row, cell, ',');) cells.push_back(cell);
+    cells.resize(header.size());
+    const DrivenPointView p = r.points[k];
+    EXPECT_FALSE(cells[mx].empty());  // a position measure is always reported
+    if (p.singular) {
+      ++singular;
+      EXPECT_TRUE(cells[ax].empty() && cells[lx].empty() && cells[vx].empty() && cells[mv].empty())
+          << "row " << k;
+      continue;
+    }
+    const double th = p.input, w2 = omega * omega;
+    EXPECT_NEAR(std::stod(cells[ax]), -w2 * std::cos(th), 1e-7) << "row " << k;
+    EXPECT_NEAR(std::stod(cells[ay]), -w2 * std::sin(th), 1e-7) << "row " << k;
+    EXPECT_NEAR(std::stod(cells[lx]), -0.5 * w2 * std::cos(th), 1e-7) << "row " << k;
+    EXPECT_NEAR(std::stod(cells[mv]), -omega * std::sin(th), 1e-9) << "row " << k;
+    ++checked;
+  }
+  EXPECT_EQ(singular, 2);  // 180° and 360°, not bridged
+  EXPECT_EQ(checked, 34);
 }
 
 TEST(CycleOutput, WriteFileAtomically) {
