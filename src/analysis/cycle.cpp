@@ -958,7 +958,7 @@ CycleRun::CycleRun(const Model& model, const CycleOptions& options, const CycleR
       result_(result),
       law_(request.law),
       state_(std::move(start)),
-      ws_(model, mob.rank),
+      ws_(model, mob.rank, ChartFactorisation::rated_sparse_when_large),
       w_(model, mob.rank, idle_body_indices(model, mob)),
       sweep_{model, request.joint, ws_, w_} {
   (void)evaluate_dual(model_, state_, ws_);

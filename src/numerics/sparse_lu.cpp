@@ -72,6 +72,43 @@ bool SparseLu::factorize(const Eigen::SparseMatrix<double>& A) {
   return factor_fresh(A);
 }
 
+double SparseLu::pivot_ratio() {
+  Klu& k = *klu_;
+  if (!k.numeric || klu_rcond(k.symbolic, k.numeric, &k.common) == 0) return 0.0;
+  return k.common.rcond;
+}
+
+namespace {
+// (−1)^(n − number of cycles) of the permutation p of 0 … n−1. seen: n flags of work space.
+int permutation_sign(const int* p, int n, std::vector<char>& seen) {
+  seen.assign(static_cast<size_t>(n), 0);
+  int sign = 1;
+  for (int i = 0; i < n; ++i) {
+    if (seen[static_cast<size_t>(i)]) continue;
+    int length = 0;
+    for (int j = i; !seen[static_cast<size_t>(j)]; j = p[j]) {
+      seen[static_cast<size_t>(j)] = 1;
+      ++length;
+    }
+    if (length % 2 == 0) sign = -sign;  // a cycle of even length is an odd permutation
+  }
+  return sign;
+}
+}  // namespace
+
+int SparseLu::determinant_sign() const {
+  const Klu& k = *klu_;
+  if (!k.numeric) return 0;
+  // P A Q = L U (KLU's block triangular form with the blocks' pivoting folded into Pnum):
+  // det A = sign(P) sign(Q) Π U_kk.
+  const auto* u = static_cast<const double*>(k.numeric->Udiag);
+  int sign = 1;
+  for (int i = 0; i < k.n; ++i)
+    if (u[i] < 0.0) sign = -sign;
+  return sign * permutation_sign(k.numeric->Pnum, k.n, seen_) *
+         permutation_sign(k.symbolic->Q, k.n, seen_);
+}
+
 void SparseLu::solve_in_place(double* x) {
   Klu& k = *klu_;
   klu_solve(k.symbolic, k.numeric, k.n, 1, x, &k.common);

@@ -24,14 +24,17 @@ ChartEngine::ChartEngine(const Model& model, int rank, ChartFactorisation factor
     : model_(&model),
       n_(model.n),
       r_(rank),
-      sparse_(factorisation == ChartFactorisation::sparse_when_large && rank > kSparseAbove &&
-              constraint_system(model).structurally_sparse()),
+      sparse_(constraint_system(model).structurally_sparse() &&
+              ((factorisation == ChartFactorisation::sparse_when_large && rank > kSparseAbove) ||
+               (factorisation == ChartFactorisation::rated_sparse_when_large &&
+                model.n >= kRatedSparseFrom && rank > kSparseAbove))),
+      rated_(sparse_ && factorisation == ChartFactorisation::rated_sparse_when_large),
       selector_(model.nc, model.n),
       dep_pos_(static_cast<size_t>(model.n), -1),
       metric_(VecX::Ones(model.n)),
       row_s_(VecX::Ones(rank)),
       col_s_(VecX::Ones(model.n)),
-      G_(rank, rank),
+      G_(sparse_ ? 0 : rank, sparse_ ? 0 : rank),  // the dense path's block only
       piv_(Eigen::VectorXi::Zero(rank)),
       Gs_(rank, rank),
       br_(rank),
@@ -177,7 +180,8 @@ double ChartEngine::factor_sparse() {
     if (!slu_.analyze(Gs_)) return quality_ = 0.0;  // structurally singular
     analyzed_ = true;
   }
-  return quality_ = slu_.factorize(Gs_) ? 1.0 : 0.0;
+  if (!slu_.factorize(Gs_)) return quality_ = 0.0;
+  return quality_ = rated_ ? slu_.pivot_ratio() : 1.0;
 }
 
 double ChartEngine::update(const MatX& Et, const VecX& A_diag, const VecX& A_sqrt, double t) {
@@ -204,6 +208,7 @@ double ChartEngine::update(const MatX& Et, const VecX& A_diag, const VecX& A_sqr
 }
 
 int ChartEngine::determinant_sign() const {
+  if (sparse_) return slu_.determinant_sign();
   int sign = 1;
   for (int i = 0; i < r_; ++i) {
     if (G_(i, i) < 0.0) sign = -sign;

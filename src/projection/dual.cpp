@@ -8,10 +8,10 @@
 
 namespace orthomech {
 
-DualWorkspace::DualWorkspace(const Model& model, int rank)
+DualWorkspace::DualWorkspace(const Model& model, int rank, ChartFactorisation factorisation)
     : na(model.n - rank),
       r(rank),
-      engine(model, rank),
+      engine(model, rank, factorisation),
       rhs(rank, std::max(1, model.n - rank)),
       F(MatX::Zero(model.n, model.n - rank)),
       MF(model.n, model.n - rank),

@@ -101,8 +101,12 @@ double dense_workspace_bytes(const Model& model) {
   return 8.0 * (13.0 * n * n + 5.0 * nc * n + nc * nc);
 }
 
-Workspace::Workspace(const Model& m, int rank)
-    : free(checked_size(m)), constraints(m), primal(m), dual(m, checked_rank(m, rank)), model(&m) {}
+Workspace::Workspace(const Model& m, int rank, ChartFactorisation factorisation)
+    : free(checked_size(m)),
+      constraints(m),
+      primal(m),
+      dual(m, checked_rank(m, rank), factorisation),
+      model(&m) {}
 
 void compute_free_system(const Model& model, const State& state, Workspace& ws) {
   if (ws.model != &model) throw std::invalid_argument("Workspace built for another Model");

@@ -13,6 +13,7 @@
 // stays in the implementation (src/numerics/).
 #include <Eigen/SparseCore>
 #include <memory>
+#include <vector>
 
 namespace orthomech {
 
@@ -33,6 +34,11 @@ class SparseLu {
   // x ← A⁻¹ x and x ← A⁻ᵀ x (x of size n), with the factors of the last factorize.
   void solve_in_place(double* x);
   void solve_transposed_in_place(double* x);
+  // Of the last successful factorize: min |U_kk| / max |U_kk| (KLU's klu_rcond, the measure the
+  // dense LU of numerics/small_lu.hpp returns), and the sign of det A (the signs of U_kk and of
+  // the row and column permutations; L has a unit diagonal and no scaling is applied).
+  [[nodiscard]] double pivot_ratio();
+  [[nodiscard]] int determinant_sign() const;
 
   // Largest growth max_j max|U_:j| / max|A_:j| accepted from a refactorisation (a fresh partial
   // pivoting of these blocks gives growth of order one).
@@ -47,6 +53,7 @@ class SparseLu {
   struct Klu;  // KLU's Common, Symbolic and Numeric objects
   std::unique_ptr<Klu> klu_;
   long fresh_ = 0, refactored_ = 0;
+  mutable std::vector<char> seen_;  // determinant_sign's work space (sized once)
 };
 
 }  // namespace orthomech

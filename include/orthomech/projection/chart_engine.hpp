@@ -38,8 +38,11 @@ struct ChartEvent {
 // How the chart's block is factorised. `dense` measures the quality (and the determinant's
 // sign) that the switching policy and the cycle's change-point detection read; `sparse_when_large`
 // uses a sparse LU above a rank of kSparseAbove (quality then only says singular or not: the
-// owner monitors σ_min instead, as simulate does).
-enum class ChartFactorisation { dense, sparse_when_large };
+// owner monitors σ_min instead, as simulate does); `rated_sparse_when_large` uses the sparse LU
+// from kRatedSparseFrom velocities on and measures the quality and the determinant's sign there
+// as the dense path does (min |U_kk| / max |U_kk| of the sparse LU's own pivots), for owners
+// that switch on the quality: the cycle of a large mechanism.
+enum class ChartFactorisation { dense, sparse_when_large, rated_sparse_when_large };
 
 // Options of ChartEngine::correct_positions.
 struct ChartCorrection {
@@ -130,7 +133,8 @@ class ChartEngine {
   [[nodiscard]] const Chart& chart() const { return chart_; }
   [[nodiscard]] bool ready() const { return ready_; }
   [[nodiscard]] double quality() const { return quality_; }
-  // Sign of det G of the last dense factorisation (signs of U_kk and of the interchanges).
+  // Sign of det G of the last factorisation (signs of U_kk and of the interchanges; on the sparse
+  // path of SparseLu::determinant_sign).
   [[nodiscard]] int determinant_sign() const;
   [[nodiscard]] long switch_count() const { return switch_count_; }
   [[nodiscard]] const std::vector<ChartEvent>& switches() const { return switches_; }
@@ -147,6 +151,10 @@ class ChartEngine {
   // (n-four-bar-100: n = 603), where the dense QRs' O(n³) dominates a run's start; below, the
   // dense choice (the charts every test of smaller mechanisms was validated with) is kept.
   static constexpr int kSparseSelectFrom = 600;
+  // From this many velocities on a `rated_sparse_when_large` engine factorises sparse (the cycle:
+  // n-four-bar-100, n = 603, spent half of each position in the dense LU of its 602 × 602 block;
+  // below, the dense path every cycle test was validated with is kept).
+  static constexpr int kRatedSparseFrom = 300;
 
  private:
   bool begin_factor(const VecX& A_sqrt);  // the scalings; false when r = 0
@@ -163,6 +171,7 @@ class ChartEngine {
   const Model* model_;
   int n_, r_;
   bool sparse_;
+  bool rated_;  // sparse_ and the quality measured (rated_sparse_when_large)
   Chart chart_;
   Chart candidate_;  // update's QR choice (kept: no allocation once sized)
   ChartSelector selector_;

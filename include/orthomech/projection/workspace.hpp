@@ -84,7 +84,9 @@ struct DualWorkspace {
   MatX theta;     // n × n: θ = ψ̇ = β Θ + Θᵀ βᵀ, eq. (84)
   VecX dq;        // n: scratch of the chart position corrector
   ProjectionStatus status = ProjectionStatus::ok;
-  DualWorkspace(const Model& model, int rank);
+  // factorisation: the engine's (chart_engine.hpp); the cycle asks for rated_sparse_when_large.
+  DualWorkspace(const Model& model, int rank,
+                ChartFactorisation factorisation = ChartFactorisation::dense);
 };
 
 // The dense projections' matrices (13 of n × n, 5 of n_c × n, G) take 8 (13 n² + 5 n_c n + n_c²)
@@ -109,7 +111,8 @@ struct Workspace {
   DualWorkspace dual;
   const Model* model;  // the Model it was sized for (API misuse check)
   // rank: rank of Eᵀ on the branch (from compute_mobility); sizes F and H.
-  Workspace(const Model& model, int rank);
+  Workspace(const Model& model, int rank,
+            ChartFactorisation factorisation = ChartFactorisation::dense);
 };
 
 }  // namespace orthomech

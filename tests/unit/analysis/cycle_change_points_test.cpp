@@ -23,7 +23,11 @@
 #include <vector>
 
 #include "orthomech/analysis/cycle.hpp"
+#include "orthomech/analysis/mobility.hpp"
+#include "orthomech/io/mechanism_file.hpp"
+#include "orthomech/projection/workspace.hpp"
 #include "support/fixtures.hpp"
+#include "unit/analysis/large_mechanisms.hpp"
 
 namespace orthomech {
 namespace {
@@ -239,6 +243,43 @@ TEST(CycleChangePoints, NFourBarDriveOnItsClosedForm) {
       const auto summary = summarize_cycle(r, reaction_magnitudes(r), "N*m");
       EXPECT_NEAR(summary[0].rms, K / std::sqrt(2.0), 1e-9 * K) << N << " " << steps;
     }
+  }
+}
+
+// The same on larger N, where the cycle's chart block is factorised by the sparse LU with its
+// quality measured (ChartFactorisation::rated_sparse_when_large from kRatedSparseFrom velocities:
+// N = 60, n = 363; N = 100, n = 603). On the dense path the quality of the 360 × 360 block (its
+// LU's pivot ratio) stayed low so far from the change points that the bridges got too wide to
+// pass their accuracy check: N = 60 bridged one of its two change points, N = 100 none, and the
+// unbridged positions had no drive. Here both are bridged, the drive is on its closed form at
+// every position and every coupler's centre moves on its circle: a = −ω² (cos θ, sin θ).
+TEST(CycleChangePoints, LargeNFourBarOnTheRatedSparsePath) {
+  for (const int N : {60, 100}) {
+    const Model model = parse_mechanism(test::n_four_bar_yaml(N, kPi / 2), "n-four-bar (test)");
+    const Mobility mob = compute_mobility(model, model.design_q());
+    ASSERT_EQ(mob.dof, 1);
+    EXPECT_TRUE(Workspace(model, mob.rank, ChartFactorisation::rated_sparse_when_large)
+                    .dual.engine.sparse());
+    const double K = 9.81 * ((N + 1) / 2.0 + N), omega = 2.0 * kPi;
+    CycleOptions o;
+    o.driver.joint = model.find_joint("O0");
+    o.driver.speed = omega;
+    o.steps = 360;
+    const CycleResult r = run_cycle(model, o);
+    ASSERT_EQ(r.status, CycleStatus::completed) << N << ": " << r.message;
+    EXPECT_EQ(r.bridges.size(), 2u) << N;
+    const Body& c =
+        model.bodies[static_cast<size_t>(model.find_body("coupler" + std::to_string(N / 2)))];
+    for (const DrivenPointView& p : r.points) {
+      ASSERT_TRUE(drive_reported(p) && rates_reported(p)) << N << " " << p.input;
+      EXPECT_NEAR(p.drive, K * std::cos(p.input), 2e-9 * K) << N << " " << p.input;
+      EXPECT_NEAR(p.udot(c.u_offset), -omega * omega * std::cos(p.input), 1e-7)
+          << N << " " << p.input;
+      EXPECT_NEAR(p.udot(c.u_offset + 1), -omega * omega * std::sin(p.input), 1e-7)
+          << N << " " << p.input;
+    }
+    const auto summary = summarize_cycle(r, reaction_magnitudes(r), "N*m");
+    EXPECT_NEAR(summary[0].rms, K / std::sqrt(2.0), 1e-9 * K) << N;
   }
 }
 

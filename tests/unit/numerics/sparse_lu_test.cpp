@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/LU>
+#include <algorithm>
 #include <random>
 #include <vector>
 
@@ -112,6 +113,57 @@ TEST(SparseLu, ReportsASingularMatrix) {
   // And regular again: factorised afresh, right.
   ASSERT_TRUE(lu.factorize(A));
   expect_solves_agree(lu, A, 3);
+}
+
+}  // namespace
+}  // namespace orthomech
+
+namespace orthomech {
+namespace {
+
+// The sign of det A and min |U_kk| / max |U_kk| (the chart engine's quality on the rated sparse
+// path). References: the sign of the dense full-pivoting LU's determinant; for a permuted diagonal
+// matrix P D, whatever KLU's ordering, the pivots are D's entries (ratio min|d|/max|d|) and the
+// sign is sign(P) · Π sign(d_k), both known here.
+TEST(SparseLu, DeterminantSignAndPivotRatio) {
+  std::mt19937 gen(11);
+  int negative = 0;
+  for (int trial = 0; trial < 40; ++trial) {
+    Eigen::SparseMatrix<double> A = random_sparse(30 + trial, 3, gen);
+    std::uniform_real_distribution<double> value(-1.0, 1.0);
+    for (Eigen::Index k = 0; k < A.nonZeros(); ++k) A.valuePtr()[k] = value(gen);
+    SparseLu lu;
+    ASSERT_TRUE(lu.analyze(A));
+    if (!lu.factorize(A)) continue;  // (singular draws are not the point here)
+    const double det = Eigen::FullPivLU<Eigen::MatrixXd>(Eigen::MatrixXd(A)).determinant();
+    ASSERT_NE(det, 0.0);
+    EXPECT_EQ(lu.determinant_sign(), det > 0.0 ? 1 : -1) << trial;
+    negative += det < 0.0;
+    const double ratio = lu.pivot_ratio();
+    EXPECT_GT(ratio, 0.0);
+    EXPECT_LE(ratio, 1.0);
+  }
+  EXPECT_GT(negative, 5);  // both signs were met
+  // A permuted diagonal matrix: row i holds d_i in column p(i).
+  const int n = 7;
+  const int p[n] = {3, 0, 6, 1, 2, 5, 4};  // cycles (0 3 1)(2 6 4)(5): even
+  const double d[n] = {2.0, -0.5, 4.0, 1.0, -8.0, 0.25, 3.0};
+  for (const int swap_first_two : {0, 1}) {
+    int q[n];
+    std::copy(p, p + n, q);
+    if (swap_first_two) std::swap(q[0], q[1]);  // one transposition more: odd
+    std::vector<Eigen::Triplet<double>> t;
+    for (int i = 0; i < n; ++i) t.emplace_back(i, q[i], d[i]);
+    Eigen::SparseMatrix<double> P(n, n);
+    P.setFromTriplets(t.begin(), t.end());
+    P.makeCompressed();
+    SparseLu lu;
+    ASSERT_TRUE(lu.analyze(P));
+    ASSERT_TRUE(lu.factorize(P));
+    // Π sign(d) = (−)(−) = +; the permutation's sign: + then −.
+    EXPECT_EQ(lu.determinant_sign(), swap_first_two ? -1 : 1);
+    EXPECT_DOUBLE_EQ(lu.pivot_ratio(), 0.25 / 8.0);
+  }
 }
 
 }  // namespace
