@@ -16,7 +16,9 @@
 //   - solves E_RDᵀ x_D = b_R and the transposed system, and estimates σ_min of the block;
 //   - corrects positions in the chart: Newton on f(q) = 0 with the independent coordinates fixed
 //     (correct_positions), the one per-step position corrector of continuation and integration.
-// Allocation-free after set-up on the dense path, except when a chart is switched.
+// Allocation-free after set-up on the dense path, except when a chart is switched; on the rated
+// sparse path (the cycle of a large model) a chart choice (update, below its quality threshold)
+// allocates in the sparse QR.
 #include <Eigen/LU>
 #include <Eigen/SparseCore>
 #include <vector>
@@ -90,7 +92,9 @@ class ChartEngine {
   // chart is kept while its quality ≥ options().switch_below, and left for the QR's best one
   // when that is better by the factor options().hysteresis (recorded in switches(), at t).
   // Leaves the block factorised in the chart kept. Returns the quality, 0 when the chart is
-  // singular or its rank is not the branch's.
+  // singular or its rank is not the branch's. On the rated sparse path the choice is the sparse
+  // QR's (ChartSelector::select_sparse: its rows, and the dependent components where the
+  // admissible velocities are best conditioned), a sparse factorisation instead of O(n³).
   double update(const MatX& Et, const VecX& A_diag, const VecX& A_sqrt, double t);
 
   // ---- Solving (after factor)
@@ -152,13 +156,18 @@ class ChartEngine {
   // dense choice (the charts every test of smaller mechanisms was validated with) is kept.
   static constexpr int kSparseSelectFrom = 600;
   // From this many velocities on a `rated_sparse_when_large` engine factorises sparse (the cycle:
-  // n-four-bar-100, n = 603, spent half of each position in the dense LU of its 602 × 602 block;
-  // below, the dense path every cycle test was validated with is kept).
+  // n-four-bar-100, n = 603, spent half of each position in the dense LU of its 602 × 602 block,
+  // and from N = 60, n = 363, the dense LU's pivot ratio stayed so low around a change point that
+  // its bridge failed; every bundled mechanism, n ≤ 243, keeps the dense path its tests were
+  // validated with).
   static constexpr int kRatedSparseFrom = 300;
 
  private:
   bool begin_factor(const VecX& A_sqrt);  // the scalings; false when r = 0
-  double factor_sparse();                 // Gs_ (values written) → slu_
+  // update's choice at a dense Eᵀ into candidate_: the dense QRs, or on the rated sparse path the
+  // sparse QR on Eᵀ's pattern (ChartSelector::select_sparse). Returns the rank found.
+  int select_candidate(const MatX& Et, const VecX& A_diag);
+  double factor_sparse();  // Gs_ (values written) → slu_
   template <typename Jacobian>
   ChartCorrectionResult correct(VecX& q, Jacobian& Et, VecX& f, VecX& dq,
                                 const ChartCorrection& options);
