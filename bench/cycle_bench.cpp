@@ -17,6 +17,22 @@
 namespace {
 using namespace orthomech;
 
+// The cycle of the model's first driver at `steps` positions, timed; per-position counters.
+void sweep(benchmark::State& bs, const Model& model, int steps) {
+  CycleOptions o;
+  o.driver = model.drivers.at(0);
+  o.steps = steps;
+  for (auto _ : bs) {
+    const CycleResult r = run_cycle(model, o);
+    if (r.status != CycleStatus::completed) bs.SkipWithError(r.message.c_str());
+    benchmark::DoNotOptimize(r.points.size());
+  }
+  bs.SetItemsProcessed(bs.iterations() * o.steps);
+  bs.counters["us_per_position"] =
+      benchmark::Counter(static_cast<double>(bs.iterations() * o.steps),
+                         benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+
 void cycle(benchmark::State& bs, const std::string& name, bool keep_heap) {
   // keep_heap: glibc returns the freed result storage to the OS after every sweep and the next
   // sweep page-faults it in again; with the trim threshold raised the benchmark measures the
@@ -27,18 +43,7 @@ void cycle(benchmark::State& bs, const std::string& name, bool keep_heap) {
   }
   const Model model =
       load_mechanism(std::string(ORTHOMECH_SOURCE_DIR) + "/mechanisms/" + name + ".yaml");
-  CycleOptions o;
-  o.driver = model.drivers.at(0);
-  o.steps = 3600;
-  for (auto _ : bs) {
-    const CycleResult r = run_cycle(model, o);
-    if (r.status != CycleStatus::completed) bs.SkipWithError(r.message.c_str());
-    benchmark::DoNotOptimize(r.points.size());
-  }
-  bs.SetItemsProcessed(bs.iterations() * o.steps);
-  bs.counters["us_per_position"] =
-      benchmark::Counter(static_cast<double>(bs.iterations() * o.steps),
-                         benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  sweep(bs, model, 3600);
 }
 
 }  // namespace
@@ -66,18 +71,7 @@ void cycle_n_four_bar(benchmark::State& bs) {
   const Model model = parse_mechanism(test::n_four_bar_yaml(N, std::numbers::pi / 2) +
                                           "drivers:\n  - {name: motor, joint: O0, speed: 60 rpm}\n",
                                       "n-four-bar (bench)");
-  CycleOptions o;
-  o.driver = model.drivers.at(0);
-  o.steps = 360;
-  for (auto _ : bs) {
-    const CycleResult r = run_cycle(model, o);
-    if (r.status != CycleStatus::completed) bs.SkipWithError(r.message.c_str());
-    benchmark::DoNotOptimize(r.points.size());
-  }
-  bs.SetItemsProcessed(bs.iterations() * o.steps);
-  bs.counters["us_per_position"] =
-      benchmark::Counter(static_cast<double>(bs.iterations() * o.steps),
-                         benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  sweep(bs, model, 360);
 }
 
 }  // namespace

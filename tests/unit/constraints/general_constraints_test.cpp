@@ -2,8 +2,6 @@
 // its joints, a general system its functions, and every model-level function reaches them
 // through constraint_system(model). References: the general system's own functions called here,
 // and an SVD rank of Eᵀ computed here.
-#include "orthomech/constraints/constraint_system.hpp"
-
 #include <gtest/gtest.h>
 
 #include <Eigen/SVD>
@@ -12,6 +10,7 @@
 #include <string>
 
 #include "orthomech/analysis/mobility.hpp"
+#include "orthomech/constraints/constraint_system.hpp"
 #include "orthomech/constraints/joints.hpp"
 #include "orthomech/constraints/sparse_et.hpp"
 #include "orthomech/model/free_system.hpp"
