@@ -24,10 +24,10 @@ ChartEngine::ChartEngine(const Model& model, int rank, ChartFactorisation factor
     : model_(&model),
       n_(model.n),
       r_(rank),
-      sparse_(constraint_system(model).structurally_sparse() &&
-              ((factorisation == ChartFactorisation::sparse_when_large && rank > kSparseAbove) ||
+      sparse_(constraint_system(model).structurally_sparse() && rank > kSparseAbove &&
+              (factorisation == ChartFactorisation::sparse_when_large ||
                (factorisation == ChartFactorisation::rated_sparse_when_large &&
-                model.n >= kRatedSparseFrom && rank > kSparseAbove))),
+                model.n >= kRatedSparseFrom))),
       rated_(sparse_ && factorisation == ChartFactorisation::rated_sparse_when_large),
       selector_(model.nc, model.n),
       dep_pos_(static_cast<size_t>(model.n), -1),
