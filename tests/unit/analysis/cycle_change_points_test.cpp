@@ -253,6 +253,9 @@ TEST(CycleChangePoints, NFourBarDriveOnItsClosedForm) {
 // pass their accuracy check: N = 60 bridged one of its two change points, N = 100 none, and the
 // unbridged positions had no drive. Here both are bridged, the drive is on its closed form at
 // every position and every coupler's centre moves on its circle: a = −ω² (cos θ, sin θ).
+// Bounds: 2e-9 of the peak drive as for N = 40 above, 1e-7 m/s² for the accelerations (measured
+// from `orthomech cycle FILE --out DIR` on the same files: drive within 2.5e-10 and 1.4e-9 of the
+// peak, accelerations within 6e-9 and 7.9e-9 m/s², N = 60 and 100).
 TEST(CycleChangePoints, LargeNFourBarOnTheRatedSparsePath) {
   for (const int N : {60, 100}) {
     const Model model = parse_mechanism(test::n_four_bar_yaml(N, kPi / 2), "n-four-bar (test)");
