@@ -107,6 +107,11 @@ constexpr double kSingularBlock = 1e-14;
 // A step ends at most this fraction of the way to the chart's singularity extrapolated from the
 // spread (1/spread linear in t next to it).
 constexpr double kChartStepFraction = 0.5;
+// Within kWatchQuality a step ends at most this fraction of σ̂ / max |dσ̂/dt| ahead
+// (limit_step_by_quality): 1, the earliest σ̂ could reach 0. It costs the N = 40 bar 5–20 % more
+// steps (rkf78 at rtol 1e-8: 0.19 → 0.22 s; 0.5 gave 0.24 s), mostly after each landing, where
+// σ̂ rises from 1e-3 and the limit lets the steps only double.
+constexpr double kQualityStepFraction = 1.0;
 
 // Change points (docs/theory.md, "Change points"; (C1)–(C6) there). σ̂ is the chart quality,
 // σ_min of the chart's dependent block in the mass metric relative to the largest mass-scaled
@@ -128,6 +133,14 @@ constexpr double kRetry = 0.25;  // 4 times closer (above)
 // step halves, its truncation error (O(h⁷)) falls ~128-fold, its rounding noise (~ε/σ̂²) grows
 // only 4-fold.
 constexpr double kTruncationRetry = 0.5;
+// A passage whose velocity jump fails its bound while its energy balance (the truncation) is
+// well below the jump fails by the landing's rounding noise, which grows as σ̂ falls (~1/σ̂: on the
+// triple-crank 1.1e-9 from σ̂ = 1e-3, 1.7e-8 from 2e-4, 1e-12 … 1e-11 from 1e-2): it is tried again
+// from the last step end with σ̂ in [kFarPassQuality, kFarPassQualityMax] (the approach's steps end
+// about 4 times apart in σ̂), at most kMaxFartherRetries times per change point.
+constexpr double kFarPassQuality = 3e-3;
+constexpr double kFarPassQualityMax = 3e-2;
+constexpr int kMaxFartherRetries = 2;
 // Approach: each approach segment covers at most this fraction of the way to t* and aims at
 // kApproachTarget · pass_quality.
 constexpr double kApproachFraction = 0.75;
@@ -665,6 +678,7 @@ class Simulation {
   struct MonitorPoint {
     bool valid = false;
     double t = 0.0, sigma = 0.0;
+    double rate = std::numeric_limits<double>::quiet_NaN();  // dσ̂/dt (NaN: unknown)
   };
   struct Request {
     bool pending = false;
@@ -974,17 +988,26 @@ class Simulation {
   // the step's length and whatever the chart did before: the step is undone and the point
   // approached from the step's start, with t* at the tangents' vertex. Returns true when the
   // step must be undone (request set) or the run stopped (stop_message set).
+  //
+  // A long step (Bulirsch–Stoer's) can also start where σ̂ still rises, pass a maximum and the
+  // point, and end rising again, low: then σ̂ at the end is below its start value, within
+  // kWatchQuality, and the end's tangent reaches 0 inside the step, at t* = t − σ̂₁/σ̂'₁.
   bool crossed_within_step(double t, double s1, double d1) {
-    if (!monitor_armed_ || !saved_prev_.valid || !(saved_prev_.rate < 0.0) || !(d1 > 0.0))
-      return false;
+    if (!monitor_armed_ || !saved_prev_.valid || !(d1 > 0.0)) return false;
     const Chart& c = dyn_.cs_.chart();
     if (saved_prev_.chart.independent != c.independent || saved_prev_.chart.rows != c.rows)
       return false;
     const double h = t - saved_prev_.t, s0 = saved_prev_.sigma, d0 = saved_prev_.rate;
     if (!(h > 0.0)) return false;
-    const double tau = std::clamp((s0 - s1 + d1 * h) / (d1 - d0), 0.0, h);
-    const double vertex = std::max(s0 + d0 * tau, s1 + d1 * (tau - h));
-    if (!(vertex < kCrossingVertex * std::min(s0, s1))) return false;
+    double tau = 0.0;
+    if (d0 < 0.0) {
+      tau = std::clamp((s0 - s1 + d1 * h) / (d1 - d0), 0.0, h);
+      const double vertex = std::max(s0 + d0 * tau, s1 + d1 * (tau - h));
+      if (!(vertex < kCrossingVertex * std::min(s0, s1))) return false;
+    } else {
+      if (!(s1 < s0 && s1 < kWatchQuality && s1 < d1 * h)) return false;
+      tau = h - s1 / d1;
+    }
     last_crossing_t_star_ = saved_prev_.t + tau;
     if (++crossing_rewinds_ > kMaxCrossingRewinds) {
       char buf[160];
@@ -1089,6 +1112,19 @@ class Simulation {
       chart_changed = true;
     }
     if (corr.status != SolveStatus::converged) {
+      // A step that ended next to a change point (σ̂ falling below kWatchQuality at the step
+      // before), where the block is too ill-conditioned for the corrector: undone and the point
+      // approached from the step before, as a crossing within a step (C2'').
+      if (!primal_ && monitor_armed_ && saved_prev_.valid && saved_prev_.t < t &&
+          saved_prev_.sigma < kWatchQuality && saved_prev_.rate < 0.0 &&
+          crossing_rewinds_ < kMaxCrossingRewinds) {
+        ++crossing_rewinds_;
+        last_crossing_t_star_ = t;
+        last_rewind_t_star_ = t;
+        rewind_to_ = 1;
+        request_ = {true, t, saved_prev_.sigma};
+        return false;
+      }
       stop_message_ =
           "position correction failed at t = " + time_text(model_, t) + ": " + corr.message;
       return false;
@@ -1236,7 +1272,18 @@ class Simulation {
       double t_star = std::numeric_limits<double>::infinity();
       if (secant_falling) t_star = t + sigma * (t - monitor_.t) / (monitor_.sigma - sigma);  // (C1)
       if (rate < 0.0) t_star = std::min(t_star, t - sigma / rate);
-      if (sigma <= pass_quality_ || t_star - t < kReachSteps * h_last_) {
+      // σ̂ concave (its rate falling since the last step end, in this chart): the parabola's
+      // zero is earlier still. Bulirsch–Stoer's long steps otherwise step over the point from
+      // where the tangent puts it out of reach (the triple-crank at rtol 1e-12: from σ̂ = 0.14).
+      if (rate < 0.0 && monitor_.valid && t > monitor_.t) {
+        const double c = (rate - monitor_.rate) / (t - monitor_.t);
+        if (c < 0.0)
+          t_star = std::min(t_star, t + (-rate - std::sqrt(rate * rate - 2.0 * c * sigma)) / c);
+      }
+      // (A point estimated beyond the run's end raises nothing: the run ends first, or a later,
+      // closer estimate puts it before the end.)
+      if ((sigma <= pass_quality_ || t_star - t < kReachSteps * h_last_) &&
+          t_star < T1_ - end_slack_) {
         request_ = {true, t_star, sigma};
         stop = true;
       }
@@ -1251,8 +1298,22 @@ class Simulation {
     saved_prev_.spread = spread_now_;
     saved_prev_.x = y;
     saved_prev_.chart = dyn_.cs_.chart();
-    monitor_ = {true, t, sigma};
+    if (sigma >= kFarPassQuality && sigma <= kFarPassQualityMax) far_ = saved_prev_;
+    monitor_ = {true, t, sigma, rate};
+    limit_step_by_quality(sigma, rate);
     return stop;
+  }
+
+  // Within kWatchQuality the next step ends before σ̂ could reach 0 falling at the fastest
+  // rate seen in the run: a step may not cross a change point between two step ends that both
+  // look regular (σ̂ rising, then falling from above its start: nothing at the ends shows it;
+  // Bulirsch–Stoer's long steps did so on the triple-crank).
+  void limit_step_by_quality(double sigma, double rate) {
+    if (primal_) return;
+    max_quality_rate_ = std::max(max_quality_rate_, std::abs(rate));
+    if (sigma < kWatchQuality && max_quality_rate_ > 0.0)
+      next_step_limit_ =
+          std::min(next_step_limit_, kQualityStepFraction * sigma / max_quality_rate_);
   }
 
   // A falling σ̂ that bottoms out above 0 (C1'): the parabola through the last three values.
@@ -1586,7 +1647,15 @@ class Simulation {
     (void)chart_quality();  // one more inverse-iteration pair: σ̂ at the landing converged
     p.sigma_b = chart_quality_rate(B.q, B.u, p.rate_b);
     const double sigma_b = p.sigma_b;
-    pass = {t_star, p.t_a, p.t_b, sigma_a, sigma_b, jump, cosine, p.iterations};
+    // The point's time where the tangents of σ̂ at the step's ends meet (σ̂ is ~linear in |t − t*|
+    // next to it, with slopes that differ on the two sides): the estimate t_star that placed the
+    // step can be off by a part of it (a passage from farther, from a coarser estimate).
+    double t_point = t_star;
+    const double rate_a = saved_prev_.valid && saved_prev_.t == p.t_a ? saved_prev_.rate : 0.0;
+    if (rate_a < 0.0 && p.rate_b > 0.0)
+      t_point =
+          p.t_a + std::clamp((sigma_a - sigma_b + p.rate_b * p.h) / (p.rate_b - rate_a), 0.0, p.h);
+    pass = {t_point, p.t_a, p.t_b, sigma_a, sigma_b, jump, cosine, p.iterations};
     pass.energy_balance = passage_energy_balance(p);
     char buf[200];
     std::snprintf(buf, sizeof buf,
@@ -1603,6 +1672,9 @@ class Simulation {
       return false;
     }
     if (!(jump <= jump_bound)) {  // on the branch, but not as accurate as the steps around it
+      // The energy balance (the step's truncation) well below the jump: the jump is the
+      // landing's rounding noise (~1/σ̂), which a passage from farther reduces (pass()).
+      noise_failure_ = pass.energy_balance < 0.5 * jump;
       char bound[64];
       std::snprintf(bound, sizeof bound, "%.3g", jump_bound);
       why = "the passage is less accurate than the bound " + std::string(bound) +
@@ -1720,8 +1792,15 @@ class Simulation {
   // (C2') undo the steps that crossed the point unannounced: back to the saved state, its
   // outputs after it removed.
   void rewind() {
-    const SavedState& back = rewind_to_ == 0 ? saved_older_ : saved_prev_;
+    const SavedState back = rewind_to_ == 0 ? saved_older_ : saved_prev_;
     rewind_to_ = -1;
+    restore(back);
+    ++result_.rewinds;
+  }
+
+  // The run continues from a saved step end: its state, chart and monitor; the outputs after it
+  // removed.
+  void restore(const SavedState& back) {
     x_ = back.x;
     t_now_ = back.t;
     t_last_accept_ = back.t;
@@ -1730,12 +1809,11 @@ class Simulation {
     while (!result_.samples.empty() && result_.samples.back().t > t_now_ + grid_slack_)
       result_.samples.pop_back();
     while (next_out_ > 0 && grid_time(next_out_ - 1) > t_now_ + grid_slack_) --next_out_;
-    monitor_ = {true, back.t, back.sigma};
+    monitor_ = {true, back.t, back.sigma, back.rate};
     const SavedState start = back;  // the state the next step starts from ((C2''))
     saved_older_.valid = false;
     saved_prev_ = start;
     next_step_limit_ = std::numeric_limits<double>::infinity();
-    ++result_.rewinds;
   }
 
   [[nodiscard]] std::string change_point_name(double t_star) const {
@@ -1760,6 +1838,21 @@ class Simulation {
       // The first attempt's reason is kept for the message: the later ones, closer to the
       // point, are dominated by rounding noise (ε/σ̂²) rather than the step's truncation.
       if (first_passage_why_.empty()) first_passage_why_ = why;
+      const bool noise = noise_failure_;
+      noise_failure_ = false;
+      if (noise && far_.valid && far_.t < t_from && far_.sigma > 2.0 * rq.sigma &&
+          far_retries_ < kMaxFartherRetries) {  // from the saved state farther from the point
+        ++far_retries_;
+        const SavedState from = far_;
+        far_.valid = false;
+        restore(from);
+        // F at the restored position (the passage starts from u = F v there).
+        dyn_.evaluate_dual(t_now_, x_.head(nq_), x_.segment(nq_, na_));
+        pass_quality_ = from.sigma;
+        request_ = {true, rq.t_star, from.sigma};
+        approaches_ = 0;
+        return true;
+      }
       const double closer = truncation_failure_ ? kTruncationRetry : kRetry;
       truncation_failure_ = false;
       if (rq.sigma * closer >= kPassQualityFloor) {  // try again from closer
@@ -1774,6 +1867,8 @@ class Simulation {
       return false;
     }
     first_passage_why_.clear();
+    far_.valid = false;
+    far_retries_ = 0;
     monitor_.valid = false;
     saved_older_.valid = false;  // saved_prev: the landing
     approaches_ = 0;
@@ -1893,7 +1988,10 @@ class Simulation {
   // minimum above 0 there, not a change point): no request until σ̂ rises again.
   bool monitor_quiet_ = false;
   double pass_quality_ = kPassQuality;  // σ̂ at which the next passage is tried
-  bool truncation_failure_ = false;     // the last passage failed its energy balance
+  bool noise_failure_ = false;       // the last passage failed its velocity jump by rounding noise
+  SavedState far_;                   // the latest step end with σ̂ in [kFarPassQuality, …Max]
+  int far_retries_ = 0;              // passages tried from far_ for the point ahead
+  bool truncation_failure_ = false;  // the last passage failed its energy balance
   double t_last_accept_, h_last_ = 0.0;
   // chart_quality_rate's work space.
   VecX sigma_left_, rate_x_, rate_plus_, rate_minus_;
@@ -1905,6 +2003,7 @@ class Simulation {
   detail::OdeProblem problem_;
   double spread_now_ = 0.0;  // the chart's spread after the last acceptance (dual form)
   double next_step_limit_ = std::numeric_limits<double>::infinity();
+  double max_quality_rate_ = 0.0;  // the largest |dσ̂/dt| of the run (limit_step_by_quality)
   std::vector<char> angular_row_;  // rows of f that are angles
   bool local_passage_;             // passages in local coordinates (spatial bodies)
   // Segments and the driver.
