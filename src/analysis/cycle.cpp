@@ -958,10 +958,14 @@ CycleRun::CycleRun(const Model& model, const CycleOptions& options, const CycleR
       result_(result),
       law_(request.law),
       state_(std::move(start)),
-      ws_(model, mob.rank, ChartFactorisation::rated_sparse_when_large),
+      ws_(model, mob.rank, ChartFactorisation::rated_sparse_when_large,
+          {.mass = MassStorage::diagonal_if_possible, .primal = false, .dual_projections = false}),
       w_(model, mob.rank, idle_body_indices(model, mob)),
       sweep_{model, request.joint, ws_, w_} {
-  (void)evaluate_dual(model_, state_, ws_);
+  // The free system, Eᵀ, Dᵀ and the chart with F at the start (the stages the cycle uses).
+  compute_free_system(model_, state_, ws_);
+  compute_constraints(model_, state_, ws_.constraints);
+  (void)compute_basis(model_, state_, ws_);
   s0_ = compute_scalar(model_, JointCoordinate{request_.joint}, state_.q, nullptr).value;
 }
 

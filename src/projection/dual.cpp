@@ -1,6 +1,7 @@
 #include "orthomech/projection/dual.hpp"
 
 #include <algorithm>
+#include <stdexcept>
 
 #include "orthomech/numerics/small_lu.hpp"
 #include "orthomech/projection/free_system_stage.hpp"
@@ -8,7 +9,8 @@
 
 namespace orthomech {
 
-DualWorkspace::DualWorkspace(const Model& model, int rank, ChartFactorisation factorisation)
+DualWorkspace::DualWorkspace(const Model& model, int rank, ChartFactorisation factorisation,
+                             bool projections)
     : na(model.n - rank),
       r(rank),
       engine(model, rank, factorisation),
@@ -17,17 +19,17 @@ DualWorkspace::DualWorkspace(const Model& model, int rank, ChartFactorisation fa
       MF(model.n, model.n - rank),
       H(model.n - rank, model.n - rank),
       H_llt(model.n - rank),
-      HinvFt(model.n - rank, model.n),
-      psi(model.n, model.n),
-      alpha(model.n, model.n),
-      beta(model.n, model.n),
+      HinvFt(model.n - rank, projections ? model.n : 0),
+      psi(projections ? model.n : 0, projections ? model.n : 0),
+      alpha(projections ? model.n : 0, projections ? model.n : 0),
+      beta(projections ? model.n : 0, projections ? model.n : 0),
       DtF(model.nc, model.n - rank),
       MFdot(model.n, model.n - rank),
       betaFdot(model.n, model.n - rank),
       small(model.n - rank, model.n - rank),
       Fdot(MatX::Zero(model.n, model.n - rank)),
-      Theta(model.n, model.n),
-      theta(model.n, model.n),
+      Theta(projections ? model.n : 0, projections ? model.n : 0),
+      theta(projections ? model.n : 0, projections ? model.n : 0),
       dq(VecX::Zero(model.n)) {}
 
 void reset_chart(Workspace& ws) { ws.dual.engine.reset(); }
@@ -62,6 +64,8 @@ ProjectionStatus compute_basis(const Model& /*model*/, const State& state, Works
 }
 
 ProjectionStatus compute_dual(const Model& model, const State& state, Workspace& ws) {
+  if (ws.dual.psi.rows() != model.n)
+    throw std::logic_error("compute_dual: the Workspace was built without the dual projections");
   if (compute_basis(model, state, ws) != ProjectionStatus::ok) return ws.dual.status;
   auto& d = ws.dual;
   const Chart& c = d.engine.chart();

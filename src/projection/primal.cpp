@@ -1,23 +1,27 @@
 #include "orthomech/projection/primal.hpp"
 
+#include <stdexcept>
+
 #include "orthomech/projection/free_system_stage.hpp"
 
 namespace orthomech {
 
-PrimalWorkspace::PrimalWorkspace(const Model& model)
-    : AE(model.n, model.nc),
-      G(model.nc, model.nc),
-      G_llt(model.nc),
-      GinvEt(model.nc, model.n),
-      pi(model.n, model.n),
-      alpha(model.n, model.n),
-      beta(model.n, model.n),
-      GinvDt(model.nc, model.n),
-      Omega(model.n, model.n),
-      omega(model.n, model.n) {}
+PrimalWorkspace::PrimalWorkspace(const Model& model, bool allocate)
+    : AE(allocate ? model.n : 0, allocate ? model.nc : 0),
+      G(allocate ? model.nc : 0, allocate ? model.nc : 0),
+      G_llt(allocate ? model.nc : 0),
+      GinvEt(allocate ? model.nc : 0, allocate ? model.n : 0),
+      pi(allocate ? model.n : 0, allocate ? model.n : 0),
+      alpha(allocate ? model.n : 0, allocate ? model.n : 0),
+      beta(allocate ? model.n : 0, allocate ? model.n : 0),
+      GinvDt(allocate ? model.nc : 0, allocate ? model.n : 0),
+      Omega(allocate ? model.n : 0, allocate ? model.n : 0),
+      omega(allocate ? model.n : 0, allocate ? model.n : 0) {}
 
-ProjectionStatus compute_primal(const Model& /*model*/, const State& /*state*/, Workspace& ws) {
+ProjectionStatus compute_primal(const Model& model, const State& /*state*/, Workspace& ws) {
   auto& p = ws.primal;
+  if (p.pi.rows() != model.n)
+    throw std::logic_error("compute_primal: the Workspace was built without the primal stage");
   const MatX& Et = ws.constraints.Et;
   const MatX& A = ws.free.A;
   p.AE.noalias() = A * Et.transpose();

@@ -65,8 +65,8 @@ FreeSystemWorkspace::FreeSystemWorkspace(const Model& model, MassStorage storage
       Q(VecX::Zero(model.n)),
       constant_mass(mass_matrix_is_constant(model)) {}
 
-void check_dense_workspace_size(const Model& m) {
-  const double bytes = dense_workspace_bytes(m);
+void check_dense_workspace_size(const Model& m, const WorkspaceStages& stages) {
+  const double bytes = dense_workspace_bytes(m, stages);
   if (bytes > kMaxDenseWorkspaceBytes) {
     std::ostringstream text;
     text.precision(2);
@@ -74,8 +74,7 @@ void check_dense_workspace_size(const Model& m) {
          << " velocity components and " << m.nc
          << " constraint rows: this command forms dense n × n matrices (" << bytes / 1e9
          << " GB, more than its limit of " << kMaxDenseWorkspaceBytes / 1e9
-         << " GB, about 1750 planar bodies); simulate and info work on sparse matrices without "
-            "this limit";
+         << " GB); simulate and info work on sparse matrices without this limit";
     throw ModelTooLarge(text.str());
   }
 }
@@ -83,8 +82,8 @@ void check_dense_workspace_size(const Model& m) {
 namespace {
 // The model, once the size of the whole workspace is checked (ModelTooLarge), before its first
 // stage allocates anything.
-const Model& checked_size(const Model& m) {
-  check_dense_workspace_size(m);
+const Model& checked_size(const Model& m, const WorkspaceStages& stages) {
+  check_dense_workspace_size(m, stages);
   return m;
 }
 
@@ -96,16 +95,21 @@ int checked_rank(const Model& m, int rank) {
 }
 }  // namespace
 
-double dense_workspace_bytes(const Model& model) {
+double dense_workspace_bytes(const Model& model, const WorkspaceStages& stages) {
   const double n = model.n, nc = model.nc;
-  return 8.0 * (13.0 * n * n + 5.0 * nc * n + nc * nc);
+  double matrices = 2.0 * nc * n;                                     // Eᵀ, Dᵀ
+  if (holds_dense_mass(model, stages.mass)) matrices += 3.0 * n * n;  // M, A, Ṁ
+  if (stages.primal) matrices += 5.0 * n * n + 3.0 * nc * n + nc * nc;
+  if (stages.dual_projections) matrices += 5.0 * n * n;  // ψ, α, β, Θ, θ
+  return 8.0 * matrices;
 }
 
-Workspace::Workspace(const Model& m, int rank, ChartFactorisation factorisation)
-    : free(checked_size(m)),
+Workspace::Workspace(const Model& m, int rank, ChartFactorisation factorisation,
+                     const WorkspaceStages& stages)
+    : free(checked_size(m, stages), stages.mass),
       constraints(m),
-      primal(m),
-      dual(m, checked_rank(m, rank), factorisation),
+      primal(m, stages.primal),
+      dual(m, checked_rank(m, rank), factorisation, stages.dual_projections),
       model(&m) {}
 
 void compute_free_system(const Model& model, const State& state, Workspace& ws) {

@@ -19,6 +19,16 @@ namespace orthomech {
 // then 0 × 0, so a large planar model holds no n × n matrix; simulate, issue 18).
 enum class MassStorage { dense, diagonal_if_possible };
 
+// The stages a command uses (issue 18: only those are allocated). Every command that projects
+// (compute_primal, compute_dual) keeps the default; `cycle` needs the free system (its
+// diagonal when M is diagonal), Eᵀ and Dᵀ, and the chart with F (compute_basis) only: at
+// N = 400 of the N-four-bar that is 4 % of the default's bytes.
+struct WorkspaceStages {
+  MassStorage mass = MassStorage::dense;
+  bool primal = true;            // PrimalWorkspace's matrices (compute_primal)
+  bool dual_projections = true;  // DualWorkspace's n × n matrices ψ, α, β, Θ, θ (compute_dual)
+};
+
 // Stage 1: the free system at q (paper §2).
 struct FreeSystemWorkspace {
   MatX M;                      // n × n: mass matrix, eq. (4) (0 × 0 unless dense_mass)
@@ -57,7 +67,8 @@ struct PrimalWorkspace {
   MatX omega;                  // n × n: ω = π̇ = Ω α + αᵀ Ωᵀ, eq. (79)
   double G_pivot_ratio = 0.0;  // min/max diagonal of the Cholesky factor, squared
   ProjectionStatus status = ProjectionStatus::ok;
-  explicit PrimalWorkspace(const Model& model);
+  // allocate: false leaves every matrix 0 × 0 (compute_primal then throws std::logic_error).
+  explicit PrimalWorkspace(const Model& model, bool allocate = true);
 };
 
 // Stage 2b: dual (F-based) projections, eq. (68), eq. (69), eq. (70), eq. (83), eq. (84), in charts
@@ -85,16 +96,20 @@ struct DualWorkspace {
   VecX dq;        // n: scratch of the chart position corrector
   ProjectionStatus status = ProjectionStatus::ok;
   // factorisation: the engine's (chart_engine.hpp); the cycle asks for rated_sparse_when_large.
+  // projections: false leaves the n × n matrices (and H⁻¹Fᵀ, Ḟ's products) 0 × 0: compute_basis
+  // only (compute_dual then throws std::logic_error).
   DualWorkspace(const Model& model, int rank,
-                ChartFactorisation factorisation = ChartFactorisation::dense);
+                ChartFactorisation factorisation = ChartFactorisation::dense,
+                bool projections = true);
 };
 
 // The dense projections' matrices (13 of n × n, 5 of n_c × n, G) take 8 (13 n² + 5 n_c n + n_c²)
-// bytes; a Workspace larger than kMaxDenseWorkspaceBytes is refused with ModelTooLarge before
-// anything is allocated (a 2500-body planar model would need 8.6 GB: the system would kill the
-// process instead of reporting). Commands on the sparse path (simulate, info) build none.
+// bytes with every stage; a Workspace larger than kMaxDenseWorkspaceBytes is refused with
+// ModelTooLarge before anything is allocated (a 2500-body planar model would need 8.6 GB: the
+// system would kill the process instead of reporting). Commands on the sparse path (simulate,
+// info) build none; `cycle` builds only Eᵀ, Dᵀ (2 n_c n) and, unless M is diagonal, M, A, Ṁ.
 inline constexpr double kMaxDenseWorkspaceBytes = 4.0 * 1024 * 1024 * 1024;
-[[nodiscard]] double dense_workspace_bytes(const Model& model);
+[[nodiscard]] double dense_workspace_bytes(const Model& model, const WorkspaceStages& stages = {});
 class ModelTooLarge : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
@@ -102,7 +117,7 @@ class ModelTooLarge : public std::runtime_error {
 // Throws ModelTooLarge (the message names the file, n, n_c and the bytes) when a Workspace of
 // this model would exceed kMaxDenseWorkspaceBytes: what the Workspace constructor checks, for a
 // command to refuse before it does other work (crosscheck: before simulating the motion).
-void check_dense_workspace_size(const Model& model);
+void check_dense_workspace_size(const Model& model, const WorkspaceStages& stages = {});
 
 struct Workspace {
   FreeSystemWorkspace free;
@@ -112,7 +127,8 @@ struct Workspace {
   const Model* model;  // the Model it was sized for (API misuse check)
   // rank: rank of Eᵀ on the branch (from compute_mobility); sizes F and H.
   Workspace(const Model& model, int rank,
-            ChartFactorisation factorisation = ChartFactorisation::dense);
+            ChartFactorisation factorisation = ChartFactorisation::dense,
+            const WorkspaceStages& stages = {});
 };
 
 }  // namespace orthomech

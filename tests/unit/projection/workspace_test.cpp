@@ -15,7 +15,9 @@
 
 #include "orthomech/io/mechanism_file.hpp"
 #include "orthomech/model/free_system.hpp"
+#include "orthomech/projection/dual.hpp"
 #include "orthomech/projection/free_system_stage.hpp"
+#include "orthomech/projection/primal.hpp"
 #include "support/fixtures.hpp"
 #include "unit/analysis/large_mechanisms.hpp"
 
@@ -170,6 +172,47 @@ TEST(Workspace, DenseBytesCountTheMatricesAndATooLargeModelIsRefused) {
   const Model n_four_bar = parse_mechanism(test::n_four_bar_yaml(1000, 0.5), "n-four-bar.yaml");
   EXPECT_EQ(n_four_bar.bodies.size(), 2001u);  // IFToMM A02 at N = 1000 loads
   EXPECT_GT(dense_workspace_bytes(n_four_bar), kMaxDenseWorkspaceBytes);
+}
+
+// The stages a command uses (WorkspaceStages, what `cycle` builds): the byte count is that of the
+// matrices as allocated (oracle: their sizes, summed here), compute_basis gives the F of the full
+// Workspace bit for bit (the same chart engine on the same Eᵀ), compute_primal and compute_dual
+// refuse a Workspace without their stage, and the IFToMM A02 four-bar at N = 1000, over the limit
+// with every stage, is within it with the cycle's.
+TEST(Workspace, StagesAllocateOnlyWhatTheyCountAndTheBasisIsUnchanged) {
+  const WorkspaceStages cycle_stages{
+      .mass = MassStorage::diagonal_if_possible, .primal = false, .dual_projections = false};
+  const Model model = test::load_bundled("crank-rocker");
+  Workspace full(model, model.nc);
+  Workspace reduced(model, model.nc, ChartFactorisation::dense, cycle_stages);
+  const Eigen::Index counted =
+      reduced.free.M.size() + reduced.free.A.size() + reduced.free.Mdot.size() +
+      reduced.constraints.Et.size() + reduced.constraints.Dt.size() + reduced.primal.AE.size() +
+      reduced.primal.G.size() + reduced.primal.GinvEt.size() + reduced.primal.pi.size() +
+      reduced.primal.alpha.size() + reduced.primal.beta.size() + reduced.primal.GinvDt.size() +
+      reduced.primal.Omega.size() + reduced.primal.omega.size() + reduced.dual.psi.size() +
+      reduced.dual.alpha.size() + reduced.dual.beta.size() + reduced.dual.Theta.size() +
+      reduced.dual.theta.size();
+  EXPECT_EQ(counted, 2 * model.nc * model.n);  // Eᵀ and Dᵀ: M is diagonal
+  EXPECT_EQ(dense_workspace_bytes(model, cycle_stages), 8.0 * static_cast<double>(counted));
+  EXPECT_LT(dense_workspace_bytes(model, cycle_stages), dense_workspace_bytes(model));
+
+  State s(model);
+  s.q = model.design_q();
+  for (Workspace* ws : {&full, &reduced}) {
+    compute_free_system(model, s, *ws);
+    compute_constraints(model, s, ws->constraints);
+    ASSERT_EQ(compute_basis(model, s, *ws), ProjectionStatus::ok);
+  }
+  EXPECT_EQ(reduced.dual.F, full.dual.F);
+  EXPECT_LT((full.constraints.Et * reduced.dual.F).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_EQ(compute_dual(model, s, full), ProjectionStatus::ok);
+  EXPECT_THROW((void)compute_dual(model, s, reduced), std::logic_error);
+  EXPECT_THROW((void)compute_primal(model, s, reduced), std::logic_error);
+
+  const Model n_four_bar = parse_mechanism(test::n_four_bar_yaml(1000, 0.5), "n-four-bar.yaml");
+  EXPECT_GT(dense_workspace_bytes(n_four_bar), kMaxDenseWorkspaceBytes);
+  EXPECT_LT(dense_workspace_bytes(n_four_bar, cycle_stages), kMaxDenseWorkspaceBytes);
 }
 
 TEST(Workspace, RefusesARankOutOfRangeAndAnotherModel) {
