@@ -1808,6 +1808,8 @@ class Simulation {
     dyn_.chart_ready_ = false;
     while (!result_.samples.empty() && result_.samples.back().t > t_now_ + grid_slack_)
       result_.samples.pop_back();
+    while (!result_.chart_switches.empty() && result_.chart_switches.back().t > t_now_)
+      result_.chart_switches.pop_back();
     while (next_out_ > 0 && grid_time(next_out_ - 1) > t_now_ + grid_slack_) --next_out_;
     monitor_ = {true, back.t, back.sigma, back.rate};
     const SavedState start = back;  // the state the next step starts from ((C2''))

@@ -441,6 +441,24 @@ std::string triple_crank_name(const testing::TestParamInfo<TripleCrankCase>& par
 INSTANTIATE_TEST_SUITE_P(Bundled, TripleCrank, testing::ValuesIn(triple_crank_cases()),
                          triple_crank_name);
 
+// Steps undone by a rewind take their chart switches with them: the slider-crank's 2 s (80
+// switches between rod.x and rod.y, three of them inside steps that (C2') undoes and redoes) lists
+// each switch once, in time order, each leaving the chart the one before entered. (Without the
+// trimming in `restore` the redone switches were listed twice: 83 entries.)
+TEST(ChangePoints, ChartSwitchesOfUndoneStepsAreNotListedTwice) {
+  const Model model = test::load_bundled("slider-crank");
+  SimulateOptions o;
+  o.t_end = 2.0;
+  o.reactions = false;
+  const SimulateResult r = simulate(model, o);
+  ASSERT_EQ(r.status, SimulateStatus::completed) << r.message;
+  ASSERT_GT(r.chart_switches.size(), 10u);
+  for (size_t k = 1; k < r.chart_switches.size(); ++k) {
+    EXPECT_LT(r.chart_switches[k - 1].t, r.chart_switches[k].t) << k;
+    EXPECT_EQ(r.chart_switches[k - 1].to, r.chart_switches[k].from) << k;
+  }
+}
+
 // A passage forced onto a wrong branch is refused (exit 3 in the CLI: never `completed`). The
 // hook replaces the predicted landing by the state on the branch through the change point on
 // which link0 stays horizontal (θ0 = 0, at rest) and the rest of the chain moves on.
