@@ -71,6 +71,28 @@ struct Reduction {
   double theta = 0.0, omega = 0.0;  // at t_end
   std::vector<double> crossings;    // times where sin θ = 0 (the change points)
 };
+// I θ̈ = −c cos θ from θ(0) = th0, θ̇(0) = w0 to t_end by classical RK4 at h ≈ 1e-5 s: θ and θ̇ at
+// t_end and the zeros of sin θ (linear interpolation in the step: ~h² accurate).
+void solve_reduction(Reduction& r, double th0, double w0, double t_end) {
+  const auto acc = [&](double th) { return -r.c * std::cos(th) / r.I; };
+  double th = th0, w = w0, t = 0.0;
+  const long steps = std::lround(t_end / 1e-5);
+  const double h = t_end / static_cast<double>(steps);
+  for (long i = 0; i < steps; ++i) {
+    const double k1t = w, k1w = acc(th);
+    const double k2t = w + 0.5 * h * k1w, k2w = acc(th + 0.5 * h * k1t);
+    const double k3t = w + 0.5 * h * k2w, k3w = acc(th + 0.5 * h * k2t);
+    const double k4t = w + h * k3w, k4w = acc(th + h * k3t);
+    const double th_new = th + h / 6.0 * (k1t + 2 * k2t + 2 * k3t + k4t);
+    const double w_new = w + h / 6.0 * (k1w + 2 * k2w + 2 * k3w + k4w);
+    if (std::sin(th) * std::sin(th_new) < 0.0)
+      r.crossings.push_back(t + h * std::sin(th) / (std::sin(th) - std::sin(th_new)));
+    th = th_new, w = w_new, t += h;
+  }
+  r.theta = th;
+  r.omega = w;
+}
+
 Reduction reduce_and_solve(const Model& model, int N, double t_end) {
   Reduction r;
   for (int k = 0; k <= N; ++k) {
@@ -91,24 +113,8 @@ Reduction reduce_and_solve(const Model& model, int N, double t_end) {
   // The closed form for unit links: I = (N+1)/3 + N, c = g((N+1)/2 + N).
   EXPECT_NEAR(r.I, (N + 1) / 3.0 + N, 1e-12);
   EXPECT_NEAR(r.c, kG * ((N + 1) / 2.0 + N), 1e-12);
-  // I θ̈ = −c cos θ, θ(0) = π/2, θ̇(0) = −1 (B0 moves at ẋ = 1 m/s): classical RK4.
-  const auto acc = [&](double th) { return -r.c * std::cos(th) / r.I; };
-  double th = M_PI / 2.0, w = -1.0, t = 0.0;
-  const long steps = std::lround(t_end / 1e-5);
-  const double h = t_end / static_cast<double>(steps);
-  for (long i = 0; i < steps; ++i) {
-    const double k1t = w, k1w = acc(th);
-    const double k2t = w + 0.5 * h * k1w, k2w = acc(th + 0.5 * h * k1t);
-    const double k3t = w + 0.5 * h * k2w, k3w = acc(th + 0.5 * h * k2t);
-    const double k4t = w + h * k3w, k4w = acc(th + h * k3t);
-    const double th_new = th + h / 6.0 * (k1t + 2 * k2t + 2 * k3t + k4t);
-    const double w_new = w + h / 6.0 * (k1w + 2 * k2w + 2 * k3w + k4w);
-    if (std::sin(th) * std::sin(th_new) < 0.0)  // linear interpolation: ~h² accurate
-      r.crossings.push_back(t + h * std::sin(th) / (std::sin(th) - std::sin(th_new)));
-    th = th_new, w = w_new, t += h;
-  }
-  r.theta = th;
-  r.omega = w;
+  // I θ̈ = −c cos θ, θ(0) = π/2, θ̇(0) = −1 (B0 moves at ẋ = 1 m/s).
+  solve_reduction(r, M_PI / 2.0, -1.0, t_end);
   return r;
 }
 
@@ -361,36 +367,24 @@ TEST_P(TripleCrank, PassesEveryChangePointOnItsBranch_AgainstExactReduction) {
   const auto [rtol, integrator] = GetParam();
   const Model model = test::load_bundled("triple-crank");
   // The reduction from the bodies (SI inside the model).
-  double I = 0.0, c = 0.0, L = 0.0;
+  Reduction red;
+  double L = 0.0;
   const Body& coupler = model.bodies[static_cast<size_t>(model.find_body("coupler"))];
   for (int k = 1; k <= 3; ++k) {
     const Body& b = model.bodies[static_cast<size_t>(model.find_body("crank" + std::to_string(k)))];
-    I += b.inertia + b.mass * b.com_local.squaredNorm();
-    c += kG * b.mass * b.com_local.norm();
+    red.I += b.inertia + b.mass * b.com_local.squaredNorm();
+    red.c += kG * b.mass * b.com_local.norm();
     for (const auto& [name, p] : b.points)
       if (name == "A") L = p.norm();
   }
-  I += coupler.mass * L * L;
-  c += kG * coupler.mass * L;
-  EXPECT_NEAR(I, 3 * 0.05 * 0.05 * 0.05 / 3 + 0.2 * 0.05 * 0.05, 1e-15);  // the file's rods
-  EXPECT_NEAR(c, kG * (3 * 0.05 * 0.025 + 0.2 * 0.05), 1e-15);
+  red.I += coupler.mass * L * L;
+  red.c += kG * coupler.mass * L;
+  EXPECT_NEAR(red.I, 3 * 0.05 * 0.05 * 0.05 / 3 + 0.2 * 0.05 * 0.05, 1e-15);  // the file's rods
+  EXPECT_NEAR(red.c, kG * (3 * 0.05 * 0.025 + 0.2 * 0.05), 1e-15);
   const double t_end = 5.0;
-  double th = M_PI / 3.0, w = 0.0, t = 0.0;
-  std::vector<double> crossings;
-  const auto acc = [&](double x) { return -c * std::cos(x) / I; };
-  const long steps = std::lround(t_end / 1e-5);
-  const double h = t_end / static_cast<double>(steps);
-  for (long i = 0; i < steps; ++i) {
-    const double k1t = w, k1w = acc(th);
-    const double k2t = w + 0.5 * h * k1w, k2w = acc(th + 0.5 * h * k1t);
-    const double k3t = w + 0.5 * h * k2w, k3w = acc(th + 0.5 * h * k2t);
-    const double k4t = w + h * k3w, k4w = acc(th + h * k3t);
-    const double th_new = th + h / 6.0 * (k1t + 2 * k2t + 2 * k3t + k4t);
-    if (std::sin(th) * std::sin(th_new) < 0.0)
-      crossings.push_back(t + h * std::sin(th) / (std::sin(th) - std::sin(th_new)));
-    w += h / 6.0 * (k1w + 2 * k2w + 2 * k3w + k4w);
-    th = th_new, t += h;
-  }
+  solve_reduction(red, M_PI / 3.0, 0.0, t_end);
+  const std::vector<double>& crossings = red.crossings;
+  const double th = red.theta;
   ASSERT_EQ(crossings.size(), 26u);
 
   SimulateOptions o;
