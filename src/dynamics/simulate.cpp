@@ -113,6 +113,12 @@ constexpr double kChartStepFraction = 0.5;
 // σ̂ rises from 1e-3 and the limit lets the steps only double.
 constexpr double kQualityStepFraction = 1.0;
 
+// Where the tangents σ̂₀ + σ̂'₀τ and σ̂₁ + σ̂'₁(τ − h) of σ̂ at the ends of a step of length h
+// meet (σ̂'₀ < 0 < σ̂'₁: a V through a change point), τ in [0, h].
+[[nodiscard]] double tangents_meet(double s0, double d0, double s1, double d1, double h) {
+  return std::clamp((s0 - s1 + d1 * h) / (d1 - d0), 0.0, h);
+}
+
 // Change points (docs/theory.md, "Change points"; (C1)–(C6) there). σ̂ is the chart quality,
 // σ_min of the chart's dependent block in the mass metric relative to the largest mass-scaled
 // column norm of Eᵀ at the start; it falls linearly to 0 at a change point.
@@ -1001,7 +1007,7 @@ class Simulation {
     if (!(h > 0.0)) return false;
     double tau = 0.0;
     if (d0 < 0.0) {
-      tau = std::clamp((s0 - s1 + d1 * h) / (d1 - d0), 0.0, h);
+      tau = tangents_meet(s0, d0, s1, d1, h);
       const double vertex = std::max(s0 + d0 * tau, s1 + d1 * (tau - h));
       if (!(vertex < kCrossingVertex * std::min(s0, s1))) return false;
     } else {
@@ -1017,10 +1023,16 @@ class Simulation {
       stop_message_ = buf;
       return true;
     }
-    rewind_to_ = 1;
-    request_ = {true, last_crossing_t_star_, s0};
-    last_rewind_t_star_ = last_crossing_t_star_;
+    undo_step_towards(last_crossing_t_star_);
     return true;
+  }
+
+  // The step just taken is undone (back to saved_prev) and the point at t_star approached from
+  // there (C2'').
+  void undo_step_towards(double t_star) {
+    rewind_to_ = 1;
+    request_ = {true, t_star, saved_prev_.sigma};
+    last_rewind_t_star_ = t_star;
   }
 
   // ---- Step acceptance ------------------------------------------------------------------------
@@ -1120,9 +1132,7 @@ class Simulation {
           crossing_rewinds_ < kMaxCrossingRewinds) {
         ++crossing_rewinds_;
         last_crossing_t_star_ = t;
-        last_rewind_t_star_ = t;
-        rewind_to_ = 1;
-        request_ = {true, t, saved_prev_.sigma};
+        undo_step_towards(t);
         return false;
       }
       stop_message_ =
@@ -1653,8 +1663,7 @@ class Simulation {
     double t_point = t_star;
     const double rate_a = saved_prev_.valid && saved_prev_.t == p.t_a ? saved_prev_.rate : 0.0;
     if (rate_a < 0.0 && p.rate_b > 0.0)
-      t_point =
-          p.t_a + std::clamp((sigma_a - sigma_b + p.rate_b * p.h) / (p.rate_b - rate_a), 0.0, p.h);
+      t_point = p.t_a + tangents_meet(sigma_a, rate_a, sigma_b, p.rate_b, p.h);
     pass = {t_point, p.t_a, p.t_b, sigma_a, sigma_b, jump, cosine, p.iterations};
     pass.energy_balance = passage_energy_balance(p);
     char buf[200];
@@ -1792,9 +1801,9 @@ class Simulation {
   // (C2') undo the steps that crossed the point unannounced: back to the saved state, its
   // outputs after it removed.
   void rewind() {
-    const SavedState back = rewind_to_ == 0 ? saved_older_ : saved_prev_;
+    const bool older = rewind_to_ == 0;
     rewind_to_ = -1;
-    restore(back);
+    restore(older ? saved_older_ : saved_prev_);  // (restore copies it before it changes them)
     ++result_.rewinds;
   }
 

@@ -438,7 +438,7 @@ INSTANTIATE_TEST_SUITE_P(Bundled, TripleCrank, testing::ValuesIn(triple_crank_ca
 // Steps undone by a rewind take their chart switches with them: the slider-crank's 2 s (80
 // switches between rod.x and rod.y, three of them inside steps that (C2') undoes and redoes) lists
 // each switch once, in time order, each leaving the chart the one before entered. (Without the
-// trimming in `restore` the redone switches were listed twice: 83 entries.)
+// trimming in `restore` the redone switches were listed twice: 3 of them on this run.)
 TEST(ChangePoints, ChartSwitchesOfUndoneStepsAreNotListedTwice) {
   const Model model = test::load_bundled("slider-crank");
   SimulateOptions o;
