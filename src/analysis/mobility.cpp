@@ -133,7 +133,7 @@ void sparse_rank(const Model& model, const SparseJacobian& J, const VecX& A_diag
                  const ChartOptions& options, Mobility& m) {
   m.sparse = true;
   if (model.nc == 0) return;
-  SparseRowRank s = sparse_row_rank(J.Et, A_diag, options.rank_tolerance, false);
+  SparseRowRank s = sparse_row_rank(J.Et, A_diag, options.rank_tolerance, {});
   m.rank = s.rank;
   m.smallest_pivot = s.smallest_pivot;
   m.largest_dropped = s.largest_dropped;

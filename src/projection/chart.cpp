@@ -83,11 +83,14 @@ int ChartSelector::select(const MatX& Et, const VecX& A_diag, const ChartOptions
 }
 
 int ChartSelector::select_sparse(const SparseMat& Et, const VecX& A_diag,
-                                 const ChartOptions& options, Chart& chart) {
+                                 const ChartOptions& options, Chart& chart, int required_rank) {
   const Eigen::Index n = Et.cols();
   if (Et.rows() == 0) return unconstrained_chart(n, chart);
   // 1. Rows: those the sparse QR keeps (the same scaled matrix as the dense step 1).
-  const SparseRowRank s = sparse_row_rank(Et, A_diag, options.rank_tolerance, true);
+  const SparseRowRank s =
+      sparse_row_rank(Et, A_diag, options.rank_tolerance,
+                      {.largest_dropped = false, .tangent = true, .tangent_rank = required_rank});
+  if (required_rank >= 0 && s.rank != required_rank) return s.rank;
   std::vector<char> redundant(static_cast<size_t>(Et.rows()), 0);
   for (const int row : s.redundant_rows) redundant[static_cast<size_t>(row)] = 1;
   chart.rows.clear();
@@ -137,15 +140,16 @@ int ChartSelector::select_sparse(const SparseMat& Et, const VecX& A_diag,
 // The columns are unit vectors (|R_11| = 1 in the dense QR), so the same tolerance applies to
 // |R_kk| directly. Without column pivoting R's diagonal is not ordered: smallest_pivot is the
 // smallest kept |R_kk|.
-//   (L5) with `tangent`: Q's columns r … of the nonempty rows, and a unit vector for each empty
+//   (L5) with request.tangent: Q's columns r … of the nonempty rows, and a unit vector for each
+//   empty
 //        row (a component no constraint touches), span {x : Sᵀx = 0}.
 SparseRowRank sparse_row_rank(const SparseMat& Et, const VecX& A_diag, double tolerance,
-                              bool tangent) {
+                              const SparseRowRankRequest& request) {
   SparseRowRank m;
   const int n = static_cast<int>(Et.cols());
   const int nc = static_cast<int>(Et.rows());
   if (nc == 0) {
-    if (tangent) m.tangent = MatX::Identity(n, n);
+    if (request.tangent) m.tangent = MatX::Identity(n, n);
     return m;
   }
   SparseMat S = Et.transpose();  // n × n_c
@@ -209,10 +213,11 @@ SparseRowRank sparse_row_rank(const SparseMat& Et, const VecX& A_diag, double to
   for (int k = m.rank; k < nc; ++k) {
     const int j = order(k);
     m.redundant_rows.push_back(col_at[static_cast<size_t>(j)]);
+    if (!request.largest_dropped) continue;
     const VecX Qt_s = qr.matrixQ().adjoint() * VecX(SP.col(j));
     m.largest_dropped = std::max(m.largest_dropped, Qt_s.tail(rows - m.rank).norm());
   }
-  if (!tangent) return m;
+  if (!request.tangent || (request.tangent_rank >= 0 && m.rank != request.tangent_rank)) return m;
   m.tangent = MatX::Zero(n, n - m.rank);  // (L5)
   int c = 0;
   VecX e(rows);

@@ -92,7 +92,7 @@ bool ChartEngine::select(const SparseEt& Et, const VecX& A_diag) {
   // (The start and a singular block's fallback only: not a hot path.)
   if (sparse_ && n_ >= kSparseSelectFrom) {
     const Eigen::SparseMatrix<double> E(Et.matrix());
-    if (selector_.select_sparse(E, A_diag, options_, candidate_) != r_) return false;
+    if (selector_.select_sparse(E, A_diag, options_, candidate_, r_) != r_) return false;
     set_chart(candidate_);
     return true;
   }
@@ -216,7 +216,7 @@ int ChartEngine::select_candidate(const MatX& Et, const VecX& A_diag) {
     for (int t = 0; t < row.count; ++t) row.values[t] = Et(i, row.columns[t]);
   }
   const Eigen::SparseMatrix<double> E(pattern_.matrix());
-  return selector_.select_sparse(E, A_diag, options_, candidate_);
+  return selector_.select_sparse(E, A_diag, options_, candidate_, r_);
 }
 
 int ChartEngine::determinant_sign() const {

@@ -48,8 +48,11 @@ class ChartSelector {
   // velocities in the mass metric is best conditioned (QR with column pivoting of its
   // transpose, as ChartEngine::select_from_tangent).
   // Allocates (a start or a fallback, not a hot path); row_pivots()/row_order() are not updated.
+  // With `required_rank` ≥ 0, a rank other than it is returned at once, `chart` unchanged (the
+  // caller takes only a chart of its rank: next to a change point the tangent basis would have
+  // n − rank ≈ N columns and cost O(N² n) for nothing).
   int select_sparse(const Eigen::SparseMatrix<double>& Et, const VecX& A_diag,
-                    const ChartOptions& options, Chart& chart);
+                    const ChartOptions& options, Chart& chart, int required_rank = -1);
   // |R_kk| / |R_11| of the last dense row selection (size nc, in pivot order), for reports.
   [[nodiscard]] const VecX& row_pivots() const { return row_pivots_; }
   [[nodiscard]] const std::vector<int>& row_order() const { return row_order_; }
@@ -70,11 +73,20 @@ struct SparseRowRank {
   std::vector<int> redundant_rows;  // the rows the QR dropped, in the order dropped
   double smallest_pivot = 0.0;      // smallest kept |R_kk| (the columns have unit length)
   double largest_dropped = 0.0;     // largest part of a dropped row outside the kept ones' span
-  // With `tangent`: n × (n − rank), an orthonormal basis of {x : Sᵀx = 0}, i.e. of the admissible
-  // velocities u = diag(√A) x in the mass metric (x = √M u for a diagonal M).
+  // With request.tangent: n × (n − rank), an orthonormal basis of {x : Sᵀx = 0}, i.e. of the
+  // admissible velocities u = diag(√A) x in the mass metric (x = √M u for a diagonal M).
   MatX tangent;
 };
+// What sparse_row_rank computes beyond the rank and the redundant rows: largest_dropped (one
+// product with Qᵀ per dropped row), and the tangent basis (one product with Q per column) only
+// where the rank is tangent_rank (any rank when negative).
+struct SparseRowRankRequest {
+  bool largest_dropped = true;
+  bool tangent = false;
+  int tangent_rank = -1;
+};
 [[nodiscard]] SparseRowRank sparse_row_rank(const Eigen::SparseMatrix<double>& Et,
-                                            const VecX& A_diag, double tolerance, bool tangent);
+                                            const VecX& A_diag, double tolerance,
+                                            const SparseRowRankRequest& request);
 
 }  // namespace orthomech

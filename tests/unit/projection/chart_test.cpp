@@ -117,7 +117,7 @@ TEST(ChartSparse, DependentRowIsDroppedAndTheTangentIsTheNullSpace) {
       1, 3, 3, -0.8;  // row 0 + row 1
   VecX A_diag(4);
   A_diag << 1.0, 0.5, 2.0, 0.25;
-  const SparseRowRank s = sparse_row_rank(Et.sparseView(), A_diag, 1e-8, true);
+  const SparseRowRank s = sparse_row_rank(Et.sparseView(), A_diag, 1e-8, {.tangent = true});
   EXPECT_EQ(s.rank, 2);
   ASSERT_EQ(s.redundant_rows.size(), 1U);
   EXPECT_LE(s.largest_dropped, 1e-12);
@@ -155,6 +155,40 @@ TEST(ChartSparse, DependentComponentIsBestConditionedInTheMassMetric) {
   EXPECT_EQ(c.independent, (std::vector<int>{0, 1, 2}));
 }
 
+// A required rank that the QR does not find returns that rank and leaves the chart as it was
+// (the chart engine takes only a chart of its own rank); the required rank found gives the same
+// chart as no requirement.
+TEST(ChartSparse, RequiredRankNotFoundLeavesTheChartUnchanged) {
+  MatX Et(2, 3);
+  Et << 1.0, 0.0, 0.01,  //
+      2.0, 0.0, 0.02;    // the first row twice: rank 1
+  ChartSelector selector(2, 3);
+  Chart free, required, before;
+  ASSERT_EQ(selector.select_sparse(Et.sparseView(), VecX::Ones(3), ChartOptions{}, free), 1);
+  ASSERT_EQ(selector.select_sparse(Et.sparseView(), VecX::Ones(3), ChartOptions{}, required, 1), 1);
+  EXPECT_EQ(required.rows, free.rows);
+  EXPECT_EQ(required.dependent, free.dependent);
+  EXPECT_EQ(required.independent, free.independent);
+  before = required;
+  EXPECT_EQ(selector.select_sparse(Et.sparseView(), VecX::Ones(3), ChartOptions{}, required, 2), 1);
+  EXPECT_EQ(required.rows, before.rows);
+  EXPECT_EQ(required.dependent, before.dependent);
+  // sparse_row_rank: no tangent at another rank, and largest_dropped only when asked.
+  const SparseRowRank other =
+      sparse_row_rank(Et.sparseView(), VecX::Ones(3), 1e-8, {.tangent = true, .tangent_rank = 2});
+  EXPECT_EQ(other.rank, 1);
+  EXPECT_EQ(other.tangent.size(), 0);
+  MatX Et_off = Et;
+  Et_off(1, 1) = 1e-3;  // the second row 1e-3 off the first's span
+  const SparseRowRank loose = sparse_row_rank(Et_off.sparseView(), VecX::Ones(3), 1e-2, {});
+  ASSERT_EQ(loose.rank, 1);
+  EXPECT_GT(loose.largest_dropped, 1e-4);
+  const SparseRowRank skipped =
+      sparse_row_rank(Et_off.sparseView(), VecX::Ones(3), 1e-2, {.largest_dropped = false});
+  EXPECT_EQ(skipped.redundant_rows, loose.redundant_rows);
+  EXPECT_EQ(skipped.largest_dropped, 0.0);
+}
+
 // 2-norm condition number of the chart's scaled block S_R E_RD S_D (an SVD here).
 double block_condition(const MatX& Et, const VecX& A_diag, const Chart& c) {
   const auto r = static_cast<Eigen::Index>(c.rows.size());
@@ -188,7 +222,7 @@ TEST(ChartSparse, LargeFourBarBlockAsWellConditionedAsTheDenseChoice) {
     const double k_dense = block_condition(Et, A_diag, dense);
     const double k_sparse = block_condition(Et, A_diag, sparse);
     EXPECT_LT(k_sparse, 20.0 * k_dense) << "theta " << theta << ": dense " << k_dense;
-    const SparseRowRank s = sparse_row_rank(Et.sparseView(), A_diag, 1e-8, true);
+    const SparseRowRank s = sparse_row_rank(Et.sparseView(), A_diag, 1e-8, {.tangent = true});
     expect_tangent(Et, A_diag, s);
   }
 }
