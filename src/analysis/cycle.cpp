@@ -13,14 +13,17 @@
 #include "orthomech/analysis/mobility.hpp"
 #include "orthomech/analysis/positions.hpp"
 #include "orthomech/check.hpp"
+#include "orthomech/constraints/constraint_system.hpp"
 #include "orthomech/constraints/joints.hpp"
 #include "orthomech/constraints/rolling_disc.hpp"
+#include "orthomech/constraints/sparse_et.hpp"
 #include "orthomech/constraints/spatial_joints.hpp"
 #include "orthomech/io/units.hpp"
 #include "orthomech/model/free_system.hpp"
 #include "orthomech/model/loads.hpp"
 #include "orthomech/model/measures.hpp"
 #include "orthomech/numerics/small_lu.hpp"
+#include "orthomech/numerics/sparse_lu.hpp"
 #include "orthomech/projection/dual.hpp"
 #include "orthomech/projection/free_system_stage.hpp"
 #include "orthomech/projection/primal.hpp"
@@ -55,6 +58,37 @@ const char* to_string(CycleStatus s) {
   return "?";
 }
 
+// The corrector of a large model (issue 18: nothing of size n_c · n or n × n per iterate).
+// - Eᵀ evaluated on its pattern, and copied into the dense Eᵀ's pattern entries, whose other
+//   entries stay zero (zeroing the N = 400 four-bar's dense Eᵀ, 46 MB, at every evaluation was
+//   30 % of its cycle).
+// - Its Jacobian in compressed form: the rows A = [E_Rᵀ; dᵀ; I] (all rows of Eᵀ with redundant
+//   rows), J = A or the normal matrix AᵀA, and J's LU by KLU (a fresh analysis per
+//   factorisation: the corrector factorises only where its chord steps fail, a few times per
+//   sweep).
+struct DrivenWorkspace::SparseJacobian {
+  explicit SparseJacobian(const Model& model) : Et(model) {}
+  SparseEt Et;
+  // The dense Eᵀ zeroed once before the first copy (a ConstraintWorkspace starts zeroed and its
+  // evaluations write only the pattern; this guards a matrix written otherwise).
+  bool dense_zeroed = false;
+  std::vector<Eigen::Triplet<double>> entries;
+  Eigen::SparseMatrix<double> A, J;
+  VecX b;  // A's right-hand side (normal equations)
+  SparseLu lu;
+};
+
+namespace {
+[[nodiscard]] bool uses_sparse_jacobian(const Model& model) {
+  return model.n >= DrivenWorkspace::kSparseJacobianFrom &&
+         constraint_system(model).structurally_sparse();
+}
+}  // namespace
+
+DrivenWorkspace::DrivenWorkspace(DrivenWorkspace&&) noexcept = default;
+DrivenWorkspace& DrivenWorkspace::operator=(DrivenWorkspace&&) noexcept = default;
+DrivenWorkspace::~DrivenWorkspace() = default;
+
 DrivenWorkspace::DrivenWorkspace(const Model& model, int rank, std::vector<int> idle)
     : d(VecX::Zero(model.n)),
       Fdot_v(VecX::Zero(model.n)),
@@ -65,8 +99,9 @@ DrivenWorkspace::DrivenWorkspace(const Model& model, int rank, std::vector<int> 
       small(model.nc - rank),
       rhs_r(rank),
       other_rows(static_cast<size_t>(model.nc - rank)),
-      J(model.n, model.n),
-      J_piv(model.n),
+      J(uses_sparse_jacobian(model) ? 0 : model.n, uses_sparse_jacobian(model) ? 0 : model.n),
+      J_piv(uses_sparse_jacobian(model) ? 0 : model.n),
+      J_sparse(uses_sparse_jacobian(model) ? std::make_unique<SparseJacobian>(model) : nullptr),
       g(model.n),
       dq(model.n),
       rotations(model),
@@ -526,7 +561,13 @@ struct Sweep {
   double evaluate_iterate(const VecX& q, double target, double& s, const VecX* row = nullptr,
                           const VecX* q_ref = nullptr, bool jacobian = true) {
     w.rotations.update(model, q);
-    if (jacobian)
+    if (jacobian && w.sparse_jacobian()) {
+      DrivenWorkspace::SparseJacobian& S = *w.J_sparse;
+      compute_constraint_residual_and_jacobian(model, q, w.rotations, ws.constraints.f, S.Et);
+      if (!S.dense_zeroed) ws.constraints.Et.setZero();
+      S.dense_zeroed = true;
+      S.Et.copy_values_to(ws.constraints.Et);
+    } else if (jacobian)
       compute_constraint_residual_and_jacobian(model, q, w.rotations, ws.constraints.f,
                                                ws.constraints.Et);
     else
@@ -613,46 +654,100 @@ struct Sweep {
       double s = 0.0;
       const double res = evaluate_iterate(q, target, s, row, q_ref);
       if (converged(res, q)) return true;
+      const VecX& lock = row ? *row : w.d;
       if (!factored || res > 0.1 * previous) {
-        if (all_rows) {  // normal equations of [Eᵀ; dᵀ]
-          w.J.noalias() = ws.constraints.Et.transpose() * ws.constraints.Et;
-          if (row)
-            w.J.noalias() += *row * row->transpose();
-          else
-            w.J.noalias() += w.d * w.d.transpose();
-          if (k > 0) w.J.noalias() += idle_at.transpose() * idle_at;
-        } else {
-          for (int i = 0; i < r; ++i)
-            w.J.row(i) = ws.constraints.Et.row(c.rows[static_cast<size_t>(i)]);
-          if (row)
-            w.J.row(r) = row->transpose();
-          else
-            w.J.row(r) = w.d.transpose();
-          if (k > 0) w.J.bottomRows(k) = idle_at;
-        }
         ++factorisations;
-        if (!(lu_factor(w.J, w.J_piv) > (all_rows ? 1e-26 : 1e-13))) return false;
+        const double ratio = w.sparse_jacobian() ? factor_sparse(all_rows, c, lock, k)
+                                                 : factor_dense(all_rows, c, lock, k);
+        if (!(ratio > (all_rows ? 1e-26 : 1e-13))) return false;
         factored = true;
       }
       previous = res;
-      if (all_rows) {
-        w.dq.noalias() = ws.constraints.Et.transpose() * ws.constraints.f;
-        if (row)
-          w.dq += (s - target) * *row;
-        else
-          w.dq += (s - target) * w.d;
-      } else {
-        for (int i = 0; i < r; ++i) w.dq(i) = ws.constraints.f(c.rows[static_cast<size_t>(i)]);
-        w.dq(r) = s - target;
-        w.dq.tail(k).setZero();  // the idle rows
-      }
-      lu_solve(w.J, w.J_piv, w.dq);
+      newton_step(all_rows, c, lock, s - target, k);
       if (!(max_abs(w.dq) <= max_step)) return false;
       integrate_positions(model, q, w.dq, -1.0);
       at_q = DrivenJacobian::evaluate;
       if (!q.allFinite()) return false;
     }
     return false;
+  }
+
+  // The corrector's Jacobian [E_Rᵀ; lockᵀ; I] (k idle rows), or with redundant rows the normal
+  // matrix of [Eᵀ; lockᵀ; I], factorised densely in w.J. Returns the LU's pivot ratio.
+  double factor_dense(bool all_rows, const Chart& c, const VecX& lock, Eigen::Index k) {
+    const int r = c.rank();
+    if (all_rows) {
+      w.J.noalias() = ws.constraints.Et.transpose() * ws.constraints.Et;
+      w.J.noalias() += lock * lock.transpose();
+      if (k > 0) w.J.noalias() += idle_at.transpose() * idle_at;
+    } else {
+      for (int i = 0; i < r; ++i)
+        w.J.row(i) = ws.constraints.Et.row(c.rows[static_cast<size_t>(i)]);
+      w.J.row(r) = lock.transpose();
+      if (k > 0) w.J.bottomRows(k) = idle_at;
+    }
+    return lu_factor(w.J, w.J_piv);
+  }
+
+  // The same in compressed form, factorised by KLU (large models: w.sparse_jacobian()), from Eᵀ
+  // on its pattern (the iterate's, evaluated by evaluate_iterate).
+  double factor_sparse(bool all_rows, const Chart& c, const VecX& lock, Eigen::Index k) {
+    DrivenWorkspace::SparseJacobian& S = *w.J_sparse;
+    const int r = c.rank();
+    const int m = all_rows ? model.nc : r;  // rows of A taken from Eᵀ
+    S.entries.clear();
+    for (int i = 0; i < m; ++i) {
+      const int row = all_rows ? i : c.rows[static_cast<size_t>(i)];
+      const auto cols = S.Et.row_columns(row);
+      const auto vals = S.Et.row_values(row);
+      for (size_t t = 0; t < cols.size(); ++t) S.entries.emplace_back(i, cols[t], vals[t]);
+    }
+    for (Eigen::Index j = 0; j < model.n; ++j) {
+      if (lock(j) != 0.0) S.entries.emplace_back(m, static_cast<int>(j), lock(j));
+      for (Eigen::Index i = 0; i < k; ++i)
+        if (idle_at(i, j) != 0.0)
+          S.entries.emplace_back(m + 1 + static_cast<int>(i), static_cast<int>(j), idle_at(i, j));
+    }
+    S.A.resize(m + 1 + k, model.n);
+    S.A.setFromTriplets(S.entries.begin(), S.entries.end());
+    if (all_rows)
+      S.J = S.A.transpose() * S.A;
+    else
+      S.J = S.A;
+    S.J.makeCompressed();
+    if (!S.lu.analyze(S.J) || !S.lu.factorize(S.J)) return 0.0;
+    return S.lu.pivot_ratio();
+  }
+
+  // The Newton step into w.dq: J Δq = [f_R; s − target; 0] (or the normal equations' right-hand
+  // side [Eᵀ; lockᵀ; I]ᵀ [f; s − target; 0]), solved with the factorisation above.
+  void newton_step(bool all_rows, const Chart& c, const VecX& lock, double lock_residual,
+                   Eigen::Index k) {
+    const int r = c.rank();
+    if (w.sparse_jacobian()) {
+      DrivenWorkspace::SparseJacobian& S = *w.J_sparse;
+      if (all_rows) {
+        S.b.setZero(S.A.rows());
+        S.b.head(model.nc) = ws.constraints.f;
+        S.b(model.nc) = lock_residual;
+        w.dq.noalias() = S.A.transpose() * S.b;
+      } else {
+        for (int i = 0; i < r; ++i) w.dq(i) = ws.constraints.f(c.rows[static_cast<size_t>(i)]);
+        w.dq(r) = lock_residual;
+        w.dq.tail(k).setZero();  // the idle rows
+      }
+      S.lu.solve_in_place(w.dq.data());
+      return;
+    }
+    if (all_rows) {
+      w.dq.noalias() = ws.constraints.Et.transpose() * ws.constraints.f;
+      w.dq += lock_residual * lock;
+    } else {
+      for (int i = 0; i < r; ++i) w.dq(i) = ws.constraints.f(c.rows[static_cast<size_t>(i)]);
+      w.dq(r) = lock_residual;
+      w.dq.tail(k).setZero();  // the idle rows
+    }
+    lu_solve(w.J, w.J_piv, w.dq);
   }
 };
 

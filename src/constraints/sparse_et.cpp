@@ -89,6 +89,14 @@ void SparseEt::set_from_general(const Model& model, const VecX& q) {
 
 void SparseEt::to_dense(MatX& Et) const { Et = MatX(m_); }
 
+void SparseEt::copy_values_to(MatX& Et) const {
+  for (int i = 0; i < rows(); ++i) {
+    const auto cols = row_columns(i);
+    const auto vals = row_values(i);
+    for (size_t t = 0; t < cols.size(); ++t) Et(i, cols[t]) = vals[t];
+  }
+}
+
 SparseEt::Row SparseEt::row(int i) {
   const int b = m_.outerIndexPtr()[i];
   const int e = m_.outerIndexPtr()[i + 1];

@@ -28,6 +28,7 @@
 #include <cstddef>
 #include <functional>
 #include <iterator>
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
@@ -273,11 +274,20 @@ struct DrivenWorkspace {
   VecX rhs_r;                   // r
   std::vector<int> other_rows;  // the k redundant rows (complement of the chart's rows)
   // n × n: [E_Rᵀ; dᵀ], Jacobian of the locked-input position problem (with redundant rows the
-  // normal matrix EEᵀ + ddᵀ of all rows instead), then its LU in place.
+  // normal matrix EEᵀ + ddᵀ of all rows instead), then its LU in place. Empty on a large model
+  // (sparse_jacobian() true): J is then kept in compressed form and factorised by KLU
+  // (SparseJacobian, cycle.cpp), so that no n × n matrix is formed (a dense LU at n = 6000 is
+  // 1.4e11 flops).
   MatX J;
   Eigen::VectorXi J_piv;  // n: row interchanges of that LU
-  VecX g;                 // n: scratch (a row of Eᵀ, for the null space N)
-  VecX dq;                // n: right-hand side, then Newton step, of the corrector
+  struct SparseJacobian;
+  std::unique_ptr<SparseJacobian> J_sparse;
+  [[nodiscard]] bool sparse_jacobian() const { return J_sparse != nullptr; }
+  // From this many coordinates on, a structurally sparse model's J is sparse (below it the dense
+  // LU is cheap, and its results are those of before).
+  static constexpr int kSparseJacobianFrom = 300;
+  VecX g;   // n: scratch (a row of Eᵀ, for the null space N)
+  VecX dq;  // n: right-hand side, then Newton step, of the corrector
   // R(φ_b) of every body at the q of the last compute_driven; the corrector updates it with Eᵀ.
   BodyPoses rotations;
   // Idle degrees of freedom held at zero rate (empty: none): their bodies (Mobility::idle), and
@@ -288,6 +298,9 @@ struct DrivenWorkspace {
   VecX F_held, idle_Idot_u, idle_mu;
   double length_scale = 1.0;  // of the mechanism (m): the step of the İ u differences
   DrivenWorkspace(const Model& model, int rank, std::vector<int> idle_bodies = {});
+  DrivenWorkspace(DrivenWorkspace&&) noexcept;
+  DrivenWorkspace& operator=(DrivenWorkspace&&) noexcept;
+  ~DrivenWorkspace();
 };
 
 // What a driven position reports at its state (q, u) with u̇ and λ: every joint's reaction

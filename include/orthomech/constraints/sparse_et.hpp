@@ -62,6 +62,10 @@ class SparseEt {
   void set_from_general(const Model& model, const VecX& q);
   // Et (resized to n_c × n) ← this matrix, zeros outside the pattern.
   void to_dense(MatX& Et) const;
+  // Et's entries on the pattern ← this matrix's; the others are not touched (O(non-zeros)): for a
+  // dense Eᵀ (n_c × n) whose entries outside the pattern are zero, as every evaluation leaves
+  // them.
+  void copy_values_to(MatX& Et) const;
   [[nodiscard]] Row row(int i);
 
  private:

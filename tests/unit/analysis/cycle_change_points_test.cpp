@@ -263,6 +263,10 @@ TEST(CycleChangePoints, LargeNFourBarOnTheRatedSparsePath) {
     ASSERT_EQ(mob.dof, 1);
     EXPECT_TRUE(Workspace(model, mob.rank, ChartFactorisation::rated_sparse_when_large)
                     .dual.engine.sparse());
+    // The corrector's Jacobian is sparse too (n ≥ kSparseJacobianFrom), and used: its own
+    // factorisations happen next to the change points.
+    EXPECT_TRUE(DrivenWorkspace(model, mob.rank).sparse_jacobian());
+    EXPECT_EQ(DrivenWorkspace(model, mob.rank).J.size(), 0);
     const double K = 9.81 * ((N + 1) / 2.0 + N), omega = 2.0 * kPi;
     CycleOptions o;
     o.driver.joint = model.find_joint("O0");
@@ -271,11 +275,16 @@ TEST(CycleChangePoints, LargeNFourBarOnTheRatedSparsePath) {
     const CycleResult r = run_cycle(model, o);
     ASSERT_EQ(r.status, CycleStatus::completed) << N << ": " << r.message;
     EXPECT_EQ(r.bridges.size(), 2u) << N;
+    EXPECT_GT(r.corrector_factorisations, 0) << N;
     const Body& c =
         model.bodies[static_cast<size_t>(model.find_body("coupler" + std::to_string(N / 2)))];
     for (const DrivenPointView& p : r.points) {
       ASSERT_TRUE(drive_reported(p) && rates_reported(p)) << N << " " << p.input;
       EXPECT_NEAR(p.drive, K * std::cos(p.input), 2e-9 * K) << N << " " << p.input;
+      // Positions on the parallelogram branch: coupler k's centre at (k + 1/2 + cos θ, sin θ)
+      // (link k pivots at (k, 0), unit lengths).
+      EXPECT_NEAR(p.q(c.q_offset), N / 2 + 0.5 + std::cos(p.input), 1e-9) << N << " " << p.input;
+      EXPECT_NEAR(p.q(c.q_offset + 1), std::sin(p.input), 1e-9) << N << " " << p.input;
       EXPECT_NEAR(p.udot(c.u_offset), -omega * omega * std::cos(p.input), 1e-7)
           << N << " " << p.input;
       EXPECT_NEAR(p.udot(c.u_offset + 1), -omega * omega * std::sin(p.input), 1e-7)

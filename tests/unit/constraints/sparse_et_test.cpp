@@ -148,6 +148,30 @@ TEST(SparseEt, ColumnsAndRowsAgree) {
             1e-13);
 }
 
+// copy_values_to writes the pattern's entries only: into a zeroed dense matrix it gives the
+// dense evaluation bit for bit at a second position after a first (the cycle's corrector on a
+// large model), and an entry outside the pattern keeps whatever it holds.
+TEST(SparseEt, CopyValuesToWritesThePatternOnly) {
+  const Model model = test::load_bundled("andrews-squeezer");
+  SparseEt Et(model);
+  MatX copied = MatX::Zero(model.nc, model.n);
+  for (const double scale : {0.05, -0.11}) {
+    const VecX q = generic_q(model, scale);
+    compute_constraint_jacobian(model, q, Et);
+    Et.copy_values_to(copied);
+    MatX dense(model.nc, model.n);
+    compute_constraint_jacobian(model, q, dense);
+    EXPECT_EQ((copied - dense).cwiseAbs().maxCoeff(), 0.0) << scale;
+  }
+  const auto cols = Et.row_columns(0);
+  int outside = 0;
+  while (std::find(cols.begin(), cols.end(), outside) != cols.end()) ++outside;
+  ASSERT_LT(outside, model.n);
+  copied(0, outside) = 7.0;
+  Et.copy_values_to(copied);
+  EXPECT_EQ(copied(0, outside), 7.0);
+}
+
 TEST(SparseEt, AGeneralSystemHasTheFullPatternAndItsFunctionsValues) {
   const Model model = test::andrews_relative();
   SparseEt Et(model);
