@@ -79,9 +79,8 @@ struct DrivenWorkspace::SparseJacobian {
 };
 
 namespace {
-[[nodiscard]] bool uses_sparse_jacobian(const Model& model) {
-  return model.n >= DrivenWorkspace::kSparseJacobianFrom &&
-         constraint_system(model).structurally_sparse();
+[[nodiscard]] bool uses_sparse_jacobian(const Model& model, int from) {
+  return model.n >= from && constraint_system(model).structurally_sparse();
 }
 }  // namespace
 
@@ -89,7 +88,8 @@ DrivenWorkspace::DrivenWorkspace(DrivenWorkspace&&) noexcept = default;
 DrivenWorkspace& DrivenWorkspace::operator=(DrivenWorkspace&&) noexcept = default;
 DrivenWorkspace::~DrivenWorkspace() = default;
 
-DrivenWorkspace::DrivenWorkspace(const Model& model, int rank, std::vector<int> idle)
+DrivenWorkspace::DrivenWorkspace(const Model& model, int rank, std::vector<int> idle,
+                                 int sparse_jacobian_from)
     : d(VecX::Zero(model.n)),
       Fdot_v(VecX::Zero(model.n)),
       R(VecX::Zero(model.n)),
@@ -99,14 +99,19 @@ DrivenWorkspace::DrivenWorkspace(const Model& model, int rank, std::vector<int> 
       small(model.nc - rank),
       rhs_r(rank),
       other_rows(static_cast<size_t>(model.nc - rank)),
-      J(uses_sparse_jacobian(model) ? 0 : model.n, uses_sparse_jacobian(model) ? 0 : model.n),
-      J_piv(uses_sparse_jacobian(model) ? 0 : model.n),
-      J_sparse(uses_sparse_jacobian(model) ? std::make_unique<SparseJacobian>(model) : nullptr),
+      J_sparse(uses_sparse_jacobian(model, sparse_jacobian_from)
+                   ? std::make_unique<SparseJacobian>(model)
+                   : nullptr),
       g(model.n),
       dq(model.n),
       rotations(model),
       idle_bodies(std::move(idle)),
-      length_scale(mechanism_size(model)) {}
+      length_scale(mechanism_size(model)) {
+  if (!J_sparse) {
+    J.resize(model.n, model.n);
+    J_piv.resize(model.n);
+  }
+}
 
 // ---- stored positions -----------------------------------------------------------------------
 void DrivenPoints::unwrap_measure(std::size_t i) {
@@ -723,31 +728,25 @@ struct Sweep {
   // side [Eᵀ; lockᵀ; I]ᵀ [f; s − target; 0]), solved with the factorisation above.
   void newton_step(bool all_rows, const Chart& c, const VecX& lock, double lock_residual,
                    Eigen::Index k) {
-    const int r = c.rank();
-    if (w.sparse_jacobian()) {
-      DrivenWorkspace::SparseJacobian& S = *w.J_sparse;
-      if (all_rows) {
-        S.b.setZero(S.A.rows());
-        S.b.head(model.nc) = ws.constraints.f;
-        S.b(model.nc) = lock_residual;
-        w.dq.noalias() = S.A.transpose() * S.b;
-      } else {
-        for (int i = 0; i < r; ++i) w.dq(i) = ws.constraints.f(c.rows[static_cast<size_t>(i)]);
-        w.dq(r) = lock_residual;
-        w.dq.tail(k).setZero();  // the idle rows
-      }
-      S.lu.solve_in_place(w.dq.data());
-      return;
-    }
-    if (all_rows) {
+    DrivenWorkspace::SparseJacobian* S = w.J_sparse.get();
+    if (all_rows && S) {
+      S->b.setZero(S->A.rows());
+      S->b.head(model.nc) = ws.constraints.f;
+      S->b(model.nc) = lock_residual;
+      w.dq.noalias() = S->A.transpose() * S->b;
+    } else if (all_rows) {
       w.dq.noalias() = ws.constraints.Et.transpose() * ws.constraints.f;
       w.dq += lock_residual * lock;
     } else {
+      const int r = c.rank();
       for (int i = 0; i < r; ++i) w.dq(i) = ws.constraints.f(c.rows[static_cast<size_t>(i)]);
       w.dq(r) = lock_residual;
       w.dq.tail(k).setZero();  // the idle rows
     }
-    lu_solve(w.J, w.J_piv, w.dq);
+    if (S)
+      S->lu.solve_in_place(w.dq.data());
+    else
+      lu_solve(w.J, w.J_piv, w.dq);
   }
 };
 
@@ -1055,7 +1054,7 @@ CycleRun::CycleRun(const Model& model, const CycleOptions& options, const CycleR
       state_(std::move(start)),
       ws_(model, mob.rank, ChartFactorisation::rated_sparse_when_large,
           {.mass = MassStorage::diagonal_if_possible, .primal = false, .dual_projections = false}),
-      w_(model, mob.rank, idle_body_indices(model, mob)),
+      w_(model, mob.rank, idle_body_indices(model, mob), options.sparse_jacobian_from),
       sweep_{model, request.joint, ws_, w_} {
   // The free system, Eᵀ, Dᵀ and the chart with F at the start (the stages the cycle uses).
   compute_free_system(model_, state_, ws_);

@@ -41,6 +41,11 @@
 
 namespace orthomech {
 
+// From this many coordinates on, the position corrector of `cycle` keeps the Jacobian of a
+// structurally sparse model in compressed form (DrivenWorkspace::J_sparse): below it the dense LU
+// is cheap, and its results are those of before.
+inline constexpr int kSparseJacobianFrom = 300;
+
 struct CycleOptions {
   // joint and law s(t): constant speed (a full turn of a revolute, or start → end), harmonic
   // (one period 1/f); polynomial laws have no cycle and are refused.
@@ -59,6 +64,9 @@ struct CycleOptions {
   std::function<void(double)> progress;
   // Take the positions next to change points from the branch (CycleResult::bridges).
   bool bridge_change_points = true;
+  // From this many coordinates on, the corrector's Jacobian of a structurally sparse model is
+  // sparse (kSparseJacobianFrom; tests set 0 to run small models on that path).
+  int sparse_jacobian_from = kSparseJacobianFrom;
 };
 
 // How far the initial projection moved a body from its drawn pose (with the driven joint held at
@@ -283,9 +291,6 @@ struct DrivenWorkspace {
   struct SparseJacobian;
   std::unique_ptr<SparseJacobian> J_sparse;
   [[nodiscard]] bool sparse_jacobian() const { return J_sparse != nullptr; }
-  // From this many coordinates on, a structurally sparse model's J is sparse (below it the dense
-  // LU is cheap, and its results are those of before).
-  static constexpr int kSparseJacobianFrom = 300;
   VecX g;   // n: scratch (a row of Eᵀ, for the null space N)
   VecX dq;  // n: right-hand side, then Newton step, of the corrector
   // R(φ_b) of every body at the q of the last compute_driven; the corrector updates it with Eᵀ.
@@ -297,7 +302,8 @@ struct DrivenWorkspace {
   MatX idle_I, idle_V, idle_IF;
   VecX F_held, idle_Idot_u, idle_mu;
   double length_scale = 1.0;  // of the mechanism (m): the step of the İ u differences
-  DrivenWorkspace(const Model& model, int rank, std::vector<int> idle_bodies = {});
+  DrivenWorkspace(const Model& model, int rank, std::vector<int> idle_bodies = {},
+                  int sparse_jacobian_from = kSparseJacobianFrom);
   DrivenWorkspace(DrivenWorkspace&&) noexcept;
   DrivenWorkspace& operator=(DrivenWorkspace&&) noexcept;
   ~DrivenWorkspace();
