@@ -140,9 +140,8 @@ int ChartSelector::select_sparse(const SparseMat& Et, const VecX& A_diag,
 // The columns are unit vectors (|R_11| = 1 in the dense QR), so the same tolerance applies to
 // |R_kk| directly. Without column pivoting R's diagonal is not ordered: smallest_pivot is the
 // smallest kept |R_kk|.
-//   (L5) with request.tangent: Q's columns r … of the nonempty rows, and a unit vector for each
-//   empty
-//        row (a component no constraint touches), span {x : Sᵀx = 0}.
+//   (L5) with request.tangent: Q's columns r … of the nonempty rows, and a unit vector for
+//        each empty row (a component no constraint touches), span {x : Sᵀx = 0}.
 SparseRowRank sparse_row_rank(const SparseMat& Et, const VecX& A_diag, double tolerance,
                               const SparseRowRankRequest& request) {
   SparseRowRank m;
