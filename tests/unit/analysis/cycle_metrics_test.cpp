@@ -14,6 +14,8 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <string>
+#include <vector>
 
 #include "support/fixtures.hpp"
 
@@ -22,6 +24,59 @@ namespace {
 
 constexpr double a = 0.03, b = 0.08, c = 0.06, d = 0.07;
 constexpr double kPi = std::numbers::pi;
+
+// A named point that no joint uses is a tracer: its x and y ranges are strokes. Andrews' K3 has D
+// (the spring's end) and E, B (joints): only K3.D.x and K3.D.y are listed. Their extremes against
+// D computed here from each position's body pose, D = r_K3 + R(γ)(D_local − com_local), itself
+// checked against the spring_length measure |D − C| (C = (0.014, 0.072) m, the file's ground
+// point). The strokes refine the extremes between grid positions: at 360 positions they are at
+// or beyond the grid's (measured 2.8e-8 and 3.4e-8 m beyond the minima) and within 1e-8 m of a
+// 3600-position grid's (whose own error is about r Δθ²/8 ≈ 4e-9 m).
+TEST(CycleMetrics, TracerPointStrokesOnAndrewsSqueezer) {
+  const Model model = test::load_bundled("andrews-squeezer");
+  const Body& k3 = model.bodies[static_cast<size_t>(model.find_body("K3"))];
+  Vec2 d_local = Vec2::Zero();
+  for (const auto& [name, local] : k3.points)
+    if (name == "D") d_local = local - k3.com_local;
+  const Vec2 ground_c(0.014, 0.072);
+  size_t spring = 0;
+  while (model.measures[spring].name != "spring_length") ++spring;
+  // D's extremes over the positions of a sweep.
+  auto extremes = [&](const CycleResult& r, Vec2& lo, Vec2& hi) {
+    lo = Vec2::Constant(1e300);
+    hi = Vec2::Constant(-1e300);
+    for (const DrivenPointView& p : r.points) {
+      const double g = p.q(k3.q_offset + 2);
+      const Vec2 pd = Vec2(p.q(k3.q_offset), p.q(k3.q_offset + 1)) +
+                      Vec2(std::cos(g) * d_local.x() - std::sin(g) * d_local.y(),
+                           std::sin(g) * d_local.x() + std::cos(g) * d_local.y());
+      ASSERT_NEAR((pd - ground_c).norm(), p.measures[spring], 1e-15);
+      lo = lo.cwiseMin(pd);
+      hi = hi.cwiseMax(pd);
+    }
+  };
+  const CycleResult result = test::full_cycle(model, 360);
+  Vec2 lo, hi, lo_fine, hi_fine;
+  extremes(result, lo, hi);
+  extremes(test::full_cycle(model, 3600), lo_fine, hi_fine);
+  CycleMetricsOptions options;
+  options.driver_joint = model.find_joint("O");
+  const CycleMetrics m = compute_cycle_metrics(model, result, options);
+  std::vector<std::string> tracers;
+  for (const StrokeMetric& st : m.strokes)
+    if (st.name.starts_with("K")) tracers.push_back(st.name);
+  ASSERT_EQ(tracers, (std::vector<std::string>{"K3.D.x", "K3.D.y"}));
+  for (int axis = 0; axis < 2; ++axis) {
+    const auto it = std::find_if(m.strokes.begin(), m.strokes.end(), [&](const StrokeMetric& st) {
+      return st.name == (axis == 0 ? "K3.D.x" : "K3.D.y");
+    });
+    EXPECT_LE(it->min.value, lo(axis) + 1e-15);
+    EXPECT_GE(it->max.value, hi(axis) - 1e-15);
+    EXPECT_NEAR(it->min.value, lo_fine(axis), 1e-8);
+    EXPECT_NEAR(it->max.value, hi_fine(axis), 1e-8);
+    EXPECT_NEAR(it->range, it->max.value - it->min.value, 1e-15);
+  }
+}
 
 TEST(CycleMetrics, CrankRockerAgainstTheFourBarsClosedForms) {
   const Model model = test::load_bundled("crank-rocker");
