@@ -169,20 +169,27 @@ TEST(ChartSparse, RequiredRankNotFoundLeavesTheChartUnchanged) {
   EXPECT_EQ(required.rows, free.rows);
   EXPECT_EQ(required.dependent, free.dependent);
   EXPECT_EQ(required.independent, free.independent);
+  // A chart no selection would give (so that one written at rank 1 would show).
+  required.rows = {1};
+  required.dependent = {1};
+  required.independent = {0, 2};
   before = required;
   EXPECT_EQ(selector.select_sparse(Et.sparseView(), VecX::Ones(3), ChartOptions{}, required, 2), 1);
   EXPECT_EQ(required.rows, before.rows);
   EXPECT_EQ(required.dependent, before.dependent);
+  EXPECT_EQ(required.independent, before.independent);
   // sparse_row_rank: no tangent at another rank, and largest_dropped only when asked.
   const SparseRowRank other =
       sparse_row_rank(Et.sparseView(), VecX::Ones(3), 1e-8, {.tangent = true, .tangent_rank = 2});
   EXPECT_EQ(other.rank, 1);
   EXPECT_EQ(other.tangent.size(), 0);
   MatX Et_off = Et;
-  Et_off(1, 1) = 1e-3;  // the second row 1e-3 off the first's span
+  // The second row (2, 1e-3, 0.02): its part outside the first's span is (0, 1e-3, 0), and the
+  // rows enter the QR normalised, so the dropped part is 1e-3 / ‖(2, 1e-3, 0.02)‖ (≈ 5e-4).
+  Et_off(1, 1) = 1e-3;
   const SparseRowRank loose = sparse_row_rank(Et_off.sparseView(), VecX::Ones(3), 1e-2, {});
   ASSERT_EQ(loose.rank, 1);
-  EXPECT_GT(loose.largest_dropped, 1e-4);
+  EXPECT_NEAR(loose.largest_dropped, 1e-3 / Et_off.row(1).norm(), 1e-12);
   const SparseRowRank skipped =
       sparse_row_rank(Et_off.sparseView(), VecX::Ones(3), 1e-2, {.largest_dropped = false});
   EXPECT_EQ(skipped.redundant_rows, loose.redundant_rows);
