@@ -1153,8 +1153,9 @@ class Simulation {
     const VecX vv = project_velocity(dyn_.MF_, dyn_.H_llt_, dyn_.state_.u);
     dyn_.state_.u.noalias() = dyn_.F_ * vv;
     dyn_.momentum_from_velocity(y.segment(nq_, n_));
-    // A poor chart only slows the corrector: re-select it when it degrades.
-    if (dyn_.chart_spread() > kSpreadLimit) {
+    // A poor chart only slows the corrector: re-select it when the rule says it degraded (no
+    // hysteresis on the choice: the primal form's results do not depend on the chart).
+    if (chart_rule_.due(1.0 / dyn_.chart_spread())) {
       const Chart old = dyn_.cs_.chart();
       dyn_.cs_.select_from_tangent(dyn_.F_, dyn_.M_sqrt());
       chart_changed = true;
@@ -1189,40 +1190,33 @@ class Simulation {
     return true;
   }
 
-  // Dual form. Chart monitor: re-select when F's mass-scaled entries grow; switch if the new
-  // chart is clearly better (hysteresis 2), re-expressing v from u = F v. Returns the spread
-  // of the chart the step ended in.
+  // Dual form. Chart monitor: the engines' one switching rule (ChartSwitchRule) on the quality
+  // 1/spread, the candidate chosen from the tangent F; a switch re-expresses v from u = F v.
+  // Returns the spread of the chart the step ended in.
   double monitor_chart(double t, VecX& y, bool& chart_changed) {
     const double spread = dyn_.chart_spread();
-
-    if (spread > spread_limit_) {
-      const Chart old = dyn_.cs_.chart();
-      const VecX u = dyn_.F_ * y.segment(nq_, na_);
-      dyn_.cs_.select_from_tangent(dyn_.F_, dyn_.M_sqrt());
-      bool switched = false;
-      if (dyn_.factor_chart(dyn_.ws_.constraints.Et)) {
-        dyn_.compute_F();
-        // Take the new chart only if it is clearly better (hysteresis 2): next to a change
-        // point F is inaccurate in every chart and switching would not help.
-        if (dyn_.chart_spread() < 0.5 * spread) {
-          for (int k = 0; k < na_; ++k)
-            y(nq_ + k) = u(dyn_.cs_.chart().independent[static_cast<size_t>(k)]);
-          result_.chart_switches.push_back(
-              {t, chart_name(model_, old), chart_name(model_, dyn_.cs_.chart())});
-          spread_limit_ = kSpreadLimit;
-          switched = true;
-          chart_changed = true;
-        }
+    if (!chart_rule_.due(1.0 / spread)) return spread;
+    const Chart old = dyn_.cs_.chart();
+    const VecX u = dyn_.F_ * y.segment(nq_, na_);
+    dyn_.cs_.select_from_tangent(dyn_.F_, dyn_.M_sqrt());
+    // Next to a change point F is inaccurate in every chart and switching would not help: the
+    // rule takes the new chart only if it is clearly better.
+    if (dyn_.factor_chart(dyn_.ws_.constraints.Et)) {
+      dyn_.compute_F();
+      if (chart_rule_.better(1.0 / dyn_.chart_spread(), 1.0 / spread)) {
+        for (int k = 0; k < na_; ++k)
+          y(nq_ + k) = u(dyn_.cs_.chart().independent[static_cast<size_t>(k)]);
+        result_.chart_switches.push_back(
+            {t, chart_name(model_, old), chart_name(model_, dyn_.cs_.chart())});
+        chart_rule_.switched();
+        chart_changed = true;
+        return spread;
       }
-      if (!switched) {  // keep the chart; try again only when it degrades further
-        dyn_.cs_.set_chart(old);
-        (void)dyn_.factor_chart(dyn_.ws_.constraints.Et);
-        dyn_.compute_F();
-        spread_limit_ = 2.0 * spread;
-      }
-    } else if (spread < 0.5 * spread_limit_) {
-      spread_limit_ = std::max(kSpreadLimit, 2.0 * spread);
     }
+    chart_rule_.refused(1.0 / spread);  // keep the chart; try again when it degrades further
+    dyn_.cs_.set_chart(old);
+    (void)dyn_.factor_chart(dyn_.ws_.constraints.Et);
+    dyn_.compute_F();
     return spread;
   }
 
@@ -1984,7 +1978,8 @@ class Simulation {
   double energy0_ = 0.0;
   bool have_energy0_ = false;
   long evaluations_ = 0;
-  double spread_limit_ = kSpreadLimit;  // chart monitor threshold (raised while no chart helps)
+  // The chart monitor's switching rule: quality 1/spread, threshold 1/kSpreadLimit.
+  ChartSwitchRule chart_rule_{1.0 / kSpreadLimit, 2.0, ChartSwitchRule::Retry::after_further_fall};
   // Change-point monitor.
   VecX sigma_w_;
   double sigma_ref_ = 0.0;

@@ -186,22 +186,29 @@ double ChartEngine::factor_sparse() {
 
 double ChartEngine::update(const MatX& Et, const VecX& A_diag, const VecX& A_sqrt, double t) {
   if (!ready_) {
+    rule_ = ChartSwitchRule(options_.switch_below, options_.hysteresis,
+                            ChartSwitchRule::Retry::every_time);
     if (select_candidate(Et, A_diag) != r_) return quality_ = 0.0;
     set_chart(candidate_);
     return factor(Et, A_sqrt);
   }
   const double kept = factor(Et, A_sqrt);
-  if (kept >= options_.switch_below) return kept;
-  // The chart degraded: the QR's best chart, if it is better by the hysteresis factor.
-  if (select_candidate(Et, A_diag) != r_) return kept;  // LU untouched
-  std::swap(chart_, candidate_);                        // (swaps the index vectors: no allocation)
+  if (!rule_.due(kept)) return kept;
+  // The chart degraded: the QR's best chart, if the rule takes it.
+  if (select_candidate(Et, A_diag) != r_) {  // another rank: a change point is near
+    rule_.refused(kept);
+    return kept;  // LU untouched
+  }
+  std::swap(chart_, candidate_);  // (swaps the index vectors: no allocation)
   index_chart();
   const double best = factor(Et, A_sqrt);
-  if (best > options_.hysteresis * kept) {
+  if (rule_.better(best, kept)) {
+    rule_.switched();
     ++switch_count_;
     if (switches_.size() < kMaxRecordedSwitches) switches_.push_back({t, kept, best});
     return best;
   }
+  rule_.refused(kept);
   std::swap(chart_, candidate_);
   index_chart();
   return factor(Et, A_sqrt);  // the LU of the chart kept

@@ -9,6 +9,7 @@
 // (columns by 1/√M_kk, rows to unit length), so they do not depend on units.
 #include <Eigen/QR>
 #include <Eigen/SparseCore>
+#include <algorithm>
 #include <vector>
 
 #include "orthomech/model/model.hpp"
@@ -24,6 +25,43 @@ struct ChartOptions {
   // hysteresis.
   double switch_below = 0.05;
   double hysteresis = 2.0;
+};
+
+// The one chart-switching rule, with hysteresis on a chart's quality (larger is better; the
+// owner says what it measures: ChartEngine::update the LU's pivot ratio, simulate 1/spread of F).
+// A switch is due when the quality is below the retry threshold, at first `threshold`. A
+// candidate is taken only when better than the kept chart by `factor`. After a refusal (no
+// candidate is that much better, or the candidate has another rank: a change point is near,
+// where every chart is poor) the retry policy says when to look again:
+//   - every_time: at the next evaluation below the threshold. The kept chart's quality is then
+//     within `factor` of the best chart's wherever a switch is due: the cycle reads it as the
+//     distance to a change point (ChangePointBridger).
+//   - after_further_fall: only once the quality has fallen by `factor` more; the threshold comes
+//     back as the quality recovers. For an owner whose attempt costs a new basis F (simulate).
+class ChartSwitchRule {
+ public:
+  enum class Retry { every_time, after_further_fall };
+  ChartSwitchRule(double threshold, double factor, Retry retry)
+      : threshold_(threshold), factor_(factor), retry_(retry), retry_below_(threshold) {}
+  // True: look for a better chart now. False: keep the chart (the threshold follows a recovery).
+  bool due(double quality) {
+    if (quality < retry_below_) return true;
+    if (quality > factor_ * retry_below_) retry_below_ = std::min(threshold_, quality / factor_);
+    return false;
+  }
+  [[nodiscard]] bool better(double candidate, double kept) const {
+    return candidate > factor_ * kept;
+  }
+  void switched() { retry_below_ = threshold_; }
+  void refused(double quality) {
+    if (retry_ == Retry::after_further_fall) retry_below_ = quality / factor_;
+  }
+  [[nodiscard]] double retry_below() const { return retry_below_; }
+
+ private:
+  double threshold_, factor_;
+  Retry retry_;
+  double retry_below_;
 };
 
 struct Chart {

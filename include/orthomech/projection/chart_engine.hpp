@@ -88,9 +88,11 @@ class ChartEngine {
   double factor(const MatX& Et, const VecX& A_sqrt);
   // The same from Eᵀ on its structural pattern (SparseEt of the same model).
   double factor(const SparseEt& Et, const VecX& A_sqrt);
-  // The switching policy (compute_basis): a fresh QR choice when no chart is ready; otherwise the
-  // chart is kept while its quality ≥ options().switch_below, and left for the QR's best one
-  // when that is better by the factor options().hysteresis (recorded in switches(), at t).
+  // The switching policy (compute_basis): a fresh QR choice when no chart is ready; otherwise
+  // ChartSwitchRule (projection/chart.hpp) on the quality with the threshold
+  // options().switch_below, the factor options().hysteresis and a retry at every evaluation:
+  // the chart is left for the QR's best one when that is better by the factor (recorded in
+  // switches(), at t).
   // Leaves the block factorised in the chart kept. Returns the quality, 0 when the chart is
   // singular or its rank is not the branch's. On the rated sparse path the choice is the sparse
   // QR's (ChartSelector::select_sparse: its rows, and the dependent components where the
@@ -186,6 +188,8 @@ class ChartEngine {
   ChartSelector selector_;
   ChartOptions options_;
   bool ready_ = false;
+  ChartSwitchRule rule_{ChartOptions{}.switch_below, ChartOptions{}.hysteresis,
+                        ChartSwitchRule::Retry::every_time};  // update's rule
   double quality_ = 0.0;
   long switch_count_ = 0;
   std::vector<ChartEvent> switches_;

@@ -234,5 +234,40 @@ TEST(ChartSparse, LargeFourBarBlockAsWellConditionedAsTheDenseChoice) {
   }
 }
 
+// The switching rule on a falling quality with every candidate refused, then a recovery: retried at
+// every evaluation below the threshold (the cycle), or only after a further fall by the factor
+// (simulate), and back to the threshold once the quality has recovered by the factor.
+TEST(ChartSwitchRule, RetriesAsItsPolicySays) {
+  using Retry = ChartSwitchRule::Retry;
+  ChartSwitchRule every(0.25, 2.0, Retry::every_time);
+  ChartSwitchRule later(0.25, 2.0, Retry::after_further_fall);
+  EXPECT_FALSE(every.due(0.3));
+  EXPECT_FALSE(later.due(0.3));
+  EXPECT_TRUE(every.due(0.2));
+  EXPECT_TRUE(later.due(0.2));
+  every.refused(0.2);
+  later.refused(0.2);  // next attempt below 0.1
+  EXPECT_TRUE(every.due(0.15));
+  EXPECT_FALSE(later.due(0.15));
+  EXPECT_FALSE(later.due(0.101));
+  EXPECT_TRUE(later.due(0.099));
+  later.refused(0.099);  // below 0.0495 now
+  EXPECT_DOUBLE_EQ(later.retry_below(), 0.0495);
+  // Recovery: above twice the threshold it follows the quality up, capped at 0.25.
+  EXPECT_FALSE(later.due(0.12));  // 0.12 > 2 · 0.0495: the threshold becomes 0.06
+  EXPECT_DOUBLE_EQ(later.retry_below(), 0.06);
+  EXPECT_TRUE(later.due(0.059));
+  EXPECT_FALSE(later.due(0.9));
+  EXPECT_DOUBLE_EQ(later.retry_below(), 0.25);
+  EXPECT_TRUE(later.due(0.24));
+  // A switch puts the threshold back at once; the candidate must be better by the factor.
+  later.refused(0.01);
+  later.switched();
+  EXPECT_TRUE(later.due(0.24));
+  EXPECT_TRUE(later.better(0.21, 0.1));
+  EXPECT_FALSE(later.better(0.2, 0.1));
+  EXPECT_DOUBLE_EQ(every.retry_below(), 0.25);
+}
+
 }  // namespace
 }  // namespace orthomech
