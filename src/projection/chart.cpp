@@ -1,11 +1,9 @@
 #include "orthomech/projection/chart.hpp"
 
-#include <Eigen/OrderingMethods>
-#include <Eigen/SparseQR>
 #include <algorithm>
 #include <cmath>
-#include <stdexcept>
-#include <string>
+
+#include "orthomech/numerics/sparse_qr.hpp"
 
 namespace orthomech {
 
@@ -127,21 +125,17 @@ int ChartSelector::select_sparse(const SparseMat& Et, const VecX& A_diag,
 // Rank and redundant rows by a sparse QR of the same scaled matrix as ChartSelector::select's step
 // 1 (docs/theory.md, "Rank and redundancy"):
 //   (L1) S = diag(√A) E (n × n_c), each column (a constraint row) normalised to unit length;
-//   (L2) columns in the COLAMD fill-reducing order; rows matched to columns (column j takes an
-//        unmatched row of its own pattern, the one that enters earliest) and placed in that order,
-//        the unmatched rows after them, the empty rows left out. Eigen's SparseQR reflects column
-//        j onto row j (it does not order rows), so without the matching the rows a tall S has in
-//        excess of its columns fill Q and R: 1000-link chain 669 000 entries in R, 7 000 with it;
-//   (L3) S P = Q R, left-looking Householder QR; a column whose part orthogonal to the columns
-//        kept before it, |R_kk|, is below the tolerance is dropped (moved to the end of P):
-//        Eigen's SparseQR, as SuiteSparseQR's rank detection [Davis 2011, Algorithm 915, §2];
-//   (L4) r = the number kept; the dropped columns are the redundant rows. Each is within the
+//   (L2) S P = Q R, rank-revealing sparse QR (numerics/sparse_qr.hpp: SuiteSparseQR, COLAMD
+//        order): a column whose part orthogonal to the columns kept before it, |R_kk|, is at or
+//        below the tolerance is dropped (moved behind the kept ones) [Davis 2011, Algorithm 915,
+//        §2];
+//   (L3) r = the number kept; the dropped columns are the redundant rows. Each is within the
 //        tolerance of the span of the kept ones, ‖(Qᵀ s_c)_{r…}‖ ≤ tolerance: largest_dropped.
 // The columns are unit vectors (|R_11| = 1 in the dense QR), so the same tolerance applies to
 // |R_kk| directly. Without column pivoting R's diagonal is not ordered: smallest_pivot is the
 // smallest kept |R_kk|.
-//   (L5) with request.tangent: Q's columns r … of the nonempty rows, and a unit vector for
-//        each empty row (a component no constraint touches), span {x : Sᵀx = 0}.
+//   (L4) with request.tangent: Q's columns r … n − 1 span {x : Sᵀx = 0} (an empty row of S, a
+//        component no constraint touches, is one of them).
 SparseRowRank sparse_row_rank(const SparseMat& Et, const VecX& A_diag, double tolerance,
                               const SparseRowRankRequest& request) {
   SparseRowRank m;
@@ -162,73 +156,26 @@ SparseRowRank sparse_row_rank(const SparseMat& Et, const VecX& A_diag, double to
     if (norm2 > 0.0) S.col(c) /= std::sqrt(norm2);
   }
   S.makeCompressed();
-  // (L2) Column order: column j of SP is column col_at[j] of S.
-  Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> colamd;
-  Eigen::COLAMDOrdering<int>()(S, colamd);
-  std::vector<int> col_at(static_cast<size_t>(nc));
-  for (int i = 0; i < nc; ++i) col_at[static_cast<size_t>(colamd.indices()(i))] = i;
-  std::vector<int> first(static_cast<size_t>(n), nc);  // first column of each row in that order
-  for (int j = 0; j < nc; ++j)
-    for (SparseMat::InnerIterator it(S, col_at[static_cast<size_t>(j)]); it; ++it)
-      first[static_cast<size_t>(it.row())] = std::min(first[static_cast<size_t>(it.row())], j);
-  std::vector<int> row_at(static_cast<size_t>(n), -1);  // new row of each row of S (−1: empty)
-  int rows = 0;
-  for (int j = 0; j < nc; ++j) {  // matched rows, in column order
-    int best = -1;
-    for (SparseMat::InnerIterator it(S, col_at[static_cast<size_t>(j)]); it; ++it) {
-      const int r = static_cast<int>(it.row());
-      if (row_at[static_cast<size_t>(r)] >= 0) continue;
-      if (best < 0 || first[static_cast<size_t>(r)] < first[static_cast<size_t>(best)]) best = r;
+  const SparseRankQr qr(S, tolerance);  // (L2)
+  m.rank = qr.rank();                   // (L3)
+  const std::vector<int>& order = qr.column_order();
+  m.smallest_pivot = m.rank > 0 ? std::min(1.0, qr.kept_pivots().minCoeff()) : 0.0;
+  m.redundant_rows.assign(order.begin() + m.rank, order.end());
+  if (request.largest_dropped) {
+    constexpr int kBlock = 64;  // dropped columns per product with Qᵀ (bounds the dense block)
+    for (int first = m.rank; first < nc; first += kBlock) {
+      const int count = std::min(kBlock, nc - first);
+      MatX block = MatX::Zero(n, count);
+      for (int c = 0; c < count; ++c)
+        for (SparseMat::InnerIterator it(S, order[static_cast<size_t>(first + c)]); it; ++it)
+          block(it.row(), c) = it.value();
+      const MatX Qt_s = qr.apply_Qt(block);
+      for (int c = 0; c < count; ++c)
+        m.largest_dropped = std::max(m.largest_dropped, Qt_s.col(c).tail(n - m.rank).norm());
     }
-    if (best >= 0) row_at[static_cast<size_t>(best)] = rows++;
-  }
-  std::vector<int> rest;  // the unmatched nonempty rows, by the column they enter
-  for (int r = 0; r < n; ++r)
-    if (row_at[static_cast<size_t>(r)] < 0 && first[static_cast<size_t>(r)] < nc) rest.push_back(r);
-  std::stable_sort(rest.begin(), rest.end(), [&](int a, int b) {
-    return first[static_cast<size_t>(a)] < first[static_cast<size_t>(b)];
-  });
-  for (const int r : rest) row_at[static_cast<size_t>(r)] = rows++;
-  std::vector<Eigen::Triplet<double>> entries;
-  entries.reserve(static_cast<size_t>(S.nonZeros()));
-  for (int j = 0; j < nc; ++j)
-    for (SparseMat::InnerIterator it(S, col_at[static_cast<size_t>(j)]); it; ++it)
-      entries.emplace_back(row_at[static_cast<size_t>(it.row())], j, it.value());
-  SparseMat SP(rows, nc);
-  SP.setFromTriplets(entries.begin(), entries.end());
-  SP.makeCompressed();
-  Eigen::SparseQR<SparseMat, Eigen::NaturalOrdering<int>> qr;  // (L3)
-  qr.setPivotThreshold(tolerance);
-  qr.compute(SP);
-  if (qr.info() != Eigen::Success)
-    throw std::runtime_error(std::string(__FILE__) + ":" + std::to_string(__LINE__) +
-                             ": sparse QR of E failed: " + qr.lastErrorMessage());
-  m.rank = static_cast<int>(qr.rank());  // (L4)
-  const auto& order = qr.colsPermutation().indices();
-  const SparseMat& R = qr.matrixR();
-  m.smallest_pivot = m.rank > 0 ? 1.0 : 0.0;
-  for (int k = 0; k < m.rank; ++k)
-    m.smallest_pivot = std::min(m.smallest_pivot, std::abs(R.coeff(k, k)));
-  for (int k = m.rank; k < nc; ++k) {
-    const int j = order(k);
-    m.redundant_rows.push_back(col_at[static_cast<size_t>(j)]);
-    if (!request.largest_dropped) continue;
-    const VecX Qt_s = qr.matrixQ().adjoint() * VecX(SP.col(j));
-    m.largest_dropped = std::max(m.largest_dropped, Qt_s.tail(rows - m.rank).norm());
   }
   if (!request.tangent || (request.tangent_rank >= 0 && m.rank != request.tangent_rank)) return m;
-  m.tangent = MatX::Zero(n, n - m.rank);  // (L5)
-  int c = 0;
-  VecX e(rows);
-  for (int k = m.rank; k < rows; ++k, ++c) {
-    e.setZero();
-    e(k) = 1.0;
-    const VecX y = qr.matrixQ() * e;
-    for (int r = 0; r < n; ++r)
-      if (row_at[static_cast<size_t>(r)] >= 0) m.tangent(r, c) = y(row_at[static_cast<size_t>(r)]);
-  }
-  for (int r = 0; r < n; ++r)
-    if (row_at[static_cast<size_t>(r)] < 0) m.tangent(r, c++) = 1.0;
+  m.tangent = qr.trailing_Q();  // (L4)
   return m;
 }
 

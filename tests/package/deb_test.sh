@@ -13,7 +13,7 @@ deb=package/orthomech_${version}_amd64.deb
 dpkg-deb -I "$deb" > deb-info.txt
 depends=$(sed -n 's/^ Depends: //p' deb-info.txt)
 echo "Depends: $depends"
-for lib in libc6 libstdc++6 libyaml-cpp libnlopt libcairo2 libsqlite3 libmuparser libklu1 \
+for lib in libc6 libstdc++6 libyaml-cpp libnlopt libcairo2 libsqlite3 libmuparser libklu1 libspqr \
   coinor-libipopt; do
   grep -q "$lib" <<< "$depends" || { echo "$deb does not depend on $lib" >&2; exit 1; }
 done
