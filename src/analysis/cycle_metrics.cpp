@@ -109,33 +109,42 @@ CycleMetrics compute_cycle_metrics(const Model& model, const CycleResult& r,
       s += (k ? "-" : "") + model.joints[static_cast<size_t>(joints[k])].name;
     return s;
   };
-  for (const FourBarLoop& l : find_four_bar_loops(model, opt.driver_joint)) {
-    LoopAngleMetric m;
-    m.loop = joint_names(l.joints);
-    bool first = true;
-    for (const DrivenPointView& p : r.points) {
-      const double mu = transmission_angle(model, l, p.q);
+  // The loops' functions take the coordinates as a VecX: each position's q is copied once, the
+  // loops inside (with the loops outside, one copy of q per loop and position: O(N²) on the
+  // N-four-bar, 26 % of N = 1000's cycle).
+  const std::vector<FourBarLoop> four_bars = find_four_bar_loops(model, opt.driver_joint);
+  const std::vector<SliderCrankLoop> slider_cranks = find_slider_crank_loops(model);
+  out.loops.resize(four_bars.size() + slider_cranks.size());
+  for (size_t i = 0; i < four_bars.size(); ++i)
+    out.loops[i].loop = joint_names(four_bars[i].joints);
+  for (size_t i = 0; i < slider_cranks.size(); ++i) {
+    LoopAngleMetric& m = out.loops[four_bars.size() + i];
+    m.loop = joint_names(slider_cranks[i].joints);
+    m.slider_crank = true;
+  }
+  VecX q(model.n);
+  for (size_t k = 0; k < n; ++k) {
+    const DrivenPointView& p = r.points[k];
+    const bool first = k == 0;
+    q = p.q;
+    for (size_t i = 0; i < four_bars.size(); ++i) {
+      LoopAngleMetric& m = out.loops[i];
+      const double mu = transmission_angle(model, four_bars[i], q);
       const double dev = std::min(mu, std::numbers::pi - mu);
       if (first || mu < m.min.value) m.min = {mu, p.input, p.time};
       if (first || mu > m.max.value) m.max = {mu, p.input, p.time};
       if (first || dev < m.worst.value) m.worst = {dev, p.input, p.time};
-      first = false;
     }
-    out.loops.push_back(m);
-  }
-  for (const SliderCrankLoop& l : find_slider_crank_loops(model)) {
-    LoopAngleMetric m;
-    m.loop = joint_names(l.joints);
-    m.slider_crank = true;
-    bool first = true;
-    for (const DrivenPointView& p : r.points) {
-      const double alpha = pressure_angle(model, l, p.q);
+    for (size_t i = 0; i < slider_cranks.size(); ++i) {
+      LoopAngleMetric& m = out.loops[four_bars.size() + i];
+      const double alpha = pressure_angle(model, slider_cranks[i], q);
       if (first || alpha < m.min.value) m.min = {alpha, p.input, p.time};
       if (first || alpha > m.max.value) m.max = {alpha, p.input, p.time};
-      first = false;
     }
+  }
+  for (size_t i = 0; i < slider_cranks.size(); ++i) {
+    LoopAngleMetric& m = out.loops[four_bars.size() + i];
     m.worst = m.max;
-    out.loops.push_back(m);
   }
 
   // ---- drive power and energy fluctuation --------------------------------------------------
@@ -217,7 +226,14 @@ CycleMetrics compute_cycle_metrics(const Model& model, const CycleResult& r,
     noise.see(d, s.max.value);
     if (noise.clean(d, s.range) != 0.0) out.strokes.push_back(std::move(s));
   };
-  std::vector<double> y(n);
+  // The series the positions do not carry (a prismatic joint's coordinate, a tracer point's x
+  // and y) are listed first and evaluated together, each position's q copied once.
+  struct Series {
+    std::string name;
+    MeasureKind kind;
+    std::vector<double> y;
+  };
+  std::vector<Series> joint_series, point_series;
   for (size_t j = 0; j < model.joints.size(); ++j) {
     if (!std::holds_alternative<Prismatic>(model.joints[j].kind)) continue;
     if (static_cast<int>(j) == opt.driver_joint) continue;
@@ -225,21 +241,8 @@ CycleMetrics compute_cycle_metrics(const Model& model, const CycleResult& r,
     for (const Measure& m : model.measures)
       if (const auto* jc = std::get_if<JointCoordinate>(&m.kind))
         measured = measured || (jc->joint == static_cast<int>(j) && m.derivative == 0);
-    if (measured) continue;
-    for (size_t k = 0; k < n; ++k)
-      y[k] =
-          compute_scalar(model, JointCoordinate{static_cast<int>(j)}, VecX(r.points[k].q), nullptr)
-              .value;
-    add_stroke(stroke(r, model.joints[j].name, "m", y, cyclic, period));
-  }
-  for (size_t i = 0; i < model.measures.size(); ++i) {
-    const Measure& m = model.measures[i];
-    if (m.derivative != 0) continue;
-    if (const auto* jc = std::get_if<JointCoordinate>(&m.kind))
-      if (jc->joint == opt.driver_joint) continue;  // the input itself
-    for (size_t k = 0; k < n; ++k) y[k] = r.points[k].measures[i];
-    if (turns_fully(m.unit, y)) continue;
-    add_stroke(stroke(r, m.name, m.unit, y, cyclic, period));
+    if (!measured)
+      joint_series.push_back({model.joints[j].name, JointCoordinate{static_cast<int>(j)}, {}});
   }
   // Named points that no joint uses (tracer points: a coupler point, a foot) and no measure
   // reports: the range of their x and y. The joints' points are listed per body once (a look-up
@@ -273,14 +276,34 @@ CycleMetrics compute_cycle_metrics(const Model& model, const CycleResult& r,
                                     (pc->point.s + body.com_local - local).norm() < 1e-12);
         if (measured) continue;
         const PointRef ref{static_cast<int>(b), local - body.com_local, ""};
-        for (size_t k = 0; k < n; ++k)
-          y[k] =
-              compute_scalar(model, PointCoordinate{ref, axis}, VecX(r.points[k].q), nullptr).value;
-        add_stroke(
-            stroke(r, body.name + "." + name + (axis == 0 ? ".x" : ".y"), "m", y, cyclic, period));
+        point_series.push_back(
+            {body.name + "." + name + (axis == 0 ? ".x" : ".y"), PointCoordinate{ref, axis}, {}});
       }
     }
   }
+  for (std::vector<Series>* list : {&joint_series, &point_series})
+    for (Series& series : *list) series.y.resize(n);
+  if (!joint_series.empty() || !point_series.empty())
+    for (size_t k = 0; k < n; ++k) {
+      q = r.points[k].q;
+      for (std::vector<Series>* list : {&joint_series, &point_series})
+        for (Series& series : *list)
+          series.y[k] = compute_scalar(model, series.kind, q, nullptr).value;
+    }
+  for (Series& series : joint_series)
+    add_stroke(stroke(r, std::move(series.name), "m", series.y, cyclic, period));
+  std::vector<double> y(n);
+  for (size_t i = 0; i < model.measures.size(); ++i) {
+    const Measure& m = model.measures[i];
+    if (m.derivative != 0) continue;
+    if (const auto* jc = std::get_if<JointCoordinate>(&m.kind))
+      if (jc->joint == opt.driver_joint) continue;  // the input itself
+    for (size_t k = 0; k < n; ++k) y[k] = r.points[k].measures[i];
+    if (turns_fully(m.unit, y)) continue;
+    add_stroke(stroke(r, m.name, m.unit, y, cyclic, period));
+  }
+  for (Series& series : point_series)
+    add_stroke(stroke(r, std::move(series.name), "m", series.y, cyclic, period));
 
   // ---- joints outside their limits ---------------------------------------------------------
   for (size_t j = 0; j < model.joints.size(); ++j) {
@@ -290,7 +313,7 @@ CycleMetrics compute_cycle_metrics(const Model& model, const CycleResult& r,
     ex.joint = static_cast<int>(j);
     double worst = 0.0;
     for (const DrivenPointView& p : r.points) {
-      const VecX q = p.q;
+      q = p.q;
       if (!outside_limits(model, ex.joint, q)) continue;
       const double x = limit_coordinate(model, ex.joint, q);
       const double beyond = std::max(joint.limits->x() - x, x - joint.limits->y());
