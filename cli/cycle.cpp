@@ -201,6 +201,7 @@ nlohmann::json positions_json(const Model& model, const CycleResult& r, bool ang
   for (const ReactionComponent& c : r.components)
     component_u.push_back(output_unit(dimension_of(c.unit), u));
   std::vector<double> pose;
+  VecX q(model.nq);
   // The poses' columns come first, then the named points' (position_columns).
   const std::vector<PositionColumn> columns = position_columns(model);
   size_t pose_columns = 0;
@@ -223,7 +224,8 @@ nlohmann::json positions_json(const Model& model, const CycleResult& r, bool ang
     // Pose of every body's frame ([x, y, angle]; a particle [x, y]; a spatial body [x, y, z, e0,
     // e1, e2, e3], its unit quaternion) and every named point ([x, y] or [x, y, z]), in
     // position_columns order.
-    compute_output_positions(model, VecX(p.q), pose);
+    q = p.q;  // copied once per position (not once per joint below: O(N²) on the N-four-bar)
+    compute_output_positions(model, q, pose);
     nlohmann::json poses = nlohmann::json::object(), points = nlohmann::json::object();
     for (size_t c = 0; c < columns.size(); ++c) {
       const std::string& name = columns[c].name;
@@ -263,7 +265,7 @@ nlohmann::json positions_json(const Model& model, const CycleResult& r, bool ang
     }
     nlohmann::json outside = nlohmann::json::array();
     for (size_t jt = 0; jt < model.joints.size(); ++jt)
-      if (outside_limits(model, static_cast<int>(jt), VecX(p.q)))
+      if (model.joints[jt].limits && outside_limits(model, static_cast<int>(jt), q))
         outside.push_back(model.joints[jt].name);
     j["outside_limits"] = outside;
     j["kinetic_energy"] = energy_u.from_si(p.kinetic);

@@ -36,6 +36,16 @@ std::string field(const std::string& s) {
 
 constexpr size_t kDimensions = static_cast<size_t>(Dimension::frequency) + 1;
 
+// What for_each_cell needs besides the position: the position columns, built once per table (at
+// every position they were rebuilt: 6000 strings per position on the N = 1000 four-bar), and the
+// buffers for q and the pose, reused.
+struct CellScratch {
+  explicit CellScratch(const Model& model) : columns(position_columns(model)), q(model.nq) {}
+  std::vector<PositionColumn> columns;
+  std::vector<double> pose;
+  VecX q;
+};
+
 // Every cell of the CSV row of p after the limits-free columns, in CSV order, with its dimension
 // and SI value: emit(dimension, value, reported); `reported` false leaves the cell empty (an
 // unbridged change point; a component that diverges towards the change point a bridged position
@@ -43,15 +53,15 @@ constexpr size_t kDimensions = static_cast<size_t>(Dimension::frequency) + 1;
 template <class Emit>
 void for_each_cell(const Model& model, const CycleResult& result,
                    const std::vector<ReactionMagnitude>& magnitudes, bool angular,
-                   const DrivenPointView& p, Emit&& emit) {
-  std::vector<double> pose;
+                   const DrivenPointView& p, CellScratch& scratch, Emit&& emit) {
   emit(angular ? Dimension::angle : Dimension::length, p.input, true);
   emit(Dimension::time, p.time, true);
   for (size_t i = 0; i < p.measures.size(); ++i)
     emit(dimension_of(model.measures[i].unit), p.measures[i], measure_reported(model, p, i));
-  const std::vector<PositionColumn> columns = position_columns(model);
-  compute_output_positions(model, VecX(p.q), pose);
-  for (size_t i = 0; i < pose.size(); ++i) emit(columns[i].dimension, pose[i], true);
+  scratch.q = p.q;
+  compute_output_positions(model, scratch.q, scratch.pose);
+  for (size_t i = 0; i < scratch.pose.size(); ++i)
+    emit(scratch.columns[i].dimension, scratch.pose[i], true);
   const bool rates = rates_reported(p);
   for (const Body& b : model.bodies) {
     for (int i = 0; i < b.nu(); ++i)
@@ -97,10 +107,12 @@ void write_file_atomically(const std::filesystem::path& file, const std::string&
 NoiseFloor cycle_noise_floor(const Model& model, const CycleResult& result,
                              const std::vector<ReactionMagnitude>& magnitudes, bool angular) {
   NoiseFloor noise;
+  CellScratch scratch(model);
   for (const DrivenPointView& p : result.points)
-    for_each_cell(model, result, magnitudes, angular, p, [&](Dimension d, double v, bool reported) {
-      if (reported) noise.see(d, v);
-    });
+    for_each_cell(model, result, magnitudes, angular, p, scratch,
+                  [&](Dimension d, double v, bool reported) {
+                    if (reported) noise.see(d, v);
+                  });
   return noise;
 }
 
@@ -274,17 +286,20 @@ CycleColumns write_cycle_csv(const std::filesystem::path& file, const Model& mod
   std::array<OutputUnit, kDimensions> unit_of;
   for (size_t d = 0; d < kDimensions; ++d)
     unit_of[d] = output_unit(static_cast<Dimension>(d), units);
+  CellScratch scratch(model);
   for (size_t row = 0; row < result.points.size(); ++row) {
     const DrivenPointView p = result.points[row];
     bool first = true;
-    for_each_cell(model, result, magnitudes, angular, p, [&](Dimension d, double v, bool reported) {
-      if (!first) out << ',';
-      first = false;
-      if (reported) out << number(unit_of[static_cast<size_t>(d)].from_si(noise.clean(d, v)));
-    });
-    std::string outside;
+    for_each_cell(model, result, magnitudes, angular, p, scratch,
+                  [&](Dimension d, double v, bool reported) {
+                    if (!first) out << ',';
+                    first = false;
+                    if (reported)
+                      out << number(unit_of[static_cast<size_t>(d)].from_si(noise.clean(d, v)));
+                  });
+    std::string outside;  // scratch.q is p.q (for_each_cell)
     for (size_t j = 0; j < model.joints.size(); ++j)
-      if (outside_limits(model, static_cast<int>(j), VecX(p.q)))
+      if (model.joints[j].limits && outside_limits(model, static_cast<int>(j), scratch.q))
         outside += (outside.empty() ? "" : " ") + model.joints[j].name;
     out << ',' << field(outside);
     for (size_t i = 0; i < extra.size(); ++i)
