@@ -43,8 +43,9 @@ namespace orthomech {
 
 // From this many coordinates on, the position corrector of `cycle` keeps the Jacobian of a
 // structurally sparse model in compressed form (DrivenWorkspace::J_sparse): below it the dense LU
-// is cheap, and its results are those of before.
-inline constexpr int kSparseJacobianFrom = 300;
+// is cheap. (300 until 2026-11-29; lowered with kRatedSparseFrom: the dense path of the driven
+// N-four-bar took 0.12 s at N = 30, n = 183, and 0.29 s at N = 40, the sparse one 0.04 s.)
+inline constexpr int kSparseJacobianFrom = 100;
 
 struct CycleOptions {
   // joint and law s(t): constant speed (a full turn of a revolute, or start → end), harmonic

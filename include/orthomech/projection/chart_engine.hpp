@@ -160,9 +160,10 @@ class ChartEngine {
   // From this many velocities on a `rated_sparse_when_large` engine factorises sparse (the cycle:
   // n-four-bar-100, n = 603, spent half of each position in the dense LU of its 602 × 602 block,
   // and from N = 60, n = 363, the dense LU's pivot ratio stayed so low around a change point that
-  // its bridge failed; every bundled mechanism, n ≤ 243, keeps the dense path its tests were
-  // validated with).
-  static constexpr int kRatedSparseFrom = 300;
+  // its bridge failed). 300 until 2026-11-29; at 100 the driven N-four-bar from N = 17 takes the
+  // sparse path (N = 40, n = 243: 0.29 → 0.04 s for 360 positions, drive on its closed form to
+  // 1.5e-10 of its peak). Every bundled mechanism a `cycle` runs on has n < 100.
+  static constexpr int kRatedSparseFrom = 100;
 
  private:
   bool begin_factor(const VecX& A_sqrt);  // the scalings; false when r = 0
