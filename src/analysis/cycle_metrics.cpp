@@ -122,7 +122,7 @@ CycleMetrics compute_cycle_metrics(const Model& model, const CycleResult& r,
     m.loop = joint_names(slider_cranks[i].joints);
     m.slider_crank = true;
   }
-  VecX q(model.n);
+  VecX q(model.nq);
   for (size_t k = 0; k < n; ++k) {
     const DrivenPointView& p = r.points[k];
     const bool first = k == 0;
