@@ -265,8 +265,7 @@ nlohmann::json positions_json(const Model& model, const CycleResult& r, bool ang
     }
     nlohmann::json outside = nlohmann::json::array();
     for (size_t jt = 0; jt < model.joints.size(); ++jt)
-      if (model.joints[jt].limits && outside_limits(model, static_cast<int>(jt), q))
-        outside.push_back(model.joints[jt].name);
+      if (outside_limits(model, static_cast<int>(jt), q)) outside.push_back(model.joints[jt].name);
     j["outside_limits"] = outside;
     j["kinetic_energy"] = energy_u.from_si(p.kinetic);
     j["potential_energy"] = energy_u.from_si(p.potential);

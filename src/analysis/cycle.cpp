@@ -72,6 +72,12 @@ struct DrivenWorkspace::SparseJacobian {
   // The dense Eᵀ zeroed once before the first copy (a ConstraintWorkspace starts zeroed and its
   // evaluations write only the pattern; this guards a matrix written otherwise).
   bool dense_zeroed = false;
+  // Et's values into the dense Eᵀ's pattern entries (its other entries stay zero).
+  void copy_to_dense(MatX& dense) {
+    if (!dense_zeroed) dense.setZero();
+    dense_zeroed = true;
+    Et.copy_values_to(dense);
+  }
   std::vector<Eigen::Triplet<double>> entries;
   Eigen::SparseMatrix<double> A, J;
   VecX b;  // A's right-hand side (normal equations)
@@ -322,11 +328,8 @@ void write_constraint_jacobian(const Model& model, const VecX& q, Workspace& ws,
     compute_constraint_jacobian(model, q, ws.constraints.Et);
     return;
   }
-  DrivenWorkspace::SparseJacobian& S = *dws.J_sparse;
-  compute_constraint_jacobian(model, q, S.Et);
-  if (!S.dense_zeroed) ws.constraints.Et.setZero();
-  S.dense_zeroed = true;
-  S.Et.copy_values_to(ws.constraints.Et);
+  compute_constraint_jacobian(model, q, dws.J_sparse->Et);
+  dws.J_sparse->copy_to_dense(ws.constraints.Et);
 }
 
 }  // namespace
@@ -585,9 +588,7 @@ struct Sweep {
     if (jacobian && w.sparse_jacobian()) {
       DrivenWorkspace::SparseJacobian& S = *w.J_sparse;
       compute_constraint_residual_and_jacobian(model, q, w.rotations, ws.constraints.f, S.Et);
-      if (!S.dense_zeroed) ws.constraints.Et.setZero();
-      S.dense_zeroed = true;
-      S.Et.copy_values_to(ws.constraints.Et);
+      S.copy_to_dense(ws.constraints.Et);
     } else if (jacobian)
       compute_constraint_residual_and_jacobian(model, q, w.rotations, ws.constraints.f,
                                                ws.constraints.Et);

@@ -299,7 +299,7 @@ CycleColumns write_cycle_csv(const std::filesystem::path& file, const Model& mod
                   });
     std::string outside;  // scratch.q is p.q (for_each_cell)
     for (size_t j = 0; j < model.joints.size(); ++j)
-      if (model.joints[j].limits && outside_limits(model, static_cast<int>(j), scratch.q))
+      if (outside_limits(model, static_cast<int>(j), scratch.q))
         outside += (outside.empty() ? "" : " ") + model.joints[j].name;
     out << ',' << field(outside);
     for (size_t i = 0; i < extra.size(); ++i)
