@@ -58,10 +58,11 @@ const char* to_string(CycleStatus s) {
   return "?";
 }
 
-// The corrector of a large model (issue 18: nothing of size n_c · n or n × n per iterate).
-// - Eᵀ evaluated on its pattern, and copied into the dense Eᵀ's pattern entries, whose other
-//   entries stay zero (zeroing the N = 400 four-bar's dense Eᵀ, 46 MB, at every evaluation was
-//   30 % of its cycle).
+// The Eᵀ and corrector of a large model (issue 18: nothing of size n_c · n or n × n).
+// - Eᵀ evaluated on its pattern only: the chart (compute_basis), the multipliers and the
+//   corrector read it there, and the cycle's Workspace holds no dense Eᵀ or Dᵀ
+//   (WorkspaceStages::constraint_matrices; at N = 1000 of the N-four-bar they took 576 MB, and
+//   zeroing the N = 400 one's dense Eᵀ, 46 MB, at every evaluation had been 30 % of its cycle).
 // - Its Jacobian in compressed form: the rows A = [E_Rᵀ; dᵀ; I] (all rows of Eᵀ with redundant
 //   rows), J = A or the normal matrix AᵀA, and J's LU by KLU (a fresh analysis per
 //   factorisation: the corrector factorises only where its chord steps fail, a few times per
@@ -69,15 +70,6 @@ const char* to_string(CycleStatus s) {
 struct DrivenWorkspace::SparseJacobian {
   explicit SparseJacobian(const Model& model) : Et(model) {}
   SparseEt Et;
-  // The dense Eᵀ zeroed once before the first copy (a ConstraintWorkspace starts zeroed and its
-  // evaluations write only the pattern; this guards a matrix written otherwise).
-  bool dense_zeroed = false;
-  // Et's values into the dense Eᵀ's pattern entries (its other entries stay zero).
-  void copy_to_dense(MatX& dense) {
-    if (!dense_zeroed) dense.setZero();
-    dense_zeroed = true;
-    Et.copy_values_to(dense);
-  }
   std::vector<Eigen::Triplet<double>> entries;
   Eigen::SparseMatrix<double> A, J;
   VecX b;  // A's right-hand side (normal equations)
@@ -235,7 +227,6 @@ void inertia_residual(const Workspace& ws, const VecX& u, const VecX& udot, VecX
 // on the chart's rows R (zero on the others): E_{D,R} λ_R = R_D with the chart's LU.
 void solve_multipliers(Workspace& ws, DrivenWorkspace& w, VecX& lambda) {
   const Chart& c = ws.dual.engine.chart();
-  const MatX& Et = ws.constraints.Et;
   const int r = c.rank();
   const int k = static_cast<int>(w.other_rows.size());
   solve_chart_transposed(ws, w.R, w.rhs_r);
@@ -244,7 +235,7 @@ void solve_multipliers(Workspace& ws, DrivenWorkspace& w, VecX& lambda) {
   if (k == 0) return;
   // Complement rows X; column j of N: 1 on row x_j, −(E_{D,R})⁻¹ E_{D,x_j} on the chart's rows.
   int next = 0;
-  for (int row = 0, ci = 0; row < Et.rows(); ++row) {
+  for (int row = 0, ci = 0; row < ws.model->nc; ++row) {
     if (ci < r && c.rows[static_cast<size_t>(ci)] == row) {
       ++ci;
       continue;
@@ -252,7 +243,16 @@ void solve_multipliers(Workspace& ws, DrivenWorkspace& w, VecX& lambda) {
     w.other_rows[static_cast<size_t>(next++)] = row;
   }
   for (int j = 0; j < k; ++j) {
-    w.g = Et.row(w.other_rows[static_cast<size_t>(j)]).transpose();
+    const int row = w.other_rows[static_cast<size_t>(j)];
+    if (w.sparse_jacobian()) {  // Eᵀ on its pattern
+      const SparseEt& S = w.J_sparse->Et;
+      const auto cols = S.row_columns(row);
+      const auto vals = S.row_values(row);
+      w.g.setZero();
+      for (size_t t = 0; t < cols.size(); ++t) w.g(cols[t]) = vals[t];
+    } else {
+      w.g = ws.constraints.Et.row(row).transpose();
+    }
     solve_chart_transposed(ws, w.g, w.rhs_r);
     w.N.col(j).setZero();
     for (int i = 0; i < r; ++i) w.N(c.rows[static_cast<size_t>(i)], j) = -w.rhs_r(i);
@@ -319,17 +319,20 @@ bool idle_rows_rate(const Model& model, const VecX& q, const VecX& u, const VecX
   return true;
 }
 
-// Eᵀ at q into ws.constraints.Et. A large model's on its pattern, copied into the dense Eᵀ's
-// pattern entries (as the corrector's iterates do): zeroing the dense Eᵀ at every evaluation was
-// 18 % of the N = 1000 four-bar's cycle (the evaluations of the change-point bridges).
+// Eᵀ at q: a large model's on its pattern (dws.J_sparse), a small one's into ws.constraints.Et.
 void write_constraint_jacobian(const Model& model, const VecX& q, Workspace& ws,
                                DrivenWorkspace& dws) {
-  if (!dws.sparse_jacobian()) {
+  if (dws.sparse_jacobian())
+    compute_constraint_jacobian(model, q, dws.J_sparse->Et);
+  else
     compute_constraint_jacobian(model, q, ws.constraints.Et);
-    return;
-  }
-  compute_constraint_jacobian(model, q, dws.J_sparse->Et);
-  dws.J_sparse->copy_to_dense(ws.constraints.Et);
+}
+
+// The chart and F (compute_basis) at the Eᵀ write_constraint_jacobian left.
+ProjectionStatus basis_at_jacobian(const Model& model, const State& state, Workspace& ws,
+                                   const DrivenWorkspace& dws) {
+  return dws.sparse_jacobian() ? compute_basis(model, state, ws, dws.J_sparse->Et)
+                               : compute_basis(model, state, ws);
 }
 
 }  // namespace
@@ -357,7 +360,7 @@ bool compute_driven(const Model& model, int driver_joint, double sdot, double sd
   }
   if (jacobian != DrivenJacobian::current_with_gradient)
     (void)compute_scalar(model, input, state.q, nullptr, dws.d);  // d: the input's gradient
-  if (compute_basis(model, state, ws) != ProjectionStatus::ok) return false;
+  if (basis_at_jacobian(model, state, ws, dws) != ProjectionStatus::ok) return false;
   // With idle degrees of freedom, the basis that holds them: F z, I F z = 0 (spatial.md §6.5).
   const bool idle = !dws.idle_bodies.empty();
   if (idle && !hold_idle(model, state.q, ws.dual.F, dws)) return false;
@@ -430,8 +433,8 @@ bool compute_multi_driven(const Model& model, const std::vector<int>& joints, co
   out.conditioning = 0.0;
   state.u.setZero();
   compute_free_system(model, state, ws);
-  compute_constraint_jacobian(model, state.q, ws.constraints.Et);
-  if (compute_basis(model, state, ws) != ProjectionStatus::ok) return false;
+  write_constraint_jacobian(model, state.q, ws, dws);
+  if (basis_at_jacobian(model, state, ws, dws) != ProjectionStatus::ok) return false;
   const MatX& F = ws.dual.F;
   if (F.cols() != m) return false;
   MatX Ds(m, model.n);
@@ -588,7 +591,6 @@ struct Sweep {
     if (jacobian && w.sparse_jacobian()) {
       DrivenWorkspace::SparseJacobian& S = *w.J_sparse;
       compute_constraint_residual_and_jacobian(model, q, w.rotations, ws.constraints.f, S.Et);
-      S.copy_to_dense(ws.constraints.Et);
     } else if (jacobian)
       compute_constraint_residual_and_jacobian(model, q, w.rotations, ws.constraints.f,
                                                ws.constraints.Et);
@@ -1070,13 +1072,17 @@ CycleRun::CycleRun(const Model& model, const CycleOptions& options, const CycleR
       law_(request.law),
       state_(std::move(start)),
       ws_(model, mob.rank, ChartFactorisation::rated_sparse_when_large,
-          {.mass = MassStorage::diagonal_if_possible, .primal = false, .dual_projections = false}),
+          {.mass = MassStorage::diagonal_if_possible,
+           .primal = false,
+           .dual_projections = false,
+           .constraint_matrices = !uses_sparse_jacobian(model, options.sparse_jacobian_from)}),
       w_(model, mob.rank, idle_body_indices(model, mob), options.sparse_jacobian_from),
       sweep_{model, request.joint, ws_, w_} {
-  // The free system, Eᵀ, Dᵀ and the chart with F at the start (the stages the cycle uses).
+  // The free system, f, Eᵀ and the chart with F at the start (the stages the cycle uses).
   compute_free_system(model_, state_, ws_);
-  compute_constraints(model_, state_, ws_.constraints);
-  (void)compute_basis(model_, state_, ws_);
+  compute_constraint_residual(model_, state_.q, ws_.constraints.f);
+  write_constraint_jacobian(model_, state_.q, ws_, w_);
+  (void)basis_at_jacobian(model_, state_, ws_, w_);
   s0_ = compute_scalar(model_, JointCoordinate{request_.joint}, state_.q, nullptr).value;
 }
 
@@ -1465,8 +1471,8 @@ bool CycleRun::pass_fold(const DrivenPoint& at_lo, double s_dead, VecX& q_cur) {
     }
     // New direction of motion: F at the new point, oriented along the old direction.
     state_.q = trial_;
-    compute_constraint_jacobian(model_, state_.q, ws_.constraints.Et);
-    if (compute_basis(model_, state_, ws_) != ProjectionStatus::ok) {
+    write_constraint_jacobian(model_, state_.q, ws_, w_);
+    if (basis_at_jacobian(model_, state_, ws_, w_) != ProjectionStatus::ok) {
       arc *= 0.5;
       continue;
     }

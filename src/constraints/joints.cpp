@@ -15,10 +15,10 @@
 
 namespace orthomech {
 
-ConstraintWorkspace::ConstraintWorkspace(const Model& model)
+ConstraintWorkspace::ConstraintWorkspace(const Model& model, bool matrices)
     : f(VecX::Zero(model.nc)),
-      Et(MatX::Zero(model.nc, model.n)),
-      Dt(MatX::Zero(model.nc, model.n)),
+      Et(MatX::Zero(matrices ? model.nc : 0, matrices ? model.n : 0)),
+      Dt(MatX::Zero(matrices ? model.nc : 0, matrices ? model.n : 0)),
       Dtu(VecX::Zero(model.nc)),
       poses(model) {}
 
@@ -387,6 +387,8 @@ void compute_constraint_rate(const Model& model, const State& state, const BodyP
 }
 
 void compute_constraints(const Model& model, const State& state, ConstraintWorkspace& ws) {
+  if (ws.Et.rows() != model.nc || ws.Et.cols() != model.n)
+    throw std::logic_error("compute_constraints: the ConstraintWorkspace holds no Eᵀ and Dᵀ");
   ws.poses.update(model, state.q);
   evaluate(model, state.q, &state.u, &ws.f, &ws.Et, &ws.Dt, nullptr, &ws.poses);
   ws.Dtu.noalias() = ws.Dt * state.u;  // convective term Dᵀu, eq. (76)

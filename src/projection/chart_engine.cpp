@@ -185,6 +185,16 @@ double ChartEngine::factor_sparse() {
 }
 
 double ChartEngine::update(const MatX& Et, const VecX& A_diag, const VecX& A_sqrt, double t) {
+  return update_at(Et, A_diag, A_sqrt, t);
+}
+
+double ChartEngine::update(const SparseEt& Et, const VecX& A_diag, const VecX& A_sqrt, double t) {
+  return update_at(Et, A_diag, A_sqrt, t);
+}
+
+template <typename Jacobian>
+double ChartEngine::update_at(const Jacobian& Et, const VecX& A_diag, const VecX& A_sqrt,
+                              double t) {
   if (!ready_) {
     rule_ = ChartSwitchRule(options_.switch_below, options_.hysteresis,
                             ChartSwitchRule::Retry::every_time);
@@ -223,6 +233,20 @@ int ChartEngine::select_candidate(const MatX& Et, const VecX& A_diag) {
     for (int t = 0; t < row.count; ++t) row.values[t] = Et(i, row.columns[t]);
   }
   const Eigen::SparseMatrix<double> E(pattern_.matrix());
+  return selector_.select_sparse(E, A_diag, options_, candidate_, r_);
+}
+
+int ChartEngine::select_candidate(const SparseEt& Et, const VecX& A_diag) {
+  if (!rated_) {
+    if (dense_Et_.rows() != Et.rows() || dense_Et_.cols() != Et.cols())
+      dense_Et_.resize(Et.rows(), Et.cols());  // once
+    dense_Et_.setZero();
+    Et.copy_values_to(dense_Et_);
+    return selector_.select(dense_Et_, A_diag, options_, candidate_);
+  }
+  if (Et.nonZeros() != pattern_.nonZeros())
+    throw std::logic_error("ChartEngine::update: Eᵀ is not on the model's pattern");
+  const Eigen::SparseMatrix<double> E(Et.matrix());  // the sparse QR's column-major input
   return selector_.select_sparse(E, A_diag, options_, candidate_, r_);
 }
 

@@ -38,9 +38,14 @@ VecX project_velocity(const MatX& MF, const Eigen::LLT<MatX>& H_llt, const VecX&
   return H_llt.solve(MF.transpose() * u0);  // eq. (70): α u₀ = F (H⁻¹ Fᵀ M u₀)
 }
 
-ProjectionStatus compute_basis(const Model& /*model*/, const State& state, Workspace& ws) {
+namespace {
+// Entry (i, j) of Eᵀ, dense or on its pattern.
+double entry(const MatX& Et, int i, int j) { return Et(i, j); }
+double entry(const SparseEt& Et, int i, int j) { return Et.coeff(i, j); }
+
+template <typename Jacobian>
+ProjectionStatus basis_at(const State& state, Workspace& ws, const Jacobian& Et) {
   auto& d = ws.dual;
-  const MatX& Et = ws.constraints.Et;
 
   // 1. Chart: kept while its block is well conditioned, switched with hysteresis otherwise
   //    (the chart engine's policy, projection/chart_engine.hpp).
@@ -55,12 +60,24 @@ ProjectionStatus compute_basis(const Model& /*model*/, const State& state, Works
     const int ik = c.independent[static_cast<size_t>(k)];
     d.F.row(ik).setZero();
     d.F(ik, k) = 1.0;
-    for (int i = 0; i < d.r; ++i) d.rhs(i, k) = Et(c.rows[static_cast<size_t>(i)], ik);
+    for (int i = 0; i < d.r; ++i) d.rhs(i, k) = entry(Et, c.rows[static_cast<size_t>(i)], ik);
   }
   d.rhs *= -1.0;
   d.engine.solve_dependent(d.rhs, d.F);
   d.status = ProjectionStatus::ok;
   return d.status;
+}
+}  // namespace
+
+ProjectionStatus compute_basis(const Model& /*model*/, const State& state, Workspace& ws) {
+  return basis_at(state, ws, ws.constraints.Et);
+}
+
+ProjectionStatus compute_basis(const Model& model, const State& state, Workspace& ws,
+                               const SparseEt& Et) {
+  if (Et.rows() != model.nc || Et.cols() != model.n)
+    throw std::invalid_argument("compute_basis: Eᵀ is not of this model");
+  return basis_at(state, ws, Et);
 }
 
 ProjectionStatus compute_dual(const Model& model, const State& state, Workspace& ws) {

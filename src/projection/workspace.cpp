@@ -97,7 +97,7 @@ int checked_rank(const Model& m, int rank) {
 
 double dense_workspace_bytes(const Model& model, const WorkspaceStages& stages) {
   const double n = model.n, nc = model.nc;
-  double matrices = 2.0 * nc * n;                                     // Eᵀ, Dᵀ
+  double matrices = stages.constraint_matrices ? 2.0 * nc * n : 0.0;  // Eᵀ, Dᵀ
   if (holds_dense_mass(model, stages.mass)) matrices += 3.0 * n * n;  // M, A, Ṁ
   if (stages.primal) matrices += 5.0 * n * n + 3.0 * nc * n + nc * nc;
   if (stages.dual_projections) matrices += 5.0 * n * n;  // ψ, α, β, Θ, θ
@@ -107,7 +107,7 @@ double dense_workspace_bytes(const Model& model, const WorkspaceStages& stages) 
 Workspace::Workspace(const Model& m, int rank, ChartFactorisation factorisation,
                      const WorkspaceStages& stages)
     : free(checked_size(m, stages), stages.mass),
-      constraints(m),
+      constraints(m, stages.constraint_matrices),
       primal(m, stages.primal),
       dual(m, checked_rank(m, rank), factorisation, stages.dual_projections),
       model(&m) {}

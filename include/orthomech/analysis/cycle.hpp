@@ -286,7 +286,10 @@ struct DrivenWorkspace {
   // normal matrix EEᵀ + ddᵀ of all rows instead), then its LU in place. Empty on a large model
   // (sparse_jacobian() true): J is then kept in compressed form and factorised by KLU
   // (SparseJacobian, cycle.cpp), so that no n × n matrix is formed (a dense LU at n = 6000 is
-  // 1.4e11 flops).
+  // 1.4e11 flops). Eᵀ is then held on its pattern there too, and every step of compute_driven,
+  // compute_multi_driven and the corrector reads it there: the Workspace's ws.constraints.Et is
+  // neither read nor written (the cycle builds its Workspace without it,
+  // WorkspaceStages::constraint_matrices).
   MatX J;
   Eigen::VectorXi J_piv;  // n: row interchanges of that LU
   struct SparseJacobian;

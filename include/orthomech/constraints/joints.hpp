@@ -13,13 +13,16 @@ namespace orthomech {
 
 struct ConstraintWorkspace {
   VecX f;    // nc:      geometric residual, eq. (20)
-  MatX Et;   // nc × n:  Eᵀ, eq. (23)
-  MatX Dt;   // nc × n:  Dᵀ = Ėᵀ, eq. (76)
+  MatX Et;   // nc × n:  Eᵀ, eq. (23) (0 × 0 without the matrices)
+  MatX Dt;   // nc × n:  Dᵀ = Ėᵀ, eq. (76) (0 × 0 without the matrices)
   VecX Dtu;  // nc:      Dᵀ u
   // The kinematics stage at the q of the last compute_constraints / compute_constraint_rate
   // (the bodies' rotations, computed once for every row).
   BodyPoses poses;
-  explicit ConstraintWorkspace(const Model& model);
+  // matrices: false leaves Et and Dt 0 × 0, for an owner that holds Eᵀ on its pattern (SparseEt)
+  // and never forms Dᵀ (the cycle of a large model, issue 18); compute_constraints then throws
+  // std::logic_error.
+  explicit ConstraintWorkspace(const Model& model, bool matrices = true);
 };
 
 // f(q) only (cheap: used by position solvers).

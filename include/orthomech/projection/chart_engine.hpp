@@ -98,6 +98,9 @@ class ChartEngine {
   // QR's (ChartSelector::select_sparse: its rows, and the dependent components where the
   // admissible velocities are best conditioned), a sparse factorisation instead of O(n³).
   double update(const MatX& Et, const VecX& A_diag, const VecX& A_sqrt, double t);
+  // The same from Eᵀ on its structural pattern (SparseEt of the same model): no n_c × n matrix.
+  // Off the rated sparse path a QR choice goes through a dense copy of Eᵀ (a scratch sized once).
+  double update(const SparseEt& Et, const VecX& A_diag, const VecX& A_sqrt, double t);
 
   // ---- Solving (after factor)
   // x (size n): x_D = (E_RDᵀ)⁻¹ b_R, x_I = 0 (b of size nc).
@@ -170,6 +173,9 @@ class ChartEngine {
   // update's choice at a dense Eᵀ into candidate_: the dense QRs, or on the rated sparse path the
   // sparse QR on Eᵀ's pattern (ChartSelector::select_sparse). Returns the rank found.
   int select_candidate(const MatX& Et, const VecX& A_diag);
+  int select_candidate(const SparseEt& Et, const VecX& A_diag);
+  template <typename Jacobian>
+  double update_at(const Jacobian& Et, const VecX& A_diag, const VecX& A_sqrt, double t);
   double factor_sparse();  // Gs_ (values written) → slu_
   template <typename Jacobian>
   ChartCorrectionResult correct(VecX& q, Jacobian& Et, VecX& f, VecX& dq,
@@ -215,6 +221,7 @@ class ChartEngine {
   std::vector<BlockEntry> block_entries_;
   bool analyzed_ = false;  // slu_ has the ordering of Gs_'s pattern in this chart
   VecX br_;                // r
+  MatX dense_Et_;          // select_candidate(SparseEt) off the rated path: Eᵀ copied (n_c × n)
   VecX sw_;                // r: work vector of estimate_sigma_min
 };
 

@@ -12,6 +12,10 @@ ProjectionStatus compute_dual(const Model& model, const State& state, Workspace&
 // Only the first steps of compute_dual: the chart (switching when it degrades) and F. Needs
 // ws.constraints.Et at state.q and the free system's scaling A (ws.free.A_diag, A_sqrt).
 ProjectionStatus compute_basis(const Model& model, const State& state, Workspace& ws);
+// The same at Eᵀ on its structural pattern (Et at state.q, a SparseEt of the model): what a
+// Workspace without the constraint matrices (WorkspaceStages::constraint_matrices) uses.
+ProjectionStatus compute_basis(const Model& model, const State& state, Workspace& ws,
+                               const SparseEt& Et);
 
 // Everything in order: free system, constraints, dual.
 ProjectionStatus evaluate_dual(const Model& model, const State& state, Workspace& ws);

@@ -21,12 +21,14 @@ enum class MassStorage { dense, diagonal_if_possible };
 
 // The stages a command uses (issue 18: only those are allocated). Every command that projects
 // (compute_primal, compute_dual) keeps the default; `cycle` needs the free system (its
-// diagonal when M is diagonal), Eᵀ and Dᵀ, and the chart with F (compute_basis) only: at
-// N = 400 of the N-four-bar that is 4 % of the default's bytes.
+// diagonal when M is diagonal) and the chart with F (compute_basis) only, with Eᵀ and Dᵀ as
+// n_c × n matrices for a small model and neither for a large one (its Eᵀ on its pattern, in
+// DrivenWorkspace; Dᵀ never formed): at N = 1000 of the N-four-bar the dense pair took 576 MB.
 struct WorkspaceStages {
   MassStorage mass = MassStorage::dense;
   bool primal = true;            // PrimalWorkspace's matrices (compute_primal)
   bool dual_projections = true;  // DualWorkspace's n × n matrices ψ, α, β, Θ, θ (compute_dual)
+  bool constraint_matrices = true;  // ConstraintWorkspace's Eᵀ, Dᵀ (n_c × n; compute_constraints)
 };
 
 // Stage 1: the free system at q (paper §2).
@@ -107,7 +109,8 @@ struct DualWorkspace {
 // bytes with every stage; a Workspace larger than kMaxDenseWorkspaceBytes is refused with
 // ModelTooLarge before anything is allocated (a 2500-body planar model would need 8.6 GB: the
 // system would kill the process instead of reporting). Commands on the sparse path (simulate,
-// info) build none; `cycle` builds only Eᵀ, Dᵀ (2 n_c n) and, unless M is diagonal, M, A, Ṁ.
+// info) build none; `cycle` builds only Eᵀ, Dᵀ (2 n_c n) below kSparseJacobianFrom velocities
+// and, unless M is diagonal, M, A, Ṁ.
 inline constexpr double kMaxDenseWorkspaceBytes = 4.0 * 1024 * 1024 * 1024;
 [[nodiscard]] double dense_workspace_bytes(const Model& model, const WorkspaceStages& stages = {});
 class ModelTooLarge : public std::runtime_error {

@@ -19,6 +19,7 @@
 #include "orthomech/constraints/sparse_et.hpp"
 #include "orthomech/io/mechanism_file.hpp"
 #include "support/fixtures.hpp"
+#include "unit/analysis/large_mechanisms.hpp"
 
 namespace orthomech {
 namespace {
@@ -477,6 +478,56 @@ TEST(ChartEngine, SparsePathSolvesAsTheDensePathInTheSameChart) {
     const double sd = dense.estimate_sigma_min(w_dense);
     const double ss = sparse.estimate_sigma_min(w_sparse);
     EXPECT_NEAR(ss, sd, 1e-10 * sd) << k;
+  }
+}
+
+// update from Eᵀ on its pattern (what the cycle of a large model calls: no n_c × n matrix) against
+// update from the same Eᵀ as a dense matrix (the oracle: the path every smaller cycle was
+// validated on), on the N-four-bar at 40 positions, every link at a random angle θ in (−3, 3)
+// (jumps between them: the chart degrades), with the switching threshold raised to 0.9 and the
+// hysteresis lowered to 1.01 so that the rule is due often and switches (more than 5 times):
+// the same quality bit for
+// bit at every position, the same charts, the same switches, and Eᵀ F = 0 for the basis built
+// from the pattern. Both engine kinds: the dense block (N = 10, n = 63) and the rated sparse one
+// (N = 20, n = 123: its QR choice on the pattern, ChartSelector::select_sparse).
+TEST(ChartEngine, UpdateOnThePatternFollowsTheDenseUpdate) {
+  for (const int N : {10, 20}) {
+    const Model model = parse_mechanism(test::n_four_bar_yaml(N, 0.6), "n-four-bar (test)");
+    SparseEt Et(model);
+    compute_constraint_jacobian(model, model.design_q(), Et);
+    const int r = static_cast<int>(Eigen::FullPivLU<MatX>(MatX(Et.matrix())).rank());
+    const VecX A_diag = random_positive(model.n, 3);
+    const VecX A_sqrt = A_diag.cwiseSqrt();
+    ChartEngine on_dense(model, r, ChartFactorisation::rated_sparse_when_large);
+    ChartEngine on_pattern(model, r, ChartFactorisation::rated_sparse_when_large);
+    EXPECT_EQ(on_pattern.sparse(), N == 20);
+    for (ChartEngine* e : {&on_dense, &on_pattern}) {
+      e->options().switch_below = 0.9;
+      e->options().hysteresis = 1.01;
+    }
+    int singular = 0;
+    for (int k = 0; k < 40; ++k) {
+      const double theta = 3.0 * random_matrix(1, 1, 100 + k)(0);
+      const Model at = parse_mechanism(test::n_four_bar_yaml(N, theta), "n-four-bar (test)");
+      compute_constraint_jacobian(model, at.design_q(), Et);
+      const MatX Ed(Et.matrix());
+      const double qd = on_dense.update(Ed, A_diag, A_sqrt, k);
+      const double qp = on_pattern.update(Et, A_diag, A_sqrt, k);
+      ASSERT_EQ(qp, qd) << N << " " << k;
+      EXPECT_EQ(on_pattern.chart().rows, on_dense.chart().rows) << N << " " << k;
+      EXPECT_EQ(on_pattern.chart().dependent, on_dense.chart().dependent) << N << " " << k;
+      EXPECT_EQ(on_pattern.switch_count(), on_dense.switch_count()) << N << " " << k;
+      if (!(qp > 0.0)) {
+        ++singular;
+        continue;
+      }
+      MatX F(model.n, model.n - r);
+      VecX b(model.nc), x(model.n);
+      on_pattern.basis(Et, b, x, F);
+      EXPECT_LT((Ed * F).cwiseAbs().maxCoeff(), 1e-9 * F.cwiseAbs().maxCoeff()) << N << " " << k;
+    }
+    EXPECT_GT(on_pattern.switch_count(), 5) << N;  // the walk switched charts
+    EXPECT_LT(singular, 5) << N;
   }
 }
 

@@ -13,6 +13,9 @@
 #include <stdexcept>
 #include <string>
 
+#include "orthomech/analysis/mobility.hpp"
+#include "orthomech/constraints/joints.hpp"
+#include "orthomech/constraints/sparse_et.hpp"
 #include "orthomech/io/mechanism_file.hpp"
 #include "orthomech/model/free_system.hpp"
 #include "orthomech/projection/dual.hpp"
@@ -213,6 +216,54 @@ TEST(Workspace, StagesAllocateOnlyWhatTheyCountAndTheBasisIsUnchanged) {
   const Model n_four_bar = parse_mechanism(test::n_four_bar_yaml(1000, 0.5), "n-four-bar.yaml");
   EXPECT_GT(dense_workspace_bytes(n_four_bar), kMaxDenseWorkspaceBytes);
   EXPECT_LT(dense_workspace_bytes(n_four_bar, cycle_stages), kMaxDenseWorkspaceBytes);
+}
+
+// Without the constraint matrices (WorkspaceStages::constraint_matrices = false: the cycle of a
+// large model, whose Eᵀ is on its pattern) Eᵀ and Dᵀ are 0 × 0 and not counted, compute_constraints
+// refuses the Workspace, and compute_basis from Eᵀ on its pattern gives the F of the full
+// Workspace bit for bit (the same chart engine, the same values) on every bundled mechanism with a
+// degree of freedom.
+TEST(Workspace, WithoutConstraintMatricesTheBasisComesFromThePattern) {
+  const WorkspaceStages lean{.mass = MassStorage::diagonal_if_possible,
+                             .primal = false,
+                             .dual_projections = false,
+                             .constraint_matrices = false};
+  const WorkspaceStages with_matrices{
+      .mass = MassStorage::diagonal_if_possible, .primal = false, .dual_projections = false};
+  int compared = 0;
+  for (const auto& e : std::filesystem::directory_iterator(test::source_path("mechanisms"))) {
+    if (e.path().extension() != ".yaml") continue;
+    const std::string name = e.path().stem().string();
+    const Model model = test::load_bundled(name);
+    const Mobility mob = compute_mobility(model, model.design_q());
+    if (mob.dof < 1) continue;
+    EXPECT_EQ(dense_workspace_bytes(model, with_matrices) - dense_workspace_bytes(model, lean),
+              16.0 * model.nc * model.n)
+        << name;
+    Workspace full(model, mob.rank);
+    Workspace reduced(model, mob.rank, ChartFactorisation::dense, lean);
+    EXPECT_EQ(reduced.constraints.Et.size(), 0) << name;
+    EXPECT_EQ(reduced.constraints.Dt.size(), 0) << name;
+    State s(model);
+    s.q = model.design_q();
+    compute_free_system(model, s, full);
+    compute_free_system(model, s, reduced);
+    compute_constraints(model, s, full.constraints);
+    EXPECT_THROW(compute_constraints(model, s, reduced.constraints), std::logic_error) << name;
+    SparseEt Et(model);
+    compute_constraint_jacobian(model, s.q, Et);
+    const ProjectionStatus status = compute_basis(model, s, full);
+    EXPECT_EQ(compute_basis(model, s, reduced, Et), status) << name;
+    if (status != ProjectionStatus::ok) continue;
+    EXPECT_EQ(reduced.dual.F, full.dual.F) << name;
+    ++compared;
+  }
+  EXPECT_GT(compared, 10);
+  const Model other = parse_mechanism(kTwoBodies, "two-bodies");
+  const Model model = test::load_bundled("crank-rocker");
+  Workspace ws(model, model.nc - 1, ChartFactorisation::dense, lean);
+  State s(model);
+  EXPECT_THROW((void)compute_basis(model, s, ws, SparseEt(other)), std::invalid_argument);
 }
 
 TEST(Workspace, RefusesARankOutOfRangeAndAnotherModel) {
