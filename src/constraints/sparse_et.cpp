@@ -9,9 +9,7 @@
 
 namespace orthomech {
 
-double& SparseEt::Row::operator()(Eigen::Index j) const {
-  for (int k = 0; k < count; ++k)
-    if (columns[k] == j) return values[k];
+void SparseEt::Row::outside_pattern(Eigen::Index j) {
   throw std::logic_error("SparseEt: column " + std::to_string(j) +
                          " is outside the recorded pattern of its row");
 }
@@ -95,12 +93,6 @@ void SparseEt::copy_values_to(MatX& Et) const {
     const auto vals = row_values(i);
     for (size_t t = 0; t < cols.size(); ++t) Et(i, cols[t]) = vals[t];
   }
-}
-
-SparseEt::Row SparseEt::row(int i) {
-  const int b = m_.outerIndexPtr()[i];
-  const int e = m_.outerIndexPtr()[i + 1];
-  return {m_.valuePtr() + b, m_.innerIndexPtr() + b, e - b};
 }
 
 }  // namespace orthomech

@@ -34,7 +34,12 @@ class SparseEt {
     double* values;
     const int* columns;
     int count;
-    double& operator()(Eigen::Index j) const;
+    double& operator()(Eigen::Index j) const {  // inline: the writers' hot path (simulate)
+      for (int k = 0; k < count; ++k)
+        if (columns[k] == j) return values[k];
+      outside_pattern(j);
+    }
+    [[noreturn]] static void outside_pattern(Eigen::Index j);  // throws std::logic_error
   };
 
   SparseEt() = default;
@@ -66,7 +71,11 @@ class SparseEt {
   // dense Eᵀ (n_c × n) whose entries outside the pattern are zero, as every evaluation leaves
   // them.
   void copy_values_to(MatX& Et) const;
-  [[nodiscard]] Row row(int i);
+  [[nodiscard]] Row row(int i) {
+    const int b = m_.outerIndexPtr()[i];
+    const int e = m_.outerIndexPtr()[i + 1];
+    return {m_.valuePtr() + b, m_.innerIndexPtr() + b, e - b};
+  }
 
  private:
   Matrix m_;
