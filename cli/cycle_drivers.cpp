@@ -15,6 +15,7 @@
 #include "orthomech/analysis/multi_drive.hpp"
 #include "orthomech/constraints/joints.hpp"
 #include "orthomech/io/cycle_output.hpp"
+#include "orthomech/io/number_text.hpp"
 #include "orthomech/io/units.hpp"
 
 namespace orthomech::cli {
@@ -105,17 +106,24 @@ int run_cycle_drivers(const Model& model, const DriversRequest& request) {
     for (const Series& s : series)
       csv << "," << s.name << " [" << output_unit(s.dimension, U).name << "]";
     csv << "\n";
+    std::string line;  // one row's text: printf's "%.12g" per number, without printf
+    const auto cell = [&](Dimension d, double v) {
+      line += ',';
+      append_number(line, value(d, v), 12);
+    };
     for (const MultiDrivenPoint& p : r.points) {
-      csv << time_u.from_si(p.time);
+      line.clear();
+      append_number(line, time_u.from_si(p.time), 12);
       for (Eigen::Index i = 0; i < p.inputs.size(); ++i)
-        csv << "," << value(input_dim[static_cast<size_t>(i)], p.inputs(i));
+        cell(input_dim[static_cast<size_t>(i)], p.inputs(i));
       for (size_t i = 0; i < model.measures.size(); ++i)
-        csv << "," << value(dimension_of(model.measures[i].unit), p.measures[i]);
+        cell(dimension_of(model.measures[i].unit), p.measures[i]);
       for (Eigen::Index i = 0; i < p.drives.size(); ++i)
-        csv << "," << value(drive_dim[static_cast<size_t>(i)], p.drives(i));
+        cell(drive_dim[static_cast<size_t>(i)], p.drives(i));
       for (size_t i = 0; i < p.reactions.size(); ++i)
-        csv << "," << value(dimension_of(r.components[i].unit), p.reactions[i]);
-      csv << "\n";
+        cell(dimension_of(r.components[i].unit), p.reactions[i]);
+      line += '\n';
+      csv << line;
     }
     const std::filesystem::path file = std::filesystem::path(request.out) / "drivers.csv";
     write_file_atomically(file, csv.str());

@@ -26,6 +26,7 @@
 #include "orthomech/analysis/reactions.hpp"
 #include "orthomech/io/cycle_output.hpp"
 #include "orthomech/io/noise.hpp"
+#include "orthomech/io/number_text.hpp"
 #include "orthomech/io/units.hpp"
 
 namespace orthomech::cli {
@@ -235,19 +236,26 @@ void write_csv(const std::filesystem::path& dir, const Model& model, const Simul
   const std::string e = " [" + U.energy.name + "]";
   out << ",kinetic" << e << ",potential" << e << ",work" << e << ",energy" << e
       << ",residual_length [" << U.length.name << "],residual_angle [" << U.angle.name << "]\n";
+  std::string line;  // one row's text: printf's "%.12g" per number, without printf
+  const auto cell = [&](double v) {
+    line += ',';
+    append_number(line, v, 12);
+  };
   spool.for_each([&](const double* row) {
-    out << U.time.from_si(row[0]);
-    for (size_t k = 0; k < model.measures.size(); ++k)
-      out << "," << U.measure(k, row[spool.measure(k)]);
+    line.clear();
+    append_number(line, U.time.from_si(row[0]), 12);
+    for (size_t k = 0; k < model.measures.size(); ++k) cell(U.measure(k, row[spool.measure(k)]));
     for (size_t k = 0; k < U.position_columns.size(); ++k)
-      out << "," << U.position(k, row[spool.position(k)]);
+      cell(U.position(k, row[spool.position(k)]));
     for (size_t k = 0; k < res.components.size(); ++k)
-      out << ","
-          << (static_cast<double>(k) < row[1] ? U.component(k, row[spool.component(k)]) : 0.0);
+      cell(static_cast<double>(k) < row[1] ? U.component(k, row[spool.component(k)]) : 0.0);
     const double* E = row + spool.kinetic();
-    out << "," << U.energy_of(E[0]) << "," << U.energy_of(E[1]) << "," << U.energy_of(E[2]) << ","
-        << U.energy_of(E[0] + E[1] - E[2]) << "," << U.length.from_si(E[3]) << ","
-        << U.angle.from_si(E[4]) << "\n";
+    for (const double v :
+         {U.energy_of(E[0]), U.energy_of(E[1]), U.energy_of(E[2]), U.energy_of(E[0] + E[1] - E[2]),
+          U.length.from_si(E[3]), U.angle.from_si(E[4])})
+      cell(v);
+    line += '\n';
+    out.write(line.data(), static_cast<std::streamsize>(line.size()));
   });
   std::ofstream sw(dir / "chart_switches.csv");
   sw << "t [" << U.time.name << "],from,to\n";

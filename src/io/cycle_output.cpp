@@ -10,21 +10,19 @@
 #include <numbers>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 #include "orthomech/analysis/cycle_metrics.hpp"
 #include "orthomech/check.hpp"
 #include "orthomech/io/noise.hpp"
+#include "orthomech/io/number_text.hpp"
 #include "orthomech/model/spatial.hpp"
 
 namespace orthomech {
 
 namespace {
 
-std::string number(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.12g", v);
-  return buf;
-}
+std::string number(double v) { return number_text(v, 12); }
 
 // A CSV field: quoted when it holds a comma or a quote.
 std::string field(const std::string& s) {
@@ -85,23 +83,51 @@ std::string gp_string(const std::string& s) {
 
 }  // namespace
 
+namespace {
+// A file written through its temporary twin (FILE.tmp) and renamed onto FILE by commit(): a
+// failure leaves no partial FILE (the twin is removed), and a large table streams to the disk
+// instead of being held whole in memory first.
+class AtomicFile {
+ public:
+  explicit AtomicFile(std::filesystem::path file)
+      : file_(std::move(file)),
+        tmp_(file_.string() + ".tmp"),
+        out_(tmp_, std::ios::binary | std::ios::trunc) {
+    if (!out_) fail(std::strerror(errno));
+  }
+  AtomicFile(const AtomicFile&) = delete;
+  AtomicFile& operator=(const AtomicFile&) = delete;
+  ~AtomicFile() {
+    if (committed_) return;
+    out_.close();
+    std::error_code ec;
+    std::filesystem::remove(tmp_, ec);
+  }
+  std::ofstream& stream() { return out_; }
+  void commit() {
+    out_.flush();
+    if (!out_) fail(std::strerror(errno));
+    out_.close();
+    std::error_code ec;
+    std::filesystem::rename(tmp_, file_, ec);
+    if (ec) fail(ec.message());
+    committed_ = true;
+  }
+
+ private:
+  [[noreturn]] void fail(const std::string& why) const {
+    throw std::runtime_error("cannot write " + file_.string() + ": " + why);
+  }
+  std::filesystem::path file_, tmp_;
+  std::ofstream out_;
+  bool committed_ = false;
+};
+}  // namespace
+
 void write_file_atomically(const std::filesystem::path& file, const std::string& text) {
-  const std::filesystem::path tmp = file.string() + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out)
-      throw std::runtime_error("cannot write " + file.string() + ": " + std::strerror(errno));
-    out << text;
-    out.flush();
-    if (!out)
-      throw std::runtime_error("cannot write " + file.string() + ": " + std::strerror(errno));
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, file, ec);
-  if (ec) {
-    std::filesystem::remove(tmp, ec);
-    throw std::runtime_error("cannot write " + file.string() + ": " + ec.message());
-  }
+  AtomicFile out(file);
+  out.stream() << text;
+  out.commit();
 }
 
 NoiseFloor cycle_noise_floor(const Model& model, const CycleResult& result,
@@ -225,7 +251,8 @@ CycleColumns write_cycle_csv(const std::filesystem::path& file, const Model& mod
                              const std::vector<ReactionMagnitude>& magnitudes, bool angular,
                              const UnitSystem& units, const std::vector<ExtraColumn>& extra) {
   CycleColumns cols;
-  std::ostringstream out;
+  AtomicFile target(file);  // rows streamed to FILE.tmp, renamed when complete
+  std::ofstream& out = target.stream();
   int col = 0;
   auto head = [&](const std::string& name, const OutputUnit& unit) {
     out << (col ? "," : "") << field(name + " [" + unit.name + "]");
@@ -287,26 +314,32 @@ CycleColumns write_cycle_csv(const std::filesystem::path& file, const Model& mod
   for (size_t d = 0; d < kDimensions; ++d)
     unit_of[d] = output_unit(static_cast<Dimension>(d), units);
   CellScratch scratch(model);
+  std::string line;  // one row's text (append_number: printf's "%.12g" without printf)
   for (size_t row = 0; row < result.points.size(); ++row) {
     const DrivenPointView p = result.points[row];
+    line.clear();
     bool first = true;
-    for_each_cell(model, result, magnitudes, angular, p, scratch,
-                  [&](Dimension d, double v, bool reported) {
-                    if (!first) out << ',';
-                    first = false;
-                    if (reported)
-                      out << number(unit_of[static_cast<size_t>(d)].from_si(noise.clean(d, v)));
-                  });
+    for_each_cell(
+        model, result, magnitudes, angular, p, scratch, [&](Dimension d, double v, bool reported) {
+          if (!first) line += ',';
+          first = false;
+          if (reported)
+            append_number(line, unit_of[static_cast<size_t>(d)].from_si(noise.clean(d, v)), 12);
+        });
     std::string outside;  // scratch.q is p.q (for_each_cell)
     for (size_t j = 0; j < model.joints.size(); ++j)
       if (outside_limits(model, static_cast<int>(j), scratch.q))
         outside += (outside.empty() ? "" : " ") + model.joints[j].name;
-    out << ',' << field(outside);
-    for (size_t i = 0; i < extra.size(); ++i)
-      out << ',' << number(extra_units[i].from_si(extra[i].values[row]));
-    out << '\n';
+    line += ',';
+    line += field(outside);
+    for (size_t i = 0; i < extra.size(); ++i) {
+      line += ',';
+      append_number(line, extra_units[i].from_si(extra[i].values[row]), 12);
+    }
+    line += '\n';
+    out.write(line.data(), static_cast<std::streamsize>(line.size()));
   }
-  write_file_atomically(file, out.str());
+  target.commit();
   return cols;
 }
 

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -137,6 +138,41 @@ TEST(CycleOutput, WriteFileAtomically) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find(missing.string()), std::string::npos) << e.what();
   }
+}
+
+// write_cycle_csv streams its rows into FILE.tmp and renames it onto FILE when complete (the
+// N = 1000 four-bar's table, 230 MB, is no longer held whole in memory): the file written is
+// the one read back with every row, an existing file is replaced, and a table that fails while
+// it is written (an extra column with a value too few, checked after the first columns) leaves
+// the existing file as it was and no temporary file.
+TEST(CycleOutput, CsvIsStreamedAndReplacedOnlyWhenComplete) {
+  const Model model = parse_mechanism(test::n_four_bar_yaml(2, std::numbers::pi / 2) +
+                                          "drivers:\n  - {name: motor, joint: O0, speed: 60 rpm}\n",
+                                      "n-four-bar-2 (test)");
+  CycleOptions o;
+  o.driver = model.drivers[0];
+  o.steps = 36;
+  const CycleResult r = run_cycle(model, o);
+  ASSERT_EQ(r.status, CycleStatus::completed) << r.message;
+  const test::TempDir dir("orthomech_cycle_stream_", true);
+  const auto file = dir.path / "cycle.csv";
+  write_file_atomically(file, "before\n");
+  ExtraColumn extra{.name = "index", .dimension = Dimension::length, .values = {}};
+  for (size_t k = 0; k < r.points.size(); ++k) extra.values.push_back(static_cast<double>(k));
+  (void)write_cycle_csv(file, model, r, reaction_magnitudes(r), true, UnitSystem{}, {extra});
+  const std::string text = test::read_text(file);
+  EXPECT_EQ(static_cast<size_t>(std::count(text.begin(), text.end(), '\n')), r.points.size() + 1);
+  EXPECT_NE(text.find(",index [m]\n"), std::string::npos);
+  EXPECT_EQ(text.substr(text.rfind(',') + 1), std::to_string(r.points.size() - 1) + "\n");
+  EXPECT_FALSE(std::filesystem::exists(file.string() + ".tmp"));
+
+  write_file_atomically(file, "before\n");
+  extra.values.pop_back();
+  EXPECT_THROW(
+      (void)write_cycle_csv(file, model, r, reaction_magnitudes(r), true, UnitSystem{}, {extra}),
+      std::invalid_argument);
+  EXPECT_EQ(test::read_text(file), "before\n");
+  EXPECT_FALSE(std::filesystem::exists(file.string() + ".tmp"));
 }
 
 }  // namespace
