@@ -51,6 +51,8 @@ TEST(NumberText, EqualsPrintfOnRandomDoublesAtEveryPrecision) {
       ++compared;
     }
   }
+  // 20 000 values × 17 precisions = 340 000 texts, less the NaNs' (random bit patterns are NaN
+  // with probability 2⁻¹¹, and their texts are checked above instead).
   EXPECT_GT(compared, 300000);
 }
 

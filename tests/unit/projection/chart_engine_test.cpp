@@ -526,7 +526,10 @@ TEST(ChartEngine, UpdateOnThePatternFollowsTheDenseUpdate) {
       on_pattern.basis(Et, b, x, F);
       EXPECT_LT((Ed * F).cwiseAbs().maxCoeff(), 1e-9 * F.cwiseAbs().maxCoeff()) << N << " " << k;
     }
-    EXPECT_GT(on_pattern.switch_count(), 5) << N;  // the walk switched charts
+    // The walk switched charts (12 and 15 times for N = 10 and 20 when written), so the switch
+    // path was compared; and the chart was usable at most positions (a random θ is regular: none
+    // singular when written).
+    EXPECT_GT(on_pattern.switch_count(), 5) << N;
     EXPECT_LT(singular, 5) << N;
   }
 }

@@ -258,7 +258,7 @@ TEST(Workspace, WithoutConstraintMatricesTheBasisComesFromThePattern) {
     EXPECT_EQ(reduced.dual.F, full.dual.F) << name;
     ++compared;
   }
-  EXPECT_GT(compared, 10);
+  EXPECT_GT(compared, 10);  // of the 23 bundled mechanisms, those with a DOF and a regular chart
   const Model other = parse_mechanism(kTwoBodies, "two-bodies");
   const Model model = test::load_bundled("crank-rocker");
   Workspace ws(model, model.nc - 1, ChartFactorisation::dense, lean);
