@@ -97,7 +97,6 @@ int run_cycle_drivers(const Model& model, const DriversRequest& request) {
   if (!request.out.empty()) {
     std::filesystem::create_directories(request.out);
     std::ostringstream csv;
-    csv.precision(12);
     csv << "time [" << time_u.name << "]";
     for (size_t i = 0; i < mo.drivers.size(); ++i)
       csv << ",input." << mo.drivers[i].name << " [" << output_unit(input_dim[i], U).name << "]";
@@ -109,11 +108,11 @@ int run_cycle_drivers(const Model& model, const DriversRequest& request) {
     std::string line;  // one row's text: printf's "%.12g" per number, without printf
     const auto cell = [&](Dimension d, double v) {
       line += ',';
-      append_number(line, value(d, v), 12);
+      append_number(line, value(d, v), kCsvDigits);
     };
     for (const MultiDrivenPoint& p : r.points) {
       line.clear();
-      append_number(line, time_u.from_si(p.time), 12);
+      append_number(line, time_u.from_si(p.time), kCsvDigits);
       for (Eigen::Index i = 0; i < p.inputs.size(); ++i)
         cell(input_dim[static_cast<size_t>(i)], p.inputs(i));
       for (size_t i = 0; i < model.measures.size(); ++i)

@@ -225,7 +225,6 @@ void write_csv(const std::filesystem::path& dir, const Model& model, const Simul
   if (ec)
     throw CLI::ValidationError("--out", "cannot create " + dir.string() + ": " + ec.message());
   std::ofstream out(dir / "simulate.csv");
-  out.precision(12);
   out << "t [" << U.time.name << "]";
   for (size_t k = 0; k < model.measures.size(); ++k)
     out << "," << model.measures[k].name << " [" << U.measures[k].name << "]";
@@ -239,11 +238,11 @@ void write_csv(const std::filesystem::path& dir, const Model& model, const Simul
   std::string line;  // one row's text: printf's "%.12g" per number, without printf
   const auto cell = [&](double v) {
     line += ',';
-    append_number(line, v, 12);
+    append_number(line, v, kCsvDigits);
   };
   spool.for_each([&](const double* row) {
     line.clear();
-    append_number(line, U.time.from_si(row[0]), 12);
+    append_number(line, U.time.from_si(row[0]), kCsvDigits);
     for (size_t k = 0; k < model.measures.size(); ++k) cell(U.measure(k, row[spool.measure(k)]));
     for (size_t k = 0; k < U.position_columns.size(); ++k)
       cell(U.position(k, row[spool.position(k)]));
@@ -260,7 +259,8 @@ void write_csv(const std::filesystem::path& dir, const Model& model, const Simul
   std::ofstream sw(dir / "chart_switches.csv");
   sw << "t [" << U.time.name << "],from,to\n";
   for (const ChartSwitch& c : res.chart_switches)
-    sw << g(U.time.from_si(c.t), 12) << ",\"" << c.from << "\",\"" << c.to << "\"\n";
+    sw << number_text(U.time.from_si(c.t), kCsvDigits) << ",\"" << c.from << "\",\"" << c.to
+       << "\"\n";
   out.close();
   sw.close();
   if (!out || !sw) throw CLI::ValidationError("--out", "cannot write the files in " + dir.string());

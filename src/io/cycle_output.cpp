@@ -22,7 +22,7 @@ namespace orthomech {
 
 namespace {
 
-std::string number(double v) { return number_text(v, 12); }
+std::string number(double v) { return number_text(v, kCsvDigits); }
 
 // A CSV field: quoted when it holds a comma or a quote.
 std::string field(const std::string& s) {
@@ -324,7 +324,8 @@ CycleColumns write_cycle_csv(const std::filesystem::path& file, const Model& mod
           if (!first) line += ',';
           first = false;
           if (reported)
-            append_number(line, unit_of[static_cast<size_t>(d)].from_si(noise.clean(d, v)), 12);
+            append_number(line, unit_of[static_cast<size_t>(d)].from_si(noise.clean(d, v)),
+                          kCsvDigits);
         });
     std::string outside;  // scratch.q is p.q (for_each_cell)
     for (size_t j = 0; j < model.joints.size(); ++j)
@@ -334,7 +335,7 @@ CycleColumns write_cycle_csv(const std::filesystem::path& file, const Model& mod
     line += field(outside);
     for (size_t i = 0; i < extra.size(); ++i) {
       line += ',';
-      append_number(line, extra_units[i].from_si(extra[i].values[row]), 12);
+      append_number(line, extra_units[i].from_si(extra[i].values[row]), kCsvDigits);
     }
     line += '\n';
     out.write(line.data(), static_cast<std::streamsize>(line.size()));

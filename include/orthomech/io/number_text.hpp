@@ -7,6 +7,11 @@
 
 namespace orthomech {
 
+// The significant digits of every number in the CSV files (`simulate --out`, `cycle --out`,
+// `cycle --drivers --out`): 12, far above what a designer reads and above the rounding noise
+// floor (io/noise.hpp).
+inline constexpr int kCsvDigits = 12;
+
 // The longest text of "%.Pg" for P ≤ 17: sign, 17 digits, point, exponent "e-308".
 inline constexpr int kNumberTextMax = 32;
 
