@@ -1292,7 +1292,9 @@ class Simulation {
         stop = true;
       }
     }
-    if (!stop) stop = crossed_across_two_steps(t, sigma);
+    // (C2') the steps are undone: the saved step ends stay those the rewind goes back to (the
+    // step start saved_prev_ or the one before, saved_older_), not shifted to this step's end.
+    if (!stop && crossed_across_two_steps(t, sigma)) return true;
     if (t > last_crossing_t_star_) crossing_rewinds_ = 0;
     saved_older_ = saved_prev_;
     saved_prev_.valid = true;
@@ -1819,6 +1821,9 @@ class Simulation {
     saved_older_.valid = false;
     saved_prev_ = start;
     next_step_limit_ = std::numeric_limits<double>::infinity();
+    // F at the restored position: a passage from here starts from u = F v, and F_ is still
+    // that of the undone steps' last evaluation.
+    if (!primal_) dyn_.evaluate_dual(t_now_, x_.head(nq_), x_.segment(nq_, na_));
   }
 
   [[nodiscard]] std::string change_point_name(double t_star) const {
@@ -1851,8 +1856,6 @@ class Simulation {
         const SavedState from = far_;
         far_.valid = false;
         restore(from);
-        // F at the restored position (the passage starts from u = F v there).
-        dyn_.evaluate_dual(t_now_, x_.head(nq_), x_.segment(nq_, na_));
         pass_quality_ = from.sigma;
         request_ = {true, rq.t_star, from.sigma};
         approaches_ = 0;
