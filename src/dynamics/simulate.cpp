@@ -1422,6 +1422,9 @@ class Simulation {
     double change = std::numeric_limits<double>::infinity(), jump = 0.0;
     int iterations = 0;
     double sigma_b = 0.0, rate_b = 0.0;  // σ̂ and its rate at the landing
+    // The step crossed the change point (check_passage): false when it landed short of it or
+    // stepped over a regular minimum of σ̂; it is then an ordinary step, not a passage.
+    bool crossed = true;
   };
 
   [[nodiscard]] double mnorm2(const VecX& a, const VecX& b) const {
@@ -1562,6 +1565,9 @@ class Simulation {
     ChangePointPassage pass;
     if (!check_passage(p, t_star, sigma_a, pass, why)) return false;
     land(p, pass);
+    // Landed short of the point (σ̂ still falling): passed from the landing, at the zero of σ̂'s
+    // tangent there (σ̂ is linear in t this close to it).
+    if (!p.crossed && p.rate_b < 0.0) request_ = {true, p.t_b - p.sigma_b / p.rate_b, p.sigma_b};
     return true;
   }
 
@@ -1660,6 +1666,7 @@ class Simulation {
     const double rate_a = saved_prev_.valid && saved_prev_.t == p.t_a ? saved_prev_.rate : 0.0;
     if (rate_a < 0.0 && p.rate_b > 0.0)
       t_point = p.t_a + tangents_meet(sigma_a, rate_a, sigma_b, p.rate_b, p.h);
+    p.crossed = crossed_in_passage(p, sigma_a, rate_a, t_point);
     pass = {t_point, p.t_a, p.t_b, sigma_a, sigma_b, jump, cosine, p.iterations};
     pass.energy_balance = passage_energy_balance(p);
     char buf[200];
@@ -1706,6 +1713,22 @@ class Simulation {
     return true;
   }
 
+  // Did the passage step cross the change point? σ̂ still falling at the landing, below its
+  // start value: the point lies beyond it (t* was estimated early: σ̂ is concave as it falls).
+  // σ̂ falling at the start and rising at the landing with the tangents meeting well above 0
+  // (the (C2'') criterion): the step went over a regular minimum of σ̂, not through 0. Either
+  // way the step is an ordinary one (its accuracy checked as a passage's) and is not recorded.
+  [[nodiscard]] static bool crossed_in_passage(const PassageStep& p, double sigma_a, double rate_a,
+                                               double t_point) {
+    if (p.rate_b < 0.0 && p.sigma_b < sigma_a) return false;  // short of the point
+    if (rate_a < 0.0 && p.rate_b > 0.0) {
+      const double tau = t_point - p.t_a;
+      const double vertex = std::max(sigma_a + rate_a * tau, p.sigma_b + p.rate_b * (tau - p.h));
+      if (!(vertex < kCrossingVertex * std::min(sigma_a, p.sigma_b))) return false;  // minimum
+    }
+    return true;
+  }
+
   // |Δ(T + V − W)| across the passage step relative to the larger kinetic energy at its ends: 0
   // for the exact motion (dE/dt = P); the step's truncation error along the energy. Less the
   // rounding of the energies' terms (1024 ε of their magnitudes), so that a slow passage
@@ -1736,7 +1759,7 @@ class Simulation {
     x_(nx_ - 1) = p.W_b;
     t_now_ = p.t_b;
     t_last_accept_ = p.t_b;
-    result_.passages.push_back(pass);
+    if (p.crossed) result_.passages.push_back(pass);
     saved_older_.valid = false;  // the next step starts from the landing ((C2''))
     saved_prev_.valid = true;
     saved_prev_.t = p.t_b;
