@@ -256,20 +256,31 @@ TEST(SpatialBody, CrosscheckPassesOnTheHeavyTop) {
 namespace orthomech {
 namespace {
 
+// mechanisms/bennett.yaml simulated from its design position (atol: the library's default).
+SimulateResult simulate_bennett(const Model& m, Integrator integrator, double t_end, double rtol,
+                                double dt_out, double atol = SimulateOptions{}.atol) {
+  SimulateOptions o;
+  o.integrator = integrator;
+  o.t_end = t_end;
+  o.rtol = rtol;
+  o.atol = atol;
+  o.dt_out = dt_out;
+  State s(m);
+  s.q = m.design_q();
+  return simulate(m, s, o);
+}
+
+Model bennett() {
+  return load_mechanism(std::string(ORTHOMECH_SOURCE_DIR) + "/mechanisms/bennett.yaml");
+}
+
 // The Bennett linkage swinging under gravity (mechanisms/bennett.yaml, spatial.md §4.2) passes
 // the positions where E loses rank (the folded positions, θ1 ≈ ±180°) with the spatial passage
 // (local coordinates q_a ⊕ x), and stays on its branch: the closure relation
 // tan(θ1/2) tan(θ2/2) = sin((β+α)/2)/sin((β−α)/2) holds all along, energy is conserved.
 TEST(SpatialBody, BennettPassesItsChangePointsOnItsBranch) {
-  const Model m = load_mechanism(std::string(ORTHOMECH_SOURCE_DIR) + "/mechanisms/bennett.yaml");
-  SimulateOptions o;
-  o.t_end = 3.0;
-  o.dt_out = 0.01;
-  o.rtol = 1e-10;
-  o.atol = 1e-12;
-  State s(m);
-  s.q = m.design_q();
-  const SimulateResult r = simulate(m, s, o);
+  const Model m = bennett();
+  const SimulateResult r = simulate_bennett(m, Integrator::dopri5, 3.0, 1e-10, 0.01, 1e-12);
   ASSERT_EQ(r.status, SimulateStatus::completed) << r.message;
   EXPECT_GE(r.passages.size(), 3u);
   const int t1 = m.find_measure("theta1"), t2 = m.find_measure("theta2");
@@ -310,24 +321,17 @@ namespace {
 // fix 1.2e-7 and 6.0e-6 (measured), against the bound 1e-4 = 100 rtol. Every passage runs forward
 // over its point, and the passages follow one another in time.
 TEST(SpatialBody, BennettRewindsGoBackBeforeTheCrossing) {
-  const Model m = load_mechanism(std::string(ORTHOMECH_SOURCE_DIR) + "/mechanisms/bennett.yaml");
+  const Model m = bennett();
   struct Run {
     Integrator integrator;
     double dt_out;
   };
   long rewinds = 0;
   for (const Run run : {Run{Integrator::rkf78, 0.01}, Run{Integrator::dopri5, 20.0}}) {
-    SimulateOptions o;
-    o.t_end = 20.0;
-    o.dt_out = run.dt_out;
-    o.rtol = 1e-6;
-    o.integrator = run.integrator;
-    State s(m);
-    s.q = m.design_q();
-    const SimulateResult r = simulate(m, s, o);
+    const SimulateResult r = simulate_bennett(m, run.integrator, 20.0, 1e-6, run.dt_out);
     ASSERT_EQ(r.status, SimulateStatus::completed) << r.message;
     rewinds += r.rewinds;
-    EXPECT_GE(r.passages.size(), 36u);  // the folds in 20 s (36 at every rtol 1e-7 … 1e-10)
+    EXPECT_EQ(r.passages.size(), 36u);  // its folds in 20 s (next test)
     for (size_t k = 0; k < r.passages.size(); ++k) {
       const ChangePointPassage& p = r.passages[k];
       EXPECT_LT(p.t_from, p.t) << "passage " << k;
@@ -356,15 +360,8 @@ namespace {
 // count); the sample nearest each recorded point is within 0.72° of a fold (measured), against
 // the bound 5° (the spurious ones were 29.7° off).
 TEST(SpatialBody, BennettRecordsOnlyItsFoldsAsChangePoints) {
-  const Model m = load_mechanism(std::string(ORTHOMECH_SOURCE_DIR) + "/mechanisms/bennett.yaml");
-  SimulateOptions o;
-  o.t_end = 20.0;
-  o.dt_out = 0.01;
-  o.rtol = 1e-5;
-  o.integrator = Integrator::rkf78;
-  State s(m);
-  s.q = m.design_q();
-  const SimulateResult r = simulate(m, s, o);
+  const Model m = bennett();
+  const SimulateResult r = simulate_bennett(m, Integrator::rkf78, 20.0, 1e-5, 0.01);
   ASSERT_EQ(r.status, SimulateStatus::completed) << r.message;
   EXPECT_EQ(r.passages.size(), 36u);
   const size_t t1 = static_cast<size_t>(m.find_measure("theta1"));
