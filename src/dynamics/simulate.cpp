@@ -1449,7 +1449,8 @@ class Simulation {
       why = "a position of the passage does not close (" + corr.message + ")";
       return false;
     }
-    (void)dyn_.cs_.polish_positions(s.q, Et, f_, dq_, 3);
+    // (f, Eᵀ and the block's factors at s.q: correct_positions converged there.)
+    (void)dyn_.cs_.polish_positions(s.q, Et, f_, dq_, 3, ChartCorrection::Start::prepared);
     dyn_.mass_at(s.q);
     dyn_.compute_F();
     dyn_.compute_H();

@@ -358,11 +358,14 @@ double ChartEngine::estimate_sigma_min(VecX& w, VecX* left) {
 // ---- Correcting positions -----------------------------------------------------------------------
 
 template <typename Jacobian>
-double ChartEngine::polish(VecX& q, Jacobian& Et, VecX& f, VecX& dq, int iterations) {
-  const VecX A_sqrt = metric_;  // (set-up of a passage only: not a hot path)
-  compute_constraint_residual_and_jacobian(*model_, q, f, Et);
+double ChartEngine::polish(VecX& q, Jacobian& Et, VecX& f, VecX& dq, int iterations,
+                           ChartCorrection::Start start) {
+  const VecX A_sqrt = metric_;  // (stages of a passage only)
+  if (start == ChartCorrection::Start::evaluate) {
+    compute_constraint_residual_and_jacobian(*model_, q, f, Et);
+    if (!(factor(Et, A_sqrt) > 0.0)) return f.size() ? f.cwiseAbs().maxCoeff() : 0.0;
+  }
   double residual = f.size() ? f.cwiseAbs().maxCoeff() : 0.0;
-  if (!(factor(Et, A_sqrt) > 0.0)) return residual;
   for (int it = 0; it < iterations && residual > 0.0; ++it) {
     solve(f, dq);
     VecX trial = q;
@@ -378,7 +381,8 @@ double ChartEngine::polish(VecX& q, Jacobian& Et, VecX& f, VecX& dq, int iterati
     residual = r_trial;
     if (!(factor(Et, A_sqrt) > 0.0)) break;
   }
-  (void)factor(Et, A_sqrt);
+  // The block is factorised at the returned q: a rejected trial leaves q, Eᵀ and the factors
+  // as they were, an accepted one was factorised above.
   return residual;
 }
 
@@ -436,11 +440,13 @@ ChartCorrectionResult ChartEngine::correct(VecX& q, Jacobian& Et, VecX& f, VecX&
   }
 }
 
-double ChartEngine::polish_positions(VecX& q, MatX& Et, VecX& f, VecX& dq, int iterations) {
-  return polish(q, Et, f, dq, iterations);
+double ChartEngine::polish_positions(VecX& q, MatX& Et, VecX& f, VecX& dq, int iterations,
+                                     ChartCorrection::Start start) {
+  return polish(q, Et, f, dq, iterations, start);
 }
-double ChartEngine::polish_positions(VecX& q, SparseEt& Et, VecX& f, VecX& dq, int iterations) {
-  return polish(q, Et, f, dq, iterations);
+double ChartEngine::polish_positions(VecX& q, SparseEt& Et, VecX& f, VecX& dq, int iterations,
+                                     ChartCorrection::Start start) {
+  return polish(q, Et, f, dq, iterations, start);
 }
 ChartCorrectionResult ChartEngine::correct_positions(VecX& q, MatX& Et, VecX& f, VecX& dq,
                                                      const ChartCorrection& options) {

@@ -134,9 +134,12 @@ class ChartEngine {
                                           const ChartCorrection& options);
   // Newton beyond a tolerance: from a corrected q while max |f| falls by at least half per
   // iteration (at most `iterations`), down to rounding. Leaves f, Eᵀ at the returned q,
-  // factorised in the chart. Returns max |f|.
-  double polish_positions(VecX& q, MatX& Et, VecX& f, VecX& dq, int iterations);
-  double polish_positions(VecX& q, SparseEt& Et, VecX& f, VecX& dq, int iterations);
+  // factorised in the chart. Returns max |f|. Start::prepared: f, Eᵀ are those at q and the
+  // block is factorised there already (as a converged correct_positions leaves them).
+  double polish_positions(VecX& q, MatX& Et, VecX& f, VecX& dq, int iterations,
+                          ChartCorrection::Start start = ChartCorrection::Start::evaluate);
+  double polish_positions(VecX& q, SparseEt& Et, VecX& f, VecX& dq, int iterations,
+                          ChartCorrection::Start start = ChartCorrection::Start::evaluate);
 
   // ---- State
   [[nodiscard]] const Chart& chart() const { return chart_; }
@@ -181,7 +184,8 @@ class ChartEngine {
   ChartCorrectionResult correct(VecX& q, Jacobian& Et, VecX& f, VecX& dq,
                                 const ChartCorrection& options);
   template <typename Jacobian>
-  double polish(VecX& q, Jacobian& Et, VecX& f, VecX& dq, int iterations);
+  double polish(VecX& q, Jacobian& Et, VecX& f, VecX& dq, int iterations,
+                ChartCorrection::Start start);
   void index_chart();  // dep_pos_, block_entries_ of chart_
   void solve_in_place(Eigen::Ref<VecX> x);
   void solve_transposed_in_place(Eigen::Ref<VecX> x);

@@ -367,6 +367,54 @@ TEST(ChartEngine, CorrectPositionsClosesTheFourBarLoop) {
   EXPECT_LT((B - expected).norm(), 1e-11);
 }
 
+// Polishing from a converged correction: with Start::prepared (f, Eᵀ and the block's factors
+// taken as the corrector left them, as simulate's passage stages do) the same positions and
+// residual, bit for bit, as with Start::evaluate (everything evaluated again at q). Oracles: the
+// evaluate path; the residual f(q) computed here at the returned q; the engine's factors are
+// those at the returned q (a solve equals that of a second engine factorised at Eᵀ(q) there).
+TEST(ChartEngine, PolishFromAConvergedCorrectionReusesItsFactors) {
+  const Model model = test::load_bundled("crank-rocker");
+  const VecX q0 = test::assembled_q(model);
+  const int crank_phi = model.bodies[static_cast<size_t>(model.find_body("crank"))].u_offset + 2;
+  std::vector<int> dependent;
+  for (int k = 0; k < model.n; ++k)
+    if (k != crank_phi) dependent.push_back(k);
+  const Chart chart = chart_with(model.nc, model.n, dependent);
+  const VecX disturbed = q0 + 0.005 * random_matrix(model.n, 1, 22);
+  ChartCorrection loose;
+  loose.tolerance = 1e-7;  // converged, with room left for polishing
+  loose.max_iterations = 20;
+  VecX q_result[2];
+  double residual[2] = {0.0, 0.0};
+  for (const int prepared : {0, 1}) {
+    ChartEngine engine(model, model.nc);
+    engine.set_chart(chart);
+    MatX Et(model.nc, model.n);
+    VecX f(model.nc), dq(model.n), q = disturbed;
+    ASSERT_EQ(engine.correct_positions(q, Et, f, dq, loose).status, SolveStatus::converged);
+    residual[prepared] = engine.polish_positions(
+        q, Et, f, dq, 3,
+        prepared ? ChartCorrection::Start::prepared : ChartCorrection::Start::evaluate);
+    q_result[prepared] = q;
+    VecX f_here(model.nc);
+    compute_constraint_residual(model, q, f_here);
+    EXPECT_EQ(residual[prepared], f_here.cwiseAbs().maxCoeff());
+    EXPECT_LT(residual[prepared], 1e-14);
+    MatX Et_here(model.nc, model.n);
+    compute_constraint_jacobian(model, q, Et_here);
+    ChartEngine fresh(model, model.nc);
+    fresh.set_chart(chart);
+    ASSERT_GT(fresh.factor(Et_here, VecX::Ones(model.n)), 0.0);
+    const VecX rhs = random_matrix(model.nc, 1, 23);
+    VecX x_engine(model.n), x_fresh(model.n);
+    engine.solve(rhs, x_engine);
+    fresh.solve(rhs, x_fresh);
+    EXPECT_EQ(x_engine, x_fresh) << (prepared ? "prepared" : "evaluate");
+  }
+  EXPECT_EQ(q_result[0], q_result[1]);
+  EXPECT_EQ(residual[0], residual[1]);
+}
+
 // ---- Switching charts
 // ----------------------------------------------------------------------------
 
