@@ -117,8 +117,7 @@ int own_motions(const Body& b, const SparseJacobian& J, const VecX& A_diag, doub
 void dense_rank(const Model& model, const MatX& Et, const VecX& A_diag, const ChartOptions& options,
                 Mobility& m) {
   ChartSelector selector(model.nc, model.n);
-  Chart chart;
-  m.rank = selector.select(Et, A_diag, options, chart);
+  m.rank = selector.select(Et, A_diag, options, m.chart);
   const auto& order = selector.row_order();
   const VecX& piv = selector.row_pivots();
   m.smallest_pivot = m.rank > 0 ? piv(m.rank - 1) : 0.0;

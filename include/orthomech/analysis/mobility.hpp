@@ -27,6 +27,10 @@ struct Mobility {
   double largest_dropped = 0.0;        // largest dropped |R_kk|/|R_11| (0 if none)
   double tolerance = 0.0;
   bool sparse = false;  // rank revealed by the sparse QR (RankMethod::sparse)
+  // The dense QR's chart at q (rows, dependent and independent components, row scales): the one
+  // ChartEngine::select chooses from the same Eᵀ, A and options, which simulate's start reuses
+  // instead of a second QR. Empty on the sparse path.
+  Chart chart;
   // Idle degrees of freedom (spatial.md §4.1, §6.5): a body held by two or more joints that can
   // move while every other body is at rest, e.g. a coupler between two spherical joints spinning
   // about the line through them. Each counts in `dof`.
