@@ -148,6 +148,25 @@ def row(r):
     sys.stdout.flush()
 
 
+def head_to_head(build, rounds):
+    """MuJoCo's cheapest tight setting against orthomech's rkf78 at rtol 1e-7 (N = 40, 20 s),
+    alternated so that both see the same machine state; CPU s per simulated s of every round,
+    the medians and their ratio."""
+    mujoco, ours = [], []
+    with tempfile.TemporaryDirectory() as tmp:
+        for _ in range(rounds):
+            mujoco.append(mujoco_row(build, 40, 20.0, 1e-3, "euler", "tight"))
+            ours.append(orthomech_row(build, 40, 20.0, "rkf78", 1e-7, tmp))
+    medians = []
+    for name, rows in (("MuJoCo Euler dt 1e-3 tight", mujoco), ("orthomech rkf78 rtol 1e-7", ours)):
+        cpu = sorted(r["cpu_per_s"] for r in rows)
+        medians.append(cpu[len(cpu) // 2])
+        print(f"{name}: CPU s per simulated s {' '.join(f'{c:.5f}' for c in cpu)}; "
+              f"median {medians[-1]:.5f}; error of B0 {rows[0]['err']:.1e}, "
+              f"loop gap {rows[0]['gap']:.0e}")
+    print(f"ratio of the medians: {medians[0] / medians[1]:.2f}")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--build", default=os.path.join(ROOT, "build"))
@@ -160,7 +179,13 @@ def main():
     ap.add_argument("--crank-rocker-only", action="store_true",
                     help="only the crank-rocker swinging under gravity")
     ap.add_argument("--andrews-only", action="store_true", help="only Andrews' squeezer")
+    ap.add_argument("--head-to-head", type=int, metavar="ROUNDS", default=0,
+                    help="only MuJoCo's Euler dt 1e-3 tight against orthomech's rkf78 at rtol "
+                         "1e-7 on N = 40 to 20 s, alternated ROUNDS times (medians and ratio)")
     a = ap.parse_args()
+    if a.head_to_head > 0:
+        head_to_head(a.build, a.head_to_head)
+        return
     peers = os.path.join(a.build, "bench", "peers")
     have_mujoco = os.path.exists(os.path.join(peers, "peer_mujoco_n_four_bar"))
     have_simbody = os.path.exists(os.path.join(peers, "peer_simbody_n_four_bar"))
