@@ -23,6 +23,7 @@ struct CrosscheckCliOptions {
   double t_end = 0.2;
   double tolerance = 1e-8;
   unsigned seed = 1;
+  std::string method = "auto";
   bool json = false;
   std::string units = "file";
 };
@@ -36,6 +37,7 @@ int run_crosscheck_cmd(const CrosscheckCliOptions& opt) {
   co.t_end = opt.t_end * unit_system(model.units).time_si;  // bare: the file's time unit
   co.tolerance = opt.tolerance;
   co.seed = opt.seed;
+  (void)parse_crosscheck_method(opt.method, co.method);  // checked by CLI11 (IsMember)
   const CrosscheckResult res = run_crosscheck(model, co);
   std::ostringstream out;
   if (opt.json) {
@@ -46,6 +48,7 @@ int run_crosscheck_cmd(const CrosscheckCliOptions& opt) {
     j["message"] = res.message;
     j["samples"] = res.samples;
     j["tolerance"] = res.tolerance;
+    j["method"] = to_string(res.method);
     j["rank"] = res.rank;
     j["constraints"] = res.nc;
     j["primal_checked"] = res.primal_checked;
@@ -63,6 +66,10 @@ int run_crosscheck_cmd(const CrosscheckCliOptions& opt) {
     out << "mechanism   " << model.name << "  (" << model.file << ")\n";
     out << "states      " << res.samples << " along a " << time_u.from_si(co.t_end) << " "
         << time_u.name << " motion; tolerance " << res.tolerance << " (relative)\n";
+    out << "method      " << to_string(res.method)
+        << (res.method == CrosscheckMethod::probes
+                ? " (the projections applied to seeded vectors, no n × n matrix)\n"
+                : " (the projections formed as n × n matrices)\n");
     if (!res.primal_skipped_reason.empty())
       out << "primal      skipped: " << res.primal_skipped_reason << "\n";
     out << "\n";
@@ -99,6 +106,10 @@ void register_crosscheck(CLI::App& app, const GlobalOptions& globals, int& exit_
   cmd->add_option("--tolerance", opt->tolerance, "largest relative difference (default 1e-8)")
       ->check(finite_range(0.0, 1.0, true));
   cmd->add_option("--seed", opt->seed, "seed of the initial velocity guess (default 1)");
+  cmd->add_option("--method", opt->method,
+                  "dense: the projections as n × n matrices; probes: applied to seeded vectors "
+                  "on the sparse stages (default auto: probes from 300 velocities)")
+      ->check(CLI::IsMember({"auto", "dense", "probes"}));
   cmd->add_flag("--json", opt->json, "one JSON document on stdout");
   add_units_option(cmd, opt->units);
   auto log = std::make_shared<LogFlags>();

@@ -11,11 +11,22 @@
 
 namespace orthomech {
 
+// How the projections are compared. `dense` forms α, β, ψ, Θ, θ as n × n matrices (O(n³) per
+// state, refused above the dense workspace limit); `probes` applies them to a few seeded vectors
+// through the sparse stages simulate integrates with (F n × n_a, G = EᵀAE sparse; O(n) per state
+// for a mechanism of simple loops) and skips the three checks that need D or Ḟ as operators
+// (eqs. (102), (82)/(85), (29)); `automatic` takes `probes` from kCrosscheckProbesFrom velocities.
+enum class CrosscheckMethod { automatic, dense, probes };
+inline constexpr int kCrosscheckProbesFrom = 300;
+[[nodiscard]] const char* to_string(CrosscheckMethod m);
+bool parse_crosscheck_method(const std::string& name, CrosscheckMethod& out);
+
 struct CrosscheckOptions {
   int samples = 10;         // states along the motion
   double t_end = 0.2;       // s: length of the motion the states are taken from
   unsigned seed = 1;        // initial velocity guess: seeded uniform in [−1, 1] (SI)
   double tolerance = 1e-8;  // largest relative difference that passes
+  CrosscheckMethod method = CrosscheckMethod::automatic;
 };
 
 struct CrosscheckItem {
@@ -34,6 +45,7 @@ struct CrosscheckResult {
   int samples = 0;
   int rank = 0, nc = 0;
   double tolerance = 0.0;
+  CrosscheckMethod method = CrosscheckMethod::dense;  // the one used (never automatic)
   std::vector<CrosscheckItem> items;
 };
 

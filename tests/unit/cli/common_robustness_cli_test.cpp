@@ -228,17 +228,23 @@ TEST(Robustness, CycleDriverProblemFromTheFileNamesTheDriversLine) {
 
 // A model too large for a command's dense n × n matrices (IFToMM A02 at N = 1000: 2001 bodies,
 // n = 6003, 5.48 GB of them) is refused with exit 2 naming the file and its sizes, before anything
-// is allocated (the system would otherwise kill the process); info and assemble, on sparse
-// matrices, run.
+// is allocated (the system would otherwise kill the process): `crosscheck --method dense`. info,
+// assemble and the default crosscheck (the probe comparison from n = 300), on sparse matrices,
+// run.
 TEST(Robustness, ModelTooLargeForDenseMatricesIsBadInputNotACrash) {
   const test::TempDir dir("orthomech_large_");
   const fs::path file = dir.path / "n-four-bar-1000.yaml";
   std::ofstream(file) << test::n_four_bar_yaml(1000, 0.5);
-  const CliResult r = run_cli({"crosscheck", file.string()});
+  const CliResult r = run_cli({"crosscheck", file.string(), "--method", "dense"});
   EXPECT_EQ(r.status, 2) << r.err;
   EXPECT_NE(r.err.find(file.string() + ": 6003 velocity components"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("dense n × n matrices"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("--method probes"), std::string::npos) << r.err;
   EXPECT_TRUE(r.out.empty());
+  const CliResult probes =
+      run_cli({"crosscheck", file.string(), "--samples", "2", "--t-end", "0.02", "--json"});
+  ASSERT_EQ(probes.status, 0) << probes.err;
+  EXPECT_EQ(nlohmann::json::parse(probes.out)["method"], "probes");
   const CliResult info = run_cli({"info", file.string(), "--json"});
   ASSERT_EQ(info.status, 0) << info.err;
   EXPECT_EQ(nlohmann::json::parse(info.out)["dof"], 1);

@@ -1,6 +1,6 @@
 // `orthomech crosscheck` (cli/crosscheck.cpp; docs/cli.md): exit 0 when the dual and primal forms
-// agree, 1 when they do not (an impossible tolerance), the JSON keys, and the primal form skipped
-// with its reason on a mechanism with a redundant equation (the check itself:
+// agree, 1 when they do not (an impossible tolerance), the JSON keys, --method, and the primal form
+// skipped with its reason on a mechanism with a redundant equation (the check itself:
 // dynamics/crosscheck_test.cpp).
 #include <gtest/gtest.h>
 
@@ -31,6 +31,25 @@ TEST(CrosscheckCli, ExitStatusAndJson) {
       {"crosscheck", test::source_path("mechanisms/triple-crank.yaml"), "--samples", "3"});
   EXPECT_EQ(red.status, 0) << red.err;
   EXPECT_NE(red.out.find("primal      skipped"), std::string::npos) << red.out;
+}
+
+// --method: the JSON says which comparison ran; `probes` forms no n × n matrix, so it also runs
+// where `dense` is refused; an unknown method is a usage error (exit 2) naming the choices.
+TEST(CrosscheckCli, MethodOption) {
+  const std::string file = test::source_path("mechanisms/crank-rocker.yaml");
+  for (const char* m : {"dense", "probes"}) {
+    const auto r = test::run_cli({"crosscheck", file, "--samples", "3", "--method", m, "--json"});
+    ASSERT_EQ(r.status, 0) << m << r.err;
+    const auto j = nlohmann::json::parse(r.out);
+    EXPECT_EQ(j["method"].get<std::string>(), m);
+    EXPECT_TRUE(j["pass"].get<bool>());
+    EXPECT_TRUE(j["primal_checked"].get<bool>());
+  }
+  const auto automatic = test::run_cli({"crosscheck", file, "--samples", "3", "--json"});
+  EXPECT_EQ(nlohmann::json::parse(automatic.out)["method"].get<std::string>(), "dense");
+  const auto bad = test::run_cli({"crosscheck", file, "--method", "sparse"});
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_NE(bad.err.find("probes"), std::string::npos) << bad.err;
 }
 
 }  // namespace

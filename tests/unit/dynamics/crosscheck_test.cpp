@@ -18,19 +18,36 @@ namespace {
 // well-conditioned states they agree to ~1e-14; 1e-9 leaves room for conditioning.
 constexpr double kFormsAgree = 1e-9;
 
+// "n-four-bar-40" → "n_four_bar_40" (a test name has no '-').
+std::string mechanism_test_name(const ::testing::TestParamInfo<const char*>& info) {
+  std::string s = info.param;
+  for (char& c : s)
+    if (c == '-') c = '_';
+  return s;
+}
+
 class Crosscheck : public ::testing::TestWithParam<const char*> {};
 
-TEST_P(Crosscheck, Eqs44_70_91_99_105_DualAgreesWithPrimal) {
-  const Model model = test::load_bundled(GetParam());
+// A bundled mechanism's cross-check at 5 states by `method`: it passes, with the primal form
+// checked and every difference within kFormsAgree.
+CrosscheckResult check_bundled(const std::string& name, CrosscheckMethod method) {
+  const Model model = test::load_bundled(name);
   CrosscheckOptions o;
   o.samples = 5;
-  o.t_end = std::string(GetParam()) == "andrews-squeezer" ? 0.01 : 0.2;
+  o.t_end = name == "andrews-squeezer" ? 0.01 : 0.2;
   o.tolerance = kFormsAgree;
+  o.method = method;
   const CrosscheckResult r = run_crosscheck(model, o);
+  EXPECT_EQ(r.method, method);
   EXPECT_TRUE(r.pass) << r.message;
   EXPECT_EQ(r.samples, 5);
   EXPECT_TRUE(r.primal_checked);
   for (const auto& it : r.items) EXPECT_LE(it.max_relative, kFormsAgree) << it.name;
+  return r;
+}
+
+TEST_P(Crosscheck, Eqs44_70_91_99_105_DualAgreesWithPrimal) {
+  const CrosscheckResult r = check_bundled(GetParam(), CrosscheckMethod::dense);
   // Every comparison the issue asks for is present.
   int n_dual_vs_primal = 0;
   for (const auto& it : r.items) n_dual_vs_primal += it.kind == "dual-vs-primal";
@@ -41,18 +58,14 @@ INSTANTIATE_TEST_SUITE_P(Bundled, Crosscheck,
                          ::testing::Values("crank-rocker", "slider-crank", "watt-six-bar",
                                            "stephenson-six-bar", "quick-return", "pendulum",
                                            "n-four-bar-2", "andrews-squeezer", "double-rocker"),
-                         [](const auto& param_info) {
-                           std::string s = param_info.param;
-                           for (char& c : s)
-                             if (c == '-') c = '_';
-                           return s;
-                         });
+                         mechanism_test_name);
 
 // Redundant constraints: G singular, the primal checks are skipped and the reason says which
 // equation is redundant; the dual identities still run and pass.
 TEST(CrosscheckRedundant, TripleCrank_PrimalSkippedWithReason) {
   const Model model = test::load_bundled("triple-crank");
-  const CrosscheckResult r = run_crosscheck(model, {5, 0.2, 1, kFormsAgree});
+  const CrosscheckResult r =
+      run_crosscheck(model, {5, 0.2, 1, kFormsAgree, CrosscheckMethod::dense});
   EXPECT_TRUE(r.pass) << r.message;
   EXPECT_FALSE(r.primal_checked);
   EXPECT_NE(r.primal_skipped_reason.find("joint 'O2'"), std::string::npos)
@@ -61,18 +74,67 @@ TEST(CrosscheckRedundant, TripleCrank_PrimalSkippedWithReason) {
   EXPECT_FALSE(r.items.empty());
 }
 
-// A model too large for the two dense Workspaces (IFToMM A02 at N = 1000: 5.5 GB) is refused
-// before its motion is simulated. The motion here cannot be simulated at all (t_end < 0:
-// simulate throws std::invalid_argument): the refusal (ModelTooLarge) must come first — with the
-// check after the motion, simulate's exception escapes and the test fails.
-TEST(CrosscheckLarge, TooLargeModelIsRefusedBeforeTheMotion) {
+// The probe comparison (CrosscheckMethod::probes: the projections applied to seeded vectors on
+// simulate's sparse stages) on the same bundled mechanisms: every check passes at the dense
+// comparison's tolerance, and no dual-vs-primal difference is exactly 0 — each compares two
+// computations that round differently (a check computing one side from the other would give 0
+// and could never fail).
+class CrosscheckProbes : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(CrosscheckProbes, Eqs44_70_91_99_105_DualAgreesWithPrimalOnProbes) {
+  const CrosscheckResult r = check_bundled(GetParam(), CrosscheckMethod::probes);
+  int n_dual_vs_primal = 0;
+  for (const auto& it : r.items) {
+    if (it.kind != "dual-vs-primal") continue;
+    ++n_dual_vs_primal;
+    EXPECT_GT(it.max_relative, 0.0) << it.name;
+  }
+  EXPECT_EQ(n_dual_vs_primal, 5);  // α, β, M u̇, R, λ (θ needs D as an operator)
+}
+
+INSTANTIATE_TEST_SUITE_P(Bundled, CrosscheckProbes,
+                         ::testing::Values("crank-rocker", "slider-crank", "watt-six-bar",
+                                           "quick-return", "n-four-bar-40", "andrews-squeezer",
+                                           "heavy-top", "rolling-disc", "stewart-platform",
+                                           "spatial-slider-crank"),
+                         mechanism_test_name);
+
+// Redundant constraints on the probe path: primal skipped with the same reason, the dual identities
+// (E λ = R with λ on the chart's rows) still run and pass.
+TEST(CrosscheckProbes, TripleCrank_PrimalSkippedWithReason) {
+  const Model model = test::load_bundled("triple-crank");
+  CrosscheckOptions o{5, 0.2, 1, kFormsAgree, CrosscheckMethod::probes};
+  const CrosscheckResult r = run_crosscheck(model, o);
+  EXPECT_TRUE(r.pass) << r.message;
+  EXPECT_FALSE(r.primal_checked);
+  EXPECT_NE(r.primal_skipped_reason.find("joint 'O2'"), std::string::npos)
+      << r.primal_skipped_reason;
+  EXPECT_GE(r.items.size(), 7U);
+}
+
+// IFToMM A02 at N = 1000 (n = 6003): the automatic choice is the probe comparison, which needs no
+// dense matrix (the dense one would need 5.5 GB and is refused), and the forms agree there. The
+// dense comparison is refused before the motion is simulated: the motion here cannot be simulated
+// at all (t_end < 0: simulate throws std::invalid_argument), so the refusal (ModelTooLarge) must
+// come first.
+TEST(CrosscheckLarge, ThousandLoopsAreCheckedOnProbes) {
   const Model model = parse_mechanism(test::n_four_bar_yaml(1000, 0.5), "n-four-bar-1000.yaml");
   ASSERT_GT(dense_workspace_bytes(model), kMaxDenseWorkspaceBytes);
   CrosscheckOptions o;
+  o.samples = 3;
+  o.t_end = 0.05;
+  const CrosscheckResult r = run_crosscheck(model, o);
+  EXPECT_EQ(r.method, CrosscheckMethod::probes);
+  EXPECT_TRUE(r.pass) << r.message;
+  EXPECT_TRUE(r.primal_checked);
+  EXPECT_EQ(r.rank, model.nc);
+  for (const auto& it : r.items) EXPECT_LE(it.max_relative, 1e-8) << it.name;
+
   o.t_end = -1.0;
+  o.method = CrosscheckMethod::dense;
   try {
-    const CrosscheckResult r = run_crosscheck(model, o);
-    ADD_FAILURE() << "not refused; message: " << r.message;
+    const CrosscheckResult d = run_crosscheck(model, o);
+    ADD_FAILURE() << "not refused; message: " << d.message;
   } catch (const ModelTooLarge& e) {
     EXPECT_NE(std::string(e.what()).find("n-four-bar-1000.yaml: 6003 velocity components"),
               std::string::npos)
