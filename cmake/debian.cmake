@@ -13,12 +13,16 @@ string(CONCAT CPACK_PACKAGE_DESCRIPTION
 set(CPACK_PACKAGING_INSTALL_PREFIX /usr)
 set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)  # orthomech_<version>_amd64.deb
 set(CPACK_DEBIAN_PACKAGE_SECTION science)
-# Runtime dependencies from the ELF files (dpkg-shlibdeps: Ipopt, yaml-cpp, Cairo, ...); the
+# Runtime dependencies from the ELF files (dpkg-shlibdeps: Ipopt, yaml-cpp, SQLite, ...); the
 # package's own liborthomech (the Python module links it) is found in the package itself.
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS_PRIVATE_DIRS ${PROJECT_BINARY_DIR})
+# Cairo and fontconfig are opened when a picture is first drawn (src/io/shared_library.hpp), so no
+# ELF file names them: declared here. Open MPI likewise for `sweep` under mpirun, which needs
+# Open MPI installed anyway: recommended.
+set(CPACK_DEBIAN_PACKAGE_DEPENDS "libcairo2, libfontconfig1")
 # The C++ headers need Eigen; the Python module needs the Python 3 it was built for and NumPy.
-set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "libeigen3-dev, python3-numpy")
+set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "libeigen3-dev, python3-numpy, libopenmpi3")
 if(ORTHOMECH_PYTHON_VERSION)
   string(APPEND CPACK_DEBIAN_PACKAGE_RECOMMENDS
          ", python3 (>= ${ORTHOMECH_PYTHON_VERSION}), python3 (<< ${ORTHOMECH_PYTHON_NEXT})")

@@ -6,6 +6,7 @@
 #include <fontconfig/fontconfig.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
@@ -23,6 +24,7 @@
 #include "orthomech/io/units.hpp"
 #include "orthomech/model/free_system.hpp"
 #include "orthomech/model/spatial.hpp"
+#include "shared_library.hpp"
 
 namespace orthomech {
 
@@ -897,13 +899,96 @@ class SceneBuilder {
   }
 };
 
+// Cairo's functions, from libcairo.so.2 opened at the first picture (io/shared_library.hpp): a
+// command that draws nothing does not load Cairo and the 17 libraries it brings.
+struct CairoApi {
+  explicit CairoApi(const detail::SharedLibrary& lib)
+      : arc(lib.function<decltype(::cairo_arc)>("cairo_arc")),
+        close_path(lib.function<decltype(::cairo_close_path)>("cairo_close_path")),
+        create(lib.function<decltype(::cairo_create)>("cairo_create")),
+        debug_reset_static_data(lib.function<decltype(::cairo_debug_reset_static_data)>(
+            "cairo_debug_reset_static_data")),
+        destroy(lib.function<decltype(::cairo_destroy)>("cairo_destroy")),
+        fill(lib.function<decltype(::cairo_fill)>("cairo_fill")),
+        fill_preserve(lib.function<decltype(::cairo_fill_preserve)>("cairo_fill_preserve")),
+        image_surface_create(
+            lib.function<decltype(::cairo_image_surface_create)>("cairo_image_surface_create")),
+        line_to(lib.function<decltype(::cairo_line_to)>("cairo_line_to")),
+        move_to(lib.function<decltype(::cairo_move_to)>("cairo_move_to")),
+        new_path(lib.function<decltype(::cairo_new_path)>("cairo_new_path")),
+        new_sub_path(lib.function<decltype(::cairo_new_sub_path)>("cairo_new_sub_path")),
+        paint(lib.function<decltype(::cairo_paint)>("cairo_paint")),
+        pdf_surface_create_for_stream(lib.function<decltype(::cairo_pdf_surface_create_for_stream)>(
+            "cairo_pdf_surface_create_for_stream")),
+        select_font_face(
+            lib.function<decltype(::cairo_select_font_face)>("cairo_select_font_face")),
+        set_font_size(lib.function<decltype(::cairo_set_font_size)>("cairo_set_font_size")),
+        set_line_cap(lib.function<decltype(::cairo_set_line_cap)>("cairo_set_line_cap")),
+        set_line_join(lib.function<decltype(::cairo_set_line_join)>("cairo_set_line_join")),
+        set_line_width(lib.function<decltype(::cairo_set_line_width)>("cairo_set_line_width")),
+        set_source_rgba(lib.function<decltype(::cairo_set_source_rgba)>("cairo_set_source_rgba")),
+        show_text(lib.function<decltype(::cairo_show_text)>("cairo_show_text")),
+        status(lib.function<decltype(::cairo_status)>("cairo_status")),
+        status_to_string(
+            lib.function<decltype(::cairo_status_to_string)>("cairo_status_to_string")),
+        stroke(lib.function<decltype(::cairo_stroke)>("cairo_stroke")),
+        surface_destroy(lib.function<decltype(::cairo_surface_destroy)>("cairo_surface_destroy")),
+        surface_finish(lib.function<decltype(::cairo_surface_finish)>("cairo_surface_finish")),
+        surface_status(lib.function<decltype(::cairo_surface_status)>("cairo_surface_status")),
+        surface_write_to_png_stream(lib.function<decltype(::cairo_surface_write_to_png_stream)>(
+            "cairo_surface_write_to_png_stream")),
+        svg_surface_create_for_stream(lib.function<decltype(::cairo_svg_surface_create_for_stream)>(
+            "cairo_svg_surface_create_for_stream")),
+        svg_surface_set_document_unit(lib.function<decltype(::cairo_svg_surface_set_document_unit)>(
+            "cairo_svg_surface_set_document_unit")) {}
+  decltype(&::cairo_arc) arc;
+  decltype(&::cairo_close_path) close_path;
+  decltype(&::cairo_create) create;
+  decltype(&::cairo_debug_reset_static_data) debug_reset_static_data;
+  decltype(&::cairo_destroy) destroy;
+  decltype(&::cairo_fill) fill;
+  decltype(&::cairo_fill_preserve) fill_preserve;
+  decltype(&::cairo_image_surface_create) image_surface_create;
+  decltype(&::cairo_line_to) line_to;
+  decltype(&::cairo_move_to) move_to;
+  decltype(&::cairo_new_path) new_path;
+  decltype(&::cairo_new_sub_path) new_sub_path;
+  decltype(&::cairo_paint) paint;
+  decltype(&::cairo_pdf_surface_create_for_stream) pdf_surface_create_for_stream;
+  decltype(&::cairo_select_font_face) select_font_face;
+  decltype(&::cairo_set_font_size) set_font_size;
+  decltype(&::cairo_set_line_cap) set_line_cap;
+  decltype(&::cairo_set_line_join) set_line_join;
+  decltype(&::cairo_set_line_width) set_line_width;
+  decltype(&::cairo_set_source_rgba) set_source_rgba;
+  decltype(&::cairo_show_text) show_text;
+  decltype(&::cairo_status) status;
+  decltype(&::cairo_status_to_string) status_to_string;
+  decltype(&::cairo_stroke) stroke;
+  decltype(&::cairo_surface_destroy) surface_destroy;
+  decltype(&::cairo_surface_finish) surface_finish;
+  decltype(&::cairo_surface_status) surface_status;
+  decltype(&::cairo_surface_write_to_png_stream) surface_write_to_png_stream;
+  decltype(&::cairo_svg_surface_create_for_stream) svg_surface_create_for_stream;
+  decltype(&::cairo_svg_surface_set_document_unit) svg_surface_set_document_unit;
+};
+
+std::atomic<bool> cairo_loaded{false};
+
+const CairoApi& cairo() {
+  static const detail::SharedLibrary lib({"libcairo.so.2"}, false, "libcairo2");
+  static const CairoApi api(lib);
+  cairo_loaded = true;
+  return api;
+}
+
 // ---- Cairo
 // ---------------------------------------------------------------------------------------
 struct SurfaceDeleter {
-  void operator()(cairo_surface_t* s) const { cairo_surface_destroy(s); }
+  void operator()(cairo_surface_t* s) const { cairo().surface_destroy(s); }
 };
 struct ContextDeleter {
-  void operator()(cairo_t* c) const { cairo_destroy(c); }
+  void operator()(cairo_t* c) const { cairo().destroy(c); }
 };
 using SurfacePtr = std::unique_ptr<cairo_surface_t, SurfaceDeleter>;
 using ContextPtr = std::unique_ptr<cairo_t, ContextDeleter>;
@@ -913,31 +998,31 @@ cairo_status_t append_bytes(void* closure, const unsigned char* data, unsigned i
   return CAIRO_STATUS_SUCCESS;
 }
 
-void set_colour(cairo_t* cr, const Rgba& c) { cairo_set_source_rgba(cr, c.r, c.g, c.b, c.a); }
+void set_colour(cairo_t* cr, const Rgba& c) { cairo().set_source_rgba(cr, c.r, c.g, c.b, c.a); }
 
 void fill_and_stroke(cairo_t* cr, const Style& style) {
   if (style.fill) {
     set_colour(cr, *style.fill);
     if (style.stroke)
-      cairo_fill_preserve(cr);
+      cairo().fill_preserve(cr);
     else
-      cairo_fill(cr);
+      cairo().fill(cr);
   }
   if (style.stroke) {
     set_colour(cr, *style.stroke);
-    cairo_set_line_width(cr, style.line_width);
-    cairo_set_line_cap(cr, style.round ? CAIRO_LINE_CAP_ROUND : CAIRO_LINE_CAP_BUTT);
-    cairo_set_line_join(cr, style.round ? CAIRO_LINE_JOIN_ROUND : CAIRO_LINE_JOIN_MITER);
-    cairo_stroke(cr);
+    cairo().set_line_width(cr, style.line_width);
+    cairo().set_line_cap(cr, style.round ? CAIRO_LINE_CAP_ROUND : CAIRO_LINE_CAP_BUTT);
+    cairo().set_line_join(cr, style.round ? CAIRO_LINE_JOIN_ROUND : CAIRO_LINE_JOIN_MITER);
+    cairo().stroke(cr);
   }
-  cairo_new_path(cr);
+  cairo().new_path(cr);
 }
 
 // The one drawing routine of every surface.
 void draw(cairo_t* cr, const Scene& scene) {
   set_colour(cr, scene.background);
-  cairo_paint(cr);
-  cairo_select_font_face(cr, "DejaVu Sans", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
+  cairo().paint(cr);
+  cairo().select_font_face(cr, "DejaVu Sans", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
   const ViewTransform& view = scene.view;
   for (const Primitive& prim : scene.primitives) {
     std::visit(
@@ -948,28 +1033,28 @@ void draw(cairo_t* cr, const Scene& scene) {
             for (size_t k = 0; k < s.points.size(); ++k) {
               const Vec2 p = view.to_pixels(s.points[k]);
               if (k == 0)
-                cairo_move_to(cr, p.x(), p.y());
+                cairo().move_to(cr, p.x(), p.y());
               else
-                cairo_line_to(cr, p.x(), p.y());
+                cairo().line_to(cr, p.x(), p.y());
             }
-            if (s.closed) cairo_close_path(cr);
+            if (s.closed) cairo().close_path(cr);
             Style style = s.style;
             if (!s.closed) style.fill.reset();
             fill_and_stroke(cr, style);
           } else if constexpr (std::is_same_v<S, Circle>) {
             const Vec2 c = view.to_pixels(s.centre);
             const double r = s.radius_px + view.scale * s.radius_model;
-            cairo_new_sub_path(cr);
-            cairo_arc(cr, c.x(), c.y(), r, 0.0, 2.0 * kPi);
-            cairo_close_path(cr);
+            cairo().new_sub_path(cr);
+            cairo().arc(cr, c.x(), c.y(), r, 0.0, 2.0 * kPi);
+            cairo().close_path(cr);
             fill_and_stroke(cr, s.style);
           } else {
             const Vec2 p = view.to_pixels(s.at);
             set_colour(cr, s.colour);
-            cairo_set_font_size(cr, s.size);
-            cairo_move_to(cr, p.x(), p.y());
-            cairo_show_text(cr, s.text.c_str());
-            cairo_new_path(cr);
+            cairo().set_font_size(cr, s.size);
+            cairo().move_to(cr, p.x(), p.y());
+            cairo().show_text(cr, s.text.c_str());
+            cairo().new_path(cr);
           }
         },
         prim.shape);
@@ -979,7 +1064,7 @@ void draw(cairo_t* cr, const Scene& scene) {
 void check(cairo_status_t status, const char* what) {
   if (status != CAIRO_STATUS_SUCCESS)
     throw std::runtime_error(std::string("render: ") + what + ": " +
-                             cairo_status_to_string(status));
+                             cairo().status_to_string(status));
 }
 
 }  // namespace
@@ -1109,27 +1194,27 @@ std::string draw_image(const Scene& scene, ImageFormat format) {
   switch (format) {
     case ImageFormat::png:
       surface.reset(
-          cairo_image_surface_create(CAIRO_FORMAT_ARGB32, scene.view.width, scene.view.height));
+          cairo().image_surface_create(CAIRO_FORMAT_ARGB32, scene.view.width, scene.view.height));
       break;
     case ImageFormat::svg:
-      surface.reset(cairo_svg_surface_create_for_stream(append_bytes, &bytes, w, h));
-      cairo_svg_surface_set_document_unit(surface.get(), CAIRO_SVG_UNIT_PX);
+      surface.reset(cairo().svg_surface_create_for_stream(append_bytes, &bytes, w, h));
+      cairo().svg_surface_set_document_unit(surface.get(), CAIRO_SVG_UNIT_PX);
       break;
     case ImageFormat::pdf:
-      surface.reset(cairo_pdf_surface_create_for_stream(append_bytes, &bytes, w, h));
+      surface.reset(cairo().pdf_surface_create_for_stream(append_bytes, &bytes, w, h));
       break;
   }
-  check(cairo_surface_status(surface.get()), "cannot create the surface");
+  check(cairo().surface_status(surface.get()), "cannot create the surface");
   {
-    const ContextPtr cr(cairo_create(surface.get()));
+    const ContextPtr cr(cairo().create(surface.get()));
     draw(cr.get(), scene);
-    check(cairo_status(cr.get()), "drawing failed");
+    check(cairo().status(cr.get()), "drawing failed");
   }
   if (format == ImageFormat::png)
-    check(cairo_surface_write_to_png_stream(surface.get(), append_bytes, &bytes),
+    check(cairo().surface_write_to_png_stream(surface.get(), append_bytes, &bytes),
           "cannot encode the PNG");
-  cairo_surface_finish(surface.get());
-  check(cairo_surface_status(surface.get()), "cannot finish the image");
+  cairo().surface_finish(surface.get());
+  check(cairo().surface_status(surface.get()), "cannot finish the image");
   return bytes;
 }
 
@@ -1138,8 +1223,11 @@ void write_image(const Scene& scene, ImageFormat format, const std::string& path
 }
 
 void release_render_caches() {
-  cairo_debug_reset_static_data();
-  FcFini();
+  if (!cairo_loaded) return;  // nothing drawn: neither Cairo nor fontconfig was loaded
+  cairo().debug_reset_static_data();
+  static const detail::SharedLibrary fontconfig({"libfontconfig.so.1"}, false, "libfontconfig1");
+  static auto* const fc_fini = fontconfig.function<decltype(::FcFini)>("FcFini");
+  fc_fini();
 }
 
 TracePoints resolve_trace_points(const Model& model, const std::vector<std::string>& points) {

@@ -6,9 +6,15 @@
 #include <stdexcept>
 
 #ifdef ORTHOMECH_HAVE_MPI
+#define OMPI_SKIP_MPICXX 1  // the C API only: no libmpi_cxx
 #include <mpi.h>
 
 #include <nlohmann/json.hpp>
+
+#include "../io/shared_library.hpp"
+#ifndef OPEN_MPI
+#error "distributed.cpp opens Open MPI's libmpi.so.40 at run time (its handles are its globals)"
+#endif
 #endif
 
 namespace orthomech {
@@ -25,9 +31,48 @@ bool mpi_launched() {
 
 namespace {
 
-// Every call goes through MPI's profiling names (PMPI_*): the sequential MUMPS that Ipopt brings
-// (libmpiseq, linked statically) defines its own stand-ins for MPI_Init, MPI_Comm_rank and
-// MPI_Finalize, which would otherwise take the place of Open MPI's and leave MPI uninitialised.
+// Open MPI, opened when a process started by mpirun first needs it (io/shared_library.hpp): the
+// other commands, and sweep on one process, do not load it and the 6 libraries it brings. Its
+// symbols resolve the components it opens itself (RTLD_GLOBAL). Every call goes through MPI's
+// profiling names (PMPI_*), Open MPI's own whatever else the process defines: the sequential
+// MUMPS that Ipopt brings (libmpiseq, linked statically) has stand-ins for MPI_Init,
+// MPI_Comm_rank and MPI_Finalize. Open MPI's handles (MPI_COMM_WORLD, MPI_INT, …) are the
+// addresses of its global objects, looked up by name like the functions.
+struct MpiApi {
+  explicit MpiApi(const detail::SharedLibrary& lib)
+      : init(lib.function<decltype(::PMPI_Init)>("PMPI_Init")),
+        comm_rank(lib.function<decltype(::PMPI_Comm_rank)>("PMPI_Comm_rank")),
+        comm_size(lib.function<decltype(::PMPI_Comm_size)>("PMPI_Comm_size")),
+        finalize(lib.function<decltype(::PMPI_Finalize)>("PMPI_Finalize")),
+        abort(lib.function<decltype(::PMPI_Abort)>("PMPI_Abort")),
+        bcast(lib.function<decltype(::PMPI_Bcast)>("PMPI_Bcast")),
+        probe(lib.function<decltype(::PMPI_Probe)>("PMPI_Probe")),
+        get_count(lib.function<decltype(::PMPI_Get_count)>("PMPI_Get_count")),
+        recv(lib.function<decltype(::PMPI_Recv)>("PMPI_Recv")),
+        send(lib.function<decltype(::PMPI_Send)>("PMPI_Send")),
+        world(static_cast<MPI_Comm>(lib.symbol("ompi_mpi_comm_world"))),
+        int_type(static_cast<MPI_Datatype>(lib.symbol("ompi_mpi_int"))),
+        char_type(static_cast<MPI_Datatype>(lib.symbol("ompi_mpi_char"))),
+        long_type(static_cast<MPI_Datatype>(lib.symbol("ompi_mpi_long"))) {}
+  decltype(&::PMPI_Init) init;
+  decltype(&::PMPI_Comm_rank) comm_rank;
+  decltype(&::PMPI_Comm_size) comm_size;
+  decltype(&::PMPI_Finalize) finalize;
+  decltype(&::PMPI_Abort) abort;
+  decltype(&::PMPI_Bcast) bcast;
+  decltype(&::PMPI_Probe) probe;
+  decltype(&::PMPI_Get_count) get_count;
+  decltype(&::PMPI_Recv) recv;
+  decltype(&::PMPI_Send) send;
+  MPI_Comm world;
+  MPI_Datatype int_type, char_type, long_type;
+};
+
+const MpiApi& mpi() {
+  static const detail::SharedLibrary lib({"libmpi.so.40"}, true, "libopenmpi3");
+  static const MpiApi api(lib);
+  return api;
+}
 constexpr int kResultTag = 1;  // worker → rank 0: a result (or an empty "ready")
 constexpr int kIndexTag = 2;   // rank 0 → worker: the next variant, −1 when there is none
 
@@ -61,39 +106,39 @@ VariantResult unpack(const std::string& text) {
 }  // namespace
 
 MpiSession::MpiSession() {
-  PMPI_Init(nullptr, nullptr);
-  PMPI_Comm_rank(MPI_COMM_WORLD, &rank_);
-  PMPI_Comm_size(MPI_COMM_WORLD, &size_);
+  mpi().init(nullptr, nullptr);
+  mpi().comm_rank(mpi().world, &rank_);
+  mpi().comm_size(mpi().world, &size_);
 }
 
 MpiSession::~MpiSession() {
   if (finished_)
-    PMPI_Finalize();
+    mpi().finalize();
   else
-    PMPI_Abort(MPI_COMM_WORLD, 3);
+    mpi().abort(mpi().world, 3);
 }
 
 bool broadcast_start(bool go) {
   int flag = go ? 1 : 0;
-  PMPI_Bcast(&flag, 1, MPI_INT, 0, MPI_COMM_WORLD);
+  mpi().bcast(&flag, 1, mpi().int_type, 0, mpi().world);
   return flag != 0;
 }
 
 void coordinate_variants(const std::vector<long>& pending,
                          const std::function<void(const VariantResult&)>& done) {
   int size = 1;
-  PMPI_Comm_size(MPI_COMM_WORLD, &size);
+  mpi().comm_size(mpi().world, &size);
   std::exception_ptr failure;
   size_t next = 0;
   int working = size - 1;
   while (working > 0) {
     MPI_Status status;
-    PMPI_Probe(MPI_ANY_SOURCE, kResultTag, MPI_COMM_WORLD, &status);
+    mpi().probe(MPI_ANY_SOURCE, kResultTag, mpi().world, &status);
     int length = 0;
-    PMPI_Get_count(&status, MPI_CHAR, &length);
+    mpi().get_count(&status, mpi().char_type, &length);
     std::string text(static_cast<size_t>(length), '\0');
-    PMPI_Recv(text.data(), length, MPI_CHAR, status.MPI_SOURCE, kResultTag, MPI_COMM_WORLD,
-              MPI_STATUS_IGNORE);
+    mpi().recv(text.data(), length, mpi().char_type, status.MPI_SOURCE, kResultTag, mpi().world,
+               MPI_STATUS_IGNORE);
     if (!text.empty() && !failure) {
       try {
         done(unpack(text));
@@ -104,7 +149,7 @@ void coordinate_variants(const std::vector<long>& pending,
     long index = -1;
     if (!failure && next < pending.size()) index = pending[next++];
     if (index < 0) --working;
-    PMPI_Send(&index, 1, MPI_LONG, status.MPI_SOURCE, kIndexTag, MPI_COMM_WORLD);
+    mpi().send(&index, 1, mpi().long_type, status.MPI_SOURCE, kIndexTag, mpi().world);
   }
   if (failure) std::rethrow_exception(failure);
 }
@@ -112,10 +157,10 @@ void coordinate_variants(const std::vector<long>& pending,
 void serve_variants(const std::string& mechanism, const std::string& origin, const Study& study) {
   std::string message;  // empty: ready for the first variant
   for (;;) {
-    PMPI_Send(message.data(), static_cast<int>(message.size()), MPI_CHAR, 0, kResultTag,
-              MPI_COMM_WORLD);
+    mpi().send(message.data(), static_cast<int>(message.size()), mpi().char_type, 0, kResultTag,
+               mpi().world);
     long index = -1;
-    PMPI_Recv(&index, 1, MPI_LONG, 0, kIndexTag, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+    mpi().recv(&index, 1, mpi().long_type, 0, kIndexTag, mpi().world, MPI_STATUS_IGNORE);
     if (index < 0) return;
     message = pack(evaluate_variant(mechanism, origin, study, index, variant_values(study, index)));
   }
