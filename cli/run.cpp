@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <exception>
 #include <iostream>
+#include <string_view>
 
 #include "commands.hpp"
 #include "common.hpp"
@@ -16,6 +17,36 @@
 
 namespace orthomech::cli {
 
+namespace {
+
+using Register = void (*)(CLI::App&, const GlobalOptions&, int&);
+struct Command {
+  const char* name;
+  Register add;
+};
+// Every subcommand, in the order `orthomech --help` lists them.
+constexpr Command kCommands[] = {
+    {"info", register_info},         {"cycle", register_cycle},
+    {"assemble", register_assemble}, {"validate", register_validate},
+    {"simulate", register_simulate}, {"crosscheck", register_crosscheck},
+    {"render", register_render},     {"sweep", register_sweep}};
+
+// The subcommand the command line names (its first word after the global flags -q, -v), or
+// nullptr when it names none of them (help, version, a mistyped command: every subcommand is
+// registered then, for CLI11's listing and messages).
+const Command* named_command(int argc, const char* const* argv) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string_view word = argv[i];
+    if (word == "-q" || word == "--quiet" || word == "-v" || word == "--verbose") continue;
+    for (const Command& c : kCommands)
+      if (word == c.name) return &c;
+    return nullptr;
+  }
+  return nullptr;
+}
+
+}  // namespace
+
 int run(int argc, const char* const* argv) {
   CLI::App app{"orthomech: analysis of planar linkages with the mass-orthogonal projection method"};
   app.set_version_flag("--version", ORTHOMECH_VERSION_LINE);
@@ -24,14 +55,12 @@ int run(int argc, const char* const* argv) {
   app.add_flag("-q,--quiet", globals.quiet, "only errors on stderr");
   app.add_flag("-v,--verbose", globals.verbose, "debug messages on stderr");
   int exit_code = kOk;
-  register_info(app, globals, exit_code);
-  register_cycle(app, globals, exit_code);
-  register_assemble(app, globals, exit_code);
-  register_validate(app, globals, exit_code);
-  register_simulate(app, globals, exit_code);
-  register_crosscheck(app, globals, exit_code);
-  register_render(app, globals, exit_code);
-  register_sweep(app, globals, exit_code);
+  // Only the subcommand that runs is registered: the others' options (a few hundred CLI11
+  // objects) cost every start about 0.2 ms (docs/performance.md, "Andrews' squeezer: the start").
+  if (const Command* c = named_command(argc, argv))
+    c->add(app, globals, exit_code);
+  else
+    for (const Command& each : kCommands) each.add(app, globals, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
