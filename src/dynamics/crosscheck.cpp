@@ -67,13 +67,17 @@ SimulateResult simulate_motion(const Model& model, const CrosscheckOptions& opti
   return simulate(model, so);
 }
 
-std::string redundancy_reason(const Mobility& mob, int nc) {
+// Why the primal form is skipped; `lambda` says which of the non-unique multipliers the dual
+// checks use (the dense comparison's minimum-norm one, or the probe comparison's on a chart's
+// rows).
+std::string redundancy_reason(const Mobility& mob, int nc, const char* lambda) {
   std::string reason =
       "E has rank " + std::to_string(mob.rank) + " < n_c = " + std::to_string(nc) + " (redundant: ";
   for (size_t k = 0; k < mob.redundant.size(); ++k) reason += (k ? "; " : "") + mob.redundant[k];
   return reason +
          "), so G = EᵀAE (eq. (42)) is singular and the primal form is undefined; the reactions "
-         "are not unique (minimum-norm λ)";
+         "are not unique (" +
+         lambda + ")";
 }
 
 // The dense comparison: α, β, ψ, Θ, θ formed as n × n matrices (projection/dual.hpp,
@@ -395,7 +399,10 @@ CrosscheckResult run_crosscheck(const Model& model, const CrosscheckOptions& opt
                                      "move, there is no motion to cross-check";
     return result;
   }
-  if (mob.rank < model.nc) result.primal_skipped_reason = redundancy_reason(mob, model.nc);
+  if (mob.rank < model.nc)
+    result.primal_skipped_reason = redundancy_reason(
+        mob, model.nc,
+        result.method == CrosscheckMethod::dense ? "minimum-norm λ" : "λ on the chart's rows");
 
   // 3. The two forms at every state.
   Recorder rec(options.tolerance);

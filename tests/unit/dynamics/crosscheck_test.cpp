@@ -109,6 +109,8 @@ TEST(CrosscheckProbes, TripleCrank_PrimalSkippedWithReason) {
   EXPECT_FALSE(r.primal_checked);
   EXPECT_NE(r.primal_skipped_reason.find("joint 'O2'"), std::string::npos)
       << r.primal_skipped_reason;
+  EXPECT_NE(r.primal_skipped_reason.find("λ on the chart's rows"), std::string::npos)
+      << r.primal_skipped_reason;
   EXPECT_GE(r.items.size(), 7U);
 }
 
