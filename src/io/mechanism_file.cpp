@@ -20,6 +20,7 @@
 #include "orthomech/io/units.hpp"
 #include "orthomech/model/free_system.hpp"
 #include "orthomech/model/measures.hpp"
+#include "yaml_walk.hpp"
 
 namespace orthomech {
 
@@ -565,8 +566,10 @@ double Reader::speed_text(const std::string& text, bool angular, bool allow_zero
     return parse_speed(text, angular, bare, allow_zero);
   } catch (const std::invalid_argument&) {
     if (expressions_.parameters().empty() || text.size() > kMaxExpressionLength) throw;
+    // The same limits as a plain number's (parse_speed: Quantity::general in SI).
     const double v = expressions_.evaluate(text) * bare;
-    if (!std::isfinite(v)) throw std::invalid_argument("'" + text + "' is not finite");
+    const std::string problem = range_problem(v, Quantity::general);
+    if (!problem.empty()) throw std::invalid_argument("'" + text + "' " + problem);
     if (v == 0.0 && !allow_zero) throw std::invalid_argument("the speed must not be zero");
     return v;
   }
@@ -850,8 +853,11 @@ Model Reader::read(const YAML::Node& root) {
 
 namespace {
 
+using detail::check_yaml_document;
 using detail::Reader;
 using detail::SetNodes;
+using detail::walk_yaml_value;
+using detail::YamlWalkError;
 
 SourceLocation unclosed_bracket(const std::string& text, const std::string& origin) {
   std::vector<std::pair<char, SourceLocation>> open;
@@ -885,13 +891,17 @@ SourceLocation unclosed_bracket(const std::string& text, const std::string& orig
 
 // ---- --set PATH=VALUE
 // ------------------------------------------------------------------------------ Every node of
-// `value` (the value and all it holds), to name the `--set` in messages.
-void collect_nodes(const YAML::Node& value, std::vector<YAML::Node>& out) {
-  out.push_back(value);
-  if (value.IsSequence())
-    for (const auto& item : value) collect_nodes(item, out);
-  else if (value.IsMap())
-    for (const auto& kv : value) collect_nodes(kv.second, out);
+// `value` (the value and all it holds), to name the `--set` in messages; a value that holds
+// itself through an alias, or expands beyond the limit, is refused at its `--set`
+// (yaml_walk.hpp: the one walk over YAML values).
+void collect_nodes(const YAML::Node& value, std::vector<YAML::Node>& out, const std::string& label,
+                   const std::string& element) {
+  try {
+    walk_yaml_value(value, [&](const YAML::Node& n) { out.push_back(n); });
+  } catch (const YamlWalkError& e) {
+    out.clear();
+    throw InputError({label, 0, 0}, element, e.what());
+  }
 }
 
 std::string names_in(const YAML::Node& node) {
@@ -968,7 +978,7 @@ SetNodes apply_change(YAML::Node& root, const FileChange& change, const std::str
         for (const auto& kv : current)  // the new key too: the reader checks it like any key
           if (kv.first.IsScalar() && kv.first.Scalar() == segment)
             written.nodes.push_back(kv.first);
-        collect_nodes(value, written.nodes);
+        collect_nodes(value, written.nodes, written.label, change.path);
         return written;
       }
       if (!child)
@@ -985,7 +995,7 @@ SetNodes apply_change(YAML::Node& root, const FileChange& change, const std::str
     }
     if (last) {
       child = value;
-      collect_nodes(child, written.nodes);
+      collect_nodes(child, written.nodes, written.label, change.path);
       return written;
     }
     node.reset(child);
@@ -1006,6 +1016,7 @@ Model parse_text(const std::string& text, const std::string& origin,
     }
     throw InputError({origin, e.mark.line + 1, e.mark.column + 1}, "YAML", e.msg);
   }
+  check_yaml_document(root, origin);
   try {
     std::vector<SetNodes> sets;
     sets.reserve(changes.size());

@@ -706,6 +706,15 @@ std::optional<MeasureKind> Reader::spatial_measure(const YAML::Node& item,
     w.body = spatial_body_ref(require(item, "body", element), element);
     w.axis = unit_vec3(require(item, "axis", element), element, "axis");
     w.which = type == "camber" ? WheelAngle::Which::camber : WheelAngle::Which::toe;
+    // Both angles are undefined for a vertical spin axis (camber's 1/√(1 − s_z²), toe's
+    // atan2(s_x, |s_y|) at s_x = s_y = 0): refused where the file draws it so, not printed as
+    // NaN and noise (issue 47).
+    const Vec3 s = design_rotation(model_, w.body) * w.axis;
+    if (s.x() * s.x() + s.y() * s.y() < 1e-12)
+      fail(item["axis"], element,
+           type + " is undefined at the design pose: the spin axis is vertical there (world [" +
+               std::to_string(s.x()) + ", " + std::to_string(s.y()) + ", " + std::to_string(s.z()) +
+               "]); give the wheel's outboard spin axis, horizontal at the design pose");
     unit = "rad";
     return w;
   }

@@ -20,6 +20,7 @@
 #include <sstream>
 #include <variant>
 
+#include "../io/yaml_walk.hpp"
 #include "orthomech/analysis/assembly.hpp"
 #include "orthomech/analysis/cycle.hpp"
 #include "orthomech/analysis/cycle_metrics.hpp"
@@ -70,11 +71,20 @@ class StudyReader {
     const YAML::Node params = require(root, "parameters", "study");
     if (!params.IsSequence() || params.size() == 0)
       fail(params, "parameters", "expected a list of parameters (- {path: ..., values: [...]})");
-    std::set<std::string> names;
+    // Column names are SQL identifiers (study_db.cpp): equal up to case is the same column.
+    std::set<std::string> names{"variant", "status", "message"}, paths;
     for (const auto& item : params) {
       StudyParameter p = parameter(item, s.kind);
-      if (!names.insert(p.name).second)
-        fail(item, "parameter '" + p.name + "'", "the parameter is listed twice");
+      const std::string element = "parameter '" + p.name + "'";
+      if (!paths.insert(p.path).second)
+        fail(item["path"], element, "path '" + p.path + "' is listed twice");
+      if (!names.insert(folded(p.name)).second)
+        fail(item, element,
+             is_column(p.name) ? "the name '" + p.name +
+                                     "' is a column of the study's table (variant, status, "
+                                     "message): give the parameter another name"
+                               : "the name is listed twice (names equal up to case are one "
+                                 "column)");
       s.parameters.push_back(std::move(p));
     }
     if (const YAML::Node best = root["best"]) {
@@ -92,6 +102,7 @@ class StudyReader {
     if (variant_count(s) > kMaxVariants)
       fail(params, "parameters", "the grid has more than 1e9 variants");
     if (const YAML::Node m = root["metrics"]) s.metrics = metrics(m);
+    check_metric_names(root, s);
     return s;
   }
 
@@ -168,6 +179,20 @@ class StudyReader {
     return v;
   }
 
+  static std::string folded(std::string name) {
+    for (char& c : name) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return name;
+  }
+  static bool is_column(const std::string& name) {
+    const std::string f = folded(name);
+    return f == "variant" || f == "status" || f == "message";
+  }
+
+  // The metric columns the study will have, from its first variant (the columns depend on the
+  // mechanism: one per joint reaction, a transmission angle per four-bar loop): `best: metric`
+  // must be one of them, and no parameter may share a name with one (one SQL column each).
+  void check_metric_names(const YAML::Node& root, const Study& s) const;
+
   bool flag(const YAML::Node& node, const std::string& field) const {
     bool v = false;
     if (!node.IsScalar() || !YAML::convert<bool>::decode(node, v))
@@ -217,6 +242,7 @@ class StudyReader {
     p.name = item["name"] ? text(item["name"], "parameters", "name") : p.path;
     const std::string element = "parameter '" + p.name + "'";
     const std::string nominal_text = file_text(item, p, element);
+    check_file_number(item, p, element);
     int laws = 0;
     for (const char* key : {"values", "range", "normal", "uniform"}) laws += item[key] ? 1 : 0;
     if (laws != 1)
@@ -259,8 +285,57 @@ class StudyReader {
       (normal ? p.sigma : p.tolerance) = w;
       p.mean = law["mean"] ? number(law["mean"], element, "mean")
                            : nominal(item, p, element, nominal_text);
+      check_law_range(law, p, element, normal);
+    }
+    if (!p.values.empty()) {
+      const auto [lo, hi] = std::minmax_element(p.values.begin(), p.values.end());
+      check_value(item[item["values"] ? "values" : "range"], p, element, *lo, "the smallest value");
+      check_value(item[item["values"] ? "values" : "range"], p, element, *hi, "the largest value");
     }
     return p;
+  }
+
+  // The values a law draws lie in mean ± kLawReach spreads (a normal law beyond 10 σ: below
+  // 1e-23 per draw; a uniform one within mean ± tolerance): they must be finite numbers there —
+  // and the law's mean and both ends valid values of the file's field, checked by reading the
+  // mechanism with them (the same limits as a number written in the file, docs/file-format.md).
+  void check_law_range(const YAML::Node& law, const StudyParameter& p, const std::string& element,
+                       bool normal) const {
+    const double reach = normal ? 10.0 * p.sigma : p.tolerance;
+    const double lo = p.mean - reach, hi = p.mean + reach;
+    if (!std::isfinite(lo) || !std::isfinite(hi) || !std::isfinite(hi - lo))
+      fail(law, element,
+           std::string("mean ± ") + (normal ? "10 sigma" : "tolerance") +
+               " must be finite numbers (the law draws its values there)");
+    check_value(law, p, element, p.mean, "the mean");
+    if (!normal) {
+      check_value(law, p, element, lo, "mean − tolerance");
+      check_value(law, p, element, hi, "mean + tolerance");
+    }
+  }
+
+  // The field at the path must be read as a number: a text value there (a name, a description)
+  // is refused, found by reading the mechanism with a word that no number field accepts.
+  void check_file_number(const YAML::Node& item, const StudyParameter& p,
+                         const std::string& element) const {
+    try {
+      (void)parse_mechanism(mechanism_, mechanism_origin_, {{p.path, "orthomech_not_a_number"}});
+    } catch (const InputError&) {
+      return;  // refused as a number field refuses a word
+    }
+    fail(item["path"], element,
+         "path '" + p.path + "' in " + mechanism_origin_ +
+             " is not a number (a word is accepted there): a study varies numbers");
+  }
+
+  // One value the parameter takes, read into the mechanism as a variant would be.
+  void check_value(const YAML::Node& node, const StudyParameter& p, const std::string& element,
+                   double v, const std::string& which) const {
+    try {
+      (void)parse_mechanism(mechanism_, mechanism_origin_, {{p.path, value_text(v)}});
+    } catch (const InputError& e) {
+      fail(node, element, which + " (" + value_text(v) + ") is not a valid value: " + e.message());
+    }
   }
 };
 
@@ -485,6 +560,7 @@ Study parse_study(const std::string& text, const std::string& origin, const std:
   }
   if (!root.IsDefined() || root.IsNull())
     throw InputError({origin, 1, 1}, "study", "the study file is empty");
+  detail::check_yaml_document(root, origin);
   try {
     return StudyReader(origin, mechanism, mechanism_origin).read(root);
   } catch (const YAML::Exception& e) {
@@ -628,6 +704,48 @@ VariantResult evaluate_variant(const std::string& mechanism, const std::string& 
     r.metrics.clear();
   }
   return r;
+}
+
+namespace {
+
+// A name of the form of a metric column (cycle_metrics, validate_metrics, assemble_metrics,
+// deviation_metrics): only those can collide with one.
+bool could_be_metric(const std::string& name) {
+  if (name == "dead_points") return true;
+  const auto ends_with = [&](const std::string& tail) {
+    return name.size() >= tail.size() &&
+           name.compare(name.size() - tail.size(), tail.size(), tail) == 0;
+  };
+  for (const char* head :
+       {"drive.", "power.", "transmission.", "pressure.", "validate.", "assemble.", "deviation."})
+    if (name.rfind(head, 0) == 0) return true;
+  return ends_with(".peak");
+}
+
+}  // namespace
+
+void StudyReader::check_metric_names(const YAML::Node& root, const Study& s) const {
+  const YAML::Node best = root["best"];
+  const bool best_given = best && best["metric"];
+  const bool collide = std::any_of(s.parameters.begin(), s.parameters.end(),
+                                   [](const StudyParameter& p) { return could_be_metric(p.name); });
+  if (!best_given && !collide) return;
+  // The nominal design (the file unchanged) gives the metric columns of the study.
+  Study nominal = s;
+  nominal.parameters.clear();
+  const VariantResult r = evaluate_variant(mechanism_, mechanism_origin_, nominal, 0, {});
+  if (r.metrics.empty()) return;  // no column known: the nominal has none to compare with
+  std::string names;
+  for (const auto& [name, value] : r.metrics) names += (names.empty() ? "" : ", ") + name;
+  for (size_t j = 0; j < s.parameters.size(); ++j)
+    for (const auto& [name, value] : r.metrics)
+      if (folded(name) == folded(s.parameters[j].name))
+        fail(root["parameters"][j], "parameter '" + s.parameters[j].name + "'",
+             "the name is that of a metric column: give the parameter another name");
+  if (best_given && std::none_of(r.metrics.begin(), r.metrics.end(),
+                                 [&](const auto& m) { return m.first == s.best_metric; }))
+    fail(best["metric"], "best",
+         "unknown metric '" + s.best_metric + "' (the study's metrics: " + names + ")");
 }
 
 void run_variants(const std::string& mechanism, const std::string& origin, const Study& study,
