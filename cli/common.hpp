@@ -23,6 +23,7 @@ enum ExitCode : int {
   kBadInput = 2,     // bad mechanism file or command line
   kNumerical = 3,    // numerical failure (cannot assemble, singular, no convergence)
   kInternal = 4,     // a bug: please report
+  kStopped = 5,      // a run stopped at a bound (budget, time limit, SIGINT/SIGTERM): partial
 };
 
 struct GlobalOptions {

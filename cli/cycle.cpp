@@ -925,7 +925,8 @@ void CycleRun::write_pictures(const Projection& projection, const std::string& t
     animation = animated_svg(model, sweep.q, ro, opt.duration);
     if (!opt.animate.empty()) {
       write_file_atomically(opt.animate, animation);
-      spdlog::info("wrote {} ({} frames)", opt.animate, sweep.q.size());
+      spdlog::info("wrote {} ({} frames of {} positions)", opt.animate,
+                   picture_positions(sweep.q.size()).size(), sweep.q.size());
     }
     if (!opt.report.empty()) {
       CycleReport report;
@@ -1050,7 +1051,7 @@ void register_cycle(CLI::App& app, const GlobalOptions& globals, int& exit_code)
                   "swept over --t-end or one period of the slowest law")
       ->delimiter(',');
   cmd->add_option("--t-end", opt->t_end, "with --drivers: end of the sweep (s)")
-      ->check(CLI::PositiveNumber);
+      ->check(finite_range(0.0, kMaxGeneral, true));
   cmd->add_flag("--reverse-at-dead-point", opt->reverse,
                 "at a dead point, pass it and drive the input back (sweeps a rocker's closed "
                 "curve)");
@@ -1060,8 +1061,8 @@ void register_cycle(CLI::App& app, const GlobalOptions& globals, int& exit_code)
       "with --json: every position too (body poses, named points, velocities, reactions)");
   cmd->add_option("--speed-fluctuation", opt->speed_fluctuation,
                   "coefficient of speed fluctuation C_s (e.g. 0.02): report the flywheel inertia "
-                  "on the input that keeps it")
-      ->check(CLI::PositiveNumber);
+                  "on the input that keeps it; 1e-6 to 1")
+      ->check(finite_range(kMinSpeedFluctuation, 1.0));
   add_units_option(cmd, opt->units);
   cmd->add_option("--out", opt->out, "directory for cycle.csv, cycle.gp and the plots");
   cmd->add_option("--trace", opt->traces,

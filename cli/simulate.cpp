@@ -24,10 +24,12 @@
 #include "common.hpp"
 #include "orthomech/analysis/assembly.hpp"
 #include "orthomech/analysis/reactions.hpp"
+#include "orthomech/constraints/joints.hpp"
 #include "orthomech/io/cycle_output.hpp"
 #include "orthomech/io/noise.hpp"
 #include "orthomech/io/number_text.hpp"
 #include "orthomech/io/units.hpp"
+#include "run_bounds.hpp"
 
 namespace orthomech::cli {
 
@@ -38,6 +40,8 @@ struct SimulateCliOptions {
   std::vector<std::string> sets;  // --set PATH=VALUE
   double t_end = 1.0;
   double rtol = 1e-8, atol = 1e-10, dt_out = 0.0, max_step = 0.0;
+  long max_steps = kDefaultMaxSteps;
+  double time_limit = 0.0;  // s of wall clock; 0: none
   std::string form = "dual";
   std::string integrator = "dopri5";
   std::vector<std::string> rates;  // NAME=VALUE
@@ -449,6 +453,8 @@ SimulateOptions simulate_options(const Model& model, const SimulateCliOptions& o
   so.atol = opt.atol;
   so.dt_out = opt.dt_out * file_time;
   so.max_step = opt.max_step * file_time;
+  so.max_steps = opt.max_steps;
+  so.control = run_control("simulate", opt.time_limit);
   so.form = opt.form == "primal" ? DynamicsForm::primal : DynamicsForm::dual;
   if (!parse_integrator(opt.integrator, so.integrator))  // CLI::IsMember checked the name
     throw std::logic_error("simulate: integrator '" + opt.integrator + "' has no stepper");
@@ -482,6 +488,46 @@ nlohmann::json passages_json(const SimulateResult& res, const SimulateUnits& U) 
   return cp;
 }
 
+// The unit of a joint's coordinate (angle or length) in the output units.
+OutputUnit joint_unit(const Model& model, int joint, const SimulateUnits& U) {
+  const bool angle =
+      joint_coordinate_kind(model.joints[static_cast<size_t>(joint)]) == CoordinateKind::angle;
+  return output_unit(angle ? Dimension::angle : Dimension::length, U.system);
+}
+
+// The joints that left their limits (simulate does not enforce them: no end stops yet).
+nlohmann::json limits_json(const Model& model, const SimulateResult& res, const SimulateUnits& U) {
+  nlohmann::json a = nlohmann::json::array();
+  for (const LimitExit& e : res.limits_left) {
+    const Joint& joint = model.joints[static_cast<size_t>(e.joint)];
+    const OutputUnit u = joint_unit(model, e.joint, U);
+    a.push_back({{"joint", joint.name},
+                 {"unit", u.name},
+                 {"limits", {u.from_si(joint.limits->x()), u.from_si(joint.limits->y())}},
+                 {"t_first", U.time.from_si(e.t_first)},
+                 {"first", u.from_si(e.value_first)},
+                 {"t_furthest", U.time.from_si(e.t_furthest)},
+                 {"furthest", u.from_si(e.value_furthest)},
+                 {"steps", e.steps}});
+  }
+  return a;
+}
+
+// A located warning per joint that left its limits.
+void warn_limits(const Model& model, const SimulateResult& res, const SimulateUnits& U) {
+  for (const LimitExit& e : res.limits_left) {
+    const Joint& joint = model.joints[static_cast<size_t>(e.joint)];
+    const OutputUnit u = joint_unit(model, e.joint, U);
+    spdlog::warn(
+        "{}: joint '{}' leaves its limits [{:.6g}, {:.6g}] {} at t = {:.6g} {} ({:.6g} {}), "
+        "furthest "
+        "{:.6g} {} at t = {:.6g} {}: simulate does not stop a joint at its limits (no end stops)",
+        joint.where.str(), joint.name, u.from_si(joint.limits->x()), u.from_si(joint.limits->y()),
+        u.name, U.time.from_si(e.t_first), U.time.name, u.from_si(e.value_first), u.name,
+        u.from_si(e.value_furthest), u.name, U.time.from_si(e.t_furthest), U.time.name);
+  }
+}
+
 // The --json document; its `samples` arrays are placeholders (write_with_columns).
 nlohmann::json result_json(const Model& model, const UnitSystem& system, const SimulateOptions& so,
                            const SimulateResult& res, const SimulateUnits& U,
@@ -491,6 +537,9 @@ nlohmann::json result_json(const Model& model, const UnitSystem& system, const S
   j["units"] = units_json(system);
   j["status"] = to_string(res.status);
   j["message"] = res.message;
+  // A run stopped at a bound holds the motion up to the stop only (docs/cli.md "Limits").
+  j["complete"] = res.status != SimulateStatus::stopped;
+  if (res.status == SimulateStatus::stopped) j["stop"] = to_string(res.stop);
   j["form"] = so.form == DynamicsForm::dual ? "dual" : "primal";
   j["integrator"] = to_string(so.integrator);
   j["rtol"] = so.rtol;
@@ -499,7 +548,12 @@ nlohmann::json result_json(const Model& model, const UnitSystem& system, const S
   j["energy"] = {{"initial", U.energy.from_si(res.energy_initial)},
                  {"final", U.energy.from_si(res.energy_final)},
                  {"max_drift", U.energy.from_si(res.energy_max_drift)},
-                 {"relative_drift", relative_drift(res)}};
+                 {"relative_drift", relative_drift(res)},
+                 {"drift_limit", res.energy_drift_limit},
+                 {"balance", res.status == SimulateStatus::energy_drift ? "drifted"
+                             : res.status == SimulateStatus::completed  ? "held"
+                                                                        : "unknown"}};
+  j["limits_left"] = limits_json(model, res, U);
   j["max_residual_length"] = U.length.from_si(res.max_residual_length);
   j["max_residual_angle"] = U.angle.from_si(res.max_residual_angle);
   j["max_velocity_residual"] = res.max_velocity_residual;
@@ -559,10 +613,16 @@ int run_simulate(const SimulateCliOptions& opt) {
   SimulateUnits U(model, reaction_components(model), system);
   SampleSpool spool(model, U);
   so.on_sample = [&spool](const SimulationSample& s) { spool.add(s); };
-  const SimulateResult res = simulate(model, so);
+  const SimulateResult res = [&] {
+    const InterruptScope interrupts;  // SIGINT/SIGTERM: stop, write what was computed
+    SimulateResult r = simulate(model, so);
+    end_progress();
+    return r;
+  }();
   if (res.kinetic_removed > 0.0)
     spdlog::info("initial velocity projection removed {:.6g} {} of kinetic energy",
                  U.energy.from_si(res.kinetic_removed), U.energy.name);
+  warn_limits(model, res, U);
   if (!opt.out_dir.empty()) write_csv(opt.out_dir, model, res, spool, U);
   spdlog::info(
       "{} chart switches: the dual form changed its independent velocities {} times (bookkeeping "
@@ -581,6 +641,7 @@ int run_simulate(const SimulateCliOptions& opt) {
   }
   std::cout.flush();
   if (!ok) spdlog::error("simulate: {}: {}", to_string(res.status), res.message);
+  if (res.status == SimulateStatus::stopped) return kStopped;
   return ok ? kOk : kNumerical;
 }
 
@@ -595,7 +656,7 @@ void register_simulate(CLI::App& app, const GlobalOptions& globals, int& exit_co
   cmd->add_option("--t-end", opt->t_end, "end time, in the file's time unit")
       ->required()
       ->check(finite_range(0.0, kMaxGeneral, true));
-  cmd->add_option("--rtol", opt->rtol, "relative tolerance")->check(finite_range(1e-15, 1.0));
+  cmd->add_option("--rtol", opt->rtol, "relative tolerance")->check(finite_range(kMinRtol, 1.0));
   cmd->add_option("--atol", opt->atol, "absolute tolerance")->check(finite_range(0.0, 1e6, true));
   cmd->add_option("--dt-out", opt->dt_out,
                   "output interval (the file's time unit; default t_end/100; at most 1e6 output "
@@ -603,6 +664,14 @@ void register_simulate(CLI::App& app, const GlobalOptions& globals, int& exit_co
       ->check(finite_range(0.0, kMaxGeneral, true));
   cmd->add_option("--max-step", opt->max_step, "largest step (the file's time unit)")
       ->check(finite_range(0.0, kMaxGeneral, true));
+  cmd->add_option("--max-steps", opt->max_steps,
+                  "step budget of the whole motion (default 1e7): the run stops there with "
+                  "status stopped, exit 5")
+      ->check(CLI::Range(1L, kMaxMaxSteps));
+  cmd->add_option("--time-limit", opt->time_limit,
+                  "wall-clock limit in seconds (default: none): the run stops there with status "
+                  "stopped, exit 5")
+      ->check(finite_range(0.0, 1e9, true));
   cmd->add_option("--form", opt->form, "dual (default) or primal (Theorem 7)")
       ->check(CLI::IsMember({"dual", "primal"}));
   cmd->add_option("--integrator", opt->integrator,
@@ -620,6 +689,14 @@ void register_simulate(CLI::App& app, const GlobalOptions& globals, int& exit_co
   auto log = std::make_shared<LogFlags>();
   add_log_flags(cmd, *log);
   cmd->callback([opt, log, &globals, &exit_code] {
+    if (opt->max_step > 0.0 && opt->t_end / opt->max_step > static_cast<double>(opt->max_steps))
+      throw CLI::ValidationError("--max-step", request_problem([&] {
+                                   SimulateOptions o;
+                                   o.t_end = opt->t_end;
+                                   o.max_step = opt->max_step;
+                                   o.max_steps = opt->max_steps;
+                                   return o;
+                                 }()));
     if (opt->dt_out > 0.0 && opt->t_end / opt->dt_out + 1.0 > kMaxOutputSamples)
       throw CLI::ValidationError("--dt-out",
                                  "--t-end / --dt-out gives more than 1e6 output "

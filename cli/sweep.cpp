@@ -21,6 +21,7 @@
 #include "orthomech/io/study_db.hpp"
 #include "orthomech/study/distributed.hpp"
 #include "orthomech/study/study.hpp"
+#include "run_bounds.hpp"
 
 namespace orthomech::cli {
 
@@ -32,7 +33,18 @@ struct SweepCliOptions {
   std::string file, study, out;
   int jobs = 0;
   bool resume = false, json = false;
+  double time_limit = 0.0;  // s of wall clock; 0: none
 };
+
+// Thrown by the store callback to end the variants' loop at a bound (run_variants and
+// coordinate_variants stop handing out variants when `done` throws, and rethrow it).
+struct StopSweep {
+  StopReason reason;
+};
+
+// OpenMP takes the pending variants in blocks of this many indices, so that the memory does not
+// grow with the study (a grid of 1e9 variants holds one block, not 8 GB of indices).
+constexpr long kPendingBlock = 4096;
 
 std::string read_file(const std::string& path, const std::string& what) {
   std::error_code ec;
@@ -241,12 +253,7 @@ int run_sweep_command(const SweepCliOptions& opt) {
   std::vector<std::string> parameters, metrics;
   for (const auto& p : study.parameters) parameters.push_back(p.name);
   for (const auto& [name, value] : nominal.metrics) metrics.push_back(name);
-  for (const std::string& p : parameters)
-    if (p == "variant" || p == "status" || p == "message" ||
-        std::find(metrics.begin(), metrics.end(), p) != metrics.end())
-      throw CLI::ValidationError("--study", "parameter name '" + p +
-                                                "' is also a column of the results: give it a "
-                                                "'name'");
+  // (A parameter named as a column, up to case, was refused by the study's reader at its line.)
 
   const fs::path out = opt.out;
   std::error_code ec;
@@ -266,38 +273,84 @@ int run_sweep_command(const SweepCliOptions& opt) {
     return kBadInput;
   }
   const long total = variant_count(study);
-  std::vector<long> stored = db->stored();
-  std::vector<long> pending;
-  size_t s = 0;
-  for (long i = 0; i < total; ++i) {
-    while (s < stored.size() && stored[s] < i) ++s;
-    if (s < stored.size() && stored[s] == i) continue;
-    pending.push_back(i);
-  }
+  const std::vector<long> stored = db->stored();
   spdlog::info("{}: {} variants, {} stored, {} to compute", opt.study, total, stored.size(),
-               pending.size());
+               total - static_cast<long>(stored.size()));
+  // The run's bounds: the time limit, SIGINT/SIGTERM, the progress line (run_bounds.hpp).
+  const InterruptScope interrupts;
+  const RunControl control = run_control("sweep", opt.time_limit);
+  RunMonitor monitor(control, 0);
+  const double to_compute = std::max(1.0, double(total) - double(stored.size()));
   long finished = 0;
   const auto store = [&](const VariantResult& r) {
-    db->insert(r);
+    try {
+      db->insert(r);
+    } catch (const std::runtime_error& e) {  // a full disk: the rows stored before are kept
+      throw std::runtime_error(std::string(e.what()) + "; the " +
+                               std::to_string(static_cast<long>(stored.size()) + finished) +
+                               " variants stored before are kept: free space and run again "
+                               "with --resume");
+    }
     ++finished;
     if (r.status != "completed") spdlog::debug("variant {}: {}: {}", r.index, r.status, r.message);
+    if (const StopReason why = monitor.tick(double(finished) / to_compute); why != StopReason::none)
+      throw StopSweep{why};
+  };
+  // The pending variants in index order, the stored ones skipped: drawn one at a time (MPI) or
+  // a block at a time (OpenMP), never all at once.
+  StopReason stop = StopReason::none;
+  long i = 0;
+  size_t s = 0;
+  const auto next_pending = [&]() -> long {
+    for (; i < total; ++i) {
+      while (s < stored.size() && stored[s] < i) ++s;
+      if (s < stored.size() && stored[s] == i) continue;
+      return i++;
+    }
+    return -1;
   };
   if (mpi) {
     spdlog::info("{} MPI ranks: rank 0 stores, {} evaluate", mpi->size(), mpi->size() - 1);
     guard.started = broadcast_start(true);
-    try {
-      coordinate_variants(pending, store);
-    } catch (...) {
-      mpi->finish();  // every rank was released
-      throw;
-    }
-    mpi->finish();
-  } else {
-    run_variants(mechanism, opt.file, study, pending, opt.jobs, store);
   }
+  try {
+    try {
+      if (mpi) {
+        coordinate_variants(next_pending, store);
+      } else {
+        std::vector<long> pending;
+        pending.reserve(kPendingBlock);
+        do {
+          pending.clear();
+          for (long k;
+               static_cast<long>(pending.size()) < kPendingBlock && (k = next_pending()) >= 0;)
+            pending.push_back(k);
+          if (!pending.empty()) run_variants(mechanism, opt.file, study, pending, opt.jobs, store);
+        } while (!pending.empty());
+      }
+    } catch (const StopSweep& e) {
+      stop = e.reason;
+    }
+  } catch (const std::runtime_error& e) {
+    if (mpi) mpi->finish();
+    end_progress();
+    spdlog::error("{}", e.what());
+    return kBadInput;
+  } catch (...) {
+    if (mpi) mpi->finish();  // every rank was released
+    throw;
+  }
+  if (mpi) mpi->finish();
+  end_progress();
+  if (stop != StopReason::none)
+    spdlog::error("sweep: {}; {} of {} variants are stored: run again with --resume",
+                  monitor.stop_message(stop, double(finished) / to_compute, "variant", ""),
+                  stored.size() + static_cast<size_t>(finished), total);
   spdlog::info("computed {} variants", finished);
 
-  const nlohmann::json summary = summarize(study, *db, nominal);
+  nlohmann::json summary = summarize(study, *db, nominal);
+  summary["complete"] = stop == StopReason::none;  // a stopped sweep: the stored variants only
+  if (stop != StopReason::none) summary["stop"] = to_string(stop);
   try {
     write_file_atomically(out / "variants.csv", study_csv(*db));
     write_file_atomically(out / "summary.json", summary.dump(2) + "\n");
@@ -309,7 +362,7 @@ int run_sweep_command(const SweepCliOptions& opt) {
     std::cout << summary.dump(2) << "\n";
   else
     print_summary(summary, out);
-  return kOk;
+  return stop == StopReason::none ? kOk : kStopped;
 }
 
 }  // namespace
@@ -327,6 +380,10 @@ void register_sweep(CLI::App& app, const GlobalOptions& globals, int& exit_code)
   cmd->add_flag("--resume", opt->resume,
                 "continue the study stored in --out (computes only the variants not stored)");
   cmd->add_flag("--json", opt->json, "the summary as one JSON document on stdout");
+  cmd->add_option("--time-limit", opt->time_limit,
+                  "wall-clock limit in seconds (default: none): the sweep stops there, keeps the "
+                  "variants stored and exits 5 (continue with --resume)")
+      ->check(finite_range(0.0, 1e9, true));
   auto log = std::make_shared<LogFlags>();
   add_log_flags(cmd, *log);
   cmd->callback([opt, log, &globals, &exit_code] {

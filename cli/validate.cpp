@@ -83,6 +83,8 @@ int run_validate(const ValidateCliOptions& opt) {
     j["generic_rank"] = rep.generic_rank;
     j["loop_basis"] = loop_basis_size(model);
     j["circuits"] = rep.circuits;
+    // positions[].modes counts the modes the multi-start found: a lower bound (issue 47).
+    j["modes_search"] = {{"starts", opt.starts}, {"seed", opt.seed}, {"lower_bound", true}};
     j["circuit_defect"] = rep.circuit_defect;
     j["branch_defect"] = rep.branch_defect;
     j["order_defect"] = rep.order_defect;
@@ -189,6 +191,12 @@ int run_validate(const ValidateCliOptions& opt) {
           p.branch > 0 ? std::to_string(p.branch).c_str() : "-", p.pass() ? "pass" : "FAIL");
       out << line;
     }
+    bool any_mode = false;
+    for (const PositionReport& p : rep.positions) any_mode = any_mode || p.mode > 0;
+    if (any_mode)
+      out << "\nmode m/N: the position's assembly mode among the N found by " << opt.starts
+          << " multi-start projections (seed " << opt.seed
+          << "): at least N modes exist; more --starts may find more\n";
     bool any_loop = false;
     for (const PositionReport& p : rep.positions)
       if (!p.four_bars.empty() && !any_loop) {
@@ -271,7 +279,7 @@ void register_validate(CLI::App& app, const GlobalOptions& globals, int& exit_co
   cmd->add_option("--min-transmission-index", opt->min_transmission_index,
                   "smallest acceptable Sutherland-Roth transmission index of a spatial loop, in "
                   "[0, 1] (default: sin of --min-transmission, 0.5)")
-      ->check(CLI::Range(0.0, 1.0));
+      ->check(finite_range(0.0, 1.0));
   cmd->add_option("--starts", opt->starts, "multi-start projections per position (default 24)")
       ->check(CLI::Range(0, 100000));
   cmd->add_option("--seed", opt->seed, "seed of the multi-start (default 1)");

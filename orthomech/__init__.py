@@ -19,9 +19,12 @@ command's ``--help``. Calls run one at a time (the global interpreter lock is he
 
 Errors are exceptions named after the CLI's exit codes: :class:`InputError` (2: bad file or
 option; ``file``, ``line``, ``column`` of the problem), :class:`CheckFailed` (1: an analysis ran
-and a check failed), :class:`NumericalError` (3), :class:`InternalError` (4). The result of an
-analysis that ran (``validate`` that found a problem, ``simulate`` that stopped at a change
-point) is the exception's ``result``. The CLI's warnings go to ``sys.stderr``.
+and a check failed; its message names the failed checks), :class:`NumericalError` (3),
+:class:`InternalError` (4), :class:`Stopped` (5: a run stopped at its step budget, time limit or
+an interrupt, with what it computed). The result of an analysis that ran (``validate`` that found
+a problem, ``simulate`` that stopped at a change point or at its budget) is the exception's
+``result``. The CLI's warnings are Python warnings (:class:`OrthomechWarning`, through
+:mod:`warnings`); its other log lines go to ``sys.stderr``.
 """
 
 from __future__ import annotations
@@ -32,6 +35,7 @@ import json
 import os
 import re
 import sys
+import warnings
 
 import numpy as np
 
@@ -80,6 +84,8 @@ __all__ = [
     "CheckFailed",
     "NumericalError",
     "InternalError",
+    "Stopped",
+    "OrthomechWarning",
 ]
 
 
@@ -126,16 +132,63 @@ class InternalError(Error, RuntimeError):
     exit_code = 4
 
 
-_ERRORS = {1: CheckFailed, 2: InputError, 3: NumericalError, 4: InternalError}
+class Stopped(Error):
+    """Exit code 5: a run stopped at a bound before its end (its step budget, ``time_limit``, or
+    SIGINT/SIGTERM); ``result`` holds what it computed (``complete`` is false, ``stop`` says
+    which bound)."""
+
+    exit_code = 5
+
+
+class OrthomechWarning(UserWarning):
+    """A warning of the CLI (a ``warning: ...`` line of its log), raised through :mod:`warnings`
+    so that ``warnings.simplefilter("error", orthomech.OrthomechWarning)`` and pytest see it."""
+
+
+_ERRORS = {1: CheckFailed, 2: InputError, 3: NumericalError, 4: InternalError, 5: Stopped}
 # "file:line:column: ..." (the reader's messages), possibly after the log level ("error: ").
 _PLACE = re.compile(r"^(?:[a-z]+: )?(?P<file>[^\n:]+):(?P<line>\d+):(?P<column>\d+)", re.M)
 
 
-def _error(code, message, result):
+def _failed_checks(subcommand, result):
+    """The failed checks of a report, in words (the message of CheckFailed, whose CLI prints
+    the report rather than an error)."""
+    if not isinstance(result, dict):
+        return ""
+    words = []
+    for p in result.get("positions", []) or []:  # validate
+        if isinstance(p, dict) and not p.get("pass", True):
+            words.append(f"position '{p.get('name')}': " + "; ".join(p.get("failures", [])))
+    for d in result.get("defects", []) or []:
+        if not any(str(d) in w for w in words):  # a position's failure names it already
+            words.append(str(d))
+    for c in result.get("checks", []) or []:  # crosscheck
+        if isinstance(c, dict) and not c.get("pass", True):
+            words.append(f"{c.get('name')} differs by {c.get('max_relative')}")
+    if not words and result.get("message"):  # cycle: stopped at a dead point
+        words.append(str(result["message"]))
+    return f"orthomech {subcommand}: " + ("; ".join(words) if words else "a check failed")
+
+
+def _error(code, message, result, subcommand=""):
     cls = _ERRORS.get(code, Error)
     m = _PLACE.search(message)
     place = (m["file"], int(m["line"]), int(m["column"])) if m else (None, None, None)
+    if not message and code == 1:
+        message = _failed_checks(subcommand, result)
     return cls(message or f"orthomech: exit code {code}", code, result, *place)
+
+
+def _log(err):
+    """The CLI's log: ``warning: ...`` lines as Python warnings, the others to sys.stderr."""
+    rest = []
+    for line in err.splitlines(keepends=True):
+        if line.startswith("warning: "):
+            warnings.warn(line[len("warning: "):].rstrip("\n"), OrthomechWarning, stacklevel=3)
+        else:
+            rest.append(line)
+    if rest:
+        sys.stderr.write("".join(rest))
 
 
 # ---- Mechanisms --------------------------------------------------------------------------------
@@ -150,6 +203,10 @@ class Mechanism:
     def __init__(self, path=None, text=None, origin=TEXT_ORIGIN):
         if (path is None) == (text is None):
             raise TypeError("Mechanism: give either path or text")
+        if path is not None and "\0" in os.fsdecode(os.fspath(path)):
+            # The C++ side would cut the name at the NUL and read another file.
+            raise InputError(f"{os.fsdecode(os.fspath(path))!r}: file: the path holds a NUL "
+                             "character", 2)
         self.path = None if path is None else os.fspath(path)
         self.text = text
         self.origin = self.path if self.path is not None else origin
@@ -225,6 +282,9 @@ def _options(options: dict) -> list:
 def command(args, mechanism=None):
     """Runs ``orthomech ARGS...`` in this process: (exit code, stdout, stderr). With
     ``mechanism`` given as text, the argument equal to its origin reads the text."""
+    for a in args:
+        if "\0" in str(a):  # the C++ side would cut the argument at the NUL
+            raise InputError(f"{str(a)!r}: an argument holds a NUL character", 2)
     m = None if mechanism is None else _mechanism(mechanism)
     if m is None or m.path is not None:
         return _core.run([str(a) for a in args])
@@ -243,9 +303,9 @@ def _run(subcommand, mechanism, options, arrays=True):
         if arrays:
             result = to_arrays(result)
     if code != 0:
-        raise _error(code, err.strip(), result)
+        raise _error(code, err.strip(), result, subcommand)
     if err:
-        sys.stderr.write(err)  # the CLI's warnings
+        _log(err)
     return result
 
 

@@ -8,6 +8,7 @@
 #include <variant>
 
 #include "orthomech/analysis/cycle.hpp"
+#include "orthomech/constraints/joints.hpp"
 #include "orthomech/error.hpp"
 #include "orthomech/io/mechanism_file.hpp"
 #include "orthomech/version.hpp"
@@ -32,8 +33,11 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "%s: %s\n", file.c_str(), result.message.c_str());
       return 3;
     }
-    const bool angular = std::holds_alternative<orthomech::Revolute>(
-        model.joints[static_cast<std::size_t>(options.driver.joint)].kind);
+    // A driver whose coordinate is an angle (a planar or spatial revolute, a cylindrical's or
+    // screw's turn) takes a torque; a slide a force.
+    const bool angular = orthomech::joint_coordinate_kind(
+                             model.joints[static_cast<std::size_t>(options.driver.joint)]) ==
+                         orthomech::CoordinateKind::angle;
     // The drive first, then every reaction magnitude.
     const std::vector<orthomech::SeriesSummary> summary = orthomech::summarize_cycle(
         result, orthomech::reaction_magnitudes(result), angular ? "N*m" : "N");

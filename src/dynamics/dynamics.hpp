@@ -275,6 +275,11 @@ class Dynamics {
   // on its fixed sparse pattern and factorised by a sparse LDLᵀ (numerics/weighted_gram.hpp).
   void factor_G() {
     const SparseEt::Matrix& E = ws_.constraints.Et.matrix();  // Eᵀ
+    if (nc_ == 0) {  // no constraint: G is 0 × 0, λ empty and (L3) is ṗ = Q̂
+      sparse_G_ = false;
+      G_.resize(0, 0);
+      return;
+    }
     if (nc_ > 48 && ws_.free.diagonal_mass) {
       if (!G_analyzed_) {  // Eᵀ's structural pattern, hence G's, is fixed: one analysis
         G_sparse_.analyze(E);
@@ -307,7 +312,9 @@ class Dynamics {
                                " (redundant constraints or a change point)"};
   }
   void solve_G(const VecX& b, VecX& x) {
-    if (sparse_G_)
+    if (nc_ == 0)
+      x.resize(0);
+    else if (sparse_G_)
       G_sparse_.solve(b, x);
     else
       x = G_llt_.solve(b);

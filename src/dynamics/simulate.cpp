@@ -14,6 +14,7 @@
 #include "dynamics.hpp"
 #include "integrator.hpp"
 #include "orthomech/analysis/assembly.hpp"
+#include "orthomech/analysis/cycle_metrics.hpp"
 #include "orthomech/analysis/mobility.hpp"
 #include "orthomech/constraints/joints.hpp"
 #include "orthomech/constraints/sparse_et.hpp"
@@ -40,8 +41,31 @@ const char* to_string(SimulateStatus s) {
       return "failed_step";
     case SimulateStatus::singular:
       return "singular";
+    case SimulateStatus::energy_drift:
+      return "energy_drift";
+    case SimulateStatus::stopped:
+      return "stopped";
   }
   return "?";
+}
+
+double energy_drift_limit(double rtol) {
+  return std::max(kEnergyDriftFloor, kEnergyDriftFactor * rtol);
+}
+
+std::string request_problem(const SimulateOptions& o) {
+  if (!(o.max_steps > 0) || o.max_steps > kMaxMaxSteps)
+    return "the step budget (--max-steps) must be from 1 to " + std::to_string(kMaxMaxSteps);
+  if (o.max_step > 0.0 && o.t_end / o.max_step > static_cast<double>(o.max_steps)) {
+    char need[32];
+    std::snprintf(need, sizeof need, "%.3g", o.t_end / o.max_step);
+    return std::string("--t-end / --max-step needs at least ") + need +
+           " steps, more than the step budget of " + std::to_string(o.max_steps) +
+           " (--max-steps): give a larger --max-step or a larger --max-steps";
+  }
+  if (!(o.control.time_limit >= 0.0) || !std::isfinite(o.control.time_limit))
+    return "the time limit (--time-limit) must be a finite number of seconds, 0 for none";
+  return "";
 }
 
 const char* to_string(Integrator i) {
@@ -297,7 +321,12 @@ class Simulation {
         rate_rotations_(model),
         angular_row_(static_cast<size_t>(model.nc), 0),
         local_passage_(model.nq != model.n),
+        monitor_run_(options.control, options.max_steps),
+        window_t_(initial.t),
         t_now_(initial.t) {
+    for (size_t j = 0; j < model.joints.size(); ++j)
+      if (model.joints[j].limits) limited_.push_back(static_cast<int>(j));
+    limit_exits_.resize(limited_.size());
     result_.components = reaction_components(model);
   }
 
@@ -562,6 +591,7 @@ class Simulation {
         result_.samples.pop_back();
         throw;
       }
+      if (!limited_.empty()) note_limits(t, result_.samples.back().q);
       deliver(false);
     }
     ++next_out_;
@@ -714,7 +744,76 @@ class Simulation {
       limit_next_step(t, spread, chart_changed);
     }
     book_energy(t, y);
-    return !monitor_change_points(t, y, sigma_end, rate_end, chart_changed);
+    const bool request = monitor_change_points(t, y, sigma_end, rate_end, chart_changed);
+    // The bounds count every accepted step; a step that raised a change-point request ends the
+    // segment anyway, and a bound met there stops the first step after the request is served.
+    const bool go_on = within_bounds(t);
+    return go_on && !request;
+  }
+
+  // Joints outside their `limits:` at q (SimulateResult::limits_left): every corrected step end
+  // and every output sample (an output inside a long step may be outside before its end).
+  void note_limits(double t, const VecX& q) {
+    for (size_t k = 0; k < limited_.size(); ++k) {
+      const int j = limited_[k];
+      if (!outside_limits(model_, j, q)) continue;
+      const Vec2& lim = *model_.joints[static_cast<size_t>(j)].limits;
+      const double x = limit_coordinate(model_, j, q);
+      const double beyond = std::max(lim.x() - x, x - lim.y());
+      LimitExit& e = limit_exits_[k];
+      if (e.steps++ == 0 || t < e.t_first) {  // (an output inside a step precedes its end)
+        e.joint = j;
+        e.t_first = t, e.value_first = x;
+      }
+      if (e.steps == 1) {
+        e.t_furthest = t, e.value_furthest = x;
+      } else if (beyond > std::max(lim.x() - e.value_furthest, e.value_furthest - lim.y())) {
+        e.t_furthest = t, e.value_furthest = x;
+      }
+    }
+  }
+  void collect_limits() {
+    result_.limits_left.clear();
+    for (const LimitExit& e : limit_exits_)
+      if (e.steps > 0) result_.limits_left.push_back(e);
+  }
+
+  // The run's bounds after an accepted, corrected step (SimulateOptions::max_steps, control):
+  // false stops the integrator there (status stopped, the reason in the message).
+  bool within_bounds(double t) {
+    note_limits(t, q_);
+    const double fraction = (t - T0_) / (T1_ - T0_);
+    const StopReason r = monitor_run_.tick(fraction);
+    if (r == StopReason::none) return !beyond_budget(t, fraction);
+    stop_message_ = monitor_run_.stop_message(r, fraction, "step", "--max-steps");
+    failure_status_ = SimulateStatus::stopped;
+    result_.stop = r;
+    return false;
+  }
+
+  // A run that cannot fit its step budget stops when that is clear, not when the budget is
+  // spent: every kBudgetWindow steps, the steps still needed at the window's mean step size are
+  // compared with the budget; beyond kBudgetMargin times what is left, the run stops (a spatial
+  // gravity of 1e12 m/s² needs about 6e7 steps for 1 s: stopped after 1e4 steps, not 1e7).
+  bool beyond_budget(double t, double fraction) {
+    constexpr long kBudgetWindow = 10000;
+    constexpr double kBudgetMargin = 2.0;
+    const long done = monitor_run_.units();
+    if (done % kBudgetWindow != 0) return false;
+    const double h = (t - window_t_) / static_cast<double>(kBudgetWindow);
+    window_t_ = t;
+    const double left = static_cast<double>(options_.max_steps - done);
+    if (!(h > 0.0) || (T1_ - t) / h <= kBudgetMargin * left) return false;
+    char text[200];
+    std::snprintf(text, sizeof text,
+                  "stopped at %.0f %% of the run: at its mean step of the last %ld steps (%.3g s) "
+                  "the motion needs about %.3g more steps, beyond the step budget of %ld "
+                  "(--max-steps)",
+                  100.0 * fraction, kBudgetWindow, h, (T1_ - t) / h, options_.max_steps);
+    stop_message_ = text;
+    failure_status_ = SimulateStatus::stopped;
+    result_.stop = StopReason::work_budget;
+    return true;
   }
 
   // Residual left by the step (before correction), with Eᵀ at the same q. Quaternions are
@@ -1584,6 +1683,7 @@ class Simulation {
   // ---- Final sample and status ----------------------------------------------------------------
 
   void finish() {
+    collect_limits();
     result_.evaluations = evaluations_;
     result_.rejected_steps = rejected_steps_;
     result_.jacobians = jacobians_;
@@ -1613,6 +1713,25 @@ class Simulation {
         result_.max_velocity_residual =
             std::max(result_.max_velocity_residual, smp.velocity_residual);
     result_.status = SimulateStatus::completed;
+    check_energy_balance();
+  }
+
+  // The energy balance T + V − W against what the tolerance allows (energy_drift_limit): a run
+  // whose balance drifted beyond it is not `completed` (its motion cannot be vouched for).
+  void check_energy_balance() {
+    result_.energy_drift_limit = energy_drift_limit(options_.rtol);
+    const double drift =
+        result_.energy_scale > 0.0 ? result_.energy_max_drift / result_.energy_scale : 0.0;
+    if (!(drift > result_.energy_drift_limit)) return;
+    char text[160];
+    std::snprintf(text, sizeof text,
+                  "the energy balance T + V - W drifted by %.3g relative, beyond the %.3g that "
+                  "rtol %.3g allows",
+                  drift, result_.energy_drift_limit, options_.rtol);
+    result_.status = SimulateStatus::energy_drift;
+    result_.message = std::string(text) +
+                      ": the motion does not meet its tolerance (a load switched by active_while, "
+                      "or another discontinuity of the forces, defeats the step-size control)";
   }
 
   // A run stopped early: its status and message, and the final sample at the stop time (the
@@ -1636,6 +1755,8 @@ class Simulation {
       result_.final.t = std::max(t_now_, t_last_accept_);
     }
     result_.energy_initial = energy0_;
+    result_.energy_final = result_.final.kinetic + result_.final.potential - result_.final.work;
+    result_.energy_drift_limit = energy_drift_limit(options_.rtol);
   }
 
   // ---- State ----------------------------------------------------------------------------------
@@ -1689,9 +1810,13 @@ class Simulation {
   detail::OdeProblem problem_;
   double spread_now_ = 0.0;  // the chart's spread after the last acceptance (dual form)
   double next_step_limit_ = std::numeric_limits<double>::infinity();
-  double max_quality_rate_ = 0.0;  // the largest |dσ̂/dt| of the run (limit_step_by_quality)
-  std::vector<char> angular_row_;  // rows of f that are angles
-  bool local_passage_;             // passages in local coordinates (spatial bodies)
+  double max_quality_rate_ = 0.0;       // the largest |dσ̂/dt| of the run (limit_step_by_quality)
+  std::vector<char> angular_row_;       // rows of f that are angles
+  bool local_passage_;                  // passages in local coordinates (spatial bodies)
+  RunMonitor monitor_run_;              // the step budget, time limit, interrupt and progress
+  double window_t_;                     // t at the start of beyond_budget's window
+  std::vector<int> limited_;            // joints with limits
+  std::vector<LimitExit> limit_exits_;  // per limited_ joint
   // Segments and the driver.
   detail::OdeOptions base_;
   double t_now_;
@@ -1720,6 +1845,12 @@ SimulateResult simulate(const Model& model, const State& initial, const Simulate
   SimulateResult result;
   result.form = options.form;
   if (!(options.t_end > 0.0)) throw std::invalid_argument("simulate: t_end must be positive");
+  if (const std::string problem = request_problem(options); !problem.empty()) {
+    result.status = SimulateStatus::stopped;
+    result.stop = StopReason::work_budget;
+    result.message = problem;
+    return result;
+  }
   VecX q;
   int rank = 0;
   Chart chart;

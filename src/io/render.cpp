@@ -21,6 +21,7 @@
 #include "orthomech/check.hpp"
 #include "orthomech/constraints/joints.hpp"
 #include "orthomech/io/mechanism_writer.hpp"
+#include "orthomech/io/report.hpp"
 #include "orthomech/io/units.hpp"
 #include "orthomech/model/free_system.hpp"
 #include "orthomech/model/spatial.hpp"
@@ -1395,6 +1396,29 @@ ViewTransform animation_view(const Model& model, const std::vector<VecX>& frames
 std::string animated_svg(const Model& model, const std::vector<VecX>& frames,
                          const RenderOptions& options, double duration) {
   check_argument(!frames.empty(), "animated_svg", "frames", "must not be empty");
+  // At most kMaxPictureFrames frames (report.hpp picture_positions), the traces at the same
+  // positions: a bounded picture whatever the number of positions.
+  if (frames.size() > kMaxPictureFrames) {
+    const std::vector<size_t> shown = picture_positions(frames.size());
+    std::vector<VecX> kept;
+    kept.reserve(shown.size());
+    for (const size_t k : shown) kept.push_back(frames[k]);
+    RenderOptions thinned = options;
+    for (PointTrace& t : thinned.traces) {
+      if (t.path.size() != frames.size()) continue;
+      std::vector<Vec2> path;
+      std::vector<double> z, input;
+      for (const size_t k : shown) {
+        path.push_back(t.path[k]);
+        if (t.z.size() == frames.size()) z.push_back(t.z[k]);
+        if (t.input.size() == frames.size()) input.push_back(t.input[k]);
+      }
+      t.path = std::move(path);
+      t.z = std::move(z);
+      t.input = std::move(input);
+    }
+    return animated_svg(model, kept, thinned, duration);
+  }
   // One view for every frame.
   RenderOptions fixed = options;
   fixed.view = animation_view(model, frames, options);

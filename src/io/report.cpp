@@ -1,5 +1,6 @@
 #include "orthomech/io/report.hpp"
 
+#include <cmath>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 
@@ -281,13 +282,30 @@ constexpr const char* kScript = R"JS(
 
 }  // namespace
 
+std::vector<std::size_t> picture_positions(std::size_t n) {
+  std::vector<std::size_t> k;
+  if (n <= kMaxPictureFrames) {
+    for (std::size_t i = 0; i < n; ++i) k.push_back(i);
+    return k;
+  }
+  // m evenly spaced of the n: i_j = round(j (n − 1) / (m − 1)), strictly increasing as n > m.
+  const std::size_t m = kMaxPictureFrames;
+  for (std::size_t j = 0; j < m; ++j)
+    k.push_back(static_cast<std::size_t>(std::llround(
+        static_cast<double>(j) * static_cast<double>(n - 1) / static_cast<double>(m - 1))));
+  return k;
+}
+
 std::string cycle_report_html(const CycleReport& report) {
   const size_t n = report.input.size();
   check_argument(n != 0, "cycle_report_html", "report.input", "must not be empty (no positions)");
-  check_argument(count_frames(report.animation) == n, "cycle_report_html", "report.animation",
-                 "must have one frame per position");
+  const std::vector<std::size_t> shown = picture_positions(n);
+  check_argument(count_frames(report.animation) == shown.size(), "cycle_report_html",
+                 "report.animation", "must have one frame per picture position");
   nlohmann::json data;
-  data["input"] = report.input;
+  std::vector<double> input;
+  for (const std::size_t k : shown) input.push_back(report.input[k]);
+  data["input"] = input;
   data["input_label"] = report.input_label;
   data["duration"] = report.duration;
   nlohmann::json plots = nlohmann::json::array();
@@ -297,7 +315,8 @@ std::string cycle_report_html(const CycleReport& report) {
       check_argument(s.values.size() == n, "cycle_report_html", "report.plots",
                      "must have one value per position in every series");
       nlohmann::json values = nlohmann::json::array();
-      for (const auto& v : s.values) values.push_back(v ? nlohmann::json(*v) : nlohmann::json());
+      for (const std::size_t k : shown)
+        values.push_back(s.values[k] ? nlohmann::json(*s.values[k]) : nlohmann::json());
       series.push_back({{"name", s.name}, {"values", values}});
     }
     plots.push_back({{"id", p.id}, {"title", p.title}, {"unit", p.unit}, {"series", series}});

@@ -1,6 +1,9 @@
 #include "orthomech/io/study_db.hpp"
 
+#include <fcntl.h>
 #include <sqlite3.h>
+#include <sys/file.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <limits>
@@ -22,6 +25,7 @@ struct StudyDatabase::Impl {
   sqlite3* db = nullptr;
   sqlite3_stmt* insert = nullptr;
   std::string file;
+  int lock = -1;  // the file's descriptor holding flock(LOCK_EX): one writer per study
 
   [[noreturn]] void fail(const std::string& what) const {
     throw std::runtime_error(file + ": " + what + ": " + (db ? sqlite3_errmsg(db) : "no database"));
@@ -42,6 +46,18 @@ struct StudyDatabase::Impl {
   ~Impl() {
     if (insert) sqlite3_finalize(insert);
     if (db) sqlite3_close(db);
+    if (lock >= 0) ::close(lock);
+  }
+  // One study, one writer: an exclusive flock on the database file (independent of SQLite's
+  // own POSIX locks, released when the process ends however it ends). A second sweep on the same
+  // folder is refused instead of computing the same variants and failing on their rows.
+  void lock_file() {
+    lock = ::open(file.c_str(), O_RDONLY | O_CLOEXEC);
+    if (lock < 0) fail("cannot open");
+    if (::flock(lock, LOCK_EX | LOCK_NB) != 0)
+      throw std::runtime_error(file +
+                               ": another sweep is writing this study (it holds the file's "
+                               "lock): wait for it to end, or give another --out");
   }
 };
 
@@ -59,6 +75,7 @@ StudyDatabase::StudyDatabase(const std::filesystem::path& file, bool resume,
   if (sqlite3_open_v2(impl_->file.c_str(), &impl_->db, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE,
                       nullptr) != SQLITE_OK)
     impl_->fail("cannot open");
+  impl_->lock_file();
   sqlite3_busy_timeout(impl_->db, 10000);
   // Each insert is its own transaction, in the write-ahead log once it returns: a killed study
   // keeps every variant stored before the kill (a half-written one is rolled back). NORMAL does not

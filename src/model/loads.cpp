@@ -4,6 +4,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "orthomech/constraints/joints.hpp"
 #include "orthomech/constraints/spatial_joints.hpp"
 #include "orthomech/model/body_kinds.hpp"
 #include "orthomech/model/free_system.hpp"
@@ -75,6 +76,18 @@ SpatialStretch stretch(const Model& model, const SpatialSpringDamper& s, const S
 SpatialScalar joint_angle(const Model& model, const JointSpringDamper& l, const State& st) {
   const auto& joint = std::get<SpatialJoint>(model.joints[static_cast<size_t>(l.joint)].kind);
   return spatial_joint_coordinate(model, joint, st.q, &st.u);
+}
+
+// The rotary spring's deflection θ − θ₀. A spatial joint's angle is read within a turn (its
+// orientation, not its history: joint_coordinate_wraps), so the deflection is taken within half
+// a turn of the free angle, remainder(θ − θ₀, 2π): the spring's energy ½ k (θ − θ₀)² is then a
+// continuous function of the pose and its moment its exact derivative. (Taking wrap(θ) − θ₀, as
+// before, made the energy jump by 2π k |θ₀| at every pass through ±180°, and `simulate`'s
+// balance grow by as much, issue 47.) A planar revolute's angle is continuous: no remainder.
+double spring_deflection(const Model& model, const JointSpringDamper& l, double theta) {
+  const Joint& joint = model.joints[static_cast<size_t>(l.joint)];
+  const double d = theta - l.free_angle;
+  return joint_coordinate_wraps(joint) ? std::remainder(d, 2.0 * std::numbers::pi) : d;
 }
 
 // A world force F at ρ from the centre of mass (or a world moment n, with F = 0): Q = (F, Rᵀ(ρ×F
@@ -151,7 +164,8 @@ void add_load(const Model& model, const Load& load, const State& st, VecX& Q) {
           add_wrench(x.kj, -tension * x.e, x.pj.rho.cross(-tension * x.e), Q);
         } else if constexpr (std::is_same_v<T, JointSpringDamper>) {
           const SpatialScalar th = joint_angle(model, l, st);
-          const double moment = l.stiffness * (th.value - l.free_angle) + l.damping * th.rate();
+          const double moment =
+              l.stiffness * spring_deflection(model, l, th.value) + l.damping * th.rate();
           th.add_row(Q, -moment);  // Q = −moment ∂θ/∂u
         }
       },
@@ -193,7 +207,8 @@ double potential_energy(const Model& model, const VecX& q) {
       V += 0.5 * ss->stiffness * dl * dl;
     } else if (const auto* js = std::get_if<JointSpringDamper>(&load.kind)) {
       const auto& joint = std::get<SpatialJoint>(model.joints[static_cast<size_t>(js->joint)].kind);
-      const double th = spatial_joint_coordinate(model, joint, q, none).value - js->free_angle;
+      const double th =
+          spring_deflection(model, *js, spatial_joint_coordinate(model, joint, q, none).value);
       V += 0.5 * js->stiffness * th * th;
     }
   }

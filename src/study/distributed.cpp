@@ -124,12 +124,11 @@ bool broadcast_start(bool go) {
   return flag != 0;
 }
 
-void coordinate_variants(const std::vector<long>& pending,
+void coordinate_variants(const std::function<long()>& next,
                          const std::function<void(const VariantResult&)>& done) {
   int size = 1;
   mpi().comm_size(mpi().world, &size);
   std::exception_ptr failure;
-  size_t next = 0;
   int working = size - 1;
   while (working > 0) {
     MPI_Status status;
@@ -147,7 +146,7 @@ void coordinate_variants(const std::vector<long>& pending,
       }
     }
     long index = -1;
-    if (!failure && next < pending.size()) index = pending[next++];
+    if (!failure) index = next();
     if (index < 0) --working;
     mpi().send(&index, 1, mpi().long_type, status.MPI_SOURCE, kIndexTag, mpi().world);
   }
@@ -171,7 +170,7 @@ void serve_variants(const std::string& mechanism, const std::string& origin, con
 MpiSession::MpiSession() = default;
 MpiSession::~MpiSession() = default;
 bool broadcast_start(bool) { throw std::logic_error("this build has no MPI"); }
-void coordinate_variants(const std::vector<long>&,
+void coordinate_variants(const std::function<long()>&,
                          const std::function<void(const VariantResult&)>&) {
   throw std::logic_error("this build has no MPI");
 }

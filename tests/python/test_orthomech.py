@@ -7,6 +7,7 @@ import os
 import re
 import subprocess
 import sys
+import warnings
 
 import numpy as np
 import pytest
@@ -166,6 +167,11 @@ def test_check_failed_carries_the_report():
         orthomech.validate(path)
     assert e.value.exit_code == 1
     assert orthomech.to_json(e.value.result) == doc
+    # The message names what failed (it was only "orthomech: exit code 1"): the defects and the
+    # failures of the report itself (the oracle: the CLI's JSON document).
+    assert str(e.value).startswith("orthomech validate: ")
+    for d in doc["defects"]:
+        assert d in str(e.value)
 
 
 # A four-bar whose links (1 + 2 + 3 < 10) cannot close (tests/unit/cli/assemble_cli_test.cpp).
@@ -202,17 +208,43 @@ def test_numerical_error_is_exit_code_3(tmp_path):
 
 def test_exception_types():
     assert issubclass(orthomech.InternalError, orthomech.Error)
+    assert issubclass(orthomech.Stopped, orthomech.Error)
     assert {c.exit_code for c in (orthomech.CheckFailed, orthomech.InputError,
-                                   orthomech.NumericalError, orthomech.InternalError)} == {1, 2, 3, 4}
+                                   orthomech.NumericalError, orthomech.InternalError,
+                                   orthomech.Stopped)} == {1, 2, 3, 4, 5}
 
 
-def test_warnings_go_to_stderr(capsys):
+def test_warnings_are_python_warnings(capsys):
     text = open(CRANK_ROCKER, encoding="utf-8").read()
     # A crank 2 mm longer than drawn: the start position moves (a warning), the cycle runs.
-    orthomech.cycle(text, steps=12, set={"bodies.crank.points.A": "[32, 0]"})
-    assert "warning" in capsys.readouterr().err
-    orthomech.cycle(text, steps=12, set={"bodies.crank.points.A": "[32, 0]"}, quiet=True)
+    with pytest.warns(orthomech.OrthomechWarning):
+        orthomech.cycle(text, steps=12, set={"bodies.crank.points.A": "[32, 0]"})
+    assert "warning" not in capsys.readouterr().err  # not printed besides
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # quiet: no warning at all
+        orthomech.cycle(text, steps=12, set={"bodies.crank.points.A": "[32, 0]"}, quiet=True)
     assert capsys.readouterr().err == ""
+
+
+def test_a_stopped_simulation_is_stopped_with_its_samples():
+    with pytest.raises(orthomech.Stopped) as e:
+        orthomech.simulate(os.path.join(MECH, "pendulum.yaml"), t_end=10, max_steps=40)
+    assert e.value.exit_code == 5
+    assert e.value.result["complete"] is False and e.value.result["stop"] == "budget"
+    assert e.value.result["steps"] == 40
+
+
+def test_nul_in_a_path_is_an_input_error():
+    with pytest.raises(orthomech.InputError) as e:
+        orthomech.info(os.path.join(MECH, "pendulum.yaml") + "\0.txt")
+    assert "NUL" in str(e.value)
+
+
+def test_cyclic_alias_in_a_set_value_is_an_input_error():
+    # It crashed the interpreter (unbounded recursion over the value's nodes).
+    with pytest.raises(orthomech.InputError) as e:
+        orthomech.info(CRANK_ROCKER, set=["x={a: &a [*a]}"])
+    assert "holds itself" in str(e.value)
 
 
 # ---- The example script ---------------------------------------------------------------------

@@ -25,6 +25,7 @@
 #include "orthomech/analysis/reactions.hpp"
 #include "orthomech/model/model.hpp"
 #include "orthomech/model/state.hpp"
+#include "orthomech/run_control.hpp"
 
 namespace orthomech {
 
@@ -50,6 +51,11 @@ struct InitialRate {
 
 struct SimulationSample;
 
+// The default step budget of a motion: about 3 to 60 minutes of stepping at 2 to 20 µs a step,
+// far beyond every bundled motion (the longest, the 2000 s pendulum, takes about 1e5 steps).
+inline constexpr long kDefaultMaxSteps = 10'000'000;
+inline constexpr long kMaxMaxSteps = 1'000'000'000;
+
 struct SimulateOptions {
   DynamicsForm form = DynamicsForm::dual;
   Integrator integrator = Integrator::dopri5;
@@ -71,7 +77,12 @@ struct SimulateOptions {
   // components kept). Needed to pass change points (IFToMM A02) at a sane step size; costs
   // about one Newton iteration per evaluation. Always on for rosenbrock4.
   bool project_stages = false;
-  long max_steps = 100'000'000;
+  // The budget of accepted steps over the whole run (every segment and passage), the wall-clock
+  // limit, the interrupt flag and the progress callback (run_control.hpp). A run that meets one
+  // stops with status `stopped` and what it computed so far. A request that cannot fit the
+  // budget (t_end / max_step steps at least) is refused before it starts (request_problem).
+  long max_steps = kDefaultMaxSteps;
+  RunControl control;
   // For tests only: called with the predicted landing state (t, q, u) of every change-point
   // passage before it is corrected, so that a test can force a passage onto a wrong branch and
   // see it refused. Empty in every normal run.
@@ -83,7 +94,20 @@ struct SimulateOptions {
   std::function<void(const SimulationSample&)> on_sample;
 };
 
-enum class SimulateStatus { completed, failed_assembly, failed_step, singular };
+// completed: the run reached t_end and its energy balance held within its limit;
+// energy_drift: it reached t_end but T + V − W drifted beyond what the tolerance allows
+//   (energy_drift_limit): the motion cannot be vouched for (e.g. a load switched on and off by
+//   `active_while`, which no step-size control resolves);
+// stopped: a bound of SimulateOptions (max_steps, control) stopped it before t_end (stop says
+//   which); the samples up to the stop are kept.
+enum class SimulateStatus {
+  completed,
+  failed_assembly,
+  failed_step,
+  singular,
+  energy_drift,
+  stopped
+};
 [[nodiscard]] const char* to_string(SimulateStatus s);
 
 struct SimulationSample {
@@ -116,6 +140,17 @@ struct ChangePointPassage {
   double energy_balance = 0.0;              // |Δ(T + V − W)| / max(T_from, T_to) over the step
 };
 
+// A joint that left its `limits:` during the motion (simulate does not enforce limits: no end
+// stops yet). Checked after every accepted step and at every output sample; values are the joint
+// coordinate (rad or m), a revolute's angle taken within a turn of the limits' middle
+// (analysis/cycle_metrics.hpp).
+struct LimitExit {
+  int joint = -1;
+  double t_first = 0.0, value_first = 0.0;        // where it first left them
+  double t_furthest = 0.0, value_furthest = 0.0;  // furthest beyond them
+  long steps = 0;                                 // accepted steps and output samples outside them
+};
+
 struct SimulateResult {
   SimulateStatus status = SimulateStatus::failed_step;
   std::string message;
@@ -128,8 +163,13 @@ struct SimulateResult {
   std::vector<ChartSwitch> chart_switches;
   std::vector<ChangePointPassage> passages;  // change points passed (dual form), in order
   double energy_initial = 0.0, energy_final = 0.0;
-  double energy_max_drift = 0.0;         // max |E(t) − E(0)| over the accepted steps (J)
-  double energy_scale = 0.0;             // max (|T| + |V| + |W|) (J): for relative drifts
+  double energy_max_drift = 0.0;  // max |E(t) − E(0)| over the accepted steps (J)
+  double energy_scale = 0.0;      // max (|T| + |V| + |W|) (J): for relative drifts
+  // The largest relative drift energy_max_drift / energy_scale the run's tolerance allows
+  // (energy_drift_limit(rtol)); beyond it the status is energy_drift.
+  double energy_drift_limit = 0.0;
+  StopReason stop = StopReason::none;    // status stopped: which bound
+  std::vector<LimitExit> limits_left;    // joints that left their limits, in joint order
   double max_constraint_residual = 0.0;  // max |f| over the accepted steps before correction
   // The same split by kind of row: length rows (m) and angular rows, "angle"/"ratio" (rad).
   double max_residual_length = 0.0, max_residual_angle = 0.0;
@@ -142,6 +182,17 @@ struct SimulateResult {
   long rejected_steps = 0;     // rejected step attempts (rkf78, rosenbrock4)
   long jacobians = 0;          // Jacobians by finite differences (rosenbrock4)
 };
+
+// The relative energy drift a run at relative tolerance `rtol` may show: kEnergyDriftFactor ·
+// rtol, at least kEnergyDriftFloor (docs/theory.md "The energy balance").
+inline constexpr double kEnergyDriftFactor = 1e4;
+inline constexpr double kEnergyDriftFloor = 1e-6;
+[[nodiscard]] double energy_drift_limit(double rtol);
+
+// "" when the request fits its bounds; else why not, naming the options (t_end / max_step needs
+// more steps than max_steps allows). simulate() returns status `stopped` for such a request
+// without starting.
+[[nodiscard]] std::string request_problem(const SimulateOptions& options);
 
 // Simulates from the design position (projected) with the velocity given by the options.
 [[nodiscard]] SimulateResult simulate(const Model& model, const SimulateOptions& options);

@@ -12,6 +12,7 @@
 // `input#position` (0 … N − 1); the button `#play`; each plot `svg.plot` with a `line.cursor` at
 // the shown position; the tooltip `#tooltip`; `body[data-ready="yes"]` once the script ran and
 // `window.reportErrors` lists the script errors met.
+#include <cstddef>
 #include <optional>
 #include <string>
 #include <vector>
@@ -39,8 +40,15 @@ struct CycleReport {
   double duration = 4.0;  // s per loop of the play button
 };
 
-// The page. Throws std::invalid_argument when a series or the animation does not have one value
-// (frame) per position.
+// Pictures of many positions (animated_svg's frames, the report's plots and slider) show at most
+// kMaxPictureFrames of them: the positions picture_positions(n) gives, evenly spaced over the n,
+// the first and the last included (all n when n ≤ kMaxPictureFrames). The page of a 100000-step
+// cycle stays a few MB instead of 1.3 GB; every position stays in the CSV and JSON outputs.
+inline constexpr std::size_t kMaxPictureFrames = 1000;
+[[nodiscard]] std::vector<std::size_t> picture_positions(std::size_t n);
+
+// The page. Throws std::invalid_argument when a series does not have one value per position or
+// the animation not one frame per picture position (picture_positions of the positions).
 [[nodiscard]] std::string cycle_report_html(const CycleReport& report);
 
 }  // namespace orthomech

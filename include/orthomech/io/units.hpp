@@ -80,6 +80,11 @@ inline constexpr double kMaxGeneral = 1e12;
 inline constexpr int kMaxCycleSteps = 100000;
 // The most output samples of `simulate` (t_end / dt_out + 1).
 inline constexpr double kMaxOutputSamples = 1e6;
+// The tightest relative tolerance of `simulate --rtol` (a step-size control below it asks for
+// digits a double does not have) and the smallest coefficient of speed fluctuation of
+// `cycle --speed-fluctuation` (the flywheel inertia grows as 1/C_s).
+inline constexpr double kMinRtol = 1e-14;
+inline constexpr double kMinSpeedFluctuation = 1e-6;
 // The longest number text read (characters): longer ones are refused, not parsed.
 inline constexpr std::size_t kMaxNumberLength = 64;
 

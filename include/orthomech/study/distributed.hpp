@@ -35,9 +35,12 @@ class MpiSession {
 // Rank 0 tells every rank whether the study starts (`go`: its set-up succeeded) or not (an error,
 // reported by rank 0 alone); every rank returns rank 0's answer.
 bool broadcast_start(bool go);
-// Rank 0: hands out `pending` to the other ranks as they ask and calls `done` with each result
-// (one at a time, any order); returns when every variant is back and every rank is released.
-void coordinate_variants(const std::vector<long>& pending,
+// Rank 0: hands out the variants `next` gives (one index per call, −1 when there is none left;
+// the indices are drawn as the ranks ask, so that none are held in memory) to the other ranks and
+// calls `done` with each result (one at a time, any order); returns when every variant handed
+// out is back and every rank is released. When `done` throws, no further variant is handed out,
+// every rank is released and the exception is rethrown.
+void coordinate_variants(const std::function<long()>& next,
                          const std::function<void(const VariantResult&)>& done);
 // Every other rank: asks rank 0 for variants, evaluates them and sends the results back, until
 // rank 0 has none left.

@@ -3,6 +3,8 @@
 // with one animation frame per position and the plotted drive and reaction magnitudes equal to
 // `cycle --json --positions` of the same sweep, in the same units. The page running in a browser:
 // tests/unit/io/report_browser_test.cpp.
+#include "orthomech/io/report.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -10,6 +12,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "support/cli_runner.hpp"
 
@@ -99,6 +102,24 @@ TEST(CycleReport, UnwritableFileIsBadInputWithNothingOnStdout) {
   EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.err.find("--report"), std::string::npos) << r.err;
   EXPECT_TRUE(r.out.empty());
+}
+
+TEST(CycleReport, PicturePositionsAreEvenlySpacedWithBothEnds) {
+  // All of them up to the limit; beyond it kMaxPictureFrames, strictly increasing, the first and
+  // the last position included, and no gap larger than ceil((n − 1) / (m − 1)) positions.
+  EXPECT_EQ(picture_positions(5), (std::vector<std::size_t>{0, 1, 2, 3, 4}));
+  EXPECT_EQ(picture_positions(kMaxPictureFrames).size(), kMaxPictureFrames);
+  for (const std::size_t n : {std::size_t{1001}, std::size_t{3600}, std::size_t{100001}}) {
+    const auto k = picture_positions(n);
+    ASSERT_EQ(k.size(), kMaxPictureFrames);
+    EXPECT_EQ(k.front(), 0u);
+    EXPECT_EQ(k.back(), n - 1);
+    const std::size_t gap = (n - 1 + kMaxPictureFrames - 2) / (kMaxPictureFrames - 1);
+    for (std::size_t j = 1; j < k.size(); ++j) {
+      EXPECT_GT(k[j], k[j - 1]);
+      EXPECT_LE(k[j] - k[j - 1], gap);
+    }
+  }
 }
 
 }  // namespace

@@ -92,5 +92,32 @@ TEST(StudyDb, VariantsComeBackInOrderAndResumeChecksTheIdentity) {
   EXPECT_EQ(std::stod(parts[5]), 0.1 + 0.2);
 }
 
+TEST(StudyDb, ASecondWriterOfTheSameStudyIsRefusedWhileTheFirstHoldsIt) {
+  // Issue 47: two `sweep --resume` on one folder computed the same variants and the second
+  // failed on their rows (exit 4). The second is now refused at once, the first goes on, and
+  // once the first is closed the study opens again.
+  const test::TempDir dir("orthomech_study_db_", true);
+  const auto file = dir.path / "study.sqlite";
+  StudyDatabase first(file, false, kIdentity, kParameters, kMetrics);
+  first.insert(variant(0, 0.08, 0.03, "completed"));
+  try {
+    StudyDatabase second(file, true, kIdentity, kParameters, kMetrics);
+    ADD_FAILURE() << "a second writer was let in";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("another sweep is writing this study"), std::string::npos)
+        << e.what();
+  }
+  first.insert(variant(1, 0.08, 0.04, "completed"));
+  EXPECT_EQ(first.stored(), (std::vector<long>{0, 1}));
+}
+
+TEST(StudyDb, TheLockIsReleasedWhenTheWriterCloses) {
+  const test::TempDir dir("orthomech_study_db_", true);
+  const auto file = dir.path / "study.sqlite";
+  { StudyDatabase first(file, false, kIdentity, kParameters, kMetrics); }
+  StudyDatabase again(file, true, kIdentity, kParameters, kMetrics);
+  EXPECT_TRUE(again.stored().empty());
+}
+
 }  // namespace
 }  // namespace orthomech
