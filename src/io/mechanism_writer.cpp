@@ -1,18 +1,13 @@
 #include "orthomech/io/mechanism_writer.hpp"
 
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
-#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <filesystem>
 #include <map>
 #include <numbers>
 #include <stdexcept>
@@ -431,53 +426,6 @@ std::string replace_design_poses(const std::string& file_text, const std::string
   const std::string out = apply(text, edits);
   (void)verify_written(out, origin, model, frames);
   return has_bom ? bom + out : out;
-}
-
-void write_file_atomically(const std::string& path, const std::string& text) {
-  namespace fs = std::filesystem;
-  const fs::path target(path);
-  const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
-  std::string leaf(".");
-  leaf.append(target.filename().string());
-  leaf.append(".tmp-XXXXXX");
-  const std::string tmpl = (dir / leaf).string();
-  std::vector<char> name(tmpl.begin(), tmpl.end());
-  name.push_back('\0');
-  const int fd = ::mkstemp(name.data());
-  if (fd < 0) throw std::runtime_error("cannot write '" + path + "': " + std::strerror(errno));
-  const std::string tmp(name.data());
-  auto fail = [&](const std::string& what) {
-    const int err = errno;
-    ::close(fd);
-    ::unlink(tmp.c_str());
-    throw std::runtime_error("cannot write '" + path + "': " + what + ": " + std::strerror(err));
-  };
-  size_t done = 0;
-  while (done < text.size()) {
-    const ssize_t w = ::write(fd, text.data() + done, text.size() - done);
-    if (w < 0) {
-      if (errno == EINTR) continue;
-      fail("write");
-    }
-    done += static_cast<size_t>(w);
-  }
-  if (::fsync(fd) != 0) fail("fsync");
-  // Keep the permissions of the file being replaced (mkstemp creates 0600).
-  std::error_code ec;
-  const auto st = fs::status(target, ec);
-  const auto mode = !ec && fs::exists(st) ? static_cast<mode_t>(st.permissions()) : 0644;
-  if (::fchmod(fd, mode) != 0) {
-    // not fatal: the file keeps mkstemp's 0600
-  }
-  if (::close(fd) != 0) {
-    ::unlink(tmp.c_str());
-    throw std::runtime_error("cannot write '" + path + "': close: " + std::strerror(errno));
-  }
-  if (::rename(tmp.c_str(), path.c_str()) != 0) {
-    const int err = errno;
-    ::unlink(tmp.c_str());
-    throw std::runtime_error("cannot write '" + path + "': rename: " + std::strerror(err));
-  }
 }
 
 }  // namespace orthomech

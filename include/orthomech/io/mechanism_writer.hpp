@@ -21,9 +21,4 @@ namespace orthomech {
 [[nodiscard]] std::string replace_design_poses(const std::string& text, const std::string& origin,
                                                const Model& model, const VecX& q);
 
-// Writes `text` to `path` atomically: a temporary file in the same directory, flushed, then
-// renamed over `path` (readers see the old or the new file, never a half-written one).
-// Throws std::runtime_error on failure (the temporary file is removed).
-void write_file_atomically(const std::string& path, const std::string& text);
-
 }  // namespace orthomech

@@ -104,6 +104,23 @@ TEST(AssembleCli, Write_SavesAssembledFile_InputUntouched_InPlace) {
   fs::remove(out);
 }
 
+// --in-place through a symbolic link writes the file it names; the link stays a link
+// (io/file_writer.hpp).
+TEST(AssembleCli, InPlace_ThroughSymlink_LinkStaysALink) {
+  const std::string file = write_temp(kRoughFourBar, "real.yaml");
+  const std::string link = temp_path("link.yaml").string();
+  fs::create_symlink(file, link);
+  const auto r = run_cli({"assemble", link, "--in-place"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(fs::is_symlink(fs::symlink_status(link)));
+  EXPECT_EQ(fs::read_symlink(link), file);
+  EXPECT_NE(test::read_text(file), kRoughFourBar);
+  EXPECT_EQ(nlohmann::json::parse(run_cli({"assemble", file, "--json"}).out)["status"],
+            "unchanged");
+  fs::remove(link);
+  fs::remove(file);
+}
+
 TEST(AssembleCli, BadLock_Exit2) {
   const std::string file = test::source_path("mechanisms/crank-rocker.yaml");
   const auto r = run_cli({"assemble", file, "--lock", "nope=3"});
