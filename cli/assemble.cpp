@@ -19,6 +19,7 @@
 #include "orthomech/analysis/assembly.hpp"
 #include "orthomech/analysis/validate.hpp"
 #include "orthomech/constraints/joints.hpp"
+#include "orthomech/io/file_writer.hpp"
 #include "orthomech/io/mechanism_writer.hpp"
 #include "orthomech/io/noise.hpp"
 #include "orthomech/io/units.hpp"
@@ -194,9 +195,11 @@ int run_assemble(const AssembleOptions& opt) {
     text << in.rdbuf();
     // The edited text is checked to re-read as the assembled mechanism before anything is
     // written; a file that cannot be edited so is an InputError (exit 2, printed once by main).
-    const std::string edited = replace_design_poses(text.str(), opt.file, model, res.q);
+    const PoseEdit edited = edit_design_poses(text.str(), opt.file, model, res.q);
+    for (const std::string& note : edited.replaced_expressions)
+      spdlog::warn("{}: {}", opt.file, note);
     try {
-      write_file_atomically(write_to, edited);
+      write_file(write_to, edited.text);
     } catch (const std::runtime_error& e) {  // e.g. no such directory, no permission
       spdlog::error("{}", e.what());
       return kBadInput;

@@ -31,6 +31,7 @@
 #include "orthomech/constraints/joints.hpp"
 #include "orthomech/error.hpp"
 #include "orthomech/io/cycle_output.hpp"
+#include "orthomech/io/file_writer.hpp"
 #include "orthomech/io/render.hpp"
 #include "orthomech/io/report.hpp"
 #include "orthomech/io/units.hpp"
@@ -924,7 +925,7 @@ void CycleRun::write_pictures(const Projection& projection, const std::string& t
   try {
     animation = animated_svg(model, sweep.q, ro, opt.duration);
     if (!opt.animate.empty()) {
-      write_file_atomically(opt.animate, animation);
+      write_file(opt.animate, animation);
       spdlog::info("wrote {} ({} frames of {} positions)", opt.animate,
                    picture_positions(sweep.q.size()).size(), sweep.q.size());
     }
@@ -937,7 +938,7 @@ void CycleRun::write_pictures(const Projection& projection, const std::string& t
       report.plots = report_plots(r, magnitudes, angular, U);
       report.animation = std::move(animation);
       report.duration = opt.duration;
-      write_file_atomically(opt.report, cycle_report_html(report));
+      write_file(opt.report, cycle_report_html(report));
       spdlog::info("wrote {} ({} positions)", opt.report, sweep.q.size());
     }
   } catch (const std::runtime_error& e) {

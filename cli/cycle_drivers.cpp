@@ -15,6 +15,7 @@
 #include "orthomech/analysis/multi_drive.hpp"
 #include "orthomech/constraints/joints.hpp"
 #include "orthomech/io/cycle_output.hpp"
+#include "orthomech/io/file_writer.hpp"
 #include "orthomech/io/number_text.hpp"
 #include "orthomech/io/units.hpp"
 
@@ -125,7 +126,7 @@ int run_cycle_drivers(const Model& model, const DriversRequest& request) {
       csv << line;
     }
     const std::filesystem::path file = std::filesystem::path(request.out) / "drivers.csv";
-    write_file_atomically(file, csv.str());
+    write_file(file, csv.str());
     spdlog::info("wrote {} ({} positions)", file.string(), r.points.size());
   }
 

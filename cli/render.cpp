@@ -11,7 +11,7 @@
 
 #include "commands.hpp"
 #include "common.hpp"
-#include "orthomech/io/mechanism_writer.hpp"
+#include "orthomech/io/file_writer.hpp"
 
 namespace orthomech::cli {
 
@@ -83,7 +83,7 @@ int run_render(const RenderCliOptions& opt) {
       code = kCheckFailed;
     }
     try {
-      write_file_atomically(opt.out, animated_svg(model, sweep.q, options, opt.duration));
+      write_file(opt.out, animated_svg(model, sweep.q, options, opt.duration));
     } catch (const std::runtime_error& e) {
       release_render_caches();
       spdlog::error("{}", e.what());

@@ -9,6 +9,8 @@
 #include <cstdlib>
 #include <cstring>
 
+#include "orthomech/io/file_writer.hpp"
+
 namespace orthomech::cli {
 
 namespace {
@@ -19,9 +21,11 @@ struct sigaction previous_int, previous_term;
 std::atomic<bool> progress_shown{false};
 bool progress_newlines = false;
 
-// First signal: ask the run to stop (the flag). Second: the default action (the process ends).
-void on_signal(int signal) {
+// First signal: ask the run to stop (the flag). Second: the temporaries being written removed
+// (io/file_writer.hpp), then the default action (the process ends with the signal's status).
+extern "C" void on_signal(int signal) {
   if (interrupted.exchange(true)) {
+    orthomech::remove_pending_temporaries();
     std::signal(signal, SIG_DFL);
     std::raise(signal);
     return;
@@ -29,22 +33,29 @@ void on_signal(int signal) {
   received.store(signal);
 }
 
+// Installs on_signal for `signal` unless the process ignores it (started under nohup, or in the
+// background of a shell without job control): an ignored signal stays ignored.
+void install(int signal, struct sigaction& previous) {
+  struct sigaction action {};
+  action.sa_handler = on_signal;
+  sigemptyset(&action.sa_mask);
+  action.sa_flags = SA_RESTART;
+  if (::sigaction(signal, nullptr, &previous) == 0 && previous.sa_handler == SIG_IGN) return;
+  ::sigaction(signal, &action, &previous);
+}
+
 }  // namespace
 
 InterruptScope::InterruptScope() {
   interrupted.store(false);
   received.store(0);
-  struct sigaction action {};
-  action.sa_handler = on_signal;
-  sigemptyset(&action.sa_mask);
-  action.sa_flags = SA_RESTART;
-  sigaction(SIGINT, &action, &previous_int);
-  sigaction(SIGTERM, &action, &previous_term);
+  install(SIGINT, previous_int);
+  install(SIGTERM, previous_term);
 }
 
 InterruptScope::~InterruptScope() {
-  sigaction(SIGINT, &previous_int, nullptr);
-  sigaction(SIGTERM, &previous_term, nullptr);
+  ::sigaction(SIGINT, &previous_int, nullptr);
+  ::sigaction(SIGTERM, &previous_term, nullptr);
 }
 
 int InterruptScope::signal_received() { return received.load(); }

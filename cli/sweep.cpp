@@ -17,6 +17,7 @@
 #include "commands.hpp"
 #include "common.hpp"
 #include "orthomech/io/cycle_output.hpp"
+#include "orthomech/io/file_writer.hpp"
 #include "orthomech/io/mechanism_file.hpp"
 #include "orthomech/io/study_db.hpp"
 #include "orthomech/study/distributed.hpp"
@@ -352,8 +353,8 @@ int run_sweep_command(const SweepCliOptions& opt) {
   summary["complete"] = stop == StopReason::none;  // a stopped sweep: the stored variants only
   if (stop != StopReason::none) summary["stop"] = to_string(stop);
   try {
-    write_file_atomically(out / "variants.csv", study_csv(*db));
-    write_file_atomically(out / "summary.json", summary.dump(2) + "\n");
+    write_file(out / "variants.csv", study_csv(*db));
+    write_file(out / "summary.json", summary.dump(2) + "\n");
   } catch (const std::runtime_error& e) {
     spdlog::error("{}", e.what());
     return kBadInput;

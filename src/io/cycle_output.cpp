@@ -2,11 +2,9 @@
 
 #include <algorithm>
 #include <array>
-#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <fstream>
 #include <numbers>
 #include <sstream>
 #include <stdexcept>
@@ -14,6 +12,7 @@
 
 #include "orthomech/analysis/cycle_metrics.hpp"
 #include "orthomech/check.hpp"
+#include "orthomech/io/file_writer.hpp"
 #include "orthomech/io/noise.hpp"
 #include "orthomech/io/number_text.hpp"
 #include "orthomech/model/spatial.hpp"
@@ -82,53 +81,6 @@ std::string gp_string(const std::string& s) {
 }
 
 }  // namespace
-
-namespace {
-// A file written through its temporary twin (FILE.tmp) and renamed onto FILE by commit(): a
-// failure leaves no partial FILE (the twin is removed), and a large table streams to the disk
-// instead of being held whole in memory first.
-class AtomicFile {
- public:
-  explicit AtomicFile(std::filesystem::path file)
-      : file_(std::move(file)),
-        tmp_(file_.string() + ".tmp"),
-        out_(tmp_, std::ios::binary | std::ios::trunc) {
-    if (!out_) fail(std::strerror(errno));
-  }
-  AtomicFile(const AtomicFile&) = delete;
-  AtomicFile& operator=(const AtomicFile&) = delete;
-  ~AtomicFile() {
-    if (committed_) return;
-    out_.close();
-    std::error_code ec;
-    std::filesystem::remove(tmp_, ec);
-  }
-  std::ofstream& stream() { return out_; }
-  void commit() {
-    out_.flush();
-    if (!out_) fail(std::strerror(errno));
-    out_.close();
-    std::error_code ec;
-    std::filesystem::rename(tmp_, file_, ec);
-    if (ec) fail(ec.message());
-    committed_ = true;
-  }
-
- private:
-  [[noreturn]] void fail(const std::string& why) const {
-    throw std::runtime_error("cannot write " + file_.string() + ": " + why);
-  }
-  std::filesystem::path file_, tmp_;
-  std::ofstream out_;
-  bool committed_ = false;
-};
-}  // namespace
-
-void write_file_atomically(const std::filesystem::path& file, const std::string& text) {
-  AtomicFile out(file);
-  out.stream() << text;
-  out.commit();
-}
 
 NoiseFloor cycle_noise_floor(const Model& model, const CycleResult& result,
                              const std::vector<ReactionMagnitude>& magnitudes, bool angular) {
@@ -251,8 +203,8 @@ CycleColumns write_cycle_csv(const std::filesystem::path& file, const Model& mod
                              const std::vector<ReactionMagnitude>& magnitudes, bool angular,
                              const UnitSystem& units, const std::vector<ExtraColumn>& extra) {
   CycleColumns cols;
-  AtomicFile target(file);  // rows streamed to FILE.tmp, renamed when complete
-  std::ofstream& out = target.stream();
+  FileWriter target(file);  // rows streamed to a temporary file, put in place when complete
+  std::ostream& out = target.stream();
   int col = 0;
   auto head = [&](const std::string& name, const OutputUnit& unit) {
     out << (col ? "," : "") << field(name + " [" + unit.name + "]");
@@ -409,7 +361,7 @@ void write_cycle_gnuplot(const std::filesystem::path& script, const std::string&
     plot_both("reactions", model.name + ": joint reactions (magnitudes)" + title_tail,
               "force [" + force_unit + "]",
               columns.moments.empty() ? "" : "moment [" + moment_unit + "]", plot);
-  write_file_atomically(script, gp.str());
+  write_file(script, gp.str());
 }
 
 }  // namespace orthomech

@@ -1,18 +1,13 @@
 #include "orthomech/io/mechanism_writer.hpp"
 
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
-#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <filesystem>
 #include <map>
 #include <numbers>
 #include <stdexcept>
@@ -86,6 +81,27 @@ void count_uses(const YAML::Node& node, std::map<int, int>& uses, int depth = 0)
 // of the mechanism's size, 1.8e-13 rad); reading multiplies by the unit factor once: a few ulps.
 // All of it far below 1e-12 (m or rad) for the limits of docs/file-format.md (|x| <= 1e6).
 constexpr double kRoundTrip = 1e-12;
+
+// A pose number written as an expression of the parameters (`a/2`, docs/file-format.md
+// "Parameters") keeps its text when the assembly left it where it was: within a tenth of
+// kRoundTrip (m or rad, against the same scale), so that the re-read file still passes
+// verify_written; it is replaced by a number (and listed in PoseEdit::replaced_expressions) when
+// the assembly moved it.
+constexpr double kKeptExpression = kRoundTrip / 10;
+
+bool is_plain_number(const std::string& s) {
+  if (s.empty()) return false;
+  char* end = nullptr;
+  (void)std::strtod(s.c_str(), &end);
+  return end == s.c_str() + s.size();
+}
+
+// The expression text of `v` is kept: v is an expression whose value `before` (SI) the assembly
+// did not change (`after`).
+bool keeps_expression(const YAML::Node& v, double before, double after, double scale) {
+  return v.IsScalar() && !is_plain_number(v.Scalar()) &&
+         std::abs(after - before) <= kKeptExpression * std::max(1.0, scale);
+}
 
 Model verify_written(const std::string& written, const std::string& origin, const Model& model,
                      const std::vector<Vec3>& frames) {
@@ -251,6 +267,17 @@ std::string apply(const std::string& text, std::vector<Edit> edits) {
   return out;
 }
 
+// "body 'coupler': pose x: the expression 'b/2' is now 41.5 (the assembly moved it)".
+std::string expression_note(const std::string& element, const std::string& component,
+                            const std::string& expression, const std::string& number) {
+  return element + ": pose " + component + ": the expression '" + expression + "' is now " +
+         number + " (the assembly moved it)";
+}
+std::string expression_note(const std::string& element, char component,
+                            const std::string& expression, const std::string& number) {
+  return expression_note(element, std::string(1, component), expression, number);
+}
+
 // The edit that writes `value` over the plain number `v` of the text.
 Edit number_edit(const std::string& text, const YAML::Node& v, const std::map<int, int>& uses,
                  const std::string& origin, const std::string& element, double value) {
@@ -275,7 +302,7 @@ std::string quaternion_text(const Quat& e) {
 void spatial_pose_edits(const std::string& text, const YAML::Node& bodies,
                         const std::map<int, int>& uses, const std::string& origin,
                         const Model& model, const VecX& q, double length, std::vector<Edit>& edits,
-                        std::vector<WrittenFrame>& frames) {
+                        std::vector<WrittenFrame>& frames, std::vector<std::string>& replaced) {
   // Rounding noise as 0 (io/noise.hpp): lengths against the largest coordinate of the mechanism;
   // quaternion components (at most 1) against 1.
   NoiseFloor noise;
@@ -290,6 +317,9 @@ void spatial_pose_edits(const std::string& text, const YAML::Node& bodies,
     exact.push_back({r, e});
   }
   const bool crlf = text.find("\r\n") != std::string::npos;
+  double length_scale = 0.0;
+  for (const WrittenFrame& f : exact)
+    length_scale = std::max(length_scale, f.origin.cwiseAbs().maxCoeff());
   for (size_t b = 0; b < model.bodies.size(); ++b) {
     const Body& body = model.bodies[b];
     const std::string element = "body '" + body.name + "'";
@@ -302,8 +332,15 @@ void spatial_pose_edits(const std::string& text, const YAML::Node& bodies,
     WrittenFrame frame;
     for (int k = 0; k < 3; ++k) {
       frame.origin(k) = noise.clean(Dimension::length, exact[b].origin(k));
-      edits.push_back(number_edit(text, position[static_cast<size_t>(k)], uses, origin, element,
-                                  frame.origin(k) / length));
+      const YAML::Node v = position[static_cast<size_t>(k)];
+      const double before = body.spatial.design_position(k);
+      if (keeps_expression(v, before, frame.origin(k), length_scale)) {
+        frame.origin(k) = before;
+        continue;
+      }
+      edits.push_back(number_edit(text, v, uses, origin, element, frame.origin(k) / length));
+      if (v.IsScalar() && !is_plain_number(v.Scalar()))
+        replaced.push_back(expression_note(element, "xyz"[k], v.Scalar(), edits.back().text));
     }
     const Quat& e = exact[b].orientation;
     for (int k = 0; k < 4; ++k)
@@ -349,8 +386,12 @@ void spatial_pose_edits(const std::string& text, const YAML::Node& bodies,
 
 std::string replace_design_poses(const std::string& file_text, const std::string& origin,
                                  const Model& model, const VecX& q) {
-  check_argument(q.size() == model.nq, "replace_design_poses", "q",
-                 "must have model.nq coordinates");
+  return edit_design_poses(file_text, origin, model, q).text;
+}
+
+PoseEdit edit_design_poses(const std::string& file_text, const std::string& origin,
+                           const Model& model, const VecX& q) {
+  check_argument(q.size() == model.nq, "edit_design_poses", "q", "must have model.nq coordinates");
   // A UTF-8 byte order mark is kept as it is; the YAML parser's offsets start after it.
   static const std::string bom = "\xEF\xBB\xBF";
   const bool has_bom = file_text.rfind(bom, 0) == 0;
@@ -375,14 +416,16 @@ std::string replace_design_poses(const std::string& file_text, const std::string
   if (model.dimension == 3) {
     std::vector<WrittenFrame> spatial_frames;
     std::vector<Edit> edits;
-    spatial_pose_edits(text, bodies, uses, origin, model, q, length, edits, spatial_frames);
+    std::vector<std::string> replaced;
+    spatial_pose_edits(text, bodies, uses, origin, model, q, length, edits, spatial_frames,
+                       replaced);
     const std::string out = apply(text, edits);
     double scale = 0.0;
     for (const WrittenFrame& f : spatial_frames)
       scale = std::max(scale, f.origin.cwiseAbs().maxCoeff());
     verify_spatial(verify_written(out, origin, model, frames), origin, model, q, spatial_frames,
                    scale);
-    return has_bom ? bom + out : out;
+    return {has_bom ? bom + out : out, replaced};
   }
   NoiseFloor noise;
   for (const Body& body : model.bodies) {
@@ -390,7 +433,17 @@ std::string replace_design_poses(const std::string& file_text, const std::string
     noise.see(Dimension::length, q(body.q_offset + 1));
     noise.see(Dimension::length, body.com_local.norm());
   }
+  // The scales of keeps_expression: verify_written's.
+  double length_scale = 0.0;
+  for (const Body& body : model.bodies) {
+    const double phi = body.kind == BodyKind::rigid ? q(body.q_offset + 2) : 0.0;
+    const Vec2 com(std::cos(phi) * body.com_local.x() - std::sin(phi) * body.com_local.y(),
+                   std::sin(phi) * body.com_local.x() + std::cos(phi) * body.com_local.y());
+    length_scale = std::max({length_scale, std::abs(q(body.q_offset) - com.x()),
+                             std::abs(q(body.q_offset + 1) - com.y())});
+  }
   std::vector<Edit> edits;
+  std::vector<std::string> replaced;
   for (size_t b = 0; b < model.bodies.size(); ++b) {
     const Body& body = model.bodies[b];
     const YAML::Node item = bodies[b];
@@ -424,60 +477,27 @@ std::string replace_design_poses(const std::string& file_text, const std::string
                          "the pose is shared with another place through a YAML anchor and alias; "
                          "--write edits numbers in place and would change the other uses too: "
                          "write this pose out in full");
+      // An expression the assembly did not move keeps its text (and the frame its value).
+      const auto i = static_cast<Eigen::Index>(k);
+      const double after = k < 2 ? values[k] * length : frames.back()(i);
+      const double before = body.design_pose(i);
+      if (keeps_expression(v, before, after, k < 2 ? length_scale : std::abs(before))) {
+        frames.back()(i) = before;
+        continue;
+      }
       const size_t begin = static_cast<size_t>(m.pos);
       edits.push_back({begin, begin + scalar.size(), written_number(values[k])});
+      if (!is_plain_number(scalar))
+        replaced.push_back(expression_note("body '" + body.name + "'",
+                                           k == 0   ? "x"
+                                           : k == 1 ? "y"
+                                                    : "angle",
+                                           scalar, edits.back().text));
     }
   }
   const std::string out = apply(text, edits);
   (void)verify_written(out, origin, model, frames);
-  return has_bom ? bom + out : out;
-}
-
-void write_file_atomically(const std::string& path, const std::string& text) {
-  namespace fs = std::filesystem;
-  const fs::path target(path);
-  const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
-  std::string leaf(".");
-  leaf.append(target.filename().string());
-  leaf.append(".tmp-XXXXXX");
-  const std::string tmpl = (dir / leaf).string();
-  std::vector<char> name(tmpl.begin(), tmpl.end());
-  name.push_back('\0');
-  const int fd = ::mkstemp(name.data());
-  if (fd < 0) throw std::runtime_error("cannot write '" + path + "': " + std::strerror(errno));
-  const std::string tmp(name.data());
-  auto fail = [&](const std::string& what) {
-    const int err = errno;
-    ::close(fd);
-    ::unlink(tmp.c_str());
-    throw std::runtime_error("cannot write '" + path + "': " + what + ": " + std::strerror(err));
-  };
-  size_t done = 0;
-  while (done < text.size()) {
-    const ssize_t w = ::write(fd, text.data() + done, text.size() - done);
-    if (w < 0) {
-      if (errno == EINTR) continue;
-      fail("write");
-    }
-    done += static_cast<size_t>(w);
-  }
-  if (::fsync(fd) != 0) fail("fsync");
-  // Keep the permissions of the file being replaced (mkstemp creates 0600).
-  std::error_code ec;
-  const auto st = fs::status(target, ec);
-  const auto mode = !ec && fs::exists(st) ? static_cast<mode_t>(st.permissions()) : 0644;
-  if (::fchmod(fd, mode) != 0) {
-    // not fatal: the file keeps mkstemp's 0600
-  }
-  if (::close(fd) != 0) {
-    ::unlink(tmp.c_str());
-    throw std::runtime_error("cannot write '" + path + "': close: " + std::strerror(errno));
-  }
-  if (::rename(tmp.c_str(), path.c_str()) != 0) {
-    const int err = errno;
-    ::unlink(tmp.c_str());
-    throw std::runtime_error("cannot write '" + path + "': rename: " + std::strerror(err));
-  }
+  return {has_bom ? bom + out : out, replaced};
 }
 
 }  // namespace orthomech

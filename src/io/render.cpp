@@ -20,7 +20,7 @@
 #include "orthomech/analysis/cycle.hpp"
 #include "orthomech/check.hpp"
 #include "orthomech/constraints/joints.hpp"
-#include "orthomech/io/mechanism_writer.hpp"
+#include "orthomech/io/file_writer.hpp"
 #include "orthomech/io/report.hpp"
 #include "orthomech/io/units.hpp"
 #include "orthomech/model/free_system.hpp"
@@ -1220,7 +1220,7 @@ std::string draw_image(const Scene& scene, ImageFormat format) {
 }
 
 void write_image(const Scene& scene, ImageFormat format, const std::string& path) {
-  write_file_atomically(path, draw_image(scene, format));
+  write_file(path, draw_image(scene, format));
 }
 
 void release_render_caches() {

@@ -63,8 +63,9 @@ struct ExtraColumn {
 // (the joints outside their limits there, space-separated; empty inside) and the `extra`
 // columns. Cells that are not
 // reported are empty (drive_reported, component_reported: an unbridged singular position, a
-// component diverging next to a bridged change point). Written atomically
-// (temporary file, then rename). Throws std::runtime_error naming the file on failure.
+// component diverging next to a bridged change point). Written through FileWriter
+// (io/file_writer.hpp): rows streamed to a temporary file, put in place when complete. Throws
+// std::runtime_error naming the file on failure.
 CycleColumns write_cycle_csv(const std::filesystem::path& file, const Model& model,
                              const CycleResult& result,
                              const std::vector<ReactionMagnitude>& magnitudes, bool angular,
@@ -78,8 +79,5 @@ void write_cycle_gnuplot(const std::filesystem::path& script, const std::string&
                          const std::vector<ReactionMagnitude>& magnitudes,
                          const CycleColumns& columns, bool angular, const UnitSystem& units,
                          const std::string& speed_text);
-
-// Writes `text` to `file` atomically. Throws std::runtime_error naming the file on failure.
-void write_file_atomically(const std::filesystem::path& file, const std::string& text);
 
 }  // namespace orthomech

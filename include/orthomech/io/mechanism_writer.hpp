@@ -7,6 +7,7 @@
 // orientation as `{quaternion: [e0, e1, e2, e3]}` (another orientation form is replaced by it, a
 // missing one added; docs/cli.md "Writing a spatial file").
 #include <string>
+#include <vector>
 
 #include "orthomech/model/model.hpp"
 
@@ -21,9 +22,16 @@ namespace orthomech {
 [[nodiscard]] std::string replace_design_poses(const std::string& text, const std::string& origin,
                                                const Model& model, const VecX& q);
 
-// Writes `text` to `path` atomically: a temporary file in the same directory, flushed, then
-// renamed over `path` (readers see the old or the new file, never a half-written one).
-// Throws std::runtime_error on failure (the temporary file is removed).
-void write_file_atomically(const std::string& path, const std::string& text);
+// replace_design_poses with what it did to the expressions of the parameters: a pose number
+// written as an expression (`pose: [a/2, 0, 0]`, docs/file-format.md "Parameters") that the
+// assembly did not move (within 1e-13 m or rad of the mechanism's size) keeps its text; one that
+// moved is written as a number and named in `replaced_expressions` ("body 'coupler': pose x: the
+// expression 'b/2' is now 41.5 (the assembly moved it)").
+struct PoseEdit {
+  std::string text;
+  std::vector<std::string> replaced_expressions;
+};
+[[nodiscard]] PoseEdit edit_design_poses(const std::string& text, const std::string& origin,
+                                         const Model& model, const VecX& q);
 
 }  // namespace orthomech

@@ -104,6 +104,67 @@ TEST(AssembleCli, Write_SavesAssembledFile_InputUntouched_InPlace) {
   fs::remove(out);
 }
 
+// --in-place through a symbolic link writes the file it names; the link stays a link
+// (io/file_writer.hpp).
+TEST(AssembleCli, InPlace_ThroughSymlink_LinkStaysALink) {
+  const std::string file = write_temp(kRoughFourBar, "real.yaml");
+  const std::string link = temp_path("link.yaml").string();
+  fs::create_symlink(file, link);
+  const auto r = run_cli({"assemble", link, "--in-place"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(fs::is_symlink(fs::symlink_status(link)));
+  EXPECT_EQ(fs::read_symlink(link), file);
+  EXPECT_NE(test::read_text(file), kRoughFourBar);
+  EXPECT_EQ(nlohmann::json::parse(run_cli({"assemble", file, "--json"}).out)["status"],
+            "unchanged");
+  fs::remove(link);
+  fs::remove(file);
+}
+
+// kRoughFourBar with parameters: the crank's angle, the coupler's frame origin (at the crank's
+// A = (5 cos 53.13°, 5 sin 53.13°) = (3, 4), which the locked crank keeps) and the rocker's (at
+// B0) are expressions the assembly does not move; the coupler's angle -L/2 = -5° it moves.
+const char* const kParametricFourBar = R"(orthomech: 1
+name: rough-parametric
+units: {length: m, angle: deg}
+parameters: {L: 10, crank_angle: 53.13010235415598}
+ground:
+  points: {A0: [0, 0], B0: [L, 0]}
+bodies:
+  - {name: crank, mass: 1, inertia: 0.1, pose: [0, 0, crank_angle], points: {A0: [0, 0], A: [5, 0]}}
+  - {name: coupler, mass: 2, inertia: 0.2, pose: [L - 7, 4, -L/2], points: {A: [0, 0], B: [7.0710678118654755, 0]}}
+  - {name: rocker, mass: 1, inertia: 0.1, pose: [L, 0, 92], points: {B0: [0, 0], B: [3, 0]}}
+joints:
+  - {name: A0, type: revolute, connects: [ground.A0, crank.A0]}
+  - {name: A, type: revolute, connects: [crank.A, coupler.A]}
+  - {name: B, type: revolute, connects: [coupler.B, rocker.B]}
+  - {name: B0, type: revolute, connects: [rocker.B0, ground.B0]}
+)";
+
+// --write keeps the text of an expression whose value the assembly did not change, writes a
+// number for one it changed and says so on stderr; the written file is assembled.
+TEST(AssembleCli, Write_KeepsUnmovedExpressions_ReplacesMovedOnes) {
+  const std::string file = write_temp(kParametricFourBar, "parametric.yaml");
+  const std::string out = temp_path("parametric-out.yaml").string();
+  const auto r = run_cli({"assemble", file, "--write", out, "--lock", "A0=53.13010235415598deg"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::string text = test::read_text(out);
+  EXPECT_NE(text.find("pose: [0, 0, crank_angle]"), std::string::npos) << text;
+  EXPECT_NE(text.find("pose: [L - 7, 4, "), std::string::npos) << text;
+  EXPECT_EQ(text.find("-L/2"), std::string::npos) << text;
+  EXPECT_NE(text.find("pose: [L, 0, "), std::string::npos) << text;
+  EXPECT_EQ(text.find("pose: [L, 0, 92]"), std::string::npos) << text;  // the rocker turned
+  EXPECT_NE(r.err.find("body 'coupler': pose angle: the expression '-L/2' is now -"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(r.err.find("'L - 7'"), std::string::npos) << r.err;
+  const auto again = run_cli({"assemble", out, "--json"});
+  ASSERT_EQ(again.status, 0) << again.err;
+  EXPECT_EQ(nlohmann::json::parse(again.out)["status"], "unchanged");
+  fs::remove(file);
+  fs::remove(out);
+}
+
 TEST(AssembleCli, BadLock_Exit2) {
   const std::string file = test::source_path("mechanisms/crank-rocker.yaml");
   const auto r = run_cli({"assemble", file, "--lock", "nope=3"});

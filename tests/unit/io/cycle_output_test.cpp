@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "orthomech/analysis/cycle.hpp"
+#include "orthomech/io/file_writer.hpp"
 #include "orthomech/io/mechanism_file.hpp"
 #include "support/cli_runner.hpp"
 #include "support/fixtures.hpp"
@@ -123,25 +124,34 @@ TEST(CycleOutput, RatesAtAnUnbridgedChangePointAreEmptyAndEveryOtherPositionKeep
   EXPECT_EQ(checked, 34);
 }
 
-TEST(CycleOutput, WriteFileAtomically) {
+// The names in a directory, sorted.
+std::vector<std::string> entries(const std::filesystem::path& dir) {
+  std::vector<std::string> names;
+  for (const auto& e : std::filesystem::directory_iterator(dir))
+    names.push_back(e.path().filename().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+TEST(CycleOutput, WriteFile) {
   const test::TempDir dir("orthomech_cycle_output_", true);
   const std::filesystem::path file = dir.path / "out.csv";
-  write_file_atomically(file, "a,b\n1,2\n");
+  write_file(file, "a,b\n1,2\n");
   EXPECT_EQ(test::read_text(file), "a,b\n1,2\n");
-  write_file_atomically(file, "replaced\n");
+  write_file(file, "replaced\n");
   EXPECT_EQ(test::read_text(file), "replaced\n");
-  EXPECT_FALSE(std::filesystem::exists(file.string() + ".tmp"));
+  EXPECT_EQ(entries(dir.path), std::vector<std::string>{"out.csv"});  // no temporary left
   const std::filesystem::path missing = dir.path / "no-such-dir" / "out.csv";
   try {
-    write_file_atomically(missing, "x");
+    write_file(missing, "x");
     FAIL() << "writing into a missing directory must throw";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find(missing.string()), std::string::npos) << e.what();
   }
 }
 
-// write_cycle_csv streams its rows into FILE.tmp and renames it onto FILE when complete (the
-// N = 1000 four-bar's table, 230 MB, is no longer held whole in memory): the file written is
+// write_cycle_csv streams its rows into a temporary file and renames it onto FILE when complete
+// (the N = 1000 four-bar's table, 230 MB, is no longer held whole in memory): the file written is
 // the one read back with every row, an existing file is replaced, and a table that fails while
 // it is written (an extra column with a value too few, checked after the first columns) leaves
 // the existing file as it was and no temporary file.
@@ -156,7 +166,7 @@ TEST(CycleOutput, CsvIsStreamedAndReplacedOnlyWhenComplete) {
   ASSERT_EQ(r.status, CycleStatus::completed) << r.message;
   const test::TempDir dir("orthomech_cycle_stream_", true);
   const auto file = dir.path / "cycle.csv";
-  write_file_atomically(file, "before\n");
+  write_file(file, "before\n");
   ExtraColumn extra{.name = "index", .dimension = Dimension::length, .values = {}};
   for (size_t k = 0; k < r.points.size(); ++k) extra.values.push_back(static_cast<double>(k));
   (void)write_cycle_csv(file, model, r, reaction_magnitudes(r), true, UnitSystem{}, {extra});
@@ -164,15 +174,15 @@ TEST(CycleOutput, CsvIsStreamedAndReplacedOnlyWhenComplete) {
   EXPECT_EQ(static_cast<size_t>(std::count(text.begin(), text.end(), '\n')), r.points.size() + 1);
   EXPECT_NE(text.find(",index [m]\n"), std::string::npos);
   EXPECT_EQ(text.substr(text.rfind(',') + 1), std::to_string(r.points.size() - 1) + "\n");
-  EXPECT_FALSE(std::filesystem::exists(file.string() + ".tmp"));
+  EXPECT_EQ(entries(dir.path), std::vector<std::string>{"cycle.csv"});  // no temporary left
 
-  write_file_atomically(file, "before\n");
+  write_file(file, "before\n");
   extra.values.pop_back();
   EXPECT_THROW(
       (void)write_cycle_csv(file, model, r, reaction_magnitudes(r), true, UnitSystem{}, {extra}),
       std::invalid_argument);
   EXPECT_EQ(test::read_text(file), "before\n");
-  EXPECT_FALSE(std::filesystem::exists(file.string() + ".tmp"));
+  EXPECT_EQ(entries(dir.path), std::vector<std::string>{"cycle.csv"});  // no temporary left
 }
 
 }  // namespace

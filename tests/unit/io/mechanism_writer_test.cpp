@@ -12,6 +12,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "orthomech/error.hpp"
 #include "orthomech/io/mechanism_file.hpp"
@@ -233,6 +234,44 @@ TEST(MechanismWriter, SpatialPosesRoundTripWithQuaternionOrientations) {
   const std::string same = replace_design_poses(text, "s.yaml", m, m.design_q());
   EXPECT_NE(same.find("euler: [10, 20, 30]"), std::string::npos) << same;
   EXPECT_EQ(same.find("# no orientation\n      orientation"), std::string::npos) << same;
+}
+
+// Pose numbers written as expressions of the parameters keep their text where the new
+// coordinates leave them (the oracle: the same file with the moved number written out, read by
+// the reader, gives q); the moved one is written as a number and named. With the design
+// coordinates themselves the text comes back unchanged.
+TEST(MechanismWriter, ExpressionsTheAssemblyDidNotMoveKeepTheirText) {
+  const std::string params = "parameters: {L: 1, tilt: 30}\n";
+  const std::string text = params + arm("[0, 0, tilt]", "[L*cos(tilt*pi/180), L/2, -tilt]");
+  const std::string moved_text = params + arm("[0, 0, tilt]", "[L*cos(tilt*pi/180), L/2, -20]");
+  const Model m = parse_mechanism(text, "arm.yaml");
+  const VecX q = parse_mechanism(moved_text, "arm.yaml").design_q();
+  const PoseEdit edit = edit_design_poses(text, "arm.yaml", m, q);
+  EXPECT_EQ(edit.text, moved_text);
+  EXPECT_EQ(
+      edit.replaced_expressions,
+      std::vector<std::string>{
+          "body 'fore': pose angle: the expression '-tilt' is now -20 (the assembly moved it)"});
+  const PoseEdit same = edit_design_poses(text, "arm.yaml", m, m.design_q());
+  EXPECT_EQ(same.text, text);
+  EXPECT_TRUE(same.replaced_expressions.empty());
+}
+
+TEST(MechanismWriter, SpatialPositionExpressionsTheAssemblyDidNotMoveKeepTheirText) {
+  const auto file = [](const std::string& y) {
+    return "orthomech: 1\ndimension: 3\nunits: {length: mm, angle: deg}\nparameters: {p: 3}\n"
+           "bodies:\n  - name: a\n    mass: 1\n    inertia: [1, 2, 2]\n    com: [10, 0, 5]\n"
+           "    pose: {position: [p, " +
+           y + ", 2*p], orientation: {axis: [0, 0, 1], angle: p*10}}\n";
+  };
+  const std::string text = file("2*p");
+  const Model m = parse_mechanism(text, "s.yaml");
+  const VecX q = parse_mechanism(file("7"), "s.yaml").design_q();
+  const PoseEdit edit = edit_design_poses(text, "s.yaml", m, q);
+  EXPECT_EQ(edit.text, file("7"));
+  EXPECT_EQ(edit.replaced_expressions,
+            std::vector<std::string>{
+                "body 'a': pose y: the expression '2*p' is now 7 (the assembly moved it)"});
 }
 
 // An orientation shared through an alias: replacing it would turn the other body too; refused.
