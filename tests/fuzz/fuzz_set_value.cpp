@@ -5,27 +5,18 @@
 // alias bomb (yaml_walk.hpp), no other exception. Run with scripts/fuzz.
 #include <cstddef>
 #include <cstdint>
-#include <fstream>
-#include <sstream>
 #include <string>
 
+#include "bundled_text.hpp"
 #include "orthomech/error.hpp"
 #include "orthomech/io/mechanism_file.hpp"
 
 namespace {
-const std::string& crank_rocker() {
-  static const std::string text = [] {
-    std::ifstream in(std::string(ORTHOMECH_SOURCE_DIR) + "/mechanisms/crank-rocker.yaml");
-    std::ostringstream s;
-    s << in.rdbuf();
-    return s.str();
-  }();
-  return text;
-}
 
 void read_with(const std::string& path, const std::string& value) {
   try {
-    (void)orthomech::parse_mechanism(crank_rocker(), "crank-rocker.yaml", {{path, value}});
+    (void)orthomech::parse_mechanism(orthomech::fuzz::crank_rocker_text(), "crank-rocker.yaml",
+                                     {{path, value}});
   } catch (const orthomech::InputError&) {
     // the documented outcome of a bad change
   }

@@ -6,24 +6,11 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
-#include <fstream>
-#include <sstream>
 #include <string>
 
+#include "bundled_text.hpp"
 #include "orthomech/error.hpp"
 #include "orthomech/study/study.hpp"
-
-namespace {
-const std::string& crank_rocker() {
-  static const std::string text = [] {
-    std::ifstream in(std::string(ORTHOMECH_SOURCE_DIR) + "/mechanisms/crank-rocker.yaml");
-    std::ostringstream s;
-    s << in.rdbuf();
-    return s.str();
-  }();
-  return text;
-}
-}  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace orthomech;
@@ -31,7 +18,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);
   Study study;
   try {
-    study = parse_study(text, "study.yaml", crank_rocker(), "crank-rocker.yaml");
+    study =
+        parse_study(text, "study.yaml", orthomech::fuzz::crank_rocker_text(), "crank-rocker.yaml");
   } catch (const InputError&) {
     return 0;
   }

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "orthomech/analysis/assembly.hpp"
+#include "orthomech/constraints/joints.hpp"
 #include "orthomech/dynamics/simulate.hpp"
 #include "orthomech/io/cycle_output.hpp"
 #include "orthomech/io/noise.hpp"
@@ -122,6 +123,8 @@ struct Reference {
                   {"inertia", unit(Dimension::inertia)}};
     j["status"] = to_string(res.status);
     j["message"] = res.message;
+    j["complete"] = res.status != SimulateStatus::stopped;
+    if (res.status == SimulateStatus::stopped) j["stop"] = to_string(res.stop);
     j["form"] = so.form == DynamicsForm::dual ? "dual" : "primal";
     j["integrator"] = to_string(so.integrator);
     j["rtol"] = so.rtol;
@@ -131,7 +134,27 @@ struct Reference {
         {"initial", out(Dimension::moment, res.energy_initial, false)},
         {"final", out(Dimension::moment, res.energy_final, false)},
         {"max_drift", out(Dimension::moment, res.energy_max_drift, false)},
-        {"relative_drift", res.energy_scale > 0 ? res.energy_max_drift / res.energy_scale : 0.0}};
+        {"relative_drift", res.energy_scale > 0 ? res.energy_max_drift / res.energy_scale : 0.0},
+        {"drift_limit", res.energy_drift_limit},
+        {"balance", res.status == SimulateStatus::completed      ? "held"
+                    : res.status == SimulateStatus::energy_drift ? "drifted"
+                                                                 : "unknown"}};
+    j["limits_left"] = json::array();
+    for (const LimitExit& e : res.limits_left) {
+      const Joint& joint = model.joints[static_cast<size_t>(e.joint)];
+      const Dimension d = joint_coordinate_kind(joint) == CoordinateKind::angle ? Dimension::angle
+                                                                                : Dimension::length;
+      const OutputUnit u = output_unit(d, system);
+      j["limits_left"].push_back(
+          {{"joint", joint.name},
+           {"unit", u.name},
+           {"limits", {u.from_si(joint.limits->x()), u.from_si(joint.limits->y())}},
+           {"t_first", time(e.t_first)},
+           {"first", u.from_si(e.value_first)},
+           {"t_furthest", time(e.t_furthest)},
+           {"furthest", u.from_si(e.value_furthest)},
+           {"steps", e.steps}});
+    }
     j["max_residual_length"] = length(res.max_residual_length);
     j["max_residual_angle"] = angle(res.max_residual_angle);
     j["max_velocity_residual"] = res.max_velocity_residual;

@@ -1,0 +1,99 @@
+// The command line's side of a bounded run (cli/run_bounds.hpp, issue 47): the time limit stops
+// a long motion with exit 5, the progress line appears on stderr (and not with -q), SIGINT and
+// SIGTERM stop a run cleanly with what it computed, marked incomplete.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "support/cli_runner.hpp"
+
+namespace orthomech {
+namespace {
+
+using test::run_cli;
+
+bool has(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+TEST(RunBoundsCli, TimeLimitStopsALongRun) {
+  const auto r = run_cli({"simulate", test::bundled_file("n-four-bar-40"), "--t-end", "10000",
+                          "--time-limit", "0.5", "--json", "-q"});
+  EXPECT_EQ(r.status, 5) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["stop"], "time_limit");
+  EXPECT_FALSE(j["complete"].get<bool>());
+}
+
+TEST(RunBoundsCli, ProgressLineOnStderr) {
+  ::setenv("ORTHOMECH_PROGRESS", "1", 1);
+  const auto r = run_cli(
+      {"simulate", test::bundled_file("n-four-bar-40"), "--t-end", "10000", "--time-limit", "1.2"});
+  ::unsetenv("ORTHOMECH_PROGRESS");
+  EXPECT_EQ(r.status, 5) << r.err;
+  EXPECT_TRUE(has(r.err, "simulate: 0 %")) << r.err;
+  // -q: no progress.
+  ::setenv("ORTHOMECH_PROGRESS", "1", 1);
+  const auto quiet = run_cli({"simulate", test::bundled_file("n-four-bar-40"), "--t-end", "10000",
+                              "--time-limit", "0.6", "-q"});
+  ::unsetenv("ORTHOMECH_PROGRESS");
+  EXPECT_FALSE(has(quiet.err, "simulate: 0 %")) << quiet.err;
+}
+
+// Runs the CLI with stdout to `out` and stderr to `err`, with ORTHOMECH_PROGRESS=1 so that the
+// run's first progress line ("simulate: 0 %") says it has started; sends `signal` once that line
+// is there (within 120 s); the exit status (or −1 when a signal ended the process).
+int run_and_signal(const std::vector<std::string>& args, int signal, const std::string& out,
+                   const std::string& err) {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    std::vector<char*> argv;
+    std::string cli = ORTHOMECH_CLI;
+    argv.push_back(cli.data());
+    std::vector<std::string> copy = args;
+    for (auto& a : copy) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    ::setenv("ORTHOMECH_PROGRESS", "1", 1);
+    if (!std::freopen(out.c_str(), "w", stdout)) std::_Exit(99);
+    if (!std::freopen(err.c_str(), "w", stderr)) std::_Exit(99);
+    ::execv(cli.c_str(), argv.data());
+    std::_Exit(98);
+  }
+  const auto start = std::chrono::steady_clock::now();
+  while (!has(test::read_text(err), "simulate: ") &&
+         std::chrono::steady_clock::now() - start < std::chrono::seconds(120))
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));  // a few steps into the motion
+  ::kill(pid, signal);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+TEST(RunBoundsCli, SigtermStopsCleanlyAndWritesWhatWasComputed) {
+  test::TempDir dir("orthomech_rel_");
+  const std::string out = (dir.path / "out.json").string(), err = (dir.path / "err.txt").string();
+  for (const int signal : {SIGTERM, SIGINT}) {
+    SCOPED_TRACE(signal);
+    const int status = run_and_signal(
+        {"simulate", test::bundled_file("n-four-bar-40"), "--t-end", "10000", "--json"}, signal,
+        out, err);
+    EXPECT_EQ(status, 5) << test::read_text(err);
+    const auto j = nlohmann::json::parse(test::read_text(out));
+    EXPECT_EQ(j["stop"], "interrupted");
+    EXPECT_FALSE(j["complete"].get<bool>());
+    EXPECT_GT(j["samples"]["t"].size(), 0u);
+  }
+}
+
+}  // namespace
+}  // namespace orthomech
