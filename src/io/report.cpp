@@ -1,5 +1,6 @@
 #include "orthomech/io/report.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
@@ -284,6 +285,7 @@ constexpr const char* kScript = R"JS(
 
 std::vector<std::size_t> picture_positions(std::size_t n) {
   std::vector<std::size_t> k;
+  k.reserve(std::min(n, kMaxPictureFrames));
   if (n <= kMaxPictureFrames) {
     for (std::size_t i = 0; i < n; ++i) k.push_back(i);
     return k;
@@ -304,6 +306,7 @@ std::string cycle_report_html(const CycleReport& report) {
                  "report.animation", "must have one frame per picture position");
   nlohmann::json data;
   std::vector<double> input;
+  input.reserve(shown.size());
   for (const std::size_t k : shown) input.push_back(report.input[k]);
   data["input"] = input;
   data["input_label"] = report.input_label;

@@ -28,8 +28,8 @@ inline constexpr std::size_t kMaxYamlDepth = 200;
 // sentence for the message.
 class YamlWalkError : public std::runtime_error {
  public:
-  YamlWalkError(YAML::Node node, const std::string& message)
-      : std::runtime_error(message), node_(std::move(node)) {}
+  YamlWalkError(const YAML::Node& node, const std::string& message)
+      : std::runtime_error(message), node_(node) {}
   [[nodiscard]] const YAML::Node& node() const { return node_; }
 
  private:
