@@ -54,6 +54,9 @@ TEST(RunBoundsCli, ProgressLineOnStderr) {
 // is there (within 120 s); the exit status (or −1 when a signal ended the process).
 int run_and_signal(const std::vector<std::string>& args, int signal, const std::string& out,
                    const std::string& err) {
+  // No stale progress line of an earlier run may be taken for this one's start.
+  std::remove(err.c_str());
+  std::remove(out.c_str());
   const pid_t pid = ::fork();
   if (pid == 0) {
     std::vector<char*> argv;
