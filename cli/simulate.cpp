@@ -689,14 +689,14 @@ void register_simulate(CLI::App& app, const GlobalOptions& globals, int& exit_co
   auto log = std::make_shared<LogFlags>();
   add_log_flags(cmd, *log);
   cmd->callback([opt, log, &globals, &exit_code] {
-    if (opt->max_step > 0.0 && opt->t_end / opt->max_step > static_cast<double>(opt->max_steps))
-      throw CLI::ValidationError("--max-step", request_problem([&] {
-                                   SimulateOptions o;
-                                   o.t_end = opt->t_end;
-                                   o.max_step = opt->max_step;
-                                   o.max_steps = opt->max_steps;
-                                   return o;
-                                 }()));
+    {  // the library's own test of the request (t_end / max_step against the step budget)
+      SimulateOptions o;
+      o.t_end = opt->t_end;
+      o.max_step = opt->max_step;
+      o.max_steps = opt->max_steps;
+      if (const std::string problem = request_problem(o); !problem.empty())
+        throw CLI::ValidationError("--max-step", problem);
+    }
     if (opt->dt_out > 0.0 && opt->t_end / opt->dt_out + 1.0 > kMaxOutputSamples)
       throw CLI::ValidationError("--dt-out",
                                  "--t-end / --dt-out gives more than 1e6 output "
