@@ -11,6 +11,7 @@
 
 #include "commands.hpp"
 #include "common.hpp"
+#include "run_bounds.hpp"
 
 namespace orthomech::cli {
 
@@ -24,6 +25,8 @@ struct CrosscheckCliOptions {
   double tolerance = 1e-8;
   unsigned seed = 1;
   std::string method = "auto";
+  long max_steps = kDefaultMaxSteps;
+  double time_limit = 0.0;  // s of wall clock; 0: none
   bool json = false;
   std::string units = "file";
 };
@@ -38,13 +41,22 @@ int run_crosscheck_cmd(const CrosscheckCliOptions& opt) {
   co.tolerance = opt.tolerance;
   co.seed = opt.seed;
   (void)parse_crosscheck_method(opt.method, co.method);  // checked by CLI11 (IsMember)
-  const CrosscheckResult res = run_crosscheck(model, co);
+  co.max_steps = opt.max_steps;
+  co.control = run_control("crosscheck", opt.time_limit);
+  const CrosscheckResult res = [&] {
+    const InterruptScope interrupts;  // SIGINT/SIGTERM: stop, print what was compared
+    CrosscheckResult r = run_crosscheck(model, co);
+    end_progress();
+    return r;
+  }();
   std::ostringstream out;
   if (opt.json) {
     nlohmann::json j;
     j["mechanism"] = model.name;
     j["units"] = units_json(U);
     j["pass"] = res.pass;
+    j["complete"] = res.stop == StopReason::none;
+    if (res.stop != StopReason::none) j["stop"] = to_string(res.stop);
     j["message"] = res.message;
     j["samples"] = res.samples;
     j["tolerance"] = res.tolerance;
@@ -83,6 +95,10 @@ int run_crosscheck_cmd(const CrosscheckCliOptions& opt) {
         << (res.pass ? "PASS" : "FAIL") << (res.message.empty() ? "" : ": ") << res.message << "\n";
   }
   std::cout << out.str();
+  if (res.stop != StopReason::none) {
+    spdlog::error("crosscheck: {}: {}", model.file, res.message);
+    return kStopped;
+  }
   if (res.samples == 0) {
     spdlog::error("{}: {}", model.file, res.message);
     return kNumerical;
@@ -110,6 +126,12 @@ void register_crosscheck(CLI::App& app, const GlobalOptions& globals, int& exit_
                   "dense: the projections as n × n matrices; probes: applied to seeded vectors "
                   "on the sparse stages (default auto: probes from 300 velocities)")
       ->check(CLI::IsMember({"auto", "dense", "probes"}));
+  cmd->add_option("--max-steps", opt->max_steps,
+                  "step budget of the motion (default 1e7): the run stops there, exit 5")
+      ->check(CLI::Range(1L, kMaxMaxSteps));
+  cmd->add_option("--time-limit", opt->time_limit,
+                  "wall-clock limit in seconds (default: none): the run stops there, exit 5")
+      ->check(finite_range(0.0, 1e9, true));
   cmd->add_flag("--json", opt->json, "one JSON document on stdout");
   add_units_option(cmd, opt->units);
   auto log = std::make_shared<LogFlags>();

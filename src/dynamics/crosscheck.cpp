@@ -1,7 +1,9 @@
 #include "orthomech/dynamics/crosscheck.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <random>
 
 #include "dynamics.hpp"
@@ -17,37 +19,54 @@ namespace orthomech {
 
 namespace {
 
-// ‖a − b‖∞ / max(‖a‖∞, ‖b‖∞, floor): relative difference with a floor for quantities that
-// vanish (e.g. accelerations at rest); floor = 1e-300 gives the pure relative value.
+// One comparison at one state: the difference ‖a − b‖∞ (or the residual ‖x‖∞ of an identity
+// x = 0) and the size of what is compared (the scale the difference is relative to).
+struct Difference {
+  double difference = 0.0;
+  double scale = 1e-300;
+};
+// ‖a − b‖∞ against max(‖a‖∞, ‖b‖∞, floor): `floor` is the size of the terms the compared
+// quantity is summed from, where it may vanish while they do not (accelerations at rest,
+// reactions at a symmetric position); floor = 1e-300 gives the pure relative value.
 // The scale is at least 1e-300, so that two zeros (a mechanism at rest without loads) compare
 // as 0, not 0/0.
-double relative(const MatX& a, const MatX& b, double floor) {
-  if (a.size() == 0) return 0.0;
-  const double scale = std::max({a.cwiseAbs().maxCoeff(), b.cwiseAbs().maxCoeff(), floor, 1e-300});
-  return (a - b).cwiseAbs().maxCoeff() / scale;
+Difference relative(const MatX& a, const MatX& b, double floor) {
+  if (a.size() == 0) return {};
+  return {(a - b).cwiseAbs().maxCoeff(),
+          std::max({a.cwiseAbs().maxCoeff(), b.cwiseAbs().maxCoeff(), floor, 1e-300})};
 }
-// ‖x‖∞ / scale for an identity x = 0 whose terms are of size `scale`.
-double residual(const MatX& x, double scale) {
-  return x.size() ? x.cwiseAbs().maxCoeff() / std::max(scale, 1e-300) : 0.0;
+// ‖x‖∞ for an identity x = 0 whose terms are of size `scale`.
+Difference residual(const MatX& x, double scale) {
+  return {x.size() ? x.cwiseAbs().maxCoeff() : 0.0, std::max(scale, 1e-300)};
 }
 
+// The checks over the motion. A check's value is its largest difference over the states divided
+// by the largest scale over the states: a quantity that vanishes at one state (a drive line's
+// reactions at its symmetric position) is measured against its size along the motion, not
+// against its own roundoff there (docs/cli.md, crosscheck).
 class Recorder {
  public:
   explicit Recorder(double tol) : tol_(tol) {}
-  void add(const std::string& name, const std::string& kind, double value, double t) {
-    for (auto& it : items_) {
-      if (it.name == name) {
-        if (!(value <= it.max_relative)) it.max_relative = value, it.at_t = t;  // NaN counts
-        it.pass = it.max_relative <= tol_;
-        return;
-      }
+  void add(const std::string& name, const std::string& kind, Difference d, double t) {
+    size_t k = 0;
+    while (k < items_.size() && items_[k].name != name) ++k;
+    if (k == items_.size()) {
+      items_.push_back({name, kind, 0.0, t, true});
+      worst_.push_back({-1.0, 1e-300});
     }
-    items_.push_back({name, kind, value, t, value <= tol_});
+    Difference& w = worst_[k];
+    CrosscheckItem& it = items_[k];
+    if (!std::isnan(w.difference) && !(d.difference <= w.difference))  // a NaN stays
+      w.difference = d.difference, it.at_t = t;
+    w.scale = std::max(w.scale, d.scale);
+    it.max_relative = w.difference / w.scale;
+    it.pass = it.max_relative <= tol_;
   }
   std::vector<CrosscheckItem> items_;
 
  private:
   double tol_;
+  std::vector<Difference> worst_;  // per item: the largest difference, the largest scale
 };
 
 // The states the forms are compared at: the motion (dual form) from the design position with the
@@ -60,6 +79,10 @@ SimulateResult simulate_motion(const Model& model, const CrosscheckOptions& opti
   so.dt_out = options.t_end / std::max(1, options.samples - 1);
   so.reactions = false;
   so.use_file_rates = false;  // the seeded guess below, not the file's initial rates
+  so.max_steps = options.max_steps;
+  so.control = options.control;  // the motion is the first half of the run's progress
+  if (options.control.progress)
+    so.control.progress = [&options](double f) { options.control.progress(0.5 * f); };
   std::mt19937 rng(options.seed);
   std::uniform_real_distribution<double> uni(-1.0, 1.0);
   so.initial_u = VecX(model.n);
@@ -80,16 +103,57 @@ std::string redundancy_reason(const Mobility& mob, int nc, const char* lambda) {
          lambda + ")";
 }
 
+// The comparisons' side of the run's bounds: the second half of its progress, the wall-clock
+// limit less what the motion took, the interrupt. True (result.stop and message set) when a
+// bound is met before state k of `count`.
+class StateMonitor {
+ public:
+  StateMonitor(const RunControl& control, double spent)
+      : time_limit_(control.time_limit),
+        control_(remaining(control, spent)),
+        monitor_(control_, 0) {}
+  bool stop_before(size_t k, size_t count, CrosscheckResult& result) {
+    const double fraction = count ? static_cast<double>(k) / static_cast<double>(count) : 1.0;
+    const StopReason r = monitor_.tick(fraction);
+    if (r == StopReason::none) return false;
+    result.stop = r;
+    std::string why = monitor_.stop_message(r, 0.5 + 0.5 * fraction, "state", "--samples");
+    if (r == StopReason::time_limit) {  // the whole run's limit, not what was left of it
+      char limit[96];
+      std::snprintf(limit, sizeof limit, "the time limit of %g s is reached (--time-limit)",
+                    time_limit_);
+      why = why.substr(0, why.find("the time limit")) + limit;
+    }
+    result.message =
+        why + "; compared " + std::to_string(k) + " of " + std::to_string(count) + " states";
+    return true;
+  }
+
+ private:
+  static RunControl remaining(const RunControl& control, double spent) {
+    RunControl c = control;
+    if (control.time_limit > 0.0) c.time_limit = std::max(1e-9, control.time_limit - spent);
+    if (control.progress) c.progress = [&control](double f) { control.progress(0.5 + 0.5 * f); };
+    c.progress_after = std::max(0.0, control.progress_after - spent);
+    return c;
+  }
+  double time_limit_;
+  RunControl control_;
+  RunMonitor monitor_;
+};
+
 // The dense comparison: α, β, ψ, Θ, θ formed as n × n matrices (projection/dual.hpp,
 // projection/primal.hpp) at every state.
 void compare_dense(const Model& model, const SimulateResult& motion, const Mobility& mob,
-                   CrosscheckResult& result, Recorder& rec) {
+                   CrosscheckResult& result, Recorder& rec, StateMonitor& monitor) {
   const int n = model.n;
   const bool redundant = mob.rank < model.nc;
   Workspace wd(model, mob.rank), wp(model, mob.rank);
   DynamicsPoint dd(model), dp(model);
   const MatX I = MatX::Identity(n, n);
   for (const SimulationSample& s : motion.samples) {
+    if (monitor.stop_before(static_cast<size_t>(result.samples), motion.samples.size(), result))
+      return;
     State st(model);
     st.t = s.t;
     st.q = s.q;
@@ -126,7 +190,7 @@ void compare_dense(const Model& model, const SimulateResult& motion, const Mobil
 
     // Primal form, compared with the dual.
     if (compute_primal_dynamics(model, st, wp, dp) != ProjectionStatus::ok) {
-      rec.add("primal form evaluable (G regular)", "dual-vs-primal", 1.0, s.t);
+      rec.add("primal form evaluable (G regular)", "dual-vs-primal", {1.0, 1.0}, s.t);
       continue;
     }
     result.primal_checked = true;
@@ -135,29 +199,36 @@ void compare_dense(const Model& model, const SimulateResult& motion, const Mobil
             relative(d.alpha, p.alpha, 1e-300), s.t);
     rec.add("beta dual vs primal (eq. (70) vs (44))", "dual-vs-primal",
             relative(d.beta, p.beta, 1e-300), s.t);
-    const double qscale =
-        std::max(wd.free.Q.cwiseAbs().maxCoeff(), (M * dd.udot).cwiseAbs().maxCoeff());
+    // Scales (the sizes of the terms the compared quantities are summed from): the applied
+    // forces, the inertia forces, and the velocity-product forces through Ω = E G⁻¹ Dᵀ (eq. (78)),
+    // whose size ‖Ω‖ ‖u‖ does not vanish where Ω u does (a symmetric position).
+    const double uS = std::max(st.u.cwiseAbs().maxCoeff(), 1e-300);
+    const double OmegaS = p.Omega.cwiseAbs().maxCoeff();
+    const double qscale = std::max(
+        {wd.free.Q.cwiseAbs().maxCoeff(), (M * dd.udot).cwiseAbs().maxCoeff(), OmegaS * uS});
     rec.add("acceleration dual vs primal (eq. (99))", "dual-vs-primal",
             relative(M * dd.udot, M * dp.udot, qscale), s.t);
     rec.add("reaction dual vs Theorem 5 (eq. (91))", "dual-vs-primal", relative(dd.R, dp.R, qscale),
             s.t);
     rec.add("reaction eq. (91) vs eq. (99): R = pdot - Q", "identity",
             relative(dp.R, dp.pdot - wp.free.Q, qscale), s.t);
-    rec.add(
-        "multipliers dual vs primal", "dual-vs-primal",
-        relative(dd.lambda, dp.lambda, std::max(1e-300, 1e-12 * dp.lambda.cwiseAbs().maxCoeff())),
-        s.t);
-    const double uS = std::max(st.u.cwiseAbs().maxCoeff(), 1e-300);
+    // λ of the size the reactions E λ have: qscale over the largest entry of E.
+    const double lambda_scale = qscale / std::max(Et.cwiseAbs().maxCoeff(), 1e-300);
+    rec.add("multipliers dual vs primal", "dual-vs-primal",
+            relative(dd.lambda, dp.lambda, lambda_scale), s.t);
     rec.add("omega u = Omega u (eq. (102))", "identity",
-            relative(p.omega * st.u, p.Omega * st.u, p.Omega.cwiseAbs().maxCoeff() * uS), s.t);
+            relative(p.omega * st.u, p.Omega * st.u, OmegaS * uS), s.t);
     rec.add("Omega^T alpha = 0 (eq. (103))", "identity",
-            residual(p.Omega.transpose() * p.alpha, p.Omega.cwiseAbs().maxCoeff() * aS), s.t);
+            residual(p.Omega.transpose() * p.alpha, OmegaS * aS), s.t);
     rec.add("J = E^T A p = 0 (eq. (105))", "identity",
             residual(dp.J, Et.cwiseAbs().maxCoeff() * uS), s.t);
     // α̇ = −β̇ from eq. (85) and from eq. (82): θ M = −A ω, also when Ṁ ≠ 0 (their Ṁ terms,
-    // −Ȧ_αβ M and A Ṁ_αβ, are both A αᵀ Ṁ β since ψ = A αᵀ).
+    // −Ȧ_αβ M and A Ṁ_αβ, are both A αᵀ Ṁ β since ψ = A αᵀ). Both sum two terms (ω = Ω α +
+    // αᵀ Ωᵀ, eq. (79); θ = β Θ + Θᵀ βᵀ, eq. (84)) that cancel at a symmetric position.
+    const double theta_scale = std::max((A * p.Omega * p.alpha).cwiseAbs().maxCoeff(),
+                                        (d.beta * d.Theta * M).cwiseAbs().maxCoeff());
     rec.add("theta M = -A omega (eqs. (82), (85))", "dual-vs-primal",
-            relative(d.theta * M, -(A * p.omega), 1e-300), s.t);
+            relative(d.theta * M, -(A * p.omega), theta_scale), s.t);
     rec.add("alpha + beta = I (eq. (29))", "identity", residual(p.alpha + p.beta - I, 1.0), s.t);
   }
 }
@@ -270,7 +341,8 @@ class ProbeState {
 };
 
 void compare_probes(const Model& model, const SimulateResult& motion, const Mobility& mob,
-                    const CrosscheckOptions& options, CrosscheckResult& result, Recorder& rec) {
+                    const CrosscheckOptions& options, CrosscheckResult& result, Recorder& rec,
+                    StateMonitor& monitor) {
   const bool redundant = mob.rank < model.nc;
   SimulateOptions so;  // the right-hand sides as simulate evaluates them, reactions included
   detail::Dynamics dyn(model, mob.rank, so);
@@ -281,6 +353,8 @@ void compare_probes(const Model& model, const SimulateResult& motion, const Mobi
   for (Eigen::Index k = 0; k < X.size(); ++k) X.data()[k] = uni(rng);
   const double xS = X.cwiseAbs().maxCoeff();
   for (const SimulationSample& s : motion.samples) {
+    if (monitor.stop_before(static_cast<size_t>(result.samples), motion.samples.size(), result))
+      return;
     ++result.samples;
     std::string why;
     if (!ps.evaluate_dual(s.t, s.q, s.u, why)) {
@@ -317,7 +391,7 @@ void compare_probes(const Model& model, const SimulateResult& motion, const Mobi
 
     // Primal form, compared with the dual.
     if (!ps.evaluate_primal(why)) {
-      rec.add("primal form evaluable (G regular)", "dual-vs-primal", 1.0, s.t);
+      rec.add("primal form evaluable (G regular)", "dual-vs-primal", {1.0, 1.0}, s.t);
       continue;
     }
     result.primal_checked = true;
@@ -346,8 +420,7 @@ void compare_probes(const Model& model, const SimulateResult& motion, const Mobi
     rec.add("reaction eq. (91) vs (L3): R = E lambda", "identity",
             relative(R91, ps.pdot_primal_ - ps.Q_, qscale), s.t);
     rec.add("multipliers dual vs primal", "dual-vs-primal",
-            relative(ps.lambda_, ps.lambda_primal_,
-                     std::max(1e-300, 1e-12 * ps.lambda_primal_.cwiseAbs().maxCoeff())),
+            relative(ps.lambda_, ps.lambda_primal_, qscale / eS),  // λ of E λ's size
             s.t);
     const double uS = std::max(u.cwiseAbs().maxCoeff(), 1e-300);
     const VecX aT_Omega_u = ps.alpha_dual_transposed(Omega_u);
@@ -380,9 +453,15 @@ CrosscheckResult run_crosscheck(const Model& model, const CrosscheckOptions& opt
   }
 
   // 1. The motion: dual form from the design position, seeded initial velocity guess.
+  const auto start = std::chrono::steady_clock::now();
   const SimulateResult motion = simulate_motion(model, options);
+  if (motion.status == SimulateStatus::stopped) result.stop = motion.stop;
   if (motion.samples.empty()) {
     result.message = "the motion could not be simulated: " + motion.message;
+    return result;
+  }
+  if (result.stop == StopReason::time_limit || result.stop == StopReason::interrupted) {
+    result.message = "the motion " + motion.message + "; no state compared";
     return result;
   }
   if (motion.status != SimulateStatus::completed)
@@ -406,12 +485,15 @@ CrosscheckResult run_crosscheck(const Model& model, const CrosscheckOptions& opt
 
   // 3. The two forms at every state.
   Recorder rec(options.tolerance);
+  StateMonitor monitor(
+      options.control,
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   if (result.method == CrosscheckMethod::dense)
-    compare_dense(model, motion, mob, result, rec);
+    compare_dense(model, motion, mob, result, rec, monitor);
   else
-    compare_probes(model, motion, mob, options, result, rec);
+    compare_probes(model, motion, mob, options, result, rec, monitor);
   result.items = rec.items_;
-  result.pass = !result.items.empty();
+  result.pass = result.stop == StopReason::none && !result.items.empty();
   for (const auto& it : result.items) result.pass = result.pass && it.pass;
   if (!result.pass && result.message.empty()) result.message = "a difference exceeds the tolerance";
   return result;

@@ -7,7 +7,9 @@
 #include <string>
 #include <vector>
 
+#include "orthomech/dynamics/simulate.hpp"
 #include "orthomech/model/model.hpp"
+#include "orthomech/run_control.hpp"
 
 namespace orthomech {
 
@@ -27,11 +29,17 @@ struct CrosscheckOptions {
   unsigned seed = 1;        // initial velocity guess: seeded uniform in [−1, 1] (SI)
   double tolerance = 1e-8;  // largest relative difference that passes
   CrosscheckMethod method = CrosscheckMethod::automatic;
+  long max_steps = kDefaultMaxSteps;  // step budget of the motion (simulate's --max-steps)
+  // Wall-clock limit, interrupt and progress over the whole run: the motion is its first half,
+  // the comparisons at the states its second.
+  RunControl control;
 };
 
 struct CrosscheckItem {
   std::string name;  // e.g. "alpha dual vs primal (eq. (44) vs (70))"
   std::string kind;  // "dual-vs-primal" or "identity"
+  // The largest difference over the states over the largest size of the compared quantity (or
+  // of the terms it sums) over the states: relative to its size along the motion.
   double max_relative = 0.0;
   double at_t = 0.0;  // where the largest difference occurred
   bool pass = true;
@@ -46,6 +54,9 @@ struct CrosscheckResult {
   int rank = 0, nc = 0;
   double tolerance = 0.0;
   CrosscheckMethod method = CrosscheckMethod::dense;  // the one used (never automatic)
+  // A bound met (RunControl, the step budget): the checks hold the states compared before it;
+  // pass is false and message says which bound.
+  StopReason stop = StopReason::none;
   std::vector<CrosscheckItem> items;
 };
 

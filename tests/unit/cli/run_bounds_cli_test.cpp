@@ -98,5 +98,21 @@ TEST(RunBoundsCli, SigtermStopsCleanlyAndWritesWhatWasComputed) {
   }
 }
 
+// crosscheck: the time limit and the step budget stop it with exit 5, its JSON marked incomplete.
+TEST(RunBoundsCli, CrosscheckStopsAtItsBounds) {
+  const auto r = run_cli({"crosscheck", test::bundled_file("n-four-bar-40"), "--t-end", "1000",
+                          "--time-limit", "0.5", "--json", "-q"});
+  EXPECT_EQ(r.status, 5) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["stop"], "time_limit");
+  EXPECT_FALSE(j["complete"].get<bool>());
+  EXPECT_FALSE(j["pass"].get<bool>());
+  const auto b = run_cli(
+      {"crosscheck", test::bundled_file("crank-rocker"), "--max-steps", "5", "--json", "-q"});
+  EXPECT_EQ(b.status, 5) << b.err;
+  EXPECT_EQ(nlohmann::json::parse(b.out)["stop"], "budget");
+  EXPECT_TRUE(has(b.err, "--max-steps")) << b.err;
+}
+
 }  // namespace
 }  // namespace orthomech
