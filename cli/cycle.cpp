@@ -752,10 +752,17 @@ std::string CycleRun::summary_text(const std::string& files_note) const {
   summary_metrics(out);
   summary_traces(out);
   summary_indeterminate(out);
+  // The joint frame of the components: a planar joint's is its first body's (the second's when
+  // the first is the ground); a spatial joint's is its frame f, g, h carried by the first body,
+  // fixed in the world when that is the ground (constraints/spatial_joints.cpp).
   out << "\nconvention: reactions are forces and moments on a joint's first body from its "
-         "second; \"_local\" and joint-frame components are in the joint's frame (the first "
-         "body's, or the second's when the first is the ground). Signed max and min of every "
-         "component: --json.\n";
+         "second; "
+      << (model.dimension == 3
+              ? "Ff ... Mh are in the joint frame f, g, h carried by the first body (fixed in the "
+                "world when the first body is the ground). "
+              : "\"_local\" and joint-frame components are in the joint's frame (the first "
+                "body's, or the second's when the first is the ground). ")
+      << "Signed max and min of every component: --json.\n";
   return out.str();
 }
 

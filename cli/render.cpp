@@ -11,7 +11,9 @@
 
 #include "commands.hpp"
 #include "common.hpp"
+#include "orthomech/constraints/joints.hpp"
 #include "orthomech/io/file_writer.hpp"
+#include "orthomech/io/units.hpp"
 
 namespace orthomech::cli {
 
@@ -25,6 +27,7 @@ struct RenderCliOptions {
   std::string input;
   std::string view;  // --view: "" is iso for spatial files
   std::vector<std::string> traces;
+  std::string from, to;  // --from, --to: the input range of --trace and --animate
   bool labels = false;
   bool animate = false;
   double duration = 4.0;
@@ -34,6 +37,28 @@ struct RenderCliOptions {
 
 [[noreturn]] void bad(const std::string& what) {
   throw InputError({"command line", 0, 0}, "option", what);
+}
+
+// The sweep's input range of --trace and --animate from --from and --to (bare numbers in the
+// file's declared units, as `cycle`); empty: the driver's full turn, or a prismatic driver's
+// limits.
+SweepRange sweep_range(const Model& model, int driver, const RenderCliOptions& opt) {
+  SweepRange range;
+  if (opt.from.empty() && opt.to.empty()) return range;
+  if (driver < 0) bad("--from and --to need a driver and the file has none");
+  const bool angular =
+      joint_coordinate_kind(model.joints[static_cast<size_t>(driver)]) == CoordinateKind::angle;
+  const UnitSystem file_units = unit_system(model.units);
+  const double bare = angular ? file_units.angle_si : file_units.length_si;
+  try {
+    if (!opt.from.empty()) range.start = parse_position(opt.from, angular, bare);
+    if (!opt.to.empty()) range.end = parse_position(opt.to, angular, bare);
+  } catch (const std::invalid_argument& e) {
+    bad(std::string(opt.from.empty() ? "--to" : "--from/--to") + ": " + e.what());
+  }
+  if (range.start && !range.end && !angular)
+    bad("--to: a prismatic driver needs the end of the range (--to)");
+  return range;
 }
 
 int run_render(const RenderCliOptions& opt) {
@@ -55,8 +80,11 @@ int run_render(const RenderCliOptions& opt) {
   options.driver = pose.driver;
   options.projection = *view.projection;
   int code = kOk;
+  if ((!opt.from.empty() || !opt.to.empty()) && opt.traces.empty() && !opt.animate)
+    bad("--from and --to give the range of --trace and --animate: give one of them");
+  const SweepRange range = sweep_range(model, pose.driver, opt);
   if (!opt.traces.empty()) {
-    TraceResult traced = trace_points(model, opt.traces, pose.driver);
+    TraceResult traced = trace_points(model, opt.traces, pose.driver, range);
     if (traced.status == TraceStatus::bad_request) bad(traced.message);
     if (traced.status == TraceStatus::failed) {
       spdlog::error("{}: {}", model.file, traced.message);
@@ -71,7 +99,7 @@ int run_render(const RenderCliOptions& opt) {
   }
   if (opt.animate) {
     if (*format != ImageFormat::svg) bad("--animate writes an SVG: give --out NAME.svg");
-    const CyclePositions sweep = sweep_positions(model, pose.driver);
+    const CyclePositions sweep = sweep_positions(model, pose.driver, range);
     if (sweep.status == TraceStatus::bad_request) bad(sweep.message);
     if (sweep.status == TraceStatus::failed) {
       spdlog::error("{}: {}", model.file, sweep.message);
@@ -126,6 +154,12 @@ void register_render(CLI::App& app, const GlobalOptions& globals, int& exit_code
   cmd->add_option("--trace", opt->traces,
                   "BODY.POINT: draw the path of this point over the driver's cycle (as `cycle` "
                   "sweeps it); repeatable");
+  cmd->add_option("--from", opt->from,
+                  "start input of --trace and --animate, e.g. 30deg, 20mm (a bare number is in "
+                  "the file's units); default: the design position");
+  cmd->add_option("--to", opt->to,
+                  "end input of --trace and --animate: the range instead of a full turn; a "
+                  "prismatic driver's default is its joint's limits");
   cmd->add_flag("--animate", opt->animate,
                 "an SVG that plays the driver's cycle by itself, one frame per position");
   cmd->add_option("--duration", opt->duration, "seconds of one loop of --animate (default 4)")

@@ -176,6 +176,9 @@ TwistAngle twist_angle(const Vec3& fi, const Vec3& gi, const Vec3& fj, const Vec
   TwistAngle a;
   const double x = fi.dot(fj), y = gi.dot(fj);
   a.theta = std::atan2(y, x);
+  // One convention for every command, (−π, π]: atan2 gives −π for y = −0 (a joint drawn at
+  // 180° read −180° in `assemble` and `info`, +180° in `cycle`).
+  if (a.theta <= -std::numbers::pi) a.theta = std::numbers::pi;
   const Vec3 cx = fi.cross(fj), cy = gi.cross(fj);
   const double r2 = x * x + y * y;
   const Vec3 N = x * cy - y * cx;

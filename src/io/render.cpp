@@ -1313,7 +1313,8 @@ std::vector<PointTrace> trace_paths(const Model& model, const std::vector<PointR
   return traces;
 }
 
-TraceResult trace_points(const Model& model, const std::vector<std::string>& points, int driver) {
+TraceResult trace_points(const Model& model, const std::vector<std::string>& points, int driver,
+                         const SweepRange& range) {
   TraceResult result;
   const TracePoints refs = resolve_trace_points(model, points);
   if (refs.status == TraceStatus::bad_request) {
@@ -1321,7 +1322,7 @@ TraceResult trace_points(const Model& model, const std::vector<std::string>& poi
     result.message = refs.message;
     return result;
   }
-  const CyclePositions sweep = sweep_positions(model, driver);
+  const CyclePositions sweep = sweep_positions(model, driver, range);
   if (sweep.status == TraceStatus::failed || sweep.status == TraceStatus::bad_request) {
     result.status = sweep.status;
     result.message = sweep.message;
@@ -1333,7 +1334,7 @@ TraceResult trace_points(const Model& model, const std::vector<std::string>& poi
   return result;
 }
 
-CyclePositions sweep_positions(const Model& model, int driver) {
+CyclePositions sweep_positions(const Model& model, int driver, const SweepRange& range) {
   CyclePositions result;
   const auto d = std::find_if(model.drivers.begin(), model.drivers.end(),
                               [&](const Driver& x) { return x.joint == driver; });
@@ -1345,6 +1346,22 @@ CyclePositions sweep_positions(const Model& model, int driver) {
   CycleOptions options;
   options.driver = *d;
   options.steps = model.analysis.steps;
+  // The range: as given; a prismatic driver without an end takes its joint's limits.
+  const Joint& joint = model.joints[static_cast<size_t>(driver)];
+  SweepRange r = range;
+  if (!r.end && joint_coordinate_kind(joint) != CoordinateKind::angle) {
+    if (!joint.limits) {
+      result.status = TraceStatus::bad_request;
+      result.message = "the prismatic driver '" + d->name + "' (joint '" + joint.name +
+                       "') has no full turn to sweep: give its stroke with --from and --to, or "
+                       "limits: on the joint";
+      return result;
+    }
+    if (!r.start) r.start = (*joint.limits)(0);
+    r.end = (*joint.limits)(1);
+  }
+  if (r.start) options.use_start = true, options.start = *r.start;
+  if (r.end) options.full_cycle = false, options.end = *r.end;
   const CycleResult cycle = run_cycle(model, options);
   if (cycle.status == CycleStatus::failed || cycle.status == CycleStatus::invalid_request ||
       cycle.points.size() == 0) {

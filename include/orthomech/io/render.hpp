@@ -252,8 +252,14 @@ struct TraceResult {
 // the cycle of the driver (`cycle`'s sweep, analysis/cycle.hpp run_cycle: a full turn of a
 // constant-speed revolute, one period of a harmonic law, from the design position, the file's
 // `analysis: steps`). Numerical trouble is data, never an exception.
+// The input range of the sweep (SI): none given, a revolute driver's full turn from the design
+// position; a prismatic driver has no full turn and takes [start, end], else its joint's
+// `limits:` (bad_request, the message naming render's --from/--to, when it has neither).
+struct SweepRange {
+  std::optional<double> start, end;
+};
 [[nodiscard]] TraceResult trace_points(const Model& model, const std::vector<std::string>& points,
-                                       int driver);
+                                       int driver, const SweepRange& range = {});
 // The two steps of trace_points, for a caller that has the positions already (`cycle --trace`:
 // the cycle's own positions). resolve_trace_points: the named points as PointRef (s from the
 // centre of mass, label the name as given), or status bad_request with the message (traces
@@ -283,7 +289,8 @@ struct CyclePositions {
   std::vector<VecX> q;
   std::vector<double> input;
 };
-[[nodiscard]] CyclePositions sweep_positions(const Model& model, int driver);
+[[nodiscard]] CyclePositions sweep_positions(const Model& model, int driver,
+                                             const SweepRange& range = {});
 
 // The one view of an animation: fit_view over the primitives of every frame (and the traces).
 [[nodiscard]] ViewTransform animation_view(const Model& model, const std::vector<VecX>& frames,

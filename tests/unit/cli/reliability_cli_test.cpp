@@ -6,7 +6,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -285,6 +287,36 @@ TEST(ReliabilityCli, ReportOfAHundredThousandPositionsIsBounded) {
        at = html.find("<g id=\"frame-", at + 1))
     ++frames;
   EXPECT_EQ(frames, 1000u);
+}
+
+// render --trace and --animate of a prismatic driver (issue 47: it asked for --to, which render
+// lacked): without a range it is refused naming --from and --to; with --from/--to, or with its
+// joint's limits, the sweep is drawn.
+TEST(ReliabilityCli, RenderOfAPrismaticDriverTakesItsStroke) {
+  const std::string file = test::bundled_file("slider-crank");
+  const std::vector<std::string> push = {"--set",
+                                         "drivers=[{name: push, joint: slide, speed: 100 mm/s}]",
+                                         "--set", "analysis={driver: push, steps: 40}"};
+  const std::string out = ::testing::TempDir() + "/prismatic-trace.svg";
+  auto args = [&](std::vector<std::string> extra) {
+    std::vector<std::string> a = {"render", file, "--trace", "rod.B", "--out", out};
+    a.insert(a.end(), push.begin(), push.end());
+    a.insert(a.end(), extra.begin(), extra.end());
+    return a;
+  };
+  const auto refused = run_cli(args({}));
+  EXPECT_EQ(refused.status, 2) << refused.err;
+  EXPECT_NE(refused.err.find("--from and --to"), std::string::npos) << refused.err;
+  std::remove(out.c_str());
+  const auto ranged = run_cli(args({"--from", "170", "--to", "230"}));
+  EXPECT_EQ(ranged.status, 0) << ranged.err;
+  EXPECT_TRUE(std::filesystem::exists(out));
+  std::remove(out.c_str());
+  const auto limited = run_cli(args({"--set", "joints.slide.limits=[170, 230]"}));
+  EXPECT_EQ(limited.status, 0) << limited.err;
+  EXPECT_TRUE(std::filesystem::exists(out));
+  const auto alone = run_cli({"render", file, "--from", "10", "--out", out});
+  EXPECT_EQ(alone.status, 2) << alone.err;
 }
 
 }  // namespace

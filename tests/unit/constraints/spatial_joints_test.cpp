@@ -331,5 +331,17 @@ TEST(SpatialKinematicsStage, RotationsAndRowsEqualTheDirectEvaluation) {
   }
 }
 
+// One angle convention, (−π, π] (issue 47): a joint at 180° whose sine is −0 (atan2(−0, −1) is
+// −π) reads +π, as `cycle` takes it; just below 180° on either side the angle is continuous with
+// ±π, and the exact closed form atan2(sin θ, cos θ) elsewhere.
+TEST(SpatialJoints, TwistAngleIsInMinusPiToPi) {
+  const Vec3 fi(1, 0, 0), gi(0, 1, 0), w = Vec3::Zero();
+  EXPECT_EQ(twist_angle(fi, gi, Vec3(-1.0, -0.0, 0.0), w, w).theta, std::numbers::pi);
+  EXPECT_EQ(twist_angle(fi, gi, Vec3(-1.0, 0.0, 0.0), w, w).theta, std::numbers::pi);
+  for (const double theta : {-3.14, -2.0, -0.5, 0.0, 0.5, 2.0, 3.14})
+    EXPECT_NEAR(twist_angle(fi, gi, Vec3(std::cos(theta), std::sin(theta), 0.0), w, w).theta, theta,
+                1e-15);
+}
+
 }  // namespace
 }  // namespace orthomech
