@@ -158,6 +158,20 @@ CrankRange calc_crank_range(const FourBar& linkage) noexcept {
   return range;
 }
 
+const char* to_string(SynthesisStatus status) noexcept {
+  switch (status) {
+    case SynthesisStatus::ok:
+      return "ok";
+    case SynthesisStatus::no_linkage:
+      return "no linkage";
+    case SynthesisStatus::branch_defect:
+      return "branch defect";
+    case SynthesisStatus::not_converged:
+      return "not converged";
+  }
+  return "?";
+}
+
 // Slider-crank (L8): A = O + r (cos θ, sin θ); in the line frame (t, n) A − O = (u, v); the
 // slider B = O + e n + s t with |B − A| = l gives (s − u)² + (e − v)² = l², so
 // s = u + branch · √(l² − (e − v)²); outside the range the root is taken 0 (gap |e − v| − l).

@@ -74,18 +74,6 @@ void choose_branch(const std::vector<AnglePair>& pairs, FunctionSynthesisResult&
 
 }  // namespace
 
-const char* to_string(SynthesisStatus status) noexcept {
-  switch (status) {
-    case SynthesisStatus::ok:
-      return "ok";
-    case SynthesisStatus::no_linkage:
-      return "no linkage";
-    case SynthesisStatus::branch_defect:
-      return "branch defect";
-  }
-  return "?";
-}
-
 // Freudenstein synthesis [Freudenstein 1955] (docs/synthesis.md (L9)–(L12)):
 //   1. K from the linear system (L11) (3 pairs, exact) or its least-squares solution (L12);
 //   2. the lengths from (L10) with signed a, c: c = −d/K1, a = −d/K2,

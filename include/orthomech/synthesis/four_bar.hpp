@@ -82,6 +82,16 @@ struct CrankRange {
 };
 [[nodiscard]] CrankRange calc_crank_range(const FourBar& linkage) noexcept;
 
+// The outcome of every synthesis function (function_generation.hpp, motion_generation.hpp,
+// path_generation.hpp): data, never an exception.
+enum class SynthesisStatus {
+  ok,             // a linkage was found and reproduces the data within the stated residual
+  no_linkage,     // the data give no real linkage (b² ≤ 0, a or c infinite, singular system)
+  branch_defect,  // the precision points lie on different assembly branches
+  not_converged,  // an iterative search stopped without meeting its tolerance (best so far)
+};
+[[nodiscard]] const char* to_string(SynthesisStatus status) noexcept;
+
 // ---- slider-crank ---------------------------------------------------------------------------
 // Crank pivot O, crank r = |OA|, coupler l = |AB|, slider B on the line through O + e·n with
 // direction t = (cos γ, sin γ), n = (−sin γ, cos γ) (e the offset); slider position s along t

@@ -25,13 +25,6 @@ struct AnglePair {
   double psi = 0.0;  // output angle ψ
 };
 
-enum class SynthesisStatus {
-  ok,             // a linkage was found and reproduces the data within the stated residual
-  no_linkage,     // the data give no real linkage (b² ≤ 0, a or c infinite, singular system)
-  branch_defect,  // the precision points lie on different assembly branches
-};
-[[nodiscard]] const char* to_string(SynthesisStatus status) noexcept;
-
 struct FunctionSynthesisResult {
   SynthesisStatus status = SynthesisStatus::no_linkage;
   std::string message;
