@@ -85,6 +85,7 @@ Dyad make_dyad(const std::vector<Pose>& poses, const Vec2& m, const Vec2& z) {
   d.fixed_pivot = m;
   d.moving_pivot = z;
   std::vector<double> r;
+  r.reserve(poses.size());
   for (const Pose& p : poses) r.push_back((p.position + rotation(p.angle) * z - m).norm());
   for (const double ri : r) d.radius += ri / static_cast<double>(r.size());
   for (const double ri : r) d.residual = std::max(d.residual, std::abs(ri - d.radius));
@@ -350,6 +351,7 @@ ConjugatePivot calc_centre_point(const std::vector<Pose>& poses, const Vec2& cir
   check_argument(poses.size() == 2 || poses.size() == 3, "calc_centre_point", "poses",
                  "needs 2 or 3 poses");
   std::vector<Vec2> Z;  // (L15a): the moving pivot's world positions Z_j = P_j + R(θ_j) z
+  Z.reserve(poses.size());
   for (const Pose& p : poses) Z.emplace_back(p.position + rotation(p.angle) * circle_point);
   return circumcentre(Z, pose_spread(poses) + circle_point.norm());
 }
@@ -358,6 +360,7 @@ ConjugatePivot calc_circle_point(const std::vector<Pose>& poses, const Vec2& cen
   check_argument(poses.size() == 2 || poses.size() == 3, "calc_circle_point", "poses",
                  "needs 2 or 3 poses");
   std::vector<Vec2> w;  // (L15b): the fixed pivot seen from the body, R(θ_j)ᵀ(m − P_j)
+  w.reserve(poses.size());
   for (const Pose& p : poses)
     w.emplace_back(rotation(p.angle).transpose() * (centre_point - p.position));
   return circumcentre(w, pose_spread(poses) + centre_point.norm());
