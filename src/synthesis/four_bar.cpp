@@ -91,7 +91,7 @@ const char* to_string(GrashofType type) noexcept {
 
 // Grashof's criterion (L6): with s the shortest, l the longest and p, q the other two links,
 // s + l < p + q lets the shortest link turn fully relative to its neighbours; the shortest
-// link's place names the type [Norton 2012, §2.12]. Ties for the shortest are resolved in the
+// link's place names the type [Norton 2012, ch. 2]. Ties for the shortest are resolved in the
 // order crank, ground, follower, coupler (a full-turning crank is reported first).
 GrashofType classify_grashof(const FourBar& linkage, double relative_tolerance) noexcept {
   const double d = ground_length(linkage);

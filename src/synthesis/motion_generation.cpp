@@ -366,10 +366,10 @@ ConjugatePivot calc_circle_point(const std::vector<Pose>& poses, const Vec2& cen
   return circumcentre(w, pose_spread(poses) + centre_point.norm());
 }
 
-// The centre-point curve of 4 poses (L16) [Sandor & Erdman 1984, §2.9; McCarthy & Soh 2011,
-// §4.5]: det C(m) = 0 with C's rows (a_j(m)ᵀ, c_j(m)), j = 2, 3, 4. On the line m = P_1k + t u the
-// entries are affine in t, det C is a cubic with the root t = 0 (the pole is on the curve); the
-// other two roots are curve points, each with its circle point from the (compatible) rows.
+// The centre-point curve of 4 poses (L16) [Sandor & Erdman 1984, ch. 2; McCarthy & Soh
+// 2011, ch. 4]: det C(m) = 0 with C's rows (a_j(m)ᵀ, c_j(m)), j = 2, 3, 4. On the line m = P_1k + t
+// u the entries are affine in t, det C is a cubic with the root t = 0 (the pole is on the curve);
+// the other two roots are curve points, each with its circle point from the (compatible) rows.
 CentrePointCurve sample_centre_point_curve(const std::vector<Pose>& poses, int rays) {
   check_argument(poses.size() == 4, "sample_centre_point_curve", "poses", "needs exactly 4 poses");
   check_argument(rays >= 1, "sample_centre_point_curve", "rays", "must be at least 1");

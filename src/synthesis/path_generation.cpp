@@ -79,8 +79,8 @@ FourBar decode(const Problem& pb, const Eigen::VectorXd& x, std::vector<double>&
   return fb;
 }
 
-// The residual vector of (L21): coupler-point misses (2N), √w · closure-slack deficits (N), √w · the
-// crank-rocker violations (2, (L22)), √w · the timing's excess over a turn (1).
+// The residual vector of (L21): coupler-point misses (2N), √w · closure-slack deficits (N), √w ·
+// the crank-rocker violations (2, (L22)), √w · the timing's excess over a turn (1).
 int residual_count(const Problem& pb) { return 3 * static_cast<int>(pb.T.size()) + 3; }
 
 void residuals(const Problem& pb, const Eigen::VectorXd& x, std::vector<double>& theta,

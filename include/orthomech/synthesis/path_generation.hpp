@@ -4,16 +4,16 @@
 //
 // The coupler point P(θ) of calc_position (four_bar.hpp) should pass through target points T_i.
 // Objective (L21): F = Σ_i |P(θ_i) − T_i|² + w Σ (penalties)², the penalties being the loop's
-// closure deficit at each θ_i (its slack below a margin of 1e-5 spreads), the Grashof crank-rocker violation when required, and the timing's
-// excess over one turn (untimed). The reported `error` is the first sum alone (the squared
-// distances, the measure of the published benchmarks), in the targets' units squared.
-// Variables: A0, the ground angle θ_g and length d (so B0 = A0 + d (cos θ_g, sin θ_g)), a, b, c,
-// the coupler point (p, q) and the timing: θ_i = θ_g + φ_i with φ_i given (timed, angles relative
-// to the ground line), θ_g + θ_0 + φ_i (timed with a free start θ_0), or θ_0 + s Σ_{k≤i} δ_k with
-// δ_k ≥ 0 (untimed: a free start and non-negative increments, s = ±1 the turning sense).
-// Search: multistart BOBYQA over a seeded quasi-random design (NLopt through the private adapter)
-// from every branch (and turning sense) asked for, then a Levenberg–Marquardt polish of the best
-// runs on the residual vector of F (L23). Deterministic for a given seed.
+// closure deficit at each θ_i (its slack below a margin of 1e-5 spreads), the Grashof crank-rocker
+// violation when required, and the timing's excess over one turn (untimed). The reported `error` is
+// the first sum alone (the squared distances, the measure of the published benchmarks), in the
+// targets' units squared. Variables: A0, the ground angle θ_g and length d (so B0 = A0 + d (cos
+// θ_g, sin θ_g)), a, b, c, the coupler point (p, q) and the timing: θ_i = θ_g + φ_i with φ_i given
+// (timed, angles relative to the ground line), θ_g + θ_0 + φ_i (timed with a free start θ_0), or
+// θ_0 + s Σ_{k≤i} δ_k with δ_k ≥ 0 (untimed: a free start and non-negative increments, s = ±1 the
+// turning sense). Search: multistart BOBYQA over a seeded quasi-random design (NLopt through the
+// private adapter) from every branch (and turning sense) asked for, then a Levenberg–Marquardt
+// polish of the best runs on the residual vector of F (L23). Deterministic for a given seed.
 #include <Eigen/Core>
 #include <optional>
 #include <string>
