@@ -92,6 +92,19 @@ TEST(FunctionGeneration, L10_NegativeCrankBecomesAnInputOffset) {
   EXPECT_LT(r.max_output_error, kExactAngle);
 }
 
+TEST(FunctionGeneration, L9_PairsOnBothBranchesAreABranchDefect) {
+  // (L9) holds on both branches, so two open-branch pairs and one crossed-branch pair give the
+  // crank-rocker's K exactly, but no single branch passes through all three.
+  FourBar open = crank_rocker(), crossed = crank_rocker();
+  crossed.branch = -1;
+  std::vector<AnglePair> pairs = sample(open, {30 * kDeg, 140 * kDeg});
+  pairs.push_back(sample(crossed, {260 * kDeg})[0]);
+  const FunctionSynthesisResult r = synthesize_function_generator(pairs, 70.0);
+  EXPECT_EQ(r.status, SynthesisStatus::branch_defect) << r.message;
+  EXPECT_NE(r.message.find("different assembly branches"), std::string::npos) << r.message;
+  expect_same_linkage(r.linkage, open);
+}
+
 TEST(FunctionGeneration, L13_ChebyshevSpacingAndALogarithmGenerator) {
   const std::vector<double> x = chebyshev_spacing(3, 1.0, 2.0);
   ASSERT_EQ(x.size(), 3U);

@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <numbers>
 #include <stdexcept>
@@ -60,6 +61,26 @@ TEST(PathGeneration, L21_TimedRoundTripFindsTheCrankRocker) {
   EXPECT_NEAR(r.linkage.b, want.b, 1e-8);
   EXPECT_NEAR(r.linkage.c, want.c, 1e-8);
   EXPECT_NEAR((r.linkage.coupler_point - want.coupler_point).norm(), 0.0, 1e-8);
+}
+
+TEST(PathGeneration, L24_FreeStartRecoversTheCrankOffset) {
+  // The crank-rocker's points at θ = 40° + φ_i, given φ_i only: the start θ_0 = 40° is found.
+  std::vector<Vec2> targets;
+  PathSynthesisOptions o;
+  o.timing = PathTiming::prescribed_free_start;
+  for (const double a : kRoundTripAngles) {
+    targets.push_back(calc_position(crank_rocker(), (a + 40.0) * kDeg).P);
+    o.crank_angles.push_back(a * kDeg);
+  }
+  o.starts = 60;
+  o.branch = 1;
+  const PathSynthesisResult r = synthesize_path_generator(targets, o);
+  ASSERT_EQ(r.status, SynthesisStatus::ok) << r.message;
+  expect_consistent(r, targets);
+  EXPECT_LE(r.max_distance, 1e-10);
+  // θ_g + θ_0 is determined (the ground angle and the start trade off only through it).
+  EXPECT_NEAR(std::remainder(r.crank_angles[0] - 40.0 * kDeg, 2 * std::numbers::pi), 0.0, 1e-8);
+  EXPECT_NEAR(r.linkage.a, 30.0, 1e-8);
 }
 
 TEST(PathGeneration, L24_UntimedRoundTripPassesThroughThePoints) {
