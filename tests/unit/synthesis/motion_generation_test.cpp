@@ -117,6 +117,16 @@ TEST(MotionGeneration, L16_CentrePointCurvePointsSatisfyTheFourPoses) {
   }
 }
 
+TEST(MotionGeneration, L16_TranslationsOnlyAndMisuse) {
+  const std::vector<Pose> shifted{{{0, 0}, 0.3}, {{1, 0}, 0.3}, {{2, 1}, 0.3}, {{0, 3}, 0.3}};
+  const CentrePointCurve curve = sample_centre_point_curve(shifted);
+  EXPECT_EQ(curve.status, SynthesisStatus::no_linkage);
+  EXPECT_NE(curve.message.find("translations"), std::string::npos) << curve.message;
+  EXPECT_THROW((void)sample_centre_point_curve({shifted[0], shifted[1], shifted[2]}),
+               std::invalid_argument);
+  EXPECT_THROW((void)sample_centre_point_curve(shifted, 0), std::invalid_argument);
+}
+
 TEST(MotionGeneration, L17_FivePosesFindTheCrankRocker) {
   const std::vector<Pose> poses = sample_poses(crank_rocker(), {0, 60, 130, 210, 300});
   const MotionSynthesisResult r = synthesize_motion_generator(poses);
