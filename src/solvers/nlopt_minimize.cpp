@@ -2,7 +2,11 @@
 
 #include <nlopt.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <random>
+#include <utility>
 #include <vector>
 
 namespace orthomech::solvers {
@@ -144,6 +148,68 @@ NloptOutcome minimize_bounded(const std::function<double(const Eigen::VectorXd&)
       out.kind = NloptOutcomeKind::failed;
       out.message = "NLopt failed (code " + std::to_string(static_cast<int>(r)) + ")";
       break;
+  }
+  return out;
+}
+
+namespace {
+
+constexpr std::array<int, 40> kPrimes{
+    2,  3,  5,  7,  11, 13,  17,  19,  23,  29,  31,  37,  41,  43,  47,  53,  59,  61,  67,  71,
+    73, 79, 83, 89, 97, 101, 103, 107, 109, 113, 127, 131, 137, 139, 149, 151, 157, 163, 167, 173};
+
+// The radical inverse of `index` in `base` (the Halton coordinate).
+double radical_inverse(long long index, int base) {
+  double inv = 1.0 / base, f = inv, r = 0.0;
+  while (index > 0) {
+    r += f * static_cast<double>(index % base);
+    index /= base;
+    f *= inv;
+  }
+  return r;
+}
+
+}  // namespace
+
+Eigen::MatrixXd quasi_random_starts(const Eigen::VectorXd& lower, const Eigen::VectorXd& upper,
+                                    int count, unsigned long long seed) {
+  const auto n = static_cast<int>(std::min<Eigen::Index>(lower.size(), kPrimes.size()));
+  Eigen::MatrixXd X(lower.size(), std::max(count, 0));
+  std::mt19937_64 rng(seed);
+  Eigen::VectorXd shift(lower.size());
+  // 53 random bits → [0, 1): the same numbers on every standard library.
+  for (Eigen::Index i = 0; i < shift.size(); ++i)
+    shift(i) = static_cast<double>(rng() >> 11) * 0x1.0p-53;
+  for (int k = 0; k < count; ++k)
+    for (Eigen::Index i = 0; i < lower.size(); ++i) {
+      const int base = kPrimes[static_cast<std::size_t>(std::min<Eigen::Index>(i, n - 1))];
+      double u = radical_inverse(k + 1, base) + shift(i);
+      u -= std::floor(u);
+      X(i, k) = lower(i) + u * (upper(i) - lower(i));
+    }
+  return X;
+}
+
+MultistartOutcome minimize_multistart(const std::function<double(const Eigen::VectorXd&)>& f,
+                                      const Eigen::VectorXd& lower, const Eigen::VectorXd& upper,
+                                      const MultistartSettings& settings) {
+  MultistartOutcome out;
+  out.best.x = lower;
+  out.best.value = HUGE_VAL;
+  out.best.message = "no start";
+  const Eigen::MatrixXd grid = quasi_random_starts(lower, upper, settings.starts, settings.seed);
+  const auto runs = static_cast<int>(settings.extra_starts.size()) + static_cast<int>(grid.cols());
+  out.locals.reserve(static_cast<std::size_t>(runs));
+  for (int k = 0; k < runs; ++k) {
+    const auto extra = static_cast<int>(settings.extra_starts.size());
+    const Eigen::VectorXd x0 =
+        k < extra ? settings.extra_starts[static_cast<std::size_t>(k)] : grid.col(k - extra);
+    NloptOutcome r = minimize_bounded(f, x0, lower, upper, settings.local);
+    out.evaluations += r.evaluations;
+    const bool stop = r.kind == NloptOutcomeKind::callback_error;
+    if (stop || r.value < out.best.value || k == 0) out.best = r;
+    out.locals.push_back(std::move(r));
+    if (stop) break;
   }
   return out;
 }

@@ -7,6 +7,7 @@
 #include <exception>
 #include <functional>
 #include <string>
+#include <vector>
 
 namespace orthomech::solvers {
 
@@ -41,6 +42,34 @@ struct NloptSettings {
                                             const Eigen::VectorXd& x0, const Eigen::VectorXd& lower,
                                             const Eigen::VectorXd& upper,
                                             const NloptSettings& settings = {});
+
+// Global search by multistart (issue 50): the local method of minimize_bounded from each of the
+// starts `extra_starts` (first, in order) and then `starts` quasi-random points of the box
+// (quasi_random_starts). Deterministic for a given seed. Stops at the first callback error
+// (that outcome is then `best`). Never throws (std::bad_alloc aside).
+struct MultistartSettings {
+  int starts = 64;
+  unsigned long long seed = 1;
+  NloptSettings local;
+  std::vector<Eigen::VectorXd> extra_starts;
+};
+
+struct MultistartOutcome {
+  NloptOutcome best;                 // the lowest value over the runs
+  std::vector<NloptOutcome> locals;  // one per run, in start order
+  int evaluations = 0;               // over all runs
+};
+
+[[nodiscard]] MultistartOutcome minimize_multistart(
+    const std::function<double(const Eigen::VectorXd&)>& f, const Eigen::VectorXd& lower,
+    const Eigen::VectorXd& upper, const MultistartSettings& settings = {});
+
+// `count` points of the box [lower, upper] (columns): the Halton sequence (bases the first
+// primes, dimension ≤ 40), shifted modulo 1 by a vector drawn from std::mt19937_64(seed)
+// (a Cranley–Patterson rotation), mapped affinely onto the box.
+[[nodiscard]] Eigen::MatrixXd quasi_random_starts(const Eigen::VectorXd& lower,
+                                                  const Eigen::VectorXd& upper, int count,
+                                                  unsigned long long seed);
 
 [[nodiscard]] const char* to_string(NloptOutcomeKind k);
 

@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <stdexcept>
 
 namespace orthomech::solvers {
@@ -66,6 +67,58 @@ TEST(NloptAdapter, NaN_InvalidBounds_EvaluationLimit_AreStatuses) {
                              VectorXd::Constant(1, 1.0), s)
                 .kind,
             NloptOutcomeKind::max_evaluations);
+}
+
+// Multistart (issue 50): the global minimum of a 2-D function with many local minima, found
+// from the quasi-random design; oracle: the minimiser by hand. f = Σ (x_i² − 10 cos 2πx_i) + 20
+// (Rastrigin) has its global minimum 0 at the origin and a local minimum near every integer point.
+TEST(NloptAdapter, Multistart_FindsTheGlobalMinimumOfRastrigin) {
+  const auto f = [](const VectorXd& x) {
+    double v = 20.0;
+    for (int i = 0; i < 2; ++i) v += x(i) * x(i) - 10.0 * std::cos(2.0 * std::numbers::pi * x(i));
+    return v;
+  };
+  MultistartSettings s;
+  s.starts = 200;
+  s.seed = 7;
+  const MultistartOutcome r =
+      minimize_multistart(f, VectorXd::Constant(2, -4.2), VectorXd::Constant(2, 4.7), s);
+  EXPECT_EQ(r.best.kind, NloptOutcomeKind::converged) << r.best.message;
+  EXPECT_NEAR(r.best.x(0), 0.0, 1e-6);
+  EXPECT_NEAR(r.best.x(1), 0.0, 1e-6);
+  EXPECT_EQ(r.locals.size(), 200U);
+  // Deterministic: the same seed gives the same runs, another seed other starts.
+  const MultistartOutcome again =
+      minimize_multistart(f, VectorXd::Constant(2, -4.2), VectorXd::Constant(2, 4.7), s);
+  EXPECT_EQ(again.evaluations, r.evaluations);
+  EXPECT_EQ(again.best.x, r.best.x);
+}
+
+TEST(NloptAdapter, QuasiRandomStartsFillTheBoxAndFollowTheSeed) {
+  const VectorXd lo = VectorXd::Constant(3, -1.0), hi = VectorXd::Constant(3, 2.0);
+  const Eigen::MatrixXd X = quasi_random_starts(lo, hi, 64, 3);
+  ASSERT_EQ(X.cols(), 64);
+  EXPECT_GE(X.minCoeff(), -1.0);
+  EXPECT_LT(X.maxCoeff(), 2.0);
+  // Every eighth of each axis holds a point (a low-discrepancy set, unlike 64 clumped draws).
+  for (int i = 0; i < 3; ++i)
+    for (int bin = 0; bin < 8; ++bin) {
+      bool hit = false;
+      for (int k = 0; k < 64; ++k) hit = hit || static_cast<int>((X(i, k) + 1.0) / 3.0 * 8) == bin;
+      EXPECT_TRUE(hit) << "axis " << i << " bin " << bin;
+    }
+  EXPECT_EQ(quasi_random_starts(lo, hi, 64, 3), X);
+  EXPECT_NE(quasi_random_starts(lo, hi, 64, 4), X);
+}
+
+TEST(NloptAdapter, Multistart_StopsAtTheFirstCallbackError) {
+  const auto f = [](const VectorXd&) -> double { throw std::runtime_error("boom"); };
+  MultistartSettings s;
+  s.starts = 10;
+  const MultistartOutcome r =
+      minimize_multistart(f, VectorXd::Constant(2, -1.0), VectorXd::Constant(2, 1.0), s);
+  EXPECT_EQ(r.best.kind, NloptOutcomeKind::callback_error);
+  EXPECT_EQ(r.locals.size(), 1U);
 }
 
 }  // namespace
