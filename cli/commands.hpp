@@ -22,4 +22,6 @@ void register_crosscheck(CLI::App& app, const GlobalOptions& globals, int& exit_
 void register_render(CLI::App& app, const GlobalOptions& globals, int& exit_code);
 // `sweep`: a design study of many variants (sweep.cpp).
 void register_sweep(CLI::App& app, const GlobalOptions& globals, int& exit_code);
+// `synthesize TASK`: four-bars from the motion, path or law wanted, validated (synthesize.cpp).
+void register_synthesize(CLI::App& app, const GlobalOptions& globals, int& exit_code);
 }  // namespace orthomech::cli

@@ -29,6 +29,17 @@ std::string mechanism_test_name(const ::testing::TestParamInfo<const char*>& inf
 
 class Crosscheck : public ::testing::TestWithParam<const char*> {};
 
+// 5 states of a 0.2 s motion, seed 1, the forms' agreement as tolerance, by `method`.
+CrosscheckOptions options(CrosscheckMethod method) {
+  CrosscheckOptions o;
+  o.samples = 5;
+  o.t_end = 0.2;
+  o.seed = 1;
+  o.tolerance = kFormsAgree;
+  o.method = method;
+  return o;
+}
+
 // A bundled mechanism's cross-check at 5 states by `method`: it passes, with the primal form
 // checked and every difference within kFormsAgree.
 CrosscheckResult check_bundled(const std::string& name, CrosscheckMethod method) {
@@ -65,8 +76,7 @@ INSTANTIATE_TEST_SUITE_P(Bundled, Crosscheck,
 // equation is redundant; the dual identities still run and pass.
 TEST(CrosscheckRedundant, TripleCrank_PrimalSkippedWithReason) {
   const Model model = test::load_bundled("triple-crank");
-  const CrosscheckResult r =
-      run_crosscheck(model, {5, 0.2, 1, kFormsAgree, CrosscheckMethod::dense});
+  const CrosscheckResult r = run_crosscheck(model, options(CrosscheckMethod::dense));
   EXPECT_TRUE(r.pass) << r.message;
   EXPECT_FALSE(r.primal_checked);
   EXPECT_NE(r.primal_skipped_reason.find("joint 'O2'"), std::string::npos)
@@ -104,7 +114,7 @@ INSTANTIATE_TEST_SUITE_P(Bundled, CrosscheckProbes,
 // (E λ = R with λ on the chart's rows) still run and pass.
 TEST(CrosscheckProbes, TripleCrank_PrimalSkippedWithReason) {
   const Model model = test::load_bundled("triple-crank");
-  CrosscheckOptions o{5, 0.2, 1, kFormsAgree, CrosscheckMethod::probes};
+  CrosscheckOptions o = options(CrosscheckMethod::probes);
   const CrosscheckResult r = run_crosscheck(model, o);
   EXPECT_TRUE(r.pass) << r.message;
   EXPECT_FALSE(r.primal_checked);

@@ -1,0 +1,59 @@
+#pragma once
+// A synthesis task from its targets to validated, ranked candidates (issue 50; docs/cli.md,
+// "synthesize"). The one algorithm behind `orthomech synthesize`:
+//   1. the generator of the task's kind: Burmester motion generation (motion_generation.hpp),
+//      path generation by global search (path_generation.hpp), Freudenstein function generation
+//      (function_generation.hpp);
+//   2. each four-bar written as a mechanism file (the format every command reads), with one
+//      design position per target (its crank angle, the target point and, for a pose, the
+//      coupler's angle);
+//   3. that file read back and validated as `validate` does (analysis/validate.hpp: assembly at
+//      every target, the target met, circuit, branch and order defects, transmission angle,
+//      singular positions), plus the task's own requirements (Grashof crank-rocker) and the
+//      worst transmission angle over the motion through the targets (the closed form of
+//      four_bar.hpp, every degree of crank);
+//   4. a candidate that fails anything is rejected with its reasons, never returned as a
+//      solution; the others are ranked (worst transmission angle, largest first; or the distance
+//      to the targets, smallest first).
+// Results are data: nothing here throws for a numerical outcome.
+#include <string>
+#include <vector>
+
+#include "orthomech/synthesis/four_bar.hpp"
+#include "orthomech/synthesis/task.hpp"
+
+namespace orthomech::synthesis {
+
+struct SynthesisCandidate {
+  std::string name;    // "candidate-1" … in rank order (accepted), "rejected-1" … (rejected)
+  std::string method;  // e.g. "Burmester points 1 and 3", "path search, branch +1"
+  FourBar linkage;
+  std::vector<double> crank_angles;  // rad at the targets, in the targets' order, unwrapped
+  double max_distance = 0.0;         // m: largest distance of the coupler point (function: of
+                                     // the follower pin) from its target
+  double max_angle_error = 0.0;      // rad: motion: the coupler's angle; function: the output's
+  GrashofType grashof = GrashofType::triple_rocker;
+  double worst_transmission = 0.0;      // rad: min over the motion of min(μ, π − μ)
+  std::vector<std::string> rejections;  // empty: accepted
+  std::string file_text;                // the mechanism file (YAML)
+  size_t task = 0;                      // internal: which generator output it is
+  [[nodiscard]] bool accepted() const { return rejections.empty(); }
+};
+
+struct SynthesisResult {
+  TaskKind kind = TaskKind::motion;
+  SynthesisStatus status = SynthesisStatus::no_linkage;  // of the generator
+  std::string message;                                   // the generator's, or why none
+  double tolerance = 0.0;                    // m: the distance to a target a candidate may have
+  std::vector<SynthesisCandidate> accepted;  // ranked
+  std::vector<SynthesisCandidate> rejected;
+};
+
+[[nodiscard]] SynthesisResult run_synthesis(const SynthesisTask& task);
+
+// The mechanism file of a four-bar at the crank angles of its targets (exposed for tests).
+[[nodiscard]] std::string four_bar_file(const SynthesisTask& task, const FourBar& linkage,
+                                        const std::vector<double>& crank_angles, double tolerance,
+                                        const std::string& name);
+
+}  // namespace orthomech::synthesis

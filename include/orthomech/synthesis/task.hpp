@@ -1,0 +1,57 @@
+#pragma once
+// A synthesis task file (issue 50; docs/file-format.md, "Synthesis tasks"): what a designer
+// wants of a planar four-bar — coupler poses (motion generation), coupler points (path
+// generation) or input–output angle pairs (function generation) — with the requirements its
+// candidates must meet and the mechanism each candidate is written as. Read once, validated,
+// immutable; every mistake an InputError at its file:line with the element's name.
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "orthomech/synthesis/four_bar.hpp"
+
+namespace orthomech::synthesis {
+
+enum class TaskKind { motion, path, function };
+[[nodiscard]] const char* to_string(TaskKind kind) noexcept;
+
+// A path task's timing (path_generation.hpp, PathTiming): the crank angles at the points given
+// (from the ground line), given up to a free start, or free (matched in order).
+enum class TaskTiming { prescribed, free_start, free };
+[[nodiscard]] const char* to_string(TaskTiming timing) noexcept;
+
+struct SynthesisTask {
+  std::string file;  // where it was read from (messages)
+  std::string name;
+  TaskKind kind = TaskKind::motion;
+  // The task's units, as a mechanism file's: the candidates are written in them. SI factors.
+  std::string length_unit = "mm", angle_unit = "deg";
+  double length_si = 1e-3, angle_si = 0.017453292519943295;
+  // Targets, in SI (m, rad). motion: poses of the coupler frame; path: points; function: pairs.
+  std::vector<Vec2> positions;  // motion and path: P_j
+  std::vector<double> angles;   // motion: θ_j of the pose
+  std::vector<double> inputs;   // function: φ_i; path (timed): φ_i from the ground line
+  std::vector<double> outputs;  // function: ψ_i
+  double ground = 0.0;          // function: the ground length d (m)
+  TaskTiming timing = TaskTiming::free;
+  std::optional<Vec2> fixed_pivot;     // path: A0 given
+  std::optional<double> ground_angle;  // path: θ_g given (rad)
+  // Requirements of a candidate (every one is validated; these are checked besides).
+  bool crank_rocker = false;                     // Grashof with the crank the shortest link
+  double min_transmission = 0.5235987755982988;  // rad: the worst transmission angle allowed
+  double tolerance = 0.0;  // m: how far from a target a candidate's point may be (0: automatic)
+  // Search.
+  unsigned long seed = 1;
+  int starts = 200;
+  // The mechanism a candidate is written as: link mass per length (kg/m), the driver's speed.
+  double mass_per_length = 1.0;          // kg/m (1 g/mm, a 20 × 6 mm steel bar is 0.94)
+  double speed = 6.283185307179586;      // rad/s (60 rpm)
+  std::string rank_by = "transmission";  // or "error"
+};
+
+// Reads a task from YAML text (`origin` names it in messages) or from a file. Throws InputError.
+[[nodiscard]] SynthesisTask parse_synthesis_task(const std::string& text,
+                                                 const std::string& origin);
+[[nodiscard]] SynthesisTask load_synthesis_task(const std::string& path);
+
+}  // namespace orthomech::synthesis

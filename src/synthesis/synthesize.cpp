@@ -1,0 +1,345 @@
+#include "orthomech/synthesis/synthesize.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+#include <sstream>
+
+#include "orthomech/analysis/validate.hpp"
+#include "orthomech/error.hpp"
+#include "orthomech/io/mechanism_file.hpp"
+#include "orthomech/synthesis/function_generation.hpp"
+#include "orthomech/synthesis/motion_generation.hpp"
+#include "orthomech/synthesis/path_generation.hpp"
+
+namespace orthomech::synthesis {
+
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+constexpr double kDegree = kPi / 180.0;
+
+// A generator's four-bar before it is checked.
+struct Raw {
+  FourBar linkage;
+  std::vector<double> crank_angles;
+  std::string method;
+  double output_offset = 0.0;  // function: the follower's angle is ψ + this
+};
+
+// ---- 1. The generators -------------------------------------------------------------------------
+
+std::vector<Raw> motion_candidates(const SynthesisTask& task, SynthesisResult& result) {
+  std::vector<Pose> poses;
+  for (size_t j = 0; j < task.positions.size(); ++j)
+    poses.push_back({task.positions[j], task.angles[j]});
+  MotionSynthesisOptions o;
+  o.seed = task.seed;
+  o.starts = std::max(8, task.starts / 2);
+  const MotionSynthesisResult m = synthesize_motion_generator(poses, o);
+  result.status = m.status;
+  result.message = m.message;
+  std::vector<Raw> raw;
+  for (const MotionCandidate& c : m.candidates)
+    raw.push_back({c.linkage, c.crank_angles,
+                   (poses.size() == 5 ? "Burmester dyads " : "least-squares dyads ") +
+                       std::to_string(c.crank_dyad + 1) + " (crank) and " +
+                       std::to_string(c.follower_dyad + 1) + " (follower)"});
+  return raw;
+}
+
+std::vector<Raw> path_candidates(const SynthesisTask& task, SynthesisResult& result) {
+  std::vector<Raw> raw;
+  for (const int branch : {1, -1}) {
+    PathSynthesisOptions o;
+    o.timing = task.timing == TaskTiming::prescribed   ? PathTiming::prescribed
+               : task.timing == TaskTiming::free_start ? PathTiming::prescribed_free_start
+                                                       : PathTiming::free;
+    o.crank_angles = task.inputs;
+    o.fixed_A0 = task.fixed_pivot;
+    o.fixed_ground_angle = task.ground_angle;
+    o.require_crank_rocker = task.crank_rocker;
+    o.branch = branch;
+    o.starts = task.starts;
+    o.seed = task.seed;
+    const PathSynthesisResult p = synthesize_path_generator(task.positions, o);
+    if (result.status != SynthesisStatus::ok) result.status = p.status, result.message = p.message;
+    if (p.status == SynthesisStatus::no_linkage) continue;
+    raw.push_back({p.linkage, p.crank_angles,
+                   std::string("path search on branch ") + (branch > 0 ? "+1" : "-1")});
+  }
+  return raw;
+}
+
+std::vector<Raw> function_candidates(const SynthesisTask& task, SynthesisResult& result) {
+  std::vector<AnglePair> pairs;
+  for (size_t i = 0; i < task.inputs.size(); ++i)
+    pairs.push_back({task.inputs[i], task.outputs[i]});
+  const FunctionSynthesisResult f = synthesize_function_generator(pairs, task.ground);
+  result.status = f.status;
+  result.message = f.message;
+  if (f.status == SynthesisStatus::no_linkage) return {};
+  std::vector<double> crank;
+  for (const double phi : task.inputs) crank.push_back(phi + f.input_offset);
+  return {{f.linkage, crank,
+           pairs.size() == 3 ? "Freudenstein, 3 precision pairs" : "Freudenstein, least squares",
+           f.output_offset}};
+}
+
+// ---- 2. Checks of the closed form -----------------------------------------------------------
+
+// The crank angles unwrapped in the targets' order, turning the way that reaches them all in
+// less than a turn (the smaller total); false when neither sense does (an order defect).
+bool unwrap_in_order(std::vector<double>& angles) {
+  if (angles.size() < 2) return true;
+  double ccw = 0.0, cw = 0.0;
+  std::vector<double> step(angles.size(), 0.0);
+  for (size_t j = 1; j < angles.size(); ++j) {
+    step[j] = std::fmod(std::fmod(angles[j] - angles[j - 1], 2 * kPi) + 2 * kPi, 2 * kPi);
+    ccw += step[j];
+    cw += step[j] > 0.0 ? 2 * kPi - step[j] : 0.0;
+  }
+  const bool forward = ccw <= cw;
+  for (size_t j = 1; j < angles.size(); ++j)
+    angles[j] = angles[j - 1] + (forward ? step[j] : (step[j] > 0.0 ? step[j] - 2 * kPi : 0.0));
+  return std::min(ccw, cw) < 2 * kPi;
+}
+
+// Distances to the targets by the closed form (calc_position), and the worst transmission angle
+// over the crank's motion from the first target to the last (every degree and at the targets).
+void check_closed_form(const SynthesisTask& task, SynthesisCandidate& c) {
+  const FourBar& fb = c.linkage;
+  for (size_t j = 0; j < c.crank_angles.size(); ++j) {
+    const FourBarPosition p = calc_position(fb, c.crank_angles[j]);
+    if (!p.assembles) {
+      c.rejections.push_back("it does not assemble at target " + std::to_string(j + 1));
+      continue;
+    }
+    if (task.kind == TaskKind::function) {  // the output angle, and the pin B's distance
+      const double psi = task.outputs[j];   // the follower's world angle (offset included)
+      const Vec2 B = fb.B0 + fb.c * Vec2(std::cos(psi), std::sin(psi));
+      c.max_distance = std::max(c.max_distance, (p.B - B).norm());
+      c.max_angle_error =
+          std::max(c.max_angle_error, std::abs(std::remainder(p.follower_angle - psi, 2 * kPi)));
+      continue;
+    }
+    c.max_distance = std::max(c.max_distance, (p.P - task.positions[j]).norm());
+    if (task.kind == TaskKind::motion)
+      c.max_angle_error = std::max(
+          c.max_angle_error, std::abs(std::remainder(p.frame_angle - task.angles[j], 2 * kPi)));
+  }
+  c.grashof = classify_grashof(fb);
+  if (task.crank_rocker && c.grashof != GrashofType::crank_rocker)
+    c.rejections.push_back(std::string("not a Grashof crank-rocker (") + to_string(c.grashof) +
+                           "), which the task requires");
+  const double from = c.crank_angles.front(), to = c.crank_angles.back();
+  const int steps = std::max(1, static_cast<int>(std::ceil(std::abs(to - from) / kDegree)));
+  c.worst_transmission = kPi / 2;
+  for (int k = 0; k <= steps; ++k) {
+    const FourBarPosition p = calc_position(fb, from + (to - from) * k / steps);
+    if (!p.assembles) {
+      c.rejections.push_back(
+          "the crank cannot turn from the first target to the last: the "
+          "linkage does not assemble between them");
+      break;
+    }
+    c.worst_transmission =
+        std::min(c.worst_transmission, std::min(p.transmission_angle, kPi - p.transmission_angle));
+  }
+  if (c.worst_transmission < task.min_transmission) {
+    char m[160];
+    std::snprintf(m, sizeof m,
+                  "its worst transmission angle over the motion, %.3g deg, is below %.3g deg",
+                  c.worst_transmission / kDegree, task.min_transmission / kDegree);
+    c.rejections.emplace_back(m);
+  }
+}
+
+// ---- 3. The file, read back and validated -------------------------------------------------------
+
+void check_by_validate(const SynthesisTask& task, SynthesisCandidate& c) {
+  Model model;
+  try {
+    model = parse_mechanism(c.file_text, c.name + ".yaml");
+  } catch (const InputError& e) {
+    c.rejections.push_back(std::string("its mechanism file does not read back: ") + e.what());
+    return;
+  }
+  ValidateOptions vo;
+  vo.min_transmission = task.min_transmission;
+  const ValidationReport report = validate_design_positions(model, vo);
+  for (const PositionReport& p : report.positions)
+    for (const std::string& f : p.failures)
+      c.rejections.push_back("validate, " + p.name + ": " + f);
+  for (const std::string& d : report.defects) c.rejections.push_back("validate: " + d);
+}
+
+// The automatic tolerance: 1e-3 of the targets' size (their largest distance from their centroid;
+// the ground for a function task), at least 1e-9 m.
+double automatic_tolerance(const SynthesisTask& task) {
+  if (task.tolerance > 0.0) return task.tolerance;
+  if (task.kind == TaskKind::function) return std::max(1e-9, 1e-3 * task.ground);
+  Vec2 centre = Vec2::Zero();
+  for (const Vec2& p : task.positions) centre += p;
+  centre /= static_cast<double>(task.positions.size());
+  double size = 0.0;
+  for (const Vec2& p : task.positions) size = std::max(size, (p - centre).norm());
+  return std::max(1e-9, 1e-3 * size);
+}
+
+void rank(const SynthesisTask& task, std::vector<SynthesisCandidate>& list) {
+  std::stable_sort(list.begin(), list.end(), [&](const auto& a, const auto& b) {
+    if (task.rank_by == "error") return a.max_distance < b.max_distance;
+    return a.worst_transmission > b.worst_transmission;
+  });
+}
+
+// ---- The mechanism file
+// --------------------------------------------------------------------------
+
+// A number for the file: every digit a double has.
+std::string num(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.17g", v == 0.0 ? 0.0 : v);
+  return b;
+}
+std::string point(const Vec2& p, double L) {
+  return "[" + num(p.x() / L) + ", " + num(p.y() / L) + "]";
+}
+
+// A uniform slender link of `length` (m) between its frame origin and (length, 0): mass, inertia
+// about its centre m L²/12, in the file's units (kg, kg·unit²).
+void link_body(std::ostringstream& out, const SynthesisTask& task, const std::string& name,
+               double length, const std::string& pose, const std::string& points,
+               const std::string& extra = "") {
+  const double L = task.length_si, m = task.mass_per_length * length;
+  out << "  - name: " << name << "\n    mass: " << num(m)
+      << "\n    inertia: " << num(m * length * length / 12.0 / (L * L)) << "\n    com: ["
+      << num(length / 2.0 / L) << ", 0]\n    pose: " << pose << "\n    points: " << points << "\n"
+      << extra;
+}
+
+}  // namespace
+
+std::string four_bar_file(const SynthesisTask& task, const FourBar& fb,
+                          const std::vector<double>& crank_angles, double tolerance,
+                          const std::string& name) {
+  const double L = task.length_si, A = task.angle_si;
+  const FourBarPosition p0 = calc_position(fb, crank_angles.front());
+  std::ostringstream out;
+  out << "# " << name << ".yaml — a four-bar synthesised by `orthomech synthesize` from "
+      << task.file << " (" << to_string(task.kind) << " generation, " << crank_angles.size()
+      << " targets).\n"
+      << "# Frames: each link's x axis runs from its first joint to its second (crank A0->A,\n"
+      << "#   coupler A->B, rocker B0->B); joint A0 measures the crank angle. Links are uniform\n"
+      << "#   slender rods of the task's mass per length. Design pose: the first target.\n"
+      << "# Design positions t1..tn: the targets, at the crank angles the synthesis found.\n";
+  out << "orthomech: 1\nname: " << name << "\ndescription: \"" << to_string(task.kind)
+      << " generation for " << task.name << "\"\n";
+  out << "units: {length: " << task.length_unit << ", angle: " << task.angle_unit
+      << ", mass: kg, time: s, force: N}\n";
+  out << "ground:\n  points: {A0: " << point(fb.A0, L) << ", B0: " << point(fb.B0, L) << "}\n";
+  out << "bodies:\n";
+  const auto pose = [&](const Vec2& at, double angle) {
+    return "[" + num(at.x() / L) + ", " + num(at.y() / L) + ", " + num(angle / A) + "]";
+  };
+  link_body(out, task, "crank", fb.a, pose(fb.A0, crank_angles.front()),
+            "{A0: [0, 0], A: [" + num(fb.a / L) + ", 0]}");
+  const double frame = std::remainder(fb.coupler_frame_angle, 2 * kPi);
+  link_body(out, task, "coupler", fb.b, pose(p0.A, p0.coupler_angle),
+            "{A: [0, 0], B: [" + num(fb.b / L) + ", 0], P: " + point(fb.coupler_point, L) + "}",
+            "    outline: [[0, 0], " + point(fb.coupler_point, L) + ", [" + num(fb.b / L) +
+                ", 0], [0, 0]]\n");
+  link_body(out, task, "rocker", fb.c, pose(fb.B0, p0.follower_angle),
+            "{B0: [0, 0], B: [" + num(fb.c / L) + ", 0]}");
+  out << "joints:\n"
+      << "  - {name: A0, type: revolute, connects: [ground.A0, crank.A0]}\n"
+      << "  - {name: A, type: revolute, connects: [crank.A, coupler.A]}\n"
+      << "  - {name: B, type: revolute, connects: [coupler.B, rocker.B]}\n"
+      << "  - {name: B0, type: revolute, connects: [ground.B0, rocker.B0]}\n";
+  out << "measures:\n"
+      << "  - {name: crank_angle, type: joint, joint: A0}\n"
+      << "  - {name: rocker_angle, type: joint, joint: B0}\n"
+      << "  - {name: transmission, type: angle, bodies: [coupler, rocker]}\n"
+      << "  - {name: P_x, type: point, point: coupler.P, component: x}\n"
+      << "  - {name: P_y, type: point, point: coupler.P, component: y}\n";
+  out << "drivers:\n  - {name: motor, joint: A0, speed: " << num(task.speed) << " rad/s}\n";
+  out << "design_positions:\n";
+  for (size_t j = 0; j < crank_angles.size(); ++j) {
+    out << "  - name: t" << j + 1 << "\n    inputs: {A0: " << num(crank_angles[j] / A) << "}\n";
+    if (task.kind == TaskKind::function) {  // the follower at its output angle: the pin B there
+      const double psi = task.outputs[j];   // the follower's world angle (offset included)
+      const Vec2 B = fb.B0 + fb.c * Vec2(std::cos(psi), std::sin(psi));
+      out << "    target: {point: rocker.B, at: " << point(B, L)
+          << ", tolerance: " << num(tolerance / L) << "}\n";
+      continue;
+    }
+    out << "    target: {point: coupler.P, at: " << point(task.positions[j], L);
+    if (task.kind == TaskKind::motion)
+      out << ", angle: " << num(std::remainder(task.angles[j] - frame, 2 * kPi) / A);
+    out << ", tolerance: " << num(tolerance / L) << "}\n";
+  }
+  out << "analysis: {driver: motor, steps: 360}\n";
+  return out.str();
+}
+
+SynthesisResult run_synthesis(const SynthesisTask& task) {
+  SynthesisResult result;
+  result.kind = task.kind;
+  result.tolerance = automatic_tolerance(task);
+  // 1. The generator.
+  std::vector<Raw> raw;
+  switch (task.kind) {
+    case TaskKind::motion:
+      raw = motion_candidates(task, result);
+      break;
+    case TaskKind::path:
+      raw = path_candidates(task, result);
+      break;
+    case TaskKind::function:
+      raw = function_candidates(task, result);
+      break;
+  }
+  if (raw.empty() && result.message.empty()) result.message = "the generator found no four-bar";
+  // 2.–3. Every candidate checked and validated.
+  std::vector<SynthesisCandidate> all;
+  std::vector<SynthesisTask> tasks;  // per candidate: a function's outputs as follower angles
+  for (size_t k = 0; k < raw.size(); ++k) {
+    SynthesisTask t = task;
+    for (double& psi : t.outputs) psi += raw[k].output_offset;
+    tasks.push_back(std::move(t));
+  }
+  for (size_t k = 0; k < raw.size(); ++k) {
+    const SynthesisTask& own = tasks[k];
+    SynthesisCandidate c;
+    c.task = k;
+    c.name = "candidate-" + std::to_string(k + 1);
+    c.method = raw[k].method;
+    c.linkage = raw[k].linkage;
+    c.crank_angles = raw[k].crank_angles;
+    if (!unwrap_in_order(c.crank_angles))
+      c.rejections.push_back(
+          "order defect: the crank does not reach the targets in their order "
+          "within one turn");
+    check_closed_form(own, c);
+    if (c.max_distance > result.tolerance)
+      c.rejections.push_back("a target is missed by more than the tolerance");
+    c.file_text = four_bar_file(own, c.linkage, c.crank_angles, result.tolerance, c.name);
+    check_by_validate(own, c);
+    all.push_back(std::move(c));
+  }
+  // 4. Accepted ranked, rejected listed; names in that order.
+  for (SynthesisCandidate& c : all) (c.accepted() ? result.accepted : result.rejected).push_back(c);
+  rank(task, result.accepted);
+  for (size_t k = 0; k < result.accepted.size(); ++k) {
+    SynthesisCandidate& c = result.accepted[k];
+    c.name = "candidate-" + std::to_string(k + 1);
+    c.file_text = four_bar_file(tasks[c.task], c.linkage, c.crank_angles, result.tolerance, c.name);
+  }
+  for (size_t k = 0; k < result.rejected.size(); ++k)
+    result.rejected[k].name = "rejected-" + std::to_string(k + 1);
+  return result;
+}
+
+}  // namespace orthomech::synthesis

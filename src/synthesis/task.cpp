@@ -1,0 +1,301 @@
+#include "orthomech/synthesis/task.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+#include "../io/yaml_walk.hpp"
+#include "orthomech/error.hpp"
+#include "orthomech/io/units.hpp"
+
+namespace orthomech::synthesis {
+
+const char* to_string(TaskKind kind) noexcept {
+  switch (kind) {
+    case TaskKind::motion:
+      return "motion";
+    case TaskKind::path:
+      return "path";
+    case TaskKind::function:
+      return "function";
+  }
+  return "?";
+}
+
+const char* to_string(TaskTiming timing) noexcept {
+  switch (timing) {
+    case TaskTiming::prescribed:
+      return "prescribed";
+    case TaskTiming::free_start:
+      return "free_start";
+    case TaskTiming::free:
+      return "free";
+  }
+  return "?";
+}
+
+namespace {
+
+// The most targets of a task: a least-squares fit of more is not a design task.
+constexpr size_t kMaxTargets = 1000;
+
+// Reads one task document; every refusal names the node's place (house style, "Errors").
+class TaskReader {
+ public:
+  explicit TaskReader(std::string file) : file_(std::move(file)) {}
+
+  SynthesisTask read(const YAML::Node& root) {
+    expect_keys(root, "task file",
+                {"orthomech-synthesis", "name", "units", "task", "poses", "points", "pairs",
+                 "ground", "timing", "crank_angles", "fixed_pivot", "ground_angle", "require",
+                 "search", "mechanism", "rank_by", "tolerance"});
+    if (!root["orthomech-synthesis"] || root["orthomech-synthesis"].as<std::string>() != "1")
+      fail(root, "orthomech-synthesis",
+           "a synthesis task starts with `orthomech-synthesis: 1` (the format's version)");
+    SynthesisTask t;
+    t.file = file_;
+    t.name = root["name"] ? root["name"].as<std::string>() : "synthesis";
+    units(root["units"], t);
+    kind(root, t);
+    targets(root, t);
+    requirements(root, t);
+    return t;
+  }
+
+ private:
+  std::string file_;
+
+  [[noreturn]] void fail(const YAML::Node& node, const std::string& element,
+                         const std::string& message) const {
+    const YAML::Mark m = node.Mark();
+    throw InputError({file_, m.is_null() ? 1 : m.line + 1, m.is_null() ? 1 : m.column + 1}, element,
+                     message);
+  }
+  void expect_keys(const YAML::Node& node, const std::string& element,
+                   const std::vector<std::string>& allowed) const {
+    if (!node.IsMap()) fail(node, element, "expected a mapping");
+    for (const auto& kv : node) {
+      const std::string key = kv.first.Scalar();
+      if (std::find(allowed.begin(), allowed.end(), key) == allowed.end()) {
+        std::string list;
+        for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
+        fail(kv.first, element, "unknown key '" + key + "' (allowed: " + list + ")");
+      }
+    }
+  }
+  double number(const YAML::Node& node, const std::string& element, double lo, double hi) const {
+    double v = 0.0;
+    if (!node.IsScalar() || !YAML::convert<double>::decode(node, v) || !std::isfinite(v))
+      fail(node, element, "expected a finite number");
+    if (v < lo || v > hi) {
+      std::ostringstream m;
+      m << "must be in [" << lo << ", " << hi << "], got " << v;
+      fail(node, element, m.str());
+    }
+    return v;
+  }
+  std::vector<double> row(const YAML::Node& node, const std::string& element, size_t size) const {
+    if (!node.IsSequence() || node.size() != size)
+      fail(node, element, "expected a list of " + std::to_string(size) + " numbers");
+    std::vector<double> v;
+    for (const auto& x : node) v.push_back(number(x, element, -kMaxGeneral, kMaxGeneral));
+    return v;
+  }
+  // A list of rows of `size` numbers, between `least` and kMaxTargets of them.
+  std::vector<std::vector<double>> rows(const YAML::Node& node, const std::string& element,
+                                        size_t size, size_t least) const {
+    if (!node.IsSequence()) fail(node, element, "expected a list");
+    if (node.size() < least || node.size() > kMaxTargets)
+      fail(node, element,
+           "needs " + std::to_string(least) + " to " + std::to_string(kMaxTargets) +
+               " entries, got " + std::to_string(node.size()));
+    std::vector<std::vector<double>> out;
+    for (const auto& r : node) out.push_back(row(r, element, size));
+    return out;
+  }
+
+  void units(const YAML::Node& node, SynthesisTask& t) const {
+    if (!node) return;
+    expect_keys(node, "units", {"length", "angle"});
+    DeclaredUnits d;
+    d.length = node["length"] ? node["length"].as<std::string>() : "mm";
+    d.angle = node["angle"] ? node["angle"].as<std::string>() : "deg";
+    try {
+      const UnitSystem u = unit_system(d);
+      t.length_unit = u.length, t.angle_unit = u.angle;
+      t.length_si = u.length_si, t.angle_si = u.angle_si;
+    } catch (const std::invalid_argument& e) {
+      fail(node, "units", e.what());
+    }
+  }
+
+  void kind(const YAML::Node& root, SynthesisTask& t) const {
+    const YAML::Node k = root["task"];
+    if (!k) fail(root, "task", "missing `task:` (motion, path or function)");
+    const std::string s = k.as<std::string>();
+    if (s == "motion")
+      t.kind = TaskKind::motion;
+    else if (s == "path")
+      t.kind = TaskKind::path;
+    else if (s == "function")
+      t.kind = TaskKind::function;
+    else
+      fail(k, "task", "unknown task '" + s + "' (motion, path or function)");
+  }
+
+  void targets(const YAML::Node& root, SynthesisTask& t) const {
+    const double L = t.length_si, A = t.angle_si;
+    const auto only = [&](const char* key) {
+      for (const char* k : {"poses", "points", "pairs", "ground", "timing", "crank_angles",
+                            "fixed_pivot", "ground_angle"})
+        if (root[k] && std::string(k) != key && !allowed_with(t.kind, k))
+          fail(root[k], k,
+               std::string("`") + k + "` does not belong to a " + to_string(t.kind) + " task");
+    };
+    switch (t.kind) {
+      case TaskKind::motion: {
+        only("poses");
+        if (!root["poses"])
+          fail(root, "poses", "a motion task needs `poses: [[x, y, angle], ...]`");
+        for (const auto& p : rows(root["poses"], "poses", 3, 5)) {
+          t.positions.emplace_back(p[0] * L, p[1] * L);
+          t.angles.push_back(p[2] * A);
+        }
+        break;
+      }
+      case TaskKind::path: {
+        only("points");
+        if (!root["points"]) fail(root, "points", "a path task needs `points: [[x, y], ...]`");
+        for (const auto& p : rows(root["points"], "points", 2, 3))
+          t.positions.emplace_back(p[0] * L, p[1] * L);
+        path_timing(root, t);
+        break;
+      }
+      case TaskKind::function: {
+        only("pairs");
+        if (!root["pairs"])
+          fail(root, "pairs", "a function task needs `pairs: [[input, output], ...]`");
+        if (!root["ground"])
+          fail(root, "ground", "a function task needs the ground length `ground:`");
+        t.ground = number(root["ground"], "ground", 1e-9, kMaxGeneral) * L;
+        for (const auto& p : rows(root["pairs"], "pairs", 2, 3)) {
+          t.inputs.push_back(p[0] * A);
+          t.outputs.push_back(p[1] * A);
+        }
+        break;
+      }
+    }
+  }
+  static bool allowed_with(TaskKind kind, const std::string& key) {
+    if (kind == TaskKind::path)
+      return key == "timing" || key == "crank_angles" || key == "fixed_pivot" ||
+             key == "ground_angle";
+    if (kind == TaskKind::function) return key == "ground";
+    return false;
+  }
+
+  void path_timing(const YAML::Node& root, SynthesisTask& t) const {
+    const YAML::Node timing = root["timing"];
+    const std::string s =
+        timing ? timing.as<std::string>() : (root["crank_angles"] ? "prescribed" : "free");
+    if (s == "prescribed")
+      t.timing = TaskTiming::prescribed;
+    else if (s == "free_start")
+      t.timing = TaskTiming::free_start;
+    else if (s == "free")
+      t.timing = TaskTiming::free;
+    else
+      fail(timing, "timing", "unknown timing '" + s + "' (prescribed, free_start or free)");
+    const YAML::Node angles = root["crank_angles"];
+    if (t.timing == TaskTiming::free) {
+      if (angles) fail(angles, "crank_angles", "free timing takes no crank angles");
+    } else {
+      if (!angles || !angles.IsSequence() || angles.size() != t.positions.size())
+        fail(angles ? angles : root, "crank_angles",
+             "timed points need one crank angle per point (" + std::to_string(t.positions.size()) +
+                 ")");
+      for (const auto& a : angles)
+        t.inputs.push_back(number(a, "crank_angles", -kMaxGeneral, kMaxGeneral) * t.angle_si);
+    }
+    if (const YAML::Node p = root["fixed_pivot"]) {
+      const auto v = row(p, "fixed_pivot", 2);
+      t.fixed_pivot = Vec2(v[0] * t.length_si, v[1] * t.length_si);
+    }
+    if (const YAML::Node g = root["ground_angle"])
+      t.ground_angle = number(g, "ground_angle", -kMaxGeneral, kMaxGeneral) * t.angle_si;
+  }
+
+  void requirements(const YAML::Node& root, SynthesisTask& t) const {
+    if (const YAML::Node r = root["require"]) {
+      expect_keys(r, "require", {"crank_rocker", "min_transmission"});
+      if (r["crank_rocker"]) t.crank_rocker = r["crank_rocker"].as<bool>();
+      if (r["min_transmission"])
+        t.min_transmission = number(r["min_transmission"], "min_transmission", 0.0,
+                                    90.0 * 0.017453292519943295 / t.angle_si) *
+                             t.angle_si;
+    }
+    if (const YAML::Node tol = root["tolerance"])
+      t.tolerance = number(tol, "tolerance", 0.0, kMaxGeneral) * t.length_si;
+    if (const YAML::Node s = root["search"]) {
+      expect_keys(s, "search", {"seed", "starts"});
+      if (s["seed"])
+        t.seed = static_cast<unsigned long>(number(s["seed"], "seed", 0, 4294967295.0));
+      if (s["starts"]) t.starts = static_cast<int>(number(s["starts"], "starts", 1, 100000));
+    }
+    if (const YAML::Node m = root["mechanism"]) {
+      expect_keys(m, "mechanism", {"mass_per_length", "speed"});
+      if (m["mass_per_length"])
+        t.mass_per_length =
+            number(m["mass_per_length"], "mass_per_length", 1e-12, 1e12) / t.length_si;
+      if (m["speed"]) {
+        try {
+          t.speed = parse_speed(m["speed"].as<std::string>(), true, t.angle_si);
+        } catch (const std::invalid_argument& e) {
+          fail(m["speed"], "speed", e.what());
+        }
+      }
+    }
+    if (const YAML::Node r = root["rank_by"]) {
+      t.rank_by = r.as<std::string>();
+      if (t.rank_by != "transmission" && t.rank_by != "error")
+        fail(r, "rank_by",
+             "rank_by is `transmission` (the worst transmission angle, largest "
+             "first) or `error` (the distance to the targets, smallest first)");
+    }
+  }
+};
+
+}  // namespace
+
+SynthesisTask parse_synthesis_task(const std::string& text, const std::string& origin) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    throw InputError({origin, e.mark.line + 1, e.mark.column + 1}, "YAML", e.msg);
+  }
+  if (!root.IsDefined() || root.IsNull())
+    throw InputError({origin, 1, 1}, "task file", "the task file is empty");
+  orthomech::detail::check_yaml_document(root, origin);
+  try {
+    return TaskReader(origin).read(root);
+  } catch (const YAML::Exception& e) {
+    throw InputError(
+        {origin, e.mark.is_null() ? 1 : e.mark.line + 1, e.mark.is_null() ? 1 : e.mark.column + 1},
+        "YAML", e.msg);
+  }
+}
+
+SynthesisTask load_synthesis_task(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError({path, 0, 0}, "task file", "cannot open the task file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parse_synthesis_task(text.str(), path);
+}
+
+}  // namespace orthomech::synthesis

@@ -1,0 +1,68 @@
+// `orthomech synthesize` (cli/synthesize.cpp): exit codes, the JSON document, the files written,
+// and that every written candidate is a mechanism file `validate` passes and `cycle` runs.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "support/cli_runner.hpp"
+
+namespace orthomech {
+namespace {
+
+using test::run_cli;
+
+std::string example(const std::string& name) {
+  return std::string(ORTHOMECH_SOURCE_DIR) + "/examples/" + name;
+}
+
+TEST(SynthesizeCli, MotionTaskWritesCandidatesThatValidateAndCycle) {
+  const std::string dir = ::testing::TempDir() + "/synthesize-motion";
+  std::filesystem::remove_all(dir);
+  const auto r = run_cli({"synthesize", example("synthesis-motion.yaml"), "--out", dir, "--json"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["kind"], "motion");
+  ASSERT_FALSE(j["accepted"].empty());
+  EXPECT_TRUE(std::filesystem::exists(dir + "/candidates.csv"));
+  for (const auto& c : j["accepted"]) {
+    EXPECT_TRUE(c["accepted"].get<bool>());
+    const std::string file = dir + "/" + c["name"].get<std::string>() + ".yaml";
+    ASSERT_TRUE(std::filesystem::exists(file)) << file;
+    EXPECT_EQ(run_cli({"validate", file, "-q"}).status, 0) << file;
+    EXPECT_EQ(run_cli({"cycle", file, "-q"}).status, 0) << file;
+  }
+}
+
+TEST(SynthesizeCli, ExitCodes) {
+  const std::string dir = ::testing::TempDir();
+  // A mistake in the task: exit 2 at its line.
+  const std::string bad = dir + "/bad-task.yaml";
+  {
+    std::FILE* f = std::fopen(bad.c_str(), "w");
+    std::fputs("orthomech-synthesis: 1\ntask: motion\nposes: [[0, 0, 0], [1, 0, 0]]\n", f);
+    std::fclose(f);
+  }
+  const auto b = run_cli({"synthesize", bad});
+  EXPECT_EQ(b.status, 2);
+  EXPECT_NE(b.err.find("bad-task.yaml:3:"), std::string::npos) << b.err;
+  // Every candidate rejected (a transmission bound the only four-bar misses): exit 1, listed.
+  const std::string strict = dir + "/strict-task.yaml";
+  {
+    std::FILE* f = std::fopen(strict.c_str(), "w");
+    std::fputs(
+        "orthomech-synthesis: 1\ntask: function\nground: 70\n"
+        "pairs: [[60, 71.797553609615], [150, 115.823166144399], [270, 132.362157995438]]\n"
+        "require: {min_transmission: 60}\n",
+        f);
+    std::fclose(f);
+  }
+  const auto s = run_cli({"synthesize", strict});
+  EXPECT_EQ(s.status, 1) << s.err;
+  EXPECT_NE(s.out.find("rejected: "), std::string::npos) << s.out;
+}
+
+}  // namespace
+}  // namespace orthomech
