@@ -139,7 +139,7 @@ void check_closed_form(const SynthesisTask& task, SynthesisCandidate& c) {
   for (int k = 0; k <= steps; ++k) {
     const FourBarPosition p = calc_position(fb, from + (to - from) * k / steps);
     if (!p.assembles) {
-      c.rejections.push_back(
+      c.rejections.emplace_back(
           "the crank cannot turn from the first target to the last: the "
           "linkage does not assemble between them");
       break;
@@ -305,9 +305,9 @@ SynthesisResult run_synthesis(const SynthesisTask& task) {
   // 2.–3. Every candidate checked and validated.
   std::vector<SynthesisCandidate> all;
   std::vector<SynthesisTask> tasks;  // per candidate: a function's outputs as follower angles
-  for (size_t k = 0; k < raw.size(); ++k) {
+  for (const Raw& r : raw) {
     SynthesisTask t = task;
-    for (double& psi : t.outputs) psi += raw[k].output_offset;
+    for (double& psi : t.outputs) psi += r.output_offset;
     tasks.push_back(std::move(t));
   }
   for (size_t k = 0; k < raw.size(); ++k) {
@@ -319,12 +319,12 @@ SynthesisResult run_synthesis(const SynthesisTask& task) {
     c.linkage = raw[k].linkage;
     c.crank_angles = raw[k].crank_angles;
     if (!unwrap_in_order(c.crank_angles))
-      c.rejections.push_back(
+      c.rejections.emplace_back(
           "order defect: the crank does not reach the targets in their order "
           "within one turn");
     check_closed_form(own, c);
     if (c.max_distance > result.tolerance)
-      c.rejections.push_back("a target is missed by more than the tolerance");
+      c.rejections.emplace_back("a target is missed by more than the tolerance");
     c.file_text = four_bar_file(own, c.linkage, c.crank_angles, result.tolerance, c.name);
     check_by_validate(own, c);
     all.push_back(std::move(c));
