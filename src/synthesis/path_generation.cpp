@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <random>
 
 #include "../solvers/nlopt_minimize.hpp"
 #include "orthomech/check.hpp"
@@ -19,6 +20,9 @@ constexpr double kGrashofMargin = 1e-5;
 // The loop must close with this slack (normalised units) at every target: a quadratic penalty
 // lets a constraint be violated by about |∇F| / w, so the margin keeps the optimum assembled.
 constexpr double kAssemblyMargin = 1e-5;
+// The shortest link a world box allows (normalised units), so that a box from 0 keeps links
+// positive.
+constexpr double kMinWorldLink = 1e-6;
 
 // Where each variable sits in the decision vector x (−1: not a variable).
 struct Layout {
@@ -117,11 +121,22 @@ void make_boxes(const Problem& pb, const PathSynthesisOptions& o, Eigen::VectorX
   const Layout& L = pb.L;
   lo.resize(L.size);
   hi.resize(L.size);
-  if (L.A0 >= 0)
-    lo.segment<2>(L.A0).setConstant(-o.pivot_box), hi.segment<2>(L.A0).setConstant(o.pivot_box);
+  if (o.world_box) {  // the box in world units, normalised like the targets
+    const PathSynthesisOptions::WorldBox& w = *o.world_box;
+    for (int k = 0; L.A0 >= 0 && k < 2; ++k) {
+      lo(L.A0 + k) = (w.pivot_lo - pb.centre(k)) / pb.scale;
+      hi(L.A0 + k) = (w.pivot_hi - pb.centre(k)) / pb.scale;
+    }
+    for (const int i : {L.d, L.a, L.b, L.c})
+      lo(i) = std::max(w.link_lo / pb.scale, kMinWorldLink), hi(i) = w.link_hi / pb.scale;
+    for (const int i : {L.p, L.q}) lo(i) = w.coupler_lo / pb.scale, hi(i) = w.coupler_hi / pb.scale;
+  } else {
+    if (L.A0 >= 0)
+      lo.segment<2>(L.A0).setConstant(-o.pivot_box), hi.segment<2>(L.A0).setConstant(o.pivot_box);
+    for (const int i : {L.d, L.a, L.b, L.c}) lo(i) = o.min_link, hi(i) = o.max_link;
+    for (const int i : {L.p, L.q}) lo(i) = -o.max_coupler, hi(i) = o.max_coupler;
+  }
   if (L.ground_angle >= 0) lo(L.ground_angle) = -kPi, hi(L.ground_angle) = kPi;
-  for (const int i : {L.d, L.a, L.b, L.c}) lo(i) = o.min_link, hi(i) = o.max_link;
-  for (const int i : {L.p, L.q}) lo(i) = -o.max_coupler, hi(i) = o.max_coupler;
   if (L.start >= 0) lo(L.start) = -kPi, hi(L.start) = kPi;
   start_hi = hi;
   const auto inc = static_cast<int>(pb.T.size()) - 1;
@@ -205,6 +220,39 @@ void search(Problem& pb, const PathSynthesisOptions& o, std::vector<Run>& runs, 
     if (std::isfinite(l.value)) runs.push_back({l.x, l.value, pb.branch, pb.sense});
 }
 
+// (L23) The restart policy: `restarts` rounds of basin hopping from the best point. Each round
+// moves every variable by a uniform step in ±restart_step·(hi − lo) (std::mt19937_64 seeded from
+// options.seed, its bits mapped to [−1, 1) by hand so that the sequence is portable), runs BOBYQA
+// and the polish from there and keeps the result when it lowers F.
+void hop(Problem& pb, const PathSynthesisOptions& o, const Eigen::VectorXd& lo,
+         const Eigen::VectorXd& hi, Run& best, int& evaluations) {
+  std::mt19937_64 rng(o.seed + 0x9e3779b97f4a7c15ULL);
+  const auto uniform = [&rng] {  // [−1, 1)
+    return 2.0 * static_cast<double>(rng() >> 11) * 0x1.0p-53 - 1.0;
+  };
+  std::vector<double> theta(pb.T.size());
+  Eigen::VectorXd r(residual_count(pb));
+  solvers::NloptSettings local;
+  local.max_evaluations = o.local_evaluations;
+  local.xtol_abs = 1e-12;
+  for (int k = 0; k < o.restarts; ++k) {
+    pb.branch = best.branch, pb.sense = best.sense;
+    Eigen::VectorXd x0 = best.x;
+    for (Eigen::Index j = 0; j < x0.size(); ++j)
+      x0(j) = std::clamp(x0(j) + o.restart_step * (hi(j) - lo(j)) * uniform(), lo(j), hi(j));
+    const auto f = [&](const Eigen::VectorXd& x) {
+      residuals(pb, x, theta, r);
+      return r.squaredNorm();
+    };
+    const solvers::NloptOutcome out = solvers::minimize_bounded(f, x0, lo, hi, local);
+    evaluations += out.evaluations;
+    if (!std::isfinite(out.value)) continue;
+    const Eigen::VectorXd x = polish(pb, out.x, lo, hi);
+    residuals(pb, x, theta, r);
+    if (r.squaredNorm() < best.value) best.x = x, best.value = r.squaredNorm();
+  }
+}
+
 Problem normalised_problem(const std::vector<Vec2>& targets, const PathSynthesisOptions& o) {
   Problem pb;
   for (const Vec2& t : targets) pb.centre += t;
@@ -232,8 +280,16 @@ void check_options(const std::vector<Vec2>& targets, const PathSynthesisOptions&
   check_argument(
       o.pivot_box > 0.0 && o.max_coupler > 0.0 && o.min_link > 0.0 && o.max_link > o.min_link, fn,
       "options", "needs a non-empty search box");
+  if (o.world_box) {
+    const PathSynthesisOptions::WorldBox& w = *o.world_box;
+    check_argument(w.pivot_lo < w.pivot_hi && w.link_lo >= 0.0 && w.link_lo < w.link_hi &&
+                       w.coupler_lo < w.coupler_hi,
+                   fn, "options.world_box", "needs a non-empty box with link_lo ≥ 0");
+  }
   check_argument(o.starts >= 1 && o.local_evaluations >= 1, fn, "options",
                  "needs starts ≥ 1 and local_evaluations ≥ 1");
+  check_argument(o.restarts >= 0 && o.restart_step > 0.0 && o.restart_step <= 1.0, fn, "options",
+                 "needs restarts ≥ 0 and restart_step in (0, 1]");
 }
 
 // The best run in world units, checked by calc_position.
@@ -315,7 +371,9 @@ PathSynthesisResult synthesize_path_generator(const std::vector<Vec2>& targets,
     residuals(pb, x, theta, r);
     if (r.squaredNorm() < best.value) best = {x, r.squaredNorm(), runs[k].branch, runs[k].sense};
   }
-  // Step 3: world units, checked by the closed form.
+  // Step 3: the restart policy about the best point (L23).
+  hop(pb, options, lo, hi, best, evaluations);
+  // Step 4: world units, checked by the closed form.
   pb.branch = best.branch, pb.sense = best.sense;
   PathSynthesisResult res = finish(pb, best, targets, options);
   res.evaluations = evaluations;

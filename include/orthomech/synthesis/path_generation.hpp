@@ -13,7 +13,8 @@
 // θ_0 + s Σ_{k≤i} δ_k with δ_k ≥ 0 (untimed: a free start and non-negative increments, s = ±1 the
 // turning sense). Search: multistart BOBYQA over a seeded quasi-random design (NLopt through the
 // private adapter) from every branch (and turning sense) asked for, then a Levenberg–Marquardt
-// polish of the best runs on the residual vector of F (L23). Deterministic for a given seed.
+// polish of the best runs on the residual vector of F, and optionally rounds of basin hopping
+// from the best point (L23). Deterministic for a given seed.
 #include <Eigen/Core>
 #include <optional>
 #include <string>
@@ -43,11 +44,25 @@ struct PathSynthesisOptions {
   double max_link = 8.0;   // d, a, b, c ∈ [min_link, max_link]
   double min_link = 0.02;
   double max_coupler = 8.0;  // |p|, |q|
-  int starts = 200;          // quasi-random starts per branch and turning sense
+  // A box in the targets' units instead (the published benchmarks' variable bounds): when set,
+  // it replaces pivot_box, max_link, max_coupler (and min_link, apart from a floor of 1e-6
+  // spreads that keeps the links positive).
+  struct WorldBox {
+    double pivot_lo = -60.0, pivot_hi = 60.0;      // each coordinate of A0
+    double link_lo = 0.0, link_hi = 60.0;          // d, a, b, c
+    double coupler_lo = -60.0, coupler_hi = 60.0;  // p, q
+  };
+  std::optional<WorldBox> world_box;
+  int starts = 200;  // quasi-random starts per branch and turning sense
   unsigned long long seed = 1;
   int local_evaluations = 3000;  // BOBYQA budget per start
   int polished = 8;              // the best runs polished by Levenberg–Marquardt
-  double penalty_weight = 1e6;   // w of (L21)
+  // The restart policy (basin hopping) after the polish: `restarts` rounds, each a local run
+  // (BOBYQA + polish) from the best point moved by up to ±restart_step of the box per variable,
+  // kept when it is better. 0: none.
+  int restarts = 0;
+  double restart_step = 0.02;
+  double penalty_weight = 1e6;  // w of (L21)
 };
 
 struct PathSynthesisResult {
