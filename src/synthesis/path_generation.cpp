@@ -75,7 +75,7 @@ FourBar decode_linkage(const Problem& pb, const Eigen::VectorXd& x) {
 // The linkage of x (normalised) and its crank angles θ_i (L24).
 FourBar decode(const Problem& pb, const Eigen::VectorXd& x, std::vector<double>& theta) {
   const Layout& L = pb.L;
-  const FourBar fb = decode_linkage(pb, x);
+  FourBar fb = decode_linkage(pb, x);
   const double tg = pb.ground_angle ? *pb.ground_angle : x(L.ground_angle);
   const std::size_t n = pb.T.size();
   if (pb.timing == PathTiming::free) {
@@ -231,7 +231,7 @@ constexpr int kCurveHopIterations = 30;
 constexpr double kNoCurve = 1e3;
 
 bool nearest_start(const PathSynthesisOptions& o) {
-  return o.timing == PathTiming::free && o.start != PathStart::quasi_random;
+  return o.timing == PathTiming::free && o.start == PathStart::nearest_point;
 }
 
 // The coupler curve of fb sampled at kCurveSamples crank angles over one turn.
