@@ -59,8 +59,8 @@ Layout make_layout(const Problem& pb) {
   return L;
 }
 
-// The linkage of x (normalised) and its crank angles θ_i (L24).
-FourBar decode(const Problem& pb, const Eigen::VectorXd& x, std::vector<double>& theta) {
+// The linkage of x (normalised): the variables before the timing's.
+FourBar decode_linkage(const Problem& pb, const Eigen::VectorXd& x) {
   const Layout& L = pb.L;
   FourBar fb;
   fb.A0 = pb.A0 ? *pb.A0 : Vec2(x(L.A0), x(L.A0 + 1));
@@ -69,6 +69,14 @@ FourBar decode(const Problem& pb, const Eigen::VectorXd& x, std::vector<double>&
   fb.a = x(L.a), fb.b = x(L.b), fb.c = x(L.c);
   fb.coupler_point = Vec2(x(L.p), x(L.q));
   fb.branch = pb.branch;
+  return fb;
+}
+
+// The linkage of x (normalised) and its crank angles θ_i (L24).
+FourBar decode(const Problem& pb, const Eigen::VectorXd& x, std::vector<double>& theta) {
+  const Layout& L = pb.L;
+  FourBar fb = decode_linkage(pb, x);
+  const double tg = pb.ground_angle ? *pb.ground_angle : x(L.ground_angle);
   const std::size_t n = pb.T.size();
   if (pb.timing == PathTiming::free) {
     double t = x(L.start);
@@ -87,6 +95,16 @@ FourBar decode(const Problem& pb, const Eigen::VectorXd& x, std::vector<double>&
 // the crank-rocker violations (2, (L22)), √w · the timing's excess over a turn (1).
 int residual_count(const Problem& pb) { return 3 * static_cast<int>(pb.T.size()) + 3; }
 
+// The crank-rocker violations of (L22) (zero when not required): a shortest and s + l ≤ p + q,
+// i.e. a + 2l − (b + c + d) ≤ 0, each with the margin.
+Vec2 crank_rocker_violations(const Problem& pb, const Eigen::VectorXd& x, const FourBar& fb) {
+  if (!pb.crank_rocker) return Vec2::Zero();
+  const double d = x(pb.L.d);
+  const double l = std::max({fb.b, fb.c, d});
+  return {std::max(0.0, fb.a + 2.0 * l - (fb.b + fb.c + d) + kGrashofMargin),
+          std::max(0.0, fb.a - std::min({fb.b, fb.c, d}) + kGrashofMargin)};
+}
+
 void residuals(const Problem& pb, const Eigen::VectorXd& x, std::vector<double>& theta,
                Eigen::VectorXd& r) {
   const FourBar fb = decode(pb, x, theta);
@@ -99,13 +117,8 @@ void residuals(const Problem& pb, const Eigen::VectorXd& x, std::vector<double>&
     const double slack = std::min(fb.b + fb.c - e, e - std::abs(fb.b - fb.c));
     r(2 * n + i) = pb.sqrt_w * std::max(0.0, kAssemblyMargin - slack);
   }
-  double v1 = 0.0, v2 = 0.0;
-  if (pb.crank_rocker) {  // (L22): a shortest and s + l ≤ p + q, i.e. a + 2l − (b + c + d) ≤ 0
-    const double d = x(pb.L.d);
-    const double l = std::max({fb.b, fb.c, d});
-    v1 = std::max(0.0, fb.a + 2.0 * l - (fb.b + fb.c + d) + kGrashofMargin);
-    v2 = std::max(0.0, fb.a - std::min({fb.b, fb.c, d}) + kGrashofMargin);
-  }
+  const Vec2 v = crank_rocker_violations(pb, x, fb);
+  const double v1 = v(0), v2 = v(1);
   double excess = 0.0;
   if (pb.timing == PathTiming::free)
     excess = std::max(0.0, std::abs(theta.back() - theta.front()) - 2.0 * kPi);
@@ -147,24 +160,29 @@ void make_boxes(const Problem& pb, const PathSynthesisOptions& o, Eigen::VectorX
   }
 }
 
-// (L23) Levenberg–Marquardt on the residual vector, central-difference Jacobian, steps clamped
-// to the box; a step is kept only when it lowers F.
-Eigen::VectorXd polish(const Problem& pb, Eigen::VectorXd x, const Eigen::VectorXd& lo,
-                       const Eigen::VectorXd& hi) {
-  std::vector<double> theta(pb.T.size());
-  const int m = residual_count(pb);
+// (L23) Levenberg–Marquardt on a residual vector res(x, r) of size m, central-difference
+// Jacobian, steps clamped to the box; a step is kept only when it lowers F = |r|². Adds its
+// evaluations of res to `evaluations`.
+template <typename Residuals>
+Eigen::VectorXd levenberg_marquardt(const Residuals& res_raw, int m, Eigen::VectorXd x,
+                                    const Eigen::VectorXd& lo, const Eigen::VectorXd& hi,
+                                    int max_iterations, int& evaluations) {
+  const auto res = [&](const Eigen::VectorXd& y, Eigen::VectorXd& r_out) {
+    ++evaluations;
+    res_raw(y, r_out);
+  };
   Eigen::VectorXd r(m), rp(m), rm(m), r_try(m);
   Eigen::MatrixXd J(m, x.size());
-  residuals(pb, x, theta, r);
+  res(x, r);
   double F = r.squaredNorm(), lambda = 1e-3;
-  for (int iter = 0; iter < 200 && F > 1e-30; ++iter) {
+  for (int iter = 0; iter < max_iterations && F > 1e-30; ++iter) {
     for (Eigen::Index j = 0; j < x.size(); ++j) {  // central differences
       const double h = 1e-7 * (1.0 + std::abs(x(j)));
       Eigen::VectorXd xp = x, xm = x;
       xp(j) += h;
       xm(j) -= h;
-      residuals(pb, xp, theta, rp);
-      residuals(pb, xm, theta, rm);
+      res(xp, rp);
+      res(xm, rm);
       J.col(j) = (rp - rm) / (2.0 * h);
     }
     const Eigen::MatrixXd JtJ = J.transpose() * J;
@@ -174,7 +192,7 @@ Eigen::VectorXd polish(const Problem& pb, Eigen::VectorXd x, const Eigen::Vector
       Eigen::MatrixXd A = JtJ;
       A.diagonal() += lambda * (JtJ.diagonal().array() + 1e-12).matrix();
       const Eigen::VectorXd x_try = (x - A.ldlt().solve(g)).cwiseMax(lo).cwiseMin(hi);
-      residuals(pb, x_try, theta, r_try);
+      res(x_try, r_try);
       const double F_try = r_try.squaredNorm();
       if (F_try < F) {
         improved = F - F_try > 1e-15 * F;
@@ -188,6 +206,131 @@ Eigen::VectorXd polish(const Problem& pb, Eigen::VectorXd x, const Eigen::Vector
     if (!improved) break;
   }
   return x;
+}
+
+// The polish of (L23): Levenberg–Marquardt on the residual vector of (L21).
+Eigen::VectorXd polish(const Problem& pb, const Eigen::VectorXd& x, const Eigen::VectorXd& lo,
+                       const Eigen::VectorXd& hi, int& evaluations) {
+  std::vector<double> theta(pb.T.size());
+  const auto res = [&](const Eigen::VectorXd& y, Eigen::VectorXd& r) {
+    residuals(pb, y, theta, r);
+  };
+  return levenberg_marquardt(res, residual_count(pb), x, lo, hi, 200, evaluations);
+}
+
+// ---- the nearest-point start of free timing (L25) ----------------------------------------------
+// The samples of the coupler curve per turn, and the golden-section steps refining each target's
+// nearest point between the neighbours of its nearest sample.
+constexpr int kCurveSamples = 48;
+constexpr int kRefineSteps = 6;
+// The Levenberg–Marquardt iterations on the curve distance of a fit and of a restart round.
+constexpr int kCurveFitIterations = 100;
+constexpr int kCurveHopIterations = 30;
+// The curve distance of a linkage none of whose samples assembles (normalised units): far above
+// any assembled fit, finite for BOBYQA.
+constexpr double kNoCurve = 1e3;
+
+bool nearest_start(const PathSynthesisOptions& o) {
+  return o.timing == PathTiming::free && o.start == PathStart::nearest_point;
+}
+
+// The coupler curve of fb sampled at kCurveSamples crank angles over one turn.
+struct CurveSamples {
+  std::vector<Vec2> P;
+  std::vector<char> assembles;
+};
+
+void sample_curve(const FourBar& fb, CurveSamples& cs) {
+  cs.P.resize(kCurveSamples);
+  cs.assembles.resize(kCurveSamples);
+  for (int j = 0; j < kCurveSamples; ++j) {
+    const FourBarPosition pos = calc_position(fb, 2.0 * kPi * j / kCurveSamples);
+    cs.P[static_cast<std::size_t>(j)] = pos.P;
+    cs.assembles[static_cast<std::size_t>(j)] = pos.assembles ? 1 : 0;
+  }
+}
+
+// The crank angle of the point of fb's coupler curve nearest to T (its nearest sample refined by
+// golden section within the neighbouring samples) and the squared distance; false when no sample
+// assembles.
+bool nearest_point(const FourBar& fb, const CurveSamples& cs, const Vec2& T, double& theta,
+                   double& dist2) {
+  int best = -1;
+  dist2 = HUGE_VAL;
+  for (int j = 0; j < kCurveSamples; ++j) {
+    const auto u = static_cast<std::size_t>(j);
+    if (cs.assembles[u] == 0) continue;
+    const double e = (cs.P[u] - T).squaredNorm();
+    if (e < dist2) dist2 = e, best = j;
+  }
+  if (best < 0) return false;
+  const double h = 2.0 * kPi / kCurveSamples;
+  theta = h * best;
+  const auto g = [&](double t) {
+    const FourBarPosition pos = calc_position(fb, t);
+    return pos.assembles ? (pos.P - T).squaredNorm() : HUGE_VAL;
+  };
+  // Safeguarded Newton steps on g'(t) = 0 with central differences, kept within the bracket
+  // [θ_j − h, θ_j + h] and only when g drops.
+  double t = theta, gt = dist2;
+  constexpr double kStep = 1e-4;
+  for (int k = 0; k < kRefineSteps; ++k) {
+    const double gp = g(t + kStep), gm = g(t - kStep);
+    if (!std::isfinite(gp) || !std::isfinite(gm)) break;
+    const double d1 = (gp - gm) / (2.0 * kStep), d2 = (gp - 2.0 * gt + gm) / (kStep * kStep);
+    double dt = d2 > 0.0 ? -d1 / d2 : (d1 > 0.0 ? -h : h) / 4.0;
+    const double t_new = std::clamp(t + dt, theta - h, theta + h);
+    const double g_new = g(t_new);
+    if (!(g_new < gt)) break;
+    dt = t_new - t;
+    t = t_new, gt = g_new;
+    if (std::abs(dt) < 1e-10) break;
+  }
+  theta = t, dist2 = gt;
+  return true;
+}
+
+// (L25) The curve-distance residuals over the linkage variables alone (the crank angles
+// eliminated): each target's miss P(θ*_i) − T_i from its nearest point θ*_i of the coupler curve
+// (2N), then √w · the crank-rocker violations (2); the nearest-point crank angles in theta.
+int curve_residual_count(const Problem& pb) { return 2 * static_cast<int>(pb.T.size()) + 2; }
+
+void curve_residuals(const Problem& pb, const Eigen::VectorXd& x, CurveSamples& cs,
+                     std::vector<double>& theta, Eigen::VectorXd& r) {
+  const FourBar fb = decode_linkage(pb, x);
+  sample_curve(fb, cs);
+  const auto n = static_cast<Eigen::Index>(pb.T.size());
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const auto u = static_cast<std::size_t>(i);
+    double e = 0.0;
+    if (!nearest_point(fb, cs, pb.T[u], theta[u], e)) {
+      r.head(2 * n).setConstant(std::sqrt(kNoCurve));
+      break;
+    }
+    r.segment<2>(2 * i) = calc_position(fb, theta[u]).P - pb.T[u];
+  }
+  r.tail<2>() = pb.sqrt_w * crank_rocker_violations(pb, x, fb);
+}
+
+// The full variable vector of a free timing from linkage variables and nearest-point crank
+// angles, turning in pb.sense: θ_0 = θ*_1 wrapped to [−π, π), δ_k = s(θ*_k − θ*_(k−1)) mod 2π.
+// False when the increments add up to more than one turn (the targets are not met in this
+// order and sense within a turn).
+bool timed_from_nearest(const Problem& pb, const Eigen::VectorXd& linkage,
+                        const std::vector<double>& theta, Eigen::VectorXd& x) {
+  const Layout& L = pb.L;
+  x.resize(L.size);
+  x.head(L.start) = linkage.head(L.start);
+  x(L.start) = std::remainder(theta.front(), 2.0 * kPi);
+  if (x(L.start) >= kPi) x(L.start) -= 2.0 * kPi;
+  double total = 0.0;
+  for (std::size_t i = 1; i < theta.size(); ++i) {
+    double dk = std::fmod(pb.sense * (theta[i] - theta[i - 1]), 2.0 * kPi);
+    if (dk < 0.0) dk += 2.0 * kPi;
+    x(L.increments + static_cast<int>(i) - 1) = dk;
+    total += dk;
+  }
+  return total <= 2.0 * kPi * (1.0 + 1e-9);
 }
 
 struct Run {
@@ -220,14 +363,79 @@ void search(Problem& pb, const PathSynthesisOptions& o, std::vector<Run>& runs, 
     if (std::isfinite(l.value)) runs.push_back({l.x, l.value, pb.branch, pb.sense});
 }
 
-// (L23) The restart policy: `restarts` rounds of basin hopping from the best point. Each round
-// moves every variable by a uniform step in ±restart_step·(hi − lo) (std::mt19937_64 seeded from
-// options.seed, its bits mapped to [−1, 1) by hand so that the sequence is portable), runs BOBYQA
-// and the polish from there and keeps the result when it lowers F.
+// (L25) The nearest-point start of free timing, on one branch: multistart BOBYQA on the curve
+// distance over the linkage variables (the crank angles eliminated), each local result refined
+// by Levenberg–Marquardt on the curve-distance residuals; then, from each fit and in every
+// turning sense asked for whose nearest-point timing stays within one turn, the polish of the
+// full problem (L21) with the timing started at the nearest-point crank angles. A branch none of
+// whose fits gives such a timing falls back to the quasi-random design.
+void search_nearest(Problem& pb, const PathSynthesisOptions& o, const std::vector<double>& senses,
+                    std::vector<Run>& runs, int& evaluations) {
+  Eigen::VectorXd lo, hi, start_hi;
+  make_boxes(pb, o, lo, hi, start_hi);
+  const int nl = pb.L.start;  // the linkage variables
+  const Eigen::VectorXd lo1 = lo.head(nl), hi1 = hi.head(nl);
+  std::vector<double> theta(pb.T.size());
+  CurveSamples cs;
+  Eigen::VectorXd rc(curve_residual_count(pb));
+  const auto res1 = [&](const Eigen::VectorXd& x, Eigen::VectorXd& r1) {
+    curve_residuals(pb, x, cs, theta, r1);
+  };
+  const auto f1 = [&](const Eigen::VectorXd& x) {
+    res1(x, rc);
+    return rc.squaredNorm();
+  };
+  solvers::MultistartSettings s1;
+  s1.starts = 0;
+  s1.seed = o.seed;
+  s1.local.max_evaluations = o.local_evaluations;
+  s1.local.xtol_abs = 1e-10;
+  const Eigen::MatrixXd X = solvers::quasi_random_starts(lo1, hi1, o.starts, o.seed);
+  for (Eigen::Index k = 0; k < X.cols(); ++k) s1.extra_starts.emplace_back(X.col(k));
+  const solvers::MultistartOutcome fits = solvers::minimize_multistart(f1, lo1, hi1, s1);
+  evaluations += fits.evaluations;
+  // Each fit polished on the curve distance, its nearest-point timing computed once.
+  std::vector<Eigen::VectorXd> linkages;
+  std::vector<std::vector<double>> timings;
+  for (const auto& fit : fits.locals) {
+    if (!std::isfinite(fit.value)) continue;
+    linkages.push_back(levenberg_marquardt(res1, curve_residual_count(pb), fit.x, lo1, hi1,
+                                           kCurveFitIterations, evaluations));
+    res1(linkages.back(), rc);  // its nearest-point crank angles
+    timings.push_back(theta);
+  }
+  std::vector<double> th(pb.T.size());
+  Eigen::VectorXd r(residual_count(pb));
+  const std::size_t before = runs.size();
+  for (const double sense : senses) {
+    pb.sense = sense;
+    for (std::size_t k = 0; k < linkages.size(); ++k) {
+      Eigen::VectorXd x;
+      if (!timed_from_nearest(pb, linkages[k], timings[k], x)) continue;
+      x = polish(pb, x, lo, hi, evaluations);
+      residuals(pb, x, th, r);
+      if (std::isfinite(r.squaredNorm())) runs.push_back({x, r.squaredNorm(), pb.branch, pb.sense});
+    }
+  }
+  if (runs.size() > before) return;
+  for (const double sense : senses) {
+    pb.sense = sense;
+    search(pb, o, runs, evaluations);
+  }
+}
+
+// (L23) The restart policy: `rounds` rounds of basin hopping from best. Each round moves every
+// variable by a uniform step in ±restart_step·(hi − lo) (std::mt19937_64 seeded from options.seed
+// and the stream, its bits mapped to [−1, 1) by hand so that the sequence is portable), runs
+// BOBYQA and the polish from there and keeps the result when it lowers F. With the nearest-point
+// start (L25) a round re-fits the moved linkage variables on the curve distance instead
+// (Levenberg–Marquardt, kCurveHopIterations), re-times from the nearest points in best's sense
+// and polishes the full problem.
 void hop(Problem& pb, const PathSynthesisOptions& o, const Eigen::VectorXd& lo,
-         const Eigen::VectorXd& hi, Run& best, int& evaluations) {
-  std::mt19937_64 rng(o.seed + 0x9e3779b97f4a7c15ULL);
-  const auto uniform = [&rng] {  // [−1, 1)
+         const Eigen::VectorXd& hi, int rounds, unsigned long long stream, Run& best,
+         int& evaluations) {
+  std::mt19937_64 rng(o.seed + 0x9e3779b97f4a7c15ULL * (stream + 1));  // stream 0: as before
+  const auto uniform = [&rng] {                                        // [−1, 1)
     return 2.0 * static_cast<double>(rng() >> 11) * 0x1.0p-53 - 1.0;
   };
   std::vector<double> theta(pb.T.size());
@@ -235,11 +443,31 @@ void hop(Problem& pb, const PathSynthesisOptions& o, const Eigen::VectorXd& lo,
   solvers::NloptSettings local;
   local.max_evaluations = o.local_evaluations;
   local.xtol_abs = 1e-12;
-  for (int k = 0; k < o.restarts; ++k) {
+  const bool curve_hop = nearest_start(o);
+  CurveSamples cs;
+  Eigen::VectorXd rc(curve_residual_count(pb));
+  for (int k = 0; k < rounds; ++k) {
     pb.branch = best.branch, pb.sense = best.sense;
     Eigen::VectorXd x0 = best.x;
     for (Eigen::Index j = 0; j < x0.size(); ++j)
       x0(j) = std::clamp(x0(j) + o.restart_step * (hi(j) - lo(j)) * uniform(), lo(j), hi(j));
+    if (curve_hop) {
+      const int nl = pb.L.start;
+      const Eigen::VectorXd lo1 = lo.head(nl), hi1 = hi.head(nl);
+      const auto res1 = [&](const Eigen::VectorXd& y, Eigen::VectorXd& r1) {
+        curve_residuals(pb, y, cs, theta, r1);
+      };
+      const Eigen::VectorXd y =
+          levenberg_marquardt(res1, curve_residual_count(pb), Eigen::VectorXd(x0.head(nl)), lo1,
+                              hi1, kCurveHopIterations, evaluations);
+      res1(y, rc);
+      Eigen::VectorXd x;
+      if (!timed_from_nearest(pb, y, theta, x)) continue;
+      x = polish(pb, x, lo, hi, evaluations);
+      residuals(pb, x, theta, r);
+      if (r.squaredNorm() < best.value) best.x = x, best.value = r.squaredNorm();
+      continue;
+    }
     const auto f = [&](const Eigen::VectorXd& x) {
       residuals(pb, x, theta, r);
       return r.squaredNorm();
@@ -247,7 +475,7 @@ void hop(Problem& pb, const PathSynthesisOptions& o, const Eigen::VectorXd& lo,
     const solvers::NloptOutcome out = solvers::minimize_bounded(f, x0, lo, hi, local);
     evaluations += out.evaluations;
     if (!std::isfinite(out.value)) continue;
-    const Eigen::VectorXd x = polish(pb, out.x, lo, hi);
+    const Eigen::VectorXd x = polish(pb, out.x, lo, hi, evaluations);
     residuals(pb, x, theta, r);
     if (r.squaredNorm() < best.value) best.x = x, best.value = r.squaredNorm();
   }
@@ -288,8 +516,9 @@ void check_options(const std::vector<Vec2>& targets, const PathSynthesisOptions&
   }
   check_argument(o.starts >= 1 && o.local_evaluations >= 1, fn, "options",
                  "needs starts ≥ 1 and local_evaluations ≥ 1");
-  check_argument(o.restarts >= 0 && o.restart_step > 0.0 && o.restart_step <= 1.0, fn, "options",
-                 "needs restarts ≥ 0 and restart_step in (0, 1]");
+  check_argument(
+      o.restarts >= 0 && o.restart_step > 0.0 && o.restart_step <= 1.0 && o.restart_candidates >= 1,
+      fn, "options", "needs restarts ≥ 0, restart_step in (0, 1] and restart_candidates ≥ 1");
 }
 
 // The best run in world units, checked by calc_position.
@@ -348,11 +577,18 @@ PathSynthesisResult synthesize_path_generator(const std::vector<Vec2>& targets,
   const std::vector<double> senses = !untimed || options.turning > 0 ? std::vector<double>{1.0}
                                      : options.turning < 0           ? std::vector<double>{-1.0}
                                                            : std::vector<double>{1.0, -1.0};
-  for (const int br : branches)
+  const bool nearest = nearest_start(options);
+  for (const int br : branches) {
+    pb.branch = br;
+    if (nearest) {
+      search_nearest(pb, options, senses, runs, evaluations);
+      continue;
+    }
     for (const double s : senses) {
-      pb.branch = br, pb.sense = s;
+      pb.sense = s;
       search(pb, options, runs, evaluations);
     }
+  }
   if (runs.empty()) {
     PathSynthesisResult res;
     res.message = "no run returned a finite objective";
@@ -362,17 +598,35 @@ PathSynthesisResult synthesize_path_generator(const std::vector<Vec2>& targets,
   std::sort(runs.begin(), runs.end(), [](const Run& x, const Run& y) { return x.value < y.value; });
   Eigen::VectorXd lo, hi, start_hi;
   make_boxes(pb, options, lo, hi, start_hi);
-  Run best = runs.front();
   std::vector<double> theta(pb.T.size());
   Eigen::VectorXd r(residual_count(pb));
+  std::vector<Run> polished;  // each run kept as it was when its polish does not lower F
   for (std::size_t k = 0; k < runs.size() && static_cast<int>(k) < options.polished; ++k) {
     pb.branch = runs[k].branch, pb.sense = runs[k].sense;
-    const Eigen::VectorXd x = polish(pb, runs[k].x, lo, hi);
+    const Eigen::VectorXd x = polish(pb, runs[k].x, lo, hi, evaluations);
     residuals(pb, x, theta, r);
-    if (r.squaredNorm() < best.value) best = {x, r.squaredNorm(), runs[k].branch, runs[k].sense};
+    polished.push_back(r.squaredNorm() < runs[k].value
+                           ? Run{x, r.squaredNorm(), runs[k].branch, runs[k].sense}
+                           : runs[k]);
   }
-  // Step 3: the restart policy about the best point (L23).
-  hop(pb, options, lo, hi, best, evaluations);
+  if (polished.empty()) polished.push_back(runs.front());
+  std::stable_sort(polished.begin(), polished.end(),
+                   [](const Run& x, const Run& y) { return x.value < y.value; });
+  // Step 3: the restart policy (L23) about each of the best `restart_candidates` distinct
+  // points (values apart by more than 1e-9 relative), the rounds shared out evenly.
+  std::vector<Run> candidates;
+  for (const Run& run : polished)
+    if (static_cast<int>(candidates.size()) < options.restart_candidates &&
+        (candidates.empty() || run.value > candidates.back().value * (1.0 + 1e-9)))
+      candidates.push_back(run);
+  const auto nc = static_cast<int>(candidates.size());
+  Run best = candidates.front();
+  for (int k = 0; k < nc; ++k) {
+    const int rounds = options.restarts / nc + (k < options.restarts % nc ? 1 : 0);
+    hop(pb, options, lo, hi, rounds, static_cast<unsigned long long>(k), candidates[k],
+        evaluations);
+    if (candidates[k].value < best.value) best = candidates[k];
+  }
   // Step 4: world units, checked by the closed form.
   pb.branch = best.branch, pb.sense = best.sense;
   PathSynthesisResult res = finish(pb, best, targets, options);

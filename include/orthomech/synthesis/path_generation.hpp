@@ -30,6 +30,14 @@ enum class PathTiming {
   free,                   // θ_i = θ_0 + s Σ_{k≤i} δ_k, δ_k ≥ 0, in the targets' order
 };
 
+// How the multistart search of a free timing starts (L25). The quasi-random design is the
+// default: the nearest-point start wins on the ten-point ellipse (4.10e-4 against 4.65e-4) but
+// loses on the six collinear points (4.0e-6 against an exact 4e-28), docs/synthesis.md.
+enum class PathStart {
+  quasi_random,  // the quasi-random design over every variable, the increments in [0, 2π/(N − 1)]
+  nearest_point,  // free timing: fit the curve distance first, time from the nearest points
+};
+
 struct PathSynthesisOptions {
   PathTiming timing = PathTiming::prescribed;
   std::vector<double> crank_angles;  // φ_i (timed), one per target
@@ -53,7 +61,10 @@ struct PathSynthesisOptions {
     double coupler_lo = -60.0, coupler_hi = 60.0;  // p, q
   };
   std::optional<WorldBox> world_box;
-  int starts = 200;  // quasi-random starts per branch and turning sense
+  PathStart start = PathStart::quasi_random;
+  // Quasi-random starts per branch and turning sense (nearest_point: curve-distance starts per
+  // branch, each then continued in every turning sense whose timing stays within one turn).
+  int starts = 200;
   unsigned long long seed = 1;
   int local_evaluations = 3000;  // BOBYQA budget per start
   int polished = 8;              // the best runs polished by Levenberg–Marquardt
@@ -62,6 +73,9 @@ struct PathSynthesisOptions {
   // kept when it is better. 0: none.
   int restarts = 0;
   double restart_step = 0.02;
+  // The rounds are shared out among the best `restart_candidates` distinct polished points (1:
+  // the best point alone), each hopping from its own start with its own random stream.
+  int restart_candidates = 1;
   double penalty_weight = 1e6;  // w of (L21)
 };
 
