@@ -10,10 +10,12 @@
 // (docs/file-format.md "Limits").
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cstddef>
 #include <functional>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "orthomech/error.hpp"
 
@@ -51,6 +53,26 @@ inline void check_yaml_document(const YAML::Node& root, const std::string& origi
     const YAML::Mark m = e.node().Mark();
     throw InputError({origin, m.is_null() ? 1 : m.line + 1, m.is_null() ? 1 : m.column + 1}, "YAML",
                      e.what());
+  }
+}
+
+// The readers of study and synthesis task files: a refusal at `node`'s place in `file` (line and
+// column 1 when the node has none), and the check that a mapping holds only `allowed` keys.
+[[noreturn]] inline void fail_at(const std::string& file, const YAML::Node& node,
+                                 const std::string& element, const std::string& message) {
+  const YAML::Mark m = node.Mark();
+  throw InputError({file, m.is_null() ? 1 : m.line + 1, m.is_null() ? 1 : m.column + 1}, element,
+                   message);
+}
+inline void expect_keys(const std::string& file, const YAML::Node& node, const std::string& element,
+                        const std::vector<std::string>& allowed) {
+  if (!node.IsMap()) fail_at(file, node, element, "expected a mapping");
+  for (const auto& kv : node) {
+    const std::string key = kv.first.Scalar();
+    if (std::find(allowed.begin(), allowed.end(), key) != allowed.end()) continue;
+    std::string list;
+    for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
+    fail_at(file, kv.first, element, "unknown key '" + key + "' (allowed: " + list + ")");
   }
 }
 

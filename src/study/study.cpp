@@ -113,21 +113,11 @@ class StudyReader {
 
   [[noreturn]] void fail(const YAML::Node& node, const std::string& element,
                          const std::string& message) const {
-    const YAML::Mark m = node.Mark();
-    throw InputError({file_, m.is_null() ? 1 : m.line + 1, m.is_null() ? 1 : m.column + 1}, element,
-                     message);
+    detail::fail_at(file_, node, element, message);
   }
   void expect_keys(const YAML::Node& node, const std::string& element,
                    const std::vector<std::string>& allowed) const {
-    if (!node.IsMap()) fail(node, element, "expected a mapping");
-    for (const auto& kv : node) {
-      const std::string key = kv.first.Scalar();
-      if (std::find(allowed.begin(), allowed.end(), key) == allowed.end()) {
-        std::string list;
-        for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
-        fail(kv.first, element, "unknown key '" + key + "' (allowed: " + list + ")");
-      }
-    }
+    detail::expect_keys(file_, node, element, allowed);
   }
   YAML::Node require(const YAML::Node& node, const std::string& key,
                      const std::string& element) const {
