@@ -58,16 +58,32 @@ nlohmann::json candidate_json(const SynthesisCandidate& c, const SynthesisTask& 
   nlohmann::json angles = nlohmann::json::array();
   for (const double a : c.crank_angles) angles.push_back(a / t.angle_si);
   j["crank_angles"] = angles;
+  if (c.cycle) {  // what `cycle` computes on the file, in its units (N*mm in an mm file, N)
+    j["cycle"] = {{"from", c.cycle->from / t.angle_si},
+                  {"to", c.cycle->to / t.angle_si},
+                  {"positions", c.cycle->positions},
+                  {"peak_drive", c.cycle->peak_drive / L},
+                  {"drive_unit", "N*" + t.length_unit},
+                  {"peak_pin_force", c.cycle->peak_pin_force},
+                  {"peak_pin", c.cycle->peak_pin},
+                  {"force_unit", "N"}};
+  } else {
+    j["cycle"] = nullptr;
+  }
   return j;
 }
 
 std::string text_row(const SynthesisCandidate& c, const SynthesisTask& t) {
   const double L = t.length_si;
   const auto& fb = c.linkage;
-  char row[256];
-  std::snprintf(row, sizeof row, "%-13s %9.4g %9.4g %9.4g %9.4g  %-22s %7.2f  %9.3g",
+  char row[256], peaks[64] = "        -         -";
+  if (c.cycle)
+    std::snprintf(peaks, sizeof peaks, "%9.4g %9.4g", c.cycle->peak_drive / L,
+                  c.cycle->peak_pin_force);
+  std::snprintf(row, sizeof row, "%-13s %9.4g %9.4g %9.4g %9.4g  %-22s %7.2f  %9.3g %s",
                 c.name.c_str(), (fb.B0 - fb.A0).norm() / L, fb.a / L, fb.b / L, fb.c / L,
-                synthesis::to_string(c.grashof), c.worst_transmission / kDeg, c.max_distance / L);
+                synthesis::to_string(c.grashof), c.worst_transmission / kDeg, c.max_distance / L,
+                peaks);
   return row;
 }
 
@@ -85,9 +101,10 @@ void write_text(std::ostream& out, const SynthesisTask& t, const SynthesisResult
       << " rejected (every one validated; ranked by " << t.rank_by << ")\n";
   if (!dir.empty()) out << "files           " << dir << "/candidate-K.yaml, candidates.csv\n";
   out << "\nname               ground     crank   coupler  follower  grashof                "
-         "mu_min  max_dist\n";
+         "mu_min  max_dist     drive  pin_force\n";
   out << "                   [" << t.length_unit << "]                                  "
-      << "                    [deg]  [" << t.length_unit << "]\n";
+      << "                    [deg]  [" << t.length_unit << "]   [N*" << t.length_unit
+      << "]       [N]\n";
   for (const auto& c : r.accepted) out << text_row(c, t) << "\n";
   for (const auto& c : r.rejected) {
     out << text_row(c, t) << "\n";
@@ -100,7 +117,7 @@ std::string csv_text(const SynthesisResult& r, const SynthesisTask& t) {
   std::ostringstream out;
   out.precision(17);
   out << "name,accepted,ground,crank,coupler,follower,A0_x,A0_y,B0_x,B0_y,P_p,P_q,branch,grashof,"
-         "worst_transmission,max_distance,reasons\n";
+         "worst_transmission,max_distance,peak_drive,peak_pin_force,reasons\n";
   const double L = t.length_si;
   for (const auto* list : {&r.accepted, &r.rejected})
     for (const auto& c : *list) {
@@ -114,7 +131,10 @@ std::string csv_text(const SynthesisResult& r, const SynthesisTask& t) {
           << fb.A0.y() / L << ',' << fb.B0.x() / L << ',' << fb.B0.y() / L << ','
           << fb.coupler_point.x() / L << ',' << fb.coupler_point.y() / L << ',' << fb.branch << ','
           << synthesis::to_string(c.grashof) << ',' << c.worst_transmission / t.angle_si << ','
-          << c.max_distance / L << ",\"" << reasons << "\"\n";
+          << c.max_distance / L << ',';
+      if (c.cycle) out << c.cycle->peak_drive / L << ',' << c.cycle->peak_pin_force;
+      else out << ',';
+      out << ",\"" << reasons << "\"\n";
     }
   return out.str();
 }

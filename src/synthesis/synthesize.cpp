@@ -6,6 +6,7 @@
 #include <numbers>
 #include <sstream>
 
+#include "candidate_cycle.hpp"
 #include "orthomech/analysis/validate.hpp"
 #include "orthomech/error.hpp"
 #include "orthomech/io/mechanism_file.hpp"
@@ -188,9 +189,12 @@ double automatic_tolerance(const SynthesisTask& task) {
   return std::max(1e-9, 1e-3 * size);
 }
 
+// Accepted candidates have their cycle (step 4), so the kinetostatic keys are there.
 void rank(const SynthesisTask& task, std::vector<SynthesisCandidate>& list) {
   std::stable_sort(list.begin(), list.end(), [&](const auto& a, const auto& b) {
     if (task.rank_by == "error") return a.max_distance < b.max_distance;
+    if (task.rank_by == "drive_torque") return a.cycle->peak_drive < b.cycle->peak_drive;
+    if (task.rank_by == "pin_force") return a.cycle->peak_pin_force < b.cycle->peak_pin_force;
     return a.worst_transmission > b.worst_transmission;
   });
 }
@@ -302,7 +306,7 @@ SynthesisResult run_synthesis(const SynthesisTask& task) {
       break;
   }
   if (raw.empty() && result.message.empty()) result.message = "the generator found no four-bar";
-  // 2.–3. Every candidate checked and validated.
+  // 2.–4. Every candidate checked, validated and run through `cycle`.
   std::vector<SynthesisCandidate> all;
   std::vector<SynthesisTask> tasks;  // per candidate: a function's outputs as follower angles
   for (const Raw& r : raw) {
@@ -327,9 +331,10 @@ SynthesisResult run_synthesis(const SynthesisTask& task) {
       c.rejections.emplace_back("a target is missed by more than the tolerance");
     c.file_text = four_bar_file(own, c.linkage, c.crank_angles, result.tolerance, c.name);
     check_by_validate(own, c);
+    if (c.accepted()) detail::check_by_cycle(c, calc_crank_range(c.linkage).full_turn);
     all.push_back(std::move(c));
   }
-  // 4. Accepted ranked, rejected listed; names in that order.
+  // 5. Accepted ranked, rejected listed; names in that order.
   for (SynthesisCandidate& c : all) (c.accepted() ? result.accepted : result.rejected).push_back(c);
   rank(task, result.accepted);
   for (size_t k = 0; k < result.accepted.size(); ++k) {

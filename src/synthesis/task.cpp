@@ -251,10 +251,12 @@ class TaskReader {
     }
     if (const YAML::Node r = root["rank_by"]) {
       t.rank_by = r.as<std::string>();
-      if (t.rank_by != "transmission" && t.rank_by != "error")
+      if (t.rank_by != "transmission" && t.rank_by != "error" && t.rank_by != "drive_torque" &&
+          t.rank_by != "pin_force")
         fail(r, "rank_by",
-             "rank_by is `transmission` (the worst transmission angle, largest "
-             "first) or `error` (the distance to the targets, smallest first)");
+             "rank_by is `transmission` (the worst transmission angle, largest first), `error` "
+             "(the distance to the targets), `drive_torque` (the peak drive torque over the "
+             "cycle) or `pin_force` (the largest joint force over the cycle), smallest first");
     }
   }
 };

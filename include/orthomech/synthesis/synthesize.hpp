@@ -12,10 +12,15 @@
 //      singular positions), plus the task's own requirements (Grashof crank-rocker) and the
 //      worst transmission angle over the motion through the targets (the closed form of
 //      four_bar.hpp, every degree of crank);
-//   4. a candidate that fails anything is rejected with its reasons, never returned as a
-//      solution; the others are ranked (worst transmission angle, largest first; or the distance
-//      to the targets, smallest first).
+//   4. the file through `cycle` (analysis/cycle.hpp) over the motion it is built for (a full
+//      turn of a crank that turns fully, else the crank from the first target to the last) at
+//      the task's speed: the peak drive torque and the largest pin force; a run that does not
+//      complete is a rejection too;
+//   5. a candidate that fails anything is rejected with its reasons, never returned as a
+//      solution; the others are ranked (worst transmission angle, largest first; the distance
+//      to the targets, the peak drive torque or the peak pin force, smallest first).
 // Results are data: nothing here throws for a numerical outcome.
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -23,6 +28,15 @@
 #include "orthomech/synthesis/task.hpp"
 
 namespace orthomech::synthesis {
+
+// What `cycle` computes on a candidate's file (step 4), in SI.
+struct CandidateCycle {
+  double from = 0.0, to = 0.0;  // the crank's motion (rad); a full turn: to = from + 2π
+  int positions = 0;            // of the run (360 steps)
+  double peak_drive = 0.0;      // N·m: the largest |drive torque|
+  double peak_pin_force = 0.0;  // N: the largest joint force magnitude |F| over the joints
+  std::string peak_pin;         // the joint it acts in
+};
 
 struct SynthesisCandidate {
   std::string name;    // "candidate-1" … in rank order (accepted), "rejected-1" … (rejected)
@@ -34,6 +48,7 @@ struct SynthesisCandidate {
   double max_angle_error = 0.0;      // rad: motion: the coupler's angle; function: the output's
   GrashofType grashof = GrashofType::triple_rocker;
   double worst_transmission = 0.0;      // rad: min over the motion of min(μ, π − μ)
+  std::optional<CandidateCycle> cycle;  // of an accepted candidate (step 4)
   std::vector<std::string> rejections;  // empty: accepted
   std::string file_text;                // the mechanism file (YAML)
   size_t task = 0;                      // internal: which generator output it is

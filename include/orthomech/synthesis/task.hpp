@@ -46,7 +46,7 @@ struct SynthesisTask {
   // The mechanism a candidate is written as: link mass per length (kg/m), the driver's speed.
   double mass_per_length = 1.0;          // kg/m (1 g/mm, a 20 × 6 mm steel bar is 0.94)
   double speed = 6.283185307179586;      // rad/s (60 rpm)
-  std::string rank_by = "transmission";  // or "error"
+  std::string rank_by = "transmission";  // or "error", "drive_torque", "pin_force"
 };
 
 // Reads a task from YAML text (`origin` names it in messages) or from a file. Throws InputError.

@@ -32,7 +32,17 @@ TEST(SynthesizeCli, MotionTaskWritesCandidatesThatValidateAndCycle) {
     const std::string file = dir + "/" + c["name"].get<std::string>() + ".yaml";
     ASSERT_TRUE(std::filesystem::exists(file)) << file;
     EXPECT_EQ(run_cli({"validate", file, "-q"}).status, 0) << file;
-    EXPECT_EQ(run_cli({"cycle", file, "-q"}).status, 0) << file;
+    // The peaks that rank the candidates are those `cycle` prints for the file.
+    const auto cy = run_cli({"cycle", file, "--json", "-q"});
+    ASSERT_EQ(cy.status, 0) << file;
+    const auto peaks = nlohmann::json::parse(cy.out)["peaks"];
+    EXPECT_EQ(c["cycle"]["drive_unit"], "N*mm");
+    EXPECT_NEAR(c["cycle"]["peak_drive"].get<double>(), peaks["drive"]["peak"].get<double>(),
+                1e-9 * peaks["drive"]["peak"].get<double>());
+    const std::string pin = c["cycle"]["peak_pin"].get<std::string>() + ".|F|";
+    EXPECT_NEAR(c["cycle"]["peak_pin_force"].get<double>(), peaks[pin]["peak"].get<double>(),
+                1e-9 * peaks[pin]["peak"].get<double>())
+        << pin;
   }
 }
 

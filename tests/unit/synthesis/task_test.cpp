@@ -39,6 +39,17 @@ TEST(SynthesisTask, ReadsAPathTaskInItsUnits) {
   EXPECT_NEAR(t.speed, 4 * std::numbers::pi, 1e-12);
 }
 
+TEST(SynthesisTask, KinetostaticRankings) {
+  for (const char* key : {"drive_torque", "pin_force"}) {
+    const SynthesisTask t = parse_synthesis_task(
+        std::string("orthomech-synthesis: 1\ntask: path\npoints: [[0, 0], [1, 0], [2, 1]]\n"
+                    "rank_by: ") +
+            key + "\n",
+        "t.yaml");
+    EXPECT_EQ(t.rank_by, key);
+  }
+}
+
 // Each mistake: its line and the words a user needs.
 TEST(SynthesisTask, MistakesNameTheirLine) {
   struct Case {
