@@ -1,7 +1,7 @@
-// `orthomech synthesize TASK [--out DIR] [--json]`: planar four-bars from the motion, path or
+// `orthomech synthesize TASK [--out DIR] [--report FILE.html] [--json]`: planar four-bars from the motion, path or
 // input–output law a designer wants (issue 50; docs/cli.md "synthesize"). The library runs the
-// task and validates every candidate (synthesis/synthesize.hpp); this file only renders the
-// result and writes the accepted candidates' mechanism files. Exit 0 when a candidate is
+// task and validates every candidate (synthesis/synthesize.hpp) and renders the documents
+// (io/synthesis_output.hpp); this file only prints and writes them. Exit 0 when a candidate is
 // accepted, 1 when every one is rejected, 3 when the generator finds no four-bar.
 #include "orthomech/synthesis/synthesize.hpp"
 
@@ -11,133 +11,25 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
-#include <nlohmann/json.hpp>
-#include <numbers>
-#include <sstream>
 
 #include "commands.hpp"
 #include "common.hpp"
 #include "orthomech/io/file_writer.hpp"
+#include "orthomech/io/synthesis_output.hpp"
 
 namespace orthomech::cli {
 
 namespace {
 
-using synthesis::SynthesisCandidate;
 using synthesis::SynthesisResult;
 using synthesis::SynthesisTask;
 
 struct SynthesizeCliOptions {
   std::string file;
   std::string out;
+  std::string report;
   bool json = false;
 };
-
-constexpr double kDeg = std::numbers::pi / 180.0;
-
-nlohmann::json candidate_json(const SynthesisCandidate& c, const SynthesisTask& t) {
-  const double L = t.length_si;
-  const auto& fb = c.linkage;
-  nlohmann::json j;
-  j["name"] = c.name;
-  j["method"] = c.method;
-  j["accepted"] = c.accepted();
-  j["rejections"] = c.rejections;
-  j["A0"] = {fb.A0.x() / L, fb.A0.y() / L};
-  j["B0"] = {fb.B0.x() / L, fb.B0.y() / L};
-  j["crank"] = fb.a / L;
-  j["coupler"] = fb.b / L;
-  j["follower"] = fb.c / L;
-  j["ground"] = (fb.B0 - fb.A0).norm() / L;
-  j["coupler_point"] = {fb.coupler_point.x() / L, fb.coupler_point.y() / L};
-  j["branch"] = fb.branch;
-  j["grashof"] = synthesis::to_string(c.grashof);
-  j["worst_transmission"] = c.worst_transmission / t.angle_si;
-  j["max_distance"] = c.max_distance / L;
-  j["max_angle_error"] = c.max_angle_error / t.angle_si;
-  nlohmann::json angles = nlohmann::json::array();
-  for (const double a : c.crank_angles) angles.push_back(a / t.angle_si);
-  j["crank_angles"] = angles;
-  if (c.cycle) {  // what `cycle` computes on the file, in its units (N*mm in an mm file, N)
-    j["cycle"] = {{"from", c.cycle->from / t.angle_si},
-                  {"to", c.cycle->to / t.angle_si},
-                  {"positions", c.cycle->positions},
-                  {"peak_drive", c.cycle->peak_drive / L},
-                  {"drive_unit", "N*" + t.length_unit},
-                  {"peak_pin_force", c.cycle->peak_pin_force},
-                  {"peak_pin", c.cycle->peak_pin},
-                  {"force_unit", "N"}};
-  } else {
-    j["cycle"] = nullptr;
-  }
-  return j;
-}
-
-std::string text_row(const SynthesisCandidate& c, const SynthesisTask& t) {
-  const double L = t.length_si;
-  const auto& fb = c.linkage;
-  char row[256], peaks[64] = "        -         -";
-  if (c.cycle)
-    std::snprintf(peaks, sizeof peaks, "%9.4g %9.4g", c.cycle->peak_drive / L,
-                  c.cycle->peak_pin_force);
-  std::snprintf(row, sizeof row, "%-13s %9.4g %9.4g %9.4g %9.4g  %-22s %7.2f  %9.3g %s",
-                c.name.c_str(), (fb.B0 - fb.A0).norm() / L, fb.a / L, fb.b / L, fb.c / L,
-                synthesis::to_string(c.grashof), c.worst_transmission / kDeg, c.max_distance / L,
-                peaks);
-  return row;
-}
-
-void write_text(std::ostream& out, const SynthesisTask& t, const SynthesisResult& r,
-                const std::string& dir) {
-  out << "task            " << t.name << "  (" << t.file << "), " << to_string(t.kind)
-      << " generation, "
-      << (t.kind == synthesis::TaskKind::function ? t.inputs.size() : t.positions.size())
-      << " targets\n";
-  out << "generator       " << synthesis::to_string(r.status)
-      << (r.message.empty() ? "" : ": " + r.message) << "\n";
-  out << "tolerance       " << r.tolerance / t.length_si << " " << t.length_unit
-      << " (distance of a candidate from a target)\n";
-  out << "candidates      " << r.accepted.size() << " accepted, " << r.rejected.size()
-      << " rejected (every one validated; ranked by " << t.rank_by << ")\n";
-  if (!dir.empty()) out << "files           " << dir << "/candidate-K.yaml, candidates.csv\n";
-  out << "\nname               ground     crank   coupler  follower  grashof                "
-         "mu_min  max_dist     drive  pin_force\n";
-  out << "                   [" << t.length_unit << "]                                  "
-      << "                    [deg]  [" << t.length_unit << "]   [N*" << t.length_unit
-      << "]       [N]\n";
-  for (const auto& c : r.accepted) out << text_row(c, t) << "\n";
-  for (const auto& c : r.rejected) {
-    out << text_row(c, t) << "\n";
-    for (const auto& why : c.rejections) out << "    rejected: " << why << "\n";
-  }
-}
-
-// candidates.csv: one row per candidate, accepted first (ranked), then rejected with reasons.
-std::string csv_text(const SynthesisResult& r, const SynthesisTask& t) {
-  std::ostringstream out;
-  out.precision(17);
-  out << "name,accepted,ground,crank,coupler,follower,A0_x,A0_y,B0_x,B0_y,P_p,P_q,branch,grashof,"
-         "worst_transmission,max_distance,peak_drive,peak_pin_force,reasons\n";
-  const double L = t.length_si;
-  for (const auto* list : {&r.accepted, &r.rejected})
-    for (const auto& c : *list) {
-      const auto& fb = c.linkage;
-      std::string reasons;
-      for (const auto& why : c.rejections) reasons += (reasons.empty() ? "" : "; ") + why;
-      for (char& ch : reasons)
-        if (ch == '"') ch = '\'';
-      out << c.name << ',' << (c.accepted() ? 1 : 0) << ',' << (fb.B0 - fb.A0).norm() / L << ','
-          << fb.a / L << ',' << fb.b / L << ',' << fb.c / L << ',' << fb.A0.x() / L << ','
-          << fb.A0.y() / L << ',' << fb.B0.x() / L << ',' << fb.B0.y() / L << ','
-          << fb.coupler_point.x() / L << ',' << fb.coupler_point.y() / L << ',' << fb.branch << ','
-          << synthesis::to_string(c.grashof) << ',' << c.worst_transmission / t.angle_si << ','
-          << c.max_distance / L << ',';
-      if (c.cycle) out << c.cycle->peak_drive / L << ',' << c.cycle->peak_pin_force;
-      else out << ',';
-      out << ",\"" << reasons << "\"\n";
-    }
-  return out.str();
-}
 
 int run_synthesize(const SynthesizeCliOptions& opt) {
   const SynthesisTask task = synthesis::load_synthesis_task(opt.file);
@@ -147,29 +39,24 @@ int run_synthesize(const SynthesizeCliOptions& opt) {
       std::filesystem::create_directories(opt.out);
       for (const auto& c : r.accepted)
         write_file(std::filesystem::path(opt.out) / (c.name + ".yaml"), c.file_text);
-      write_file(std::filesystem::path(opt.out) / "candidates.csv", csv_text(r, task));
+      write_file(std::filesystem::path(opt.out) / "candidates.csv", synthesis_csv(task, r));
     } catch (const std::exception& e) {  // no such directory, no permission, a full disk
       spdlog::error("synthesize: --out {}: {}", opt.out, e.what());
       return kBadInput;
     }
   }
-  if (opt.json) {
-    nlohmann::json j;
-    j["task"] = task.name;
-    j["kind"] = to_string(task.kind);
-    j["units"] = {{"length", task.length_unit}, {"angle", task.angle_unit}};
-    j["generator"] = {{"status", synthesis::to_string(r.status)}, {"message", r.message}};
-    j["tolerance"] = r.tolerance / task.length_si;
-    j["rank_by"] = task.rank_by;
-    nlohmann::json acc = nlohmann::json::array(), rej = nlohmann::json::array();
-    for (const auto& c : r.accepted) acc.push_back(candidate_json(c, task));
-    for (const auto& c : r.rejected) rej.push_back(candidate_json(c, task));
-    j["accepted"] = acc;
-    j["rejected"] = rej;
-    std::cout << j.dump(2) << '\n';
-  } else {
-    write_text(std::cout, task, r, opt.out);
+  if (!opt.report.empty()) {
+    try {
+      write_file(opt.report, synthesis_report_html(task, r));
+    } catch (const std::exception& e) {
+      spdlog::error("synthesize: --report {}: {}", opt.report, e.what());
+      return kBadInput;
+    }
   }
+  if (opt.json)
+    std::cout << synthesis_json(task, r) << '\n';
+  else
+    std::cout << synthesis_text(task, r, opt.out);
   std::cout.flush();
   if (r.accepted.empty() && r.rejected.empty()) {
     spdlog::error("synthesize: {}: no four-bar: {}", task.file, r.message);
@@ -193,6 +80,8 @@ void register_synthesize(CLI::App& app, const GlobalOptions& globals, int& exit_
   cmd->add_option("task", opt->file, "synthesis task file (YAML, docs/file-format.md)")->required();
   cmd->add_option("--out", opt->out,
                   "directory for the accepted candidates' mechanism files and candidates.csv");
+  cmd->add_option("--report", opt->report,
+                  "an offline HTML page with every candidate drawn over the targets");
   cmd->add_flag("--json", opt->json, "one JSON document on stdout");
   auto log = std::make_shared<LogFlags>();
   add_log_flags(cmd, *log);

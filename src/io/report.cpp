@@ -9,9 +9,6 @@
 
 namespace orthomech {
 
-namespace {
-
-// Text for HTML element content and attribute values.
 std::string escape_html(const std::string& s) {
   std::string out;
   out.reserve(s.size());
@@ -35,6 +32,8 @@ std::string escape_html(const std::string& s) {
   }
   return out;
 }
+
+namespace {
 
 // JSON inside <script>: "</" written as "<\/" so that no "</script>" ends the element early.
 std::string script_json(const nlohmann::json& j) {

@@ -322,6 +322,7 @@ SynthesisResult run_synthesis(const SynthesisTask& task) {
     c.method = raw[k].method;
     c.linkage = raw[k].linkage;
     c.crank_angles = raw[k].crank_angles;
+    c.output_offset = raw[k].output_offset;
     if (!unwrap_in_order(c.crank_angles))
       c.rejections.emplace_back(
           "order defect: the crank does not reach the targets in their order "

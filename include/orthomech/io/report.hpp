@@ -47,6 +47,9 @@ struct CycleReport {
 inline constexpr std::size_t kMaxPictureFrames = 1000;
 [[nodiscard]] std::vector<std::size_t> picture_positions(std::size_t n);
 
+// Text for HTML element content and attribute values: & < > " escaped.
+[[nodiscard]] std::string escape_html(const std::string& s);
+
 // The page. Throws std::invalid_argument when a series does not have one value per position or
 // the animation not one frame per picture position (picture_positions of the positions).
 [[nodiscard]] std::string cycle_report_html(const CycleReport& report);

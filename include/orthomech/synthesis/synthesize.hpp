@@ -46,6 +46,7 @@ struct SynthesisCandidate {
   double max_distance = 0.0;         // m: largest distance of the coupler point (function: of
                                      // the follower pin) from its target
   double max_angle_error = 0.0;      // rad: motion: the coupler's angle; function: the output's
+  double output_offset = 0.0;        // function: the follower's world angle is ψ + this
   GrashofType grashof = GrashofType::triple_rocker;
   double worst_transmission = 0.0;      // rad: min over the motion of min(μ, π − μ)
   std::optional<CandidateCycle> cycle;  // of an accepted candidate (step 4)

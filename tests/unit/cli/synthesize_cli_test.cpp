@@ -21,8 +21,10 @@ std::string example(const std::string& name) {
 TEST(SynthesizeCli, MotionTaskWritesCandidatesThatValidateAndCycle) {
   const std::string dir = ::testing::TempDir() + "/synthesize-motion";
   std::filesystem::remove_all(dir);
-  const auto r = run_cli({"synthesize", example("synthesis-motion.yaml"), "--out", dir, "--json"});
+  const auto r = run_cli({"synthesize", example("synthesis-motion.yaml"), "--out", dir, "--json",
+                          "--report", dir + "/report.html"});
   ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(std::filesystem::exists(dir + "/report.html"));
   const auto j = nlohmann::json::parse(r.out);
   EXPECT_EQ(j["kind"], "motion");
   ASSERT_FALSE(j["accepted"].empty());

@@ -1,0 +1,144 @@
+#include "orthomech/io/synthesis_output.hpp"
+
+#include <cstdio>
+#include <nlohmann/json.hpp>
+#include <numbers>
+#include <sstream>
+
+namespace orthomech {
+
+namespace {
+
+using synthesis::SynthesisCandidate;
+using synthesis::SynthesisResult;
+using synthesis::SynthesisTask;
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+nlohmann::json candidate_json(const SynthesisCandidate& c, const SynthesisTask& t) {
+  const double L = t.length_si;
+  const auto& fb = c.linkage;
+  nlohmann::json j;
+  j["name"] = c.name;
+  j["method"] = c.method;
+  j["accepted"] = c.accepted();
+  j["rejections"] = c.rejections;
+  j["A0"] = {fb.A0.x() / L, fb.A0.y() / L};
+  j["B0"] = {fb.B0.x() / L, fb.B0.y() / L};
+  j["crank"] = fb.a / L;
+  j["coupler"] = fb.b / L;
+  j["follower"] = fb.c / L;
+  j["ground"] = (fb.B0 - fb.A0).norm() / L;
+  j["coupler_point"] = {fb.coupler_point.x() / L, fb.coupler_point.y() / L};
+  j["branch"] = fb.branch;
+  j["grashof"] = synthesis::to_string(c.grashof);
+  j["worst_transmission"] = c.worst_transmission / t.angle_si;
+  j["max_distance"] = c.max_distance / L;
+  j["max_angle_error"] = c.max_angle_error / t.angle_si;
+  nlohmann::json angles = nlohmann::json::array();
+  for (const double a : c.crank_angles) angles.push_back(a / t.angle_si);
+  j["crank_angles"] = angles;
+  if (c.cycle) {  // what `cycle` computes on the file, in its units (N*mm in an mm file, N)
+    j["cycle"] = {{"from", c.cycle->from / t.angle_si},
+                  {"to", c.cycle->to / t.angle_si},
+                  {"positions", c.cycle->positions},
+                  {"peak_drive", c.cycle->peak_drive / L},
+                  {"drive_unit", "N*" + t.length_unit},
+                  {"peak_pin_force", c.cycle->peak_pin_force},
+                  {"peak_pin", c.cycle->peak_pin},
+                  {"force_unit", "N"}};
+  } else {
+    j["cycle"] = nullptr;
+  }
+  return j;
+}
+
+std::string text_row(const SynthesisCandidate& c, const SynthesisTask& t) {
+  const double L = t.length_si;
+  const auto& fb = c.linkage;
+  char row[256], peaks[64] = "        -         -";
+  if (c.cycle)
+    std::snprintf(peaks, sizeof peaks, "%9.4g %9.4g", c.cycle->peak_drive / L,
+                  c.cycle->peak_pin_force);
+  std::snprintf(row, sizeof row, "%-13s %9.4g %9.4g %9.4g %9.4g  %-22s %7.2f  %9.3g %s",
+                c.name.c_str(), (fb.B0 - fb.A0).norm() / L, fb.a / L, fb.b / L, fb.c / L,
+                synthesis::to_string(c.grashof), c.worst_transmission / kDeg, c.max_distance / L,
+                peaks);
+  return row;
+}
+
+}  // namespace
+
+std::string synthesis_text(const SynthesisTask& t, const SynthesisResult& r,
+                           const std::string& files_dir) {
+  std::ostringstream out;
+  out << "task            " << t.name << "  (" << t.file << "), " << to_string(t.kind)
+      << " generation, "
+      << (t.kind == synthesis::TaskKind::function ? t.inputs.size() : t.positions.size())
+      << " targets\n";
+  out << "generator       " << synthesis::to_string(r.status)
+      << (r.message.empty() ? "" : ": " + r.message) << "\n";
+  out << "tolerance       " << r.tolerance / t.length_si << " " << t.length_unit
+      << " (distance of a candidate from a target)\n";
+  out << "candidates      " << r.accepted.size() << " accepted, " << r.rejected.size()
+      << " rejected (every one validated; ranked by " << t.rank_by << ")\n";
+  if (!files_dir.empty())
+    out << "files           " << files_dir << "/candidate-K.yaml, candidates.csv\n";
+  out << "\nname               ground     crank   coupler  follower  grashof                "
+         "mu_min  max_dist     drive  pin_force\n";
+  out << "                   [" << t.length_unit << "]                                  "
+      << "                    [deg]  [" << t.length_unit << "]   [N*" << t.length_unit
+      << "]       [N]\n";
+  for (const auto& c : r.accepted) out << text_row(c, t) << "\n";
+  for (const auto& c : r.rejected) {
+    out << text_row(c, t) << "\n";
+    for (const auto& why : c.rejections) out << "    rejected: " << why << "\n";
+  }
+  return out.str();
+}
+
+std::string synthesis_csv(const SynthesisTask& t, const SynthesisResult& r) {
+  std::ostringstream out;
+  out.precision(17);
+  out << "name,accepted,ground,crank,coupler,follower,A0_x,A0_y,B0_x,B0_y,P_p,P_q,branch,grashof,"
+         "worst_transmission,max_distance,peak_drive,peak_pin_force,reasons\n";
+  const double L = t.length_si;
+  for (const auto* list : {&r.accepted, &r.rejected})
+    for (const auto& c : *list) {
+      const auto& fb = c.linkage;
+      std::string reasons;
+      for (const auto& why : c.rejections) reasons += (reasons.empty() ? "" : "; ") + why;
+      for (char& ch : reasons)
+        if (ch == '"') ch = '\'';
+      out << c.name << ',' << (c.accepted() ? 1 : 0) << ',' << (fb.B0 - fb.A0).norm() / L << ','
+          << fb.a / L << ',' << fb.b / L << ',' << fb.c / L << ',' << fb.A0.x() / L << ','
+          << fb.A0.y() / L << ',' << fb.B0.x() / L << ',' << fb.B0.y() / L << ','
+          << fb.coupler_point.x() / L << ',' << fb.coupler_point.y() / L << ',' << fb.branch << ','
+          << synthesis::to_string(c.grashof) << ',' << c.worst_transmission / t.angle_si << ','
+          << c.max_distance / L << ',';
+      if (c.cycle)
+        out << c.cycle->peak_drive / L << ',' << c.cycle->peak_pin_force;
+      else
+        out << ',';
+      out << ",\"" << reasons << "\"\n";
+    }
+  return out.str();
+}
+
+std::string synthesis_json(const SynthesisTask& task, const SynthesisResult& r) {
+  nlohmann::json j;
+  j["task"] = task.name;
+  j["kind"] = to_string(task.kind);
+  j["units"] = {{"length", task.length_unit}, {"angle", task.angle_unit}};
+  j["generator"] = {{"status", synthesis::to_string(r.status)}, {"message", r.message}};
+  j["tolerance"] = r.tolerance / task.length_si;
+  j["rank_by"] = task.rank_by;
+  nlohmann::json acc = nlohmann::json::array(), rej = nlohmann::json::array();
+  for (const auto& c : r.accepted) acc.push_back(candidate_json(c, task));
+  for (const auto& c : r.rejected) rej.push_back(candidate_json(c, task));
+  j["accepted"] = acc;
+  j["rejected"] = rej;
+  return j.dump(2);
+}
+
+}  // namespace orthomech

@@ -1,0 +1,215 @@
+// `synthesize --report FILE.html` (io/synthesis_output.hpp): the candidates drawn over the targets.
+// Three steps: the sketch of a candidate in model coordinates (sketch), the view that fits it
+// (fit), and the SVG of the sketch in that view (svg_of); the page puts the table above.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+#include <sstream>
+#include <vector>
+
+#include "orthomech/io/report.hpp"
+#include "orthomech/io/synthesis_output.hpp"
+
+namespace orthomech {
+
+namespace {
+
+using synthesis::FourBarPosition;
+using synthesis::SynthesisCandidate;
+using synthesis::SynthesisResult;
+using synthesis::SynthesisTask;
+using synthesis::TaskKind;
+using synthesis::Vec2;
+
+constexpr double kPi = std::numbers::pi;
+constexpr double kWidth = 480, kHeight = 360, kMargin = 24;
+
+// ---- 1. The sketch (task length units) ----------------------------------------------------------
+
+struct Target {
+  Vec2 at;
+  bool has_angle = false;  // a pose: an arrow along its x axis
+  double angle = 0.0;
+};
+
+struct Sketch {
+  std::vector<Target> targets;
+  std::vector<std::vector<Vec2>> curve;  // pieces where the linkage assembles
+  Vec2 A0, A, B, B0, P;                  // at the first target
+  bool drawn = false;                    // the linkage assembles at the first target
+};
+
+// The curve's crank angles: every degree of the motion and the targets' own angles.
+std::vector<double> curve_angles(const SynthesisCandidate& c) {
+  const double from = c.cycle ? c.cycle->from : c.crank_angles.front();
+  const double to = c.cycle ? c.cycle->to : c.crank_angles.back();
+  const int steps = std::max(2, static_cast<int>(std::ceil(std::abs(to - from) / (kPi / 180))));
+  std::vector<double> angles;
+  for (int k = 0; k <= steps; ++k) angles.push_back(from + (to - from) * k / steps);
+  angles.insert(angles.end(), c.crank_angles.begin(), c.crank_angles.end());
+  if (to >= from)
+    std::sort(angles.begin(), angles.end());
+  else
+    std::sort(angles.begin(), angles.end(), std::greater<>());
+  return angles;
+}
+
+Sketch sketch(const SynthesisTask& task, const SynthesisCandidate& c) {
+  const double L = task.length_si;
+  const bool function = task.kind == TaskKind::function;
+  Sketch s;
+  const auto& fb = c.linkage;
+  for (size_t j = 0; j < c.crank_angles.size(); ++j) {
+    if (function) {  // the follower's pin at the output angle the task asks
+      const double psi = task.outputs[j] + c.output_offset;
+      s.targets.push_back({(fb.B0 + fb.c * Vec2(std::cos(psi), std::sin(psi))) / L});
+    } else {
+      s.targets.push_back({task.positions[j] / L, task.kind == TaskKind::motion,
+                           task.kind == TaskKind::motion ? task.angles[j] : 0.0});
+    }
+  }
+  std::vector<Vec2> piece;
+  for (const double theta : curve_angles(c)) {
+    const FourBarPosition p = calc_position(fb, theta);
+    if (!p.assembles) {
+      if (piece.size() > 1) s.curve.push_back(piece);
+      piece.clear();
+      continue;
+    }
+    piece.push_back((function ? p.B : p.P) / L);
+  }
+  if (piece.size() > 1) s.curve.push_back(piece);
+  const FourBarPosition p0 = calc_position(fb, c.crank_angles.front());
+  s.drawn = p0.assembles;
+  s.A0 = fb.A0 / L, s.B0 = fb.B0 / L, s.A = p0.A / L, s.B = p0.B / L, s.P = p0.P / L;
+  return s;
+}
+
+// ---- 2. The view ----------------------------------------------------------------------------
+
+struct View {
+  double scale = 1.0, x0 = 0.0, y0 = 0.0;  // pixel = (x0 + s x, y0 − s y)
+  double arrow = 1.0;                      // a pose arrow's length (model units)
+  [[nodiscard]] double px(const Vec2& p) const { return x0 + scale * p.x(); }
+  [[nodiscard]] double py(const Vec2& p) const { return y0 - scale * p.y(); }
+};
+
+View fit(const Sketch& s) {
+  Vec2 lo = Vec2::Constant(1e300), hi = Vec2::Constant(-1e300);
+  const auto add = [&](const Vec2& p) { lo = lo.cwiseMin(p), hi = hi.cwiseMax(p); };
+  for (const Target& t : s.targets) add(t.at);
+  for (const auto& piece : s.curve)
+    for (const Vec2& p : piece) add(p);
+  if (s.drawn)
+    for (const Vec2& p : {s.A0, s.A, s.B, s.B0, s.P}) add(p);
+  const Vec2 size = (hi - lo).cwiseMax(1e-9);
+  View v;
+  v.scale = std::min((kWidth - 2 * kMargin) / size.x(), (kHeight - 2 * kMargin) / size.y());
+  const Vec2 mid = (lo + hi) / 2;
+  v.x0 = kWidth / 2 - v.scale * mid.x();
+  v.y0 = kHeight / 2 + v.scale * mid.y();
+  v.arrow = 0.06 * size.maxCoeff();
+  return v;
+}
+
+// ---- 3. The SVG -------------------------------------------------------------------------------
+
+std::string num(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.3f", v);
+  return b;
+}
+
+void line(std::ostringstream& out, const View& v, const Vec2& a, const Vec2& b,
+          const char* cls) {
+  out << "<line class=\"" << cls << "\" x1=\"" << num(v.px(a)) << "\" y1=\"" << num(v.py(a))
+      << "\" x2=\"" << num(v.px(b)) << "\" y2=\"" << num(v.py(b)) << "\"/>\n";
+}
+
+std::string svg_of(const Sketch& s, const View& v, const SynthesisCandidate& c) {
+  std::ostringstream out;
+  char view[96];
+  std::snprintf(view, sizeof view, "%.17g %.17g %.17g", v.scale, v.x0, v.y0);
+  out << "<svg class=\"candidate\" data-name=\"" << escape_html(c.name) << "\" data-view=\""
+      << view << "\" xmlns=\"http://www.w3.org/2000/svg\" width=\"" << kWidth << "\" height=\""
+      << kHeight << "\" viewBox=\"0 0 " << kWidth << ' ' << kHeight << "\">\n";
+  for (const auto& piece : s.curve) {
+    out << "<polyline class=\"curve\" points=\"";
+    for (const Vec2& p : piece) out << num(v.px(p)) << ',' << num(v.py(p)) << ' ';
+    out << "\"/>\n";
+  }
+  if (s.drawn) {
+    line(out, v, s.A0, s.B0, "ground");
+    line(out, v, s.A0, s.A, "link");
+    line(out, v, s.A, s.B, "link");
+    line(out, v, s.B0, s.B, "link");
+    line(out, v, s.A, s.P, "link coupler");
+    line(out, v, s.B, s.P, "link coupler");
+    for (const Vec2& p : {s.A0, s.B0})
+      out << "<rect class=\"pivot\" x=\"" << num(v.px(p) - 5) << "\" y=\"" << num(v.py(p) - 5)
+          << "\" width=\"10\" height=\"10\"/>\n";
+    for (const Vec2& p : {s.A, s.B})
+      out << "<circle class=\"joint\" cx=\"" << num(v.px(p)) << "\" cy=\"" << num(v.py(p))
+          << "\" r=\"3.5\"/>\n";
+  }
+  for (const Target& t : s.targets) {
+    out << "<circle class=\"target\" cx=\"" << num(v.px(t.at)) << "\" cy=\"" << num(v.py(t.at))
+        << "\" r=\"5\"/>\n";
+    if (t.has_angle)
+      line(out, v, t.at, t.at + v.arrow * Vec2(std::cos(t.angle), std::sin(t.angle)), "pose");
+  }
+  out << "</svg>\n";
+  return out.str();
+}
+
+std::string caption(const SynthesisTask& task, const SynthesisCandidate& c) {
+  std::ostringstream out;
+  out << "<figcaption><b>" << escape_html(c.name) << "</b> — " << escape_html(c.method);
+  if (c.cycle) {
+    char b[160];
+    std::snprintf(b, sizeof b, "; peak drive %.4g N*%s, largest pin force %.4g N (%s)",
+                  c.cycle->peak_drive / task.length_si, task.length_unit.c_str(),
+                  c.cycle->peak_pin_force, c.cycle->peak_pin.c_str());
+    out << escape_html(b);
+  }
+  for (const std::string& why : c.rejections)
+    out << "<br><span class=\"why\">rejected: " << escape_html(why) << "</span>";
+  out << "</figcaption>\n";
+  return out.str();
+}
+
+}  // namespace
+
+std::string synthesis_report_html(const SynthesisTask& task, const SynthesisResult& result) {
+  std::ostringstream out;
+  out << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>"
+      << escape_html(task.name) << " — orthomech synthesize</title>\n<style>\n"
+      << "body{font-family:sans-serif;margin:1.5em}pre{background:#f4f4f4;padding:.8em}\n"
+      << "figure{display:inline-block;margin:.5em;vertical-align:top;max-width:480px}\n"
+      << "svg.candidate{border:1px solid #ccc;background:#fff}\n"
+      << ".curve{fill:none;stroke:#bf008c;stroke-width:2}.link{stroke:#333;stroke-width:3}\n"
+      << ".ground{stroke:#999;stroke-width:1;stroke-dasharray:4 3}.pivot{fill:#666}\n"
+      << ".joint{fill:#fff;stroke:#333;stroke-width:1.5}\n"
+      << ".target{fill:none;stroke:#0060c0;stroke-width:2}.pose{stroke:#0060c0;stroke-width:2}\n"
+      << ".rejected svg{opacity:.55}.why{color:#a00}\n</style>\n</head>\n<body>\n<h1>"
+      << escape_html(task.name) << "</h1>\n<pre id=\"summary\">"
+      << escape_html(synthesis_text(task, result)) << "</pre>\n";
+  out << "<p>Targets: blue circles (a pose with its x axis). Each candidate: the linkage at the "
+         "first target, and the path of its "
+      << (task.kind == TaskKind::function ? "follower pin B" : "coupler point P")
+      << " over its motion (magenta).</p>\n";
+  for (const auto* list : {&result.accepted, &result.rejected}) {
+    out << "<h2>" << (list == &result.accepted ? "Accepted" : "Rejected") << " ("
+        << list->size() << ")</h2>\n";
+    for (const SynthesisCandidate& c : *list) {
+      const Sketch s = sketch(task, c);
+      out << "<figure class=\"" << (c.accepted() ? "accepted" : "rejected") << "\">\n"
+          << svg_of(s, fit(s), c) << caption(task, c) << "</figure>\n";
+    }
+  }
+  out << "</body>\n</html>\n";
+  return out.str();
+}
+
+}  // namespace orthomech
