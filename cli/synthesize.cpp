@@ -29,11 +29,12 @@ struct SynthesizeCliOptions {
   std::string out;
   std::string report;
   bool json = false;
+  int jobs = 0;
 };
 
 int run_synthesize(const SynthesizeCliOptions& opt) {
   const SynthesisTask task = synthesis::load_synthesis_task(opt.file);
-  const SynthesisResult r = synthesis::run_synthesis(task);
+  const SynthesisResult r = synthesis::run_synthesis(task, {opt.jobs});
   if (!opt.out.empty()) {
     try {
       std::filesystem::create_directories(opt.out);
@@ -83,6 +84,9 @@ void register_synthesize(CLI::App& app, const GlobalOptions& globals, int& exit_
   cmd->add_option("--report", opt->report,
                   "an offline HTML page with every candidate drawn over the targets");
   cmd->add_flag("--json", opt->json, "one JSON document on stdout");
+  cmd->add_option("--jobs,-j", opt->jobs,
+                  "threads of the global search (default: every core; the result is the same)")
+      ->check(CLI::Range(0, 4096));
   auto log = std::make_shared<LogFlags>();
   add_log_flags(cmd, *log);
   cmd->callback([opt, log, &globals, &exit_code] {

@@ -1,5 +1,7 @@
 #include "nlopt_minimize.hpp"
 
+#include <omp.h>
+
 #include <nlopt.h>
 
 #include <algorithm>
@@ -190,21 +192,35 @@ Eigen::MatrixXd quasi_random_starts(const Eigen::VectorXd& lower, const Eigen::V
   return X;
 }
 
-MultistartOutcome minimize_multistart(const std::function<double(const Eigen::VectorXd&)>& f,
-                                      const Eigen::VectorXd& lower, const Eigen::VectorXd& upper,
+MultistartOutcome minimize_multistart(const ObjectiveFactory& make, const Eigen::VectorXd& lower,
+                                      const Eigen::VectorXd& upper,
                                       const MultistartSettings& settings) {
+  // 1. The starts: extra ones first, then the quasi-random design.
+  const Eigen::MatrixXd grid = quasi_random_starts(lower, upper, settings.starts, settings.seed);
+  const auto extra = static_cast<int>(settings.extra_starts.size());
+  const int runs = extra + static_cast<int>(grid.cols());
+  // 2. Every local run, on as many threads as asked, each with its own objective.
+  std::vector<NloptOutcome> locals(static_cast<std::size_t>(runs));
+  const int threads = settings.threads > 0 ? settings.threads : omp_get_max_threads();
+#pragma omp parallel num_threads(threads) if (threads > 1 && runs > 1)
+  {
+    const Objective f = make();
+#pragma omp for schedule(dynamic, 1)
+    for (int k = 0; k < runs; ++k) {
+      const Eigen::VectorXd x0 =
+          k < extra ? settings.extra_starts[static_cast<std::size_t>(k)] : grid.col(k - extra);
+      locals[static_cast<std::size_t>(k)] =
+          minimize_bounded(f, x0, lower, upper, settings.local);
+    }
+  }
+  // 3. The outcome in start order, up to the first callback error.
   MultistartOutcome out;
   out.best.x = lower;
   out.best.value = HUGE_VAL;
   out.best.message = "no start";
-  const Eigen::MatrixXd grid = quasi_random_starts(lower, upper, settings.starts, settings.seed);
-  const auto runs = static_cast<int>(settings.extra_starts.size()) + static_cast<int>(grid.cols());
-  out.locals.reserve(static_cast<std::size_t>(runs));
+  out.locals.reserve(locals.size());
   for (int k = 0; k < runs; ++k) {
-    const auto extra = static_cast<int>(settings.extra_starts.size());
-    const Eigen::VectorXd x0 =
-        k < extra ? settings.extra_starts[static_cast<std::size_t>(k)] : grid.col(k - extra);
-    NloptOutcome r = minimize_bounded(f, x0, lower, upper, settings.local);
+    NloptOutcome& r = locals[static_cast<std::size_t>(k)];
     out.evaluations += r.evaluations;
     const bool stop = r.kind == NloptOutcomeKind::callback_error;
     if (stop || r.value < out.best.value || k == 0) out.best = r;
@@ -212,6 +228,14 @@ MultistartOutcome minimize_multistart(const std::function<double(const Eigen::Ve
     if (stop) break;
   }
   return out;
+}
+
+MultistartOutcome minimize_multistart(const Objective& f, const Eigen::VectorXd& lower,
+                                      const Eigen::VectorXd& upper,
+                                      const MultistartSettings& settings) {
+  MultistartSettings one = settings;
+  one.threads = 1;
+  return minimize_multistart([&f] { return f; }, lower, upper, one);
 }
 
 }  // namespace orthomech::solvers

@@ -47,12 +47,21 @@ struct NloptSettings {
 // starts `extra_starts` (first, in order) and then `starts` quasi-random points of the box
 // (quasi_random_starts). Deterministic for a given seed. Stops at the first callback error
 // (that outcome is then `best`). Never throws (std::bad_alloc aside).
+//
+// On several threads (`threads` ≠ 1, OpenMP; 0: every core) the runs are shared out among them,
+// each thread with its own objective from the factory (its own scratch), and the outcome is
+// assembled in start order as on one thread: the same `best` (the lowest value, the first start
+// on a tie), `locals` and `evaluations` for any thread count. The runs after a callback error are
+// computed and dropped.
 struct MultistartSettings {
   int starts = 64;
   unsigned long long seed = 1;
   NloptSettings local;
   std::vector<Eigen::VectorXd> extra_starts;
+  int threads = 1;
 };
+using Objective = std::function<double(const Eigen::VectorXd&)>;
+using ObjectiveFactory = std::function<Objective()>;
 
 struct MultistartOutcome {
   NloptOutcome best;                 // the lowest value over the runs
@@ -60,9 +69,15 @@ struct MultistartOutcome {
   int evaluations = 0;               // over all runs
 };
 
-[[nodiscard]] MultistartOutcome minimize_multistart(
-    const std::function<double(const Eigen::VectorXd&)>& f, const Eigen::VectorXd& lower,
-    const Eigen::VectorXd& upper, const MultistartSettings& settings = {});
+[[nodiscard]] MultistartOutcome minimize_multistart(const ObjectiveFactory& make,
+                                                   const Eigen::VectorXd& lower,
+                                                   const Eigen::VectorXd& upper,
+                                                   const MultistartSettings& settings = {});
+// One objective shared by every run: on one thread whatever `threads` says.
+[[nodiscard]] MultistartOutcome minimize_multistart(const Objective& f,
+                                                   const Eigen::VectorXd& lower,
+                                                   const Eigen::VectorXd& upper,
+                                                   const MultistartSettings& settings = {});
 
 // `count` points of the box [lower, upper] (columns): the Halton sequence (bases the first
 // primes, dimension ≤ 40), shifted modulo 1 by a vector drawn from std::mt19937_64(seed)

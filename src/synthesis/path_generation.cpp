@@ -344,15 +344,18 @@ struct Run {
 void search(Problem& pb, const PathSynthesisOptions& o, std::vector<Run>& runs, int& evaluations) {
   Eigen::VectorXd lo, hi, start_hi;
   make_boxes(pb, o, lo, hi, start_hi);
-  std::vector<double> theta(pb.T.size());
-  Eigen::VectorXd r(residual_count(pb));
-  const auto f = [&](const Eigen::VectorXd& x) {
-    residuals(pb, x, theta, r);
-    return r.squaredNorm();
+  // The objective with its own scratch, one per thread of the multistart.
+  const auto f = [&pb] {
+    return [&pb, theta = std::vector<double>(pb.T.size()),
+            r = Eigen::VectorXd(residual_count(pb))](const Eigen::VectorXd& x) mutable {
+      residuals(pb, x, theta, r);
+      return r.squaredNorm();
+    };
   };
   solvers::MultistartSettings s;
   s.starts = 0;
   s.seed = o.seed;
+  s.threads = o.threads;
   s.local.max_evaluations = o.local_evaluations;
   s.local.xtol_abs = 1e-12;
   const Eigen::MatrixXd X = solvers::quasi_random_starts(lo, start_hi, o.starts, o.seed);
@@ -381,13 +384,17 @@ void search_nearest(Problem& pb, const PathSynthesisOptions& o, const std::vecto
   const auto res1 = [&](const Eigen::VectorXd& x, Eigen::VectorXd& r1) {
     curve_residuals(pb, x, cs, theta, r1);
   };
-  const auto f1 = [&](const Eigen::VectorXd& x) {
-    res1(x, rc);
-    return rc.squaredNorm();
+  const auto f1 = [&pb] {  // one per thread of the multistart, with its own scratch
+    return [&pb, cs1 = CurveSamples(), theta1 = std::vector<double>(pb.T.size()),
+            r1 = Eigen::VectorXd(curve_residual_count(pb))](const Eigen::VectorXd& x) mutable {
+      curve_residuals(pb, x, cs1, theta1, r1);
+      return r1.squaredNorm();
+    };
   };
   solvers::MultistartSettings s1;
   s1.starts = 0;
   s1.seed = o.seed;
+  s1.threads = o.threads;
   s1.local.max_evaluations = o.local_evaluations;
   s1.local.xtol_abs = 1e-10;
   const Eigen::MatrixXd X = solvers::quasi_random_starts(lo1, hi1, o.starts, o.seed);

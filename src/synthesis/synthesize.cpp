@@ -50,7 +50,8 @@ std::vector<Raw> motion_candidates(const SynthesisTask& task, SynthesisResult& r
   return raw;
 }
 
-std::vector<Raw> path_candidates(const SynthesisTask& task, SynthesisResult& result) {
+std::vector<Raw> path_candidates(const SynthesisTask& task, const SynthesisRunOptions& run,
+                                 SynthesisResult& result) {
   std::vector<Raw> raw;
   for (const int branch : {1, -1}) {
     PathSynthesisOptions o;
@@ -64,6 +65,7 @@ std::vector<Raw> path_candidates(const SynthesisTask& task, SynthesisResult& res
     o.branch = branch;
     o.starts = task.starts;
     o.seed = task.seed;
+    o.threads = run.threads;
     const PathSynthesisResult p = synthesize_path_generator(task.positions, o);
     if (result.status != SynthesisStatus::ok) result.status = p.status, result.message = p.message;
     if (p.status == SynthesisStatus::no_linkage) continue;
@@ -288,7 +290,7 @@ std::string four_bar_file(const SynthesisTask& task, const FourBar& fb,
   return out.str();
 }
 
-SynthesisResult run_synthesis(const SynthesisTask& task) {
+SynthesisResult run_synthesis(const SynthesisTask& task, const SynthesisRunOptions& run) {
   SynthesisResult result;
   result.kind = task.kind;
   result.tolerance = automatic_tolerance(task);
@@ -299,7 +301,7 @@ SynthesisResult run_synthesis(const SynthesisTask& task) {
       raw = motion_candidates(task, result);
       break;
     case TaskKind::path:
-      raw = path_candidates(task, result);
+      raw = path_candidates(task, run, result);
       break;
     case TaskKind::function:
       raw = function_candidates(task, result);

@@ -66,6 +66,9 @@ struct PathSynthesisOptions {
   // branch, each then continued in every turning sense whose timing stays within one turn).
   int starts = 200;
   unsigned long long seed = 1;
+  // Threads of the multistart (OpenMP; 0: every core). The result does not depend on it
+  // (solvers::minimize_multistart assembles the runs in start order).
+  int threads = 0;
   int local_evaluations = 3000;  // BOBYQA budget per start
   int polished = 8;              // the best runs polished by Levenberg–Marquardt
   // The restart policy (basin hopping) after the polish: `restarts` rounds, each a local run

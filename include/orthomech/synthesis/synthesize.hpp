@@ -65,7 +65,14 @@ struct SynthesisResult {
   std::vector<SynthesisCandidate> rejected;
 };
 
-[[nodiscard]] SynthesisResult run_synthesis(const SynthesisTask& task);
+// How the task is run (not what it asks): the threads of the global searches (path generation's
+// multistart; 0: every core). The result does not depend on them.
+struct SynthesisRunOptions {
+  int threads = 0;
+};
+
+[[nodiscard]] SynthesisResult run_synthesis(const SynthesisTask& task,
+                                            const SynthesisRunOptions& run = {});
 
 // The mechanism file of a four-bar at the crank angles of its targets (exposed for tests).
 [[nodiscard]] std::string four_bar_file(const SynthesisTask& task, const FourBar& linkage,

@@ -94,6 +94,38 @@ TEST(NloptAdapter, Multistart_FindsTheGlobalMinimumOfRastrigin) {
   EXPECT_EQ(again.best.x, r.best.x);
 }
 
+// On several threads, each with its own objective (and its own scratch: a counter here, which a
+// shared objective would race on), the outcome is the one-thread outcome run for run.
+TEST(NloptAdapter, Multistart_SameOutcomeOnAnyThreadCount) {
+  const auto make = [] {
+    return [calls = 0L](const VectorXd& x) mutable {
+      ++calls;
+      double v = 20.0;
+      for (int i = 0; i < 2; ++i)
+        v += x(i) * x(i) - 10.0 * std::cos(2.0 * std::numbers::pi * x(i));
+      return v;
+    };
+  };
+  MultistartSettings s;
+  s.starts = 64;
+  s.seed = 3;
+  s.threads = 1;
+  const MultistartOutcome one =
+      minimize_multistart(make, VectorXd::Constant(2, -4.2), VectorXd::Constant(2, 4.7), s);
+  for (const int threads : {2, 3, 0}) {
+    s.threads = threads;
+    const MultistartOutcome many =
+        minimize_multistart(make, VectorXd::Constant(2, -4.2), VectorXd::Constant(2, 4.7), s);
+    EXPECT_EQ(many.evaluations, one.evaluations) << threads;
+    EXPECT_EQ(many.best.x, one.best.x) << threads;
+    ASSERT_EQ(many.locals.size(), one.locals.size());
+    for (size_t k = 0; k < one.locals.size(); ++k) {
+      EXPECT_EQ(many.locals[k].x, one.locals[k].x) << threads << " run " << k;
+      EXPECT_EQ(many.locals[k].value, one.locals[k].value) << threads << " run " << k;
+    }
+  }
+}
+
 TEST(NloptAdapter, QuasiRandomStartsFillTheBoxAndFollowTheSeed) {
   const VectorXd lo = VectorXd::Constant(3, -1.0), hi = VectorXd::Constant(3, 2.0);
   const Eigen::MatrixXd X = quasi_random_starts(lo, hi, 64, 3);

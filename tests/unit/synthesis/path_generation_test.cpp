@@ -131,6 +131,19 @@ TEST(PathGeneration, DeterministicForASeed) {
   EXPECT_EQ(r1.error, r2.error);
   EXPECT_EQ(r1.evaluations, r2.evaluations);
   EXPECT_EQ(r1.linkage.a, r2.linkage.a);
+  // The same on one thread and on three (the multistart's runs assembled in start order), for
+  // the quasi-random and the nearest-point start.
+  for (const PathStart start : {PathStart::quasi_random, PathStart::nearest_point}) {
+    o.start = start;
+    o.threads = 1;
+    const PathSynthesisResult one = synthesize_path_generator(targets, o);
+    o.threads = 3;
+    const PathSynthesisResult three = synthesize_path_generator(targets, o);
+    EXPECT_EQ(one.error, three.error);
+    EXPECT_EQ(one.evaluations, three.evaluations);
+    EXPECT_EQ(one.linkage.a, three.linkage.a);
+    EXPECT_EQ(one.linkage.coupler_point, three.linkage.coupler_point);
+  }
 }
 
 TEST(PathGeneration, L23_RestartsAreDeterministicAndNeverWorsen) {
