@@ -32,7 +32,7 @@ constexpr double kDegenerate = 1e-12;
 // the polish: the curve points are exact to ~1e-13, so this only rejects the wrong branch.
 constexpr double kPoseCheck = 1e-6;
 // Two kept four-bars differ by more than this (relative to the spread) in some pivot.
-constexpr double kSameFourBar = 0.05;
+constexpr double kSameFourBar = 0.2;
 // Default pivot_tolerance, relative to the spread.
 constexpr double kPivotTolerance = 1e-6;
 // Newton (L29), (L32): iteration caps; (L32) stops below this |g_j| (normalised units).
@@ -163,8 +163,9 @@ Vec2 project_onto_curve(const Normalised& n, const Vec2& m0) {
   Vec2 m = m0;
   for (int it = 0; it < kNewtonIterations; ++it) {
     const double f = curve_function(n, m);
-    const Vec2 grad((curve_function(n, m + Vec2(h, 0)) - curve_function(n, m - Vec2(h, 0))) / (2 * h),
-                    (curve_function(n, m + Vec2(0, h)) - curve_function(n, m - Vec2(0, h))) / (2 * h));
+    const Vec2 grad(
+        (curve_function(n, m + Vec2(h, 0)) - curve_function(n, m - Vec2(h, 0))) / (2 * h),
+        (curve_function(n, m + Vec2(0, h)) - curve_function(n, m - Vec2(0, h))) / (2 * h));
     const double g2 = grad.squaredNorm();
     if (!(g2 > 0.0) || !std::isfinite(f)) break;
     const Vec2 step = -f / g2 * grad;
@@ -211,11 +212,10 @@ DyadOutcome dyad_on_curve(const std::vector<Pose>& poses, const GivenPivots& g, 
   const Vec2 given = fixed ? *g.fixed_pivot : body_point(poses, *g.moving_pivot);
   const Vec2 on = project_onto_curve(n, (given - n.centre) / n.scale);
   const double distance = (n.centre + n.scale * on - given).norm();
-  const std::string what = std::string("the ") + role_name(role) + "'s " +
-                           (fixed ? "fixed pivot" : "moving pivot") + " is " +
-                           length_text(distance, o) + " from the " +
-                           (fixed ? "centre-point" : "circle-point") +
-                           " curve of the 4 poses (tolerance " + length_text(tolerance, o) + ")";
+  const std::string what =
+      std::string("the ") + role_name(role) + "'s " + (fixed ? "fixed pivot" : "moving pivot") +
+      " is " + length_text(distance, o) + " from the " + (fixed ? "centre-point" : "circle-point") +
+      " curve of the 4 poses (tolerance " + length_text(tolerance, o) + ")";
   if (!std::isfinite(distance) || distance > tolerance)
     return {false, what + ": 4 poses admit only pivots on it", {}};
   const Vec2 conjugate = n.scale * circle_point_of(n, {1, 2, 3}, on);
@@ -229,8 +229,7 @@ DyadOutcome dyad_on_curve(const std::vector<Pose>& poses, const GivenPivots& g, 
 std::optional<std::array<double, 2>> crank_interval(const std::vector<double>& angles) {
   double ccw = 0.0, cw = 0.0;
   for (std::size_t j = 1; j < angles.size(); ++j) {
-    const double step =
-        std::fmod(std::fmod(angles[j] - angles[j - 1], 2 * kPi) + 2 * kPi, 2 * kPi);
+    const double step = std::fmod(std::fmod(angles[j] - angles[j - 1], 2 * kPi) + 2 * kPi, 2 * kPi);
     ccw += step;
     cw += step > 0.0 ? 2 * kPi - step : 0.0;
   }
@@ -357,9 +356,8 @@ MotionSynthesisResult four_poses(const std::vector<Pose>& poses, const GivenPivo
     if (static_cast<int>(kept.size()) >= o.max_candidates) break;
     bool same = false;
     for (const ScoredPair& k : kept)
-      same = same || same_four_bar(choices[0][s.crank], choices[1][s.follower],
-                                   choices[0][k.crank], choices[1][k.follower],
-                                   kSameFourBar * spread);
+      same = same || same_four_bar(choices[0][s.crank], choices[1][s.follower], choices[0][k.crank],
+                                   choices[1][k.follower], kSameFourBar * spread);
     if (!same) kept.push_back(s);
   }
   double residual = 0.0;
@@ -371,8 +369,8 @@ MotionSynthesisResult four_poses(const std::vector<Pose>& poses, const GivenPivo
     r.candidates.push_back(candidate_of(poses, r.dyads, k - 2, k - 1));
   }
   r.status = SynthesisStatus::ok;
-  r.message = "4 poses: " + std::to_string(scored.size()) +
-              " pairs meet the poses; the best " + std::to_string(kept.size()) +
+  r.message = "4 poses: " + std::to_string(scored.size()) + " pairs meet the poses; the best " +
+              std::to_string(kept.size()) +
               " distinct kept (largest radius deviation after the polish " +
               length_text(residual, o) + ")" + given_note;
   return r;

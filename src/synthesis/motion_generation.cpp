@@ -383,7 +383,7 @@ PoseMatch find_pose(const FourBar& linkage, const Pose& pose) noexcept {
 MotionSynthesisResult synthesize_motion_generator(const std::vector<Pose>& poses,
                                                   const MotionSynthesisOptions& options) {
   check_argument(poses.size() >= 5, "synthesize_motion_generator", "poses",
-                 "needs at least 5 poses (2–4: calc_centre_point, sample_centre_point_curve)");
+                 "needs at least 5 poses (2–4: synthesize_motion_few_poses)");
   check_argument(options.rays >= 8 && options.starts >= 1 && options.box > 0.0,
                  "synthesize_motion_generator", "options", "needs rays ≥ 8, starts ≥ 1, box > 0");
   MotionSynthesisResult r;

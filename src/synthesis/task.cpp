@@ -52,8 +52,7 @@ class TaskReader {
     expect_keys(root, "task file",
                 {"orthomech-synthesis", "name", "units", "task", "poses", "points", "pairs",
                  "ground", "timing", "crank_angles", "fixed_pivot", "ground_angle", "crank",
-                 "follower", "require",
-                 "search", "mechanism", "rank_by", "tolerance"});
+                 "follower", "require", "search", "mechanism", "rank_by", "tolerance"});
     if (!root["orthomech-synthesis"] || root["orthomech-synthesis"].as<std::string>() != "1")
       fail(root, "orthomech-synthesis",
            "a synthesis task starts with `orthomech-synthesis: 1` (the format's version)");
@@ -206,8 +205,11 @@ class TaskReader {
                  "dyads (more: a least-squares fit); give pivots with 2 to 4 poses");
       if (n >= 5) continue;
       if (d) {
-        if (!d.IsMap()) fail(d, role, "expected `" + r + ": {fixed_pivot: [x, y]}` or "
-                                      "`{moving_pivot: [x, y]}`");
+        if (!d.IsMap())
+          fail(d, role,
+               "expected `" + r +
+                   ": {fixed_pivot: [x, y]}` or "
+                   "`{moving_pivot: [x, y]}`");
         expect_keys(d, role, {"fixed_pivot", "moving_pivot"});
         for (const char* key : {"fixed_pivot", "moving_pivot"})
           if (const YAML::Node v = d[key]) {

@@ -115,7 +115,7 @@ struct MotionSynthesisOptions {
 // 5 poses: the Burmester points (L17), polished by Newton on (L14); > 5 poses: the dyads of the
 // least-squares problem (L18) (multistart BOBYQA through NLopt). Each pair of distinct dyads gives
 // a candidate, each with its residuals through find_pose. Throws std::invalid_argument for fewer
-// than 5 poses (use the functions above for 2–4).
+// than 5 poses (2–4: synthesize_motion_few_poses below).
 [[nodiscard]] MotionSynthesisResult synthesize_motion_generator(
     const std::vector<Pose>& poses, const MotionSynthesisOptions& options = {});
 
@@ -140,8 +140,8 @@ struct FewPoseOptions {
   int max_candidates = 6;  // 4 poses: the best distinct four-bars kept (L31)
   double box = 4.0;  // 4 poses: curve points farther than box · spread from the poses' centroid
                      // are not used (near-slider dyads)
-  double pivot_tolerance = 0.0;  // 4 poses: how far a given pivot may be from its curve (the
-                                 // poses' length unit; 0: 1e-6 of the poses' spread)
+  double pivot_tolerance = 0.0;       // 4 poses: how far a given pivot may be from its curve (the
+                                      // poses' length unit; 0: 1e-6 of the poses' spread)
   bool require_crank_rocker = false;  // 4 poses: only Grashof crank-rockers are kept
   double unit = 1.0;                  // messages: lengths divided by this, followed by unit_name
   std::string unit_name;
@@ -156,8 +156,8 @@ struct FewPoseOptions {
 // synthesize_motion_generator) or pivots the pose count does not admit (the message names the
 // dyad).
 [[nodiscard]] MotionSynthesisResult synthesize_motion_few_poses(const std::vector<Pose>& poses,
-                                                               const GivenPivots& crank,
-                                                               const GivenPivots& follower,
-                                                               const FewPoseOptions& options = {});
+                                                                const GivenPivots& crank,
+                                                                const GivenPivots& follower,
+                                                                const FewPoseOptions& options = {});
 
 }  // namespace orthomech::synthesis
