@@ -8,13 +8,23 @@
 #include <optional>
 
 #include "../solvers/nlopt_minimize.hpp"
+#include "burmester_rows.hpp"
 #include "orthomech/check.hpp"
 
 namespace orthomech::synthesis {
 
 namespace {
 
-using Mat2 = Eigen::Matrix2d;
+using detail::circle_point_of;
+using detail::compatibility_row;
+using detail::cross;
+using detail::make_dyad;
+using detail::Mat2;
+using detail::normalise;
+using detail::Normalised;
+using detail::perp;
+using detail::rotation;
+using detail::to_world;
 constexpr double kPi = std::numbers::pi;
 // Relative size (to the poses' spread) below which two positions coincide or three are collinear.
 constexpr double kDegenerate = 1e-12;
@@ -24,77 +34,6 @@ constexpr double kNewtonTolerance = 1e-10;
 constexpr double kSameDyad = 1e-7;
 // Rotation |sin(Δθ/2)| below which a displacement is a translation (its pole at infinity).
 constexpr double kTranslation = 1e-9;
-
-Mat2 rotation(double angle) {
-  const double c = std::cos(angle), s = std::sin(angle);
-  Mat2 R;
-  R << c, -s, s, c;
-  return R;
-}
-
-Vec2 perp(const Vec2& v) { return {-v.y(), v.x()}; }
-double cross(const Vec2& u, const Vec2& v) { return u.x() * v.y() - u.y() * v.x(); }
-
-// The poses translated to their centroid and scaled by their RMS spread (conditioning).
-struct Normalised {
-  std::vector<Vec2> P;
-  std::vector<Mat2> R;
-  Vec2 centre = Vec2::Zero();
-  double scale = 1.0;
-};
-
-Normalised normalise(const std::vector<Pose>& poses) {
-  Normalised n;
-  for (const Pose& p : poses) n.centre += p.position;
-  n.centre /= static_cast<double>(poses.size());
-  double spread = 0.0;
-  for (const Pose& p : poses) spread += (p.position - n.centre).squaredNorm();
-  spread = std::sqrt(spread / static_cast<double>(poses.size()));
-  n.scale = spread > 0.0 ? spread : 1.0;
-  for (const Pose& p : poses) {
-    n.P.emplace_back((p.position - n.centre) / n.scale);
-    n.R.push_back(rotation(p.angle));
-  }
-  return n;
-}
-
-// (L15): g_j = a_j(m)·z + c_j(m) with
-//   a_j(m) = 2 (R_jᵀP_j − R_1ᵀP_1) − 2 (R_j − R_1)ᵀ m,  c_j(m) = |P_j|² − |P_1|² − 2 (P_j − P_1)·m.
-Eigen::Vector3d compatibility_row(const Normalised& n, std::size_t j, const Vec2& m) {
-  const Vec2 a = 2.0 * (n.R[j].transpose() * n.P[j] - n.R[0].transpose() * n.P[0]) -
-                 2.0 * (n.R[j] - n.R[0]).transpose() * m;
-  const double c = n.P[j].squaredNorm() - n.P[0].squaredNorm() - 2.0 * (n.P[j] - n.P[0]).dot(m);
-  return {a.x(), a.y(), c};
-}
-
-// The circle point z of centre m from the rows `rows` (least squares, rows ≥ 2).
-Vec2 circle_point_of(const Normalised& n, const std::vector<std::size_t>& rows, const Vec2& m) {
-  Eigen::MatrixXd A(static_cast<Eigen::Index>(rows.size()), 2);
-  Eigen::VectorXd rhs(A.rows());
-  for (Eigen::Index i = 0; i < A.rows(); ++i) {
-    const Eigen::Vector3d row = compatibility_row(n, rows[static_cast<std::size_t>(i)], m);
-    A.row(i) = row.head<2>().transpose();
-    rhs(i) = -row(2);
-  }
-  return A.colPivHouseholderQr().solve(rhs);
-}
-
-// The dyad (m, z) in world units with its radius and residual over all poses.
-Dyad make_dyad(const std::vector<Pose>& poses, const Vec2& m, const Vec2& z) {
-  Dyad d;
-  d.fixed_pivot = m;
-  d.moving_pivot = z;
-  std::vector<double> r;
-  r.reserve(poses.size());
-  for (const Pose& p : poses) r.push_back((p.position + rotation(p.angle) * z - m).norm());
-  for (const double ri : r) d.radius += ri / static_cast<double>(r.size());
-  for (const double ri : r) d.residual = std::max(d.residual, std::abs(ri - d.radius));
-  return d;
-}
-
-Dyad to_world(const std::vector<Pose>& poses, const Normalised& n, const Vec2& m, const Vec2& z) {
-  return make_dyad(poses, n.centre + n.scale * m, n.scale * z);
-}
 
 // The centre of the circle through 2 or 3 points (the shared step of (L15a) and (L15b)).
 ConjugatePivot circumcentre(const std::vector<Vec2>& pts, double scale) {
@@ -444,7 +383,7 @@ PoseMatch find_pose(const FourBar& linkage, const Pose& pose) noexcept {
 MotionSynthesisResult synthesize_motion_generator(const std::vector<Pose>& poses,
                                                   const MotionSynthesisOptions& options) {
   check_argument(poses.size() >= 5, "synthesize_motion_generator", "poses",
-                 "needs at least 5 poses (2–4: calc_centre_point, sample_centre_point_curve)");
+                 "needs at least 5 poses (2–4: synthesize_motion_few_poses)");
   check_argument(options.rays >= 8 && options.starts >= 1 && options.box > 0.0,
                  "synthesize_motion_generator", "options", "needs rays ≥ 8, starts ≥ 1, box > 0");
   MotionSynthesisResult r;

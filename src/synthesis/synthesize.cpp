@@ -31,10 +31,45 @@ struct Raw {
 
 // ---- 1. The generators -------------------------------------------------------------------------
 
+// 2–4 poses: what was given of a dyad, for the method's name ("crank's fixed pivot given").
+std::string given_text(const char* role, const TaskPivots& p, size_t poses) {
+  const std::string r = role;
+  if (poses == 2) return r + "'s moving pivot given, fixed pivot on the bisector";
+  if (p.fixed_pivot) return r + "'s fixed pivot given";
+  if (p.moving_pivot) return r + "'s moving pivot given";
+  return r + " from the centre-point curve";
+}
+
+// 2–4 poses with the task's given pivots (synthesize_motion_few_poses, (L26)–(L32)).
+std::vector<Raw> few_pose_candidates(const SynthesisTask& task, const std::vector<Pose>& poses,
+                                     SynthesisResult& result) {
+  FewPoseOptions o;
+  o.pivot_tolerance = result.tolerance;
+  o.require_crank_rocker = task.crank_rocker;
+  o.unit = task.length_si;
+  o.unit_name = task.length_unit;
+  const auto given = [](const TaskPivots& p) { return GivenPivots{p.fixed_pivot, p.moving_pivot}; };
+  const MotionSynthesisResult m =
+      synthesize_motion_few_poses(poses, given(task.crank), given(task.follower), o);
+  result.status = m.status;
+  result.message = m.message;
+  const std::string method = std::to_string(poses.size()) + " poses, " +
+                             given_text("crank", task.crank, poses.size()) + ", " +
+                             given_text("follower", task.follower, poses.size());
+  std::vector<Raw> raw;
+  for (size_t k = 0; k < m.candidates.size(); ++k)
+    raw.push_back({m.candidates[k].linkage, m.candidates[k].crank_angles,
+                   m.candidates.size() == 1 ? method
+                                            : method + " (pair " + std::to_string(k + 1) + " of " +
+                                                  std::to_string(m.candidates.size()) + ")"});
+  return raw;
+}
+
 std::vector<Raw> motion_candidates(const SynthesisTask& task, SynthesisResult& result) {
   std::vector<Pose> poses;
   for (size_t j = 0; j < task.positions.size(); ++j)
     poses.push_back({task.positions[j], task.angles[j]});
+  if (poses.size() < 5) return few_pose_candidates(task, poses, result);
   MotionSynthesisOptions o;
   o.seed = task.seed;
   o.starts = std::max(8, task.starts / 2);

@@ -51,8 +51,8 @@ class TaskReader {
   SynthesisTask read(const YAML::Node& root) {
     expect_keys(root, "task file",
                 {"orthomech-synthesis", "name", "units", "task", "poses", "points", "pairs",
-                 "ground", "timing", "crank_angles", "fixed_pivot", "ground_angle", "require",
-                 "search", "mechanism", "rank_by", "tolerance"});
+                 "ground", "timing", "crank_angles", "fixed_pivot", "ground_angle", "crank",
+                 "follower", "require", "search", "mechanism", "rank_by", "tolerance"});
     if (!root["orthomech-synthesis"] || root["orthomech-synthesis"].as<std::string>() != "1")
       fail(root, "orthomech-synthesis",
            "a synthesis task starts with `orthomech-synthesis: 1` (the format's version)");
@@ -141,7 +141,7 @@ class TaskReader {
     const double L = t.length_si, A = t.angle_si;
     const auto only = [&](const char* key) {
       for (const char* k : {"poses", "points", "pairs", "ground", "timing", "crank_angles",
-                            "fixed_pivot", "ground_angle"})
+                            "fixed_pivot", "ground_angle", "crank", "follower"})
         if (root[k] && std::string(k) != key && !allowed_with(t.kind, k))
           fail(root[k], k,
                std::string("`") + k + "` does not belong to a " + to_string(t.kind) + " task");
@@ -151,10 +151,11 @@ class TaskReader {
         only("poses");
         if (!root["poses"])
           fail(root, "poses", "a motion task needs `poses: [[x, y, angle], ...]`");
-        for (const auto& p : rows(root["poses"], "poses", 3, 5)) {
+        for (const auto& p : rows(root["poses"], "poses", 3, 2)) {
           t.positions.emplace_back(p[0] * L, p[1] * L);
           t.angles.push_back(p[2] * A);
         }
+        given_pivots(root, t);
         break;
       }
       case TaskKind::path: {
@@ -185,7 +186,56 @@ class TaskReader {
       return key == "timing" || key == "crank_angles" || key == "fixed_pivot" ||
              key == "ground_angle";
     if (kind == TaskKind::function) return key == "ground";
-    return false;
+    return key == "crank" || key == "follower";  // motion
+  }
+
+  // A motion task's `crank:` and `follower:` (2–4 poses): which pivots each pose count admits
+  // (synthesize_motion_few_poses, docs/synthesis.md (L26)–(L32)).
+  void given_pivots(const YAML::Node& root, SynthesisTask& t) const {
+    const size_t n = t.positions.size();
+    const YAML::Node poses = root["poses"];
+    for (const char* role : {"crank", "follower"}) {
+      const YAML::Node d = root[role];
+      TaskPivots& p = std::string(role) == "crank" ? t.crank : t.follower;
+      const std::string r = role;
+      if (d && n >= 5)
+        fail(d, role,
+             "with " + std::to_string(n) +
+                 " poses no pivot can be given: 5 poses allow only the finitely many Burmester "
+                 "dyads (more: a least-squares fit); give pivots with 2 to 4 poses");
+      if (n >= 5) continue;
+      if (d) {
+        if (!d.IsMap())
+          fail(d, role,
+               "expected `" + r +
+                   ": {fixed_pivot: [x, y]}` or "
+                   "`{moving_pivot: [x, y]}`");
+        expect_keys(d, role, {"fixed_pivot", "moving_pivot"});
+        for (const char* key : {"fixed_pivot", "moving_pivot"})
+          if (const YAML::Node v = d[key]) {
+            const auto xy = row(v, r + "." + key, 2);
+            (std::string(key) == "fixed_pivot" ? p.fixed_pivot : p.moving_pivot) =
+                Vec2(xy[0] * t.length_si, xy[1] * t.length_si);
+          }
+      }
+      const YAML::Node at = d ? d : poses;
+      const bool f = p.fixed_pivot.has_value(), m = p.moving_pivot.has_value();
+      if (n == 2 && !(f && m))
+        fail(at, role,
+             "2 poses need the " + r + "'s moving pivot and a guess of its fixed pivot: `" + r +
+                 ": {moving_pivot: [x, y], fixed_pivot: [x, y]}` (the moving pivot in the world "
+                 "at the first pose; the guess moves onto the perpendicular bisector)");
+      if (n == 3 && f == m)
+        fail(at, role,
+             "3 poses need exactly one of the " + r + "'s pivots: `" + r +
+                 ": {fixed_pivot: [x, y]}` or `" + r +
+                 ": {moving_pivot: [x, y]}` (in the world, at the first pose); the other "
+                 "follows");
+      if (n == 4 && f && m)
+        fail(at, role,
+             "4 poses take at most one of the " + r +
+                 "'s pivots (the other follows from its curve)");
+    }
   }
 
   void path_timing(const YAML::Node& root, SynthesisTask& t) const {

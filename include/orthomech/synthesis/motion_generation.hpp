@@ -12,6 +12,7 @@
 // det C(m) = 0, (L16)), 5 poses leave at most 4 Burmester points (L17); more poses are fitted by
 // least squares (L18).
 #include <Eigen/Core>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -114,8 +115,49 @@ struct MotionSynthesisOptions {
 // 5 poses: the Burmester points (L17), polished by Newton on (L14); > 5 poses: the dyads of the
 // least-squares problem (L18) (multistart BOBYQA through NLopt). Each pair of distinct dyads gives
 // a candidate, each with its residuals through find_pose. Throws std::invalid_argument for fewer
-// than 5 poses (use the functions above for 2–4).
+// than 5 poses (2–4: synthesize_motion_few_poses below).
 [[nodiscard]] MotionSynthesisResult synthesize_motion_generator(
     const std::vector<Pose>& poses, const MotionSynthesisOptions& options = {});
+
+// ---- 2, 3 and 4 poses with given pivots (docs/synthesis.md, "Motion generation for 2, 3 and 4
+// poses", (L26)–(L32)) ---------------------------------------------------------------------------
+// What a designer gives of one dyad: its fixed pivot (world) and/or its moving pivot, in WORLD
+// coordinates where it is at the first pose (what is measured on a drawing); (L26) carries it
+// into the body frame, z = R(θ_1)ᵀ(Z_1 − P_1).
+//   2 poses: both; the moving pivot exact, the fixed pivot a guess moved onto the perpendicular
+//            bisector of Z_1Z_2 (the nearest point, (L27)).
+//   3 poses: exactly one; the other follows (L28) (calc_circle_point / calc_centre_point).
+//   4 poses: at most one; a given one must lie on its curve (the centre-point curve for a fixed
+//            pivot, the circle-point curve for a moving one) within `pivot_tolerance` (L29),
+//            (L30); a free dyad is a point of the sampled centre-point curve.
+struct GivenPivots {
+  std::optional<Vec2> fixed_pivot;
+  std::optional<Vec2> moving_pivot;
+};
+
+struct FewPoseOptions {
+  int rays = 180;          // 4 poses: lines of the centre-point curve's pencil (L16)
+  int max_candidates = 6;  // 4 poses: the best distinct four-bars kept (L31)
+  double box = 4.0;  // 4 poses: curve points farther than box · spread from the poses' centroid
+                     // are not used (near-slider dyads)
+  double pivot_tolerance = 0.0;       // 4 poses: how far a given pivot may be from its curve (the
+                                      // poses' length unit; 0: 1e-6 of the poses' spread)
+  bool require_crank_rocker = false;  // 4 poses: only Grashof crank-rockers are kept
+  double unit = 1.0;                  // messages: lengths divided by this, followed by unit_name
+  std::string unit_name;
+};
+
+// dyads: the crank's and the follower's (2–3 poses: exactly these two; 4 poses: the dyads of the
+// kept candidates, polished (L32)); candidates: 2–3 poses one four-bar (crank = the dyad called
+// crank, not the shorter), 4 poses up to max_candidates, best worst transmission angle first
+// (L31). status no_linkage with the reason (a degenerate pose set, a given pivot off its curve,
+// no pair that meets the poses on one branch) — data, not an exception. Throws
+// std::invalid_argument for a pose count outside 2–4 (5 poses give finitely many dyads:
+// synthesize_motion_generator) or pivots the pose count does not admit (the message names the
+// dyad).
+[[nodiscard]] MotionSynthesisResult synthesize_motion_few_poses(const std::vector<Pose>& poses,
+                                                                const GivenPivots& crank,
+                                                                const GivenPivots& follower,
+                                                                const FewPoseOptions& options = {});
 
 }  // namespace orthomech::synthesis

@@ -20,6 +20,14 @@ enum class TaskKind { motion, path, function };
 enum class TaskTiming { prescribed, free_start, free };
 [[nodiscard]] const char* to_string(TaskTiming timing) noexcept;
 
+// A motion task's given pivots of one dyad (2–4 poses; docs/file-format.md, "Synthesis tasks"), in
+// SI, world coordinates; a moving pivot where it is at the first pose. 2 poses: both (the fixed
+// pivot a guess); 3 poses: exactly one; 4 poses: at most one.
+struct TaskPivots {
+  std::optional<Vec2> fixed_pivot;
+  std::optional<Vec2> moving_pivot;
+};
+
 struct SynthesisTask {
   std::string file;  // where it was read from (messages)
   std::string name;
@@ -36,6 +44,7 @@ struct SynthesisTask {
   TaskTiming timing = TaskTiming::free;
   std::optional<Vec2> fixed_pivot;     // path: A0 given
   std::optional<double> ground_angle;  // path: θ_g given (rad)
+  TaskPivots crank, follower;          // motion, 2–4 poses: the pivots given
   // Requirements of a candidate (every one is validated; these are checked besides).
   bool crank_rocker = false;                     // Grashof with the crank the shortest link
   double min_transmission = 0.5235987755982988;  // rad: the worst transmission angle allowed

@@ -59,7 +59,8 @@ TEST(SynthesisTask, MistakesNameTheirLine) {
   };
   const Case cases[] = {
       {"task: motion\n", 1, "orthomech-synthesis: 1"},
-      {"orthomech-synthesis: 1\ntask: motion\nposes: [[0, 0, 0], [1, 0, 0]]\n", 3, "5 to 1000"},
+      {"orthomech-synthesis: 1\ntask: motion\nposes: [[0, 0, 0], [1, 0, 0]]\n", 3,
+       "2 poses need the crank's moving pivot"},
       {"orthomech-synthesis: 1\ntask: path\npoints: [[0, 0], [1, 0], [2, 1]]\nposes: []\n", 4,
        "does not belong to a path task"},
       {"orthomech-synthesis: 1\ntask: dance\n", 2, "unknown task 'dance'"},
