@@ -10,10 +10,14 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 #include <stdexcept>
+#include <string>
+#include <variant>
 
 #include "orthomech/analysis/validate.hpp"
+#include "orthomech/error.hpp"
 #include "orthomech/io/mechanism_file.hpp"
 #include "orthomech/synthesis/function_generation.hpp"
 #include "orthomech/synthesis/synthesize.hpp"
@@ -201,6 +205,129 @@ TEST(SliderCrankPath, L46_TimedCouplerPathRoundTrip) {
   for (size_t i = 0; i < targets.size(); ++i)
     worst = std::max(worst, (calc_position(r.linkage, r.crank_angles[i]).P - targets[i]).norm());
   EXPECT_LE(worst, 1e-10);
+}
+
+// ---- the pipeline (run_synthesis, synthesize.cpp) ----------------------------------------------
+
+constexpr double kMm = 1e-3;
+
+// Every accepted candidate's file, read back here, passes validate (its own assembly solve, the
+// targets as design positions) and meets each target within 1e-9 m.
+void expect_files_validate(const SynthesisResult& r, const SynthesisTask& task) {
+  ValidateOptions vo;
+  vo.min_transmission = task.min_transmission;
+  for (const SynthesisCandidate& c : r.accepted) {
+    const Model model = parse_mechanism(c.file_text, c.name + ".yaml");
+    const ValidationReport report = validate_design_positions(model, vo);
+    EXPECT_TRUE(report.pass()) << c.name;
+    ASSERT_EQ(report.positions.size(), c.crank_angles.size());
+    for (const PositionReport& p : report.positions) {
+      ASSERT_TRUE(p.target_error.has_value()) << p.name;
+      EXPECT_LE(*p.target_error, 1e-9) << p.name;
+      EXPECT_EQ(p.slider_cranks.size(), 1u) << p.name;  // validate saw the slider-crank loop
+    }
+  }
+}
+
+// The task text of three precision pairs of the known linkage (mm, deg), the slider positions by
+// calc_position printed with every digit.
+std::string slider_function_task() {
+  std::string text =
+      "orthomech-synthesis: 1\nname: slider\ntask: function\nlinkage: slider-crank\npairs:\n";
+  for (const double deg : {20.0, 75.0, 140.0}) {
+    char row[96];
+    std::snprintf(row, sizeof row, "  - [%.17g, %.17g]\n", deg,
+                  calc_position(known(), deg * kDeg).s);
+    text += row;
+  }
+  return text;
+}
+
+TEST(SliderCrankSynthesize, FunctionTaskGivesBackTheSliderCrankAndItsFileValidates) {
+  const SynthesisTask task = parse_synthesis_task(slider_function_task(), "slider.yaml");
+  EXPECT_EQ(task.linkage, TaskLinkage::slider_crank);
+  const SynthesisResult r = run_synthesis(task);
+  ASSERT_EQ(r.accepted.size(), 1u) << r.message;
+  const SynthesisCandidate& c = r.accepted[0];
+  ASSERT_TRUE(std::holds_alternative<SliderCrank>(c.linkage));
+  const SliderCrank& sc = std::get<SliderCrank>(c.linkage);
+  EXPECT_NEAR(sc.r, 25 * kMm, 1e-10 * kMm);
+  EXPECT_NEAR(sc.l, 90 * kMm, 1e-10 * kMm);
+  EXPECT_NEAR(sc.offset, 10 * kMm, 1e-10 * kMm);
+  EXPECT_LE(c.max_distance, 1e-9);
+  // The worst transmission angle over 20°–140°: π/2 − the largest pressure angle, which is at
+  // 90° (the crank pin farthest from the line): sin α = (r − e) / l.
+  EXPECT_NEAR(c.worst_transmission, kPi / 2 - std::asin(15.0 / 90.0), 1e-12);
+  expect_files_validate(r, task);
+}
+
+TEST(SliderCrankSynthesize, TheExampleTaskIsTheSameSliderCrank) {
+  const SynthesisTask task =
+      load_synthesis_task(std::string(ORTHOMECH_SOURCE_DIR) + "/examples/synthesis-slider.yaml");
+  const SynthesisResult r = run_synthesis(task);
+  ASSERT_EQ(r.accepted.size(), 1u) << r.message;
+  const SliderCrank& sc = std::get<SliderCrank>(r.accepted[0].linkage);
+  // The example's positions are rounded to 1e-12 mm.
+  EXPECT_NEAR(sc.r, 25 * kMm, 1e-9 * kMm);
+  EXPECT_NEAR(sc.l, 90 * kMm, 1e-9 * kMm);
+  EXPECT_NEAR(sc.offset, 10 * kMm, 1e-9 * kMm);
+}
+
+// A timed path task: four coupler points of the known slider-crank (line at 15°, pivot O at
+// (10, −5) mm, P = (30, 15) mm on the rod) at crank angles from the line.
+TEST(SliderCrankSynthesize, PathTaskFindsASliderCrankThroughThePoints) {
+  SliderCrank sc = known();
+  sc.O = Vec2(10, -5);
+  sc.line_angle = 15 * kDeg;
+  sc.coupler_point = Vec2(30, 15);
+  std::string text =
+      "orthomech-synthesis: 1\ntask: path\nlinkage: slider-crank\ntiming: prescribed\n"
+      "search: {seed: 1, starts: 12}\npoints:\n";
+  std::string angles = "crank_angles: [";
+  for (int k = 0; k < 6; ++k) {
+    const Vec2 P = calc_position(sc, sc.line_angle + k * 50 * kDeg).P;
+    char row[96];
+    std::snprintf(row, sizeof row, "  - [%.17g, %.17g]\n", P.x(), P.y());
+    text += row;
+    angles += std::to_string(k * 50) + (k < 5 ? ", " : "]\n");
+  }
+  const SynthesisTask task = parse_synthesis_task(text + angles, "path.yaml");
+  const SynthesisResult r = run_synthesis(task);
+  ASSERT_FALSE(r.accepted.empty()) << r.message;
+  for (const SynthesisCandidate& c : r.accepted)
+    EXPECT_TRUE(std::holds_alternative<SliderCrank>(c.linkage)) << c.name;
+  EXPECT_LE(r.accepted.front().max_distance, 1e-10 * kMm);
+  expect_files_validate(r, task);
+}
+
+// The key's refusals, at the element.
+TEST(SliderCrankTask, KeyErrorsNameTheElement) {
+  const auto message = [](const std::string& text) {
+    try {
+      (void)parse_synthesis_task(text, "t.yaml");
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  const std::string head = "orthomech-synthesis: 1\ntask: function\n";
+  EXPECT_NE(message(head + "linkage: crank-slider\npairs: [[0, 1], [1, 2], [2, 3]]\n")
+                .find("unknown linkage 'crank-slider'"),
+            std::string::npos);
+  EXPECT_NE(message(head + "linkage: slider-crank\nground: 70\npairs: [[0, 1], [1, 2], [2, 3]]\n")
+                .find("takes no `ground`"),
+            std::string::npos);
+  EXPECT_NE(message(head + "linkage: slider-crank\npairs: [[0, 1], [1, 2], [2, 3]]\n"
+                           "require: {crank_rocker: true}\n")
+                .find("four-bar requirement"),
+            std::string::npos);
+  EXPECT_NE(message("orthomech-synthesis: 1\ntask: motion\nlinkage: slider-crank\n"
+                    "poses: [[0, 0, 0], [1, 0, 0], [2, 0, 0]]\n")
+                .find("four-bars only"),
+            std::string::npos);
+  EXPECT_NE(
+      message(head + "linkage: slider-crank\npairs: [[0, 1], [1, 2], [2, 3]]\n").find("no error"),
+      std::string::npos);
 }
 
 }  // namespace
