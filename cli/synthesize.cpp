@@ -1,4 +1,5 @@
-// `orthomech synthesize TASK [--out DIR] [--json]`: planar four-bars from the motion, path or
+// `orthomech synthesize TASK [--out DIR] [--json]`: planar four-bars (or slider-cranks, task key
+// `linkage`) from the motion, path or
 // input–output law a designer wants (issue 50; docs/cli.md "synthesize"). The library runs the
 // task and validates every candidate (synthesis/synthesize.hpp); this file only renders the
 // result and writes the accepted candidates' mechanism files. Exit 0 when a candidate is
@@ -18,6 +19,7 @@
 #include "commands.hpp"
 #include "common.hpp"
 #include "orthomech/io/file_writer.hpp"
+#include "orthomech/synthesis/slider_crank.hpp"
 
 namespace orthomech::cli {
 
@@ -35,14 +37,36 @@ struct SynthesizeCliOptions {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
 
+// A slider-crank's lengths and placement (task key `linkage: slider-crank`).
+void slider_json(nlohmann::json& j, const synthesis::SliderCrank& sc, const SynthesisTask& t) {
+  const double L = t.length_si;
+  j["O"] = {sc.O.x() / L, sc.O.y() / L};
+  j["line_angle"] = sc.line_angle / t.angle_si;
+  j["crank"] = sc.r / L;
+  j["rod"] = sc.l / L;
+  j["offset"] = sc.offset / L;
+  j["coupler_point"] = {sc.coupler_point.x() / L, sc.coupler_point.y() / L};
+  j["branch"] = sc.branch;
+  j["full_turn"] = synthesis::crank_turns_fully(sc);
+}
+
 nlohmann::json candidate_json(const SynthesisCandidate& c, const SynthesisTask& t) {
   const double L = t.length_si;
-  const auto& fb = c.linkage;
   nlohmann::json j;
   j["name"] = c.name;
   j["method"] = c.method;
   j["accepted"] = c.accepted();
   j["rejections"] = c.rejections;
+  j["worst_transmission"] = c.worst_transmission / t.angle_si;
+  j["max_distance"] = c.max_distance / L;
+  nlohmann::json angles = nlohmann::json::array();
+  for (const double a : c.crank_angles) angles.push_back(a / t.angle_si);
+  j["crank_angles"] = angles;
+  if (const auto* sc = std::get_if<synthesis::SliderCrank>(&c.linkage)) {
+    slider_json(j, *sc, t);
+    return j;
+  }
+  const auto& fb = std::get<synthesis::FourBar>(c.linkage);
   j["A0"] = {fb.A0.x() / L, fb.A0.y() / L};
   j["B0"] = {fb.B0.x() / L, fb.B0.y() / L};
   j["crank"] = fb.a / L;
@@ -52,19 +76,21 @@ nlohmann::json candidate_json(const SynthesisCandidate& c, const SynthesisTask& 
   j["coupler_point"] = {fb.coupler_point.x() / L, fb.coupler_point.y() / L};
   j["branch"] = fb.branch;
   j["grashof"] = synthesis::to_string(c.grashof);
-  j["worst_transmission"] = c.worst_transmission / t.angle_si;
-  j["max_distance"] = c.max_distance / L;
   j["max_angle_error"] = c.max_angle_error / t.angle_si;
-  nlohmann::json angles = nlohmann::json::array();
-  for (const double a : c.crank_angles) angles.push_back(a / t.angle_si);
-  j["crank_angles"] = angles;
   return j;
 }
 
 std::string text_row(const SynthesisCandidate& c, const SynthesisTask& t) {
   const double L = t.length_si;
-  const auto& fb = c.linkage;
   char row[256];
+  if (const auto* sc = std::get_if<synthesis::SliderCrank>(&c.linkage)) {
+    std::snprintf(row, sizeof row, "%-13s %9.4g %9.4g %9.4g %9s  %-22s %7.2f  %9.3g",
+                  c.name.c_str(), sc->offset / L, sc->r / L, sc->l / L, "-",
+                  synthesis::crank_turns_fully(*sc) ? "crank turns fully" : "crank rocks",
+                  c.worst_transmission / kDeg, c.max_distance / L);
+    return row;
+  }
+  const auto& fb = std::get<synthesis::FourBar>(c.linkage);
   std::snprintf(row, sizeof row, "%-13s %9.4g %9.4g %9.4g %9.4g  %-22s %7.2f  %9.3g",
                 c.name.c_str(), (fb.B0 - fb.A0).norm() / L, fb.a / L, fb.b / L, fb.c / L,
                 synthesis::to_string(c.grashof), c.worst_transmission / kDeg, c.max_distance / L);
@@ -84,8 +110,12 @@ void write_text(std::ostream& out, const SynthesisTask& t, const SynthesisResult
   out << "candidates      " << r.accepted.size() << " accepted, " << r.rejected.size()
       << " rejected (every one validated; ranked by " << t.rank_by << ")\n";
   if (!dir.empty()) out << "files           " << dir << "/candidate-K.yaml, candidates.csv\n";
-  out << "\nname               ground     crank   coupler  follower  grashof                "
-         "mu_min  max_dist\n";
+  if (t.linkage == synthesis::TaskLinkage::slider_crank)
+    out << "\nname               offset     crank       rod            type                   "
+           "mu_min  max_dist\n";
+  else
+    out << "\nname               ground     crank   coupler  follower  grashof                "
+           "mu_min  max_dist\n";
   out << "                   [" << t.length_unit << "]                                  "
       << "                    [deg]  [" << t.length_unit << "]\n";
   for (const auto& c : r.accepted) out << text_row(c, t) << "\n";
@@ -99,16 +129,31 @@ void write_text(std::ostream& out, const SynthesisTask& t, const SynthesisResult
 std::string csv_text(const SynthesisResult& r, const SynthesisTask& t) {
   std::ostringstream out;
   out.precision(17);
-  out << "name,accepted,ground,crank,coupler,follower,A0_x,A0_y,B0_x,B0_y,P_p,P_q,branch,grashof,"
-         "worst_transmission,max_distance,reasons\n";
+  const bool slider = t.linkage == synthesis::TaskLinkage::slider_crank;
+  if (slider)
+    out << "name,accepted,crank,rod,offset,O_x,O_y,line_angle,P_p,P_q,branch,full_turn,"
+           "worst_transmission,max_distance,reasons\n";
+  else
+    out << "name,accepted,ground,crank,coupler,follower,A0_x,A0_y,B0_x,B0_y,P_p,P_q,branch,"
+           "grashof,worst_transmission,max_distance,reasons\n";
   const double L = t.length_si;
   for (const auto* list : {&r.accepted, &r.rejected})
     for (const auto& c : *list) {
-      const auto& fb = c.linkage;
       std::string reasons;
       for (const auto& why : c.rejections) reasons += (reasons.empty() ? "" : "; ") + why;
       for (char& ch : reasons)
         if (ch == '"') ch = '\'';
+      if (const auto* sc = std::get_if<synthesis::SliderCrank>(&c.linkage)) {
+        out << c.name << ',' << (c.accepted() ? 1 : 0) << ',' << sc->r / L << ',' << sc->l / L
+            << ',' << sc->offset / L << ',' << sc->O.x() / L << ',' << sc->O.y() / L << ','
+            << sc->line_angle / t.angle_si << ',' << sc->coupler_point.x() / L << ','
+            << sc->coupler_point.y() / L << ',' << sc->branch << ','
+            << (synthesis::crank_turns_fully(*sc) ? 1 : 0) << ','
+            << c.worst_transmission / t.angle_si << ',' << c.max_distance / L << ",\"" << reasons
+            << "\"\n";
+        continue;
+      }
+      const auto& fb = std::get<synthesis::FourBar>(c.linkage);
       out << c.name << ',' << (c.accepted() ? 1 : 0) << ',' << (fb.B0 - fb.A0).norm() / L << ','
           << fb.a / L << ',' << fb.b / L << ',' << fb.c / L << ',' << fb.A0.x() / L << ','
           << fb.A0.y() / L << ',' << fb.B0.x() / L << ',' << fb.B0.y() / L << ','
@@ -152,7 +197,7 @@ int run_synthesize(const SynthesizeCliOptions& opt) {
   }
   std::cout.flush();
   if (r.accepted.empty() && r.rejected.empty()) {
-    spdlog::error("synthesize: {}: no four-bar: {}", task.file, r.message);
+    spdlog::error("synthesize: {}: no {}: {}", task.file, to_string(task.linkage), r.message);
     return kNumerical;
   }
   if (r.accepted.empty()) {
