@@ -1,9 +1,9 @@
 // `orthomech synthesize TASK [--out DIR] [--json]`: planar four-bars (or slider-cranks, task key
-// `linkage`) from the motion, path or
-// input–output law a designer wants (issue 50; docs/cli.md "synthesize"). The library runs the
-// task and validates every candidate (synthesis/synthesize.hpp); this file only renders the
-// result and writes the accepted candidates' mechanism files. Exit 0 when a candidate is
-// accepted, 1 when every one is rejected, 3 when the generator finds no four-bar.
+// `linkage`) from the motion, path or input–output law a designer wants (issue 50; docs/cli.md
+// "synthesize"). The library runs the task and validates every candidate
+// (synthesis/synthesize.hpp); this file only renders the result and writes the accepted
+// candidates' mechanism files. Exit 0 when a candidate is accepted, 1 when every one is
+// rejected, 3 when the generator finds no linkage.
 #include "orthomech/synthesis/synthesize.hpp"
 
 #include <spdlog/spdlog.h>
