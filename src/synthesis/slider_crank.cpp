@@ -112,7 +112,7 @@ SliderFunctionResult synthesize_slider_function_generator(const std::vector<Slid
     return r;
   }
   const double e = K2 / K1;
-  const double l2 = K1 * K1 + e * e - K3;
+  const double l2 = K1 * K1 + e * e - K3;  // (L44)
   if (!(l2 > 0.0)) {
     r.message = "no real coupler: l² = r² + e² − K3 = " + std::to_string(l2) +
                 " ≤ 0 (r = " + std::to_string(std::abs(K1)) + ", e = " + std::to_string(e) + ")";
