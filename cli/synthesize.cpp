@@ -1,8 +1,9 @@
-// `orthomech synthesize TASK [--out DIR] [--report FILE.html] [--json]`: planar four-bars from the motion, path or
-// input–output law a designer wants (issue 50; docs/cli.md "synthesize"). The library runs the
-// task and validates every candidate (synthesis/synthesize.hpp) and renders the documents
-// (io/synthesis_output.hpp); this file only prints and writes them. Exit 0 when a candidate is
-// accepted, 1 when every one is rejected, 3 when the generator finds no four-bar.
+// `orthomech synthesize TASK [--out DIR] [--report FILE.html] [--json]`: planar four-bars (or
+// slider-cranks, task key `linkage`) from the motion, path or input–output law a designer wants
+// (issue 50; docs/cli.md "synthesize"). The library runs the task, validates every candidate
+// (synthesis/synthesize.hpp) and renders the documents (io/synthesis_output.hpp); this file only
+// prints and writes them. Exit 0 when a candidate is accepted, 1 when every one is rejected, 3
+// when the generator finds no linkage.
 #include "orthomech/synthesis/synthesize.hpp"
 
 #include <spdlog/spdlog.h>
@@ -60,7 +61,7 @@ int run_synthesize(const SynthesizeCliOptions& opt) {
     std::cout << synthesis_text(task, r, opt.out);
   std::cout.flush();
   if (r.accepted.empty() && r.rejected.empty()) {
-    spdlog::error("synthesize: {}: no four-bar: {}", task.file, r.message);
+    spdlog::error("synthesize: {}: no {}: {}", task.file, to_string(task.linkage), r.message);
     return kNumerical;
   }
   if (r.accepted.empty()) {

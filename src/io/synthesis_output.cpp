@@ -5,6 +5,8 @@
 #include <numbers>
 #include <sstream>
 
+#include "orthomech/synthesis/slider_crank.hpp"
+
 namespace orthomech {
 
 namespace {
@@ -15,14 +17,22 @@ using synthesis::SynthesisTask;
 
 constexpr double kDeg = std::numbers::pi / 180.0;
 
-nlohmann::json candidate_json(const SynthesisCandidate& c, const SynthesisTask& t) {
+// A slider-crank's lengths and placement (task key `linkage: slider-crank`).
+void slider_json(nlohmann::json& j, const synthesis::SliderCrank& sc, const SynthesisTask& t) {
   const double L = t.length_si;
-  const auto& fb = c.linkage;
-  nlohmann::json j;
-  j["name"] = c.name;
-  j["method"] = c.method;
-  j["accepted"] = c.accepted();
-  j["rejections"] = c.rejections;
+  j["O"] = {sc.O.x() / L, sc.O.y() / L};
+  j["line_angle"] = sc.line_angle / t.angle_si;
+  j["crank"] = sc.r / L;
+  j["rod"] = sc.l / L;
+  j["offset"] = sc.offset / L;
+  j["coupler_point"] = {sc.coupler_point.x() / L, sc.coupler_point.y() / L};
+  j["branch"] = sc.branch;
+  j["full_turn"] = synthesis::crank_turns_fully(sc);
+}
+
+void four_bar_json(nlohmann::json& j, const synthesis::FourBar& fb, const SynthesisCandidate& c,
+                   const SynthesisTask& t) {
+  const double L = t.length_si;
   j["A0"] = {fb.A0.x() / L, fb.A0.y() / L};
   j["B0"] = {fb.B0.x() / L, fb.B0.y() / L};
   j["crank"] = fb.a / L;
@@ -32,12 +42,25 @@ nlohmann::json candidate_json(const SynthesisCandidate& c, const SynthesisTask& 
   j["coupler_point"] = {fb.coupler_point.x() / L, fb.coupler_point.y() / L};
   j["branch"] = fb.branch;
   j["grashof"] = synthesis::to_string(c.grashof);
+  j["max_angle_error"] = c.max_angle_error / t.angle_si;
+}
+
+nlohmann::json candidate_json(const SynthesisCandidate& c, const SynthesisTask& t) {
+  const double L = t.length_si;
+  nlohmann::json j;
+  j["name"] = c.name;
+  j["method"] = c.method;
+  j["accepted"] = c.accepted();
+  j["rejections"] = c.rejections;
   j["worst_transmission"] = c.worst_transmission / t.angle_si;
   j["max_distance"] = c.max_distance / L;
-  j["max_angle_error"] = c.max_angle_error / t.angle_si;
   nlohmann::json angles = nlohmann::json::array();
   for (const double a : c.crank_angles) angles.push_back(a / t.angle_si);
   j["crank_angles"] = angles;
+  if (const auto* sc = std::get_if<synthesis::SliderCrank>(&c.linkage))
+    slider_json(j, *sc, t);
+  else
+    four_bar_json(j, std::get<synthesis::FourBar>(c.linkage), c, t);
   if (c.cycle) {  // what `cycle` computes on the file, in its units (N*mm in an mm file, N)
     j["cycle"] = {{"from", c.cycle->from / t.angle_si},
                   {"to", c.cycle->to / t.angle_si},
@@ -55,16 +78,41 @@ nlohmann::json candidate_json(const SynthesisCandidate& c, const SynthesisTask& 
 
 std::string text_row(const SynthesisCandidate& c, const SynthesisTask& t) {
   const double L = t.length_si;
-  const auto& fb = c.linkage;
   char row[256], peaks[64] = "        -         -";
   if (c.cycle)
     std::snprintf(peaks, sizeof peaks, "%9.4g %9.4g", c.cycle->peak_drive / L,
                   c.cycle->peak_pin_force);
+  if (const auto* sc = std::get_if<synthesis::SliderCrank>(&c.linkage)) {
+    std::snprintf(row, sizeof row, "%-13s %9.4g %9.4g %9.4g %9s  %-22s %7.2f  %9.3g %s",
+                  c.name.c_str(), sc->offset / L, sc->r / L, sc->l / L, "-",
+                  synthesis::crank_turns_fully(*sc) ? "crank turns fully" : "crank rocks",
+                  c.worst_transmission / kDeg, c.max_distance / L, peaks);
+    return row;
+  }
+  const auto& fb = std::get<synthesis::FourBar>(c.linkage);
   std::snprintf(row, sizeof row, "%-13s %9.4g %9.4g %9.4g %9.4g  %-22s %7.2f  %9.3g %s",
                 c.name.c_str(), (fb.B0 - fb.A0).norm() / L, fb.a / L, fb.b / L, fb.c / L,
                 synthesis::to_string(c.grashof), c.worst_transmission / kDeg, c.max_distance / L,
                 peaks);
   return row;
+}
+
+// A candidate's CSV columns after name and accepted, up to max_distance.
+void csv_linkage(std::ostringstream& out, const SynthesisCandidate& c, const SynthesisTask& t) {
+  const double L = t.length_si;
+  if (const auto* sc = std::get_if<synthesis::SliderCrank>(&c.linkage)) {
+    out << sc->r / L << ',' << sc->l / L << ',' << sc->offset / L << ',' << sc->O.x() / L << ','
+        << sc->O.y() / L << ',' << sc->line_angle / t.angle_si << ',' << sc->coupler_point.x() / L
+        << ',' << sc->coupler_point.y() / L << ',' << sc->branch << ','
+        << (synthesis::crank_turns_fully(*sc) ? 1 : 0) << ',';
+  } else {
+    const auto& fb = std::get<synthesis::FourBar>(c.linkage);
+    out << (fb.B0 - fb.A0).norm() / L << ',' << fb.a / L << ',' << fb.b / L << ',' << fb.c / L
+        << ',' << fb.A0.x() / L << ',' << fb.A0.y() / L << ',' << fb.B0.x() / L << ','
+        << fb.B0.y() / L << ',' << fb.coupler_point.x() / L << ',' << fb.coupler_point.y() / L
+        << ',' << fb.branch << ',' << synthesis::to_string(c.grashof) << ',';
+  }
+  out << c.worst_transmission / t.angle_si << ',' << c.max_distance / L << ',';
 }
 
 }  // namespace
@@ -84,8 +132,12 @@ std::string synthesis_text(const SynthesisTask& t, const SynthesisResult& r,
       << " rejected (every one validated; ranked by " << t.rank_by << ")\n";
   if (!files_dir.empty())
     out << "files           " << files_dir << "/candidate-K.yaml, candidates.csv\n";
-  out << "\nname               ground     crank   coupler  follower  grashof                "
-         "mu_min  max_dist     drive  pin_force\n";
+  if (t.linkage == synthesis::TaskLinkage::slider_crank)
+    out << "\nname               offset     crank       rod            type                   "
+           "mu_min  max_dist     drive  pin_force\n";
+  else
+    out << "\nname               ground     crank   coupler  follower  grashof                "
+           "mu_min  max_dist     drive  pin_force\n";
   out << "                   [" << t.length_unit << "]                                  "
       << "                    [deg]  [" << t.length_unit << "]   [N*" << t.length_unit
       << "]       [N]\n";
@@ -100,22 +152,21 @@ std::string synthesis_text(const SynthesisTask& t, const SynthesisResult& r,
 std::string synthesis_csv(const SynthesisTask& t, const SynthesisResult& r) {
   std::ostringstream out;
   out.precision(17);
-  out << "name,accepted,ground,crank,coupler,follower,A0_x,A0_y,B0_x,B0_y,P_p,P_q,branch,grashof,"
-         "worst_transmission,max_distance,peak_drive,peak_pin_force,reasons\n";
+  if (t.linkage == synthesis::TaskLinkage::slider_crank)
+    out << "name,accepted,crank,rod,offset,O_x,O_y,line_angle,P_p,P_q,branch,full_turn,";
+  else
+    out << "name,accepted,ground,crank,coupler,follower,A0_x,A0_y,B0_x,B0_y,P_p,P_q,branch,"
+           "grashof,";
+  out << "worst_transmission,max_distance,peak_drive,peak_pin_force,reasons\n";
   const double L = t.length_si;
   for (const auto* list : {&r.accepted, &r.rejected})
     for (const auto& c : *list) {
-      const auto& fb = c.linkage;
       std::string reasons;
       for (const auto& why : c.rejections) reasons += (reasons.empty() ? "" : "; ") + why;
       for (char& ch : reasons)
         if (ch == '"') ch = '\'';
-      out << c.name << ',' << (c.accepted() ? 1 : 0) << ',' << (fb.B0 - fb.A0).norm() / L << ','
-          << fb.a / L << ',' << fb.b / L << ',' << fb.c / L << ',' << fb.A0.x() / L << ','
-          << fb.A0.y() / L << ',' << fb.B0.x() / L << ',' << fb.B0.y() / L << ','
-          << fb.coupler_point.x() / L << ',' << fb.coupler_point.y() / L << ',' << fb.branch << ','
-          << synthesis::to_string(c.grashof) << ',' << c.worst_transmission / t.angle_si << ','
-          << c.max_distance / L << ',';
+      out << c.name << ',' << (c.accepted() ? 1 : 0) << ',';
+      csv_linkage(out, c, t);
       if (c.cycle)
         out << c.cycle->peak_drive / L << ',' << c.cycle->peak_pin_force;
       else

@@ -2,6 +2,7 @@
 // Three steps: the sketch of a candidate in model coordinates (sketch), the view that fits it
 // (fit), and the SVG of the sketch in that view (svg_of); the page puts the table above.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <numbers>
@@ -15,7 +16,10 @@ namespace orthomech {
 
 namespace {
 
+using synthesis::FourBar;
 using synthesis::FourBarPosition;
+using synthesis::SliderCrank;
+using synthesis::SliderCrankPosition;
 using synthesis::SynthesisCandidate;
 using synthesis::SynthesisResult;
 using synthesis::SynthesisTask;
@@ -36,8 +40,9 @@ struct Target {
 struct Sketch {
   std::vector<Target> targets;
   std::vector<std::vector<Vec2>> curve;  // pieces where the linkage assembles
-  Vec2 A0, A, B, B0, P;                  // at the first target
-  bool drawn = false;                    // the linkage assembles at the first target
+  // The linkage at the first target (none when it does not assemble there).
+  std::vector<std::array<Vec2, 2>> links, ground;  // segments: bodies; ground line / slider guide
+  std::vector<Vec2> pivots, joints;
 };
 
 // The curve's crank angles: every degree of the motion and the targets' own angles.
@@ -55,34 +60,82 @@ std::vector<double> curve_angles(const SynthesisCandidate& c) {
   return angles;
 }
 
+// One closed-form position of either linkage: whether it assembles, its traced point (the
+// coupler point; a function task's output pin B) and its joints.
+struct Placed {
+  bool assembles = false;
+  Vec2 traced, A, B, P;
+};
+Placed place(const synthesis::Linkage& linkage, double theta, bool function) {
+  Placed out;
+  if (const auto* fb = std::get_if<FourBar>(&linkage)) {
+    const FourBarPosition p = calc_position(*fb, theta);
+    out = {p.assembles, p.P, p.A, p.B, p.P};
+  } else {
+    const SliderCrankPosition p = calc_position(std::get<SliderCrank>(linkage), theta);
+    out = {p.assembles, p.P, p.A, p.B, p.P};
+  }
+  if (function) out.traced = out.B;
+  return out;
+}
+
+// The target points: a path's points, a motion's poses, a function's output pin at the asked
+// output (the follower's pin at angle ψ + offset; the slider's pin at s on its line).
+std::vector<Target> targets(const SynthesisTask& task, const SynthesisCandidate& c) {
+  const double L = task.length_si;
+  std::vector<Target> out;
+  for (size_t j = 0; j < c.crank_angles.size(); ++j) {
+    if (task.kind != TaskKind::function) {
+      out.push_back({task.positions[j] / L, task.kind == TaskKind::motion,
+                     task.kind == TaskKind::motion ? task.angles[j] : 0.0});
+    } else if (const auto* fb = std::get_if<FourBar>(&c.linkage)) {
+      const double psi = task.outputs[j] + c.output_offset;
+      out.push_back({(fb->B0 + fb->c * Vec2(std::cos(psi), std::sin(psi))) / L});
+    } else {
+      const auto& sc = std::get<SliderCrank>(c.linkage);
+      const Vec2 t(std::cos(sc.line_angle), std::sin(sc.line_angle)), n(-t.y(), t.x());
+      out.push_back({(sc.O + sc.offset * n + task.outputs[j] * t) / L});
+    }
+  }
+  return out;
+}
+
 Sketch sketch(const SynthesisTask& task, const SynthesisCandidate& c) {
   const double L = task.length_si;
   const bool function = task.kind == TaskKind::function;
   Sketch s;
-  const auto& fb = c.linkage;
-  for (size_t j = 0; j < c.crank_angles.size(); ++j) {
-    if (function) {  // the follower's pin at the output angle the task asks
-      const double psi = task.outputs[j] + c.output_offset;
-      s.targets.push_back({(fb.B0 + fb.c * Vec2(std::cos(psi), std::sin(psi))) / L});
-    } else {
-      s.targets.push_back({task.positions[j] / L, task.kind == TaskKind::motion,
-                           task.kind == TaskKind::motion ? task.angles[j] : 0.0});
-    }
-  }
-  std::vector<Vec2> piece;
+  s.targets = targets(task, c);
+  std::vector<Vec2> piece, pins;  // pins: the output pin B over the motion (a slider's stroke)
   for (const double theta : curve_angles(c)) {
-    const FourBarPosition p = calc_position(fb, theta);
+    const Placed p = place(c.linkage, theta, function);
     if (!p.assembles) {
       if (piece.size() > 1) s.curve.push_back(piece);
       piece.clear();
       continue;
     }
-    piece.push_back((function ? p.B : p.P) / L);
+    piece.push_back(p.traced / L);
+    pins.push_back(p.B / L);
   }
   if (piece.size() > 1) s.curve.push_back(piece);
-  const FourBarPosition p0 = calc_position(fb, c.crank_angles.front());
-  s.drawn = p0.assembles;
-  s.A0 = fb.A0 / L, s.B0 = fb.B0 / L, s.A = p0.A / L, s.B = p0.B / L, s.P = p0.P / L;
+  const Placed p0 = place(c.linkage, c.crank_angles.front(), function);
+  if (!p0.assembles) return s;
+  const Vec2 A = p0.A / L, B = p0.B / L, P = p0.P / L;
+  s.joints = {A, B};
+  if (const auto* fb = std::get_if<FourBar>(&c.linkage)) {
+    const Vec2 A0 = fb->A0 / L, B0 = fb->B0 / L;
+    s.links = {{A0, A}, {A, B}, {B0, B}, {A, P}, {B, P}};
+    s.ground = {{A0, B0}};
+    s.pivots = {A0, B0};
+  } else {  // the guide over the stroke, the slider block at B
+    const auto& sc = std::get<SliderCrank>(c.linkage);
+    const Vec2 O = sc.O / L, t(std::cos(sc.line_angle), std::sin(sc.line_angle));
+    double lo = 0.0, hi = 0.0;
+    for (const Vec2& b : pins) lo = std::min(lo, (b - B).dot(t)), hi = std::max(hi, (b - B).dot(t));
+    const double margin = 0.1 * std::max(hi - lo, sc.l / L);
+    s.links = {{O, A}, {A, B}, {A, P}, {B, P}};
+    s.ground = {{B + (lo - margin) * t, B + (hi + margin) * t}};
+    s.pivots = {O, B};
+  }
   return s;
 }
 
@@ -101,8 +154,8 @@ View fit(const Sketch& s) {
   for (const Target& t : s.targets) add(t.at);
   for (const auto& piece : s.curve)
     for (const Vec2& p : piece) add(p);
-  if (s.drawn)
-    for (const Vec2& p : {s.A0, s.A, s.B, s.B0, s.P}) add(p);
+  for (const auto& seg : s.links) add(seg[0]), add(seg[1]);
+  for (const auto& seg : s.ground) add(seg[0]), add(seg[1]);
   const Vec2 size = (hi - lo).cwiseMax(1e-9);
   View v;
   v.scale = std::min((kWidth - 2 * kMargin) / size.x(), (kHeight - 2 * kMargin) / size.y());
@@ -139,20 +192,14 @@ std::string svg_of(const Sketch& s, const View& v, const SynthesisCandidate& c) 
     for (const Vec2& p : piece) out << num(v.px(p)) << ',' << num(v.py(p)) << ' ';
     out << "\"/>\n";
   }
-  if (s.drawn) {
-    line(out, v, s.A0, s.B0, "ground");
-    line(out, v, s.A0, s.A, "link");
-    line(out, v, s.A, s.B, "link");
-    line(out, v, s.B0, s.B, "link");
-    line(out, v, s.A, s.P, "link coupler");
-    line(out, v, s.B, s.P, "link coupler");
-    for (const Vec2& p : {s.A0, s.B0})
-      out << "<rect class=\"pivot\" x=\"" << num(v.px(p) - 5) << "\" y=\"" << num(v.py(p) - 5)
-          << "\" width=\"10\" height=\"10\"/>\n";
-    for (const Vec2& p : {s.A, s.B})
-      out << "<circle class=\"joint\" cx=\"" << num(v.px(p)) << "\" cy=\"" << num(v.py(p))
-          << "\" r=\"3.5\"/>\n";
-  }
+  for (const auto& seg : s.ground) line(out, v, seg[0], seg[1], "ground");
+  for (const auto& seg : s.links) line(out, v, seg[0], seg[1], "link");
+  for (const Vec2& p : s.pivots)
+    out << "<rect class=\"pivot\" x=\"" << num(v.px(p) - 5) << "\" y=\"" << num(v.py(p) - 5)
+        << "\" width=\"10\" height=\"10\"/>\n";
+  for (const Vec2& p : s.joints)
+    out << "<circle class=\"joint\" cx=\"" << num(v.px(p)) << "\" cy=\"" << num(v.py(p))
+        << "\" r=\"3.5\"/>\n";
   for (const Target& t : s.targets) {
     out << "<circle class=\"target\" cx=\"" << num(v.px(t.at)) << "\" cy=\"" << num(v.py(t.at))
         << "\" r=\"5\"/>\n";
@@ -197,7 +244,7 @@ std::string synthesis_report_html(const SynthesisTask& task, const SynthesisResu
       << escape_html(synthesis_text(task, result)) << "</pre>\n";
   out << "<p>Targets: blue circles (a pose with its x axis). Each candidate: the linkage at the "
          "first target, and the path of its "
-      << (task.kind == TaskKind::function ? "follower pin B" : "coupler point P")
+      << (task.kind == TaskKind::function ? "output pin B" : "coupler point P")
       << " over its motion (magenta).</p>\n";
   for (const auto* list : {&result.accepted, &result.rejected}) {
     out << "<h2>" << (list == &result.accepted ? "Accepted" : "Rejected") << " ("

@@ -13,6 +13,7 @@
 #include "orthomech/synthesis/function_generation.hpp"
 #include "orthomech/synthesis/motion_generation.hpp"
 #include "orthomech/synthesis/path_generation.hpp"
+#include "orthomech/synthesis/slider_crank.hpp"
 
 namespace orthomech::synthesis {
 
@@ -21,9 +22,9 @@ namespace {
 constexpr double kPi = std::numbers::pi;
 constexpr double kDegree = kPi / 180.0;
 
-// A generator's four-bar before it is checked.
+// A generator's four-bar (or slider-crank) before it is checked.
 struct Raw {
-  FourBar linkage;
+  Linkage linkage;
   std::vector<double> crank_angles;
   std::string method;
   double output_offset = 0.0;  // function: the follower's angle is ψ + this
@@ -85,23 +86,47 @@ std::vector<Raw> motion_candidates(const SynthesisTask& task, SynthesisResult& r
   return raw;
 }
 
-std::vector<Raw> path_candidates(const SynthesisTask& task, const SynthesisRunOptions& run,
-                                 SynthesisResult& result) {
+// The path options of a task, for one branch.
+PathSynthesisOptions path_options(const SynthesisTask& task, const SynthesisRunOptions& run,
+                                  int branch) {
+  PathSynthesisOptions o;
+  o.timing = task.timing == TaskTiming::prescribed   ? PathTiming::prescribed
+             : task.timing == TaskTiming::free_start ? PathTiming::prescribed_free_start
+                                                     : PathTiming::free;
+  o.crank_angles = task.inputs;
+  o.fixed_A0 = task.fixed_pivot;
+  o.fixed_ground_angle = task.ground_angle;
+  o.require_crank_rocker = task.crank_rocker;
+  o.branch = branch;
+  o.starts = task.starts;
+  o.seed = task.seed;
+  o.threads = run.threads;
+  return o;
+}
+
+// A slider-crank's coupler path (slider_crank.hpp, (L46)–(L49)), one search per branch.
+std::vector<Raw> slider_path_candidates(const SynthesisTask& task, const SynthesisRunOptions& run,
+                                        SynthesisResult& result) {
   std::vector<Raw> raw;
   for (const int branch : {1, -1}) {
-    PathSynthesisOptions o;
-    o.timing = task.timing == TaskTiming::prescribed   ? PathTiming::prescribed
-               : task.timing == TaskTiming::free_start ? PathTiming::prescribed_free_start
-                                                       : PathTiming::free;
-    o.crank_angles = task.inputs;
-    o.fixed_A0 = task.fixed_pivot;
-    o.fixed_ground_angle = task.ground_angle;
-    o.require_crank_rocker = task.crank_rocker;
-    o.branch = branch;
-    o.starts = task.starts;
-    o.seed = task.seed;
-    o.threads = run.threads;
-    const PathSynthesisResult p = synthesize_path_generator(task.positions, o);
+    const SliderPathResult p =
+        synthesize_slider_path_generator(task.positions, path_options(task, run, branch));
+    if (result.status != SynthesisStatus::ok) result.status = p.status, result.message = p.message;
+    if (p.status == SynthesisStatus::no_linkage) continue;
+    raw.push_back(
+        {p.linkage, p.crank_angles,
+         std::string("slider-crank path search on branch ") + (branch > 0 ? "+1" : "-1")});
+  }
+  return raw;
+}
+
+std::vector<Raw> path_candidates(const SynthesisTask& task, const SynthesisRunOptions& run,
+                                 SynthesisResult& result) {
+  if (task.linkage == TaskLinkage::slider_crank) return slider_path_candidates(task, run, result);
+  std::vector<Raw> raw;
+  for (const int branch : {1, -1}) {
+    const PathSynthesisResult p =
+        synthesize_path_generator(task.positions, path_options(task, run, branch));
     if (result.status != SynthesisStatus::ok) result.status = p.status, result.message = p.message;
     if (p.status == SynthesisStatus::no_linkage) continue;
     raw.push_back({p.linkage, p.crank_angles,
@@ -110,7 +135,24 @@ std::vector<Raw> path_candidates(const SynthesisTask& task, const SynthesisRunOp
   return raw;
 }
 
+// A slider-crank function generator (slider_crank.hpp, (L40)–(L45)): the outputs are the slider
+// positions s_i.
+std::vector<Raw> slider_function_candidates(const SynthesisTask& task, SynthesisResult& result) {
+  std::vector<SliderPair> pairs;
+  for (size_t i = 0; i < task.inputs.size(); ++i)
+    pairs.push_back({task.inputs[i], task.outputs[i]});
+  const SliderFunctionResult f = synthesize_slider_function_generator(pairs);
+  result.status = f.status;
+  result.message = f.message;
+  if (f.status == SynthesisStatus::no_linkage) return {};
+  std::vector<double> crank;
+  for (const double phi : task.inputs) crank.push_back(phi + f.input_offset);
+  return {{f.linkage, crank,
+           pairs.size() == 3 ? "slider-crank, 3 precision pairs" : "slider-crank, least squares"}};
+}
+
 std::vector<Raw> function_candidates(const SynthesisTask& task, SynthesisResult& result) {
+  if (task.linkage == TaskLinkage::slider_crank) return slider_function_candidates(task, result);
   std::vector<AnglePair> pairs;
   for (size_t i = 0; i < task.inputs.size(); ++i)
     pairs.push_back({task.inputs[i], task.outputs[i]});
@@ -144,10 +186,57 @@ bool unwrap_in_order(std::vector<double>& angles) {
   return std::min(ccw, cw) < 2 * kPi;
 }
 
+// The rejection of a worst transmission angle below the task's bound.
+void check_transmission(const SynthesisTask& task, SynthesisCandidate& c) {
+  if (c.worst_transmission < task.min_transmission) {
+    char m[160];
+    std::snprintf(m, sizeof m,
+                  "its worst transmission angle over the motion, %.3g deg, is below %.3g deg",
+                  c.worst_transmission / kDegree, task.min_transmission / kDegree);
+    c.rejections.emplace_back(m);
+  }
+}
+
+// A slider-crank's distances to the targets by the closed form ((L8): the slider pin B from its
+// target for a function task, the coupler point for a path task), and its worst transmission
+// angle π/2 − α over the crank's motion from the first target to the last (every degree and at
+// the targets), α the pressure angle: sin α = |e − v| / l, v the crank pin's distance from the
+// line through O.
+void check_slider_crank(const SynthesisTask& task, const SliderCrank& sc, SynthesisCandidate& c) {
+  const Vec2 t(std::cos(sc.line_angle), std::sin(sc.line_angle)), n(-t.y(), t.x());
+  for (size_t j = 0; j < c.crank_angles.size(); ++j) {
+    const SliderCrankPosition p = calc_position(sc, c.crank_angles[j]);
+    if (!p.assembles) {
+      c.rejections.push_back("it does not assemble at target " + std::to_string(j + 1));
+      continue;
+    }
+    const Vec2 target = task.kind == TaskKind::function
+                            ? Vec2(sc.O + sc.offset * n + task.outputs[j] * t)
+                            : task.positions[j];
+    c.max_distance =
+        std::max(c.max_distance, ((task.kind == TaskKind::function ? p.B : p.P) - target).norm());
+  }
+  const double from = c.crank_angles.front(), to = c.crank_angles.back();
+  const int steps = std::max(1, static_cast<int>(std::ceil(std::abs(to - from) / kDegree)));
+  c.worst_transmission = kPi / 2;
+  for (int k = 0; k <= steps; ++k) {
+    const SliderCrankPosition p = calc_position(sc, from + (to - from) * k / steps);
+    if (!p.assembles) {
+      c.rejections.emplace_back(
+          "the crank cannot turn from the first target to the last: the "
+          "linkage does not assemble between them");
+      break;
+    }
+    const double v = (p.A - sc.O).dot(n);
+    const double alpha = std::asin(std::min(1.0, std::abs(sc.offset - v) / sc.l));
+    c.worst_transmission = std::min(c.worst_transmission, kPi / 2 - alpha);
+  }
+  check_transmission(task, c);
+}
+
 // Distances to the targets by the closed form (calc_position), and the worst transmission angle
 // over the crank's motion from the first target to the last (every degree and at the targets).
-void check_closed_form(const SynthesisTask& task, SynthesisCandidate& c) {
-  const FourBar& fb = c.linkage;
+void check_four_bar(const SynthesisTask& task, const FourBar& fb, SynthesisCandidate& c) {
   for (size_t j = 0; j < c.crank_angles.size(); ++j) {
     const FourBarPosition p = calc_position(fb, c.crank_angles[j]);
     if (!p.assembles) {
@@ -185,13 +274,14 @@ void check_closed_form(const SynthesisTask& task, SynthesisCandidate& c) {
     c.worst_transmission =
         std::min(c.worst_transmission, std::min(p.transmission_angle, kPi - p.transmission_angle));
   }
-  if (c.worst_transmission < task.min_transmission) {
-    char m[160];
-    std::snprintf(m, sizeof m,
-                  "its worst transmission angle over the motion, %.3g deg, is below %.3g deg",
-                  c.worst_transmission / kDegree, task.min_transmission / kDegree);
-    c.rejections.emplace_back(m);
-  }
+  check_transmission(task, c);
+}
+
+void check_closed_form(const SynthesisTask& task, SynthesisCandidate& c) {
+  if (const auto* fb = std::get_if<FourBar>(&c.linkage))
+    check_four_bar(task, *fb, c);
+  else
+    check_slider_crank(task, std::get<SliderCrank>(c.linkage), c);
 }
 
 // ---- 3. The file, read back and validated -------------------------------------------------------
@@ -217,6 +307,11 @@ void check_by_validate(const SynthesisTask& task, SynthesisCandidate& c) {
 // the ground for a function task), at least 1e-9 m.
 double automatic_tolerance(const SynthesisTask& task) {
   if (task.tolerance > 0.0) return task.tolerance;
+  if (task.kind == TaskKind::function && task.linkage == TaskLinkage::slider_crank) {
+    double size = 0.0;  // the slider positions' largest magnitude
+    for (const double s : task.outputs) size = std::max(size, std::abs(s));
+    return std::max(1e-9, 1e-3 * size);
+  }
   if (task.kind == TaskKind::function) return std::max(1e-9, 1e-3 * task.ground);
   Vec2 centre = Vec2::Zero();
   for (const Vec2& p : task.positions) centre += p;
@@ -224,6 +319,12 @@ double automatic_tolerance(const SynthesisTask& task) {
   double size = 0.0;
   for (const Vec2& p : task.positions) size = std::max(size, (p - centre).norm());
   return std::max(1e-9, 1e-3 * size);
+}
+
+// Whether the crank turns fully: the candidate's cycle is then a full turn (step 4).
+bool crank_turns_fully(const Linkage& linkage) {
+  if (const auto* fb = std::get_if<FourBar>(&linkage)) return calc_crank_range(*fb).full_turn;
+  return crank_turns_fully(std::get<SliderCrank>(linkage));
 }
 
 // Accepted candidates have their cycle (step 4), so the kinetostatic keys are there.
@@ -325,6 +426,84 @@ std::string four_bar_file(const SynthesisTask& task, const FourBar& fb,
   return out.str();
 }
 
+// A slider-crank as a mechanism file: ground points O (the crank pivot) and X = O + e n (the foot
+// of O on the slider line), the crank O->A, the rod A->B carrying the coupler point P, the slider
+// at B (its frame x along the line, angle γ) on the prismatic joint `slide` from ground.X along
+// t = (cos γ, sin γ): the joint's coordinate is the slider position s.
+std::string slider_crank_file(const SynthesisTask& task, const SliderCrank& sc,
+                              const std::vector<double>& crank_angles, double tolerance,
+                              const std::string& name) {
+  const double L = task.length_si, A = task.angle_si;
+  const Vec2 t(std::cos(sc.line_angle), std::sin(sc.line_angle)), n(-t.y(), t.x());
+  const Vec2 X = sc.O + sc.offset * n;
+  const SliderCrankPosition p0 = calc_position(sc, crank_angles.front());
+  std::ostringstream out;
+  out << "# " << name << ".yaml — a slider-crank synthesised by `orthomech synthesize` from "
+      << task.file << " (" << to_string(task.kind) << " generation, " << crank_angles.size()
+      << " targets).\n"
+      << "# Frames: crank O->A, rod A->B (coupler point P on the rod), slider frame at the pin B\n"
+      << "#   with x along the slider line; the prismatic joint `slide` [ground.X, slider.B] has\n"
+      << "#   the slider position s as its coordinate (X: the foot of O on the line, offset e).\n"
+      << "#   Crank and rod are uniform slender rods of the task's mass per length; the slider a\n"
+      << "#   square block of side l/4 and the rod's mass. Design pose: the first target.\n"
+      << "# Design positions t1..tn: the targets, at the crank angles the synthesis found.\n";
+  out << "orthomech: 1\nname: " << name << "\ndescription: \"" << to_string(task.kind)
+      << " generation (slider-crank) for " << task.name << "\"\n";
+  out << "units: {length: " << task.length_unit << ", angle: " << task.angle_unit
+      << ", mass: kg, time: s, force: N}\n";
+  out << "ground:\n  points: {O: " << point(sc.O, L) << ", X: " << point(X, L) << "}\n";
+  out << "bodies:\n";
+  const auto pose = [&](const Vec2& at, double angle) {
+    return "[" + num(at.x() / L) + ", " + num(at.y() / L) + ", " + num(angle / A) + "]";
+  };
+  link_body(out, task, "crank", sc.r, pose(sc.O, crank_angles.front()),
+            "{O: [0, 0], A: [" + num(sc.r / L) + ", 0]}");
+  link_body(out, task, "rod", sc.l, pose(p0.A, p0.coupler_angle),
+            "{A: [0, 0], B: [" + num(sc.l / L) + ", 0], P: " + point(sc.coupler_point, L) + "}",
+            "    outline: [[0, 0], " + point(sc.coupler_point, L) + ", [" + num(sc.l / L) +
+                ", 0], [0, 0]]\n");
+  const double m = task.mass_per_length * sc.l, side = sc.l / 4.0;
+  out << "  - name: slider\n    mass: " << num(m)
+      << "\n    inertia: " << num(m * side * side / 6.0 / (L * L))
+      << "\n    com: [0, 0]\n    pose: " << pose(p0.B, sc.line_angle)
+      << "\n    points: {B: [0, 0]}\n";
+  out << "joints:\n"
+      << "  - {name: O, type: revolute, connects: [ground.O, crank.O]}\n"
+      << "  - {name: A, type: revolute, connects: [crank.A, rod.A]}\n"
+      << "  - {name: B, type: revolute, connects: [rod.B, slider.B]}\n"
+      << "  - {name: slide, type: prismatic, connects: [ground.X, slider.B], axis: [" << num(t.x())
+      << ", " << num(t.y()) << "]}\n";
+  out << "measures:\n"
+      << "  - {name: crank_angle, type: joint, joint: O}\n"
+      << "  - {name: slider_s, type: joint, joint: slide}\n"
+      << "  - {name: P_x, type: point, point: rod.P, component: x}\n"
+      << "  - {name: P_y, type: point, point: rod.P, component: y}\n";
+  out << "drivers:\n  - {name: motor, joint: O, speed: " << num(task.speed) << " rad/s}\n";
+  out << "design_positions:\n";
+  for (size_t j = 0; j < crank_angles.size(); ++j) {
+    out << "  - name: t" << j + 1 << "\n    inputs: {O: " << num(crank_angles[j] / A) << "}\n";
+    if (task.kind == TaskKind::function)  // the slider pin at its position s_j on the line
+      out << "    target: {point: slider.B, at: " << point(X + task.outputs[j] * t, L);
+    else
+      out << "    target: {point: rod.P, at: " << point(task.positions[j], L);
+    out << ", tolerance: " << num(tolerance / L) << "}\n";
+  }
+  out << "analysis: {driver: motor, steps: 360}\n";
+  return out.str();
+}
+
+namespace {
+
+std::string mechanism_file(const SynthesisTask& task, const Linkage& linkage,
+                           const std::vector<double>& crank_angles, double tolerance,
+                           const std::string& name) {
+  if (const auto* fb = std::get_if<FourBar>(&linkage))
+    return four_bar_file(task, *fb, crank_angles, tolerance, name);
+  return slider_crank_file(task, std::get<SliderCrank>(linkage), crank_angles, tolerance, name);
+}
+
+}  // namespace
+
 SynthesisResult run_synthesis(const SynthesisTask& task, const SynthesisRunOptions& run) {
   SynthesisResult result;
   result.kind = task.kind;
@@ -342,7 +521,8 @@ SynthesisResult run_synthesis(const SynthesisTask& task, const SynthesisRunOptio
       raw = function_candidates(task, result);
       break;
   }
-  if (raw.empty() && result.message.empty()) result.message = "the generator found no four-bar";
+  if (raw.empty() && result.message.empty())
+    result.message = std::string("the generator found no ") + to_string(task.linkage);
   // 2.–4. Every candidate checked, validated and run through `cycle`.
   std::vector<SynthesisCandidate> all;
   std::vector<SynthesisTask> tasks;  // per candidate: a function's outputs as follower angles
@@ -367,9 +547,9 @@ SynthesisResult run_synthesis(const SynthesisTask& task, const SynthesisRunOptio
     check_closed_form(own, c);
     if (c.max_distance > result.tolerance)
       c.rejections.emplace_back("a target is missed by more than the tolerance");
-    c.file_text = four_bar_file(own, c.linkage, c.crank_angles, result.tolerance, c.name);
+    c.file_text = mechanism_file(own, c.linkage, c.crank_angles, result.tolerance, c.name);
     check_by_validate(own, c);
-    if (c.accepted()) detail::check_by_cycle(c, calc_crank_range(c.linkage).full_turn);
+    if (c.accepted()) detail::check_by_cycle(c, crank_turns_fully(c.linkage));
     all.push_back(std::move(c));
   }
   // 5. Accepted ranked, rejected listed; names in that order.
@@ -378,7 +558,8 @@ SynthesisResult run_synthesis(const SynthesisTask& task, const SynthesisRunOptio
   for (size_t k = 0; k < result.accepted.size(); ++k) {
     SynthesisCandidate& c = result.accepted[k];
     c.name = "candidate-" + std::to_string(k + 1);
-    c.file_text = four_bar_file(tasks[c.task], c.linkage, c.crank_angles, result.tolerance, c.name);
+    c.file_text =
+        mechanism_file(tasks[c.task], c.linkage, c.crank_angles, result.tolerance, c.name);
   }
   for (size_t k = 0; k < result.rejected.size(); ++k)
     result.rejected[k].name = "rejected-" + std::to_string(k + 1);

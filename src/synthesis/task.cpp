@@ -38,6 +38,16 @@ const char* to_string(TaskTiming timing) noexcept {
   return "?";
 }
 
+const char* to_string(TaskLinkage linkage) noexcept {
+  switch (linkage) {
+    case TaskLinkage::four_bar:
+      return "four-bar";
+    case TaskLinkage::slider_crank:
+      return "slider-crank";
+  }
+  return "?";
+}
+
 namespace {
 
 // The most targets of a task: a least-squares fit of more is not a design task.
@@ -52,7 +62,8 @@ class TaskReader {
     expect_keys(root, "task file",
                 {"orthomech-synthesis", "name", "units", "task", "poses", "points", "pairs",
                  "ground", "timing", "crank_angles", "fixed_pivot", "ground_angle", "crank",
-                 "follower", "require", "search", "mechanism", "rank_by", "tolerance"});
+                 "follower", "require", "search", "mechanism", "rank_by", "tolerance",
+                 "linkage"});
     if (!root["orthomech-synthesis"] || root["orthomech-synthesis"].as<std::string>() != "1")
       fail(root, "orthomech-synthesis",
            "a synthesis task starts with `orthomech-synthesis: 1` (the format's version)");
@@ -61,6 +72,7 @@ class TaskReader {
     t.name = root["name"] ? root["name"].as<std::string>() : "synthesis";
     units(root["units"], t);
     kind(root, t);
+    linkage(root, t);
     targets(root, t);
     requirements(root, t);
     return t;
@@ -137,6 +149,21 @@ class TaskReader {
       fail(k, "task", "unknown task '" + s + "' (motion, path or function)");
   }
 
+  // `linkage: four-bar | slider-crank` (function and path tasks; default four-bar).
+  void linkage(const YAML::Node& root, SynthesisTask& t) const {
+    const YAML::Node k = root["linkage"];
+    if (!k) return;
+    const std::string s = k.IsScalar() ? k.as<std::string>() : "";
+    if (s == "four-bar")
+      t.linkage = TaskLinkage::four_bar;
+    else if (s == "slider-crank")
+      t.linkage = TaskLinkage::slider_crank;
+    else
+      fail(k, "linkage", "unknown linkage '" + s + "' (four-bar or slider-crank)");
+    if (t.kind == TaskKind::motion && t.linkage != TaskLinkage::four_bar)
+      fail(k, "linkage", "motion generation synthesises four-bars only");
+  }
+
   void targets(const YAML::Node& root, SynthesisTask& t) const {
     const double L = t.length_si, A = t.angle_si;
     const auto only = [&](const char* key) {
@@ -168,6 +195,10 @@ class TaskReader {
       }
       case TaskKind::function: {
         only("pairs");
+        if (t.linkage == TaskLinkage::slider_crank) {
+          slider_pairs(root, t);
+          break;
+        }
         if (!root["pairs"])
           fail(root, "pairs", "a function task needs `pairs: [[input, output], ...]`");
         if (!root["ground"])
@@ -179,6 +210,20 @@ class TaskReader {
         }
         break;
       }
+    }
+  }
+  // A slider-crank's function pairs: [crank angle from the slider line, slider position]; no
+  // ground length (the linkage's size follows from the positions).
+  void slider_pairs(const YAML::Node& root, SynthesisTask& t) const {
+    if (!root["pairs"])
+      fail(root, "pairs",
+           "a slider-crank function task needs `pairs: [[crank angle, slider position], ...]`");
+    if (root["ground"])
+      fail(root["ground"], "ground",
+           "a slider-crank function task takes no `ground` (its pairs give the slider positions)");
+    for (const auto& p : rows(root["pairs"], "pairs", 2, 3)) {
+      t.inputs.push_back(p[0] * t.angle_si);
+      t.outputs.push_back(p[1] * t.length_si);
     }
   }
   static bool allowed_with(TaskKind kind, const std::string& key) {
@@ -273,6 +318,10 @@ class TaskReader {
     if (const YAML::Node r = root["require"]) {
       expect_keys(r, "require", {"crank_rocker", "min_transmission"});
       if (r["crank_rocker"]) t.crank_rocker = r["crank_rocker"].as<bool>();
+      if (t.crank_rocker && t.linkage == TaskLinkage::slider_crank)
+        fail(r["crank_rocker"], "crank_rocker",
+             "a Grashof crank-rocker is a four-bar requirement; this task's linkage is a "
+             "slider-crank");
       if (r["min_transmission"])
         t.min_transmission = number(r["min_transmission"], "min_transmission", 0.0,
                                     90.0 * 0.017453292519943295 / t.angle_si) *

@@ -3,8 +3,10 @@
 // "synthesize"). The one algorithm behind `orthomech synthesize`:
 //   1. the generator of the task's kind: Burmester motion generation (motion_generation.hpp),
 //      path generation by global search (path_generation.hpp), Freudenstein function generation
-//      (function_generation.hpp);
-//   2. each four-bar written as a mechanism file (the format every command reads), with one
+//      (function_generation.hpp); for `linkage: slider-crank` the slider-crank's function and
+//      path generation (slider_crank.hpp);
+//   2. each four-bar (slider-crank) written as a mechanism file (the format every command reads),
+//   with one
 //      design position per target (its crank angle, the target point and, for a pose, the
 //      coupler's angle);
 //   3. that file read back and validated as `validate` does (analysis/validate.hpp: assembly at
@@ -22,6 +24,7 @@
 // Results are data: nothing here throws for a numerical outcome.
 #include <optional>
 #include <string>
+#include <variant>
 #include <vector>
 
 #include "orthomech/synthesis/four_bar.hpp"
@@ -38,17 +41,21 @@ struct CandidateCycle {
   std::string peak_pin;         // the joint it acts in
 };
 
+// A candidate's linkage: a four-bar, or a slider-crank (task key `linkage: slider-crank`).
+using Linkage = std::variant<FourBar, SliderCrank>;
+
 struct SynthesisCandidate {
   std::string name;    // "candidate-1" … in rank order (accepted), "rejected-1" … (rejected)
   std::string method;  // e.g. "Burmester points 1 and 3", "path search, branch +1"
-  FourBar linkage;
+  Linkage linkage;
   std::vector<double> crank_angles;  // rad at the targets, in the targets' order, unwrapped
   double max_distance = 0.0;         // m: largest distance of the coupler point (function: of
-                                     // the follower pin) from its target
+                                     // the follower pin, or the slider pin) from its target
   double max_angle_error = 0.0;      // rad: motion: the coupler's angle; function: the output's
   double output_offset = 0.0;        // function: the follower's world angle is ψ + this
-  GrashofType grashof = GrashofType::triple_rocker;
-  double worst_transmission = 0.0;      // rad: min over the motion of min(μ, π − μ)
+  GrashofType grashof = GrashofType::triple_rocker;  // four-bars only
+  double worst_transmission = 0.0;  // rad: min over the motion of min(μ, π − μ) (a slider-crank:
+                                    // μ = π/2 − the pressure angle)
   std::optional<CandidateCycle> cycle;  // of an accepted candidate (step 4)
   std::vector<std::string> rejections;  // empty: accepted
   std::string file_text;                // the mechanism file (YAML)
@@ -78,5 +85,10 @@ struct SynthesisRunOptions {
 [[nodiscard]] std::string four_bar_file(const SynthesisTask& task, const FourBar& linkage,
                                         const std::vector<double>& crank_angles, double tolerance,
                                         const std::string& name);
+// The mechanism file of a slider-crank (crank, rod, slider on a prismatic joint) at the crank
+// angles of its targets (exposed for tests).
+[[nodiscard]] std::string slider_crank_file(const SynthesisTask& task, const SliderCrank& linkage,
+                                            const std::vector<double>& crank_angles,
+                                            double tolerance, const std::string& name);
 
 }  // namespace orthomech::synthesis

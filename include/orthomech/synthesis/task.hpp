@@ -28,10 +28,18 @@ struct TaskPivots {
   std::optional<Vec2> moving_pivot;
 };
 
+// The linkage a function or path task asks for (key `linkage`, default four-bar); motion tasks
+// are four-bars. A slider-crank (four_bar.hpp, SliderCrank): function pairs are [crank angle
+// from the slider line, slider position]; a path task's fixed_pivot is the crank pivot O, its
+// ground_angle the slider line's angle γ and its crank angles are measured from that line.
+enum class TaskLinkage { four_bar, slider_crank };
+[[nodiscard]] const char* to_string(TaskLinkage linkage) noexcept;
+
 struct SynthesisTask {
   std::string file;  // where it was read from (messages)
   std::string name;
   TaskKind kind = TaskKind::motion;
+  TaskLinkage linkage = TaskLinkage::four_bar;
   // The task's units, as a mechanism file's: the candidates are written in them. SI factors.
   std::string length_unit = "mm", angle_unit = "deg";
   double length_si = 1e-3, angle_si = 0.017453292519943295;
@@ -39,8 +47,8 @@ struct SynthesisTask {
   std::vector<Vec2> positions;  // motion and path: P_j
   std::vector<double> angles;   // motion: θ_j of the pose
   std::vector<double> inputs;   // function: φ_i; path (timed): φ_i from the ground line
-  std::vector<double> outputs;  // function: ψ_i
-  double ground = 0.0;          // function: the ground length d (m)
+  std::vector<double> outputs;  // function: ψ_i (four-bar) or the slider positions s_i (m)
+  double ground = 0.0;          // function, four-bar: the ground length d (m)
   TaskTiming timing = TaskTiming::free;
   std::optional<Vec2> fixed_pivot;     // path: A0 given
   std::optional<double> ground_angle;  // path: θ_g given (rad)

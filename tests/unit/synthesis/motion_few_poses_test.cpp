@@ -260,7 +260,7 @@ TEST(MotionFewPoses, PipelineThreePosesFixedPivots) {
   const SynthesisResult r = run_synthesis(task);
   expect_accepted_meet_poses(r);
   ASSERT_EQ(r.accepted.size(), 1u);
-  EXPECT_NEAR(r.accepted[0].linkage.b, 80e-3, 1e-12);
+  EXPECT_NEAR(std::get<FourBar>(r.accepted[0].linkage).b, 80e-3, 1e-12);
   EXPECT_NE(r.accepted[0].method.find("3 poses, crank's fixed pivot given"), std::string::npos)
       << r.accepted[0].method;
 }
@@ -272,7 +272,7 @@ TEST(MotionFewPoses, ExampleThreePoseTaskGivesBackTheCrankRocker) {
       load_synthesis_task(std::string(ORTHOMECH_SOURCE_DIR) + "/examples/synthesis-motion-3.yaml");
   const SynthesisResult r = run_synthesis(task);
   ASSERT_EQ(r.accepted.size(), 1u) << r.message;
-  const FourBar& fb = r.accepted[0].linkage;
+  const FourBar& fb = std::get<FourBar>(r.accepted[0].linkage);
   constexpr double kRounded = 1e-9 * 1e-3;  // m
   EXPECT_NEAR(fb.a, 30e-3, kRounded);
   EXPECT_NEAR(fb.b, 80e-3, kRounded);

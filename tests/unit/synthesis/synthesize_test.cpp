@@ -53,8 +53,9 @@ TEST(Synthesize, FivePosesGiveBackTheCrankRocker) {
   const SynthesisTask task = load_synthesis_task(example("synthesis-motion.yaml"));
   const SynthesisResult r = run_synthesis(task);
   ASSERT_FALSE(r.accepted.empty()) << r.message;
-  EXPECT_TRUE(std::any_of(r.accepted.begin(), r.accepted.end(),
-                          [](const auto& c) { return is_crank_rocker_of_the_file(c.linkage); }));
+  EXPECT_TRUE(std::any_of(r.accepted.begin(), r.accepted.end(), [](const auto& c) {
+    return is_crank_rocker_of_the_file(std::get<FourBar>(c.linkage));
+  }));
   for (const SynthesisCandidate& c : r.accepted) {
     EXPECT_LE(c.max_distance, 1e-10 * kMm) << c.name;
     EXPECT_LE(c.max_angle_error, 1e-10) << c.name;
@@ -82,8 +83,8 @@ TEST(Synthesize, ThreePairsGiveBackTheCrankRocker) {
       "fn.yaml");
   const SynthesisResult r = run_synthesis(task);
   ASSERT_EQ(r.accepted.size(), 1u) << r.message;
-  EXPECT_NEAR(r.accepted[0].linkage.a, 30 * kMm, 1e-10 * kMm);
-  EXPECT_NEAR(r.accepted[0].linkage.c, 60 * kMm, 1e-10 * kMm);
+  EXPECT_NEAR(std::get<FourBar>(r.accepted[0].linkage).a, 30 * kMm, 1e-10 * kMm);
+  EXPECT_NEAR(std::get<FourBar>(r.accepted[0].linkage).c, 60 * kMm, 1e-10 * kMm);
   EXPECT_LE(r.accepted[0].max_angle_error, 1e-12);
   expect_files_validate(r, task);
 }
@@ -124,8 +125,8 @@ TEST(Synthesize, PeakDriveTorqueIsTheRateOfTheKineticEnergy) {
     for (int k = 0; k < 360; ++k) {
       const double theta = c.crank_angles.front() + k * std::numbers::pi / 180;
       const double tau = w2 *
-                         (kinetic_per_rate(c.linkage, theta + dt, task.mass_per_length) -
-                          kinetic_per_rate(c.linkage, theta - dt, task.mass_per_length)) /
+                         (kinetic_per_rate(std::get<FourBar>(c.linkage), theta + dt, task.mass_per_length) -
+                          kinetic_per_rate(std::get<FourBar>(c.linkage), theta - dt, task.mass_per_length)) /
                          (2 * dt);
       peak = std::max(peak, std::abs(tau));
     }
