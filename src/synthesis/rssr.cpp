@@ -28,7 +28,16 @@ constexpr double kBranchMiss = 1e-6;
 constexpr double kStepTolerance = 1e-14;
 constexpr double kCostFloor = 1e-30;
 constexpr int kPolishIterations = 20000;
+// Beyond this damping (relative to diag JᵀJ) a rejected step is a steepest-descent step of
+// relative size ~1e-20: no descent is left.
+constexpr double kMaxDamping = 1e20;
 constexpr int kMaxPairs = 1000;
+// The polish (L57) starts from up to this many distinct local minima of the outer search (two
+// closer than kSameDesign × the search radius in every coordinate are one), lowest cost first,
+// and stops at the first whose cost reaches kExactCost (rad²: every pair met to ~1e-12 rad).
+constexpr size_t kPolishStarts = 4;
+constexpr double kSameDesign = 1e-6;
+constexpr double kExactCost = 1e-24;
 
 double wrap_angle(double x) { return std::remainder(x, 2.0 * kPi); }
 
@@ -178,9 +187,11 @@ double branch_cost(const Rssr& r, const std::vector<AnglePair>& pairs, int branc
 }
 
 // Step 1 (L56): the outer search over a's free coordinates, (b, L) from (L54)–(L55), the cost
-// min over σ; multistart BOBYQA from quasi-random starts. Returns the best design's x.
-bool outer_search(const Problem& pb, const RssrSynthesisOptions& o,
-                  Eigen::Matrix<double, 7, 1>& best_x, int& evaluations) {
+// min over σ; multistart BOBYQA from quasi-random starts. Returns the designs x of the distinct
+// local minima with a real coupler, lowest cost first, at most kPolishStarts.
+std::vector<Eigen::Matrix<double, 7, 1>> outer_search(const Problem& pb,
+                                                      const RssrSynthesisOptions& o,
+                                                      int& evaluations) {
   const double pen = 1e3 * static_cast<double>(pb.pairs.size());  // no coupler: worse than any
   const auto design = [&](const Eigen::VectorXd& y, Eigen::Matrix<double, 7, 1>& x) {
     Vec3 a = pb.base.a, b;
@@ -213,7 +224,22 @@ bool outer_search(const Problem& pb, const RssrSynthesisOptions& o,
   evaluations = out.evaluations;
   if (out.best.kind == solvers::NloptOutcomeKind::callback_error && out.best.error)
     std::rethrow_exception(out.best.error);
-  return out.best.value < pen && design(out.best.x, best_x);
+  std::vector<const solvers::NloptOutcome*> order;
+  for (const solvers::NloptOutcome& l : out.locals)
+    if (std::isfinite(l.value) && l.value < pen) order.push_back(&l);
+  std::stable_sort(order.begin(), order.end(),
+                   [](const auto* p, const auto* q) { return p->value < q->value; });
+  std::vector<Eigen::Matrix<double, 7, 1>> designs;
+  for (const solvers::NloptOutcome* l : order) {
+    Eigen::Matrix<double, 7, 1> x;
+    if (!design(l->x, x)) continue;
+    const bool seen = std::any_of(designs.begin(), designs.end(), [&](const auto& y) {
+      return (y - x).cwiseAbs().maxCoeff() <= kSameDesign * radius;
+    });
+    if (!seen) designs.push_back(x);
+    if (designs.size() == kPolishStarts) break;
+  }
+  return designs;
 }
 
 // (L57) Residuals r_i = wrap(ψ_σ(φ_i; x) − ψ_i) and their Jacobian over the free coordinates by
@@ -257,7 +283,6 @@ bool polish(const Problem& pb, int branch, Eigen::Matrix<double, 7, 1>& x, int& 
   Eigen::MatrixXd J(n, m), J_try(n, m), Ja(n + m, m);
   if (!residuals(pb, x, branch, r, J)) return false;
   double cost = r.squaredNorm(), lambda = 1e-3;
-  int failures = 0;
   for (iterations = 0; iterations < kPolishIterations; ++iterations) {
     if (cost < kCostFloor) return true;
     const Eigen::VectorXd D = J.colwise().norm().transpose().cwiseMax(1e-300);
@@ -272,12 +297,11 @@ bool polish(const Problem& pb, int branch, Eigen::Matrix<double, 7, 1>& x, int& 
     if (step.allFinite() && residuals(pb, x_try, branch, r_try, J_try) &&
         r_try.squaredNorm() <= cost) {
       x = x_try, r = r_try, J = J_try, cost = r.squaredNorm();
-      lambda = std::max(lambda * 0.3, 1e-30);
-      failures = 0;
+      lambda = std::max(lambda / 3.0, 1e-30);
       if (small) return true;
     } else {
-      lambda *= 4.0;
-      if (small || ++failures > 60) return true;  // no descent left at this precision
+      lambda *= 2.0;
+      if (lambda > kMaxDamping) return true;  // no descent at any damping: a minimum
     }
   }
   return false;
@@ -354,20 +378,29 @@ RssrSynthesisResult synthesize_rssr(const RevoluteAxis& input, const RevoluteAxi
       if (k >= 3 && k < 6) pb.free_b.push_back(k - 3);
     }
   // Step 1: the outer search (L56).
-  Eigen::Matrix<double, 7, 1> x;
-  if (!outer_search(pb, options, x, res.evaluations)) {
+  const std::vector<Eigen::Matrix<double, 7, 1>> starts = outer_search(pb, options, res.evaluations);
+  if (starts.empty()) {
     res.linkage = pb.base;
     res.message = "no design assembles with a real coupler (|b|² ≤ μ or a singular system (L54))";
     return res;
   }
-  Rssr start = with_x(pb, x);
-  const int branch =
-      branch_cost(start, pairs, 1) <= branch_cost(start, pairs, -1) ? 1 : -1;
-  // Step 2: the polish (L57); the search's design when it cannot start (a pair off the branch).
-  Eigen::Matrix<double, 7, 1> xp = x;
-  const bool converged = polish(pb, branch, xp, res.polish_iterations);
-  res.linkage = with_x(pb, converged || res.polish_iterations > 0 ? xp : x);
-  res.linkage.branch = branch;
+  // Step 2: the polish (L57) from each start on its better branch; the lowest final cost wins
+  // (a start the polish cannot begin from, a pair off its branch, keeps the search's design).
+  double best = std::numeric_limits<double>::infinity();
+  bool converged = false;
+  for (const Eigen::Matrix<double, 7, 1>& x : starts) {
+    const Rssr start = with_x(pb, x);
+    const int branch = branch_cost(start, pairs, 1) <= branch_cost(start, pairs, -1) ? 1 : -1;
+    Eigen::Matrix<double, 7, 1> xp = x;
+    int iterations = 0;
+    const bool ok = polish(pb, branch, xp, iterations);
+    res.polish_iterations += iterations;
+    Rssr lk = with_x(pb, ok || iterations > 0 ? xp : x);
+    lk.branch = branch;
+    const double cost = branch_cost(lk, pairs, branch);
+    if (cost < best) best = cost, converged = ok, res.linkage = lk;
+    if (best < kExactCost) break;
+  }
   // Step 3: the check (L53).
   judge(pairs, converged, res);
   return res;
@@ -409,12 +442,11 @@ std::string rssr_file(const Rssr& lk, const std::vector<AnglePair>& pairs,
   const RssrPosition p0 = calc_position(lk, pairs.front().phi);
   check_argument(p0.assembles, "rssr_file", "pairs", "the first pair's input does not assemble");
   // The design pose at the first pair: the cranks' frames E_k Rz(angle), the coupler's x along
-  // A→B and its z ⟂ to A→B and u2 (the universal joint's pins perpendicular).
+  // A→B and its z ⟂ to A→B and u2.
   const Vec3 xc = (p0.B - p0.A).normalized();
   Vec3 zc = lk.output.direction.normalized().cross(xc);
   check_argument(zc.norm() > 1e-6, "rssr_file", "linkage",
-                 "has its coupler along the output axis at the first pair (universal joint "
-                 "singular)");
+                 "has its coupler along the output axis at the first pair");
   zc.normalize();
   const Mat3 C1 = E1 * rot_z(pairs.front().phi), C2 = E2 * rot_z(p0.psi);
   std::ostringstream out;
@@ -423,10 +455,9 @@ std::string rssr_file(const Rssr& lk, const std::vector<AnglePair>& pairs,
       << "#   generation\", (L50)-(L59)).\n"
       << "# Frames: crank and rocker frames are the axes' frames E_k = [e_k, u_k x e_k, u_k] turned\n"
       << "#   by the joint angle (joint A0 reads the input phi from its ref e1 about u1, joint B0\n"
-      << "#   the output psi from e2 about u2); the coupler's x runs A->B. The S at the rocker is\n"
-      << "#   a universal joint (coupler pin z perpendicular to AB, rocker pin its axis), as in\n"
-      << "#   mechanisms/rssr.yaml, so the coupler has no idle spin. Bodies: mass per length, isotropic\n"
-      << "#   inertia m l^2/12. Design pose: the first pair.\n"
+      << "#   the output psi from e2 about u2); the coupler's x runs A->B. Joints A and B are\n"
+      << "#   spherical: the coupler's spin about AB is idle (DOF 2, one of it idle). Bodies: mass\n"
+      << "#   per length, isotropic inertia m l^2/12. Design pose: the first pair.\n"
       << "# Coupler length L = " << num(lk.coupler / L) << " " << o.length_unit
       << "; branch sigma = " << lk.branch << " of (L53).\n"
       << "# Design positions p1..pn: input A0 = phi_i, target rocker.B at B(psi_i) (L50).\n";

@@ -109,11 +109,12 @@ struct RssrFileOptions {
 
 // The RSSR as a spatial mechanism file (docs/file-format.md, dimension 3; the layout of
 // mechanisms/rssr.yaml): ground points A0 = P1, B0 = P2; bodies crank, coupler, rocker; joints
-// A0 (revolute, axis u1, ref e1: its coordinate reads φ), A (spherical), B (universal, the
-// coupler's spin held as in mechanisms/rssr.yaml), B0 (revolute, axis u2, ref e2: reads ψ); the
+// A0 (revolute, axis u1, ref e1: its coordinate reads φ), A and B (spherical: the coupler's spin
+// about AB is an idle degree of freedom, which validate reports and holds), B0 (revolute, axis
+// u2, ref e2: reads ψ); the
 // design pose at the first pair; one design position per pair: input A0 = φ_i, target the point
-// rocker.B at B(ψ_i) (L50). Throws std::invalid_argument for no pairs or a non-assembling first
-// pair.
+// rocker.B at B(ψ_i) (L50) within options.tolerance (L59). Throws std::invalid_argument for no
+// pairs, a first pair that does not assemble, or a coupler along u2 there.
 [[nodiscard]] std::string rssr_file(const Rssr& linkage, const std::vector<AnglePair>& pairs,
                                     const RssrFileOptions& options = {});
 

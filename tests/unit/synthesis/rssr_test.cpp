@@ -232,6 +232,41 @@ TEST(RssrSynthesis, L58_FewerPairsHoldTheConventionsCoordinates) {
   expect_law(r3, three);
 }
 
+// Least squares (L56)–(L57) on inconsistent data: 12 pairs of the skew RSSR with the outputs
+// moved by up to 1e-3 rad (a fixed pattern). Oracles: the truth is one admissible design, so the
+// result's cost Σ wrap(ψ(φ_i) − ψ_i)² is at most the truth's; and the result is a stationary
+// point: the cost's central differences along each of the seven coordinates vanish (relative to
+// the cost's scale over the step).
+double cost(const Rssr& r, const std::vector<AnglePair>& pairs) {
+  double c = 0.0;
+  for (const AnglePair& pr : pairs) {
+    const RssrPosition p = calc_position(r, pr.phi);
+    c += wrap(p.psi - pr.psi) * wrap(p.psi - pr.psi);
+  }
+  return c;
+}
+
+TEST(RssrSynthesis, L57_LeastSquaresOnPerturbedPairsIsAStationaryPointBelowTheTruth) {
+  const Rssr truth = skew_rssr();
+  std::vector<AnglePair> pairs = sample(truth, 10 * kDeg, 190 * kDeg, 12);
+  for (size_t i = 0; i < pairs.size(); ++i) pairs[i].psi += 1e-3 * std::sin(2.4 * double(i) + 0.3);
+  const RssrSynthesisResult res = synthesize_rssr(truth.input, truth.output, pairs);
+  ASSERT_EQ(res.status, SynthesisStatus::ok) << res.message;
+  const double c = cost(res.linkage, pairs);
+  EXPECT_LE(c, cost(truth, pairs));
+  EXPECT_NEAR(res.rms_output_error, std::sqrt(c / 12.0), 1e-15);
+  constexpr double h = 1e-6;
+  for (int j = 0; j < 7; ++j) {
+    Rssr p = res.linkage, q = res.linkage;
+    if (j < 3) p.a(j) += h, q.a(j) -= h;
+    else if (j < 6) p.b(j - 3) += h, q.b(j - 3) -= h;
+    else p.coupler += h, q.coupler -= h;
+    // At a minimum the difference is O(h²·curvature) ≈ 1e-12·100; away from one it would be
+    // ~ h·|gradient| with |gradient| ~ 2·|r|·|J| ≈ 2·3e-3·10.
+    EXPECT_LT(std::abs(cost(p, pairs) - cost(q, pairs)) / (2 * h), 1e-7) << j;
+  }
+}
+
 // The synthesised candidate written as a spatial file reads back with the library's reader and
 // its design positions validate: each assembles at its input and meets its target.
 TEST(RssrSynthesis, TheCandidatesFileReadsBackAndEveryTargetIsMet) {
