@@ -364,7 +364,7 @@ RssrSynthesisResult synthesize_rssr(const RevoluteAxis& input, const RevoluteAxi
   pb.base.a = options.held_a;
   pb.base.b = options.held_b;
   RssrSynthesisResult res;
-  // Step 0: the held coordinates (L58).
+  // Step 0: the held coordinates (L58): with n < 7 pairs the last 7 − n of b_z, a_z, a_y, b_y.
   pb.free.fill(true);
   const int held = std::max(0, 7 - static_cast<int>(pairs.size()));
   for (int k = 0; k < held; ++k) {
@@ -489,7 +489,8 @@ std::string rssr_file(const Rssr& lk, const std::vector<AnglePair>& pairs,
   out << "drivers:\n  - {name: motor, joint: A0, speed: " << num(o.speed) << " rad/s}\n";
   out << "design_positions:\n";
   for (size_t i = 0; i < pairs.size(); ++i) {
-    const Vec3 B = lk.output.point + E2 * (rot_z(pairs[i].psi) * lk.b);  // (L50)
+    // (L59) design position i: input φ_i, target rocker.B at B(ψ_i) of (L50).
+    const Vec3 B = lk.output.point + E2 * (rot_z(pairs[i].psi) * lk.b);
     out << "  - name: p" << i + 1 << "\n    inputs: {A0: " << num(pairs[i].phi / ang)
         << "}\n    target: {point: rocker.B, at: " << vec(B, L)
         << ", tolerance: " << num(o.tolerance / L) << "}\n";
