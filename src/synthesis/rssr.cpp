@@ -68,9 +68,9 @@ Mat3 axis_frame(const RevoluteAxis& axis) {
   Vec3 e = axis.reference ? *axis.reference : default_reference(u);
   check_argument(e.allFinite(), "axis_frame", "reference", "must be finite");
   e -= e.dot(u) * u;
-  check_argument(e.norm() > kParallelSine * std::max(1.0, axis.reference ? axis.reference->norm()
-                                                                         : 1.0),
-                 "axis_frame", "reference", "is parallel to the direction");
+  check_argument(
+      e.norm() > kParallelSine * std::max(1.0, axis.reference ? axis.reference->norm() : 1.0),
+      "axis_frame", "reference", "is parallel to the direction");
   e.normalize();
   Mat3 E;
   E.col(0) = e;
@@ -94,15 +94,15 @@ RssrPosition calc_position(const Rssr& linkage, double phi, int branch) {
   const Vec3 rho = E2.transpose() * (linkage.output.point - pos.A);
   const Vec3& b = linkage.b;
   const double L = linkage.coupler;
-  const double P = 2.0 * (rho.x() * b.x() + rho.y() * b.y());                  // (L52)
-  const double Q = 2.0 * (rho.y() * b.x() - rho.x() * b.y());                  // (L52)
+  const double P = 2.0 * (rho.x() * b.x() + rho.y() * b.y());                            // (L52)
+  const double Q = 2.0 * (rho.y() * b.x() - rho.x() * b.y());                            // (L52)
   const double S = rho.squaredNorm() + b.squaredNorm() + 2.0 * rho.z() * b.z() - L * L;  // (L52)
   const double R = std::hypot(P, Q);
   pos.assembles = std::abs(S) <= R;
   pos.closure_gap = pos.assembles ? 0.0 : std::abs(S) - R;
   const double c = R > 0.0 ? std::clamp(-S / R, -1.0, 1.0) : (S > 0.0 ? -1.0 : 1.0);
   pos.psi = std::atan2(Q, P) + (branch >= 0 ? 1.0 : -1.0) * std::acos(c);  // (L53)
-  pos.B = linkage.output.point + E2 * (rot_z(pos.psi) * b);                  // (L50)
+  pos.B = linkage.output.point + E2 * (rot_z(pos.psi) * b);                // (L50)
   return pos;
 }
 
@@ -122,7 +122,7 @@ constexpr std::array<int, 4> kHoldOrder = {5, 2, 1, 4};  // b_z, a_z, a_y, b_y
 // The problem, fixed once: axes, pairs, which coordinates are free.
 struct Problem {
   const std::vector<AnglePair>& pairs;
-  Rssr base;                        // axes, held values
+  Rssr base;  // axes, held values
   Mat3 E1, E2;
   std::array<bool, 7> free{};       // x_k free
   std::vector<int> free_a, free_b;  // free indices among a (0..2) and b (0..2)
@@ -171,7 +171,8 @@ bool solve_coupler_side(const Problem& pb, const Vec3& a, Vec3& b, double& L) {
 }
 
 // (L56) The output-angle cost of a design on branch σ: Σ_i wrap(ψ_σ(φ_i) − ψ_i)², plus
-// (gap_i / √(P² + Q²))² for a pair where it does not assemble (continuous at the boundary).
+// (gap_i / L²)² for a pair where it does not assemble (gap_i = |S| − √(P² + Q²) of (L53);
+// continuous at the boundary, where ψ_σ is the clamped acos).
 double branch_cost(const Rssr& r, const std::vector<AnglePair>& pairs, int branch) {
   double cost = 0.0;
   for (const AnglePair& pr : pairs) {
@@ -378,7 +379,8 @@ RssrSynthesisResult synthesize_rssr(const RevoluteAxis& input, const RevoluteAxi
       if (k >= 3 && k < 6) pb.free_b.push_back(k - 3);
     }
   // Step 1: the outer search (L56).
-  const std::vector<Eigen::Matrix<double, 7, 1>> starts = outer_search(pb, options, res.evaluations);
+  const std::vector<Eigen::Matrix<double, 7, 1>> starts =
+      outer_search(pb, options, res.evaluations);
   if (starts.empty()) {
     res.linkage = pb.base;
     res.message = "no design assembles with a real coupler (|b|² ≤ μ or a singular system (L54))";
@@ -421,15 +423,16 @@ std::string vec(const Vec3& v, double scale) {
 
 // A body of the file: mass = mass per length × its length (at least 1 mm), isotropic inertia
 // m ℓ²/12 about the centre of mass (the triangle inequality holds), com at `com`.
-void body(std::ostringstream& out, const RssrFileOptions& o, const std::string& name,
-          double length, const Vec3& com, const Vec3& origin, const Vec3& z, const Vec3& x,
+void body(std::ostringstream& out, const RssrFileOptions& o, const std::string& name, double length,
+          const Vec3& com, const Vec3& origin, const Vec3& z, const Vec3& x,
           const std::string& points) {
   const double L = o.length_si, ell = std::max(length, 1e-3), m = o.mass_per_length * ell;
   const double J = m * ell * ell / 12.0 / (L * L);
   out << "  - name: " << name << "\n    mass: " << num(m) << "\n    inertia: [" << num(J) << ", "
       << num(J) << ", " << num(J) << "]\n    com: " << vec(com, L)
-      << "\n    pose:\n      position: " << vec(origin, L) << "\n      orientation: {z: "
-      << vec(z, 1.0) << ", x: " << vec(x, 1.0) << "}\n    points: " << points << "\n";
+      << "\n    pose:\n      position: " << vec(origin, L)
+      << "\n      orientation: {z: " << vec(z, 1.0) << ", x: " << vec(x, 1.0)
+      << "}\n    points: " << points << "\n";
 }
 
 }  // namespace
@@ -453,10 +456,12 @@ std::string rssr_file(const Rssr& lk, const std::vector<AnglePair>& pairs,
   out << "# " << o.name << ".yaml — an RSSR function generator from " << o.origin << " ("
       << pairs.size() << " input-output pairs; docs/synthesis.md, \"Spatial RSSR function\n"
       << "#   generation\", (L50)-(L59)).\n"
-      << "# Frames: crank and rocker frames are the axes' frames E_k = [e_k, u_k x e_k, u_k] turned\n"
+      << "# Frames: crank and rocker frames are the axes' frames E_k = [e_k, u_k x e_k, u_k] "
+         "turned\n"
       << "#   by the joint angle (joint A0 reads the input phi from its ref e1 about u1, joint B0\n"
       << "#   the output psi from e2 about u2); the coupler's x runs A->B. Joints A and B are\n"
-      << "#   spherical: the coupler's spin about AB is idle (DOF 2, one of it idle). Bodies: mass\n"
+      << "#   spherical: the coupler's spin about AB is idle (DOF 2, one of it idle). Bodies: "
+         "mass\n"
       << "#   per length, isotropic inertia m l^2/12. Design pose: the first pair.\n"
       << "# Coupler length L = " << num(lk.coupler / L) << " " << o.length_unit
       << "; branch sigma = " << lk.branch << " of (L53).\n"

@@ -25,19 +25,19 @@ using Vec3 = Eigen::Vector3d;
 using Mat3 = Eigen::Matrix3d;
 
 struct RevoluteAxis {
-  Vec3 point = Vec3::Zero();        // P_k, world
-  Vec3 direction = Vec3::UnitZ();   // u_k (any length: normalised)
-  std::optional<Vec3> reference;    // e_k, made ⟂ u_k; none: the spatial file's default rule
-                                    // (the world axis least aligned with u_k, projected)
+  Vec3 point = Vec3::Zero();       // P_k, world
+  Vec3 direction = Vec3::UnitZ();  // u_k (any length: normalised)
+  std::optional<Vec3> reference;   // e_k, made ⟂ u_k; none: the spatial file's default rule
+                                   // (the world axis least aligned with u_k, projected)
 };
 
 struct Rssr {
-  RevoluteAxis input;         // R1: the crank turned by φ
-  RevoluteAxis output;        // R2: the crank that reads ψ
-  Vec3 a = Vec3::Zero();      // the spherical centre A in the input crank's frame (L50)
-  Vec3 b = Vec3::Zero();      // the spherical centre B in the output crank's frame (L50)
-  double coupler = 0.0;       // L = |AB|
-  int branch = 1;             // σ = ±1 of (L53)
+  RevoluteAxis input;     // R1: the crank turned by φ
+  RevoluteAxis output;    // R2: the crank that reads ψ
+  Vec3 a = Vec3::Zero();  // the spherical centre A in the input crank's frame (L50)
+  Vec3 b = Vec3::Zero();  // the spherical centre B in the output crank's frame (L50)
+  double coupler = 0.0;   // L = |AB|
+  int branch = 1;         // σ = ±1 of (L53)
 };
 
 // The frame E_k = [e_k, u_k × e_k, u_k] of an axis (L50). Throws std::invalid_argument for a zero
@@ -78,12 +78,12 @@ struct RssrSynthesisOptions {
 struct RssrSynthesisResult {
   SynthesisStatus status = SynthesisStatus::no_linkage;
   std::string message;
-  Rssr linkage;                     // the axes as given, a, b, L and the branch found
-  std::vector<std::string> held;    // the coordinates held by the convention (L58), e.g. "b_z"
-  double max_output_error = 0.0;    // rad: max |ψ(φ_i) − ψ_i| by the closed form (L53)
-  double rms_output_error = 0.0;    // rad
-  int evaluations = 0;              // objective evaluations of the outer search
-  int polish_iterations = 0;        // Levenberg–Marquardt iterations (L57)
+  Rssr linkage;                   // the axes as given, a, b, L and the branch found
+  std::vector<std::string> held;  // the coordinates held by the convention (L58), e.g. "b_z"
+  double max_output_error = 0.0;  // rad: max |ψ(φ_i) − ψ_i| by the closed form (L53)
+  double rms_output_error = 0.0;  // rad
+  int evaluations = 0;            // objective evaluations of the outer search
+  int polish_iterations = 0;      // Levenberg–Marquardt iterations (L57), over its starts
 };
 
 // Synthesis of an RSSR generating the pairs (φ_i, ψ_i) (3 to 1000) for the given axes (L54)–(L58):
@@ -102,8 +102,8 @@ struct RssrFileOptions {
   std::string origin = "orthomech synthesis";  // where it came from (the comment block)
   std::string length_unit = "mm", angle_unit = "deg";
   double length_si = 1e-3, angle_si = 0.017453292519943295;
-  double tolerance = 1e-6;        // m: a design position's target tolerance
-  double mass_per_length = 1.0;   // kg/m
+  double tolerance = 1e-6;           // m: a design position's target tolerance
+  double mass_per_length = 1.0;      // kg/m
   double speed = 6.283185307179586;  // rad/s: the driver of the input
 };
 

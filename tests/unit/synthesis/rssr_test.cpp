@@ -156,12 +156,16 @@ TEST(RssrSynthesis, L58_SevenPairsFixTheSevenDesignCoordinates) {
   constexpr double h = 1e-6;
   for (int j = 0; j < 7; ++j) {
     Rssr p = r, q = r;
-    if (j < 3) p.a(j) += h, q.a(j) -= h;
-    else if (j < 6) p.b(j - 3) += h, q.b(j - 3) -= h;
-    else p.coupler += h, q.coupler -= h;
+    if (j < 3)
+      p.a(j) += h, q.a(j) -= h;
+    else if (j < 6)
+      p.b(j - 3) += h, q.b(j - 3) -= h;
+    else
+      p.coupler += h, q.coupler -= h;
     for (int i = 0; i < 7; ++i)
       J(i, j) = (calc_position(p, pairs[static_cast<size_t>(i)].phi).psi -
-                 calc_position(q, pairs[static_cast<size_t>(i)].phi).psi) / (2 * h);
+                 calc_position(q, pairs[static_cast<size_t>(i)].phi).psi) /
+                (2 * h);
   }
   // Over this 70° input range the law is ill-conditioned (σ7/σ1 = 3.7e-7, docs (L58)), far
   // above the differences' noise (entries ~10 with errors ~1e-10: σ7/σ1 resolved to ~1e-11).
@@ -258,9 +262,12 @@ TEST(RssrSynthesis, L57_LeastSquaresOnPerturbedPairsIsAStationaryPointBelowTheTr
   constexpr double h = 1e-6;
   for (int j = 0; j < 7; ++j) {
     Rssr p = res.linkage, q = res.linkage;
-    if (j < 3) p.a(j) += h, q.a(j) -= h;
-    else if (j < 6) p.b(j - 3) += h, q.b(j - 3) -= h;
-    else p.coupler += h, q.coupler -= h;
+    if (j < 3)
+      p.a(j) += h, q.a(j) -= h;
+    else if (j < 6)
+      p.b(j - 3) += h, q.b(j - 3) -= h;
+    else
+      p.coupler += h, q.coupler -= h;
     // At a minimum the difference is O(h²·curvature) ≈ 1e-12·100; away from one it would be
     // ~ h·|gradient| with |gradient| ~ 2·|r|·|J| ≈ 2·3e-3·10.
     EXPECT_LT(std::abs(cost(p, pairs) - cost(q, pairs)) / (2 * h), 1e-7) << j;
@@ -288,6 +295,7 @@ TEST(RssrSynthesis, TheCandidatesFileReadsBackAndEveryTargetIsMet) {
     for (const std::string& f : pr.failures) ADD_FAILURE() << pr.name << ": " << f;
   }
   for (const std::string& d : rep.defects) ADD_FAILURE() << d;
+  EXPECT_EQ(rep.circuits, 1);
 }
 
 TEST(RssrSynthesis, RejectsTooFewPairsAndADegenerateAxis) {
@@ -296,8 +304,7 @@ TEST(RssrSynthesis, RejectsTooFewPairsAndADegenerateAxis) {
                std::invalid_argument);
   RevoluteAxis bad = r.input;
   bad.reference = bad.direction;
-  EXPECT_THROW((void)synthesize_rssr(bad, r.output, sample(r, 0.2, 1.2, 7)),
-               std::invalid_argument);
+  EXPECT_THROW((void)synthesize_rssr(bad, r.output, sample(r, 0.2, 1.2, 7)), std::invalid_argument);
 }
 
 }  // namespace
