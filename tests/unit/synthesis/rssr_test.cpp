@@ -16,7 +16,9 @@
 
 #include <Eigen/SVD>
 #include <cmath>
+#include <functional>
 #include <numbers>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -298,13 +300,32 @@ TEST(RssrSynthesis, TheCandidatesFileReadsBackAndEveryTargetIsMet) {
   EXPECT_EQ(rep.circuits, 1);
 }
 
+// Misuse is std::invalid_argument naming the function and the argument.
+std::string message_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "(no exception)";
+}
+
 TEST(RssrSynthesis, RejectsTooFewPairsAndADegenerateAxis) {
   const Rssr r = skew_rssr();
-  EXPECT_THROW((void)synthesize_rssr(r.input, r.output, {{0.0, 0.0}, {0.1, 0.1}}),
-               std::invalid_argument);
+  EXPECT_EQ(message_of([&] {
+              (void)synthesize_rssr(r.input, r.output, {{0.0, 0.0}, {0.1, 0.1}});
+            }),
+            "synthesize_rssr: argument 'pairs' needs 3 to 1000 input-output pairs");
   RevoluteAxis bad = r.input;
   bad.reference = bad.direction;
-  EXPECT_THROW((void)synthesize_rssr(bad, r.output, sample(r, 0.2, 1.2, 7)), std::invalid_argument);
+  EXPECT_EQ(message_of([&] { (void)synthesize_rssr(bad, r.output, sample(r, 0.2, 1.2, 7)); }),
+            "axis_frame: argument 'reference' is parallel to the direction");
+  bad = r.input;
+  bad.direction = Vec3::Zero();
+  EXPECT_EQ(message_of([&] { (void)axis_frame(bad); }),
+            "axis_frame: argument 'direction' must be a finite non-zero vector");
+  EXPECT_EQ(message_of([&] { (void)rssr_file(r, {}); }),
+            "rssr_file: argument 'pairs' needs at least one pair");
 }
 
 }  // namespace
