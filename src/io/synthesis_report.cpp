@@ -113,8 +113,8 @@ Sketch sketch(const SynthesisTask& task, const SynthesisCandidate& c) {
       piece.clear();
       continue;
     }
-    piece.push_back(p.traced / L);
-    pins.push_back(p.B / L);
+    piece.emplace_back(p.traced / L);
+    pins.emplace_back(p.B / L);
   }
   if (piece.size() > 1) s.curve.push_back(piece);
   const Placed p0 = place(c.linkage, c.crank_angles.front(), function);

@@ -73,6 +73,7 @@ Vec2 body_point(const std::vector<Pose>& poses, const Vec2& world_at_first) {
 // ground's frame, the world) the fixed pivots.
 std::vector<Pose> inverted(const std::vector<Pose>& poses) {
   std::vector<Pose> inv;
+  inv.reserve(poses.size());
   for (const Pose& p : poses)
     inv.push_back({-(rotation(p.angle).transpose() * p.position), -p.angle});
   return inv;
