@@ -62,14 +62,10 @@ nlohmann::json candidate_json(const SynthesisCandidate& c, const SynthesisTask& 
   else
     four_bar_json(j, std::get<synthesis::FourBar>(c.linkage), c, t);
   if (c.cycle) {  // what `cycle` computes on the file, in its units (N*mm in an mm file, N)
-    j["cycle"] = {{"from", c.cycle->from / t.angle_si},
-                  {"to", c.cycle->to / t.angle_si},
-                  {"positions", c.cycle->positions},
-                  {"peak_drive", c.cycle->peak_drive / L},
-                  {"drive_unit", "N*" + t.length_unit},
-                  {"peak_pin_force", c.cycle->peak_pin_force},
-                  {"peak_pin", c.cycle->peak_pin},
-                  {"force_unit", "N"}};
+    j["cycle"] = {{"from", c.cycle->from / t.angle_si}, {"to", c.cycle->to / t.angle_si},
+                  {"positions", c.cycle->positions},    {"peak_drive", c.cycle->peak_drive / L},
+                  {"drive_unit", "N*" + t.length_unit}, {"peak_pin_force", c.cycle->peak_pin_force},
+                  {"peak_pin", c.cycle->peak_pin},      {"force_unit", "N"}};
   } else {
     j["cycle"] = nullptr;
   }

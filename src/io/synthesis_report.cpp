@@ -174,8 +174,7 @@ std::string num(double v) {
   return b;
 }
 
-void line(std::ostringstream& out, const View& v, const Vec2& a, const Vec2& b,
-          const char* cls) {
+void line(std::ostringstream& out, const View& v, const Vec2& a, const Vec2& b, const char* cls) {
   out << "<line class=\"" << cls << "\" x1=\"" << num(v.px(a)) << "\" y1=\"" << num(v.py(a))
       << "\" x2=\"" << num(v.px(b)) << "\" y2=\"" << num(v.py(b)) << "\"/>\n";
 }
@@ -184,9 +183,9 @@ std::string svg_of(const Sketch& s, const View& v, const SynthesisCandidate& c) 
   std::ostringstream out;
   char view[96];
   std::snprintf(view, sizeof view, "%.17g %.17g %.17g", v.scale, v.x0, v.y0);
-  out << "<svg class=\"candidate\" data-name=\"" << escape_html(c.name) << "\" data-view=\""
-      << view << "\" xmlns=\"http://www.w3.org/2000/svg\" width=\"" << kWidth << "\" height=\""
-      << kHeight << "\" viewBox=\"0 0 " << kWidth << ' ' << kHeight << "\">\n";
+  out << "<svg class=\"candidate\" data-name=\"" << escape_html(c.name) << "\" data-view=\"" << view
+      << "\" xmlns=\"http://www.w3.org/2000/svg\" width=\"" << kWidth << "\" height=\"" << kHeight
+      << "\" viewBox=\"0 0 " << kWidth << ' ' << kHeight << "\">\n";
   for (const auto& piece : s.curve) {
     out << "<polyline class=\"curve\" points=\"";
     for (const Vec2& p : piece) out << num(v.px(p)) << ',' << num(v.py(p)) << ' ';
@@ -247,8 +246,8 @@ std::string synthesis_report_html(const SynthesisTask& task, const SynthesisResu
       << (task.kind == TaskKind::function ? "output pin B" : "coupler point P")
       << " over its motion (magenta).</p>\n";
   for (const auto* list : {&result.accepted, &result.rejected}) {
-    out << "<h2>" << (list == &result.accepted ? "Accepted" : "Rejected") << " ("
-        << list->size() << ")</h2>\n";
+    out << "<h2>" << (list == &result.accepted ? "Accepted" : "Rejected") << " (" << list->size()
+        << ")</h2>\n";
     for (const SynthesisCandidate& c : *list) {
       const Sketch s = sketch(task, c);
       out << "<figure class=\"" << (c.accepted() ? "accepted" : "rejected") << "\">\n"

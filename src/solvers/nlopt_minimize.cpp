@@ -1,8 +1,7 @@
 #include "nlopt_minimize.hpp"
 
-#include <omp.h>
-
 #include <nlopt.h>
+#include <omp.h>
 
 #include <algorithm>
 #include <array>
@@ -209,8 +208,7 @@ MultistartOutcome minimize_multistart(const ObjectiveFactory& make, const Eigen:
     for (int k = 0; k < runs; ++k) {
       const Eigen::VectorXd x0 =
           k < extra ? settings.extra_starts[static_cast<std::size_t>(k)] : grid.col(k - extra);
-      locals[static_cast<std::size_t>(k)] =
-          minimize_bounded(f, x0, lower, upper, settings.local);
+      locals[static_cast<std::size_t>(k)] = minimize_bounded(f, x0, lower, upper, settings.local);
     }
   }
   // 3. The outcome in start order, up to the first callback error.

@@ -70,14 +70,14 @@ struct MultistartOutcome {
 };
 
 [[nodiscard]] MultistartOutcome minimize_multistart(const ObjectiveFactory& make,
-                                                   const Eigen::VectorXd& lower,
-                                                   const Eigen::VectorXd& upper,
-                                                   const MultistartSettings& settings = {});
+                                                    const Eigen::VectorXd& lower,
+                                                    const Eigen::VectorXd& upper,
+                                                    const MultistartSettings& settings = {});
 // One objective shared by every run: on one thread whatever `threads` says.
 [[nodiscard]] MultistartOutcome minimize_multistart(const Objective& f,
-                                                   const Eigen::VectorXd& lower,
-                                                   const Eigen::VectorXd& upper,
-                                                   const MultistartSettings& settings = {});
+                                                    const Eigen::VectorXd& lower,
+                                                    const Eigen::VectorXd& upper,
+                                                    const MultistartSettings& settings = {});
 
 // `count` points of the box [lower, upper] (columns): the Halton sequence (bases the first
 // primes, dimension ≤ 40), shifted modulo 1 by a vector drawn from std::mt19937_64(seed)

@@ -350,6 +350,21 @@ std::string point(const Vec2& p, double L) {
   return "[" + num(p.x() / L) + ", " + num(p.y() / L) + "]";
 }
 
+// The file's first keys: version, name, description, units (the task's).
+void preamble(std::ostringstream& out, const SynthesisTask& task, const std::string& name,
+              const std::string& linkage_note) {
+  out << "orthomech: 1\nname: " << name << "\ndescription: \"" << to_string(task.kind)
+      << " generation" << linkage_note << " for " << task.name << "\"\n";
+  out << "units: {length: " << task.length_unit << ", angle: " << task.angle_unit
+      << ", mass: kg, time: s, force: N}\n";
+}
+
+// A body's `pose:` [x, y, angle] in the task's units.
+std::string pose_text(const SynthesisTask& task, const Vec2& at, double angle) {
+  return "[" + num(at.x() / task.length_si) + ", " + num(at.y() / task.length_si) + ", " +
+         num(angle / task.angle_si) + "]";
+}
+
 // A uniform slender link of `length` (m) between its frame origin and (length, 0): mass, inertia
 // about its centre m L²/12, in the file's units (kg, kg·unit²).
 void link_body(std::ostringstream& out, const SynthesisTask& task, const std::string& name,
@@ -377,15 +392,10 @@ std::string four_bar_file(const SynthesisTask& task, const FourBar& fb,
       << "#   coupler A->B, rocker B0->B); joint A0 measures the crank angle. Links are uniform\n"
       << "#   slender rods of the task's mass per length. Design pose: the first target.\n"
       << "# Design positions t1..tn: the targets, at the crank angles the synthesis found.\n";
-  out << "orthomech: 1\nname: " << name << "\ndescription: \"" << to_string(task.kind)
-      << " generation for " << task.name << "\"\n";
-  out << "units: {length: " << task.length_unit << ", angle: " << task.angle_unit
-      << ", mass: kg, time: s, force: N}\n";
+  preamble(out, task, name, "");
   out << "ground:\n  points: {A0: " << point(fb.A0, L) << ", B0: " << point(fb.B0, L) << "}\n";
   out << "bodies:\n";
-  const auto pose = [&](const Vec2& at, double angle) {
-    return "[" + num(at.x() / L) + ", " + num(at.y() / L) + ", " + num(angle / A) + "]";
-  };
+  const auto pose = [&](const Vec2& at, double angle) { return pose_text(task, at, angle); };
   link_body(out, task, "crank", fb.a, pose(fb.A0, crank_angles.front()),
             "{A0: [0, 0], A: [" + num(fb.a / L) + ", 0]}");
   const double frame = std::remainder(fb.coupler_frame_angle, 2 * kPi);
@@ -447,15 +457,10 @@ std::string slider_crank_file(const SynthesisTask& task, const SliderCrank& sc,
       << "#   Crank and rod are uniform slender rods of the task's mass per length; the slider a\n"
       << "#   square block of side l/4 and the rod's mass. Design pose: the first target.\n"
       << "# Design positions t1..tn: the targets, at the crank angles the synthesis found.\n";
-  out << "orthomech: 1\nname: " << name << "\ndescription: \"" << to_string(task.kind)
-      << " generation (slider-crank) for " << task.name << "\"\n";
-  out << "units: {length: " << task.length_unit << ", angle: " << task.angle_unit
-      << ", mass: kg, time: s, force: N}\n";
+  preamble(out, task, name, " (slider-crank)");
   out << "ground:\n  points: {O: " << point(sc.O, L) << ", X: " << point(X, L) << "}\n";
   out << "bodies:\n";
-  const auto pose = [&](const Vec2& at, double angle) {
-    return "[" + num(at.x() / L) + ", " + num(at.y() / L) + ", " + num(angle / A) + "]";
-  };
+  const auto pose = [&](const Vec2& at, double angle) { return pose_text(task, at, angle); };
   link_body(out, task, "crank", sc.r, pose(sc.O, crank_angles.front()),
             "{O: [0, 0], A: [" + num(sc.r / L) + ", 0]}");
   link_body(out, task, "rod", sc.l, pose(p0.A, p0.coupler_angle),

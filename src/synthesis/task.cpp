@@ -60,9 +60,25 @@ class TaskReader {
 
   SynthesisTask read(const YAML::Node& root) {
     expect_keys(root, "task file",
-                {"orthomech-synthesis", "name", "units", "task", "poses", "points", "pairs",
-                 "ground", "timing", "crank_angles", "fixed_pivot", "ground_angle", "crank",
-                 "follower", "require", "search", "mechanism", "rank_by", "tolerance",
+                {"orthomech-synthesis",
+                 "name",
+                 "units",
+                 "task",
+                 "poses",
+                 "points",
+                 "pairs",
+                 "ground",
+                 "timing",
+                 "crank_angles",
+                 "fixed_pivot",
+                 "ground_angle",
+                 "crank",
+                 "follower",
+                 "require",
+                 "search",
+                 "mechanism",
+                 "rank_by",
+                 "tolerance",
                  "linkage"});
     if (!root["orthomech-synthesis"] || root["orthomech-synthesis"].as<std::string>() != "1")
       fail(root, "orthomech-synthesis",
