@@ -18,7 +18,6 @@ namespace {
 using detail::circle_point_of;
 using detail::compatibility_row;
 using detail::cross;
-using detail::make_dyad;
 using detail::Mat2;
 using detail::normalise;
 using detail::Normalised;
