@@ -1,10 +1,12 @@
 #include "orthomech/io/synthesis_output.hpp"
 
+#include <cmath>
 #include <cstdio>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <sstream>
 
+#include "orthomech/synthesis/rssr.hpp"
 #include "orthomech/synthesis/slider_crank.hpp"
 
 namespace orthomech {
@@ -28,6 +30,29 @@ void slider_json(nlohmann::json& j, const synthesis::SliderCrank& sc, const Synt
   j["coupler_point"] = {sc.coupler_point.x() / L, sc.coupler_point.y() / L};
   j["branch"] = sc.branch;
   j["full_turn"] = synthesis::crank_turns_fully(sc);
+}
+
+nlohmann::json xyz(const synthesis::Vec3& v, double unit) {
+  return {v.x() / unit, v.y() / unit, v.z() / unit};
+}
+
+// An RSSR's axes (points in length units, unit directions and references), spherical centres in
+// the cranks' frames (L50), coupler length and branch.
+void rssr_json(nlohmann::json& j, const synthesis::Rssr& r, const SynthesisCandidate& c,
+               const SynthesisTask& t) {
+  const double L = t.length_si;
+  for (const auto* ax : {&r.input, &r.output}) {
+    const synthesis::Mat3 E = synthesis::axis_frame(*ax);
+    j[ax == &r.input ? "input_axis" : "output_axis"] = {{"point", xyz(ax->point, L)},
+                                                        {"direction", xyz(E.col(2), 1.0)},
+                                                        {"ref", xyz(E.col(0), 1.0)}};
+  }
+  j["a"] = xyz(r.a, L);
+  j["b"] = xyz(r.b, L);
+  j["coupler"] = r.coupler / L;
+  j["branch"] = r.branch;
+  j["full_turn"] = synthesis::input_turns_fully(r);
+  j["max_angle_error"] = c.max_angle_error / t.angle_si;
 }
 
 void four_bar_json(nlohmann::json& j, const synthesis::FourBar& fb, const SynthesisCandidate& c,
@@ -59,6 +84,8 @@ nlohmann::json candidate_json(const SynthesisCandidate& c, const SynthesisTask& 
   j["crank_angles"] = angles;
   if (const auto* sc = std::get_if<synthesis::SliderCrank>(&c.linkage))
     slider_json(j, *sc, t);
+  else if (const auto* r = std::get_if<synthesis::Rssr>(&c.linkage))
+    rssr_json(j, *r, c, t);
   else
     four_bar_json(j, std::get<synthesis::FourBar>(c.linkage), c, t);
   if (c.cycle) {  // what `cycle` computes on the file, in its units (N*mm in an mm file, N)
@@ -85,6 +112,14 @@ std::string text_row(const SynthesisCandidate& c, const SynthesisTask& t) {
                   c.worst_transmission / kDeg, c.max_distance / L, peaks);
     return row;
   }
+  if (const auto* r = std::get_if<synthesis::Rssr>(&c.linkage)) {
+    const double ra = std::hypot(r->a.x(), r->a.y()), rb = std::hypot(r->b.x(), r->b.y());
+    std::snprintf(row, sizeof row, "%-13s %9.4g %9.4g %9.4g %9.3g  %-22s %7.2f  %9.3g %s",
+                  c.name.c_str(), r->coupler / L, ra / L, rb / L, c.max_angle_error / kDeg,
+                  synthesis::input_turns_fully(*r) ? "input turns fully" : "input rocks",
+                  c.worst_transmission / kDeg, c.max_distance / L, peaks);
+    return row;
+  }
   const auto& fb = std::get<synthesis::FourBar>(c.linkage);
   std::snprintf(row, sizeof row, "%-13s %9.4g %9.4g %9.4g %9.4g  %-22s %7.2f  %9.3g %s",
                 c.name.c_str(), (fb.B0 - fb.A0).norm() / L, fb.a / L, fb.b / L, fb.c / L,
@@ -101,6 +136,11 @@ void csv_linkage(std::ostringstream& out, const SynthesisCandidate& c, const Syn
         << sc->O.y() / L << ',' << sc->line_angle / t.angle_si << ',' << sc->coupler_point.x() / L
         << ',' << sc->coupler_point.y() / L << ',' << sc->branch << ','
         << (synthesis::crank_turns_fully(*sc) ? 1 : 0) << ',';
+  } else if (const auto* r = std::get_if<synthesis::Rssr>(&c.linkage)) {
+    out << r->coupler / L << ',' << r->a.x() / L << ',' << r->a.y() / L << ',' << r->a.z() / L
+        << ',' << r->b.x() / L << ',' << r->b.y() / L << ',' << r->b.z() / L << ',' << r->branch
+        << ',' << (synthesis::input_turns_fully(*r) ? 1 : 0) << ','
+        << c.max_angle_error / t.angle_si << ',';
   } else {
     const auto& fb = std::get<synthesis::FourBar>(c.linkage);
     out << (fb.B0 - fb.A0).norm() / L << ',' << fb.a / L << ',' << fb.b / L << ',' << fb.c / L
@@ -131,6 +171,9 @@ std::string synthesis_text(const SynthesisTask& t, const SynthesisResult& r,
   if (t.linkage == synthesis::TaskLinkage::slider_crank)
     out << "\nname               offset     crank       rod            type                   "
            "mu_min  max_dist     drive  pin_force\n";
+  else if (t.linkage == synthesis::TaskLinkage::rssr)
+    out << "\nname              coupler   r_input  r_output  psi_err  type                   "
+           "mu_min  max_dist     drive  pin_force\n";
   else
     out << "\nname               ground     crank   coupler  follower  grashof                "
            "mu_min  max_dist     drive  pin_force\n";
@@ -150,6 +193,8 @@ std::string synthesis_csv(const SynthesisTask& t, const SynthesisResult& r) {
   out.precision(17);
   if (t.linkage == synthesis::TaskLinkage::slider_crank)
     out << "name,accepted,crank,rod,offset,O_x,O_y,line_angle,P_p,P_q,branch,full_turn,";
+  else if (t.linkage == synthesis::TaskLinkage::rssr)
+    out << "name,accepted,coupler,a_x,a_y,a_z,b_x,b_y,b_z,branch,full_turn,max_angle_error,";
   else
     out << "name,accepted,ground,crank,coupler,follower,A0_x,A0_y,B0_x,B0_y,P_p,P_q,branch,"
            "grashof,";

@@ -66,8 +66,19 @@ struct Placed {
   bool assembles = false;
   Vec2 traced, A, B, P;
 };
+// A spatial RSSR is drawn in the isometric view of its world frame (x to the lower right, y to
+// the lower left, z up): (x, y, z) ↦ ((x − y) cos 30°, z − (x + y) sin 30°).
+Vec2 isometric(const synthesis::Vec3& p) {
+  return {(p.x() - p.y()) * std::cos(kPi / 6), p.z() - (p.x() + p.y()) * 0.5};
+}
+
 Placed place(const synthesis::Linkage& linkage, double theta, bool function) {
   Placed out;
+  if (const auto* r = std::get_if<synthesis::Rssr>(&linkage)) {
+    const synthesis::RssrPosition p = calc_position(*r, theta);
+    const Vec2 A = isometric(p.A), B = isometric(p.B);
+    return {p.assembles, B, A, B, B};
+  }
   if (const auto* fb = std::get_if<FourBar>(&linkage)) {
     const FourBarPosition p = calc_position(*fb, theta);
     out = {p.assembles, p.P, p.A, p.B, p.P};
@@ -88,6 +99,8 @@ std::vector<Target> targets(const SynthesisTask& task, const SynthesisCandidate&
     if (task.kind != TaskKind::function) {
       out.push_back({task.positions[j] / L, task.kind == TaskKind::motion,
                      task.kind == TaskKind::motion ? task.angles[j] : 0.0});
+    } else if (const auto* r = std::get_if<synthesis::Rssr>(&c.linkage)) {
+      out.push_back({isometric(output_pin(*r, task.outputs[j])) / L});
     } else if (const auto* fb = std::get_if<FourBar>(&c.linkage)) {
       const double psi = task.outputs[j] + c.output_offset;
       out.push_back({(fb->B0 + fb->c * Vec2(std::cos(psi), std::sin(psi))) / L});
@@ -121,7 +134,16 @@ Sketch sketch(const SynthesisTask& task, const SynthesisCandidate& c) {
   if (!p0.assembles) return s;
   const Vec2 A = p0.A / L, B = p0.B / L, P = p0.P / L;
   s.joints = {A, B};
-  if (const auto* fb = std::get_if<FourBar>(&c.linkage)) {
+  if (const auto* r = std::get_if<synthesis::Rssr>(&c.linkage)) {  // the axes as dashed lines
+    const Vec2 P1 = isometric(r->input.point) / L, P2 = isometric(r->output.point) / L;
+    const double reach = std::max({r->a.norm(), r->b.norm(), r->coupler}) / L;
+    s.links = {{P1, A}, {A, B}, {P2, B}};
+    for (const synthesis::RevoluteAxis* ax : {&r->input, &r->output}) {
+      const synthesis::Vec3 u = ax->direction.normalized() * (0.5 * reach * L);
+      s.ground.push_back({isometric(ax->point - u) / L, isometric(ax->point + u) / L});
+    }
+    s.pivots = {P1, P2};
+  } else if (const auto* fb = std::get_if<FourBar>(&c.linkage)) {
     const Vec2 A0 = fb->A0 / L, B0 = fb->B0 / L;
     s.links = {{A0, A}, {A, B}, {B0, B}, {A, P}, {B, P}};
     s.ground = {{A0, B0}};
@@ -244,7 +266,12 @@ std::string synthesis_report_html(const SynthesisTask& task, const SynthesisResu
   out << "<p>Targets: blue circles (a pose with its x axis). Each candidate: the linkage at the "
          "first target, and the path of its "
       << (task.kind == TaskKind::function ? "output pin B" : "coupler point P")
-      << " over its motion (magenta).</p>\n";
+      << " over its motion (magenta)."
+      << (task.linkage == synthesis::TaskLinkage::rssr
+              ? " A spatial RSSR is drawn in the isometric view of its world frame (x to the "
+                "lower right, y to the lower left, z up), its revolute axes dashed."
+              : "")
+      << "</p>\n";
   for (const auto* list : {&result.accepted, &result.rejected}) {
     out << "<h2>" << (list == &result.accepted ? "Accepted" : "Rejected") << " (" << list->size()
         << ")</h2>\n";

@@ -38,6 +38,13 @@ constexpr int kMaxPairs = 1000;
 constexpr size_t kPolishStarts = 4;
 constexpr double kSameDesign = 1e-6;
 constexpr double kExactCost = 1e-24;
+// A design is degenerate when a crank's radius (its spherical centre's distance from its axis) or
+// the coupler is below this fraction of the axes' distance |P2 − P1| (1 m if they meet): with
+// B on the output axis ψ no longer moves B, and the law (L53) can fit any pairs through the
+// ill-conditioned S / √(P² + Q²).
+constexpr double kMinLink = 1e-3;
+// Axes whose common normal is shorter than this fraction of |P2 − P1| intersect.
+constexpr double kIntersecting = 1e-6;
 
 double wrap_angle(double x) { return std::remainder(x, 2.0 * kPi); }
 
@@ -129,6 +136,16 @@ struct Problem {
   std::vector<int> free_all;        // free indices among the seven
 };
 
+// The length below which a crank radius or the coupler makes a design degenerate (kMinLink).
+double min_link(const Problem& pb) {
+  const double d = (pb.base.output.point - pb.base.input.point).norm();
+  return kMinLink * (d > 0.0 ? d : 1.0);
+}
+bool degenerate(const Problem& pb, const Eigen::Matrix<double, 7, 1>& x) {
+  const double m = min_link(pb);
+  return std::hypot(x(0), x(1)) < m || std::hypot(x(3), x(4)) < m || x(6) < m;
+}
+
 Rssr with_x(const Problem& pb, const Eigen::Matrix<double, 7, 1>& x) {
   Rssr r = pb.base;
   r.a = x.segment<3>(0);
@@ -204,7 +221,7 @@ std::vector<Eigen::Matrix<double, 7, 1>> outer_search(const Problem& pb,
   };
   const auto f = [&](const Eigen::VectorXd& y) {
     Eigen::Matrix<double, 7, 1> x;
-    if (!design(y, x)) return pen;
+    if (!design(y, x) || degenerate(pb, x)) return pen;
     const Rssr r = with_x(pb, x);
     return std::min(branch_cost(r, pb.pairs, 1), branch_cost(r, pb.pairs, -1));
   };
@@ -233,7 +250,7 @@ std::vector<Eigen::Matrix<double, 7, 1>> outer_search(const Problem& pb,
   std::vector<Eigen::Matrix<double, 7, 1>> designs;
   for (const solvers::NloptOutcome* l : order) {
     Eigen::Matrix<double, 7, 1> x;
-    if (!design(l->x, x)) continue;
+    if (!design(l->x, x) || degenerate(pb, x)) continue;
     const bool seen = std::any_of(designs.begin(), designs.end(), [&](const auto& y) {
       return (y - x).cwiseAbs().maxCoeff() <= kSameDesign * radius;
     });
@@ -365,6 +382,19 @@ RssrSynthesisResult synthesize_rssr(const RevoluteAxis& input, const RevoluteAxi
   pb.base.a = options.held_a;
   pb.base.b = options.held_b;
   RssrSynthesisResult res;
+  // Intersecting axes: B at their common point closes the loop at every input, an exact
+  // solution of (L54) for every a that hides the true one (the step finds only it).
+  const Vec3 u1 = pb.E1.col(2), u2 = pb.E2.col(2), n = u1.cross(u2);
+  const Vec3 d12 = output.point - input.point;
+  if (n.norm() > kParallelSine &&
+      std::abs(d12.dot(n.normalized())) <= kIntersecting * std::max(d12.norm(), 1e-300)) {
+    res.linkage = pb.base;
+    res.message =
+        "the input and output axes intersect: the rocker's pin at their common point closes "
+        "the loop at every input, so (L54) cannot single out a linkage; give axes with a common "
+        "normal of non-zero length";
+    return res;
+  }
   // Step 0: the held coordinates (L58): with n < 7 pairs the last 7 − n of b_z, a_z, a_y, b_y.
   pb.free.fill(true);
   const int held = std::max(0, 7 - static_cast<int>(pairs.size()));
@@ -383,7 +413,9 @@ RssrSynthesisResult synthesize_rssr(const RevoluteAxis& input, const RevoluteAxi
       outer_search(pb, options, res.evaluations);
   if (starts.empty()) {
     res.linkage = pb.base;
-    res.message = "no design assembles with a real coupler (|b|² ≤ μ or a singular system (L54))";
+    res.message =
+        "no design assembles with a real coupler (|b|² ≤ μ or a singular system (L54)) and cranks "
+        "off their axes";
     return res;
   }
   // Step 2: the polish (L57) from each start on its better branch; the lowest final cost wins
@@ -397,11 +429,18 @@ RssrSynthesisResult synthesize_rssr(const RevoluteAxis& input, const RevoluteAxi
     int iterations = 0;
     const bool ok = polish(pb, branch, xp, iterations);
     res.polish_iterations += iterations;
-    Rssr lk = with_x(pb, ok || iterations > 0 ? xp : x);
+    const Eigen::Matrix<double, 7, 1>& xf = ok || iterations > 0 ? xp : x;
+    if (degenerate(pb, xf)) continue;  // the polish ran into a crank on its axis
+    Rssr lk = with_x(pb, xf);
     lk.branch = branch;
     const double cost = branch_cost(lk, pairs, branch);
     if (cost < best) best = cost, converged = ok, res.linkage = lk;
     if (best < kExactCost) break;
+  }
+  if (!std::isfinite(best)) {
+    res.linkage = pb.base;
+    res.message = "every polished design has a crank on its axis or no coupler (degenerate)";
+    return res;
   }
   // Step 3: the check (L53).
   judge(pairs, converged, res);
@@ -508,6 +547,24 @@ std::string rssr_file(const Rssr& lk, const std::vector<AnglePair>& pairs,
   }
   out << "analysis: {driver: motor, steps: 360}\n";
   return out.str();
+}
+
+Vec3 output_pin(const Rssr& linkage, double psi) {
+  return linkage.output.point + axis_frame(linkage.output) * (rot_z(psi) * linkage.b);
+}
+
+double transmission_index(const Rssr& linkage, const RssrPosition& position) {
+  const Vec3 d = position.B - position.A;
+  const Vec3 t = linkage.output.direction.normalized().cross(position.B - linkage.output.point);
+  if (d.norm() == 0.0 || t.norm() == 0.0) return 0.0;
+  return std::abs(d.normalized().dot(t.normalized()));
+}
+
+bool input_turns_fully(const Rssr& linkage) {
+  constexpr int kSamples = 1440;  // every quarter degree
+  for (int k = 0; k < kSamples; ++k)
+    if (!calc_position(linkage, 2.0 * std::numbers::pi * k / kSamples).assembles) return false;
+  return true;
 }
 
 }  // namespace orthomech::synthesis

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <numbers>
 #include <sstream>
+#include <stdexcept>
 
 #include "candidate_cycle.hpp"
 #include "orthomech/analysis/validate.hpp"
@@ -151,8 +152,33 @@ std::vector<Raw> slider_function_candidates(const SynthesisTask& task, Synthesis
            pairs.size() == 3 ? "slider-crank, 3 precision pairs" : "slider-crank, least squares"}};
 }
 
+// A spatial RSSR function generator for the task's axes (rssr.hpp, (L54)–(L58)): the input
+// crank's angle is the joint coordinate φ itself.
+std::vector<Raw> rssr_function_candidates(const SynthesisTask& task, SynthesisResult& result) {
+  std::vector<AnglePair> pairs;
+  for (size_t i = 0; i < task.inputs.size(); ++i)
+    pairs.push_back({task.inputs[i], task.outputs[i]});
+  RssrSynthesisOptions o;
+  o.seed = task.seed;
+  o.starts = std::max(8, task.starts / 4);
+  o.held_a = task.held_a;
+  o.held_b = task.held_b;
+  const RssrSynthesisResult f = synthesize_rssr(task.input_axis, task.output_axis, pairs, o);
+  result.status = f.status;
+  result.message = f.message;
+  if (f.status == SynthesisStatus::no_linkage) return {};
+  std::string method = pairs.size() >= 7 ? "RSSR, least squares" : "RSSR, exact";
+  if (!f.held.empty()) {
+    method += " (held:";
+    for (const std::string& h : f.held) method += " " + h;
+    method += ")";
+  }
+  return {{f.linkage, task.inputs, method}};
+}
+
 std::vector<Raw> function_candidates(const SynthesisTask& task, SynthesisResult& result) {
   if (task.linkage == TaskLinkage::slider_crank) return slider_function_candidates(task, result);
+  if (task.linkage == TaskLinkage::rssr) return rssr_function_candidates(task, result);
   std::vector<AnglePair> pairs;
   for (size_t i = 0; i < task.inputs.size(); ++i)
     pairs.push_back({task.inputs[i], task.outputs[i]});
@@ -277,9 +303,42 @@ void check_four_bar(const SynthesisTask& task, const FourBar& fb, SynthesisCandi
   check_transmission(task, c);
 }
 
+// An RSSR's output angles and rocker pin B against the pairs by the closed form (L53), and its
+// worst transmission angle asin(index) over the input's motion from the first pair to the last
+// (every degree and at the pairs; rssr.hpp, transmission_index).
+void check_rssr(const SynthesisTask& task, const Rssr& r, SynthesisCandidate& c) {
+  for (size_t j = 0; j < c.crank_angles.size(); ++j) {
+    const RssrPosition p = calc_position(r, c.crank_angles[j]);
+    if (!p.assembles) {
+      c.rejections.push_back("it does not assemble at target " + std::to_string(j + 1));
+      continue;
+    }
+    c.max_angle_error =
+        std::max(c.max_angle_error, std::abs(std::remainder(p.psi - task.outputs[j], 2 * kPi)));
+    c.max_distance = std::max(c.max_distance, (p.B - output_pin(r, task.outputs[j])).norm());
+  }
+  const double from = c.crank_angles.front(), to = c.crank_angles.back();
+  const int steps = std::max(1, static_cast<int>(std::ceil(std::abs(to - from) / kDegree)));
+  c.worst_transmission = kPi / 2;
+  for (int k = 0; k <= steps; ++k) {
+    const RssrPosition p = calc_position(r, from + (to - from) * k / steps);
+    if (!p.assembles) {
+      c.rejections.emplace_back(
+          "the input cannot turn from the first target to the last: the "
+          "linkage does not assemble between them");
+      break;
+    }
+    c.worst_transmission =
+        std::min(c.worst_transmission, std::asin(std::min(1.0, transmission_index(r, p))));
+  }
+  check_transmission(task, c);
+}
+
 void check_closed_form(const SynthesisTask& task, SynthesisCandidate& c) {
   if (const auto* fb = std::get_if<FourBar>(&c.linkage))
     check_four_bar(task, *fb, c);
+  else if (const auto* r = std::get_if<Rssr>(&c.linkage))
+    check_rssr(task, *r, c);
   else
     check_slider_crank(task, std::get<SliderCrank>(c.linkage), c);
 }
@@ -312,6 +371,8 @@ double automatic_tolerance(const SynthesisTask& task) {
     for (const double s : task.outputs) size = std::max(size, std::abs(s));
     return std::max(1e-9, 1e-3 * size);
   }
+  if (task.kind == TaskKind::function && task.linkage == TaskLinkage::rssr)
+    return std::max(1e-9, 1e-3 * (task.output_axis.point - task.input_axis.point).norm());
   if (task.kind == TaskKind::function) return std::max(1e-9, 1e-3 * task.ground);
   Vec2 centre = Vec2::Zero();
   for (const Vec2& p : task.positions) centre += p;
@@ -324,6 +385,7 @@ double automatic_tolerance(const SynthesisTask& task) {
 // Whether the crank turns fully: the candidate's cycle is then a full turn (step 4).
 bool crank_turns_fully(const Linkage& linkage) {
   if (const auto* fb = std::get_if<FourBar>(&linkage)) return calc_crank_range(*fb).full_turn;
+  if (const auto* r = std::get_if<Rssr>(&linkage)) return input_turns_fully(*r);
   return crank_turns_fully(std::get<SliderCrank>(linkage));
 }
 
@@ -504,6 +566,20 @@ std::string mechanism_file(const SynthesisTask& task, const Linkage& linkage,
                            const std::string& name) {
   if (const auto* fb = std::get_if<FourBar>(&linkage))
     return four_bar_file(task, *fb, crank_angles, tolerance, name);
+  if (const auto* r = std::get_if<Rssr>(&linkage)) {
+    std::vector<AnglePair> pairs;
+    for (size_t i = 0; i < crank_angles.size(); ++i)
+      pairs.push_back({crank_angles[i], task.outputs[i]});
+    RssrFileOptions o;
+    o.name = name;
+    o.origin = "`orthomech synthesize` of " + task.file;
+    o.length_unit = task.length_unit, o.angle_unit = task.angle_unit;
+    o.length_si = task.length_si, o.angle_si = task.angle_si;
+    o.tolerance = tolerance;
+    o.mass_per_length = task.mass_per_length;
+    o.speed = task.speed;
+    return rssr_file(*r, pairs, o);
+  }
   return slider_crank_file(task, std::get<SliderCrank>(linkage), crank_angles, tolerance, name);
 }
 
@@ -552,7 +628,13 @@ SynthesisResult run_synthesis(const SynthesisTask& task, const SynthesisRunOptio
     check_closed_form(own, c);
     if (c.max_distance > result.tolerance)
       c.rejections.emplace_back("a target is missed by more than the tolerance");
-    c.file_text = mechanism_file(own, c.linkage, c.crank_angles, result.tolerance, c.name);
+    try {
+      c.file_text = mechanism_file(own, c.linkage, c.crank_angles, result.tolerance, c.name);
+    } catch (const std::invalid_argument& e) {  // an RSSR the file cannot pose (rssr_file)
+      c.rejections.push_back(std::string("its mechanism file cannot be written: ") + e.what());
+      all.push_back(std::move(c));
+      continue;
+    }
     check_by_validate(own, c);
     if (c.accepted()) detail::check_by_cycle(c, crank_turns_fully(c.linkage));
     all.push_back(std::move(c));

@@ -2,6 +2,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <fstream>
@@ -44,6 +45,8 @@ const char* to_string(TaskLinkage linkage) noexcept {
       return "four-bar";
     case TaskLinkage::slider_crank:
       return "slider-crank";
+    case TaskLinkage::rssr:
+      return "rssr";
   }
   return "?";
 }
@@ -79,7 +82,9 @@ class TaskReader {
                  "mechanism",
                  "rank_by",
                  "tolerance",
-                 "linkage"});
+                 "linkage",
+                 "axes",
+                 "held"});
     if (!root["orthomech-synthesis"] || root["orthomech-synthesis"].as<std::string>() != "1")
       fail(root, "orthomech-synthesis",
            "a synthesis task starts with `orthomech-synthesis: 1` (the format's version)");
@@ -165,7 +170,8 @@ class TaskReader {
       fail(k, "task", "unknown task '" + s + "' (motion, path or function)");
   }
 
-  // `linkage: four-bar | slider-crank` (function and path tasks; default four-bar).
+  // `linkage: four-bar | slider-crank | rssr` (function and path tasks; default four-bar; an RSSR
+  // generates functions only).
   void linkage(const YAML::Node& root, SynthesisTask& t) const {
     const YAML::Node k = root["linkage"];
     if (!k) return;
@@ -174,10 +180,14 @@ class TaskReader {
       t.linkage = TaskLinkage::four_bar;
     else if (s == "slider-crank")
       t.linkage = TaskLinkage::slider_crank;
+    else if (s == "rssr")
+      t.linkage = TaskLinkage::rssr;
     else
-      fail(k, "linkage", "unknown linkage '" + s + "' (four-bar or slider-crank)");
+      fail(k, "linkage", "unknown linkage '" + s + "' (four-bar, slider-crank or rssr)");
     if (t.kind == TaskKind::motion && t.linkage != TaskLinkage::four_bar)
       fail(k, "linkage", "motion generation synthesises four-bars only");
+    if (t.kind == TaskKind::path && t.linkage == TaskLinkage::rssr)
+      fail(k, "linkage", "an RSSR is synthesised as a function generator (task: function) only");
   }
 
   void targets(const YAML::Node& root, SynthesisTask& t) const {
@@ -189,6 +199,11 @@ class TaskReader {
           fail(root[k], k,
                std::string("`") + k + "` does not belong to a " + to_string(t.kind) + " task");
     };
+    if (t.linkage != TaskLinkage::rssr)
+      for (const char* k : {"axes", "held"})
+        if (root[k])
+          fail(root[k], k,
+               std::string("`") + k + "` belongs to an RSSR function task (`linkage: rssr`)");
     switch (t.kind) {
       case TaskKind::motion: {
         only("poses");
@@ -213,6 +228,10 @@ class TaskReader {
         only("pairs");
         if (t.linkage == TaskLinkage::slider_crank) {
           slider_pairs(root, t);
+          break;
+        }
+        if (t.linkage == TaskLinkage::rssr) {
+          rssr_pairs(root, t);
           break;
         }
         if (!root["pairs"])
@@ -241,6 +260,62 @@ class TaskReader {
       t.inputs.push_back(p[0] * t.angle_si);
       t.outputs.push_back(p[1] * t.length_si);
     }
+  }
+  // An RSSR's pairs [φ, ψ] (angles about the input and output axes), its `axes:` and `held:`.
+  void rssr_pairs(const YAML::Node& root, SynthesisTask& t) const {
+    if (!root["pairs"])
+      fail(root, "pairs",
+           "an RSSR function task needs `pairs: [[input angle, output angle], ...]`");
+    if (root["ground"])
+      fail(root["ground"], "ground",
+           "an RSSR function task takes no `ground` (its axes place the frame: `axes:`)");
+    for (const auto& p : rows(root["pairs"], "pairs", 2, 3)) {
+      t.inputs.push_back(p[0] * t.angle_si);
+      t.outputs.push_back(p[1] * t.angle_si);
+    }
+    const YAML::Node axes = root["axes"];
+    if (!axes || !axes.IsMap())
+      fail(axes ? axes : root, "axes",
+           "an RSSR task needs `axes: {input: {point: [x, y, z], direction: [x, y, z]}, output: "
+           "{...}}` (an optional `ref:` per axis: the direction its angle is measured from)");
+    expect_keys(axes, "axes", {"input", "output"});
+    t.input_axis = axis(axes, "input", t.length_si);
+    t.output_axis = axis(axes, "output", t.length_si);
+    if (const YAML::Node h = root["held"]) {
+      if (!h.IsMap()) fail(h, "held", "expected `held: {a: [x, y, z], b: [x, y, z]}`");
+      expect_keys(h, "held", {"a", "b"});
+      for (const char* key : {"a", "b"})
+        if (const YAML::Node v = h[key]) {
+          const auto xyz = row(v, std::string("held.") + key, 3);
+          (std::string(key) == "a" ? t.held_a : t.held_b) =
+              Vec3(xyz[0], xyz[1], xyz[2]) * t.length_si;
+        }
+    }
+  }
+  // One revolute axis of `axes:`: point (length units), direction and optional ref (unit-free).
+  RevoluteAxis axis(const YAML::Node& axes, const char* role, double L) const {
+    const YAML::Node a = axes[role];
+    const std::string r = std::string("axes.") + role;
+    if (!a || !a.IsMap())
+      fail(a ? a : axes, r,
+           "expected `" + std::string(role) +
+               ": {point: [x, y, z], direction: "
+               "[x, y, z]}` (and an optional `ref: [x, y, z]`)");
+    expect_keys(a, r, {"point", "direction", "ref"});
+    RevoluteAxis out;
+    if (!a["point"] || !a["direction"]) fail(a, r, "an axis needs `point:` and `direction:`");
+    const auto p = row(a["point"], r + ".point", 3), d = row(a["direction"], r + ".direction", 3);
+    out.point = Vec3(p[0], p[1], p[2]) * L;
+    out.direction = Vec3(d[0], d[1], d[2]);
+    if (out.direction.norm() < 1e-12) fail(a["direction"], r + ".direction", "is a zero vector");
+    if (const YAML::Node e = a["ref"]) {
+      const auto v = row(e, r + ".ref", 3);
+      const Vec3 ref(v[0], v[1], v[2]);
+      if (ref.cross(out.direction.normalized()).norm() < 1e-9 * std::max(1.0, ref.norm()))
+        fail(e, r + ".ref", "is zero or parallel to the axis' direction");
+      out.reference = ref;
+    }
+    return out;
   }
   static bool allowed_with(TaskKind kind, const std::string& key) {
     if (kind == TaskKind::path)
@@ -334,10 +409,11 @@ class TaskReader {
     if (const YAML::Node r = root["require"]) {
       expect_keys(r, "require", {"crank_rocker", "min_transmission"});
       if (r["crank_rocker"]) t.crank_rocker = r["crank_rocker"].as<bool>();
-      if (t.crank_rocker && t.linkage == TaskLinkage::slider_crank)
+      if (t.crank_rocker && t.linkage != TaskLinkage::four_bar)
         fail(r["crank_rocker"], "crank_rocker",
-             "a Grashof crank-rocker is a four-bar requirement; this task's linkage is a "
-             "slider-crank");
+             std::string("a Grashof crank-rocker is a four-bar requirement; this task's linkage "
+                         "is a ") +
+                 (t.linkage == TaskLinkage::rssr ? "spatial RSSR" : "slider-crank"));
       if (r["min_transmission"])
         t.min_transmission = number(r["min_transmission"], "min_transmission", 0.0,
                                     90.0 * 0.017453292519943295 / t.angle_si) *

@@ -58,6 +58,18 @@ struct RssrPosition {
 // The same on the linkage's branch.
 [[nodiscard]] RssrPosition calc_position(const Rssr& linkage, double phi);
 
+// B(ψ) = P2 + E2 Rz(ψ) b of (L50): the output crank's spherical centre at output angle ψ.
+[[nodiscard]] Vec3 output_pin(const Rssr& linkage, double psi);
+
+// The Sutherland–Roth transmission index of a position (the one validate reports for a spatial
+// loop): |d̂ · t̂|, d̂ along the coupler A→B and t̂ = û2 × (B − P2) normalised, the direction B
+// moves in; 1 when the coupler pushes B along its path, 0 at a dead position. A planar
+// four-bar's index is sin μ (μ its transmission angle). 0 when B lies on the output axis.
+[[nodiscard]] double transmission_index(const Rssr& linkage, const RssrPosition& position);
+
+// Whether the input crank turns fully: the linkage assembles at every quarter degree of φ.
+[[nodiscard]] bool input_turns_fully(const Rssr& linkage);
+
 // ---- synthesis --------------------------------------------------------------------------------
 
 // The design coordinates of (L58), in the order of the convention for fewer than 7 pairs: with n

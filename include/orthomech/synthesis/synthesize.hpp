@@ -4,11 +4,11 @@
 //   1. the generator of the task's kind: Burmester motion generation (motion_generation.hpp),
 //      path generation by global search (path_generation.hpp), Freudenstein function generation
 //      (function_generation.hpp); for `linkage: slider-crank` the slider-crank's function and
-//      path generation (slider_crank.hpp);
-//   2. each four-bar (slider-crank) written as a mechanism file (the format every command reads),
-//   with one
-//      design position per target (its crank angle, the target point and, for a pose, the
-//      coupler's angle);
+//      path generation (slider_crank.hpp); for `linkage: rssr` the spatial RSSR function
+//      generator (rssr.hpp);
+//   2. each linkage written as a mechanism file (the format every command reads; an RSSR as a
+//      spatial file), with one design position per target (its crank angle, the target point
+//      and, for a pose, the coupler's angle);
 //   3. that file read back and validated as `validate` does (analysis/validate.hpp: assembly at
 //      every target, the target met, circuit, branch and order defects, transmission angle,
 //      singular positions), plus the task's own requirements (Grashof crank-rocker) and the
@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "orthomech/synthesis/four_bar.hpp"
+#include "orthomech/synthesis/rssr.hpp"
 #include "orthomech/synthesis/task.hpp"
 
 namespace orthomech::synthesis {
@@ -41,8 +42,9 @@ struct CandidateCycle {
   std::string peak_pin;         // the joint it acts in
 };
 
-// A candidate's linkage: a four-bar, or a slider-crank (task key `linkage: slider-crank`).
-using Linkage = std::variant<FourBar, SliderCrank>;
+// A candidate's linkage: a four-bar, a slider-crank (task key `linkage: slider-crank`) or a spatial
+// RSSR (`linkage: rssr`).
+using Linkage = std::variant<FourBar, SliderCrank, Rssr>;
 
 struct SynthesisCandidate {
   std::string name;    // "candidate-1" … in rank order (accepted), "rejected-1" … (rejected)
@@ -50,12 +52,14 @@ struct SynthesisCandidate {
   Linkage linkage;
   std::vector<double> crank_angles;  // rad at the targets, in the targets' order, unwrapped
   double max_distance = 0.0;         // m: largest distance of the coupler point (function: of
-                                     // the follower pin, or the slider pin) from its target
+                                     // the follower pin, the slider pin or the RSSR's rocker
+                                     // pin B) from its target
   double max_angle_error = 0.0;      // rad: motion: the coupler's angle; function: the output's
   double output_offset = 0.0;        // function: the follower's world angle is ψ + this
   GrashofType grashof = GrashofType::triple_rocker;  // four-bars only
   double worst_transmission = 0.0;  // rad: min over the motion of min(μ, π − μ) (a slider-crank:
-                                    // μ = π/2 − the pressure angle)
+                                    // μ = π/2 − the pressure angle; an RSSR: μ = asin of the
+                                    // transmission index, rssr.hpp)
   std::optional<CandidateCycle> cycle;  // of an accepted candidate (step 4)
   std::vector<std::string> rejections;  // empty: accepted
   std::string file_text;                // the mechanism file (YAML)

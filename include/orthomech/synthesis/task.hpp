@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "orthomech/synthesis/four_bar.hpp"
+#include "orthomech/synthesis/rssr.hpp"
 
 namespace orthomech::synthesis {
 
@@ -32,7 +33,9 @@ struct TaskPivots {
 // are four-bars. A slider-crank (four_bar.hpp, SliderCrank): function pairs are [crank angle
 // from the slider line, slider position]; a path task's fixed_pivot is the crank pivot O, its
 // ground_angle the slider line's angle γ and its crank angles are measured from that line.
-enum class TaskLinkage { four_bar, slider_crank };
+// A spatial RSSR (rssr.hpp, `linkage: rssr`, function tasks): pairs are [φ, ψ], the input and
+// output cranks' angles about the axes of `axes:`, each from its reference direction.
+enum class TaskLinkage { four_bar, slider_crank, rssr };
 [[nodiscard]] const char* to_string(TaskLinkage linkage) noexcept;
 
 struct SynthesisTask {
@@ -53,6 +56,9 @@ struct SynthesisTask {
   std::optional<Vec2> fixed_pivot;     // path: A0 given
   std::optional<double> ground_angle;  // path: θ_g given (rad)
   TaskPivots crank, follower;          // motion, 2–4 poses: the pivots given
+  // function, RSSR: the revolute axes (SI, world) and the held design coordinates (L58).
+  RevoluteAxis input_axis, output_axis;
+  Vec3 held_a = Vec3::Zero(), held_b = Vec3::Zero();
   // Requirements of a candidate (every one is validated; these are checked besides).
   bool crank_rocker = false;                     // Grashof with the crank the shortest link
   double min_transmission = 0.5235987755982988;  // rad: the worst transmission angle allowed

@@ -48,6 +48,41 @@ TEST(SynthesizeCli, MotionTaskWritesCandidatesThatValidateAndCycle) {
   }
 }
 
+// A spatial RSSR task (linkage: rssr): its candidate is a dimension-3 file that `validate` passes
+// at the task's transmission bound (20°: index sin 20°) and `cycle` runs with the peaks the JSON
+// reports; the CSV has the RSSR's columns.
+TEST(SynthesizeCli, RssrTaskWritesASpatialFileThatValidatesAndCycles) {
+  const std::string dir = ::testing::TempDir() + "/synthesize-rssr";
+  std::filesystem::remove_all(dir);
+  const auto r = run_cli({"synthesize", example("synthesis-rssr.yaml"), "--out", dir, "--json",
+                          "--report", dir + "/report.html"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  ASSERT_EQ(j["accepted"].size(), 1u);
+  const auto& c = j["accepted"][0];
+  EXPECT_NEAR(c["coupler"].get<double>(), 420.0, 1e-6);
+  EXPECT_EQ(c["output_axis"]["point"], nlohmann::json({300.0, 50.0, 200.0}));
+  const std::string file = dir + "/candidate-1.yaml";
+  const auto v = run_cli({"validate", file, "-q", "--min-transmission", "20"});
+  EXPECT_EQ(v.status, 0) << v.out << v.err;
+  const auto cy = run_cli({"cycle", file, "--json", "-q"});
+  ASSERT_EQ(cy.status, 0) << cy.err;
+  const auto peaks = nlohmann::json::parse(cy.out)["peaks"];
+  EXPECT_NEAR(c["cycle"]["peak_drive"].get<double>(), peaks["drive"]["peak"].get<double>(),
+              1e-9 * peaks["drive"]["peak"].get<double>());
+  const std::string pin = c["cycle"]["peak_pin"].get<std::string>() + ".|F|";
+  EXPECT_NEAR(c["cycle"]["peak_pin_force"].get<double>(), peaks[pin]["peak"].get<double>(),
+              1e-9 * peaks[pin]["peak"].get<double>())
+      << pin;
+  std::FILE* f = std::fopen((dir + "/candidates.csv").c_str(), "r");
+  ASSERT_NE(f, nullptr);
+  char header[512] = {};
+  ASSERT_NE(std::fgets(header, sizeof header, f), nullptr);
+  std::fclose(f);
+  EXPECT_EQ(std::string(header).rfind("name,accepted,coupler,a_x,a_y,a_z,b_x,b_y,b_z,", 0), 0u)
+      << header;
+}
+
 TEST(SynthesizeCli, ExitCodes) {
   const std::string dir = ::testing::TempDir();
   // A mistake in the task: exit 2 at its line.

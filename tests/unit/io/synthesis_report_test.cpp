@@ -103,5 +103,26 @@ TEST(SynthesisReport, FunctionTargetsAreTheFollowerPinAtTheOutputAngles) {
   }
 }
 
+// A spatial RSSR is drawn in the isometric view (x, y, z) ↦ ((x − y) cos 30°, z − (x + y)/2): the
+// targets are the rocker's pin B = P2 + E2 Rz(ψ) b at the asked outputs, computed here for the
+// example's axes (output about world x through (300, 50, 200) mm, angle from world y: E2 Rz(ψ)
+// (200, 0, 0) = 200 (0, cos ψ, sin ψ)), and the drawn path of B meets them.
+TEST(SynthesisReport, RssrTargetsAreTheRockerPinInTheIsometricView) {
+  const synthesis::SynthesisTask task = synthesis::load_synthesis_task(
+      std::string(ORTHOMECH_SOURCE_DIR) + "/examples/synthesis-rssr.yaml");
+  const synthesis::SynthesisResult r = synthesis::run_synthesis(task);
+  ASSERT_EQ(r.accepted.size(), 1u) << r.message;
+  const std::vector<Drawing> d = drawings(synthesis_report_html(task, r));
+  ASSERT_EQ(d.size(), 1u);
+  ASSERT_EQ(d[0].targets.size(), task.outputs.size());
+  for (size_t j = 0; j < task.outputs.size(); ++j) {
+    const double psi = task.outputs[j];
+    const double x = 300, y = 50 + 200 * std::cos(psi), z = 200 + 200 * std::sin(psi);
+    const Vec2 iso((x - y) * std::cos(std::numbers::pi / 6), z - (x + y) / 2);
+    EXPECT_LT((d[0].targets[j] - pixel(d[0], iso)).norm(), 1e-3) << j;
+    EXPECT_LT(nearest(d[0].curve, pixel(d[0], iso)), 2e-3) << j;
+  }
+}
+
 }  // namespace
 }  // namespace orthomech

@@ -113,5 +113,64 @@ TEST(Synthesize, DefectiveCandidatesAreRejectedWithTheReason) {
       << r.rejected[0].rejections.front();
 }
 
+// examples/synthesis-rssr.yaml: eight pairs sampled from the skew RSSR a = (100, 0, 0),
+// b = (200, 0, 0), L = 420 mm (axes: z through the origin, x through (300, 50, 200) mm) on its
+// branch -1; the task's pipeline gives it back, and its spatial file validates and runs `cycle`.
+TEST(Synthesize, RssrTaskGivesBackTheSkewRssr) {
+  const SynthesisTask task = load_synthesis_task(example("synthesis-rssr.yaml"));
+  ASSERT_EQ(task.linkage, TaskLinkage::rssr);
+  const SynthesisResult r = run_synthesis(task);
+  ASSERT_EQ(r.accepted.size(), 1u) << r.message;
+  const auto& lk = std::get<Rssr>(r.accepted[0].linkage);
+  // Targets rounded to 1e-12 deg: the least-squares design within 1e-9 m of the source.
+  EXPECT_LT((lk.a - Vec3(0.1, 0.0, 0.0)).norm(), 1e-9);
+  EXPECT_LT((lk.b - Vec3(0.2, 0.0, 0.0)).norm(), 1e-9);
+  EXPECT_NEAR(lk.coupler, 0.42, 1e-9);
+  EXPECT_EQ(lk.branch, -1);
+  EXPECT_LT(r.accepted[0].max_angle_error, 1e-10);
+  EXPECT_LT(r.accepted[0].max_distance, 1e-10 * kMm);
+  ASSERT_TRUE(r.accepted[0].cycle.has_value());
+  EXPECT_GT(r.accepted[0].cycle->peak_drive, 0.0);
+  expect_files_validate(r, task);
+}
+
+// The worst transmission angle of an RSSR candidate is asin of the Sutherland–Roth index of the
+// closed form (rssr.hpp); validate computes that index on the file's own assembled positions.
+// At every design position the two agree, and the worst over the motion is at most the targets'.
+TEST(Synthesize, RssrTransmissionIsTheIndexValidateComputes) {
+  const SynthesisTask task = load_synthesis_task(example("synthesis-rssr.yaml"));
+  const SynthesisResult r = run_synthesis(task);
+  ASSERT_EQ(r.accepted.size(), 1u) << r.message;
+  const SynthesisCandidate& c = r.accepted[0];
+  const auto& lk = std::get<Rssr>(c.linkage);
+  ValidateOptions vo;
+  vo.min_transmission = task.min_transmission;
+  const ValidationReport report =
+      validate_design_positions(parse_mechanism(c.file_text, "c.yaml"), vo);
+  ASSERT_EQ(report.positions.size(), task.inputs.size());
+  double lowest = 1.0;
+  for (size_t j = 0; j < task.inputs.size(); ++j) {
+    const auto& loops = report.positions[j].spatial_loops;
+    ASSERT_EQ(loops.size(), 1u) << report.positions[j].name;
+    const double closed = transmission_index(lk, calc_position(lk, c.crank_angles[j]));
+    EXPECT_NEAR(loops[0].index, closed, 1e-9) << report.positions[j].name;
+    lowest = std::min(lowest, loops[0].index);
+  }
+  EXPECT_LE(c.worst_transmission, std::asin(lowest) + 1e-12);
+  EXPECT_GE(c.worst_transmission, task.min_transmission);
+}
+
+// Axes that intersect (mechanisms/rssr.yaml's: z through the origin, x through (300, 0, 200) mm)
+// are refused with the reason: the rocker's pin at their common point closes the loop at every
+// input, an exact solution of (L54) that hides the linkage.
+TEST(Synthesize, RssrWithIntersectingAxesIsRefusedWithTheReason) {
+  SynthesisTask task = load_synthesis_task(example("synthesis-rssr.yaml"));
+  task.output_axis.point = Vec3(0.3, 0.0, 0.2);
+  const SynthesisResult r = run_synthesis(task);
+  EXPECT_EQ(r.status, SynthesisStatus::no_linkage);
+  EXPECT_TRUE(r.accepted.empty());
+  EXPECT_NE(r.message.find("axes intersect"), std::string::npos) << r.message;
+}
+
 }  // namespace
 }  // namespace orthomech::synthesis

@@ -39,6 +39,24 @@ TEST(SynthesisTask, ReadsAPathTaskInItsUnits) {
   EXPECT_NEAR(t.speed, 4 * std::numbers::pi, 1e-12);
 }
 
+// An RSSR function task: the axes' points in the task's length unit, directions and references
+// as given (unit-free), the pairs in its angle unit.
+TEST(SynthesisTask, ReadsAnRssrTaskInItsUnits) {
+  const SynthesisTask t =
+      load_synthesis_task(std::string(ORTHOMECH_SOURCE_DIR) + "/examples/synthesis-rssr.yaml");
+  EXPECT_EQ(t.kind, TaskKind::function);
+  EXPECT_EQ(t.linkage, TaskLinkage::rssr);
+  EXPECT_LT((t.input_axis.point - Vec3::Zero()).norm(), 1e-15);
+  EXPECT_LT((t.output_axis.point - Vec3(0.3, 0.05, 0.2)).norm(), 1e-15);
+  EXPECT_LT((t.output_axis.direction - Vec3::UnitX()).norm(), 1e-15);
+  ASSERT_TRUE(t.output_axis.reference.has_value());
+  EXPECT_LT((*t.output_axis.reference - Vec3::UnitY()).norm(), 1e-15);
+  ASSERT_EQ(t.inputs.size(), 8u);
+  EXPECT_NEAR(t.inputs[1], 45 * kDeg, 1e-15);
+  EXPECT_NEAR(t.outputs[6], -9.347043474587 * kDeg, 1e-15);
+  EXPECT_DOUBLE_EQ(t.min_transmission, 20 * kDeg);
+}
+
 TEST(SynthesisTask, KinetostaticRankings) {
   for (const char* key : {"drive_torque", "pin_force"}) {
     const SynthesisTask t = parse_synthesis_task(
@@ -76,6 +94,25 @@ TEST(SynthesisTask, MistakesNameTheirLine) {
       {"orthomech-synthesis: 1\ntask: path\npoints: [[0, 0], [1, 0], [2, 1]]\nspeed: 3\n", 4,
        "unknown key 'speed'"},
       {"orthomech-synthesis: 1\ntask: path\npoints: &a [*a]\n", 3, "alias"},
+      // An RSSR (linkage: rssr): a function task with its two axes.
+      {"orthomech-synthesis: 1\ntask: path\nlinkage: rssr\npoints: [[0, 0], [1, 0], [2, 1]]\n", 3,
+       "function generator (task: function) only"},
+      {"orthomech-synthesis: 1\ntask: function\nlinkage: rssr\npairs: [[0, 1], [1, 2], [2, 3]]\n",
+       1, "needs `axes:"},
+      {"orthomech-synthesis: 1\ntask: function\nlinkage: rssr\npairs: [[0, 1], [1, 2], [2, 3]]\n"
+       "axes: {input: {point: [0, 0, 0], direction: [0, 0, 1]}}\n",
+       5, "expected `output:"},
+      {"orthomech-synthesis: 1\ntask: function\nlinkage: rssr\npairs: [[0, 1], [1, 2], [2, 3]]\n"
+       "axes:\n  input: {point: [0, 0, 0], direction: [0, 0, 1], ref: [0, 0, 2]}\n"
+       "  output: {point: [1, 0, 0], direction: [1, 0, 0]}\n",
+       6, "parallel to the axis' direction"},
+      {"orthomech-synthesis: 1\ntask: function\nlinkage: rssr\npairs: [[0, 1], [1, 2], [2, 3]]\n"
+       "axes:\n  input: {point: [0, 0, 0], direction: [0, 0, 0]}\n"
+       "  output: {point: [1, 0, 0], direction: [1, 0, 0]}\n",
+       6, "zero vector"},
+      {"orthomech-synthesis: 1\ntask: function\npairs: [[0, 1], [1, 2], [2, 3]]\nground: 1\n"
+       "held: {a: [0, 0, 0]}\n",
+       5, "belongs to an RSSR function task"},
   };
   for (const Case& c : cases) {
     try {
