@@ -2,8 +2,9 @@
 // slider-cranks, task key `linkage`) from the motion, path or input–output law a designer wants
 // (issue 50; docs/cli.md "synthesize"). The library runs the task, validates every candidate
 // (synthesis/synthesize.hpp) and renders the documents (io/synthesis_output.hpp); this file only
-// prints and writes them. Exit 0 when a candidate is accepted, 1 when every one is rejected, 3
-// when the generator finds no linkage.
+// prints and writes them. Under mpirun the ranks share the global search's starts (rank 0 writes).
+// Exit 0 when a candidate is accepted, 1 when every one is rejected, 3 when the generator finds no
+// linkage.
 #include "orthomech/synthesis/synthesize.hpp"
 
 #include <spdlog/spdlog.h>
@@ -12,11 +13,13 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <optional>
 
 #include "commands.hpp"
 #include "common.hpp"
 #include "orthomech/io/file_writer.hpp"
 #include "orthomech/io/synthesis_output.hpp"
+#include "orthomech/study/distributed.hpp"
 
 namespace orthomech::cli {
 
@@ -33,9 +36,45 @@ struct SynthesizeCliOptions {
   int jobs = 0;
 };
 
+// The exit status of a result (0 accepted, 1 every one rejected, 3 none found).
+int status_of(const SynthesisTask& task, const SynthesisResult& r, bool say) {
+  if (r.accepted.empty() && r.rejected.empty()) {
+    if (say)
+      spdlog::error("synthesize: {}: no {}: {}", task.file, to_string(task.linkage), r.message);
+    return kNumerical;
+  }
+  if (r.accepted.empty()) {
+    if (say)
+      spdlog::error("synthesize: {}: every candidate is rejected (the reasons are listed)",
+                    task.file);
+    return kCheckFailed;
+  }
+  return kOk;
+}
+
+// The task run on this process, or under mpirun on every rank: the global searches' starts
+// shared among the ranks (each rank holds every outcome, so every rank computes the same result;
+// rank 0 alone writes and prints). The task is read before MPI starts: a mistake in it is
+// exit 2 on every rank.
+SynthesisResult run_task(const SynthesisTask& task, const SynthesizeCliOptions& opt,
+                         std::optional<MpiSession>& mpi) {
+  synthesis::SynthesisRunOptions run;
+  run.threads = opt.jobs;
+  if (mpi_launched()) {
+    mpi.emplace();
+    run.share = mpi_share(*mpi);
+    if (mpi->rank() == 0)
+      spdlog::info("{} MPI ranks share the global search's starts", mpi->size());
+  }
+  return synthesis::run_synthesis(task, run);
+}
+
 int run_synthesize(const SynthesizeCliOptions& opt) {
   const SynthesisTask task = synthesis::load_synthesis_task(opt.file);
-  const SynthesisResult r = synthesis::run_synthesis(task, {opt.jobs});
+  std::optional<MpiSession> mpi;
+  const SynthesisResult r = run_task(task, opt, mpi);
+  if (mpi) mpi->finish();  // every rank has the result; the collective calls are over
+  if (mpi && mpi->rank() != 0) return status_of(task, r, false);
   if (!opt.out.empty()) {
     try {
       std::filesystem::create_directories(opt.out);
@@ -60,16 +99,7 @@ int run_synthesize(const SynthesizeCliOptions& opt) {
   else
     std::cout << synthesis_text(task, r, opt.out);
   std::cout.flush();
-  if (r.accepted.empty() && r.rejected.empty()) {
-    spdlog::error("synthesize: {}: no {}: {}", task.file, to_string(task.linkage), r.message);
-    return kNumerical;
-  }
-  if (r.accepted.empty()) {
-    spdlog::error("synthesize: {}: every candidate is rejected (the reasons are listed)",
-                  task.file);
-    return kCheckFailed;
-  }
-  return kOk;
+  return status_of(task, r, true);
 }
 
 }  // namespace

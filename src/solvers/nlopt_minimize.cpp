@@ -6,7 +6,10 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <exception>
 #include <random>
+#include <stdexcept>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -191,6 +194,45 @@ Eigen::MatrixXd quasi_random_starts(const Eigen::VectorXd& lower, const Eigen::V
   return X;
 }
 
+namespace {
+
+// Every process's runs in every process (MultistartSettings::share): each run a record
+// [kind, code, value, evaluations, x_1 … x_n], process r's runs k = r, r + size, … in order.
+void gather_runs(const ProcessShare& share, int runs, Eigen::Index n,
+                 std::vector<NloptOutcome>& locals) {
+  const auto width = static_cast<std::size_t>(4 + n);
+  const auto count = [&](int r) { return r < runs ? (runs - r + share.size - 1) / share.size : 0; };
+  std::vector<double> mine;
+  mine.reserve(static_cast<std::size_t>(count(share.rank)) * width);
+  for (int k = share.rank; k < runs; k += share.size) {
+    const NloptOutcome& o = locals[static_cast<std::size_t>(k)];
+    mine.insert(mine.end(), {static_cast<double>(o.kind), static_cast<double>(o.code), o.value,
+                             static_cast<double>(o.evaluations)});
+    for (Eigen::Index i = 0; i < n; ++i) mine.push_back(i < o.x.size() ? o.x(i) : 0.0);
+  }
+  std::vector<int> counts(static_cast<std::size_t>(share.size));
+  for (int r = 0; r < share.size; ++r)
+    counts[static_cast<std::size_t>(r)] = count(r) * static_cast<int>(width);
+  const std::vector<double> all = share.gather(mine, counts);
+  std::size_t at = 0;
+  for (int r = 0; r < share.size; ++r)
+    for (int k = r; k < runs; k += share.size, at += width) {
+      if (r == share.rank) continue;  // this process's own, with its message
+      NloptOutcome& o = locals[static_cast<std::size_t>(k)];
+      o.kind = static_cast<NloptOutcomeKind>(static_cast<int>(all[at]));
+      o.code = static_cast<int>(all[at + 1]);
+      o.value = all[at + 2];
+      o.evaluations = static_cast<int>(all[at + 3]);
+      o.x = Eigen::Map<const Eigen::VectorXd>(all.data() + at + 4, n);
+      o.message = "run on process " + std::to_string(r);
+      if (o.kind == NloptOutcomeKind::callback_error)
+        o.error = std::make_exception_ptr(
+            std::runtime_error("the objective failed on process " + std::to_string(r)));
+    }
+}
+
+}  // namespace
+
 MultistartOutcome minimize_multistart(const ObjectiveFactory& make, const Eigen::VectorXd& lower,
                                       const Eigen::VectorXd& upper,
                                       const MultistartSettings& settings) {
@@ -198,19 +240,25 @@ MultistartOutcome minimize_multistart(const ObjectiveFactory& make, const Eigen:
   const Eigen::MatrixXd grid = quasi_random_starts(lower, upper, settings.starts, settings.seed);
   const auto extra = static_cast<int>(settings.extra_starts.size());
   const int runs = extra + static_cast<int>(grid.cols());
-  // 2. Every local run, on as many threads as asked, each with its own objective.
+  // 2. This process's local runs (every run, unless processes share them), on as many threads
+  //    as asked, each thread with its own objective.
   std::vector<NloptOutcome> locals(static_cast<std::size_t>(runs));
+  const ProcessShare& share = settings.share;
+  const int stride = share.shared() ? share.size : 1, first = share.shared() ? share.rank : 0;
+  const int mine = first < runs ? (runs - first + stride - 1) / stride : 0;
   const int threads = settings.threads > 0 ? settings.threads : omp_get_max_threads();
-#pragma omp parallel num_threads(threads) if (threads > 1 && runs > 1)
+#pragma omp parallel num_threads(threads) if (threads > 1 && mine > 1)
   {
     const Objective f = make();
 #pragma omp for schedule(dynamic, 1)
-    for (int k = 0; k < runs; ++k) {
+    for (int j = 0; j < mine; ++j) {
+      const int k = first + j * stride;
       const Eigen::VectorXd x0 =
           k < extra ? settings.extra_starts[static_cast<std::size_t>(k)] : grid.col(k - extra);
       locals[static_cast<std::size_t>(k)] = minimize_bounded(f, x0, lower, upper, settings.local);
     }
   }
+  if (share.shared()) gather_runs(share, runs, lower.size(), locals);
   // 3. The outcome in start order, up to the first callback error.
   MultistartOutcome out;
   out.best.x = lower;

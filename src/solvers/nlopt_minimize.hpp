@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "orthomech/run_control.hpp"
+
 namespace orthomech::solvers {
 
 enum class NloptOutcomeKind {
@@ -59,6 +61,10 @@ struct MultistartSettings {
   NloptSettings local;
   std::vector<Eigen::VectorXd> extra_starts;
   int threads = 1;
+  // Processes (MPI ranks) sharing the runs: each runs its own, then every outcome is gathered
+  // (code, kind, value, evaluations and x; a message or a callback's exception stays on its
+  // process: another process sees a callback_error as "failed on process r").
+  ProcessShare share;
 };
 using Objective = std::function<double(const Eigen::VectorXd&)>;
 using ObjectiveFactory = std::function<Objective()>;

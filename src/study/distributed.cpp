@@ -4,6 +4,7 @@
 #include <cstdlib>
 #include <exception>
 #include <stdexcept>
+#include <vector>
 
 #ifdef ORTHOMECH_HAVE_MPI
 #define OMPI_SKIP_MPICXX 1  // the C API only: no libmpi_cxx
@@ -50,10 +51,12 @@ struct MpiApi {
         get_count(lib.function<decltype(::PMPI_Get_count)>("PMPI_Get_count")),
         recv(lib.function<decltype(::PMPI_Recv)>("PMPI_Recv")),
         send(lib.function<decltype(::PMPI_Send)>("PMPI_Send")),
+        allgatherv(lib.function<decltype(::PMPI_Allgatherv)>("PMPI_Allgatherv")),
         world(static_cast<MPI_Comm>(lib.symbol("ompi_mpi_comm_world"))),
         int_type(static_cast<MPI_Datatype>(lib.symbol("ompi_mpi_int"))),
         char_type(static_cast<MPI_Datatype>(lib.symbol("ompi_mpi_char"))),
-        long_type(static_cast<MPI_Datatype>(lib.symbol("ompi_mpi_long"))) {}
+        long_type(static_cast<MPI_Datatype>(lib.symbol("ompi_mpi_long"))),
+        double_type(static_cast<MPI_Datatype>(lib.symbol("ompi_mpi_double"))) {}
   decltype(&::PMPI_Init) init;
   decltype(&::PMPI_Comm_rank) comm_rank;
   decltype(&::PMPI_Comm_size) comm_size;
@@ -64,8 +67,9 @@ struct MpiApi {
   decltype(&::PMPI_Get_count) get_count;
   decltype(&::PMPI_Recv) recv;
   decltype(&::PMPI_Send) send;
+  decltype(&::PMPI_Allgatherv) allgatherv;
   MPI_Comm world;
-  MPI_Datatype int_type, char_type, long_type;
+  MPI_Datatype int_type, char_type, long_type, double_type;
 };
 
 const MpiApi& mpi() {
@@ -116,6 +120,21 @@ MpiSession::~MpiSession() {
     mpi().finalize();
   else
     mpi().abort(mpi().world, 3);
+}
+
+ProcessShare mpi_share(const MpiSession& session) {
+  ProcessShare share;
+  share.rank = session.rank();
+  share.size = session.size();
+  share.gather = [](const std::vector<double>& mine, const std::vector<int>& counts) {
+    std::vector<int> offsets(counts.size(), 0);
+    for (size_t r = 1; r < counts.size(); ++r) offsets[r] = offsets[r - 1] + counts[r - 1];
+    std::vector<double> all(static_cast<size_t>(offsets.back() + counts.back()));
+    mpi().allgatherv(mine.data(), static_cast<int>(mine.size()), mpi().double_type, all.data(),
+                     counts.data(), offsets.data(), mpi().double_type, mpi().world);
+    return all;
+  };
+  return share;
 }
 
 bool broadcast_start(bool go) {
@@ -169,6 +188,7 @@ void serve_variants(const std::string& mechanism, const std::string& origin, con
 
 MpiSession::MpiSession() = default;
 MpiSession::~MpiSession() = default;
+ProcessShare mpi_share(const MpiSession&) { throw std::logic_error("this build has no MPI"); }
 bool broadcast_start(bool) { throw std::logic_error("this build has no MPI"); }
 void coordinate_variants(const std::function<long()>&,
                          const std::function<void(const VariantResult&)>&) {

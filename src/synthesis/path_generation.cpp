@@ -311,6 +311,7 @@ void search(Problem& pb, const PathSynthesisOptions& o, std::vector<Run>& runs, 
   s.starts = 0;
   s.seed = o.seed;
   s.threads = o.threads;
+  s.share = o.share;
   s.local.max_evaluations = o.local_evaluations;
   s.local.xtol_abs = 1e-12;
   const Eigen::MatrixXd X = solvers::quasi_random_starts(lo, start_hi, o.starts, o.seed);
@@ -350,6 +351,7 @@ void search_nearest(Problem& pb, const PathSynthesisOptions& o, const std::vecto
   s1.starts = 0;
   s1.seed = o.seed;
   s1.threads = o.threads;
+  s1.share = o.share;
   s1.local.max_evaluations = o.local_evaluations;
   s1.local.xtol_abs = 1e-10;
   const Eigen::MatrixXd X = solvers::quasi_random_starts(lo1, hi1, o.starts, o.seed);

@@ -291,6 +291,7 @@ void search(const SliderProblem& pb, const PathSynthesisOptions& o, std::vector<
   s.seed = o.seed;
   s.local.max_evaluations = o.local_evaluations;
   s.local.xtol_abs = 1e-12;
+  s.share = o.share;
   const Eigen::MatrixXd X = solvers::quasi_random_starts(lo, start_hi, o.starts, o.seed);
   for (Eigen::Index k = 0; k < X.cols(); ++k) s.extra_starts.emplace_back(X.col(k));
   const solvers::MultistartOutcome out = solvers::minimize_multistart(f, lo, hi, s);

@@ -102,6 +102,7 @@ PathSynthesisOptions path_options(const SynthesisTask& task, const SynthesisRunO
   o.starts = task.starts;
   o.seed = task.seed;
   o.threads = run.threads;
+  o.share = run.share;
   return o;
 }
 

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "orthomech/run_control.hpp"
 #include "orthomech/study/study.hpp"
 
 namespace orthomech {
@@ -31,6 +32,11 @@ class MpiSession {
   int rank_ = 0, size_ = 1;
   bool finished_ = false;
 };
+
+// The ranks of the session as the processes of a shared search (run_control.hpp: each rank runs
+// its share of a multistart's starts, then every rank holds every outcome: MPI_Allgatherv). Used
+// by `synthesize` under mpirun.
+[[nodiscard]] ProcessShare mpi_share(const MpiSession& session);
 
 // Rank 0 tells every rank whether the study starts (`go`: its set-up succeeded) or not (an error,
 // reported by rank 0 alone); every rank returns rank 0's answer.

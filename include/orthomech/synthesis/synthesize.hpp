@@ -27,6 +27,7 @@
 #include <variant>
 #include <vector>
 
+#include "orthomech/run_control.hpp"
 #include "orthomech/synthesis/four_bar.hpp"
 #include "orthomech/synthesis/rssr.hpp"
 #include "orthomech/synthesis/task.hpp"
@@ -77,9 +78,11 @@ struct SynthesisResult {
 };
 
 // How the task is run (not what it asks): the threads of the global searches (path generation's
-// multistart; 0: every core). The result does not depend on them.
+// multistart; 0: every core) and the processes sharing their starts (`mpirun`). The result does
+// not depend on them.
 struct SynthesisRunOptions {
   int threads = 0;
+  ProcessShare share;  // processes (MPI ranks) sharing the global searches' starts
 };
 
 [[nodiscard]] SynthesisResult run_synthesis(const SynthesisTask& task,

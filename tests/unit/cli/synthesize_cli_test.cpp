@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -81,6 +82,46 @@ TEST(SynthesizeCli, RssrTaskWritesASpatialFileThatValidatesAndCycles) {
   std::fclose(f);
   EXPECT_EQ(std::string(header).rfind("name,accepted,coupler,a_x,a_y,a_z,b_x,b_y,b_z,", 0), 0u)
       << header;
+}
+
+// Under mpirun the ranks share the path search's starts (run_control.hpp, ProcessShare; every
+// rank gathers every outcome): the JSON document and the candidate files are those of one
+// process, for 2 and 3 ranks (the README tour's path task with 40 starts, to keep it short).
+TEST(SynthesizeCli, MpirunGivesTheResultOfOneProcess) {
+  ASSERT_EQ(std::system("command -v mpirun > /dev/null 2>&1"), 0)
+      << "mpirun is not installed: scripts/setup installs Open MPI (openmpi-bin, libopenmpi-dev)";
+  const std::string dir = ::testing::TempDir() + "/synthesize-mpi";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const std::string task = dir + "/path.yaml";
+  {
+    std::string text = test::read_text(example("synthesis-path.yaml"));
+    text.replace(text.find("starts: 200"), 11, "starts: 40");
+    std::FILE* f = std::fopen(task.c_str(), "w");
+    std::fputs(text.c_str(), f);
+    std::fclose(f);
+  }
+  const auto one = run_cli({"synthesize", task, "--json", "-j", "1", "--out", dir + "/one"});
+  ASSERT_EQ(one.status, 0) << one.err;
+  ASSERT_FALSE(nlohmann::json::parse(one.out)["accepted"].empty());
+  for (const char* ranks : {"2", "3"}) {
+    SCOPED_TRACE(ranks);
+    const std::string out = dir + "/mpi" + ranks;
+    const std::string command =
+        "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 "
+        "OMPI_MCA_rmaps_base_oversubscribe=1 mpirun -n " +
+        std::string(ranks) + " '" + std::string(ORTHOMECH_CLI) + "' synthesize '" + task +
+        "' --json -j 1 -v --out '" + out + "' > '" + out + ".json' 2> '" + out + ".log'";
+    const int status = std::system(command.c_str());
+    const std::string log = test::read_text(out + ".log");
+    ASSERT_EQ(status, 0) << log;
+    EXPECT_NE(log.find(std::string(ranks) + " MPI ranks share"), std::string::npos) << log;
+    EXPECT_EQ(test::read_text(out + ".json"), one.out);
+    EXPECT_EQ(test::read_text(out + "/candidate-1.yaml"),
+              test::read_text(dir + "/one/candidate-1.yaml"));
+    EXPECT_EQ(test::read_text(out + "/candidates.csv"),
+              test::read_text(dir + "/one/candidates.csv"));
+  }
 }
 
 TEST(SynthesizeCli, ExitCodes) {

@@ -9,6 +9,7 @@
 #include <limits>
 #include <numbers>
 #include <stdexcept>
+#include <vector>
 
 namespace orthomech::solvers {
 namespace {
@@ -101,8 +102,7 @@ TEST(NloptAdapter, Multistart_SameOutcomeOnAnyThreadCount) {
     return [calls = 0L](const VectorXd& x) mutable {
       ++calls;
       double v = 20.0;
-      for (int i = 0; i < 2; ++i)
-        v += x(i) * x(i) - 10.0 * std::cos(2.0 * std::numbers::pi * x(i));
+      for (int i = 0; i < 2; ++i) v += x(i) * x(i) - 10.0 * std::cos(2.0 * std::numbers::pi * x(i));
       return v;
     };
   };
@@ -122,6 +122,61 @@ TEST(NloptAdapter, Multistart_SameOutcomeOnAnyThreadCount) {
     for (size_t k = 0; k < one.locals.size(); ++k) {
       EXPECT_EQ(many.locals[k].x, one.locals[k].x) << threads << " run " << k;
       EXPECT_EQ(many.locals[k].value, one.locals[k].value) << threads << " run " << k;
+    }
+  }
+}
+
+// Shared among processes (ProcessShare, as under mpirun): process r of 3 runs the starts
+// k = r, r + 3, … and gathers the others. The test plays each process in turn: its gather checks
+// that the process sent exactly its own runs of the one-process outcome (record [kind, code,
+// value, evaluations, x]) and hands back the other processes' records, packed here from that
+// outcome; the assembled outcome is the one-process outcome run for run.
+TEST(NloptAdapter, Multistart_SharedAmongProcessesIsTheOneProcessOutcome) {
+  const auto f = [](const VectorXd& x) {
+    double v = 20.0;
+    for (int i = 0; i < 2; ++i) v += x(i) * x(i) - 10.0 * std::cos(2.0 * std::numbers::pi * x(i));
+    return v;
+  };
+  MultistartSettings s;
+  s.starts = 17;  // not a multiple of 3: the processes hold 6, 6 and 5 runs
+  s.seed = 5;
+  const VectorXd lo = VectorXd::Constant(2, -4.2), hi = VectorXd::Constant(2, 4.7);
+  const MultistartOutcome one = minimize_multistart(f, lo, hi, s);
+  const int runs = static_cast<int>(one.locals.size());
+  const auto record = [&](int k) {
+    const NloptOutcome& o = one.locals[static_cast<size_t>(k)];
+    return std::vector<double>{static_cast<double>(o.kind),
+                               static_cast<double>(o.code),
+                               o.value,
+                               static_cast<double>(o.evaluations),
+                               o.x(0),
+                               o.x(1)};
+  };
+  for (int rank = 0; rank < 3; ++rank) {
+    s.share.rank = rank;
+    s.share.size = 3;
+    s.share.gather = [&](const std::vector<double>& mine, const std::vector<int>& counts) {
+      std::vector<double> all, own;
+      for (int r = 0; r < 3; ++r) {
+        int n = 0;
+        for (int k = r; k < runs; k += 3, n += 6) {
+          const std::vector<double> rec = record(k);
+          all.insert(all.end(), rec.begin(), rec.end());
+          if (r == rank) own.insert(own.end(), rec.begin(), rec.end());
+        }
+        EXPECT_EQ(counts[static_cast<size_t>(r)], n) << "rank " << r;
+      }
+      EXPECT_EQ(mine, own) << "process " << rank << " ran other starts than k = r mod 3";
+      return all;
+    };
+    const MultistartOutcome shared = minimize_multistart(f, lo, hi, s);
+    EXPECT_EQ(shared.evaluations, one.evaluations) << rank;
+    EXPECT_EQ(shared.best.x, one.best.x) << rank;
+    ASSERT_EQ(shared.locals.size(), one.locals.size());
+    for (int k = 0; k < runs; ++k) {
+      EXPECT_EQ(shared.locals[static_cast<size_t>(k)].x, one.locals[static_cast<size_t>(k)].x);
+      EXPECT_EQ(shared.locals[static_cast<size_t>(k)].value,
+                one.locals[static_cast<size_t>(k)].value);
     }
   }
 }
