@@ -8,7 +8,6 @@
 #include <chrono>
 #include <functional>
 #include <string>
-#include <vector>
 
 namespace orthomech {
 
@@ -20,19 +19,6 @@ struct RunControl {
   std::function<void(double fraction)> progress;
   double progress_after = 2.0;  // s before the first progress call
   double progress_every = 0.5;  // s between progress calls
-};
-
-// How the independent runs of a search (the starts of a multistart) are shared among processes,
-// e.g. MPI ranks (study/distributed.hpp, mpi_share): this process runs the items k with
-// k mod size = rank; `gather` takes this process's records (in its items' order) and returns
-// every process's, rank by rank, rank r contributing counts[r] numbers. Every process then holds
-// every record, so the result is the one process's. The default: one process.
-struct ProcessShare {
-  int rank = 0, size = 1;
-  std::function<std::vector<double>(const std::vector<double>& mine,
-                                    const std::vector<int>& counts)>
-      gather;
-  [[nodiscard]] bool shared() const { return size > 1 && gather; }
 };
 
 enum class StopReason { none, work_budget, time_limit, interrupted };

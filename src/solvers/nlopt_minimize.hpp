@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "orthomech/run_control.hpp"
+#include "orthomech/process_share.hpp"
 
 namespace orthomech::solvers {
 

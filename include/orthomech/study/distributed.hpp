@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "orthomech/run_control.hpp"
+#include "orthomech/process_share.hpp"
 #include "orthomech/study/study.hpp"
 
 namespace orthomech {
@@ -33,7 +33,7 @@ class MpiSession {
   bool finished_ = false;
 };
 
-// The ranks of the session as the processes of a shared search (run_control.hpp: each rank runs
+// The ranks of the session as the processes of a shared search (process_share.hpp: each rank runs
 // its share of a multistart's starts, then every rank holds every outcome: MPI_Allgatherv). Used
 // by `synthesize` under mpirun.
 [[nodiscard]] ProcessShare mpi_share(const MpiSession& session);

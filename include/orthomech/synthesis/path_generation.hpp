@@ -20,7 +20,7 @@
 #include <string>
 #include <vector>
 
-#include "orthomech/run_control.hpp"
+#include "orthomech/process_share.hpp"
 #include "orthomech/synthesis/four_bar.hpp"
 
 namespace orthomech::synthesis {
@@ -70,7 +70,7 @@ struct PathSynthesisOptions {
   // Threads of the multistart (OpenMP; 0: every core). The result does not depend on it
   // (solvers::minimize_multistart assembles the runs in start order).
   int threads = 0;
-  // Processes (MPI ranks) sharing the multistart's starts (run_control.hpp; the result is the
+  // Processes (MPI ranks) sharing the multistart's starts (process_share.hpp; the result is the
   // one process's).
   ProcessShare share;
   int local_evaluations = 3000;  // BOBYQA budget per start

@@ -27,7 +27,7 @@
 #include <variant>
 #include <vector>
 
-#include "orthomech/run_control.hpp"
+#include "orthomech/process_share.hpp"
 #include "orthomech/synthesis/four_bar.hpp"
 #include "orthomech/synthesis/rssr.hpp"
 #include "orthomech/synthesis/task.hpp"

@@ -84,7 +84,7 @@ TEST(SynthesizeCli, RssrTaskWritesASpatialFileThatValidatesAndCycles) {
       << header;
 }
 
-// Under mpirun the ranks share the path search's starts (run_control.hpp, ProcessShare; every
+// Under mpirun the ranks share the path search's starts (process_share.hpp, ProcessShare; every
 // rank gathers every outcome): the JSON document and the candidate files are those of one
 // process, for 2 and 3 ranks (the README tour's path task with 40 starts, to keep it short).
 TEST(SynthesizeCli, MpirunGivesTheResultOfOneProcess) {
