@@ -12,6 +12,7 @@
 
 #include "mechanism_reader.hpp"
 #include "orthomech/constraints/spatial_joints.hpp"
+#include "orthomech/model/reference_direction.hpp"
 #include "orthomech/model/spatial.hpp"
 
 namespace orthomech::detail {
@@ -37,19 +38,6 @@ Vec3 design_world(const Model& model, const SpatialPointRef& p) {
   if (p.body == kGround) return p.s;
   const SpatialBodyData& b = model.bodies[static_cast<size_t>(p.body)].spatial;
   return b.design_position + rotation_matrix(b.design_orientation) * (b.com_local + p.s);
-}
-
-// The frame axis of a body least aligned with `h` (its components in that body's frame; the first
-// of a tie, x before y before z), projected perpendicular to h and normalised: the default
-// reference direction. Components equal to within kTie are a tie, so that the round-off of a
-// rotation (h = (1e-17, 0, 1)) does not decide it.
-Vec3 least_aligned(const Vec3& h) {
-  constexpr double kTie = 1e-9;
-  const double smallest = h.cwiseAbs().minCoeff();
-  int k = 0;
-  while (std::abs(h(k)) > smallest + kTie) ++k;
-  const Vec3 e = Vec3::Unit(k);
-  return (e - e.dot(h) * h).normalized();
 }
 
 Quat to_quaternion(const Mat3& R) {

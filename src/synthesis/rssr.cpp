@@ -12,6 +12,7 @@
 
 #include "../solvers/nlopt_minimize.hpp"
 #include "orthomech/check.hpp"
+#include "orthomech/model/reference_direction.hpp"
 
 namespace orthomech::synthesis {
 
@@ -55,24 +56,14 @@ Mat3 rot_z(double angle) {
   return R;
 }
 
-// The reader's default reference (src/io/spatial_file.cpp, least_aligned): the world axis least
-// aligned with u (x before y before z on a tie of 1e-9), projected perpendicular to u.
-Vec3 default_reference(const Vec3& u) {
-  constexpr double kTie = 1e-9;
-  const double smallest = u.cwiseAbs().minCoeff();
-  int k = 0;
-  while (std::abs(u(k)) > smallest + kTie) ++k;
-  const Vec3 e = Vec3::Unit(k);
-  return (e - e.dot(u) * u).normalized();
-}
-
 }  // namespace
 
 Mat3 axis_frame(const RevoluteAxis& axis) {
   check_argument(axis.direction.allFinite() && axis.direction.norm() > 0.0, "axis_frame",
                  "direction", "must be a finite non-zero vector");
   const Vec3 u = axis.direction.normalized();
-  Vec3 e = axis.reference ? *axis.reference : default_reference(u);
+  // Without a reference: the spatial reader's default rule (model/reference_direction.hpp).
+  Vec3 e = axis.reference ? *axis.reference : least_aligned(u);
   check_argument(e.allFinite(), "axis_frame", "reference", "must be finite");
   e -= e.dot(u) * u;
   check_argument(
@@ -540,7 +531,7 @@ std::string rssr_file(const Rssr& lk, const std::vector<AnglePair>& pairs,
   out << "design_positions:\n";
   for (size_t i = 0; i < pairs.size(); ++i) {
     // (L59) design position i: input φ_i, target rocker.B at B(ψ_i) of (L50).
-    const Vec3 B = lk.output.point + E2 * (rot_z(pairs[i].psi) * lk.b);
+    const Vec3 B = output_pin(lk, pairs[i].psi);
     out << "  - name: p" << i + 1 << "\n    inputs: {A0: " << num(pairs[i].phi / ang)
         << "}\n    target: {point: rocker.B, at: " << vec(B, L)
         << ", tolerance: " << num(o.tolerance / L) << "}\n";

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <numbers>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -224,6 +225,28 @@ void check_transmission(const SynthesisTask& task, SynthesisCandidate& c) {
   }
 }
 
+// The worst transmission angle over the motion from the first target to the last, every degree at
+// least: `mu(θ)` is the angle at the driver's angle θ, none where the linkage does not assemble
+// (a rejection: the `driver` cannot turn through); then the task's bound (check_transmission).
+template <class Mu>
+void sweep_transmission(const SynthesisTask& task, SynthesisCandidate& c, const char* driver,
+                        const Mu& mu) {
+  const double from = c.crank_angles.front(), to = c.crank_angles.back();
+  const int steps = std::max(1, static_cast<int>(std::ceil(std::abs(to - from) / kDegree)));
+  c.worst_transmission = kPi / 2;
+  for (int k = 0; k <= steps; ++k) {
+    const std::optional<double> m = mu(from + (to - from) * k / steps);
+    if (!m) {
+      c.rejections.push_back(std::string("the ") + driver +
+                             " cannot turn from the first target to the last: the linkage does "
+                             "not assemble between them");
+      break;
+    }
+    c.worst_transmission = std::min(c.worst_transmission, *m);
+  }
+  check_transmission(task, c);
+}
+
 // A slider-crank's distances to the targets by the closed form ((L8): the slider pin B from its
 // target for a function task, the coupler point for a path task), and its worst transmission
 // angle π/2 − α over the crank's motion from the first target to the last (every degree and at
@@ -243,22 +266,12 @@ void check_slider_crank(const SynthesisTask& task, const SliderCrank& sc, Synthe
     c.max_distance =
         std::max(c.max_distance, ((task.kind == TaskKind::function ? p.B : p.P) - target).norm());
   }
-  const double from = c.crank_angles.front(), to = c.crank_angles.back();
-  const int steps = std::max(1, static_cast<int>(std::ceil(std::abs(to - from) / kDegree)));
-  c.worst_transmission = kPi / 2;
-  for (int k = 0; k <= steps; ++k) {
-    const SliderCrankPosition p = calc_position(sc, from + (to - from) * k / steps);
-    if (!p.assembles) {
-      c.rejections.emplace_back(
-          "the crank cannot turn from the first target to the last: the "
-          "linkage does not assemble between them");
-      break;
-    }
+  sweep_transmission(task, c, "crank", [&](double theta) -> std::optional<double> {
+    const SliderCrankPosition p = calc_position(sc, theta);
+    if (!p.assembles) return std::nullopt;
     const double v = (p.A - sc.O).dot(n);
-    const double alpha = std::asin(std::min(1.0, std::abs(sc.offset - v) / sc.l));
-    c.worst_transmission = std::min(c.worst_transmission, kPi / 2 - alpha);
-  }
-  check_transmission(task, c);
+    return kPi / 2 - std::asin(std::min(1.0, std::abs(sc.offset - v) / sc.l));
+  });
 }
 
 // Distances to the targets by the closed form (calc_position), and the worst transmission angle
@@ -287,21 +300,11 @@ void check_four_bar(const SynthesisTask& task, const FourBar& fb, SynthesisCandi
   if (task.crank_rocker && c.grashof != GrashofType::crank_rocker)
     c.rejections.push_back(std::string("not a Grashof crank-rocker (") + to_string(c.grashof) +
                            "), which the task requires");
-  const double from = c.crank_angles.front(), to = c.crank_angles.back();
-  const int steps = std::max(1, static_cast<int>(std::ceil(std::abs(to - from) / kDegree)));
-  c.worst_transmission = kPi / 2;
-  for (int k = 0; k <= steps; ++k) {
-    const FourBarPosition p = calc_position(fb, from + (to - from) * k / steps);
-    if (!p.assembles) {
-      c.rejections.emplace_back(
-          "the crank cannot turn from the first target to the last: the "
-          "linkage does not assemble between them");
-      break;
-    }
-    c.worst_transmission =
-        std::min(c.worst_transmission, std::min(p.transmission_angle, kPi - p.transmission_angle));
-  }
-  check_transmission(task, c);
+  sweep_transmission(task, c, "crank", [&](double theta) -> std::optional<double> {
+    const FourBarPosition p = calc_position(fb, theta);
+    if (!p.assembles) return std::nullopt;
+    return std::min(p.transmission_angle, kPi - p.transmission_angle);
+  });
 }
 
 // An RSSR's output angles and rocker pin B against the pairs by the closed form (L53), and its
@@ -318,21 +321,11 @@ void check_rssr(const SynthesisTask& task, const Rssr& r, SynthesisCandidate& c)
         std::max(c.max_angle_error, std::abs(std::remainder(p.psi - task.outputs[j], 2 * kPi)));
     c.max_distance = std::max(c.max_distance, (p.B - output_pin(r, task.outputs[j])).norm());
   }
-  const double from = c.crank_angles.front(), to = c.crank_angles.back();
-  const int steps = std::max(1, static_cast<int>(std::ceil(std::abs(to - from) / kDegree)));
-  c.worst_transmission = kPi / 2;
-  for (int k = 0; k <= steps; ++k) {
-    const RssrPosition p = calc_position(r, from + (to - from) * k / steps);
-    if (!p.assembles) {
-      c.rejections.emplace_back(
-          "the input cannot turn from the first target to the last: the "
-          "linkage does not assemble between them");
-      break;
-    }
-    c.worst_transmission =
-        std::min(c.worst_transmission, std::asin(std::min(1.0, transmission_index(r, p))));
-  }
-  check_transmission(task, c);
+  sweep_transmission(task, c, "input", [&](double phi) -> std::optional<double> {
+    const RssrPosition p = calc_position(r, phi);
+    if (!p.assembles) return std::nullopt;
+    return std::asin(std::min(1.0, transmission_index(r, p)));
+  });
 }
 
 void check_closed_form(const SynthesisTask& task, SynthesisCandidate& c) {

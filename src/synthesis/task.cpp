@@ -247,32 +247,31 @@ class TaskReader {
       }
     }
   }
+  // A function task's `pairs` without a `ground` (a slider-crank, an RSSR): `needs` says what a
+  // row is, `no_ground` why there is no ground length; the outputs in `output_si` per unit.
+  void pairs_without_ground(const YAML::Node& root, SynthesisTask& t, const std::string& needs,
+                            const std::string& no_ground, double output_si) const {
+    if (!root["pairs"]) fail(root, "pairs", needs);
+    if (root["ground"]) fail(root["ground"], "ground", no_ground);
+    for (const auto& p : rows(root["pairs"], "pairs", 2, 3)) {
+      t.inputs.push_back(p[0] * t.angle_si);
+      t.outputs.push_back(p[1] * output_si);
+    }
+  }
   // A slider-crank's function pairs: [crank angle from the slider line, slider position]; no
   // ground length (the linkage's size follows from the positions).
   void slider_pairs(const YAML::Node& root, SynthesisTask& t) const {
-    if (!root["pairs"])
-      fail(root, "pairs",
-           "a slider-crank function task needs `pairs: [[crank angle, slider position], ...]`");
-    if (root["ground"])
-      fail(root["ground"], "ground",
-           "a slider-crank function task takes no `ground` (its pairs give the slider positions)");
-    for (const auto& p : rows(root["pairs"], "pairs", 2, 3)) {
-      t.inputs.push_back(p[0] * t.angle_si);
-      t.outputs.push_back(p[1] * t.length_si);
-    }
+    pairs_without_ground(
+        root, t,
+        "a slider-crank function task needs `pairs: [[crank angle, slider position], ...]`",
+        "a slider-crank function task takes no `ground` (its pairs give the slider positions)",
+        t.length_si);
   }
   // An RSSR's pairs [φ, ψ] (angles about the input and output axes), its `axes:` and `held:`.
   void rssr_pairs(const YAML::Node& root, SynthesisTask& t) const {
-    if (!root["pairs"])
-      fail(root, "pairs",
-           "an RSSR function task needs `pairs: [[input angle, output angle], ...]`");
-    if (root["ground"])
-      fail(root["ground"], "ground",
-           "an RSSR function task takes no `ground` (its axes place the frame: `axes:`)");
-    for (const auto& p : rows(root["pairs"], "pairs", 2, 3)) {
-      t.inputs.push_back(p[0] * t.angle_si);
-      t.outputs.push_back(p[1] * t.angle_si);
-    }
+    pairs_without_ground(
+        root, t, "an RSSR function task needs `pairs: [[input angle, output angle], ...]`",
+        "an RSSR function task takes no `ground` (its axes place the frame: `axes:`)", t.angle_si);
     const YAML::Node axes = root["axes"];
     if (!axes || !axes.IsMap())
       fail(axes ? axes : root, "axes",

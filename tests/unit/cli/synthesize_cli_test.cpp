@@ -19,6 +19,21 @@ std::string example(const std::string& name) {
   return std::string(ORTHOMECH_SOURCE_DIR) + "/examples/" + name;
 }
 
+// The peaks that rank a candidate (its JSON `cycle` object) are those `cycle --json` prints for
+// its written file, to 1e-9 relative.
+void expect_peaks_of_cycle(const nlohmann::json& c, const std::string& file) {
+  const auto cy = run_cli({"cycle", file, "--json", "-q"});
+  ASSERT_EQ(cy.status, 0) << file << ": " << cy.err;
+  const auto peaks = nlohmann::json::parse(cy.out)["peaks"];
+  EXPECT_NEAR(c["cycle"]["peak_drive"].get<double>(), peaks["drive"]["peak"].get<double>(),
+              1e-9 * peaks["drive"]["peak"].get<double>())
+      << file;
+  const std::string pin = c["cycle"]["peak_pin"].get<std::string>() + ".|F|";
+  EXPECT_NEAR(c["cycle"]["peak_pin_force"].get<double>(), peaks[pin]["peak"].get<double>(),
+              1e-9 * peaks[pin]["peak"].get<double>())
+      << file << " " << pin;
+}
+
 TEST(SynthesizeCli, MotionTaskWritesCandidatesThatValidateAndCycle) {
   const std::string dir = ::testing::TempDir() + "/synthesize-motion";
   std::filesystem::remove_all(dir);
@@ -35,17 +50,8 @@ TEST(SynthesizeCli, MotionTaskWritesCandidatesThatValidateAndCycle) {
     const std::string file = dir + "/" + c["name"].get<std::string>() + ".yaml";
     ASSERT_TRUE(std::filesystem::exists(file)) << file;
     EXPECT_EQ(run_cli({"validate", file, "-q"}).status, 0) << file;
-    // The peaks that rank the candidates are those `cycle` prints for the file.
-    const auto cy = run_cli({"cycle", file, "--json", "-q"});
-    ASSERT_EQ(cy.status, 0) << file;
-    const auto peaks = nlohmann::json::parse(cy.out)["peaks"];
     EXPECT_EQ(c["cycle"]["drive_unit"], "N*mm");
-    EXPECT_NEAR(c["cycle"]["peak_drive"].get<double>(), peaks["drive"]["peak"].get<double>(),
-                1e-9 * peaks["drive"]["peak"].get<double>());
-    const std::string pin = c["cycle"]["peak_pin"].get<std::string>() + ".|F|";
-    EXPECT_NEAR(c["cycle"]["peak_pin_force"].get<double>(), peaks[pin]["peak"].get<double>(),
-                1e-9 * peaks[pin]["peak"].get<double>())
-        << pin;
+    expect_peaks_of_cycle(c, file);
   }
 }
 
@@ -66,15 +72,7 @@ TEST(SynthesizeCli, RssrTaskWritesASpatialFileThatValidatesAndCycles) {
   const std::string file = dir + "/candidate-1.yaml";
   const auto v = run_cli({"validate", file, "-q", "--min-transmission", "20"});
   EXPECT_EQ(v.status, 0) << v.out << v.err;
-  const auto cy = run_cli({"cycle", file, "--json", "-q"});
-  ASSERT_EQ(cy.status, 0) << cy.err;
-  const auto peaks = nlohmann::json::parse(cy.out)["peaks"];
-  EXPECT_NEAR(c["cycle"]["peak_drive"].get<double>(), peaks["drive"]["peak"].get<double>(),
-              1e-9 * peaks["drive"]["peak"].get<double>());
-  const std::string pin = c["cycle"]["peak_pin"].get<std::string>() + ".|F|";
-  EXPECT_NEAR(c["cycle"]["peak_pin_force"].get<double>(), peaks[pin]["peak"].get<double>(),
-              1e-9 * peaks[pin]["peak"].get<double>())
-      << pin;
+  expect_peaks_of_cycle(c, file);
   std::FILE* f = std::fopen((dir + "/candidates.csv").c_str(), "r");
   ASSERT_NE(f, nullptr);
   char header[512] = {};

@@ -20,6 +20,7 @@
 #include <numbers>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "orthomech/analysis/assembly.hpp"
@@ -86,6 +87,19 @@ ValidateOptions any_index() {  // the transmission index is not what these tests
   ValidateOptions o;
   o.min_transmission_index = 0.0;
   return o;
+}
+
+// The linkage with design coordinate j of (a_x, a_y, a_z, b_x, b_y, b_z, L) moved by +h and by −h
+// (the central differences of the tests below).
+std::pair<Rssr, Rssr> moved(const Rssr& r, int j, double h) {
+  Rssr p = r, q = r;
+  if (j < 3)
+    p.a(j) += h, q.a(j) -= h;
+  else if (j < 6)
+    p.b(j - 3) += h, q.b(j - 3) -= h;
+  else
+    p.coupler += h, q.coupler -= h;
+  return {p, q};
 }
 
 // The closed form reproduces its own loop: |B − A| = L, B on its circle.
@@ -157,13 +171,7 @@ TEST(RssrSynthesis, L58_SevenPairsFixTheSevenDesignCoordinates) {
   Eigen::MatrixXd J(7, 7);
   constexpr double h = 1e-6;
   for (int j = 0; j < 7; ++j) {
-    Rssr p = r, q = r;
-    if (j < 3)
-      p.a(j) += h, q.a(j) -= h;
-    else if (j < 6)
-      p.b(j - 3) += h, q.b(j - 3) -= h;
-    else
-      p.coupler += h, q.coupler -= h;
+    const auto [p, q] = moved(r, j, h);
     for (int i = 0; i < 7; ++i)
       J(i, j) = (calc_position(p, pairs[static_cast<size_t>(i)].phi).psi -
                  calc_position(q, pairs[static_cast<size_t>(i)].phi).psi) /
@@ -263,13 +271,7 @@ TEST(RssrSynthesis, L57_LeastSquaresOnPerturbedPairsIsAStationaryPointBelowTheTr
   EXPECT_NEAR(res.rms_output_error, std::sqrt(c / 12.0), 1e-15);
   constexpr double h = 1e-6;
   for (int j = 0; j < 7; ++j) {
-    Rssr p = res.linkage, q = res.linkage;
-    if (j < 3)
-      p.a(j) += h, q.a(j) -= h;
-    else if (j < 6)
-      p.b(j - 3) += h, q.b(j - 3) -= h;
-    else
-      p.coupler += h, q.coupler -= h;
+    const auto [p, q] = moved(res.linkage, j, h);
     // At a minimum the difference is O(h²·curvature) ≈ 1e-12·100; away from one it would be
     // ~ h·|gradient| with |gradient| ~ 2·|r|·|J| ≈ 2·3e-3·10.
     EXPECT_LT(std::abs(cost(p, pairs) - cost(q, pairs)) / (2 * h), 1e-7) << j;
