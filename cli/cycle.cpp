@@ -12,7 +12,6 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cerrno>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -27,11 +26,13 @@
 #include "commands.hpp"
 #include "common.hpp"
 #include "cycle_drivers.hpp"
+#include "run_bounds.hpp"
 #include "orthomech/analysis/cycle_metrics.hpp"
 #include "orthomech/constraints/joints.hpp"
 #include "orthomech/error.hpp"
 #include "orthomech/io/cycle_output.hpp"
 #include "orthomech/io/file_writer.hpp"
+#include "orthomech/io/json_stream.hpp"
 #include "orthomech/io/render.hpp"
 #include "orthomech/io/report.hpp"
 #include "orthomech/io/units.hpp"
@@ -56,6 +57,7 @@ struct CycleCliOptions {
   double speed_fluctuation = 0.0;    // C_s for the flywheel inertia (0: not asked)
   std::vector<std::string> drivers;  // --drivers A,B,…: the several-driver sweep
   double t_end = 0.0;                // --t-end (several drivers)
+  double time_limit = 0.0;           // --time-limit (s of wall clock; 0: none)
   std::vector<std::string> traces;   // --trace BODY.POINT
   std::string animate;               // --animate FILE.svg
   std::string report;                // --report FILE.html
@@ -184,95 +186,125 @@ int run_in_directory(const std::filesystem::path& dir, const std::string& progra
 }
 
 // Every position: input, time, measures, body poses and named points, velocities and
-// accelerations of the bodies, drive, reactions and energies, in the output units.
-nlohmann::json positions_json(const Model& model, const CycleResult& r, bool angular,
-                              const UnitSystem& u, const NoiseFloor& noise) {
-  // Rounding noise of a dimension as 0 (io/noise.hpp).
-  auto out = [&](const OutputUnit& unit, Dimension d, double v) {
-    return unit.from_si(noise.clean(d, v));
-  };
-  const OutputUnit input_u = output_unit(angular ? Dimension::angle : Dimension::length, u);
-  const OutputUnit time_u = output_unit(Dimension::time, u);
-  const OutputUnit drive_u = output_unit(angular ? Dimension::moment : Dimension::force, u);
-  const OutputUnit energy_u = output_unit(Dimension::moment, u);
-  const OutputUnit length_u = output_unit(Dimension::length, u);
-  const OutputUnit angle_u = output_unit(Dimension::angle, u);
-  std::vector<OutputUnit> measure_u, component_u;
-  for (const Measure& m : model.measures) measure_u.push_back(output_unit(dimension_of(m.unit), u));
-  for (const ReactionComponent& c : r.components)
-    component_u.push_back(output_unit(dimension_of(c.unit), u));
-  std::vector<double> pose;
-  VecX q(model.nq);
-  // The poses' columns come first, then the named points' (position_columns).
-  const std::vector<PositionColumn> columns = position_columns(model);
-  size_t pose_columns = 0;
-  for (const Body& b : model.bodies) pose_columns += static_cast<size_t>(b.nq());
-  nlohmann::json pts = nlohmann::json::array();
-  for (const DrivenPointView& p : r.points) {
-    nlohmann::json j;
-    j["input"] = input_u.from_si(p.input);
-    j["time"] = time_u.from_si(p.time);
-    j["singular"] = p.singular;
-    j["bridged"] = p.bridge >= 0;
-    nlohmann::json m = nlohmann::json::object();
-    for (size_t i = 0; i < model.measures.size(); ++i)  // null: not reported (rates_reported)
-      m[model.measures[i].name] =
-          measure_reported(model, p, i)
-              ? nlohmann::json(
-                    out(measure_u[i], dimension_of(model.measures[i].unit), p.measures[i]))
-              : nlohmann::json(nullptr);
-    j["measures"] = m;
-    // Pose of every body's frame ([x, y, angle]; a particle [x, y]; a spatial body [x, y, z, e0,
-    // e1, e2, e3], its unit quaternion) and every named point ([x, y] or [x, y, z]), in
-    // position_columns order.
-    q = p.q;  // copied once per position (not once per joint below: O(N²) on the N-four-bar)
-    compute_output_positions(model, q, pose);
-    nlohmann::json poses = nlohmann::json::object(), points = nlohmann::json::object();
-    for (size_t c = 0; c < columns.size(); ++c) {
-      const std::string& name = columns[c].name;
-      const std::string owner = name.substr(0, name.rfind('.'));
-      const double v = columns[c].dimension == Dimension::none
-                           ? pose[c]
-                           : out(columns[c].dimension == Dimension::angle ? angle_u : length_u,
-                                 columns[c].dimension, pose[c]);
-      (c < pose_columns ? poses : points)[owner].push_back(v);
-    }
-    j["poses"] = poses;
-    j["named_points"] = points;
-    // Velocities and accelerations of every body's centre of mass (and angular ones); none at a
-    // change point that could not be bridged (rates_reported).
-    nlohmann::json bodies = nlohmann::json::object();
-    for (const Body& b : model.bodies) {
-      if (!rates_reported(p)) break;
-      std::vector<double> v, a;
-      for (int i = 0; i < b.nu(); ++i) {
-        const VelocityComponent& c = velocity_component(b, i);
-        v.push_back(
-            out(output_unit(c.velocity_dimension, u), c.velocity_dimension, p.u(b.u_offset + i)));
-        a.push_back(out(output_unit(c.acceleration_dimension, u), c.acceleration_dimension,
-                        p.udot(b.u_offset + i)));
-      }
-      bodies[b.name] = {{"velocity", v}, {"acceleration", a}};
-    }
-    j["bodies"] = bodies;
-    if (drive_reported(p)) {  // not at a change point that could not be bridged
-      j["drive"] = out(drive_u, angular ? Dimension::moment : Dimension::force, p.drive);
-      nlohmann::json rc = nlohmann::json::object();
-      for (size_t i = 0; i < r.components.size(); ++i)
-        if (component_reported(r, p, i))
-          rc[r.components[i].name] =
-              out(component_u[i], dimension_of(r.components[i].unit), p.reactions[i]);
-      j["reactions"] = rc;
-    }
-    nlohmann::json outside = nlohmann::json::array();
-    for (size_t jt = 0; jt < model.joints.size(); ++jt)
-      if (outside_limits(model, static_cast<int>(jt), q)) outside.push_back(model.joints[jt].name);
-    j["outside_limits"] = outside;
-    j["kinetic_energy"] = energy_u.from_si(p.kinetic);
-    j["potential_energy"] = energy_u.from_si(p.potential);
-    pts.push_back(j);
+// accelerations of the bodies, drive, reactions and energies, in the output units; one position's
+// object at a time (the --json document streams them: io/json_stream.hpp).
+class PositionJson {
+ public:
+  PositionJson(const Model& model, const CycleResult& r, bool angular, const UnitSystem& u,
+               const NoiseFloor& noise)
+      : model_(model),
+        r_(r),
+        u_(u),
+        noise_(noise),
+        angular_(angular),
+        input_u_(output_unit(angular ? Dimension::angle : Dimension::length, u)),
+        time_u_(output_unit(Dimension::time, u)),
+        drive_u_(output_unit(angular ? Dimension::moment : Dimension::force, u)),
+        energy_u_(output_unit(Dimension::moment, u)),
+        length_u_(output_unit(Dimension::length, u)),
+        angle_u_(output_unit(Dimension::angle, u)),
+        q_(model.nq),
+        columns_(position_columns(model)) {
+    for (const Measure& m : model.measures)
+      measure_u_.push_back(output_unit(dimension_of(m.unit), u));
+    for (const ReactionComponent& c : r.components)
+      component_u_.push_back(output_unit(dimension_of(c.unit), u));
+    // The poses' columns come first, then the named points' (position_columns).
+    for (const Body& b : model.bodies) pose_columns_ += static_cast<size_t>(b.nq());
   }
-  return pts;
+  [[nodiscard]] nlohmann::json operator()(const DrivenPointView& p);
+
+ private:
+  void add_poses(const DrivenPointView& p, nlohmann::json& j);
+  void add_rates(const DrivenPointView& p, nlohmann::json& j) const;
+  // Rounding noise of a dimension as 0 (io/noise.hpp).
+  [[nodiscard]] double out(const OutputUnit& unit, Dimension d, double v) const {
+    return unit.from_si(noise_.clean(d, v));
+  }
+  const Model& model_;
+  const CycleResult& r_;
+  const UnitSystem& u_;
+  const NoiseFloor& noise_;
+  bool angular_;
+  OutputUnit input_u_, time_u_, drive_u_, energy_u_, length_u_, angle_u_;
+  std::vector<OutputUnit> measure_u_, component_u_;
+  std::vector<double> pose_;
+  VecX q_;
+  std::vector<PositionColumn> columns_;
+  size_t pose_columns_ = 0;
+};
+
+nlohmann::json PositionJson::operator()(const DrivenPointView& p) {
+  nlohmann::json j;
+  j["input"] = input_u_.from_si(p.input);
+  j["time"] = time_u_.from_si(p.time);
+  j["singular"] = p.singular;
+  j["bridged"] = p.bridge >= 0;
+  nlohmann::json m = nlohmann::json::object();
+  for (size_t i = 0; i < model_.measures.size(); ++i)  // null: not reported (rates_reported)
+    m[model_.measures[i].name] =
+        measure_reported(model_, p, i)
+            ? nlohmann::json(
+                  out(measure_u_[i], dimension_of(model_.measures[i].unit), p.measures[i]))
+            : nlohmann::json(nullptr);
+  j["measures"] = m;
+  add_poses(p, j);
+  add_rates(p, j);
+  if (drive_reported(p)) {  // not at a change point that could not be bridged
+    j["drive"] = out(drive_u_, angular_ ? Dimension::moment : Dimension::force, p.drive);
+    nlohmann::json rc = nlohmann::json::object();
+    for (size_t i = 0; i < r_.components.size(); ++i)
+      if (component_reported(r_, p, i))
+        rc[r_.components[i].name] =
+            out(component_u_[i], dimension_of(r_.components[i].unit), p.reactions[i]);
+    j["reactions"] = rc;
+  }
+  nlohmann::json outside = nlohmann::json::array();
+  for (size_t jt = 0; jt < model_.joints.size(); ++jt)
+    if (outside_limits(model_, static_cast<int>(jt), q_)) outside.push_back(model_.joints[jt].name);
+  j["outside_limits"] = outside;
+  j["kinetic_energy"] = energy_u_.from_si(p.kinetic);
+  j["potential_energy"] = energy_u_.from_si(p.potential);
+  return j;
+}
+
+// Pose of every body's frame ([x, y, angle]; a particle [x, y]; a spatial body [x, y, z, e0, e1,
+// e2, e3], its unit quaternion) and every named point ([x, y] or [x, y, z]), in position_columns
+// order.
+void PositionJson::add_poses(const DrivenPointView& p, nlohmann::json& j) {
+  q_ = p.q;  // copied once per position (not once per joint: O(N²) on the N-four-bar)
+  compute_output_positions(model_, q_, pose_);
+  nlohmann::json poses = nlohmann::json::object(), points = nlohmann::json::object();
+  for (size_t c = 0; c < columns_.size(); ++c) {
+    const std::string& name = columns_[c].name;
+    const std::string owner = name.substr(0, name.rfind('.'));
+    const double v = columns_[c].dimension == Dimension::none
+                         ? pose_[c]
+                         : out(columns_[c].dimension == Dimension::angle ? angle_u_ : length_u_,
+                               columns_[c].dimension, pose_[c]);
+    (c < pose_columns_ ? poses : points)[owner].push_back(v);
+  }
+  j["poses"] = poses;
+  j["named_points"] = points;
+}
+
+// Velocities and accelerations of every body's centre of mass (and angular ones); none at a
+// change point that could not be bridged (rates_reported).
+void PositionJson::add_rates(const DrivenPointView& p, nlohmann::json& j) const {
+  nlohmann::json bodies = nlohmann::json::object();
+  for (const Body& b : model_.bodies) {
+    if (!rates_reported(p)) break;
+    std::vector<double> v, a;
+    for (int i = 0; i < b.nu(); ++i) {
+      const VelocityComponent& c = velocity_component(b, i);
+      v.push_back(
+          out(output_unit(c.velocity_dimension, u_), c.velocity_dimension, p.u(b.u_offset + i)));
+      a.push_back(out(output_unit(c.acceleration_dimension, u_), c.acceleration_dimension,
+                      p.udot(b.u_offset + i)));
+    }
+    bodies[b.name] = {{"velocity", v}, {"acceleration", a}};
+  }
+  j["bodies"] = bodies;
 }
 
 // The positions of the sweep as vectors (SI): for the traces and the frames of the pictures.
@@ -385,7 +417,8 @@ struct CycleRun {
   // The output steps (4 to 7 of run_cycle_command), on the members above.
   void log_cycle() const;
   [[nodiscard]] std::string write_files() const;
-  [[nodiscard]] nlohmann::json json_document() const;
+  [[nodiscard]] nlohmann::json json_document() const;  // without the positions
+  void write_json(std::ostream& out) const;
   [[nodiscard]] std::string summary_text(const std::string& files_note) const;
   void write_pictures(const Projection& projection, const std::string& text) const;
 
@@ -478,6 +511,7 @@ void CycleRun::log_cycle() const {
         model.file, bodies);
   }
   if (r.status == CycleStatus::stopped_at_dead_point) spdlog::warn("{}: {}", model.file, r.message);
+  if (r.status == CycleStatus::stopped) spdlog::error("cycle: stopped: {}", r.message);
   for (const DeadPoint& d : r.singular_positions) spdlog::info("{}", d.message);
   spdlog::info(
       "{} chart switches: the dual form changed its independent velocities {} times along the "
@@ -546,9 +580,22 @@ nlohmann::json CycleRun::json_document() const {
   if (metrics.power.available) add_power_json(j);
   j["strokes"] = strokes_json();
   j["limits"] = limits_json();
-  if (opt.positions) j["points"] = positions_json(model, r, angular, U, noise);
   j["traces"] = traces_json();
   return j;
+}
+
+// The document on `out`; with --positions its "points" are written one position at a time
+// (io/json_stream.hpp): 1e5 positions were a tree of 1.3 GB for 324 MB of text.
+void CycleRun::write_json(std::ostream& out) const {
+  const nlohmann::json document = json_document();
+  if (opt.positions) {
+    PositionJson position(model, r, angular, U, noise);
+    write_json_streaming_array(out, document, "points", r.points.size(),
+                               [&](size_t i) { return position(r.points[i]); });
+  } else {
+    out << document.dump(2);
+  }
+  out << "\n";
 }
 
 // A value at an extreme with its input and time.
@@ -575,7 +622,10 @@ void CycleRun::add_run_json(nlohmann::json& j) const {
   j["units"] = units_json(U);
   j["status"] = r.status == CycleStatus::completed               ? "completed"
                 : r.status == CycleStatus::stopped_at_dead_point ? "stopped_at_dead_point"
+                : r.status == CycleStatus::stopped               ? "stopped"
                                                                  : "failed";
+  j["complete"] = r.status != CycleStatus::stopped;
+  if (r.status == CycleStatus::stopped) j["stop"] = to_string(r.stop);
   j["message"] = r.message;
   j["driver"] = {{"joint", joint.name},
                  {"name", co.driver.name},
@@ -955,7 +1005,7 @@ void CycleRun::write_pictures(const Projection& projection, const std::string& t
   release_render_caches();
 }
 
-int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) {
+int run_cycle_command(const CycleCliOptions& opt) {
   const Model model = load(opt.file, opt.sets);
   if (!opt.drivers.empty()) {  // several drivers: cli/cycle_drivers.cpp
     DriversRequest request;
@@ -978,22 +1028,16 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
     throw InputError({"command line", 0, 0}, "option", trace_request.message);
   const CycleOptions request = cycle_request(model, opt, U);
 
-  // Step 2: the sweep, with progress on stderr for sweeps longer than a second, only on a
-  // terminal and not when quiet.
+  // Step 2: the sweep, bounded (run_bounds.hpp): --time-limit, SIGINT/SIGTERM as a clean stop
+  // (what was swept is written, marked incomplete), a progress line on a terminal's stderr.
   CycleOptions co = request;
-  const bool show_progress = !opt.quiet && !globals.quiet && isatty(STDERR_FILENO) != 0;
-  const auto started = std::chrono::steady_clock::now();
-  bool progress_shown = false;
-  if (show_progress) {
-    co.progress = [&](double fraction) {
-      if (std::chrono::steady_clock::now() - started < std::chrono::seconds(1)) return;
-      std::fprintf(stderr, "\rcycle: %3.0f %%", 100.0 * fraction);
-      std::fflush(stderr);
-      progress_shown = true;
-    };
-  }
-  const CycleResult r = run_cycle(model, co);
-  if (progress_shown) std::fprintf(stderr, "\r\033[K");
+  co.control = run_control("cycle", opt.time_limit);
+  const CycleResult r = [&] {
+    const InterruptScope interrupts;
+    CycleResult swept = run_cycle(model, co);
+    end_progress();
+    return swept;
+  }();
 
   // Summaries, metrics, traced points and units of what the sweep found.
   const bool angular = is_angular(model, co.driver.joint);
@@ -1023,12 +1067,15 @@ int run_cycle_command(const CycleCliOptions& opt, const GlobalOptions& globals) 
   // Step 6: the results (stdout): the JSON document or the terminal summary.
   c.noise = cycle_noise_floor(model, r, c.magnitudes, angular);
   const std::string summary = c.summary_text(files_note);
-  const std::string json = opt.json ? c.json_document().dump(2) + "\n" : std::string();
   // Step 7: the pictures.
   if (!opt.animate.empty() || !opt.report.empty()) c.write_pictures(*view.projection, summary);
-  std::cout << (opt.json ? json : summary);  // all at once
+  if (opt.json)
+    c.write_json(std::cout);
+  else
+    std::cout << summary;  // all at once
   return r.status == CycleStatus::completed               ? kOk
          : r.status == CycleStatus::stopped_at_dead_point ? kCheckFailed
+         : r.status == CycleStatus::stopped               ? kStopped
                                                           : kNumerical;
 }
 
@@ -1063,6 +1110,10 @@ void register_cycle(CLI::App& app, const GlobalOptions& globals, int& exit_code)
   cmd->add_flag("--reverse-at-dead-point", opt->reverse,
                 "at a dead point, pass it and drive the input back (sweeps a rocker's closed "
                 "curve)");
+  cmd->add_option("--time-limit", opt->time_limit,
+                  "wall-clock limit in seconds (default: none): the sweep stops there with status "
+                  "stopped and writes the positions swept, exit 5")
+      ->check(finite_range(0.0, 1e9, true));
   cmd->add_flag("--json", opt->json, "one JSON document on stdout");
   cmd->add_flag(
       "--positions", opt->positions,
@@ -1094,7 +1145,7 @@ void register_cycle(CLI::App& app, const GlobalOptions& globals, int& exit_code)
     g.quiet = g.quiet || opt->quiet;
     g.verbose = g.verbose || opt->verbose;
     setup_logging(g);
-    exit_code = run_cycle_command(*opt, g);
+    exit_code = run_cycle_command(*opt);
   });
 }
 

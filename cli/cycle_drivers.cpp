@@ -16,6 +16,7 @@
 #include "orthomech/constraints/joints.hpp"
 #include "orthomech/io/cycle_output.hpp"
 #include "orthomech/io/file_writer.hpp"
+#include "orthomech/io/json_stream.hpp"
 #include "orthomech/io/number_text.hpp"
 #include "orthomech/io/units.hpp"
 
@@ -153,8 +154,9 @@ int run_cycle_drivers(const Model& model, const DriversRequest& request) {
                        {"unit", output_unit(dimension_of(r.components[i].unit), U).name},
                        {"determinate", bool(r.determinate[i])}});
     j["components"] = comps;
-    nlohmann::json pts = nlohmann::json::array();
-    for (const MultiDrivenPoint& p : r.points) {
+    // The points one at a time (io/json_stream.hpp): 1e5 positions were a tree of 1 GB.
+    const auto point_json = [&](size_t k) {
+      const MultiDrivenPoint& p = r.points[k];
       nlohmann::json pj;
       pj["time"] = time_u.from_si(p.time);
       nlohmann::json in = nlohmann::json::object(), dr = nlohmann::json::object();
@@ -172,10 +174,10 @@ int run_cycle_drivers(const Model& model, const DriversRequest& request) {
       pj["measures"] = ms;
       pj["reactions"] = rc;
       pj["conditioning"] = p.conditioning;
-      pts.push_back(pj);
-    }
-    j["points"] = pts;
-    std::cout << j.dump(2) << "\n";
+      return pj;
+    };
+    write_json_streaming_array(std::cout, j, "points", r.points.size(), point_json);
+    std::cout << "\n";
   } else {
     std::ostringstream out;
     out << "mechanism       " << model.name << "  (" << model.file << ")\n";

@@ -54,6 +54,8 @@ const char* to_string(CycleStatus s) {
       return "failed";
     case CycleStatus::invalid_request:
       return "invalid request";
+    case CycleStatus::stopped:
+      return "stopped";
   }
   return "?";
 }
@@ -1027,6 +1029,7 @@ class CycleRun {
   void update_determinacy(const DrivenPoint& p);
   void record_singular(double s_at, double t_at);
   bool closed_after_reversal(double t);
+  bool stopped_by_control(double fraction);
   bool reach_grid_time(double t, double& h);
   void locate_sign_change(const DrivenPoint& from);
   Jump jump_change_point(double t);
@@ -1049,7 +1052,8 @@ class CycleRun {
   double s0_ = 0.0;     // the start's input
   VecX start_tangent_;  // set when the start was reached along the branch
   // The time grid (set_time_grid).
-  int steps_ = 0, last_index_ = 0, max_positions_ = 0, report_every_ = 1;
+  int steps_ = 0, last_index_ = 0, max_positions_ = 0;
+  RunMonitor monitor_;  // CycleOptions::control over the sweep (its positions: no budget of its own)
   double period_ = 0.0, dt_ = 0.0, omega0_ = 0.0;
   // The sweep's work buffers (set_time_grid).
   VecX scale_;                   // of each velocity component, for kMaxMove
@@ -1077,7 +1081,8 @@ CycleRun::CycleRun(const Model& model, const CycleOptions& options, const CycleR
            .dual_projections = false,
            .constraint_matrices = !uses_sparse_jacobian(model, options.sparse_jacobian_from)}),
       w_(model, mob.rank, idle_body_indices(model, mob), options.sparse_jacobian_from),
-      sweep_{model, request.joint, ws_, w_} {
+      sweep_{model, request.joint, ws_, w_},
+      monitor_(options.control, 0) {
   // The free system, f, Eᵀ and the chart with F at the start (the stages the cycle uses).
   compute_free_system(model_, state_, ws_);
   compute_constraint_residual(model_, state_.q, ws_.constraints.f);
@@ -1167,7 +1172,6 @@ bool CycleRun::set_time_grid() {
   last_index_ = steps_;  // grid times k = 0 … steps − 1
   omega0_ = law_.omega;
   max_positions_ = 4 * steps_;  // bound on a reversing sweep that does not close
-  report_every_ = std::max(1, steps_ / 100);
   // The positions' storage, then the sweep's work buffers.
   result_.points.reserve(static_cast<size_t>(steps_));
   scale_ = step_scale(model_);
@@ -1292,8 +1296,7 @@ void CycleRun::sweep() {
                         " positions: the reversing sweep did not return to its start";
       break;
     }
-    if (options_.progress && k % report_every_ == 0)
-      options_.progress(std::min(1.0, static_cast<double>(k) * dt_ / period_));
+    if (stopped_by_control(std::min(1.0, static_cast<double>(k) * dt_ / period_))) break;
     const double t = static_cast<double>(k) * dt_;
     if (closed_after_reversal(t)) break;
     double h = 0.0;
@@ -1313,6 +1316,18 @@ void CycleRun::sweep() {
     }
     if (!pass_dead_point(t, h, k)) break;
   }
+}
+
+// The run's bounds (CycleOptions::control), once per grid position: a bound met ends the sweep
+// with status `stopped` and the positions reached.
+bool CycleRun::stopped_by_control(double fraction) {
+  const StopReason stop = monitor_.tick(fraction);
+  if (stop == StopReason::none) return false;
+  result_.status = CycleStatus::stopped;
+  result_.stop = stop;
+  result_.message = monitor_.stop_message(stop, fraction, "position", "--steps") + "; " +
+                    std::to_string(result_.points.size()) + " positions swept";
+  return true;
 }
 
 // After a reversal the cycle closes when the input passes its start again, moving in the
@@ -1875,7 +1890,6 @@ void CycleRun::finish() {
   result_.chart_switches = ws_.dual.engine.switch_count();
   result_.corrector_factorisations = sweep_.factorisations;
   result_.reversals = reversals_;
-  if (options_.progress) options_.progress(1.0);
 }
 
 }  // namespace

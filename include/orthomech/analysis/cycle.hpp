@@ -38,6 +38,7 @@
 #include "orthomech/model/model.hpp"
 #include "orthomech/model/state.hpp"
 #include "orthomech/projection/workspace.hpp"
+#include "orthomech/run_control.hpp"
 
 namespace orthomech {
 
@@ -61,8 +62,11 @@ struct CycleOptions {
   // input back (constant-speed drivers): a rocker-driven double-rocker then sweeps its whole
   // closed curve, both assembly branches, until it returns to its start.
   bool reverse_at_dead_point = false;
-  // Called now and then with the fraction of the sweep done (0–1]; may be empty.
-  std::function<void(double)> progress;
+  // The run's bounds (orthomech/run_control.hpp): a wall-clock limit, an interrupt flag, and a
+  // progress callback with the fraction of the sweep done. The positions themselves are bounded
+  // by `steps` (and 4 × steps for a reversing sweep); a bound met ends the sweep with status
+  // `stopped` and the positions reached so far.
+  RunControl control;
   // Take the positions next to change points from the branch (CycleResult::bridges).
   bool bridge_change_points = true;
   // From this many coordinates on, the corrector's Jacobian of a structurally sparse model is
@@ -239,10 +243,13 @@ inline constexpr double kBridgeTolerance = 1e-6;
 
 // invalid_request: the options do not fit the driver or the mechanism (a range for a harmonic
 // law, a full turn of a prismatic joint, an empty range): a usage error, not a numerical one.
-enum class CycleStatus { completed, stopped_at_dead_point, failed, invalid_request };
+// stopped: a bound of CycleOptions::control was met (CycleResult::stop); the positions swept
+// before it are kept.
+enum class CycleStatus { completed, stopped_at_dead_point, failed, invalid_request, stopped };
 
 struct CycleResult {
   CycleStatus status = CycleStatus::failed;
+  StopReason stop = StopReason::none;  // which bound, when status is stopped
   std::string message;
   std::vector<ReactionComponent> components;
   std::vector<bool> determinate;       // per component: unique although constraints are redundant?

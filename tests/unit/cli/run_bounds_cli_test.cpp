@@ -51,9 +51,11 @@ TEST(RunBoundsCli, ProgressLineOnStderr) {
 
 // Runs the CLI with stdout to `out` and stderr to `err`, with ORTHOMECH_PROGRESS=1 so that the
 // run's first progress line ("simulate: 0 %") says it has started; sends `signal` once that line
-// is there (within 120 s); the exit status (or −1 when a signal ended the process).
+// is there (within 120 s) and `after` later; the exit status (or −1 when a signal ended the
+// process).
 int run_and_signal(const std::vector<std::string>& args, int signal, const std::string& out,
-                   const std::string& err) {
+                   const std::string& err,
+                   std::chrono::milliseconds after = std::chrono::milliseconds(200)) {
   // No stale progress line of an earlier run may be taken for this one's start.
   std::remove(err.c_str());
   std::remove(out.c_str());
@@ -72,10 +74,11 @@ int run_and_signal(const std::vector<std::string>& args, int signal, const std::
     std::_Exit(98);
   }
   const auto start = std::chrono::steady_clock::now();
-  while (!has(test::read_text(err), "simulate: ") &&
+  const std::string started = args.front() + ": ";
+  while (!has(test::read_text(err), started) &&
          std::chrono::steady_clock::now() - start < std::chrono::seconds(120))
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  std::this_thread::sleep_for(std::chrono::milliseconds(200));  // a few steps into the motion
+  std::this_thread::sleep_for(after);  // a few steps into the run
   ::kill(pid, signal);
   int status = 0;
   ::waitpid(pid, &status, 0);
@@ -112,6 +115,34 @@ TEST(RunBoundsCli, CrosscheckStopsAtItsBounds) {
   EXPECT_EQ(b.status, 5) << b.err;
   EXPECT_EQ(nlohmann::json::parse(b.out)["stop"], "budget");
   EXPECT_TRUE(has(b.err, "--max-steps")) << b.err;
+}
+
+// cycle: the time limit and SIGINT/SIGTERM stop the sweep with exit 5; the positions swept are
+// written, the JSON marked incomplete. The double wishbone at 1e5 positions sweeps for about
+// 1.5 s in the Release build (several times longer under the sanitizers).
+TEST(RunBoundsCli, CycleStopsAtItsTimeLimitAndOnASignal) {
+  const std::vector<std::string> args = {"cycle", test::bundled_file("double-wishbone"),
+                                         "--steps", "100000", "--json"};
+  std::vector<std::string> limited = args;
+  limited.insert(limited.end(), {"--time-limit", "0.2", "-q"});
+  const auto r = run_cli(limited);
+  EXPECT_EQ(r.status, 5) << r.err;
+  EXPECT_TRUE(has(r.err, "the time limit of 0.2 s is reached (--time-limit)")) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["status"], "stopped");
+  EXPECT_EQ(j["stop"], "time_limit");
+  EXPECT_FALSE(j["complete"].get<bool>());
+  EXPECT_GT(j["positions"].get<int>(), 1);
+  EXPECT_LT(j["positions"].get<int>(), 100000);
+
+  test::TempDir dir("orthomech_rel_");
+  const std::string out = (dir.path / "out.json").string(), err = (dir.path / "err.txt").string();
+  const int status = run_and_signal(args, SIGINT, out, err, std::chrono::milliseconds(50));
+  EXPECT_EQ(status, 5) << test::read_text(err);
+  const auto s = nlohmann::json::parse(test::read_text(out));
+  EXPECT_EQ(s["stop"], "interrupted");
+  EXPECT_FALSE(s["complete"].get<bool>());
+  EXPECT_GT(s["positions"].get<int>(), 0);
 }
 
 }  // namespace
