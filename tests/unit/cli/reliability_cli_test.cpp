@@ -319,5 +319,59 @@ TEST(ReliabilityCli, RenderOfAPrismaticDriverTakesItsStroke) {
   EXPECT_EQ(alone.status, 2) << alone.err;
 }
 
+// ---- a spatial joint's range across ±180° ---------------------------------------------------------
+
+// `cycle --from -210 --to -150` on a spatial revolute driver failed with an unrelated dead-point
+// message (issue 47: the joint angle was read in (−180°, 180°] at the start and continuously
+// along the sweep). Oracle: the same positions reached as 150° → 210° (a whole turn apart), whose
+// drive and every reaction must agree position by position.
+TEST(ReliabilityCli, SpatialRangeAcrossMinus180DegreesIsTheSameSweepATurnLater) {
+  const std::string file = test::bundled_file("crank-rocker-3d");
+  auto sweep = [&](const std::string& from, const std::string& to) {
+    const auto r = run_cli({"cycle", file, "--from", from, "--to", to, "--steps", "61", "--json",
+                            "--positions", "-q"});
+    EXPECT_EQ(r.status, 0) << r.err;
+    return nlohmann::json::parse(r.out);
+  };
+  const auto across = sweep("-210deg", "-150deg");
+  const auto later = sweep("150deg", "210deg");
+  ASSERT_EQ(across["status"], "completed");
+  ASSERT_EQ(across["points"].size(), 61u);
+  ASSERT_EQ(later["points"].size(), 61u);
+  double largest = 0.0;
+  for (const auto& p : later["points"]) largest = std::max(largest, std::abs(p["drive"].get<double>()));
+  ASSERT_GT(largest, 0.0);
+  for (size_t k = 0; k < 61; ++k) {
+    const auto& a = across["points"][k];
+    const auto& b = later["points"][k];
+    EXPECT_NEAR(a["input"].get<double>(), -210.0 + static_cast<double>(k), 1e-9) << k;
+    EXPECT_NEAR(b["input"].get<double>() - a["input"].get<double>(), 360.0, 1e-9) << k;
+    EXPECT_NEAR(a["drive"].get<double>(), b["drive"].get<double>(), 1e-9 * largest) << k;
+    for (auto it = b["reactions"].begin(); it != b["reactions"].end(); ++it)
+      EXPECT_NEAR(a["reactions"][it.key()].get<double>(), it.value().get<double>(),
+                  1e-9 * std::max(1.0, std::abs(it.value().get<double>())))
+          << k << " " << it.key();
+  }
+}
+
+// ---- a rolling disc of radius 1e-9 ---------------------------------------------------------------
+
+// The bundled disc's initial rates with a radius of 1e-9 m spin it at about 1e8 rad/s: the motion
+// needs ~1e10 steps of 5e-11 s. It ran for tens of minutes; it stops after its first 1e4 steps,
+// saying how many it would need, exit 5 with the states computed.
+TEST(ReliabilityCli, RollingDiscOfRadiusOneNanometreStopsAtOnceWithItsStepCount) {
+  const auto start = std::chrono::steady_clock::now();
+  const auto r = run_cli({"simulate", test::bundled_file("rolling-disc"), "--set",
+                          "nonholonomic.contact.radius=1e-9", "--t-end", "1", "--json", "-q"});
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_EQ(r.status, 5) << r.err;
+  EXPECT_TRUE(has(r.err, "more steps, beyond the step budget of 10000000 (--max-steps)")) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["stop"], "budget");
+  EXPECT_FALSE(j["complete"].get<bool>());
+  EXPECT_LT(seconds, 60.0);  // a bound on a hang, not a speed test (0.4 s in Release)
+}
+
 }  // namespace
 }  // namespace orthomech
