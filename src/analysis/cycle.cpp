@@ -898,25 +898,49 @@ void warn_start_moves(const Model& model, const CycleRequest& request, const Vec
   }
 }
 
-// Start: the design position projected onto f(q) = 0 with the driven joint held at its drawn
-// value (as `assemble --lock`); only where it cannot be held (a dead point of the driver, or
-// the joints close only with the driver moved) is it projected freely. Bodies moved by more
-// than the tolerances are listed and warned about. False (the message set) when it does not
+// The drawn position closed onto f(q) = 0, `hold` kept (none: every coordinate free): by the
+// mass-metric Gauss–Newton of project_positions, and where that fails by `assemble`'s own
+// projection (Ipopt, eq. (20)), so that the cycle starts wherever `assemble` would say the
+// mechanism assembles (one criterion for both commands). Joint limits are not imposed (the sweep
+// reports where a joint leaves them). False, with assemble's account of the gaps in `why`, when
+// neither closes it.
+bool close_drawn_position(const Model& model, const VecX& drawn, const PositionOptions& hold,
+                          VecX& q, std::string& why) {
+  q = drawn;
+  if (project_positions(model, q, hold).status == SolveStatus::converged) return true;
+  AssemblyOptions ao;
+  ao.use_limits = false;
+  if (hold.locked_joint >= 0) ao.locks.push_back({hold.locked_joint, hold.locked_value});
+  const AssemblyResult a = assemble(model, drawn, ao);
+  if (a.status == AssemblyStatus::assembled || a.status == AssemblyStatus::unchanged) {
+    q = a.q;
+    return true;
+  }
+  q = a.status == AssemblyStatus::cannot_close && a.q_least_squares.size() == model.nq
+          ? a.q_least_squares
+          : a.q;
+  why = a.message;
+  return false;
+}
+
+// Start: the design position closed with the driven joint held at its drawn value (as
+// `assemble --lock`); only where it cannot be held (a dead point of the driver, or the joints
+// close only with the driver moved) is it closed freely (close_drawn_position). Bodies moved by
+// more than the tolerances are listed and warned about. False (the message set) when it does not
 // assemble.
 bool assemble_start(const Model& model, const CycleRequest& request, State& state,
                     CycleResult& result) {
   const int joint = request.joint;
   const UnitSystem& units = request.file_units;
   const VecX drawn = model.design_q();
-  state.q = drawn;
   PositionOptions hold;
   hold.locked_joint = joint;
   hold.locked_value = compute_scalar(model, JointCoordinate{joint}, drawn, nullptr).value;
-  SolveResult assembly = project_positions(model, state.q, hold);
-  if (assembly.status != SolveStatus::converged) {
-    state.q = drawn;
-    assembly = project_positions(model, state.q);
-    if (assembly.status == SolveStatus::converged)
+  std::string why;
+  bool closed = close_drawn_position(model, drawn, hold, state.q, why);
+  if (!closed) {
+    closed = close_drawn_position(model, drawn, PositionOptions{}, state.q, why);
+    if (closed)
       result.warnings.push_back(
           "the design position closes only with driver joint '" + request.joint_name +
           "' moved from its drawn " + format_input(hold.locked_value, request.angular, units) +
@@ -924,11 +948,12 @@ bool assemble_start(const Model& model, const CycleRequest& request, State& stat
           format_input(compute_scalar(model, JointCoordinate{joint}, state.q, nullptr).value,
                        request.angular, units));
   }
-  if (assembly.status != SolveStatus::converged) {
+  if (!closed) {
     const ResidualSplit left = split_residual(model, state.q);
     result.message = "the design position does not assemble (residual " +
                      format_quantity(left.length, Dimension::length, units) + ", " +
-                     format_quantity(left.angle, Dimension::angle, units) + ")";
+                     format_quantity(left.angle, Dimension::angle, units) + ")" +
+                     (why.empty() ? "" : ": " + why);
     return false;
   }
   warn_start_moves(model, request, state.q, drawn, result);

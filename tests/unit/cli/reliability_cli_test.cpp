@@ -373,5 +373,52 @@ TEST(ReliabilityCli, RollingDiscOfRadiusOneNanometreStopsAtOnceWithItsStepCount)
   EXPECT_LT(seconds, 60.0);  // a bound on a hang, not a speed test (0.4 s in Release)
 }
 
+// ---- one assembly criterion for assemble and cycle ------------------------------------------------
+
+// A sketch drawn far from closed: `assemble` closed it while `cycle` said "the design position
+// does not assemble (residual 58.93 mm)" (its start tried only Gauss–Newton). Now the cycle starts
+// where `assemble --lock` puts it. Oracle: the cycle of the file `assemble --lock --write` wrote,
+// whose peaks must be the sketch's; and a linkage that cannot close is refused by both with
+// assemble's account of the gaps.
+TEST(ReliabilityCli, CycleStartsWhereAssembleClosesASketch) {
+  const std::string sketch = data_file("sketched-crank-rocker.yaml");
+  const auto assembled = run_cli({"assemble", sketch, "--json"});
+  ASSERT_EQ(assembled.status, 0) << assembled.err;
+  EXPECT_EQ(nlohmann::json::parse(assembled.out)["status"], "assembled");
+  const auto cycled = run_cli({"cycle", sketch, "--json", "-q"});
+  ASSERT_EQ(cycled.status, 0) << cycled.err;
+  const auto c = nlohmann::json::parse(cycled.out);
+  EXPECT_EQ(c["status"], "completed");
+
+  test::TempDir dir("orthomech_rel_");
+  const std::string written = (dir.path / "closed.yaml").string();
+  const auto locked =
+      run_cli({"assemble", sketch, "--lock", "A0=-56.3269deg", "--write", written, "-q"});
+  ASSERT_EQ(locked.status, 0) << locked.err;
+  const auto again = run_cli({"cycle", written, "--json", "-q"});
+  ASSERT_EQ(again.status, 0) << again.err;
+  const auto w = nlohmann::json::parse(again.out);
+  for (const char* series : {"drive", "A0.|F|", "B0.|F|"}) {
+    const double peak = w["peaks"][series]["peak"].get<double>();
+    EXPECT_NEAR(c["peaks"][series]["peak"].get<double>(), peak, 1e-9 * peak) << series;
+    EXPECT_NEAR(c["peaks"][series]["input"].get<double>(),
+                w["peaks"][series]["input"].get<double>(), 1e-9)
+        << series;
+  }
+
+  const std::vector<std::string> open = {"--set", "ground.points.B0=[300, 0]"};
+  auto with = [&](std::vector<std::string> args) {
+    args.insert(args.end(), open.begin(), open.end());
+    return run_cli(args);
+  };
+  const auto refused = with({"cycle", test::bundled_file("crank-rocker"), "-q"});
+  EXPECT_EQ(refused.status, 3) << refused.err;
+  EXPECT_TRUE(has(refused.err, "the design position does not assemble (residual 32.5 mm, 0 deg): "
+                               "the mechanism cannot close"))
+      << refused.err;
+  const auto also = with({"assemble", test::bundled_file("crank-rocker"), "--json"});
+  EXPECT_EQ(nlohmann::json::parse(also.out)["status"], "cannot close") << also.out;
+}
+
 }  // namespace
 }  // namespace orthomech
