@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <exception>
 #include <iostream>
+#include <new>
 #include <string_view>
 
 #include "commands.hpp"
@@ -83,6 +84,12 @@ int run(int argc, const char* const* argv) {
   } catch (const orthomech::ModelTooLarge& e) {  // for a command's dense matrices (workspace.hpp)
     std::fflush(stdout);
     std::cerr << "orthomech: " << e.what() << '\n';
+    return kBadInput;
+  } catch (const std::bad_alloc&) {  // the memory the process may use (ulimit -v, the machine)
+    std::fflush(stdout);
+    std::cerr << "orthomech: out of memory: the model or the request needs more memory than "
+                 "this process may use (ulimit -v, the machine's memory); docs/cli.md \"Limits "
+                 "and budgets\"\n";
     return kBadInput;
   } catch (const std::exception& e) {
     std::cerr << "orthomech: internal error: " << e.what() << '\n';

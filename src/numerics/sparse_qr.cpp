@@ -1,6 +1,7 @@
 #include "orthomech/numerics/sparse_qr.hpp"
 
 #include <cmath>
+#include <new>
 #include <stdexcept>
 #include <string>
 #include <suitesparse/SuiteSparseQR.hpp>
@@ -10,6 +11,7 @@ namespace orthomech {
 namespace {
 using Long = SuiteSparse_long;
 [[noreturn]] void fail(const char* what, int status) {
+  if (status == CHOLMOD_OUT_OF_MEMORY) throw std::bad_alloc();  // the environment's limit
   throw std::runtime_error(std::string("SuiteSparseQR: ") + what + " failed (CHOLMOD status " +
                            std::to_string(status) + ")");
 }

@@ -24,13 +24,12 @@ int unconstrained_chart(Eigen::Index n, Chart& chart) {
 
 }  // namespace
 
-ChartSelector::ChartSelector(int nc, int n)
-    : scaled_E_(n, nc),
-      scaled_Et_rows_(nc, n),
-      qr_rows_(n, nc),
-      qr_cols_(nc, n),
-      row_pivots_(nc),
-      row_order_(static_cast<size_t>(nc)) {}
+// The dense buffers (n × nc each, 4 of them) are sized at the first dense select: a large model
+// whose charts are chosen on the sparse path (select_sparse, the chart engine's sparse
+// factorisation) never touches them, and a 2400-body spatial chain (n = 14400, n_c = 7200)
+// reserved 3.3 GB for them per selector (issue 47).
+ChartSelector::ChartSelector(int nc, int /*n: sized at the first select*/)
+    : row_pivots_(nc), row_order_(static_cast<size_t>(nc)) {}
 
 int ChartSelector::select(const MatX& Et, const VecX& A_diag, const ChartOptions& options,
                           Chart& chart) {
@@ -45,7 +44,7 @@ int ChartSelector::select(const MatX& Et, const VecX& A_diag, const ChartOptions
     const double norm = scaled_E_.col(c).norm();
     if (norm > 0.0) scaled_E_.col(c) /= norm;
   }
-  qr_rows_.compute(scaled_E_);
+  qr_rows_.compute(scaled_E_);  // allocates at the first call of a size only
   const auto& R = qr_rows_.matrixR();
   const Eigen::Index kmax = std::min(n, nc);
   const double r11 = kmax > 0 ? std::abs(R(0, 0)) : 0.0;
@@ -66,6 +65,7 @@ int ChartSelector::select(const MatX& Et, const VecX& A_diag, const ChartOptions
   }
   // 2. Columns: QR with column pivoting of the selected rows of Eᵀ, columns scaled by √A_kk;
   //    the first r pivots are the dependent components (best-conditioned block).
+  if (scaled_Et_rows_.rows() != nc || scaled_Et_rows_.cols() != n) scaled_Et_rows_.resize(nc, n);
   auto rows_block = scaled_Et_rows_.topRows(rank);
   for (int k = 0; k < rank; ++k)
     rows_block.row(k) =

@@ -27,8 +27,7 @@ class Rows {
         options_(options),
         f_(model.nc),
         g_(extra.count),
-        G_(extra.count, model.n),
-        Et_(model.nc, model.n) {
+        G_(extra.count, model.n) {
     if (options.f_rows.empty()) {
       rows_.resize(static_cast<size_t>(model.nc));
       for (int k = 0; k < model.nc; ++k) rows_[static_cast<size_t>(k)] = k;
@@ -55,6 +54,9 @@ class Rows {
 
   // C and c at q (the last q evaluated); false when choose_f_rows chose no row.
   bool assemble(const VecX& q, const MatX& A) {
+    // Sized at the first step: a start that already satisfies the rows (a closed drawing of a
+    // 2400-body chain: n_c × n = 830 MB) never forms Eᵀ.
+    if (Et_.rows() != model_.nc || Et_.cols() != model_.n) Et_.resize(model_.nc, model_.n);
     compute_constraint_jacobian(model_, q, Et_);
     if (options_.choose_f_rows) options_.choose_f_rows(Et_, G_, A, rows_);
     if (options_.choose_f_rows && rows_.empty()) return false;
