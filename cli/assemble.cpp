@@ -25,6 +25,7 @@
 #include "orthomech/io/units.hpp"
 #include "orthomech/model/measures.hpp"
 #include "orthomech/model/spatial.hpp"
+#include "run_bounds.hpp"
 
 namespace orthomech::cli {
 
@@ -41,6 +42,7 @@ struct AssembleOptions {
   std::string write;
   bool in_place = false;
   double tolerance = 1e-12;
+  double time_limit = 0.0;  // --time-limit (s of wall clock; 0: none)
   std::string units = "file";
 };
 
@@ -176,7 +178,14 @@ int run_assemble(const AssembleOptions& opt) {
   }
 
   const VecX q0 = model.design_q();
-  const AssemblyResult res = assemble(model, q0, options);
+  // Bounded (run_bounds.hpp): --time-limit, SIGINT/SIGTERM, a progress line on a terminal.
+  options.control = run_control("assemble", opt.time_limit);
+  const AssemblyResult res = [&] {
+    const InterruptScope interrupts;
+    AssemblyResult projected = assemble(model, q0, options);
+    end_progress();
+    return projected;
+  }();
   const bool ok =
       res.status == AssemblyStatus::assembled || res.status == AssemblyStatus::unchanged;
   VelocityProjection vel;
@@ -225,6 +234,8 @@ int run_assemble(const AssembleOptions& opt) {
     j["file"] = model.file;
     j["units"] = units_json(U);
     j["status"] = to_string(res.status);
+    j["complete"] = res.status != AssemblyStatus::stopped;
+    if (res.status == AssemblyStatus::stopped) j["stop"] = to_string(res.stop);
     j["message"] = res.message;
     j["solver_status"] = res.solver_status;
     j["iterations"] = res.iterations;
@@ -400,6 +411,10 @@ int run_assemble(const AssembleOptions& opt) {
     if (!written.empty()) out << "\nwritten     " << written << "\n";
   }
   std::cout << out.str();
+  if (res.status == AssemblyStatus::stopped) {  // nothing written: not assembled
+    spdlog::error("assemble: stopped: {}", res.message);
+    return kStopped;
+  }
   if (!ok) {
     spdlog::error("{}: {}", model.file, res.message);
     for (const LimitBlock& b : blocks) {
@@ -439,6 +454,10 @@ void register_assemble(CLI::App& app, const GlobalOptions& globals, int& exit_co
   cmd->add_flag("--in-place", opt->in_place, "overwrite the input file with the assembled one");
   cmd->add_option("--tolerance", opt->tolerance, "max residual of an assembled position (m, rad)")
       ->check(finite_range(0.0, 1.0, true));
+  cmd->add_option("--time-limit", opt->time_limit,
+                  "wall-clock limit in seconds (default: none): the projection stops there with "
+                  "status stopped, nothing written, exit 5")
+      ->check(finite_range(0.0, 1e9, true));
   add_units_option(cmd, opt->units);
   auto log = std::make_shared<LogFlags>();
   add_log_flags(cmd, *log);

@@ -539,6 +539,8 @@ const char* to_string(AssemblyStatus s) {
       return "not converged";
     case AssemblyStatus::failed:
       return "failed";
+    case AssemblyStatus::stopped:
+      return "stopped";
   }
   return "?";
 }
@@ -754,6 +756,48 @@ double lock_value(const Model& model, const JointLock& l, const VecX& q) {
 
 AssemblyResult assemble_spatial(const Model& model, const VecX& q0, const AssemblyOptions& options);
 
+// The run's bounds over Ipopt's iterations (AssemblyOptions::control), through
+// IpoptSettings::keep_going; the fraction of the run is the iterations' share of the budget.
+class IpoptBounds {
+ public:
+  explicit IpoptBounds(const AssemblyOptions& options)
+      : monitor_(options.control, 0), max_iterations_(std::max(1, options.max_iterations)) {}
+  IpoptBounds(const IpoptBounds&) = delete;
+  IpoptBounds& operator=(const IpoptBounds&) = delete;
+  void attach(solvers::IpoptSettings& settings) {
+    settings.keep_going = [this](int iteration) {
+      fraction_ = static_cast<double>(iteration) / max_iterations_;
+      stop_ = monitor_.tick(fraction_);
+      return stop_ == StopReason::none;
+    };
+  }
+  // The result of a projection a bound stopped: Ipopt's last iterate q, status stopped.
+  [[nodiscard]] AssemblyResult stopped(const Model& model, const VecX& q0, const VecX& q,
+                                       const std::vector<CoordinateRow>& coords, int iterations,
+                                       const std::string& solver_status) const {
+    AssemblyResult res;
+    res.status = AssemblyStatus::stopped;
+    res.stop = stop_;
+    res.solver_status = solver_status;
+    res.iterations = iterations;
+    res.q = q;
+    VecX f(model.nc), d(model.n);
+    res.residual = total_residual(model, q, coords, f, d);
+    res.bodies = body_moves(model, q0, q);
+    res.joints = joint_residuals(model, q);
+    res.message = monitor_.stop_message(stop_, fraction_, "iteration", "--max-iterations") +
+                  " (Ipopt iteration " + std::to_string(iterations) + ")";
+    return res;
+  }
+
+ private:
+  RunMonitor monitor_;
+  int max_iterations_;
+  double fraction_ = 0.0;
+  StopReason stop_ = StopReason::none;
+};
+
+
 AssemblyResult assemble_position(const Model& model, const VecX& q0,
                                  const AssemblyOptions& options) {
   if (model.nq != model.n) return assemble_spatial(model, q0, options);
@@ -786,11 +830,15 @@ AssemblyResult assemble_position(const Model& model, const VecX& q0,
   solvers::IpoptSettings settings;
   settings.max_iter = options.max_iterations;
   settings.constr_viol_tol = std::max(tol, 1e-14);
+  IpoptBounds bounds(options);
+  bounds.attach(settings);
   const solvers::IpoptOutcome out = solvers::solve_with_ipopt(p.nlp(q_start), settings);
   if (out.error) std::rethrow_exception(out.error);  // a bug in a callback: after the solve
   res.solver_status = out.status;
   res.iterations = out.iterations;
   VecX q = out.x.size() == model.nq && out.x.allFinite() ? out.x : q_start;
+  if (out.kind == solvers::IpoptOutcomeKind::stopped)
+    return bounds.stopped(model, q0, q, coords, out.iterations, out.status);
   const bool ipopt_ok = out.kind == solvers::IpoptOutcomeKind::solved ||
                         out.kind == solvers::IpoptOutcomeKind::acceptable ||
                         out.kind == solvers::IpoptOutcomeKind::not_converged;
@@ -819,6 +867,8 @@ AssemblyResult assemble_position(const Model& model, const VecX& q0,
   p.least_squares = true;
   const solvers::IpoptOutcome ls = solvers::solve_with_ipopt(p.nlp(q_start), settings);
   if (ls.error) std::rethrow_exception(ls.error);
+  if (ls.kind == solvers::IpoptOutcomeKind::stopped)
+    return bounds.stopped(model, q0, q, coords, res.iterations + ls.iterations, ls.status);
   res.q_least_squares = ls.x.size() == model.nq && ls.x.allFinite() ? ls.x : q;
   collect_gaps(model, res.q_least_squares, tol, res);
   std::ostringstream msg;
@@ -993,12 +1043,16 @@ AssemblyResult assemble_spatial(const Model& model, const VecX& q0_in,
   solvers::IpoptSettings settings;
   settings.max_iter = options.max_iterations;
   settings.constr_viol_tol = std::max(tol, 1e-14);
+  IpoptBounds bounds(options);
+  bounds.attach(settings);
   const solvers::IpoptOutcome out = solvers::solve_with_ipopt(p.nlp(x_start), settings);
   if (out.error) std::rethrow_exception(out.error);
   res.solver_status = out.status;
   res.iterations = out.iterations;
   const VecX x = out.x.size() == model.n && out.x.allFinite() ? out.x : x_start;
   VecX q = p.at(x);
+  if (out.kind == solvers::IpoptOutcomeKind::stopped)
+    return bounds.stopped(model, q0, q, coords, out.iterations, out.status);
   const int polished = polish_spatial(model, q, p.f_rows, coords, tol);
   res.iterations += polished;
   res.residual = total_residual(model, q, coords, f, d);
@@ -1026,6 +1080,8 @@ AssemblyResult assemble_spatial(const Model& model, const VecX& q0_in,
   p.least_squares = true;
   const solvers::IpoptOutcome ls = solvers::solve_with_ipopt(p.nlp(x_start), settings);
   if (ls.error) std::rethrow_exception(ls.error);
+  if (ls.kind == solvers::IpoptOutcomeKind::stopped)
+    return bounds.stopped(model, q0, q, coords, res.iterations + ls.iterations, ls.status);
   res.q_least_squares = p.at(ls.x.size() == model.n && ls.x.allFinite() ? ls.x : x);
   collect_gaps(model, res.q_least_squares, tol, res);
   res.q = res.gaps.empty() ? q : res.q_least_squares;
@@ -1077,6 +1133,12 @@ AssemblyResult assemble(const Model& model, const VecX& q0, const AssemblyOption
 
 ResidualSplit split_residual(const Model& model, const VecX& q, const AssemblyOptions& options) {
   return split_residual(model, q, coordinate_rows(model, q, options));
+}
+
+ResidualSplit split_residual(const Model& model, const VecX& q) {
+  AssemblyOptions f_alone;
+  f_alone.use_limits = false;
+  return split_residual(model, q, f_alone);
 }
 
 }  // namespace orthomech

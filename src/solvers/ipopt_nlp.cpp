@@ -20,8 +20,9 @@ using Ipopt::Number;
 // is told the evaluation failed, so nothing is thrown through Ipopt's C++/Fortran frames.
 class DenseTnlp : public Ipopt::TNLP {
  public:
-  DenseTnlp(const DenseNlp& nlp, IpoptOutcome& out)
+  DenseTnlp(const DenseNlp& nlp, const IpoptSettings& settings, IpoptOutcome& out)
       : nlp_(nlp),
+        settings_(settings),
         out_(out),
         x_(nlp.n),
         v_(nlp.n),
@@ -152,8 +153,14 @@ class DenseTnlp : public Ipopt::TNLP {
                              Number, Number, Number, Number, Index, const Ipopt::IpoptData*,
                              Ipopt::IpoptCalculatedQuantities*) override {
     out_.iterations = iter;
-    return !out_.error;  // a stored exception stops the solve (User_Requested_Stop)
+    if (out_.error) return false;  // a stored exception stops the solve (User_Requested_Stop)
+    if (settings_.keep_going && !guard([&] { return settings_.keep_going(iter); })) {
+      stopped_ = !out_.error;
+      return false;
+    }
+    return true;
   }
+  [[nodiscard]] bool stopped_by_caller() const { return stopped_; }
 
  private:
   static constexpr double kInf = 1e20;  // Ipopt's default nlp_lower/upper_bound_inf
@@ -177,7 +184,9 @@ class DenseTnlp : public Ipopt::TNLP {
   }
 
   const DenseNlp& nlp_;
+  const IpoptSettings& settings_;
   IpoptOutcome& out_;
+  bool stopped_ = false;  // keep_going said stop
   Eigen::VectorXd x_, v_, g_;
   Eigen::MatrixXd J_, H_;
   Eigen::VectorXd lambda_;
@@ -269,6 +278,8 @@ const char* to_string(IpoptOutcomeKind k) {
       return "too few degrees of freedom";
     case IpoptOutcomeKind::invalid_number:
       return "invalid number";
+    case IpoptOutcomeKind::stopped:
+      return "stopped";
     case IpoptOutcomeKind::callback_error:
       return "callback error";
     case IpoptOutcomeKind::failed:
@@ -305,7 +316,8 @@ IpoptOutcome solve_with_ipopt(const DenseNlp& nlp, const IpoptSettings& settings
     out.message = "Ipopt could not be initialised";
     return out;
   }
-  Ipopt::SmartPtr<Ipopt::TNLP> tnlp = new DenseTnlp(nlp, out);
+  auto* dense = new DenseTnlp(nlp, settings, out);
+  Ipopt::SmartPtr<Ipopt::TNLP> tnlp = dense;
   try {
     status = app->OptimizeTNLP(tnlp);
   } catch (...) {  // Ipopt catches its own; this is belt and braces
@@ -314,7 +326,9 @@ IpoptOutcome solve_with_ipopt(const DenseNlp& nlp, const IpoptSettings& settings
   }
   out.code = static_cast<int>(status);
   out.status = status_name(status);
-  out.kind = out.error ? IpoptOutcomeKind::callback_error : classify(status);
+  out.kind = out.error                    ? IpoptOutcomeKind::callback_error
+             : dense->stopped_by_caller() ? IpoptOutcomeKind::stopped
+                                          : classify(status);
   if (Ipopt::SmartPtr<Ipopt::SolveStatistics> stats = app->Statistics(); Ipopt::IsValid(stats))
     out.iterations = stats->IterationCount();
   if (out.error) {

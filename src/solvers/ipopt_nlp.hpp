@@ -33,6 +33,9 @@ struct IpoptSettings {
   double constr_viol_tol = 1e-12;  // Ipopt `constr_viol_tol`
   int max_iter = 200;
   double max_cpu_time = 60.0;  // s
+  // Asked after every iteration (its number): false stops the solve with outcome `stopped` (the
+  // caller's run bounds: a time limit, SIGINT/SIGTERM). Empty: never stops.
+  std::function<bool(int iteration)> keep_going;
 };
 
 enum class IpoptOutcomeKind {
@@ -42,6 +45,7 @@ enum class IpoptOutcomeKind {
   not_converged,   // iteration/time limit, step too small, restoration failed, diverging
   too_few_dof,     // Not_Enough_Degrees_Of_Freedom
   invalid_number,  // NaN/Inf from a callback or a callback returned false
+  stopped,         // IpoptSettings::keep_going said stop (User_Requested_Stop)
   callback_error,  // a callback threw: see `error`
   failed,          // any other Ipopt error (invalid problem, option, internal error)
 };

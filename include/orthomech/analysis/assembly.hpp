@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "orthomech/model/model.hpp"
+#include "orthomech/run_control.hpp"
 
 namespace orthomech {
 
@@ -38,6 +39,10 @@ struct AssemblyOptions {
   bool use_limits = true;    // bounds from Joint::limits
   double tolerance = 1e-12;  // max |f_k|, |s_k − value_k| of an assembled position (m, rad)
   int max_iterations = 300;  // Ipopt iterations
+  // The run's bounds (orthomech/run_control.hpp), asked after every Ipopt iteration: a time
+  // limit, an interrupt flag, a progress callback (the fraction of max_iterations). A bound met
+  // ends the projection with status `stopped`.
+  RunControl control;
 };
 
 enum class AssemblyStatus {
@@ -46,6 +51,7 @@ enum class AssemblyStatus {
   cannot_close,   // no feasible pose: see `gaps`
   not_converged,  // the solver stopped without a feasible pose and the gap is within tolerance
   failed,         // solver error (see message / solver_status)
+  stopped,        // a bound of AssemblyOptions::control was met (AssemblyResult::stop)
 };
 [[nodiscard]] const char* to_string(AssemblyStatus s);
 
@@ -64,6 +70,7 @@ struct JointResidual {
 
 struct AssemblyResult {
   AssemblyStatus status = AssemblyStatus::failed;
+  StopReason stop = StopReason::none;  // which bound, when status is stopped
   std::string message;
   std::string solver_status;  // Ipopt's return status ("" when Ipopt was not needed)
   int iterations = 0;         // Ipopt iterations (+ Newton polish steps)
@@ -95,7 +102,9 @@ struct ResidualSplit {
   double length = 0.0, angle = 0.0;
 };
 [[nodiscard]] ResidualSplit split_residual(const Model& model, const VecX& q,
-                                           const AssemblyOptions& options = {{}, false});
+                                           const AssemblyOptions& options);
+// f alone: no locks, no limits.
+[[nodiscard]] ResidualSplit split_residual(const Model& model, const VecX& q);
 // Whether a joint component (Joint::component_names) is an angular row of f (rad).
 [[nodiscard]] bool is_angular_row(const std::string& component);
 

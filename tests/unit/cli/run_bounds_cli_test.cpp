@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <thread>
@@ -143,6 +144,29 @@ TEST(RunBoundsCli, CycleStopsAtItsTimeLimitAndOnASignal) {
   EXPECT_EQ(s["stop"], "interrupted");
   EXPECT_FALSE(s["complete"].get<bool>());
   EXPECT_GT(s["positions"].get<int>(), 0);
+}
+
+// assemble: the time limit stops Ipopt after its iteration (the sketch needs several): exit 5,
+// `status: stopped`, nothing written even with --write; without the limit it assembles.
+TEST(RunBoundsCli, AssembleStopsAtItsTimeLimitAndWritesNothing) {
+  const std::string sketch =
+      std::string(ORTHOMECH_SOURCE_DIR) + "/tests/data/reliability/sketched-crank-rocker.yaml";
+  test::TempDir dir("orthomech_rel_");
+  const std::string written = (dir.path / "closed.yaml").string();
+  const auto r = run_cli(
+      {"assemble", sketch, "--time-limit", "1e-6", "--write", written, "--json", "-q"});
+  EXPECT_EQ(r.status, 5) << r.err;
+  EXPECT_TRUE(has(r.err, "the time limit of 1e-06 s is reached (--time-limit)")) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["status"], "stopped");
+  EXPECT_EQ(j["stop"], "time_limit");
+  EXPECT_FALSE(j["complete"].get<bool>());
+  EXPECT_TRUE(j["written"].is_null());
+  EXPECT_FALSE(std::filesystem::exists(written));
+  const auto whole = run_cli({"assemble", sketch, "--write", written, "--json", "-q"});
+  EXPECT_EQ(whole.status, 0) << whole.err;
+  EXPECT_TRUE(nlohmann::json::parse(whole.out)["complete"].get<bool>());
+  EXPECT_TRUE(std::filesystem::exists(written));
 }
 
 }  // namespace

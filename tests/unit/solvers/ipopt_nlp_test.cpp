@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <vector>
+
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -75,6 +77,37 @@ TEST(IpoptAdapter, IterationLimit_IsAStatus) {
   const IpoptOutcome r = solve_with_ipopt(p, s);
   EXPECT_EQ(r.kind, IpoptOutcomeKind::not_converged) << r.status;
   EXPECT_EQ(r.status, "Maximum_Iterations_Exceeded");
+}
+
+// IpoptSettings::keep_going: asked after every iteration with its number; false stops the solve
+// there with outcome `stopped` (not `not_converged`), the iterate of that iteration kept.
+TEST(IpoptAdapter, KeepGoingFalse_StopsAtThatIteration) {
+  DenseNlp p = plane_problem();
+  p.objective = [](const VectorXd& x) {  // Rosenbrock, unconstrained: many iterations
+    return 100 * std::pow(x(1) - x(0) * x(0), 2) + std::pow(1 - x(0), 2);
+  };
+  p.gradient = [](const VectorXd& x, VectorXd& g) {
+    g(0) = -400 * x(0) * (x(1) - x(0) * x(0)) - 2 * (1 - x(0));
+    g(1) = 200 * (x(1) - x(0) * x(0));
+  };
+  p.hessian = {};
+  p.m = 0;
+  p.g_lower.resize(0);
+  p.g_upper.resize(0);
+  p.x0 << -1.2, 1.0;
+  std::vector<int> asked;
+  IpoptSettings s;
+  s.keep_going = [&](int iteration) {
+    asked.push_back(iteration);
+    return iteration < 3;
+  };
+  const IpoptOutcome r = solve_with_ipopt(p, s);
+  EXPECT_EQ(r.kind, IpoptOutcomeKind::stopped) << r.status;
+  EXPECT_EQ(r.status, "User_Requested_Stop");
+  EXPECT_EQ(asked, (std::vector<int>{0, 1, 2, 3}));
+  EXPECT_EQ(r.x.size(), 2);
+  s.keep_going = [](int) { return true; };  // never stops: Ipopt's own end
+  EXPECT_EQ(solve_with_ipopt(p, s).kind, IpoptOutcomeKind::solved);
 }
 
 TEST(IpoptAdapter, NaNFromCallback_IsAStatus) {
