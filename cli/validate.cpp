@@ -16,6 +16,7 @@
 
 #include "commands.hpp"
 #include "common.hpp"
+#include "run_bounds.hpp"
 
 namespace orthomech::cli {
 
@@ -29,6 +30,7 @@ struct ValidateCliOptions {
   double min_transmission_index = -1.0;  // < 0: sin(min_transmission)
   int starts = 24;
   unsigned seed = 1;
+  double time_limit = 0.0;  // --time-limit (s of wall clock; 0: none)
   std::string units = "file";
 };
 
@@ -60,7 +62,14 @@ int run_validate(const ValidateCliOptions& opt) {
   vo.seed = opt.seed;
   if (model.design_positions.empty())
     spdlog::warn("{}: no design positions: nothing to validate", model.file);
-  const ValidationReport rep = validate_design_positions(model, vo);
+  // Bounded (run_bounds.hpp): --time-limit, SIGINT/SIGTERM, a progress line on a terminal.
+  vo.control = run_control("validate", opt.time_limit);
+  const ValidationReport rep = [&] {
+    const InterruptScope interrupts;
+    ValidationReport checked = validate_design_positions(model, vo);
+    end_progress();
+    return checked;
+  }();
   const bool input_angular = rep.input_angular;
   const bool applicable = rep.not_applicable.empty();  // the planar loop checks
   const OutputUnit length_u = output_unit(Dimension::length, U);
@@ -79,6 +88,11 @@ int run_validate(const ValidateCliOptions& opt) {
     j["file"] = model.file;
     j["units"] = units_json(U);
     j["pass"] = rep.pass();
+    j["complete"] = rep.stop == StopReason::none;
+    if (rep.stop != StopReason::none) {
+      j["stop"] = to_string(rep.stop);
+      j["message"] = rep.stop_message;
+    }
     j["input"] = rep.input;
     j["generic_rank"] = rep.generic_rank;
     j["loop_basis"] = loop_basis_size(model);
@@ -127,7 +141,7 @@ int run_validate(const ValidateCliOptions& opt) {
       for (const Mobility::Idle& i : p.idle) idle.push_back({{"body", i.body}, {"count", i.count}});
       const nlohmann::json na = "not applicable";
       positions.push_back({{"name", p.name},
-                           {"pass", p.pass()},
+                           {"pass", rep.stop == StopReason::none && p.pass()},
                            {"failures", p.failures},
                            {"assembles", p.assembles},
                            {"assembly_status", to_string(p.assembly)},
@@ -171,6 +185,7 @@ int run_validate(const ValidateCliOptions& opt) {
                   "", ("[" + length_u.name + "]").c_str(), ("[" + length_u.name + "]").c_str(), "",
                   "", "", in_unit.c_str(), ("[" + angle_u.name + "]").c_str(), "", "", "");
     out << line;
+    const bool stopped = rep.stop != StopReason::none;  // the checks did not all run
     for (const PositionReport& p : rep.positions) {
       std::optional<double> mu;
       for (const FourBarReport& f : p.four_bars) {
@@ -188,7 +203,8 @@ int run_validate(const ValidateCliOptions& opt) {
           cell(p.singular.eta, 1.0, "%.3g").c_str(), cell(p.singular_distance, in_scale).c_str(),
           applicable ? cell(mu, 1.0 / angle_u.si, "%.2f").c_str() : "n/a", mode.c_str(),
           p.circuit > 0 ? std::to_string(p.circuit).c_str() : "-",
-          p.branch > 0 ? std::to_string(p.branch).c_str() : "-", p.pass() ? "pass" : "FAIL");
+          p.branch > 0 ? std::to_string(p.branch).c_str() : "-",
+          stopped ? "-" : p.pass() ? "pass" : "FAIL");
       out << line;
     }
     bool any_mode = false;
@@ -256,9 +272,16 @@ int run_validate(const ValidateCliOptions& opt) {
     out << "\n";
     for (const PositionReport& p : rep.positions)
       for (const std::string& f : p.failures) out << "FAIL " << p.name << ": " << f << "\n";
-    if (rep.pass()) out << "every position passes every check\n";
+    if (rep.stop != StopReason::none)
+      out << "stopped: " << rep.stop_message << "\n";
+    else if (rep.pass())
+      out << "every position passes every check\n";
   }
   std::cout << out.str();
+  if (rep.stop != StopReason::none) {  // the checks after the stop did not run
+    spdlog::error("validate: stopped: {}", rep.stop_message);
+    return kStopped;
+  }
   return rep.pass() ? kOk : kCheckFailed;
 }
 
@@ -283,6 +306,10 @@ void register_validate(CLI::App& app, const GlobalOptions& globals, int& exit_co
   cmd->add_option("--starts", opt->starts, "multi-start projections per position (default 24)")
       ->check(CLI::Range(0, 100000));
   cmd->add_option("--seed", opt->seed, "seed of the multi-start (default 1)");
+  cmd->add_option("--time-limit", opt->time_limit,
+                  "wall-clock limit in seconds (default: none): the checks stop there, the report "
+                  "does not pass, exit 5")
+      ->check(finite_range(0.0, 1e9, true));
   add_units_option(cmd, opt->units);
   auto log = std::make_shared<LogFlags>();
   add_log_flags(cmd, *log);

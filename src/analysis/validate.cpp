@@ -238,11 +238,36 @@ struct Circuit {
   }
 };
 
+// The run's bounds over the checks (ValidateOptions::control), ticked at every multi-start
+// projection and trace step. The first bound met is kept: every later tick says stop, so each
+// loop ends at its next step and the checks after it do not run.
+class ValidationBounds {
+ public:
+  explicit ValidationBounds(const RunControl& control) : monitor_(control, 0) {}
+  // One unit of work done: false once a bound is met.
+  bool go_on() {
+    if (stop_ == StopReason::none) stop_ = monitor_.tick(fraction_);
+    return stop_ == StopReason::none;
+  }
+  void set_fraction(double f) { fraction_ = f; }
+  [[nodiscard]] bool stopped() const { return stop_ != StopReason::none; }
+  [[nodiscard]] StopReason stop() const { return stop_; }
+  [[nodiscard]] std::string message() const {
+    return monitor_.stop_message(stop_, fraction_, "step", "");
+  }
+
+ private:
+  RunMonitor monitor_;
+  double fraction_ = 0.0;
+  StopReason stop_ = StopReason::none;
+};
+
 class Tracer {
  public:
   Tracer(const Model& model, int input, int generic_rank, const ValidateOptions& o,
-         std::vector<int> idle)
-      : m_(model),
+         std::vector<int> idle, ValidationBounds& bounds)
+      : bounds_(bounds),
+        m_(model),
         input_(input),
         rank_(generic_rank),
         idle_(std::move(idle)),
@@ -325,6 +350,7 @@ class Tracer {
     c.samples.push_back(s0);
     double h = opt_.step;
     for (int step = 0; step < opt_.max_trace_steps; ++step) {
+      if (!bounds_.go_on()) break;
       const Sample& a = c.samples.back();
       VecX q;
       if (!at(a, h, q)) {
@@ -441,6 +467,7 @@ class Tracer {
   }
 
  private:
+  ValidationBounds& bounds_;
   const Model& m_;
   int input_;
   int rank_;
@@ -452,8 +479,6 @@ class Tracer {
 };
 
 // Distinct solutions of f = 0 with the inputs locked: the given one plus multi-start
-// projections from random poses (body positions within ±L of the design, angles uniform).
-// Distinct solutions of f = 0 with the inputs locked: the given one plus multi-start
 // projections from random poses (body positions within ±L of the design, angles uniform; spatial
 // bodies: half the starts uniformly random orientations, normalised Gaussian quaternions
 // [Shoemake 1992], half the design orientation turned about one of the body's joint axes; only
@@ -462,7 +487,7 @@ class Tracer {
 std::vector<VecX> assembly_modes(const Model& model, const std::vector<JointLock>& locks,
                                  const VecX& q_ref, const VecX& q_design, double L,
                                  const ValidateOptions& opt, std::mt19937& gen,
-                                 const std::vector<int>& idle) {
+                                 const std::vector<int>& idle, ValidationBounds& bounds) {
   std::vector<VecX> modes = {q_ref};
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   std::normal_distribution<double> gauss(0.0, 1.0);
@@ -481,6 +506,7 @@ std::vector<VecX> assembly_modes(const Model& model, const std::vector<JointLock
       }
     }
   for (int k = 0; k < opt.starts; ++k) {
+    if (!bounds.go_on()) break;  // the modes found so far (a lower bound in any case)
     VecX q = q_design;
     for (const Body& b : model.bodies) {
       if (b.kind == BodyKind::spatial) {
@@ -1130,6 +1156,7 @@ SingularityMeasures singularity_measures(const Model& model, const VecX& q,
 }
 
 bool ValidationReport::pass() const {
+  if (stop != StopReason::none) return false;  // checks did not run
   if (circuit_defect || branch_defect || order_defect) return false;
   return std::all_of(positions.begin(), positions.end(),
                      [](const PositionReport& p) { return p.pass(); });
@@ -1151,6 +1178,7 @@ struct ValidationContext {
   std::vector<SliderCrankLoop> slider_cranks{};
   std::vector<SpatialTransmissionLoop> transmission_loops{};
   std::vector<int> idle_bodies{};  // idle bodies at the assembled design pose
+  ValidationBounds* bounds = nullptr;  // the run's bounds (validate_design_positions owns them)
 };
 
 // The common input: the single joint every position locks (circuits, order, η need it); −1 if
@@ -1381,7 +1409,7 @@ PositionReport report_position(const ValidationContext& c, const DesignPosition&
   const AssemblyResult a = assemble_design_position(c, ao, pr);
   if (!pr.assembles) return pr;
   const std::vector<VecX> modes =
-      assembly_modes(c.model, ao.locks, a.q, c.q_design, c.L, c.opt, gen, c.idle_bodies);
+      assembly_modes(c.model, ao.locks, a.q, c.q_design, c.L, c.opt, gen, c.idle_bodies, *c.bounds);
   choose_mode(c, dp, inputs, modes, pr);
   measure_displacement(c, pr);
   if (dp.target) check_target(c, *dp.target, pr);
@@ -1508,7 +1536,7 @@ void check_order(const ValidationContext& c, ValidationReport& rep) {
 // circuits.
 std::vector<Circuit> trace_circuits(const ValidationContext& c, ValidationReport& rep) {
   const Model& model = c.model;
-  Tracer tracer(model, c.input, rep.generic_rank, c.opt, c.idle_bodies);
+  Tracer tracer(model, c.input, rep.generic_rank, c.opt, c.idle_bodies, *c.bounds);
   std::vector<Circuit> circuits;
   std::vector<std::optional<double>> where(rep.positions.size());
   for (size_t k = 0; k < rep.positions.size(); ++k) {
@@ -1572,10 +1600,24 @@ void check_circuits_and_branches(ValidationReport& rep) {
 
 }  // namespace
 
+namespace {
+
+// A report whose checks a bound stopped at `where`: the checks from there on did not run.
+ValidationReport stopped_report(const ValidationBounds& bounds, const std::string& where,
+                                ValidationReport& rep) {
+  rep.stop = bounds.stop();
+  rep.stop_message = bounds.message() + "; the checks from " + where + " on did not run";
+  return std::move(rep);
+}
+
+}  // namespace
+
 ValidationReport validate_design_positions(const Model& model, const ValidateOptions& opt) {
   ValidationReport rep;
   // Step 1: what every position shares: the common input, the loops, the design pose's rank.
   ValidationContext c{model, opt, unit_system(model.units)};
+  ValidationBounds bounds(opt.control);
+  c.bounds = &bounds;
   c.L = length_scale(model);
   c.q_design = model.design_q();
   c.spatial = model.dimension == 3;
@@ -1587,10 +1629,15 @@ ValidationReport validate_design_positions(const Model& model, const ValidateOpt
   find_checked_loops(c, rep);
   design_pose_mobility(c, rep);
 
-  // Step 2 (pass 1): every position's assembly, modes, mode, target and mobility.
+  // Step 2 (pass 1): every position's assembly, modes, mode, target and mobility. The run's
+  // fraction: a share per position, the circuits' trace the last one.
   std::mt19937 gen(opt.seed);
-  for (const DesignPosition& dp : model.design_positions)
+  const double shares = static_cast<double>(model.design_positions.size() + 1);
+  for (const DesignPosition& dp : model.design_positions) {
+    bounds.set_fraction(static_cast<double>(rep.positions.size()) / shares);
     rep.positions.push_back(report_position(c, dp, gen, rep));
+    if (bounds.stopped()) return stopped_report(bounds, "position '" + dp.name + "'", rep);
+  }
 
   // Step 3 (pass 2): singularity measures and loop quality at every assembled position (with
   // the generic rank over all positions).
@@ -1611,7 +1658,9 @@ ValidationReport validate_design_positions(const Model& model, const ValidateOpt
         return p.assembles && p.dof - p.idle_dof == 1;
       });
   if (traceable && !rep.positions.empty()) {
+    bounds.set_fraction((shares - 1.0) / shares);
     rep.circuits = static_cast<int>(trace_circuits(c, rep).size());
+    if (bounds.stopped()) return stopped_report(bounds, "the circuits' trace", rep);
     check_circuits_and_branches(rep);
   }
   return rep;

@@ -31,6 +31,7 @@
 #include "orthomech/analysis/assembly.hpp"
 #include "orthomech/analysis/mobility.hpp"
 #include "orthomech/model/model.hpp"
+#include "orthomech/run_control.hpp"
 
 namespace orthomech {
 
@@ -44,6 +45,10 @@ struct ValidateOptions {
   double min_sigma = 1e-6;  // σ_min and η below this: singular (fails)
   double step = 0.05;       // trace step (scaled coordinates: rad, length / L)
   int max_trace_steps = 20000;
+  // The run's bounds (orthomech/run_control.hpp), asked at every multi-start projection and
+  // trace step: a time limit, an interrupt flag, a progress callback. A bound met ends the
+  // checks there (ValidationReport::stop); the report then does not pass.
+  RunControl control;
 };
 
 enum class GrashofType {
@@ -224,6 +229,10 @@ struct ValidationReport {
   std::optional<double> min_transmission_index;
   std::string min_transmission_index_at;  // position name
   double transmission_index_bound = 0.0;
+  // A bound of ValidateOptions::control met (none: every check ran): the checks after it did
+  // not run, so the report does not pass; stop_message says where.
+  StopReason stop = StopReason::none;
+  std::string stop_message;
   [[nodiscard]] bool pass() const;
 };
 

@@ -169,5 +169,28 @@ TEST(RunBoundsCli, AssembleStopsAtItsTimeLimitAndWritesNothing) {
   EXPECT_TRUE(std::filesystem::exists(written));
 }
 
+// validate: the time limit stops the multi-start search (1e5 starts take about 10 s): exit 5,
+// the report does not pass and says which checks did not run; with the default starts it passes.
+TEST(RunBoundsCli, ValidateStopsAtItsTimeLimitAndDoesNotPass) {
+  const std::string file = test::bundled_file("crank-rocker");
+  const auto r =
+      run_cli({"validate", file, "--starts", "100000", "--time-limit", "0.3", "--json", "-q"});
+  EXPECT_EQ(r.status, 5) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_FALSE(j["pass"].get<bool>());
+  EXPECT_FALSE(j["complete"].get<bool>());
+  EXPECT_EQ(j["stop"], "time_limit");
+  EXPECT_TRUE(has(j["message"].get<std::string>(), "the checks from position 'p1' on did not run"))
+      << j["message"];
+  for (const auto& p : j["positions"]) EXPECT_FALSE(p["pass"].get<bool>());
+  const auto text = run_cli({"validate", file, "--starts", "100000", "--time-limit", "0.3"});
+  EXPECT_EQ(text.status, 5);
+  EXPECT_FALSE(has(text.out, "every position passes")) << text.out;
+  EXPECT_TRUE(has(text.out, "stopped: ")) << text.out;
+  const auto whole = run_cli({"validate", file, "--json", "-q"});
+  EXPECT_EQ(whole.status, 0) << whole.err;
+  EXPECT_TRUE(nlohmann::json::parse(whole.out)["complete"].get<bool>());
+}
+
 }  // namespace
 }  // namespace orthomech
