@@ -587,11 +587,12 @@ nlohmann::json CycleRun::json_document() const {
 // The document on `out`; with --positions its "points" are written one position at a time
 // (io/json_stream.hpp): 1e5 positions were a tree of 1.3 GB for 324 MB of text.
 void CycleRun::write_json(std::ostream& out) const {
-  const nlohmann::json document = json_document();
+  nlohmann::json document = json_document();
   if (opt.positions) {
     PositionJson position(model, r, angular, U, noise);
-    write_json_streaming_array(out, document, "points", r.points.size(),
-                               [&](size_t i) { return position(r.points[i]); });
+    document["points"] = kJsonStreamPlaceholder;
+    write_json_streaming_array(out, document.dump(2), r.points.size(),
+                               [&](size_t i) { return position(r.points[i]).dump(2); });
   } else {
     out << document.dump(2);
   }

@@ -176,7 +176,9 @@ int run_cycle_drivers(const Model& model, const DriversRequest& request) {
       pj["conditioning"] = p.conditioning;
       return pj;
     };
-    write_json_streaming_array(std::cout, j, "points", r.points.size(), point_json);
+    j["points"] = kJsonStreamPlaceholder;
+    write_json_streaming_array(std::cout, j.dump(2), r.points.size(),
+                               [&](size_t k) { return point_json(k).dump(2); });
     std::cout << "\n";
   } else {
     std::ostringstream out;

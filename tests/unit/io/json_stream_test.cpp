@@ -9,16 +9,18 @@
 
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 
 namespace orthomech {
 namespace {
 
-std::string streamed(const nlohmann::json& skeleton, const std::string& key,
+std::string streamed(nlohmann::json skeleton, const std::string& key,
                      const nlohmann::json& items) {
+  skeleton[key] = kJsonStreamPlaceholder;
   std::ostringstream out;
-  write_json_streaming_array(out, skeleton, key, items.size(),
-                             [&](std::size_t i) { return items[i]; });
+  write_json_streaming_array(out, skeleton.dump(2), items.size(),
+                             [&](std::size_t i) { return items[i].dump(2); });
   return out.str();
 }
 
@@ -65,6 +67,13 @@ TEST(JsonStream, TheKeyOfTheSkeletonIsReplaced) {
   j["points"] = "held before";
   const nlohmann::json items = {1, 2};
   EXPECT_EQ(streamed(j, "points", items), whole(skeleton(), "points", items));
+}
+
+TEST(JsonStream, ADocumentWithoutThePlaceholderIsRefused) {
+  std::ostringstream out;
+  EXPECT_THROW(write_json_streaming_array(out, skeleton().dump(2), 1,
+                                          [](std::size_t) { return std::string("1"); }),
+               std::logic_error);
 }
 
 }  // namespace
