@@ -4,6 +4,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "orthomech/analysis/assembly.hpp"
 #include "orthomech/analysis/mobility.hpp"
 #include "orthomech/analysis/positions.hpp"
 #include "orthomech/constraints/joints.hpp"
@@ -88,6 +89,25 @@ struct MultiSweep {
   }
 };
 
+// Where the Gauss–Newton hold does not close the drawn position (a rough sketch), `assemble`'s
+// own projection (Ipopt, eq. (20)) with the drivers locked at their values at t = 0 and no
+// limits, then the hold from there: the sweep starts wherever `assemble --lock` says the
+// mechanism assembles (one criterion, as the single-driver cycle). False with assemble's account
+// of the gaps in `why`.
+bool close_with_assemble(const Model& model, const VecX& drawn, MultiSweep& sweep, VecX& q,
+                         std::string& why) {
+  AssemblyOptions ao;
+  ao.use_limits = false;
+  for (const PositionOptions::Lock& l : sweep.hold.locks) ao.locks.push_back({l.joint, l.value});
+  const AssemblyResult a = assemble(model, drawn, ao);
+  if (a.status != AssemblyStatus::assembled && a.status != AssemblyStatus::unchanged) {
+    why = a.message;
+    return false;
+  }
+  q = a.q;
+  return sweep.hold_at(q, 0.0);
+}
+
 std::string joint_list(const Model& model, const std::vector<int>& joints) {
   std::string s;
   for (const int j : joints)
@@ -169,10 +189,12 @@ MultiDriveResult run_multi_drive(const Model& model, const MultiDriveOptions& op
   sweep.hold.tolerance = 1e-13;
   for (const int j : joints) sweep.hold.locks.push_back({j, 0.0});
   VecX q = drawn;
-  if (!sweep.hold_at(q, 0.0)) {
+  std::string why;
+  if (!sweep.hold_at(q, 0.0) && !close_with_assemble(model, drawn, sweep, q, why)) {
     result.status = MultiDriveStatus::failed;
     result.message = "the design position does not assemble with the drivers " +
-                     joint_list(model, joints) + " at their values at t = 0";
+                     joint_list(model, joints) + " at their values at t = 0" +
+                     (why.empty() ? "" : ": " + why);
     return result;
   }
   const Mobility mob = compute_mobility(model, q);

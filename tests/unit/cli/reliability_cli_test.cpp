@@ -420,5 +420,37 @@ TEST(ReliabilityCli, CycleStartsWhereAssembleClosesASketch) {
   EXPECT_EQ(nlohmann::json::parse(also.out)["status"], "cannot close") << also.out;
 }
 
+// The same for several drivers: `cycle --drivers` started only by Gauss–Newton and refused the
+// sketched five-bar that `assemble --lock` closes. Oracle: the sweep of the file that
+// `assemble --lock … --write` wrote, position by position.
+TEST(ReliabilityCli, CycleDriversStartWhereAssembleLocksASketch) {
+  const std::string sketch = data_file("sketched-five-bar.yaml");
+  const auto swept = run_cli({"cycle", sketch, "--drivers", "left,right", "--json", "-q"});
+  ASSERT_EQ(swept.status, 0) << swept.err;
+  test::TempDir dir("orthomech_rel_");
+  const std::string written = (dir.path / "closed.yaml").string();
+  const auto locked = run_cli({"assemble", sketch, "--lock", "A0=80.5378deg", "--lock",
+                               "E0=-22.6624deg", "--write", written, "-q"});
+  ASSERT_EQ(locked.status, 0) << locked.err;
+  const auto again = run_cli({"cycle", written, "--drivers", "left,right", "--json", "-q"});
+  ASSERT_EQ(again.status, 0) << again.err;
+  const auto a = nlohmann::json::parse(swept.out)["points"];
+  const auto b = nlohmann::json::parse(again.out)["points"];
+  ASSERT_EQ(a.size(), b.size());
+  ASSERT_GT(a.size(), 2u);
+  double largest = 0.0;
+  for (const auto& p : b)
+    for (const auto& d : p["drives"]) largest = std::max(largest, std::abs(d.get<double>()));
+  ASSERT_GT(largest, 0.0);
+  for (size_t k = 0; k < a.size(); ++k)
+    for (const char* driver : {"left", "right"}) {
+      EXPECT_NEAR(a[k]["inputs"][driver].get<double>(), b[k]["inputs"][driver].get<double>(), 1e-9)
+          << k;
+      EXPECT_NEAR(a[k]["drives"][driver].get<double>(), b[k]["drives"][driver].get<double>(),
+                  1e-9 * largest)
+          << k << " " << driver;
+    }
+}
+
 }  // namespace
 }  // namespace orthomech
