@@ -180,12 +180,7 @@ int run_assemble(const AssembleOptions& opt) {
   const VecX q0 = model.design_q();
   // Bounded (run_bounds.hpp): --time-limit, SIGINT/SIGTERM, a progress line on a terminal.
   options.control = run_control("assemble", opt.time_limit);
-  const AssemblyResult res = [&] {
-    const InterruptScope interrupts;
-    AssemblyResult projected = assemble(model, q0, options);
-    end_progress();
-    return projected;
-  }();
+  const AssemblyResult res = run_bounded([&] { return assemble(model, q0, options); });
   const bool ok =
       res.status == AssemblyStatus::assembled || res.status == AssemblyStatus::unchanged;
   VelocityProjection vel;

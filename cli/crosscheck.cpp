@@ -43,12 +43,8 @@ int run_crosscheck_cmd(const CrosscheckCliOptions& opt) {
   (void)parse_crosscheck_method(opt.method, co.method);  // checked by CLI11 (IsMember)
   co.max_steps = opt.max_steps;
   co.control = run_control("crosscheck", opt.time_limit);
-  const CrosscheckResult res = [&] {
-    const InterruptScope interrupts;  // SIGINT/SIGTERM: stop, print what was compared
-    CrosscheckResult r = run_crosscheck(model, co);
-    end_progress();
-    return r;
-  }();
+  // SIGINT/SIGTERM: stop, print what was compared.
+  const CrosscheckResult res = run_bounded([&] { return run_crosscheck(model, co); });
   std::ostringstream out;
   if (opt.json) {
     nlohmann::json j;

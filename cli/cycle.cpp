@@ -26,7 +26,6 @@
 #include "commands.hpp"
 #include "common.hpp"
 #include "cycle_drivers.hpp"
-#include "run_bounds.hpp"
 #include "orthomech/analysis/cycle_metrics.hpp"
 #include "orthomech/constraints/joints.hpp"
 #include "orthomech/error.hpp"
@@ -36,6 +35,7 @@
 #include "orthomech/io/render.hpp"
 #include "orthomech/io/report.hpp"
 #include "orthomech/io/units.hpp"
+#include "run_bounds.hpp"
 
 namespace orthomech::cli {
 
@@ -1033,12 +1033,7 @@ int run_cycle_command(const CycleCliOptions& opt) {
   // (what was swept is written, marked incomplete), a progress line on a terminal's stderr.
   CycleOptions co = request;
   co.control = run_control("cycle", opt.time_limit);
-  const CycleResult r = [&] {
-    const InterruptScope interrupts;
-    CycleResult swept = run_cycle(model, co);
-    end_progress();
-    return swept;
-  }();
+  const CycleResult r = run_bounded([&] { return run_cycle(model, co); });
 
   // Summaries, metrics, traced points and units of what the sweep found.
   const bool angular = is_angular(model, co.driver.joint);

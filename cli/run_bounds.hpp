@@ -29,4 +29,14 @@ class InterruptScope {
 [[nodiscard]] RunControl run_control(const std::string& command, double time_limit);
 void end_progress();
 
+// run() (a library call whose RunControl came from run_control) with SIGINT/SIGTERM turned into a
+// clean stop while it runs (InterruptScope) and the progress line cleared after it; its result.
+template <class Run>
+[[nodiscard]] auto run_bounded(Run&& run) {
+  const InterruptScope interrupts;
+  auto result = run();
+  end_progress();
+  return result;
+}
+
 }  // namespace orthomech::cli

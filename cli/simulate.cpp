@@ -613,12 +613,8 @@ int run_simulate(const SimulateCliOptions& opt) {
   SimulateUnits U(model, reaction_components(model), system);
   SampleSpool spool(model, U);
   so.on_sample = [&spool](const SimulationSample& s) { spool.add(s); };
-  const SimulateResult res = [&] {
-    const InterruptScope interrupts;  // SIGINT/SIGTERM: stop, write what was computed
-    SimulateResult r = simulate(model, so);
-    end_progress();
-    return r;
-  }();
+  // SIGINT/SIGTERM: stop, write what was computed.
+  const SimulateResult res = run_bounded([&] { return simulate(model, so); });
   if (res.kinetic_removed > 0.0)
     spdlog::info("initial velocity projection removed {:.6g} {} of kinetic energy",
                  U.energy.from_si(res.kinetic_removed), U.energy.name);

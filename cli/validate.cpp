@@ -64,12 +64,7 @@ int run_validate(const ValidateCliOptions& opt) {
     spdlog::warn("{}: no design positions: nothing to validate", model.file);
   // Bounded (run_bounds.hpp): --time-limit, SIGINT/SIGTERM, a progress line on a terminal.
   vo.control = run_control("validate", opt.time_limit);
-  const ValidationReport rep = [&] {
-    const InterruptScope interrupts;
-    ValidationReport checked = validate_design_positions(model, vo);
-    end_progress();
-    return checked;
-  }();
+  const ValidationReport rep = run_bounded([&] { return validate_design_positions(model, vo); });
   const bool input_angular = rep.input_angular;
   const bool applicable = rep.not_applicable.empty();  // the planar loop checks
   const OutputUnit length_u = output_unit(Dimension::length, U);
@@ -194,17 +189,19 @@ int run_validate(const ValidateCliOptions& opt) {
       }
       const std::string mode =
           p.mode > 0 ? std::to_string(p.mode) + "/" + std::to_string(p.modes) : "-";
-      std::snprintf(
-          line, sizeof line, "%-10s %-5s %9s %9s %3d %9s %9s %11s %8s %7s %5s %5s  %s\n",
-          p.name.c_str(), p.assembles ? "yes" : "NO",
-          cell(std::optional<double>(p.max_translation), 1.0 / length_u.si).c_str(),
-          cell(p.target_error, 1.0 / length_u.si).c_str(), p.dof,
-          cell(std::optional<double>(p.singular.sigma_min), 1.0, "%.3g").c_str(),
-          cell(p.singular.eta, 1.0, "%.3g").c_str(), cell(p.singular_distance, in_scale).c_str(),
-          applicable ? cell(mu, 1.0 / angle_u.si, "%.2f").c_str() : "n/a", mode.c_str(),
-          p.circuit > 0 ? std::to_string(p.circuit).c_str() : "-",
-          p.branch > 0 ? std::to_string(p.branch).c_str() : "-",
-          stopped ? "-" : p.pass() ? "pass" : "FAIL");
+      std::snprintf(line, sizeof line, "%-10s %-5s %9s %9s %3d %9s %9s %11s %8s %7s %5s %5s  %s\n",
+                    p.name.c_str(), p.assembles ? "yes" : "NO",
+                    cell(std::optional<double>(p.max_translation), 1.0 / length_u.si).c_str(),
+                    cell(p.target_error, 1.0 / length_u.si).c_str(), p.dof,
+                    cell(std::optional<double>(p.singular.sigma_min), 1.0, "%.3g").c_str(),
+                    cell(p.singular.eta, 1.0, "%.3g").c_str(),
+                    cell(p.singular_distance, in_scale).c_str(),
+                    applicable ? cell(mu, 1.0 / angle_u.si, "%.2f").c_str() : "n/a", mode.c_str(),
+                    p.circuit > 0 ? std::to_string(p.circuit).c_str() : "-",
+                    p.branch > 0 ? std::to_string(p.branch).c_str() : "-",
+                    stopped    ? "-"
+                    : p.pass() ? "pass"
+                               : "FAIL");
       out << line;
     }
     bool any_mode = false;

@@ -8,6 +8,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "../run_watch.hpp"
 #include "../solvers/ipopt_nlp.hpp"
 #include "orthomech/analysis/mobility.hpp"
 #include "orthomech/analysis/positions.hpp"
@@ -761,14 +762,10 @@ AssemblyResult assemble_spatial(const Model& model, const VecX& q0, const Assemb
 class IpoptBounds {
  public:
   explicit IpoptBounds(const AssemblyOptions& options)
-      : monitor_(options.control, 0), max_iterations_(std::max(1, options.max_iterations)) {}
-  IpoptBounds(const IpoptBounds&) = delete;
-  IpoptBounds& operator=(const IpoptBounds&) = delete;
+      : watch_(options.control), max_iterations_(std::max(1, options.max_iterations)) {}
   void attach(solvers::IpoptSettings& settings) {
     settings.keep_going = [this](int iteration) {
-      fraction_ = static_cast<double>(iteration) / max_iterations_;
-      stop_ = monitor_.tick(fraction_);
-      return stop_ == StopReason::none;
+      return watch_.go_on(static_cast<double>(iteration) / max_iterations_);
     };
   }
   // The result of a projection a bound stopped: Ipopt's last iterate q, status stopped.
@@ -777,7 +774,7 @@ class IpoptBounds {
                                        const std::string& solver_status) const {
     AssemblyResult res;
     res.status = AssemblyStatus::stopped;
-    res.stop = stop_;
+    res.stop = watch_.stop();
     res.solver_status = solver_status;
     res.iterations = iterations;
     res.q = q;
@@ -785,18 +782,14 @@ class IpoptBounds {
     res.residual = total_residual(model, q, coords, f, d);
     res.bodies = body_moves(model, q0, q);
     res.joints = joint_residuals(model, q);
-    res.message = monitor_.stop_message(stop_, fraction_, "iteration", "--max-iterations") +
-                  " (Ipopt iteration " + std::to_string(iterations) + ")";
+    res.message = watch_.message() + " (Ipopt iteration " + std::to_string(iterations) + ")";
     return res;
   }
 
  private:
-  RunMonitor monitor_;
+  RunWatch watch_;
   int max_iterations_;
-  double fraction_ = 0.0;
-  StopReason stop_ = StopReason::none;
 };
-
 
 AssemblyResult assemble_position(const Model& model, const VecX& q0,
                                  const AssemblyOptions& options) {

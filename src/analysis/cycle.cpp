@@ -916,9 +916,7 @@ bool close_drawn_position(const Model& model, const VecX& drawn, const PositionO
     q = a.q;
     return true;
   }
-  q = a.status == AssemblyStatus::cannot_close && a.q_least_squares.size() == model.nq
-          ? a.q_least_squares
-          : a.q;
+  q = a.q;  // the best least-squares pose when it cannot close (AssemblyResult::q)
   why = a.message;
   return false;
 }
@@ -1078,7 +1076,8 @@ class CycleRun {
   VecX start_tangent_;  // set when the start was reached along the branch
   // The time grid (set_time_grid).
   int steps_ = 0, last_index_ = 0, max_positions_ = 0;
-  RunMonitor monitor_;  // CycleOptions::control over the sweep (its positions: no budget of its own)
+  RunMonitor
+      monitor_;  // CycleOptions::control over the sweep (its positions: no budget of its own)
   double period_ = 0.0, dt_ = 0.0, omega0_ = 0.0;
   // The sweep's work buffers (set_time_grid).
   VecX scale_;                   // of each velocity component, for kMaxMove

@@ -13,6 +13,7 @@
 #include <set>
 #include <sstream>
 
+#include "../run_watch.hpp"
 #include "../solvers/nlopt_minimize.hpp"
 #include "orthomech/analysis/cycle_metrics.hpp"
 #include "orthomech/analysis/mobility.hpp"
@@ -238,34 +239,13 @@ struct Circuit {
   }
 };
 
-// The run's bounds over the checks (ValidateOptions::control), ticked at every multi-start
-// projection and trace step. The first bound met is kept: every later tick says stop, so each
-// loop ends at its next step and the checks after it do not run.
-class ValidationBounds {
- public:
-  explicit ValidationBounds(const RunControl& control) : monitor_(control, 0) {}
-  // One unit of work done: false once a bound is met.
-  bool go_on() {
-    if (stop_ == StopReason::none) stop_ = monitor_.tick(fraction_);
-    return stop_ == StopReason::none;
-  }
-  void set_fraction(double f) { fraction_ = f; }
-  [[nodiscard]] bool stopped() const { return stop_ != StopReason::none; }
-  [[nodiscard]] StopReason stop() const { return stop_; }
-  [[nodiscard]] std::string message() const {
-    return monitor_.stop_message(stop_, fraction_, "step", "");
-  }
-
- private:
-  RunMonitor monitor_;
-  double fraction_ = 0.0;
-  StopReason stop_ = StopReason::none;
-};
-
+// The run's bounds over the checks (ValidateOptions::control, run_watch.hpp) are ticked at every
+// multi-start projection and trace step: the first bound met ends each loop at its next step and
+// the checks after it do not run.
 class Tracer {
  public:
   Tracer(const Model& model, int input, int generic_rank, const ValidateOptions& o,
-         std::vector<int> idle, ValidationBounds& bounds)
+         std::vector<int> idle, RunWatch& bounds)
       : bounds_(bounds),
         m_(model),
         input_(input),
@@ -467,7 +447,7 @@ class Tracer {
   }
 
  private:
-  ValidationBounds& bounds_;
+  RunWatch& bounds_;
   const Model& m_;
   int input_;
   int rank_;
@@ -487,7 +467,7 @@ class Tracer {
 std::vector<VecX> assembly_modes(const Model& model, const std::vector<JointLock>& locks,
                                  const VecX& q_ref, const VecX& q_design, double L,
                                  const ValidateOptions& opt, std::mt19937& gen,
-                                 const std::vector<int>& idle, ValidationBounds& bounds) {
+                                 const std::vector<int>& idle, RunWatch& bounds) {
   std::vector<VecX> modes = {q_ref};
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   std::normal_distribution<double> gauss(0.0, 1.0);
@@ -1178,7 +1158,7 @@ struct ValidationContext {
   std::vector<SliderCrankLoop> slider_cranks{};
   std::vector<SpatialTransmissionLoop> transmission_loops{};
   std::vector<int> idle_bodies{};  // idle bodies at the assembled design pose
-  ValidationBounds* bounds = nullptr;  // the run's bounds (validate_design_positions owns them)
+  RunWatch* bounds = nullptr;      // the run's bounds (validate_design_positions owns them)
 };
 
 // The common input: the single joint every position locks (circuits, order, η need it); −1 if
@@ -1603,11 +1583,9 @@ void check_circuits_and_branches(ValidationReport& rep) {
 namespace {
 
 // A report whose checks a bound stopped at `where`: the checks from there on did not run.
-ValidationReport stopped_report(const ValidationBounds& bounds, const std::string& where,
-                                ValidationReport& rep) {
+void mark_stopped(const RunWatch& bounds, const std::string& where, ValidationReport& rep) {
   rep.stop = bounds.stop();
   rep.stop_message = bounds.message() + "; the checks from " + where + " on did not run";
-  return std::move(rep);
 }
 
 }  // namespace
@@ -1616,7 +1594,7 @@ ValidationReport validate_design_positions(const Model& model, const ValidateOpt
   ValidationReport rep;
   // Step 1: what every position shares: the common input, the loops, the design pose's rank.
   ValidationContext c{model, opt, unit_system(model.units)};
-  ValidationBounds bounds(opt.control);
+  RunWatch bounds(opt.control);
   c.bounds = &bounds;
   c.L = length_scale(model);
   c.q_design = model.design_q();
@@ -1636,7 +1614,10 @@ ValidationReport validate_design_positions(const Model& model, const ValidateOpt
   for (const DesignPosition& dp : model.design_positions) {
     bounds.set_fraction(static_cast<double>(rep.positions.size()) / shares);
     rep.positions.push_back(report_position(c, dp, gen, rep));
-    if (bounds.stopped()) return stopped_report(bounds, "position '" + dp.name + "'", rep);
+    if (bounds.stopped()) {
+      mark_stopped(bounds, "position '" + dp.name + "'", rep);
+      return rep;
+    }
   }
 
   // Step 3 (pass 2): singularity measures and loop quality at every assembled position (with
@@ -1660,7 +1641,10 @@ ValidationReport validate_design_positions(const Model& model, const ValidateOpt
   if (traceable && !rep.positions.empty()) {
     bounds.set_fraction((shares - 1.0) / shares);
     rep.circuits = static_cast<int>(trace_circuits(c, rep).size());
-    if (bounds.stopped()) return stopped_report(bounds, "the circuits' trace", rep);
+    if (bounds.stopped()) {
+      mark_stopped(bounds, "the circuits' trace", rep);
+      return rep;
+    }
     check_circuits_and_branches(rep);
   }
   return rep;

@@ -13,12 +13,12 @@
 #include "orthomech/analysis/cycle.hpp"
 #include "orthomech/analysis/mobility.hpp"
 #include "orthomech/analysis/positions.hpp"
-#include "orthomech/io/mechanism_file.hpp"
-#include "orthomech/projection/chart.hpp"
 #include "orthomech/constraints/joints.hpp"
 #include "orthomech/constraints/sparse_et.hpp"
+#include "orthomech/io/mechanism_file.hpp"
 #include "orthomech/model/free_system.hpp"
 #include "orthomech/model/measures.hpp"
+#include "orthomech/projection/chart.hpp"
 #include "orthomech/projection/chart_engine.hpp"
 #include "orthomech/projection/dual.hpp"
 #include "orthomech/projection/primal.hpp"
@@ -28,7 +28,7 @@
 namespace {
 std::atomic<long> g_allocations{0};
 std::atomic<long long> g_bytes{0};  // bytes asked for (never decreases)
-}
+}  // namespace
 
 // Every heap allocation of the process goes through malloc/calloc/realloc (Eigen's
 // aligned_malloc uses std::malloc; libstdc++'s operator new calls malloc). This binary interposes
@@ -311,6 +311,8 @@ TEST(NoAllocationLargeModels, SelectorAndAClosedStartReserveNoDenseBlocks) {
   before = g_bytes.load();
   const SolveResult closed = project_positions(model, q);
   EXPECT_EQ(closed.status, SolveStatus::converged);
+  // The closed start forms nothing n × n_c: what it allocates is O(n) (f, the selector's
+  // bookkeeping), far below a tenth of one dense block (83 MB); before, 4.1 GB.
   EXPECT_LT(g_bytes.load() - before, dense / 10);
   // The counter sees large blocks (else this test could not fail).
   before = g_bytes.load();

@@ -319,7 +319,8 @@ TEST(ReliabilityCli, RenderOfAPrismaticDriverTakesItsStroke) {
   EXPECT_EQ(alone.status, 2) << alone.err;
 }
 
-// ---- a spatial joint's range across ±180° ---------------------------------------------------------
+// ---- a spatial joint's range across ±180°
+// ---------------------------------------------------------
 
 // `cycle --from -210 --to -150` on a spatial revolute driver failed with an unrelated dead-point
 // message (issue 47: the joint angle was read in (−180°, 180°] at the start and continuously
@@ -339,7 +340,8 @@ TEST(ReliabilityCli, SpatialRangeAcrossMinus180DegreesIsTheSameSweepATurnLater) 
   ASSERT_EQ(across["points"].size(), 61u);
   ASSERT_EQ(later["points"].size(), 61u);
   double largest = 0.0;
-  for (const auto& p : later["points"]) largest = std::max(largest, std::abs(p["drive"].get<double>()));
+  for (const auto& p : later["points"])
+    largest = std::max(largest, std::abs(p["drive"].get<double>()));
   ASSERT_GT(largest, 0.0);
   for (size_t k = 0; k < 61; ++k) {
     const auto& a = across["points"][k];
@@ -354,7 +356,8 @@ TEST(ReliabilityCli, SpatialRangeAcrossMinus180DegreesIsTheSameSweepATurnLater) 
   }
 }
 
-// ---- a rolling disc of radius 1e-9 ---------------------------------------------------------------
+// ---- a rolling disc of radius 1e-9
+// ---------------------------------------------------------------
 
 // The bundled disc's initial rates with a radius of 1e-9 m spin it at about 1e8 rad/s: the motion
 // needs ~1e10 steps of 5e-11 s. It ran for tens of minutes; it stops after its first 1e4 steps,
@@ -373,7 +376,8 @@ TEST(ReliabilityCli, RollingDiscOfRadiusOneNanometreStopsAtOnceWithItsStepCount)
   EXPECT_LT(seconds, 60.0);  // a bound on a hang, not a speed test (0.4 s in Release)
 }
 
-// ---- one assembly criterion for assemble and cycle ------------------------------------------------
+// ---- one assembly criterion for assemble and cycle
+// ------------------------------------------------
 
 // A sketch drawn far from closed: `assemble` closed it while `cycle` said "the design position
 // does not assemble (residual 58.93 mm)" (its start tried only Gauss–Newton). Now the cycle starts
@@ -392,6 +396,7 @@ TEST(ReliabilityCli, CycleStartsWhereAssembleClosesASketch) {
 
   test::TempDir dir("orthomech_rel_");
   const std::string written = (dir.path / "closed.yaml").string();
+  // A0 held at the sketch's drawn crank angle (its pose's -56.3269 deg), as the cycle holds it.
   const auto locked =
       run_cli({"assemble", sketch, "--lock", "A0=-56.3269deg", "--write", written, "-q"});
   ASSERT_EQ(locked.status, 0) << locked.err;
@@ -413,8 +418,9 @@ TEST(ReliabilityCli, CycleStartsWhereAssembleClosesASketch) {
   };
   const auto refused = with({"cycle", test::bundled_file("crank-rocker"), "-q"});
   EXPECT_EQ(refused.status, 3) << refused.err;
-  EXPECT_TRUE(has(refused.err, "the design position does not assemble (residual 32.5 mm, 0 deg): "
-                               "the mechanism cannot close"))
+  EXPECT_TRUE(has(refused.err,
+                  "the design position does not assemble (residual 32.5 mm, 0 deg): "
+                  "the mechanism cannot close"))
       << refused.err;
   const auto also = with({"assemble", test::bundled_file("crank-rocker"), "--json"});
   EXPECT_EQ(nlohmann::json::parse(also.out)["status"], "cannot close") << also.out;
@@ -429,6 +435,7 @@ TEST(ReliabilityCli, CycleDriversStartWhereAssembleLocksASketch) {
   ASSERT_EQ(swept.status, 0) << swept.err;
   test::TempDir dir("orthomech_rel_");
   const std::string written = (dir.path / "closed.yaml").string();
+  // The drivers at their values at t = 0: the sketch's drawn crank angles (its header).
   const auto locked = run_cli({"assemble", sketch, "--lock", "A0=80.5378deg", "--lock",
                                "E0=-22.6624deg", "--write", written, "-q"});
   ASSERT_EQ(locked.status, 0) << locked.err;

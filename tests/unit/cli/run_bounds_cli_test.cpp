@@ -122,8 +122,8 @@ TEST(RunBoundsCli, CrosscheckStopsAtItsBounds) {
 // written, the JSON marked incomplete. The double wishbone at 1e5 positions sweeps for about
 // 1.5 s in the Release build (several times longer under the sanitizers).
 TEST(RunBoundsCli, CycleStopsAtItsTimeLimitAndOnASignal) {
-  const std::vector<std::string> args = {"cycle", test::bundled_file("double-wishbone"),
-                                         "--steps", "100000", "--json"};
+  const std::vector<std::string> args = {"cycle", test::bundled_file("double-wishbone"), "--steps",
+                                         "100000", "--json"};
   std::vector<std::string> limited = args;
   limited.insert(limited.end(), {"--time-limit", "0.2", "-q"});
   const auto r = run_cli(limited);
@@ -153,8 +153,8 @@ TEST(RunBoundsCli, AssembleStopsAtItsTimeLimitAndWritesNothing) {
       std::string(ORTHOMECH_SOURCE_DIR) + "/tests/data/reliability/sketched-crank-rocker.yaml";
   test::TempDir dir("orthomech_rel_");
   const std::string written = (dir.path / "closed.yaml").string();
-  const auto r = run_cli(
-      {"assemble", sketch, "--time-limit", "1e-6", "--write", written, "--json", "-q"});
+  const auto r =
+      run_cli({"assemble", sketch, "--time-limit", "1e-6", "--write", written, "--json", "-q"});
   EXPECT_EQ(r.status, 5) << r.err;
   EXPECT_TRUE(has(r.err, "the time limit of 1e-06 s is reached (--time-limit)")) << r.err;
   const auto j = nlohmann::json::parse(r.out);

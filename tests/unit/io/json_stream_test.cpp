@@ -15,8 +15,7 @@
 namespace orthomech {
 namespace {
 
-std::string streamed(nlohmann::json skeleton, const std::string& key,
-                     const nlohmann::json& items) {
+std::string streamed(nlohmann::json skeleton, const std::string& key, const nlohmann::json& items) {
   skeleton[key] = kJsonStreamPlaceholder;
   std::ostringstream out;
   write_json_streaming_array(out, skeleton.dump(2), items.size(),
@@ -52,8 +51,14 @@ TEST(JsonStream, ObjectItemsAreWrittenAsTheWholeDocumentsDump) {
 }
 
 TEST(JsonStream, ScalarAndEmptyItemsAndAnEmptyArray) {
-  const nlohmann::json scalars = {1, -2.25, "x", nullptr, true, nlohmann::json::array(),
-                                  nlohmann::json::object(), nlohmann::json::array({1, {2, 3}})};
+  const nlohmann::json scalars = {1,
+                                  -2.25,
+                                  "x",
+                                  nullptr,
+                                  true,
+                                  nlohmann::json::array(),
+                                  nlohmann::json::object(),
+                                  nlohmann::json::array({1, {2, 3}})};
   EXPECT_EQ(streamed(skeleton(), "points", scalars), whole(skeleton(), "points", scalars));
   EXPECT_EQ(streamed(skeleton(), "points", nlohmann::json::array()),
             whole(skeleton(), "points", nlohmann::json::array()));
