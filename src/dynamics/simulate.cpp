@@ -152,6 +152,17 @@ constexpr double kReachSteps = 6.0;
 // the passage's own noise grows as σ̂ falls.
 constexpr double kPassQuality = 1e-3;
 constexpr double kPassQualityFloor = 1e-6;
+// Inverse iterations per accepted step for the primal form's chart-free σ̂ (warm-started: the
+// eigenvector moves little between steps, and next to a change point λ_min is far below the
+// rest of G's spectrum, where one iteration already gains that ratio).
+constexpr int kPrimalQualityIterations = 3;
+// The primal form stops ahead of a change point when its σ̂ = √λ_min(G)/σ_ref falls to this (or
+// the point is within kReachSteps steps). Below kPassQuality: the chart-free σ̂ of a regular
+// mechanism may sit there for a whole run (the RSSR of mechanisms/rssr.yaml: about 5e-4 in
+// metres and kilograms, E regular), and G's solves keep ~ε/σ̂² ≈ 2e-8 of their accuracy at 1e-4.
+// Not lower: rosenbrock4 evaluates G at stages beyond the step, which fail on a singular G
+// within ~1e-5 of the point (N-four-bar of N = 40, PrimalAtChangePoint).
+constexpr double kPrimalStopQuality = 1e-4;
 constexpr double kRetry = 0.25;  // 4 times closer (above)
 // A passage that fails only its energy balance (C6 (v)) is tried again from 2 times closer: its
 // step halves, its truncation error (O(h⁷)) falls ~128-fold, its rounding noise (~ε/σ̂²) grows
@@ -497,7 +508,8 @@ class Simulation {
         std::abs(kinetic_energy(model_, dyn_.state_)) + std::abs(potential_energy(model_, q_));
     saved_prev_.valid = true;
     saved_prev_.t = T0_;
-    saved_prev_.sigma = chart_quality_rate(q_, dyn_.state_.u, saved_prev_.rate);
+    saved_prev_.sigma = primal_ ? primal_quality_rate(T0_, dyn_.state_.u, saved_prev_.rate)
+                                : chart_quality_rate(q_, dyn_.state_.u, saved_prev_.rate);
     saved_prev_.spread = primal_ ? 0.0 : dyn_.chart_spread();
     saved_prev_.x = x_;
     saved_prev_.chart = dyn_.cs_.chart();
@@ -669,6 +681,56 @@ class Simulation {
     return sigma;
   }
 
+  // Primal form: σ̂ free of the chart, σ_min(Eᵀ A^½)/σ_ref = √λ_min(G)/σ_ref with G = Eᵀ A E
+  // (eq. (42)) at the corrected q, and its rate. The primal form stops where G is singular,
+  // which is where E loses rank: every chart's block is singular there, but a chart's block is
+  // also singular where E is regular (the chart's own singularity), and the chart-free σ̂, which
+  // bounds every chart's from above, falls to 0 only at a change point (the RSSR of
+  // mechanisms/rssr.yaml: its charts' σ̂ fall to 1e-4 three times in 0.4 s, E stays regular).
+  // λ_min by inverse iteration on G's factor, warm-started from the last step's vector; the
+  // rate as in chart_quality_rate, with y the unit eigenvector and x = A E y/σ_abs
+  // (the right singular vector of Eᵀ A^½ mapped back by A^½). Allocation-free after the first call.
+  double primal_quality_rate(double t, const VecX& uu, double& rate) {
+    rate = 0.0;
+    if (model_.nc == 0 || rank_ == 0) return std::numeric_limits<double>::infinity();
+    try {
+      dyn_.state_.t = t;  // (for factor_G's message)
+      dyn_.factor_G();    // at the corrected q: ws_.constraints.Et and the mass there
+    } catch (const detail::SingularEvaluation&) {
+      return 0.0;  // G singular: at the point (the monitor stops there)
+    }
+    const SparseEt::Matrix& E = dyn_.ws_.constraints.Et.matrix();  // Eᵀ
+    if (g_y_.size() != model_.nc) g_y_ = VecX::Ones(model_.nc);
+    g_y_.normalize();
+    for (int k = 0; k < kPrimalQualityIterations; ++k) {
+      dyn_.solve_G(g_y_, g_z_);
+      const double zn = g_z_.norm();
+      if (!(zn > 0.0) || !std::isfinite(zn)) return 0.0;
+      g_y_ = g_z_ / zn;
+    }
+    g_Ety_.noalias() = E.transpose() * g_y_;  // E y
+    if (dyn_.ws_.free.diagonal_mass)
+      rate_x_ = dyn_.ws_.free.A_diag.cwiseProduct(g_Ety_);
+    else
+      rate_x_.noalias() = dyn_.ws_.free.A * g_Ety_;
+    const double lambda = g_Ety_.dot(rate_x_);  // yᵀ G y
+    if (!(lambda > 0.0)) return 0.0;
+    const double sigma_abs = std::sqrt(lambda);
+    const double sigma = sigma_abs / sigma_ref_;
+    const double un = uu.norm();
+    if (!(un > 0.0)) return sigma;
+    rate_x_ /= sigma_abs;  // x = A E y / σ_abs
+    const double alpha = un / rate_x_.norm();
+    rate_state_.q = q_;
+    rate_rotations_.update(model_, q_);
+    rate_state_.u = uu + alpha * rate_x_;
+    compute_constraint_rate(model_, rate_state_, rate_rotations_, rate_plus_);
+    rate_state_.u = uu - alpha * rate_x_;
+    compute_constraint_rate(model_, rate_state_, rate_rotations_, rate_minus_);
+    rate = 0.25 * g_y_.dot(rate_plus_ - rate_minus_) / (alpha * sigma_ref_);
+    return sigma;
+  }
+
   // (C2'') A change point inside the step just taken (from saved_prev, in the same chart): σ̂
   // fell at the start and rises at the end, and the two tangents σ̂₀ + σ̂'₀ τ and
   // σ̂₁ + σ̂'₁ (τ − h) meet at or near 0 (below kCrossingVertex of the smaller end value; a
@@ -683,7 +745,8 @@ class Simulation {
   bool crossed_within_step(double t, double s1, double d1) {
     if (!monitor_armed_ || !saved_prev_.valid || !(d1 > 0.0)) return false;
     const Chart& c = dyn_.cs_.chart();
-    if (saved_prev_.chart.independent != c.independent || saved_prev_.chart.rows != c.rows)
+    if (!primal_ &&
+        (saved_prev_.chart.independent != c.independent || saved_prev_.chart.rows != c.rows))
       return false;
     const double h = t - saved_prev_.t, s0 = saved_prev_.sigma, d0 = saved_prev_.rate;
     if (!(h > 0.0)) return false;
@@ -731,8 +794,9 @@ class Simulation {
     // the corrected q): a change point inside the step, whatever the step's length, is undone
     // before anything else looks at the step's end (its velocity check included).
     double rate_end = 0.0;
-    const double sigma_end = chart_quality_rate(q_, primal_ ? dyn_.state_.u : u_step_, rate_end);
-    if (!chart_changed && crossed_within_step(t, sigma_end, rate_end)) return false;
+    const double sigma_end = primal_ ? primal_quality_rate(t, dyn_.state_.u, rate_end)
+                                     : chart_quality_rate(q_, u_step_, rate_end);
+    if ((primal_ || !chart_changed) && crossed_within_step(t, sigma_end, rate_end)) return false;
     if (primal_) {
       project_momenta(y, chart_changed);
     } else {
@@ -1009,9 +1073,11 @@ class Simulation {
   bool monitor_change_points(double t, const VecX& y, double sigma_end, double rate_end,
                              bool chart_changed) {
     // σ̂ and its rate in the chart the next step uses (another block after a switch).
+    // (The primal form's σ̂ does not depend on the chart.)
+    const bool other_block = chart_changed && !primal_;
     double rate = rate_end;
-    const double sigma = chart_changed ? chart_quality_rate(q_, dyn_.state_.u, rate) : sigma_end;
-    if (chart_changed) monitor_.valid = false;  // σ̂ of another chart block: no secant trend
+    const double sigma = other_block ? chart_quality_rate(q_, dyn_.state_.u, rate) : sigma_end;
+    if (other_block) monitor_.valid = false;  // σ̂ of another chart block: no secant trend
     bool stop = false;
     const bool minimum_above_zero = bottoms_out_above_zero(t, sigma);
     if (monitor_quiet_ && (rate > 0.0 || (monitor_.valid && sigma > monitor_.sigma)))
@@ -1037,7 +1103,8 @@ class Simulation {
       }
       // (A point estimated beyond the run's end raises nothing: the run ends first, or a later,
       // closer estimate puts it before the end.)
-      if ((sigma <= pass_quality_ || t_star - t < kReachSteps * h_last_) &&
+      if ((sigma <= (primal_ ? kPrimalStopQuality : pass_quality_) ||
+           t_star - t < kReachSteps * h_last_) &&
           t_star < T1_ - end_slack_) {
         request_ = {true, t_star, sigma};
         stop = true;
@@ -1802,6 +1869,7 @@ class Simulation {
   double t_last_accept_, h_last_ = 0.0;
   // chart_quality_rate's work space.
   VecX sigma_left_, rate_x_, rate_plus_, rate_minus_;
+  VecX g_y_, g_z_, g_Ety_;  // primal_quality_rate's eigenvector, G⁻¹ y, E y
   State rate_state_;
   BodyPoses rate_rotations_;
   std::string stop_message_;  // why accept stopped the integrator
