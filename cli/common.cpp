@@ -8,6 +8,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <sstream>
+#include <vector>
 
 #include "orthomech/io/mechanism_file.hpp"
 #include "orthomech/io/noise.hpp"
@@ -196,6 +198,24 @@ nlohmann::json units_json(const UnitSystem& u) {
       {"inertia", Dimension::inertia}};
   for (const auto& [name, q] : kinds) j[name] = output_unit(q, u).name;
   return j;
+}
+
+Vec3 parse_point(const Model& model, const std::string& text, const std::string& option) {
+  Vec3 o = Vec3::Zero();
+  if (text.empty()) return o;
+  const double unit = unit_system(model.units).length_si;
+  std::vector<double> v;
+  std::stringstream in(text);
+  for (std::string item; std::getline(in, item, ',');)
+    v.push_back(parse_number(item, option) * unit);
+  const auto dim = static_cast<size_t>(model.dimension);
+  if (v.size() != dim || text.back() == ',')
+    throw CLI::ValidationError(option, "'" + text + "' is not a point of a " +
+                                           (dim == 2 ? "planar" : "spatial") + " mechanism: give " +
+                                           (dim == 2 ? "X,Y" : "X,Y,Z") +
+                                           " in the file's length unit");
+  for (size_t i = 0; i < dim; ++i) o(static_cast<Eigen::Index>(i)) = v[i];
+  return o;
 }
 
 }  // namespace orthomech::cli

@@ -78,6 +78,11 @@ void add_units_option(CLI::App* cmd, std::string& choice);
 // The unit of the mass-metric distance √((q − q₀)ᵀ M (q − q₀)): √mass·length, e.g.
 // "sqrt(kg)*mm".
 [[nodiscard]] OutputUnit mass_metric_unit(const UnitSystem& units);
+// A point of the frame given on the command line (`--shaking-about 35,0`): 2 numbers (planar) or
+// 3 (spatial) in the file's length unit, returned in SI (z = 0 for a planar mechanism); "" is
+// the origin. Throws CLI::ValidationError naming `option` otherwise.
+[[nodiscard]] Vec3 parse_point(const Model& model, const std::string& text,
+                               const std::string& option);
 // The `units` object of every JSON document: the unit name of each kind of quantity.
 [[nodiscard]] nlohmann::json units_json(const UnitSystem& units);
 

@@ -27,6 +27,7 @@
 #include "common.hpp"
 #include "cycle_drivers.hpp"
 #include "orthomech/analysis/cycle_metrics.hpp"
+#include "orthomech/analysis/shaking.hpp"
 #include "orthomech/constraints/joints.hpp"
 #include "orthomech/error.hpp"
 #include "orthomech/io/cycle_output.hpp"
@@ -63,6 +64,7 @@ struct CycleCliOptions {
   std::string report;                // --report FILE.html
   std::string view;                  // --view (spatial pictures; "" is iso)
   double duration = 4.0;             // s per loop of the animation
+  std::string shaking_about;         // --shaking-about X,Y[,Z] (file's length unit; "": origin)
 };
 
 std::string fmt(double v, int precision = 4) {
@@ -328,8 +330,8 @@ SweepPositions sweep_positions_of(const CycleResult& r) {
 std::vector<ExtraColumn> trace_columns(const std::vector<PointTrace>& traces) {
   std::vector<ExtraColumn> cols;
   for (const PointTrace& t : traces) {
-    ExtraColumn x{"trace " + t.point + ".x", Dimension::length, {}};
-    ExtraColumn y{"trace " + t.point + ".y", Dimension::length, {}};
+    ExtraColumn x{"trace " + t.point + ".x", Dimension::length, {}, {}, false};
+    ExtraColumn y{"trace " + t.point + ".y", Dimension::length, {}, {}, false};
     for (const Vec2& p : t.path) {
       x.values.push_back(p.x());
       y.values.push_back(p.y());
@@ -337,15 +339,17 @@ std::vector<ExtraColumn> trace_columns(const std::vector<PointTrace>& traces) {
     cols.push_back(std::move(x));
     cols.push_back(std::move(y));
     if (!t.z.empty())
-      cols.push_back(ExtraColumn{"trace " + t.point + ".z", Dimension::length, t.z});
+      cols.push_back(ExtraColumn{"trace " + t.point + ".z", Dimension::length, t.z, {}, false});
   }
   return cols;
 }
 
 // The report's plots (output units): the drive, the reaction force magnitudes and the reaction
-// moment magnitudes versus the input; a value that is not reported is left out (null).
-std::vector<ReportPlot> report_plots(const CycleResult& r,
-                                     const std::vector<ReactionMagnitude>& magnitudes, bool angular,
+// moment magnitudes versus the input, and the shaking force's components and magnitude; a value
+// that is not reported is left out (null).
+std::vector<ReportPlot> report_plots(const Model& model, const CycleResult& r,
+                                     const std::vector<ReactionMagnitude>& magnitudes,
+                                     const ShakingSeries& shaking, bool angular,
                                      const UnitSystem& u) {
   std::vector<ReportPlot> plots;
   const OutputUnit drive_u = output_unit(angular ? Dimension::moment : Dimension::force, u);
@@ -368,6 +372,19 @@ std::vector<ReportPlot> report_plots(const CycleResult& r,
   }
   if (!forces.series.empty()) plots.push_back(std::move(forces));
   if (!moments.series.empty()) plots.push_back(std::move(moments));
+  const OutputUnit fu = output_unit(Dimension::force, u);
+  ReportPlot shake{"shaking", "shaking force on the frame", fu.name, {}};
+  const char* axes[3] = {"x", "y", "z"};
+  for (int i = 0; i <= model.dimension; ++i) {  // x, y[, z], then |F_s|
+    ReportSeries sr{i == model.dimension ? "|F_s|" : std::string("F_s ") + axes[i], {}};
+    for (size_t k = 0; k < shaking.force.size(); ++k)
+      sr.values.push_back(shaking.reported[k] ? std::optional(fu.from_si(
+                                                    i == model.dimension ? shaking.force[k].norm()
+                                                                         : shaking.force[k](i)))
+                                              : std::nullopt);
+    shake.series.push_back(std::move(sr));
+  }
+  plots.push_back(std::move(shake));
   return plots;
 }
 
@@ -385,6 +402,8 @@ struct CycleRun {
   std::vector<SeriesSummary> summary{};
   std::vector<SeriesSummary> component_summary{};
   CycleMetrics metrics{};
+  ShakingSeries shaking{};
+  std::vector<SeriesSummary> shaking_summary{};  // |F_s| and M_s (JSON peaks; summary_metrics)
   SweepPositions sweep{};
   std::vector<PointTrace> traces{};
   NoiseFloor noise{};
@@ -441,6 +460,7 @@ struct CycleRun {
   void summary_table(std::ostream& out) const;
   void summary_metrics(std::ostream& out) const;
   void summary_traces(std::ostream& out) const;
+  void summary_shaking(std::ostream& out) const;
   void summary_indeterminate(std::ostream& out) const;
 };
 
@@ -533,8 +553,10 @@ std::string CycleRun::write_files() const {
     std::filesystem::create_directories(dir, ec);
     if (ec) throw CLI::ValidationError("--out", "cannot create " + opt.out + ": " + ec.message());
     try {
-      const CycleColumns cols = write_cycle_csv(dir / "cycle.csv", model, r, magnitudes, angular, U,
-                                                trace_columns(traces));
+      std::vector<ExtraColumn> extra = trace_columns(traces);
+      for (ExtraColumn& col : shaking_columns(model, shaking)) extra.push_back(std::move(col));
+      const CycleColumns cols =
+          write_cycle_csv(dir / "cycle.csv", model, r, magnitudes, angular, U, extra);
       write_cycle_gnuplot(dir / "cycle.gp", "cycle.csv", model, r, magnitudes, cols, angular, U,
                           speed_text(co.driver, angular, U));
     } catch (const std::runtime_error& e) {
@@ -578,6 +600,9 @@ nlohmann::json CycleRun::json_document() const {
   // Design metrics.
   j["loops"] = loops_json();
   if (metrics.power.available) add_power_json(j);
+  nlohmann::json about = nlohmann::json::array();
+  for (int i = 0; i < model.dimension; ++i) about.push_back(length_u.from_si(shaking.about(i)));
+  j["shaking"] = {{"about", about}, {"unit", length_u.name}};
   j["strokes"] = strokes_json();
   j["limits"] = limits_json();
   j["traces"] = traces_json();
@@ -671,7 +696,7 @@ nlohmann::json CycleRun::bridges_json() const {
 // rounding noise of the solve (io/noise.hpp).
 nlohmann::json CycleRun::peaks_json() const {
   nlohmann::json peaks;
-  for (const auto* list : {&summary, &component_summary})
+  for (const auto* list : {&summary, &shaking_summary, &component_summary})
     for (const SeriesSummary& s : *list) {
       const OutputUnit u = unit_of(s.unit);
       const Dimension d = dimension_of(s.unit);
@@ -902,9 +927,10 @@ void CycleRun::summary_table(std::ostream& out) const {
   }
 }
 
-// Design metrics: transmission and pressure angles, drive power and flywheel, strokes.
+// Design metrics: transmission and pressure angles, drive power and flywheel, the shaking
+// moment's point, strokes.
 void CycleRun::summary_metrics(std::ostream& out) const {
-  if (!metrics.loops.empty() || metrics.power.available || !metrics.strokes.empty()) out << "\n";
+  out << "\n";
   for (const LoopAngleMetric& l : metrics.loops) {
     if (l.slider_crank)
       out << "pressure angle      loop " << l.loop << ": max " << format_input(l.max.value, true, U)
@@ -929,6 +955,7 @@ void CycleRun::summary_metrics(std::ostream& out) const {
           << inertia_u.name << " on the input for a speed fluctuation of "
           << fmt(opt.speed_fluctuation) << "\n";
   }
+  summary_shaking(out);
   for (const StrokeMetric& st : metrics.strokes) {
     const OutputUnit u = unit_of(st.unit);
     out << "range  " << st.name << ": " << fmt(u.from_si(st.min.value), 7) << " ... "
@@ -936,6 +963,32 @@ void CycleRun::summary_metrics(std::ostream& out) const {
         << fmt(u.from_si(st.range), 7) << ")";
     if (st.time_ratio) out << ", time ratio forward/return " << fmt(*st.time_ratio, 6);
     out << "\n";
+  }
+}
+
+// The shaking force and moment: extremes, RMS and the point of the moment.
+void CycleRun::summary_shaking(std::ostream& out) const {
+  for (const SeriesSummary& s : shaking_summary) {
+    if (s.samples == 0) continue;
+    const OutputUnit u = unit_of(s.unit);
+    const Dimension d = dimension_of(s.unit);
+    const bool is_force = d == Dimension::force;
+    out << (is_force ? "shaking force       max " : "shaking moment      max ")
+        << fmt(u.from_si(noise.clean(d, s.max.value)), 5) << " at input "
+        << format_input(wrapped(s.max.input), angular, U);
+    if (s.min.value < 0.0)
+      out << ", min " << fmt(u.from_si(noise.clean(d, s.min.value)), 5) << " at input "
+          << format_input(wrapped(s.min.input), angular, U);
+    out << ", RMS " << fmt(u.from_si(noise.clean(d, s.rms)), 5) << " " << u.name;
+    if (!is_force) {
+      out << " about (";
+      for (int i = 0; i < model.dimension; ++i)
+        out << (i ? ", " : "") << fmt(length_u.from_si(shaking.about(i)), 7);
+      out << ") " << length_u.name;
+    }
+    out << (is_force ? " (the inertia forces of the moving bodies on the frame; it also carries "
+                       "the static loads)\n"
+                     : "\n");
   }
 }
 
@@ -993,7 +1046,7 @@ void CycleRun::write_pictures(const Projection& projection, const std::string& t
       report.summary = text;
       report.input_label = "input [" + input_u.name + "]";
       for (const double s : sweep.input) report.input.push_back(input_u.from_si(s));
-      report.plots = report_plots(r, magnitudes, angular, U);
+      report.plots = report_plots(model, r, magnitudes, shaking, angular, U);
       report.animation = std::move(animation);
       report.duration = opt.duration;
       write_file(opt.report, cycle_report_html(report));
@@ -1042,6 +1095,10 @@ int run_cycle_command(const CycleCliOptions& opt) {
   c.magnitudes = reaction_magnitudes(r);
   c.summary = summarize_cycle(r, c.magnitudes, c.drive_unit_si);
   c.component_summary = summarize_components(r);
+  c.shaking = shaking_series(model, r, parse_point(model, opt.shaking_about, "--shaking-about"));
+  ShakingSummaries shaking = summarize_shaking(model, r, c.shaking);
+  c.shaking_summary = std::move(shaking.magnitudes);
+  for (SeriesSummary& s : shaking.components) c.component_summary.push_back(std::move(s));
   CycleMetricsOptions mo;
   mo.driver_joint = co.driver.joint;
   mo.full_cycle = co.full_cycle;
@@ -1134,6 +1191,9 @@ void register_cycle(CLI::App& app, const GlobalOptions& globals, int& exit_code)
   cmd->add_option("--duration", opt->duration,
                   "seconds of one loop of the animation (--animate, --report; default 4)")
       ->check(finite_range(0.0, 3600.0, true));
+  cmd->add_option("--shaking-about", opt->shaking_about,
+                  "X,Y (planar) or X,Y,Z (spatial) in the file's length unit: the point of the "
+                  "frame about which the shaking moment is taken (default: the origin)");
   cmd->add_flag("-q,--quiet", opt->quiet, "no progress and only errors on stderr");
   cmd->add_flag("-v,--verbose", opt->verbose, "debug messages on stderr (also before the command)");
   cmd->callback([opt, &globals, &exit_code] {

@@ -34,7 +34,8 @@ constexpr Command kCommands[] = {{"info", register_info},
                                  {"crosscheck", register_crosscheck},
                                  {"render", register_render},
                                  {"sweep", register_sweep},
-                                 {"synthesize", register_synthesize}};
+                                 {"synthesize", register_synthesize},
+                                 {"balance", register_balance}};
 
 // The subcommand the command line names (its first word after the global flags -q, -v), or
 // nullptr when it names none of them (help, version, a mistyped command: every subcommand is

@@ -2019,7 +2019,6 @@ double magnitude_at(const DrivenPointView& p, const ReactionMagnitude& m) {
 
 namespace {
 
-// Max, min, peak |x| and RMS of value(p) over the positions where reported(p).
 // A fresh summary of one series (name, unit, determinacy; everything else accumulated).
 SeriesSummary series(std::string name, std::string unit, bool determinate) {
   SeriesSummary s;
@@ -2029,13 +2028,15 @@ SeriesSummary series(std::string name, std::string unit, bool determinate) {
   return s;
 }
 
+// Max, min, peak |x| and RMS of value(k) over the positions k where reported(k).
 template <class Value, class Reported>
 SeriesSummary summarize_series(const CycleResult& result, SeriesSummary s, Value value,
                                Reported reported) {
   double sum2 = 0.0;
-  for (const DrivenPointView& p : result.points) {
-    if (!reported(p)) continue;
-    const double v = value(p);
+  for (size_t k = 0; k < result.points.size(); ++k) {
+    if (!reported(k)) continue;
+    const DrivenPointView p = result.points[k];
+    const double v = value(k);
     sum2 += v * v;
     const bool first = s.samples++ == 0;
     if (first || std::abs(v) > s.peak) {
@@ -2057,15 +2058,15 @@ std::vector<SeriesSummary> summarize_cycle(const CycleResult& result,
                                            const std::string& drive_unit) {
   std::vector<SeriesSummary> out;
   out.push_back(summarize_series(
-      result, series("drive", drive_unit, true), [](const DrivenPointView& p) { return p.drive; },
-      drive_reported));
+      result, series("drive", drive_unit, true), [&](size_t k) { return result.points[k].drive; },
+      [&](size_t k) { return drive_reported(result.points[k]); }));
   for (const ReactionMagnitude& m : magnitudes) {
     SeriesSummary s = series(m.name, m.unit, m.determinate);
     for (const int c : m.components)
       if (!result.diverging.empty() && result.diverging[static_cast<size_t>(c)]) s.diverges = true;
     out.push_back(summarize_series(
-        result, std::move(s), [&](const DrivenPointView& p) { return magnitude_at(p, m); },
-        [&](const DrivenPointView& p) { return magnitude_reported(result, p, m); }));
+        result, std::move(s), [&](size_t k) { return magnitude_at(result.points[k], m); },
+        [&](size_t k) { return magnitude_reported(result, result.points[k], m); }));
   }
   return out;
 }
@@ -2077,10 +2078,20 @@ std::vector<SeriesSummary> summarize_components(const CycleResult& result) {
                              result.determinate.empty() || result.determinate[i]);
     s.diverges = !result.diverging.empty() && result.diverging[i];
     out.push_back(summarize_series(
-        result, std::move(s), [i](const DrivenPointView& p) { return p.reactions[i]; },
-        [&](const DrivenPointView& p) { return component_reported(result, p, i); }));
+        result, std::move(s), [&](size_t k) { return result.points[k].reactions[i]; },
+        [&](size_t k) { return component_reported(result, result.points[k], i); }));
   }
   return out;
+}
+
+SeriesSummary summarize_values(const CycleResult& result, std::string name, std::string unit,
+                               const std::vector<double>& values,
+                               const std::vector<bool>& reported) {
+  check_argument(values.size() == result.points.size() && reported.size() == values.size(),
+                 "summarize_values", "values", "must have one value per position");
+  return summarize_series(
+      result, series(std::move(name), std::move(unit), true), [&](size_t k) { return values[k]; },
+      [&](size_t k) { return static_cast<bool>(reported[k]); });
 }
 
 }  // namespace orthomech

@@ -198,6 +198,24 @@ void compute_output_positions(const Model& model, const VecX& q, std::vector<dou
   }
 }
 
+std::vector<ExtraColumn> shaking_columns(const Model& model, const ShakingSeries& s) {
+  std::vector<ExtraColumn> cols;
+  const char* axes[3] = {"x", "y", "z"};
+  const bool planar = model.dimension == 2;
+  for (int part = 0; part < 2; ++part)
+    for (int i = planar && part == 1 ? 2 : 0; i < (planar && part == 0 ? 2 : 3); ++i) {
+      ExtraColumn c{std::string(part == 0 ? "shaking force " : "shaking moment ") + axes[i],
+                    part == 0 ? Dimension::force : Dimension::moment,
+                    {},
+                    s.reported,
+                    true};
+      for (size_t k = 0; k < s.force.size(); ++k)
+        c.values.push_back(part == 0 ? s.force[k](i) : s.moment[k](i));
+      cols.push_back(std::move(c));
+    }
+  return cols;
+}
+
 CycleColumns write_cycle_csv(const std::filesystem::path& file, const Model& model,
                              const CycleResult& result,
                              const std::vector<ReactionMagnitude>& magnitudes, bool angular,
@@ -252,13 +270,19 @@ CycleColumns write_cycle_csv(const std::filesystem::path& file, const Model& mod
     cols.magnitudes.push_back(c);
     (qm == Dimension::force ? cols.forces : cols.moments).push_back(c);
   }
-  out << ",limits";
+  // The extra columns: those before `limits`, then `limits`, then the others.
   std::vector<OutputUnit> extra_units;
   for (const ExtraColumn& c : extra) {
-    check_argument(c.values.size() == result.points.size(), "write_cycle_csv", "extra",
-                   "must have one value per position in every column");
+    check_argument(c.values.size() == result.points.size() &&
+                       (c.reported.empty() || c.reported.size() == c.values.size()),
+                   "write_cycle_csv", "extra", "must have one value per position in every column");
     extra_units.push_back(output_unit(c.dimension, units));
-    out << ',' << field(c.name + " [" + extra_units.back().name + "]");
+  }
+  for (const bool before : {true, false}) {
+    if (!before) out << ",limits";
+    for (size_t i = 0; i < extra.size(); ++i)
+      if (extra[i].before_limits == before)
+        out << ',' << field(extra[i].name + " [" + extra_units[i].name + "]");
   }
   out << '\n';
   const NoiseFloor noise = cycle_noise_floor(model, result, magnitudes, angular);
@@ -283,11 +307,17 @@ CycleColumns write_cycle_csv(const std::filesystem::path& file, const Model& mod
     for (size_t j = 0; j < model.joints.size(); ++j)
       if (outside_limits(model, static_cast<int>(j), scratch.q))
         outside += (outside.empty() ? "" : " ") + model.joints[j].name;
-    line += ',';
-    line += field(outside);
-    for (size_t i = 0; i < extra.size(); ++i) {
-      line += ',';
-      append_number(line, extra_units[i].from_si(extra[i].values[row]), kCsvDigits);
+    for (const bool before : {true, false}) {
+      if (!before) {
+        line += ',';
+        line += field(outside);
+      }
+      for (size_t i = 0; i < extra.size(); ++i) {
+        if (extra[i].before_limits != before) continue;
+        line += ',';
+        if (extra[i].reported.empty() || extra[i].reported[row])
+          append_number(line, extra_units[i].from_si(extra[i].values[row]), kCsvDigits);
+      }
     }
     line += '\n';
     out.write(line.data(), static_cast<std::streamsize>(line.size()));

@@ -18,6 +18,7 @@
 #include "orthomech/error.hpp"
 #include "orthomech/io/mechanism_file.hpp"
 #include "orthomech/io/noise.hpp"
+#include "orthomech/io/units.hpp"
 #include "orthomech/model/spatial.hpp"
 
 namespace orthomech {
@@ -498,6 +499,99 @@ PoseEdit edit_design_poses(const std::string& file_text, const std::string& orig
   const std::string out = apply(text, edits);
   (void)verify_written(out, origin, model, frames);
   return {has_bom ? bom + out : out, replaced};
+}
+
+namespace {
+
+// The edits of one body's mass properties (edit_mass_properties).
+void mass_edits(const std::string& text, const YAML::Node& item, const std::map<int, int>& uses,
+                const std::string& origin, const Body& body, const MassEdit& c, const UnitSystem& u,
+                std::vector<Edit>& edits) {
+  const std::string element = "body '" + body.name + "'";
+  auto node = [&](const char* key) {
+    const YAML::Node v = item[key];
+    if (!v)
+      throw InputError(
+          {origin, item.Mark().line + 1, item.Mark().column + 1}, element,
+          std::string("has no '") + key + "' to edit; write it out (`" + key + ":`) and run again");
+    return v;
+  };
+  edits.push_back(
+      number_edit(text, node("mass"), uses, origin, element + ": mass", c.mass / u.mass_si));
+  const YAML::Node com = node("com");
+  if (!com.IsSequence() || com.size() != 2)
+    throw InputError({origin, com.Mark().line + 1, com.Mark().column + 1}, element,
+                     "com must be [x, y] to be edited");
+  for (int k = 0; k < 2; ++k)
+    edits.push_back(number_edit(text, com[static_cast<size_t>(k)], uses, origin, element + ": com",
+                                c.com(k) / u.length_si));
+  edits.push_back(number_edit(text, node("inertia"), uses, origin, element + ": inertia",
+                              c.inertia / (u.mass_si * u.length_si * u.length_si)));
+}
+
+}  // namespace
+
+std::string edit_mass_properties(const std::string& file_text, const std::string& origin,
+                                 const Model& model, const std::vector<MassEdit>& changes) {
+  check_argument(model.dimension == 2, "edit_mass_properties", "model", "must be planar");
+  static const std::string bom = "\xEF\xBB\xBF";
+  const bool has_bom = file_text.rfind(bom, 0) == 0;
+  const std::string text = has_bom ? file_text.substr(bom.size()) : file_text;
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    throw InputError({origin, e.mark.line + 1, e.mark.column + 1}, "YAML", e.msg);
+  }
+  std::map<int, int> uses;
+  count_uses(root, uses);
+  const YAML::Node bodies = root["bodies"];
+  if (!bodies || !bodies.IsSequence() || bodies.size() != model.bodies.size())
+    throw InputError({origin, 0, 0}, "file", "the bodies in the file do not match the model");
+  const UnitSystem u = unit_system(model.units);
+  std::vector<Edit> edits;
+  for (const MassEdit& c : changes) {
+    check_argument(c.body >= 0 && static_cast<size_t>(c.body) < model.bodies.size(),
+                   "edit_mass_properties", "changes", "must name bodies of the model");
+    const Body& body = model.bodies[static_cast<size_t>(c.body)];
+    const YAML::Node item = bodies[static_cast<size_t>(c.body)];
+    if (!item["name"] || item["name"].Scalar() != body.name)
+      throw InputError({origin, 0, 0}, "body '" + body.name + "'",
+                       "the file does not match the model");
+    mass_edits(text, item, uses, origin, body, c, u, edits);
+  }
+  const std::string out = apply(text, edits);
+  // Read back: the changed bodies carry the new values (to the 15 digits written), every other
+  // body and element is the model's.
+  Model back;
+  try {
+    back = parse_mechanism(out, origin);
+  } catch (const InputError& e) {
+    throw InputError(
+        {origin, 1, 1}, "file",
+        "the edited file would not read back (" + e.message() + "); nothing was written");
+  }
+  // (15 significant digits and a unit conversion each way: 1e-12 relative.)
+  auto close = [](double a, double b) {
+    return std::abs(a - b) <= 1e-12 * std::max(std::abs(a), std::abs(b));
+  };
+  bool same =
+      back.bodies.size() == model.bodies.size() && back.joints.size() == model.joints.size();
+  for (size_t b = 0; same && b < model.bodies.size(); ++b) {
+    const Body &x = model.bodies[b], &y = back.bodies[b];
+    double mass = x.mass, inertia = x.inertia;
+    Vec2 com = x.com_local;
+    for (const MassEdit& c : changes)
+      if (static_cast<size_t>(c.body) == b) mass = c.mass, inertia = c.inertia, com = c.com;
+    same = x.name == y.name && x.points == y.points && close(mass, y.mass) &&
+           close(inertia, y.inertia) &&
+           (com - y.com_local).norm() <= 1e-12 * (com.norm() + y.com_local.norm()) + 1e-15;
+  }
+  if (!same)
+    throw InputError({origin, 1, 1}, "file",
+                     "the edited file would not read back with the new mass properties; nothing "
+                     "was written");
+  return has_bom ? bom + out : out;
 }
 
 }  // namespace orthomech

@@ -435,5 +435,11 @@ struct SeriesSummary {
     const std::string& drive_unit);
 // Every reaction component (CycleResult::components order), signed.
 [[nodiscard]] std::vector<SeriesSummary> summarize_components(const CycleResult& result);
+// A series given by its value at every position of the sweep, counted where reported[k]
+// (analysis/shaking.hpp's shaking force and moment). Throws std::invalid_argument unless both
+// have one entry per position.
+[[nodiscard]] SeriesSummary summarize_values(const CycleResult& result, std::string name,
+                                             std::string unit, const std::vector<double>& values,
+                                             const std::vector<bool>& reported);
 
 }  // namespace orthomech

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "orthomech/analysis/cycle.hpp"
+#include "orthomech/analysis/shaking.hpp"
 #include "orthomech/io/noise.hpp"
 #include "orthomech/io/units.hpp"
 #include "orthomech/model/model.hpp"
@@ -49,19 +50,28 @@ struct CycleColumns {
   std::vector<int> forces, moments;  // the magnitudes' columns that are forces, moments
 };
 
-// Columns added at the end of cycle.csv (`cycle --trace`: "trace coupler.P.x"): a name, its
-// dimension and one SI value per position of the sweep.
+// Columns added to cycle.csv (`cycle --trace`: "trace coupler.P.x", at the end; the shaking
+// force: before `limits`): a name, its dimension, one SI value per position of the sweep and,
+// when not empty, whether each is reported (an empty cell where not).
 struct ExtraColumn {
   std::string name;
   Dimension dimension = Dimension::length;
   std::vector<double> values;
+  std::vector<bool> reported;  // empty: every value
+  bool before_limits = false;  // after the magnitudes, before `limits` (else at the end)
 };
+
+// The shaking force's and moment's columns (analysis/shaking.hpp), before `limits`: "shaking
+// force x", "shaking force y" and "shaking moment z" (spatial: x, y, z of both), in the world
+// frame; empty where the position's rates are not reported.
+[[nodiscard]] std::vector<ExtraColumn> shaking_columns(const Model& model,
+                                                       const ShakingSeries& series);
 
 // One row per position, every quantity in `units` (units in the header: "drive [N*mm]"):
 // input, time, every measure, every body's pose and named point, every body's velocity and
-// acceleration, the drive, every reaction component, every reaction magnitude, `limits`
-// (the joints outside their limits there, space-separated; empty inside) and the `extra`
-// columns. Cells that are not
+// acceleration, the drive, every reaction component, every reaction magnitude, the `extra`
+// columns marked before_limits, `limits` (the joints outside their limits there,
+// space-separated; empty inside) and the other `extra` columns. Cells that are not
 // reported are empty (drive_reported, component_reported: an unbridged singular position, a
 // component diverging next to a bridged change point). Written through FileWriter
 // (io/file_writer.hpp): rows streamed to a temporary file, put in place when complete. Throws

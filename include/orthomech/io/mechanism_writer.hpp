@@ -34,4 +34,21 @@ struct PoseEdit {
 [[nodiscard]] PoseEdit edit_design_poses(const std::string& text, const std::string& origin,
                                          const Model& model, const VecX& q);
 
+// The mass, centre of mass (body frame, m) and inertia about it (kg·m²) of a planar body, as
+// `balance --write` gives them to a body with its counterweight.
+struct MassEdit {
+  int body = -1;
+  double mass = 0.0;
+  Vec2 com = Vec2::Zero();
+  double inertia = 0.0;
+};
+// The text of a planar mechanism file with those bodies' `mass:`, `com:` and `inertia:` numbers
+// replaced in place (the file's units, 15 significant digits; an expression there becomes a
+// number), every other byte kept. Throws InputError when the text is not the model's file, a
+// body lacks one of the three keys, a number is shared through a YAML alias, or the edited text
+// would not read back as the model with the new mass properties.
+[[nodiscard]] std::string edit_mass_properties(const std::string& text, const std::string& origin,
+                                               const Model& model,
+                                               const std::vector<MassEdit>& changes);
+
 }  // namespace orthomech

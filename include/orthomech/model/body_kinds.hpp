@@ -2,8 +2,9 @@
 // Each body kind defined in one place (paper §2; spatial.md §1, §6.3): its coordinates q (nq)
 // and velocity parameters u (nu, translations first, then rotations), q ⊕ h·du, q₁ ⊖ q₀,
 // q̇ = B̃u (eq. (19)), its blocks of M and A = M⁻¹, its kinetic energy, its velocity-dependent
-// forces (the −C p u term of eq. (16)) and its coordinates at the design pose. The free system
-// of bodies (model/free_system.cpp) and the loads (model/loads.cpp) visit each body's kind with
+// forces (the −C p u term of eq. (16)), the rates of its momenta (analysis/shaking.hpp) and its
+// coordinates at the design pose. The free system of bodies (model/free_system.cpp), the loads
+// (model/loads.cpp) and the shaking force (analysis/shaking.cpp) visit each body's kind with
 // visit_kind; nothing else switches on the kind for these.
 #include <Eigen/Core>
 #include <cmath>
@@ -23,6 +24,17 @@ inline Vec2 planar_design_com(const Body& b) {
   const double c = std::cos(phi), s = std::sin(phi);
   return {b.design_pose.x() + c * b.com_local.x() - s * b.com_local.y(),
           b.design_pose.y() + s * b.com_local.x() + c * b.com_local.y()};
+}
+
+// A planar body's centre of mass (q's first two entries, accelerations u̇'s): Ṗ += m a,
+// Ḣ_O += ((r − O) × m a)_z.
+inline void add_planar_com_momentum_rate(const Body& b, const VecX& q, const VecX& udot,
+                                         const Vec3& about, Vec3& p_dot, Vec3& h_dot) {
+  const double max = b.mass * udot(b.u_offset), may = b.mass * udot(b.u_offset + 1);
+  const double rx = q(b.q_offset) - about.x(), ry = q(b.q_offset + 1) - about.y();
+  p_dot.x() += max;
+  p_dot.y() += may;
+  h_dot.z() += rx * may - ry * max;
 }
 
 // Coordinates whose velocity parameters are their rates (B̃ = I on these nq = nu entries).
@@ -61,6 +73,12 @@ struct PlanarRigidKind : detail::Cartesian<body_layout(BodyKind::rigid).nq> {
   }
   // None: T does not depend on q and B̃ = I.
   static void add_velocity_forces(const Body& /*b*/, const VecX& /*u*/, VecX& /*Q*/) {}
+  // Ṗ += m a and Ḣ_O += (r − O) × m a + J φ̈ (z) (analysis/shaking.hpp).
+  static void add_momentum_rate(const Body& b, const VecX& q, const VecX& /*u*/, const VecX& udot,
+                                const Vec3& about, Vec3& p_dot, Vec3& h_dot) {
+    detail::add_planar_com_momentum_rate(b, q, udot, about, p_dot, h_dot);
+    h_dot.z() += b.inertia * udot(b.u_offset + 2);
+  }
   static void design_coordinates(const Body& b, VecX& q) {
     const Vec2 com = detail::planar_design_com(b);
     q(b.q_offset) = com.x();
@@ -84,6 +102,11 @@ struct ParticleKind : detail::Cartesian<body_layout(BodyKind::particle).nq> {
     T += 0.5 * b.mass * (u(o) * u(o) + u(o + 1) * u(o + 1));
   }
   static void add_velocity_forces(const Body& /*b*/, const VecX& /*u*/, VecX& /*Q*/) {}
+  // Ṗ += m a and Ḣ_O += (r − O) × m a (z) (analysis/shaking.hpp).
+  static void add_momentum_rate(const Body& b, const VecX& q, const VecX& /*u*/, const VecX& udot,
+                                const Vec3& about, Vec3& p_dot, Vec3& h_dot) {
+    detail::add_planar_com_momentum_rate(b, q, udot, about, p_dot, h_dot);
+  }
   static void design_coordinates(const Body& b, VecX& q) {
     const Vec2 com = detail::planar_design_com(b);
     q(b.q_offset) = com.x();
@@ -145,6 +168,18 @@ struct SpatialKind {
   static void add_velocity_forces(const Body& b, const VecX& u, VecX& Q) {
     const Vec3 w = u.segment<3>(b.u_offset + 3);
     Q.segment<3>(b.u_offset + 3) -= w.cross(b.spatial.inertia * w);  // eq. (16): −C p u (S5)
+  }
+  // Ṗ += m a and Ḣ_O += (r − O) × m a + d/dt(R J ω) with d/dt(R J ω) = R (J ω̇ + ω × J ω), ω
+  // in the body frame (analysis/shaking.hpp).
+  static void add_momentum_rate(const Body& b, const VecX& q, const VecX& u, const VecX& udot,
+                                const Vec3& about, Vec3& p_dot, Vec3& h_dot) {
+    const Vec3 ma = b.mass * udot.segment<3>(b.u_offset);
+    const Vec3 w = u.segment<3>(b.u_offset + 3);
+    const Vec3 spin_rate =
+        b.spatial.inertia * udot.segment<3>(b.u_offset + 3) + w.cross(b.spatial.inertia * w);
+    p_dot += ma;
+    h_dot += (q.segment<3>(b.q_offset) - about).cross(ma) +
+             rotation_matrix(q.segment<4>(b.q_offset + 3)) * spin_rate;
   }
   // q = (r, e): the centre of mass and the orientation of the design pose.
   static void design_coordinates(const Body& b, VecX& q) {

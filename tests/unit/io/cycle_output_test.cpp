@@ -167,7 +167,11 @@ TEST(CycleOutput, CsvIsStreamedAndReplacedOnlyWhenComplete) {
   const test::TempDir dir("orthomech_cycle_stream_", true);
   const auto file = dir.path / "cycle.csv";
   write_file(file, "before\n");
-  ExtraColumn extra{.name = "index", .dimension = Dimension::length, .values = {}};
+  ExtraColumn extra{.name = "index",
+                    .dimension = Dimension::length,
+                    .values = {},
+                    .reported = {},
+                    .before_limits = false};
   for (size_t k = 0; k < r.points.size(); ++k) extra.values.push_back(static_cast<double>(k));
   (void)write_cycle_csv(file, model, r, reaction_magnitudes(r), true, UnitSystem{}, {extra});
   const std::string text = test::read_text(file);
@@ -183,6 +187,47 @@ TEST(CycleOutput, CsvIsStreamedAndReplacedOnlyWhenComplete) {
       std::invalid_argument);
   EXPECT_EQ(test::read_text(file), "before\n");
   EXPECT_EQ(entries(dir.path), std::vector<std::string>{"cycle.csv"});  // no temporary left
+}
+
+// The shaking columns go before `limits`, in the world frame, empty where a position's rates
+// are not reported: the CSV's cells are the series' values (planar: force x, y and moment z).
+TEST(CycleOutput, ShakingColumnsBeforeLimitsWithTheSeriesValues) {
+  const Model model = test::load_bundled("crank-rocker");
+  const CycleResult r = test::full_cycle(model, 12);
+  ShakingSeries s = shaking_series(model, r, Vec3(0.01, 0.0, 0.0));
+  s.reported[3] = false;  // as at an unbridged change point
+  const test::TempDir dir("orthomech_cycle_shaking_", true);
+  const auto file = dir.path / "cycle.csv";
+  (void)write_cycle_csv(file, model, r, reaction_magnitudes(r), true, UnitSystem{},
+                        shaking_columns(model, s));
+  std::istringstream in(test::read_text(file));
+  std::string line;
+  std::getline(in, line);
+  const std::string tail = "shaking force x [N],shaking force y [N],shaking moment z [N*m],limits";
+  ASSERT_GE(line.size(), tail.size());
+  EXPECT_EQ(line.substr(line.size() - tail.size()), tail);
+  for (size_t k = 0; std::getline(in, line); ++k) {
+    std::vector<std::string> cells;
+    std::stringstream row(line);
+    for (std::string c; std::getline(row, c, ',');) cells.push_back(c);
+    if (line.back() == ',') cells.emplace_back();  // the empty `limits`
+    ASSERT_GE(cells.size(), 4u);
+    const size_t n = cells.size();
+    if (k == 3) {
+      EXPECT_TRUE(cells[n - 4].empty() && cells[n - 2].empty()) << line;
+      continue;
+    }
+    EXPECT_NEAR(std::stod(cells[n - 4]), s.force[k].x(), 1e-10 * s.force[k].norm());
+    EXPECT_NEAR(std::stod(cells[n - 3]), s.force[k].y(), 1e-10 * s.force[k].norm());
+    EXPECT_NEAR(std::stod(cells[n - 2]), s.moment[k].z(), 1e-10 * std::abs(s.moment[k].z()));
+  }
+  const Model spatial = test::load_bundled("rssr");
+  const auto cols =
+      shaking_columns(spatial, shaking_series(spatial, test::full_cycle(spatial, 6), Vec3::Zero()));
+  ASSERT_EQ(cols.size(), 6u);
+  EXPECT_EQ(cols[2].name, "shaking force z");
+  EXPECT_EQ(cols[5].name, "shaking moment z");
+  EXPECT_TRUE(cols[0].before_limits);
 }
 
 }  // namespace

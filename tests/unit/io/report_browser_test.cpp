@@ -151,8 +151,9 @@ TEST(ReportBrowser, PlaysAndTheSliderPutsTheCrankAtEachInput) {
     EXPECT_EQ(browser.execute("return Array.prototype.map.call(document.querySelectorAll("
                               "'svg.plot line.cursor'), function (c) { return "
                               "c.dataset.position; });"),
-              nlohmann::json::array({std::to_string(k), std::to_string(k), std::to_string(k)}))
-        << "drive, reaction forces, reaction moments";
+              nlohmann::json::array(
+                  {std::to_string(k), std::to_string(k), std::to_string(k), std::to_string(k)}))
+        << "drive, reaction forces, reaction moments, shaking force";
   }
   std::this_thread::sleep_for(std::chrono::milliseconds(400));
   EXPECT_EQ(browser.execute("return document.body.dataset.position;"), "23") << "still paused";

@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -71,7 +72,7 @@ TEST(CycleReport, OneSelfContainedPageWithThePlottedValuesOfTheCycle) {
   ASSERT_EQ(data["input"].size(), static_cast<size_t>(kSteps));
   EXPECT_EQ(data["input_label"], "input [deg]");
   const nlohmann::json& points = cycle["points"];
-  ASSERT_EQ(data["plots"].size(), 3u) << "drive, reaction forces, the slide's moment";
+  ASSERT_EQ(data["plots"].size(), 4u) << "drive, reaction forces, the slide's moment, shaking";
   EXPECT_EQ(data["plots"][2]["series"][0]["name"], "slide.|M|");
   EXPECT_EQ(data["plots"][2]["unit"], "N*mm");
   EXPECT_EQ(data["plots"][0]["unit"], cycle["driver"]["drive_unit"]);
@@ -94,6 +95,20 @@ TEST(CycleReport, OneSelfContainedPageWithThePlottedValuesOfTheCycle) {
     }
   }
   EXPECT_TRUE(found);
+  // The shaking force: x, y and |F_s|, whose largest value is the JSON peak.
+  const nlohmann::json& shaking = data["plots"][3];
+  EXPECT_EQ(shaking["unit"], "N");
+  ASSERT_EQ(shaking["series"].size(), 3u);
+  EXPECT_EQ(shaking["series"][2]["name"], "|F_s|");
+  double peak = 0.0;
+  for (int k = 0; k < kSteps; ++k) {
+    const double x = shaking["series"][0]["values"][k], y = shaking["series"][1]["values"][k];
+    const double m = shaking["series"][2]["values"][k];
+    EXPECT_NEAR(m, std::hypot(x, y), 1e-12 * m);
+    peak = std::max(peak, m);
+  }
+  const double json_peak = cycle["peaks"]["shaking force"]["peak"];
+  EXPECT_NEAR(peak, json_peak, 1e-9 * json_peak);
 }
 
 TEST(CycleReport, UnwritableFileIsBadInputWithNothingOnStdout) {
