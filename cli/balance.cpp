@@ -12,6 +12,7 @@
 #include <fstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <sstream>
 
 #include "commands.hpp"
@@ -23,6 +24,7 @@
 #include "orthomech/io/mechanism_file.hpp"
 #include "orthomech/io/mechanism_writer.hpp"
 #include "orthomech/io/units.hpp"
+#include "run_bounds.hpp"
 
 namespace orthomech::cli {
 
@@ -36,6 +38,7 @@ struct BalanceCliOptions {
   std::string about;  // --shaking-about
   int steps = 0;      // 0: the file's analysis.steps
   double max_mass = 0.0;
+  double time_limit = 0.0;  // --time-limit (s of wall clock; 0: none), each sweep
   std::string write;
   bool json = false;
   std::string units = "file";
@@ -86,12 +89,27 @@ const Driver& driver_of(const Model& model) {
   return *d;
 }
 
-// The sweep that is balanced: a full cycle of the file's driver.
-CycleResult sweep_of(const Model& model, int steps) {
+// A full cycle of the file's driver, bounded (run_bounds.hpp: --time-limit, SIGINT/SIGTERM, a
+// progress line on a terminal).
+CycleResult sweep_of(const Model& model, int steps, double time_limit) {
   CycleOptions co;
   co.driver = driver_of(model);
   co.steps = steps > 0 ? steps : model.analysis.steps;
-  return run_cycle(model, co);
+  co.control = run_control("balance", time_limit);
+  return run_bounded([&] { return run_cycle(model, co); });
+}
+
+// Exit 5 for a sweep a bound stopped, 3 for one that failed; nullopt when it completed.
+std::optional<int> sweep_problem(const Model& model, const CycleResult& sweep, const char* which) {
+  if (sweep.status == CycleStatus::completed) return std::nullopt;
+  if (sweep.status == CycleStatus::stopped) {
+    spdlog::error("{}: balance stopped during the {} sweep: {}; nothing was written", model.file,
+                  which, sweep.message);
+    return kStopped;
+  }
+  spdlog::error("{}: the {} cycle cannot be swept ({}); balancing needs a full cycle", model.file,
+                which, sweep.message);
+  return kNumerical;
 }
 
 std::string read_text(const std::string& path) {
@@ -202,12 +220,8 @@ int run_balance(const BalanceCliOptions& opt) {
   bo.about = parse_point(model, opt.about, "--shaking-about");
   bo.mass_limit = opt.max_mass * unit_system(model.units).mass_si;
   // Step 1: the mechanism's own sweep.
-  const CycleResult sweep = sweep_of(model, opt.steps);
-  if (sweep.status != CycleStatus::completed) {
-    spdlog::error("{}: the cycle cannot be swept ({}); balancing needs a full cycle", model.file,
-                  sweep.message);
-    return kNumerical;
-  }
+  const CycleResult sweep = sweep_of(model, opt.steps, opt.time_limit);
+  if (const std::optional<int> code = sweep_problem(model, sweep, "mechanism's")) return *code;
   // Step 2: the counterweights.
   const BalanceResult r = balance_counterweights(model, sweep, bo);
   if (r.status == BalanceStatus::invalid_request)
@@ -222,10 +236,11 @@ int run_balance(const BalanceCliOptions& opt) {
     edits.push_back({c.body, c.body_mass, c.body_com, c.body_inertia});
   const std::string text = edit_mass_properties(read_text(opt.file), opt.file, model, edits);
   const Model balanced = parse_mechanism(text, opt.file);
-  const CycleResult again = sweep_of(balanced, opt.steps);
+  const CycleResult again = sweep_of(balanced, opt.steps, opt.time_limit);
+  if (const std::optional<int> code = sweep_problem(model, again, "balanced mechanism's"))
+    return *code;
   const BalanceTerms swept = balance_terms(balanced, again, bo.about);
   const bool agrees =
-      again.status == CycleStatus::completed &&
       std::abs(swept.force_rms - r.after.force_rms) <= kAgreement * r.before.force_rms &&
       std::abs(swept.moment_rms - r.after.moment_rms) <= kAgreement * r.before.moment_rms &&
       std::abs(swept.drive_rms - r.after.drive_rms) <= kAgreement * r.before.drive_rms;
@@ -293,6 +308,10 @@ void register_balance(CLI::App& app, const GlobalOptions& globals, int& exit_cod
                   "largest counterweight mass in the file's mass unit (default 10 x the moving "
                   "bodies' mass)")
       ->check(finite_range(0.0, 1e12, true));
+  cmd->add_option("--time-limit", opt->time_limit,
+                  "wall-clock limit in seconds of each of its two sweeps (default: none): exit 5, "
+                  "nothing written")
+      ->check(finite_range(0.0, 1e9, true));
   cmd->add_option("--write", opt->write,
                   "FILE.yaml: the balanced mechanism (mass, com, inertia "
                   "of the counterweighted bodies edited in place)");

@@ -3,6 +3,7 @@
 // and the refusals (exit 2 naming the option or the element).
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -65,6 +66,18 @@ TEST(BalanceCli, RefusesBadSitesSpatialFilesAndOverwritingItsInput) {
   const auto about = run_cli({"cycle", file, "--shaking-about", "1,2,3", "-q"});
   EXPECT_EQ(about.status, 2);
   EXPECT_NE(about.err.find("--shaking-about"), std::string::npos) << about.err;
+}
+
+// Bounded like every long run: --time-limit stops its sweep (1e5 positions of the crank-rocker,
+// about 0.4 s in the Release build) with exit 5 and nothing written.
+TEST(BalanceCli, TimeLimitStopsItsSweepAndWritesNothing) {
+  const test::TempDir dir("balance_cli_");
+  const std::string out = (dir.path / "balanced.yaml").string();
+  const auto r = run_cli({"balance", bundled_file("crank-rocker"), "--counterweight", "crank:40",
+                          "--steps", "100000", "--time-limit", "0.02", "--write", out, "-q"});
+  EXPECT_EQ(r.status, 5) << r.err;
+  EXPECT_NE(r.err.find("--time-limit"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(out));
 }
 
 }  // namespace
