@@ -218,4 +218,13 @@ Vec3 parse_point(const Model& model, const std::string& text, const std::string&
   return o;
 }
 
+void warn_friction_not_applied(const Model& model, const std::string& command) {
+  for (const Joint& j : model.joints)
+    if (j.friction)
+      spdlog::warn(
+          "{}: joint '{}': {} does not apply joint friction yet (cycle does): its results "
+          "are frictionless",
+          j.where.str(), j.name, command);
+}
+
 }  // namespace orthomech::cli

@@ -61,6 +61,10 @@ void add_set_option(CLI::App* cmd, std::vector<std::string>& sets);
 // of the file name `origin` reads `text` (messages name `origin`). An empty origin clears it.
 void set_mechanism_text(const std::string& origin, const std::string& text);
 
+// A located warning per joint with `friction:` for a command that does not apply it yet
+// (`simulate`, `crosscheck`, `cycle --drivers`): its results are frictionless.
+void warn_friction_not_applied(const Model& model, const std::string& command);
+
 // Commands not yet available on spatial mechanisms (dimension: 3) refuse them with exit code 2
 // (InputError naming the file and what works instead).
 void require_planar(const Model& model, const std::string& command);

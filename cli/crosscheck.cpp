@@ -33,6 +33,7 @@ struct CrosscheckCliOptions {
 
 int run_crosscheck_cmd(const CrosscheckCliOptions& opt) {
   const Model model = load(opt.file, opt.sets);
+  warn_friction_not_applied(model, "crosscheck");
   const UnitSystem U = resolve_units(model, opt.units);
   const OutputUnit time_u = output_unit(Dimension::time, U);
   CrosscheckOptions co;

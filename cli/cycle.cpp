@@ -26,6 +26,7 @@
 #include "commands.hpp"
 #include "common.hpp"
 #include "cycle_drivers.hpp"
+#include "orthomech/analysis/cycle_friction.hpp"
 #include "orthomech/analysis/cycle_metrics.hpp"
 #include "orthomech/analysis/shaking.hpp"
 #include "orthomech/constraints/joints.hpp"
@@ -403,7 +404,9 @@ struct CycleRun {
   std::vector<SeriesSummary> component_summary{};
   CycleMetrics metrics{};
   ShakingSeries shaking{};
-  std::vector<SeriesSummary> shaking_summary{};  // |F_s| and M_s (JSON peaks; summary_metrics)
+  std::vector<SeriesSummary> shaking_summary{};   // |F_s| and M_s (JSON peaks; summary_metrics)
+  FrictionSeries friction{};                      // the pins' friction (empty: none)
+  std::vector<SeriesSummary> friction_summary{};  // drive without friction, moments, power
   SweepPositions sweep{};
   std::vector<PointTrace> traces{};
   NoiseFloor noise{};
@@ -451,6 +454,7 @@ struct CycleRun {
   [[nodiscard]] nlohmann::json components_json() const;
   [[nodiscard]] nlohmann::json loops_json() const;
   void add_power_json(nlohmann::json& j) const;
+  void add_friction_json(nlohmann::json& j) const;
   [[nodiscard]] nlohmann::json strokes_json() const;
   [[nodiscard]] nlohmann::json limits_json() const;
   [[nodiscard]] nlohmann::json traces_json() const;
@@ -461,6 +465,7 @@ struct CycleRun {
   void summary_metrics(std::ostream& out) const;
   void summary_traces(std::ostream& out) const;
   void summary_shaking(std::ostream& out) const;
+  void summary_friction(std::ostream& out) const;
   void summary_indeterminate(std::ostream& out) const;
 };
 
@@ -554,6 +559,8 @@ std::string CycleRun::write_files() const {
     if (ec) throw CLI::ValidationError("--out", "cannot create " + opt.out + ": " + ec.message());
     try {
       std::vector<ExtraColumn> extra = trace_columns(traces);
+      for (ExtraColumn& col : friction_columns(model, r, friction, angular))
+        extra.push_back(std::move(col));
       for (ExtraColumn& col : shaking_columns(model, shaking)) extra.push_back(std::move(col));
       const CycleColumns cols =
           write_cycle_csv(dir / "cycle.csv", model, r, magnitudes, angular, U, extra);
@@ -603,6 +610,7 @@ nlohmann::json CycleRun::json_document() const {
   nlohmann::json about = nlohmann::json::array();
   for (int i = 0; i < model.dimension; ++i) about.push_back(length_u.from_si(shaking.about(i)));
   j["shaking"] = {{"about", about}, {"unit", length_u.name}};
+  if (!friction.pins.empty()) add_friction_json(j);
   j["strokes"] = strokes_json();
   j["limits"] = limits_json();
   j["traces"] = traces_json();
@@ -696,7 +704,7 @@ nlohmann::json CycleRun::bridges_json() const {
 // rounding noise of the solve (io/noise.hpp).
 nlohmann::json CycleRun::peaks_json() const {
   nlohmann::json peaks;
-  for (const auto* list : {&summary, &shaking_summary, &component_summary})
+  for (const auto* list : {&summary, &shaking_summary, &friction_summary, &component_summary})
     for (const SeriesSummary& s : *list) {
       const OutputUnit u = unit_of(s.unit);
       const Dimension d = dimension_of(s.unit);
@@ -956,6 +964,7 @@ void CycleRun::summary_metrics(std::ostream& out) const {
           << fmt(opt.speed_fluctuation) << "\n";
   }
   summary_shaking(out);
+  summary_friction(out);
   for (const StrokeMetric& st : metrics.strokes) {
     const OutputUnit u = unit_of(st.unit);
     out << "range  " << st.name << ": " << fmt(u.from_si(st.min.value), 7) << " ... "
@@ -990,6 +999,46 @@ void CycleRun::summary_shaking(std::ostream& out) const {
                        "the static loads)\n"
                      : "\n");
   }
+}
+
+// The pins' friction: the drive without it, the dissipated energy, each pin's moment.
+void CycleRun::summary_friction(std::ostream& out) const {
+  if (friction.pins.empty()) return;
+  const OutputUnit drive_u = unit_of(drive_unit_si);
+  const OutputUnit moment_u = output_unit(Dimension::moment, U);
+  for (const SeriesSummary& s : friction_summary) {
+    if (s.samples == 0) continue;
+    const OutputUnit u = unit_of(s.unit);
+    out << "friction  " << s.name << ": max " << fmt(u.from_si(s.max.value), 5) << ", min "
+        << fmt(u.from_si(s.min.value), 5) << ", RMS " << fmt(u.from_si(s.rms), 5) << " " << u.name
+        << "\n";
+  }
+  out << "friction  dissipated " << fmt(energy_u.from_si(friction.dissipated), 5) << " "
+      << energy_u.name << " over the sweep (drive RMS " << fmt(drive_u.from_si(summary[0].rms), 5)
+      << " " << drive_u.name << " with friction)\n";
+  for (size_t i = 0; i < friction.pins.size(); ++i)
+    if (!friction.determinate[i])
+      out << "friction  " << model.joints[static_cast<size_t>(friction.pins[i].joint)].name
+          << ": not determined (its force is statically indeterminate; the minimum-norm force's "
+             "friction is reported)\n";
+  (void)moment_u;
+}
+
+// The pins' friction in the JSON document.
+void CycleRun::add_friction_json(nlohmann::json& j) const {
+  nlohmann::json pins = nlohmann::json::array();
+  for (size_t i = 0; i < friction.pins.size(); ++i) {
+    const FrictionPin& p = friction.pins[i];
+    pins.push_back({{"joint", model.joints[static_cast<size_t>(p.joint)].name},
+                    {"coefficient", p.coefficient},
+                    {"radius", length_u.from_si(p.radius)},
+                    {"determinate", bool(friction.determinate[i])}});
+  }
+  j["friction"] = {{"joints", pins},
+                   {"dissipated", energy_u.from_si(friction.dissipated)},
+                   {"unit", energy_u.name},
+                   {"iterations_max", friction.iterations_max},
+                   {"converged", friction.converged}};
 }
 
 // The box of every traced point's path.
@@ -1098,6 +1147,9 @@ int run_cycle_command(const CycleCliOptions& opt) {
   c.shaking = shaking_series(model, r, parse_point(model, opt.shaking_about, "--shaking-about"));
   ShakingSummaries shaking = summarize_shaking(model, r, c.shaking);
   c.shaking_summary = std::move(shaking.magnitudes);
+  c.friction = friction_series(
+      model, r, co.full_cycle && r.status == CycleStatus::completed && r.reversals == 0);
+  c.friction_summary = summarize_friction(model, r, c.friction, c.drive_unit_si);
   for (SeriesSummary& s : shaking.components) c.component_summary.push_back(std::move(s));
   CycleMetricsOptions mo;
   mo.driver_joint = co.driver.joint;
@@ -1126,6 +1178,14 @@ int run_cycle_command(const CycleCliOptions& opt) {
     c.write_json(std::cout);
   else
     std::cout << summary;  // all at once
+  if (!c.friction.converged) {
+    spdlog::error(
+        "{}: the friction moments did not settle at some positions (the fixed point of the pin "
+        "forces and their friction did not converge: the friction radius or coefficient is too "
+        "large for the linkage's lever arms); the friction values are not reliable",
+        model.file);
+    return kNumerical;
+  }
   return r.status == CycleStatus::completed               ? kOk
          : r.status == CycleStatus::stopped_at_dead_point ? kCheckFailed
          : r.status == CycleStatus::stopped               ? kStopped

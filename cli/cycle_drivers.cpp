@@ -61,6 +61,7 @@ struct Series {
 }  // namespace
 
 int run_cycle_drivers(const Model& model, const DriversRequest& request) {
+  warn_friction_not_applied(model, "cycle --drivers");
   const UnitSystem U = resolve_units(model, request.units);
   MultiDriveOptions mo;
   mo.drivers = resolve_drivers(model, request.drivers);

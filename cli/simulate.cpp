@@ -608,6 +608,7 @@ void write_text(std::ostream& out, const Model& model, const SimulateCliOptions&
 
 int run_simulate(const SimulateCliOptions& opt) {
   const Model model = load(opt.file, opt.sets);
+  warn_friction_not_applied(model, "simulate");
   const UnitSystem system = resolve_units(model, opt.units);
   SimulateOptions so = simulate_options(model, opt);
   SimulateUnits U(model, reaction_components(model), system);

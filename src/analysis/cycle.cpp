@@ -106,7 +106,13 @@ DrivenWorkspace::DrivenWorkspace(const Model& model, int rank, std::vector<int> 
       dq(model.n),
       rotations(model),
       idle_bodies(std::move(idle)),
-      length_scale(mechanism_size(model)) {
+      length_scale(mechanism_size(model)),
+      friction(friction_pins(model)) {
+  if (!friction.empty()) {
+    R_inertia.resize(model.n);
+    Q_friction.resize(model.n);
+    lambda_previous.resize(model.nc);
+  }
   if (!J_sparse) {
     J.resize(model.n, model.n);
     J_piv.resize(model.n);
@@ -140,6 +146,8 @@ DrivenPointView DrivenPoints::operator[](std::size_t k) const {
                          s.input_acceleration,
                          Eigen::Map<const VecX>(tangent, n_tangent_),
                          s.drive,
+                         s.drive_frictionless,
+                         s.friction_iterations,
                          s.chart_quality,
                          s.chart_sign,
                          s.chart_id,
@@ -164,9 +172,23 @@ void DrivenPoints::reserve(std::size_t count) {
 }
 
 DrivenPoints::Scalars DrivenPoints::scalars_of(const DrivenPoint& p) const {
-  return {p.input,         p.time,     p.input_rate, p.input_acceleration, p.drive,
-          p.chart_quality, p.dTF,      p.kinetic,    p.potential,          p.dissipated,
-          p.idle_hold,     p.chart_id, p.chart_sign, p.singular,           p.bridge};
+  return {p.input,
+          p.time,
+          p.input_rate,
+          p.input_acceleration,
+          p.drive,
+          p.drive_frictionless,
+          p.chart_quality,
+          p.dTF,
+          p.kinetic,
+          p.potential,
+          p.dissipated,
+          p.idle_hold,
+          p.chart_id,
+          p.chart_sign,
+          p.friction_iterations,
+          p.singular,
+          p.bridge};
 }
 
 void DrivenPoints::check_sizes(const DrivenPoint& p) const {
@@ -337,6 +359,45 @@ ProjectionStatus basis_at_jacobian(const Model& model, const State& state, Works
                                : compute_basis(model, state, ws);
 }
 
+// (C3)–(C4) from dws.R = M u̇ + Ṁu − Q̂ (− Q_f): the drive τ = Fᵀ R / (Fᵀd), the forces holding
+// the idle motions, and the minimum-norm multipliers of E λ = R − d τ.
+void drive_and_multipliers(Workspace& ws, DrivenWorkspace& dws, const Eigen::Ref<const VecX>& F,
+                           double dTF, bool idle, DrivenPoint& out) {
+  out.drive = F.dot(dws.R) / dTF;
+  // (C4) reactions: E λ = M u̇ + Ṁu − Q̂ − d τ.
+  dws.R -= out.drive * dws.d;
+  out.idle_hold = 0.0;
+  if (idle) {  // − Iᵀ μ, the forces holding the idle motions: (I F)ᵀ μ = Fᵀ(R − d τ)
+    dws.idle_mu = (dws.idle_IF * dws.idle_IF.transpose())
+                      .ldlt()
+                      .solve(dws.idle_IF * (ws.dual.F.transpose() * dws.R));
+    dws.R.noalias() -= dws.idle_I.transpose() * dws.idle_mu;
+    // Their work per unit rate of each idle motion (V: unit angular rate).
+    const VecX work = dws.idle_V.transpose() * (dws.idle_I.transpose() * dws.idle_mu);
+    for (Eigen::Index j = 0; j < work.size(); ++j)
+      if (std::abs(work(j)) > std::abs(out.idle_hold)) out.idle_hold = work(j);
+  }
+  solve_multipliers(ws, dws, out.lambda);
+}
+
+// The joints' friction (analysis/friction.hpp): E λ + d τ = M u̇ + Ṁu − Q̂ − Q_f(λ, u) by
+// fixed-point iteration from the frictionless λ in out. The iterations taken, −1 when λ still
+// moved by more than kFrictionTolerance of its size after kFrictionIterations.
+int add_friction(const State& state, Workspace& ws, DrivenWorkspace& dws,
+                 const Eigen::Ref<const VecX>& F, double dTF, bool idle, DrivenPoint& out) {
+  for (int it = 1; it <= kFrictionIterations; ++it) {
+    dws.lambda_previous = out.lambda;
+    dws.Q_friction.setZero();
+    add_friction_forces(dws.friction, state.u, out.lambda, dws.Q_friction);
+    dws.R = dws.R_inertia - dws.Q_friction;
+    drive_and_multipliers(ws, dws, F, dTF, idle, out);
+    const double size = out.lambda.cwiseAbs().maxCoeff();
+    if ((out.lambda - dws.lambda_previous).cwiseAbs().maxCoeff() <= kFrictionTolerance * size)
+      return it;
+  }
+  return -1;
+}
+
 }  // namespace
 
 bool compute_driven(const Model& model, int driver_joint, double sdot, double sddot, State& state,
@@ -394,22 +455,16 @@ bool compute_driven(const Model& model, int driver_joint, double sdot, double sd
   out.udot = F * vdot + dws.Fdot_v;
   // (C3) drive: Fᵀ(M u̇ + Ṁu − Q̂) = (Fᵀd) τ.
   inertia_residual(ws, state.u, out.udot, dws.R);
-  out.drive = F.dot(dws.R) / dTF;
-  // (C4) reactions: E λ = M u̇ + Ṁu − Q̂ − d τ.
-  dws.R -= out.drive * dws.d;
-  out.idle_hold = 0.0;
-  if (idle) {  // − Iᵀ μ, the forces holding the idle motions: (I F)ᵀ μ = Fᵀ(R − d τ)
-    dws.idle_mu = (dws.idle_IF * dws.idle_IF.transpose())
-                      .ldlt()
-                      .solve(dws.idle_IF * (ws.dual.F.transpose() * dws.R));
-    dws.R.noalias() -= dws.idle_I.transpose() * dws.idle_mu;
-    // Their work per unit rate of each idle motion (V: unit angular rate).
-    const VecX work = dws.idle_V.transpose() * (dws.idle_I.transpose() * dws.idle_mu);
-    for (Eigen::Index j = 0; j < work.size(); ++j)
-      if (std::abs(work(j)) > std::abs(out.idle_hold)) out.idle_hold = work(j);
-  }
   out.lambda.resize(model.nc);
-  solve_multipliers(ws, dws, out.lambda);
+  if (dws.friction.empty()) {
+    drive_and_multipliers(ws, dws, F, dTF, idle, out);
+    out.drive_frictionless = out.drive;
+  } else {
+    dws.R_inertia = dws.R;
+    drive_and_multipliers(ws, dws, F, dTF, idle, out);
+    out.drive_frictionless = out.drive;
+    out.friction_iterations = add_friction(state, ws, dws, F, dTF, idle, out);
+  }
   out.q = state.q;
   out.u = state.u;
   out.input_rate = sdot;
@@ -1571,7 +1626,7 @@ constexpr unsigned kAll = (1u << kNodes) - 1;
 void pack(const DrivenPoint& p, VecX& v) {
   const Eigen::Index nr = static_cast<Eigen::Index>(p.reactions.size());
   const Eigen::Index nm = static_cast<Eigen::Index>(p.measures.size());
-  v.resize(p.q.size() + 3 * p.u.size() + p.lambda.size() + nr + nm + 4);
+  v.resize(p.q.size() + 3 * p.u.size() + p.lambda.size() + nr + nm + 5);
   Eigen::Index at = 0;
   auto put = [&](const auto& x) {
     for (Eigen::Index i = 0; i < static_cast<Eigen::Index>(x.size()); ++i)
@@ -1580,6 +1635,7 @@ void pack(const DrivenPoint& p, VecX& v) {
   put(p.q), put(p.u), put(p.udot), put(p.tangent), put(p.lambda);
   put(p.reactions), put(p.measures);
   v(at++) = p.drive, v(at++) = p.kinetic, v(at++) = p.potential, v(at++) = p.dissipated;
+  v(at++) = p.drive_frictionless;
 }
 
 void unpack(const VecX& v, DrivenPoint& p) {
@@ -1591,6 +1647,7 @@ void unpack(const VecX& v, DrivenPoint& p) {
   get(p.q), get(p.u), get(p.udot), get(p.tangent), get(p.lambda);
   get(p.reactions), get(p.measures);
   p.drive = v(at++), p.kinetic = v(at++), p.potential = v(at++), p.dissipated = v(at++);
+  p.drive_frictionless = v(at++);
 }
 
 // Lagrange basis at `at` of the nodes x whose bit is set in `used`.

@@ -216,6 +216,25 @@ std::vector<ExtraColumn> shaking_columns(const Model& model, const ShakingSeries
   return cols;
 }
 
+std::vector<ExtraColumn> friction_columns(const Model& model, const CycleResult& result,
+                                          const FrictionSeries& series, bool angular) {
+  std::vector<ExtraColumn> cols;
+  if (series.pins.empty()) return cols;
+  ExtraColumn drive{"drive without friction",
+                    angular ? Dimension::moment : Dimension::force,
+                    {},
+                    series.reported,
+                    true};
+  for (const DrivenPointView p : result.points) drive.values.push_back(p.drive_frictionless);
+  cols.push_back(std::move(drive));
+  for (size_t i = 0; i < series.pins.size(); ++i)
+    cols.push_back(
+        {model.joints[static_cast<size_t>(series.pins[i].joint)].name + " friction moment",
+         Dimension::moment, series.moment[i], series.reported, true});
+  cols.push_back({"friction power", Dimension::power, series.power, series.reported, true});
+  return cols;
+}
+
 CycleColumns write_cycle_csv(const std::filesystem::path& file, const Model& model,
                              const CycleResult& result,
                              const std::vector<ReactionMagnitude>& magnitudes, bool angular,

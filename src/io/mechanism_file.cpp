@@ -179,10 +179,12 @@ void Reader::read_joints(const YAML::Node& root) {
                    type + " joint needs rigid bodies");
     };
     if (type == "revolute") {
-      expect_map(item, element, {"name", "type", "connects", "limits"});
+      expect_map(item, element, {"name", "type", "connects", "limits", "friction"});
       auto [a, b] = connects(item, element);
       j.kind = Revolute{a, b};
       j.limits = joint_limits(item, element, units_.angle, Quantity::angle);
+      j.friction = joint_friction(item, element, units_.length);
+      if (j.friction) no_particles(a, b);  // the friction moment acts on both bodies' angles
     } else if (type == "prismatic" || type == "fixed") {
       if (type == "prismatic")
         expect_map(item, element, {"name", "type", "connects", "axis", "angle", "limits"});

@@ -189,6 +189,24 @@ class Reader {
     for (const auto& item : node) out.push_back(number(item, element, field, scale, quantity));
     return out;
   }
+  // `friction: {coefficient: μ, radius: r}` of a joint (0 ≤ μ ≤ 10, 0 < r ≤ kMaxLength), or
+  // nothing.
+  std::optional<JointFriction> joint_friction(const YAML::Node& item, const std::string& element,
+                                              double length_scale) const {
+    const YAML::Node f = item["friction"];
+    if (!f) return std::nullopt;
+    if (!f.IsMap()) fail(f, element, "friction must be a mapping {coefficient: MU, radius: R}");
+    expect_map(f, element + ": friction", {"coefficient", "radius"});
+    JointFriction out;
+    out.coefficient = number_field(f, "coefficient", element);
+    if (!(out.coefficient >= 0.0 && out.coefficient <= 10.0))
+      fail(f["coefficient"], element,
+           "friction coefficient must be in [0, 10], got " + f["coefficient"].Scalar());
+    out.radius = number_field(f, "radius", element, length_scale, Quantity::length);
+    if (!(out.radius > 0.0))
+      fail(f["radius"], element, "friction radius must be positive, got " + f["radius"].Scalar());
+    return out;
+  }
   // `limits: [min, max]` of a revolute or prismatic joint (min ≤ max), or nothing.
   std::optional<Vec2> joint_limits(const YAML::Node& item, const std::string& element, double scale,
                                    Quantity quantity) const {

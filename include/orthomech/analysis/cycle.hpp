@@ -33,6 +33,7 @@
 #include <string>
 #include <vector>
 
+#include "orthomech/analysis/friction.hpp"
 #include "orthomech/analysis/mobility.hpp"
 #include "orthomech/analysis/reactions.hpp"
 #include "orthomech/model/model.hpp"
@@ -97,6 +98,10 @@ struct DrivenPoint {
   double input_rate = 0.0, input_acceleration = 0.0;  // ṡ, s̈ of the driver's law at `time`
   VecX tangent;        // dq/ds = F / (dᵀF): the branch's direction per unit input
   double drive = 0.0;  // τ: drive torque (N·m) or force (N), from the driver onto the joint
+  // With joint friction (analysis/friction.hpp): the drive without it, and the fixed-point
+  // iterations the friction loads took (−1: not converged); τ and 0 without friction.
+  double drive_frictionless = 0.0;
+  int friction_iterations = 0;
   double chart_quality = 0.0;  // conditioning of the chart's block (→ 0 next to a change point)
   int chart_sign = 1;          // sign of det of the chart's block
   long chart_id = 0;           // the chart (count of switches so far)
@@ -129,6 +134,8 @@ struct DrivenPointView {
   double input_rate = 0.0, input_acceleration = 0.0;
   Eigen::Map<const VecX> tangent;
   double drive = 0.0;
+  double drive_frictionless = 0.0;
+  int friction_iterations = 0;
   double chart_quality = 0.0;
   int chart_sign = 1;
   long chart_id = 0;
@@ -188,10 +195,10 @@ class DrivenPoints {
 
  private:
   struct Scalars {
-    double input, time, input_rate, input_acceleration, drive, chart_quality, dTF, kinetic,
-        potential, dissipated, idle_hold;
+    double input, time, input_rate, input_acceleration, drive, drive_frictionless, chart_quality,
+        dTF, kinetic, potential, dissipated, idle_hold;
     long chart_id;
-    int chart_sign;
+    int chart_sign, friction_iterations;
     bool singular;
     int bridge;
   };
@@ -313,6 +320,10 @@ struct DrivenWorkspace {
   MatX idle_I, idle_V, idle_IF;
   VecX F_held, idle_Idot_u, idle_mu;
   double length_scale = 1.0;  // of the mechanism (m): the step of the İ u differences
+  // Joint friction (analysis/friction.hpp; empty: none): the pins, M u̇ + Ṁu − Q̂ before the
+  // friction loads, the friction loads Q_f and the previous iterate of λ.
+  std::vector<FrictionPin> friction;
+  VecX R_inertia, Q_friction, lambda_previous;
   DrivenWorkspace(const Model& model, int rank, std::vector<int> idle_bodies = {},
                   int sparse_jacobian_from = kSparseJacobianFrom);
   DrivenWorkspace(DrivenWorkspace&&) noexcept;

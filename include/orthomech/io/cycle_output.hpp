@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "orthomech/analysis/cycle.hpp"
+#include "orthomech/analysis/cycle_friction.hpp"
 #include "orthomech/analysis/shaking.hpp"
 #include "orthomech/io/noise.hpp"
 #include "orthomech/io/units.hpp"
@@ -66,6 +67,13 @@ struct ExtraColumn {
 // frame; empty where the position's rates are not reported.
 [[nodiscard]] std::vector<ExtraColumn> shaking_columns(const Model& model,
                                                        const ShakingSeries& series);
+
+// The friction's columns (analysis/friction.hpp), before `limits`: "drive without friction"
+// (N*m when `angular`, else N), each pin's "<joint> friction moment" and "friction power";
+// none without friction.
+[[nodiscard]] std::vector<ExtraColumn> friction_columns(const Model& model,
+                                                        const CycleResult& result,
+                                                        const FrictionSeries& series, bool angular);
 
 // One row per position, every quantity in `units` (units in the header: "drive [N*mm]"):
 // input, time, every measure, every body's pose and named point, every body's velocity and

@@ -159,6 +159,14 @@ struct SpatialJoint {
 using JointKind =
     std::variant<Revolute, Prismatic, Fixed, PinInSlot, GearPair, Distance, SpatialJoint>;
 
+// Coulomb friction of a joint (`friction:` in the file; planar revolute joints so far): a
+// friction moment μ r |F| on the pin, F the joint's force, r the pin radius, against the relative
+// rotation (analysis/friction.hpp).
+struct JointFriction {
+  double coefficient = 0.0;  // μ (kinetic)
+  double radius = 0.0;       // r, m
+};
+
 struct Joint {
   std::string name;
   JointKind kind;
@@ -166,6 +174,7 @@ struct Joint {
   // Range [min, max] of the joint coordinate (revolute: φ_j − φ_i, rad; prismatic: slide, m),
   // from `limits:` in the file; bounds of `assemble` (analysis/assembly.hpp).
   std::optional<Vec2> limits;
+  std::optional<JointFriction> friction;
   SourceLocation where;
   [[nodiscard]] int rows() const;
   [[nodiscard]] std::string type_name() const;

@@ -351,5 +351,49 @@ TEST(CycleCli, BadOptionsAreCommandLineErrors) {
   EXPECT_EQ(d.status, 2);
 }
 
+// Pin friction from the file (--set here): the JSON `friction` object, the drive without friction
+// equal to the plain file's drive, the extra lines of the table; in a redundant mechanism the
+// friction of a pin whose force is indeterminate is flagged, and simulate says it ignores it.
+TEST(CycleCli, PinFrictionIsReportedAndFlaggedWhereNotDetermined) {
+  std::vector<std::string> args = {"cycle", bundled("crank-rocker"), "--steps", "72"};
+  for (const char* j : {"A0", "A", "B", "B0"}) {
+    args.push_back("--set");
+    args.push_back(std::string("joints.") + j + ".friction={coefficient: 0.15, radius: 4}");
+  }
+  std::vector<std::string> json_args = args;
+  json_args.insert(json_args.end(), {"--json", "-q"});
+  const CliResult r = run_cli(json_args);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  ASSERT_EQ(j["friction"]["joints"].size(), 4u);
+  EXPECT_EQ(j["friction"]["joints"][0]["joint"], "A0");
+  EXPECT_EQ(j["friction"]["joints"][0]["radius"], 4.0);
+  EXPECT_TRUE(j["friction"]["converged"].get<bool>());
+  EXPECT_GT(j["friction"]["dissipated"].get<double>(), 0.0);
+  const CliResult plain = run_cli({"cycle", bundled("crank-rocker"), "--steps", "72", "--json"});
+  ASSERT_EQ(plain.status, 0) << plain.err;
+  const double rms0 = nlohmann::json::parse(plain.out)["peaks"]["drive"]["rms"].get<double>();
+  EXPECT_NEAR(j["peaks"]["drive without friction"]["rms"].get<double>(), rms0, 1e-9 * rms0);
+  // Over the turn (0.2 s at 300 rpm) the drive's work is what the pins dissipate.
+  EXPECT_NEAR(j["power"]["mean"].get<double>() * 0.2, j["friction"]["dissipated"].get<double>(),
+              1e-5 * j["friction"]["dissipated"].get<double>());
+  EXPECT_GT(j["peaks"]["A0 friction moment"]["peak"].get<double>(), 0.0);
+  const CliResult text = run_cli(args);
+  ASSERT_EQ(text.status, 0) << text.err;
+  EXPECT_NE(text.out.find("friction  dissipated"), std::string::npos) << text.out;
+
+  const CliResult redundant =
+      run_cli({"cycle", bundled("triple-crank"), "--set",
+               "joints.O2.friction={coefficient: 0.1, radius: 2}", "--json", "-q"});
+  ASSERT_EQ(redundant.status, 0) << redundant.err;
+  const auto f = nlohmann::json::parse(redundant.out)["friction"]["joints"];
+  ASSERT_EQ(f.size(), 1u);
+  EXPECT_FALSE(f[0]["determinate"].get<bool>());
+  const CliResult sim = run_cli({"simulate", bundled("crank-rocker"), "--t-end", "0.01", "--set",
+                                 "joints.A0.friction={coefficient: 0.1, radius: 2}"});
+  EXPECT_EQ(sim.status, 0) << sim.err;
+  EXPECT_NE(sim.err.find("does not apply joint friction"), std::string::npos) << sim.err;
+}
+
 }  // namespace
 }  // namespace orthomech

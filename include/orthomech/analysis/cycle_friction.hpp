@@ -1,0 +1,39 @@
+#pragma once
+/// @file
+/// The pins' friction over a sweep of `cycle` (analysis/friction.hpp gives the moments at one
+/// position): per position and pin, the energy dissipated, the summaries.
+#include <string>
+#include <vector>
+
+#include "orthomech/analysis/cycle.hpp"
+#include "orthomech/analysis/friction.hpp"
+#include "orthomech/model/model.hpp"
+
+namespace orthomech {
+
+/// The friction over a sweep: each pin's moment and the power dissipated at every position
+/// (reported where the position's drive is, drive_reported), whether each pin's force is
+/// determinate (all its reaction components are), the energy dissipated over the sweep
+/// (trapezoid rule in time, closed round the period when `cyclic`), and the fixed point's
+/// iterations (the most taken; converged false when a reported position did not converge).
+struct FrictionSeries {
+  std::vector<FrictionPin> pins;
+  std::vector<std::vector<double>> moment;  // [pin][position], N·m on the second body
+  std::vector<double> power;                // W
+  std::vector<bool> reported;
+  std::vector<bool> determinate;  // per pin
+  double dissipated = 0.0;        // J
+  int iterations_max = 0;
+  bool converged = true;
+};
+[[nodiscard]] FrictionSeries friction_series(const Model& model, const CycleResult& result,
+                                             bool cyclic);
+
+/// Their summaries (summarize_values): "drive without friction" (`drive_unit`), each pin's
+/// "<joint> friction moment" (N*m) and "friction power" (W). Empty without friction.
+[[nodiscard]] std::vector<SeriesSummary> summarize_friction(const Model& model,
+                                                            const CycleResult& result,
+                                                            const FrictionSeries& series,
+                                                            const std::string& drive_unit);
+
+}  // namespace orthomech

@@ -1,0 +1,53 @@
+// The pins' friction over a sweep (src/analysis/cycle_friction.cpp) on the crank-rocker with
+// friction in all four pins, against the drive's own accounts: over one turn a frictionless
+// conservative mechanism takes back all the work it gets, so the energy the pins dissipate is
+// the work of the drive with friction, the mean drive power times the period
+// (compute_cycle_metrics, its own trapezoid rule); and "drive without friction" is the drive of
+// the same mechanism swept without friction.
+#include "orthomech/analysis/cycle_friction.hpp"
+
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "orthomech/analysis/cycle_metrics.hpp"
+#include "orthomech/io/mechanism_file.hpp"
+#include "support/fixtures.hpp"
+
+namespace orthomech {
+namespace {
+
+TEST(CycleFriction, DissipatedEnergyIsTheDrivesWorkOverATurn) {
+  const std::string path = test::source_path("mechanisms/crank-rocker.yaml");
+  std::vector<FileChange> changes;
+  for (const char* j : {"A0", "A", "B", "B0"})
+    changes.push_back(
+        parse_file_change(std::string("joints.") + j + ".friction={coefficient: 0.15, radius: 4}"));
+  const Model model = load_mechanism(path, changes);
+  const CycleResult res = test::full_cycle(model, 720);
+  ASSERT_EQ(res.status, CycleStatus::completed) << res.message;
+  const FrictionSeries s = friction_series(model, res, true);
+  ASSERT_EQ(s.pins.size(), 4u);
+  EXPECT_TRUE(s.converged);
+  EXPECT_TRUE(s.determinate[0] && s.determinate[3]);
+  CycleMetricsOptions mo;
+  mo.driver_joint = model.find_joint("A0");
+  const CycleMetrics metrics = compute_cycle_metrics(model, res, mo);
+  const double period = 720 * (res.points[1].time - res.points[0].time);
+  EXPECT_GT(s.dissipated, 0.0);
+  EXPECT_NEAR(s.dissipated, metrics.power.mean * period, 1e-6 * s.dissipated);
+
+  const Model plain = load_mechanism(path);
+  const CycleResult ref = test::full_cycle(plain, 720);
+  const std::vector<SeriesSummary> sums = summarize_friction(model, res, s, "N*m");
+  ASSERT_EQ(sums.size(), 6u);  // the drive without friction, four pins, the power
+  EXPECT_EQ(sums[0].name, "drive without friction");
+  EXPECT_EQ(sums[1].name, "A0 friction moment");
+  const SeriesSummary plain_drive = summarize_cycle(ref, {}, "N*m")[0];
+  EXPECT_NEAR(sums[0].rms, plain_drive.rms, 1e-12 * plain_drive.rms);
+  EXPECT_NEAR(sums[0].max.value, plain_drive.max.value, 1e-12 * plain_drive.peak);
+}
+
+}  // namespace
+}  // namespace orthomech
