@@ -1,5 +1,6 @@
 // `orthomech crosscheck FILE [--samples N]`: dual versus primal form at states along a motion,
-// and the paper's identities (issue 5; design §8). Exit 1 when a difference exceeds the tolerance.
+// and the paper's identities (issue 5; docs/design.md §8). Exit 1 when a difference exceeds the
+// tolerance.
 #include "orthomech/dynamics/crosscheck.hpp"
 
 #include <spdlog/spdlog.h>

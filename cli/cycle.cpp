@@ -1,7 +1,7 @@
 // `orthomech cycle FILE`: a driven mechanism swept through one cycle of its input — drive
 // torque/force and every joint's reaction at every position, peaks and RMS, dead points, chart
-// switches, which reaction components are unique (design §6, docs/cli.md). No math here: the
-// sweep is run_cycle (analysis/cycle.hpp), the files are io/cycle_output.hpp.
+// switches, which reaction components are unique (docs/design.md §6, docs/cli.md). No math here:
+// the sweep is run_cycle (analysis/cycle.hpp), the files are io/cycle_output.hpp.
 #include "orthomech/analysis/cycle.hpp"
 
 #include <fcntl.h>

@@ -1,4 +1,4 @@
-// `orthomech info FILE [--json]`: structure and mobility of a mechanism (design §8).
+// `orthomech info FILE [--json]`: structure and mobility of a mechanism (docs/design.md §8).
 // The design position is first projected onto f(q) = 0 (mass-metric Gauss–Newton), because the
 // rank of E, and so the redundancy, is a property of the constraint manifold.
 #include <spdlog/spdlog.h>

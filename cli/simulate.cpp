@@ -1,4 +1,4 @@
-// `orthomech simulate FILE --t-end T`: forward dynamics (issue 5; design §4–5, §8).
+// `orthomech simulate FILE --t-end T`: forward dynamics (issue 5; docs/design.md §4–5, §8).
 // All the mathematics is in dynamics/simulate; this file parses options and formats results.
 #include "orthomech/dynamics/simulate.hpp"
 

@@ -47,8 +47,8 @@ struct CoordinateRow {
   std::vector<int> cols;  // coordinates s depends on (for its Hessian)
   // Spatial angle (revolute, cylindrical, screw: the (P5) twist angle θ ∈ (−π, π]): known only
   // modulo 2π, so the row reads s = centre + wrap(θ − centre), the value of θ nearest `centre`
-  // (the lock's value; a limit's midpoint). Its gradient is θ's (spatial.md §6.4: "locks use the
-  // wrapped residual").                                                                      (L4)
+  // (the lock's value; a limit's midpoint). Its gradient is θ's (docs/spatial.md §6.4: "locks use
+  // the wrapped residual").                                                                  (L4)
   bool wraps = false;
   double centre = 0.0;
   int measure = -1;  // a lock on a position measure's value instead of a joint coordinate
@@ -370,7 +370,7 @@ struct Problem {
   }
 };
 
-// Spatial models (spatial.md §6.4, the local-coordinates option): the unknowns are x ∈ Rⁿ with
+// Spatial models (docs/spatial.md §6.4, the local-coordinates option): the unknowns are x ∈ Rⁿ with
 // q(x) = q₀ ⊕ x, the velocity-space displacement from the guess (translation of each centre of
 // mass, rotation vector θ in body axes). (A1) becomes min ½ xᵀWx, f(q(x)) = 0 — the mass metric
 // of the planar problem, now exactly quadratic — with ∂f/∂x = Eᵀ(q(x)) blockdiag(I₃, J_r(θ))
@@ -918,7 +918,7 @@ double spatial_length_scale(const Model& model) {
 // there to the lock (an angle the short way round, (L4)) in equal steps of at most 2° or 2 % of
 // the length scale, each predicted along the previous one (q_k ⊕ (q_k ⊖ q_{k−1})) and corrected
 // by the same Gauss–Newton with the locks at the step's values. Small steps keep the guess's
-// assembly mode and the joints' drawn branches (spatial.md §2.4), as `cycle` follows them; a
+// assembly mode and the joints' drawn branches (docs/spatial.md §2.4), as `cycle` follows them; a
 // projection straight onto the locks may land on another mode. Empty when a step does not
 // converge (a dead point of the locked coordinate on the way, or a lock out of reach).
 std::optional<VecX> follow_locks(const Model& model, const VecX& q_guess,
@@ -960,7 +960,7 @@ std::optional<VecX> follow_locks(const Model& model, const VecX& q_guess,
 namespace {
 
 // Feasibility to the rounding level after Ipopt (optimality is Ipopt's): the mass-metric
-// Gauss–Newton in velocity space, Δu = −A Cᵀ (C A Cᵀ)⁺ c, q ← q ⊕ Δu (spatial.md §6.3), on the
+// Gauss–Newton in velocity space, Δu = −A Cᵀ (C A Cᵀ)⁺ c, q ← q ⊕ Δu (docs/spatial.md §6.3), on the
 // rows Ipopt kept — the independent rows of f, the locks, the limits active at q (held at their
 // nearer bound). The row set is fixed: off the manifold the redundant rows of an overconstrained
 // mechanism regain rank, and re-ranking them with a lock row made the step singular on the

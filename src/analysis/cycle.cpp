@@ -290,8 +290,8 @@ void solve_multipliers(Workspace& ws, DrivenWorkspace& w, VecX& lambda) {
   lambda.noalias() -= w.N * w.small;
 }
 
-// The idle motions held (spatial.md §6.5): the idle rows I and motions V at q, I F, and the held
-// basis F z with (I F) z = 0, |z| = 1 (z's largest component positive). False when F does not
+// The idle motions held (docs/spatial.md §6.5): the idle rows I and motions V at q, I F, and the
+// held basis F z with (I F) z = 0, |z| = 1 (z's largest component positive). False when F does not
 // have 1 + k columns (k idle motions) or I F has not rank k.
 bool hold_idle(const Model& model, const VecX& q, const MatX& F, DrivenWorkspace& w) {
   w.idle_I = idle_rows(model, q, w.idle_bodies, &w.idle_V);
@@ -424,7 +424,7 @@ bool compute_driven(const Model& model, int driver_joint, double sdot, double sd
   if (jacobian != DrivenJacobian::current_with_gradient)
     (void)compute_scalar(model, input, state.q, nullptr, dws.d);  // d: the input's gradient
   if (basis_at_jacobian(model, state, ws, dws) != ProjectionStatus::ok) return false;
-  // With idle degrees of freedom, the basis that holds them: F z, I F z = 0 (spatial.md §6.5).
+  // With idle degrees of freedom, the basis that holds them: F z, I F z = 0 (docs/spatial.md §6.5).
   const bool idle = !dws.idle_bodies.empty();
   if (idle && !hold_idle(model, state.q, ws.dual.F, dws)) return false;
   const Eigen::Ref<const VecX> F =
@@ -708,7 +708,7 @@ struct Sweep {
   // step across a dead point). A step longer than max_step (a jump towards another branch or
   // another turn of an angle) fails. Idle degrees of freedom (w.idle_bodies): rows I of their
   // motions, taken at the first iterate, with zero right-hand side (the steps do not move along
-  // them; spatial.md §6.5). With `tau` (the previous position's tangent, the chart factorised
+  // them; docs/spatial.md §6.5). With `tau` (the previous position's tangent, the chart factorised
   // there) the chord steps above come first; the Jacobian is factorised here only when they do
   // not converge (CycleResult::corrector_factorisations counts those).
   bool corrector(VecX& q, double target, double max_step, const VecX* row = nullptr,
@@ -1305,8 +1305,8 @@ bool CycleRun::try_step(const DrivenPoint& from, double t, DrivenPoint& out) {
          evaluate_at(trial_, t, out, sweep_.at_q) && same_branch(out.tangent, tangent);
 }
 
-// Determinacy (design §3): component cᵀλ is unique iff Nᵀc = 0 for the null space N of E. The
-// values of the components for λ = N_j are exactly (Nᵀc)_j; a component is determinate when
+// Determinacy (docs/design.md §3): component cᵀλ is unique iff Nᵀc = 0 for the null space N of E.
+// The values of the components for λ = N_j are exactly (Nᵀc)_j; a component is determinate when
 // they vanish at every regular position of the sweep.
 void CycleRun::update_determinacy(const DrivenPoint& p) {
   if (result_.redundant == 0 || p.singular) return;

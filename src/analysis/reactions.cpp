@@ -15,7 +15,7 @@ std::vector<ReactionComponent> reaction_components(const Model& model) {
     auto add = [&](const std::string& c, bool global, const char* unit) {
       out.push_back({joint.name + "." + c, ji, global, unit});
     };
-    if (std::holds_alternative<SpatialJoint>(joint.kind)) {  // spatial.md §2.6
+    if (std::holds_alternative<SpatialJoint>(joint.kind)) {  // docs/spatial.md §2.6
       for (const char* c : {"Fx", "Fy", "Fz"}) add(c, true, "N");
       for (const char* c : {"Mx", "My", "Mz"}) add(c, true, "N*m");
       for (const char* c : {"Ff", "Fg", "Fh"}) add(c, false, "N");

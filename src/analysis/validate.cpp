@@ -46,7 +46,7 @@ std::string fmt(double v, int precision = 4) {
 }
 
 // Whether a joint's coordinate is an angle (rad, compared modulo 2π): a planar revolute, or a
-// spatial revolute, cylindrical or screw joint (spatial.md §2.4: the (P5) twist angle).
+// spatial revolute, cylindrical or screw joint (docs/spatial.md §2.4: the (P5) twist angle).
 bool is_revolute(const Model& model, int joint) {
   const JointKind& k = model.joints[static_cast<size_t>(joint)].kind;
   if (const auto* s = std::get_if<SpatialJoint>(&k))
@@ -83,7 +83,7 @@ double length_scale(const Model& model) {
   return std::max(L, 1e-6);
 }
 
-// The joint points of spatial body b (body frame): an idle body's own motion (spatial.md §4.1)
+// The joint points of spatial body b (body frame): an idle body's own motion (docs/spatial.md §4.1)
 // leaves them in place, so positions are compared by them.
 std::vector<Vec3> joint_points_on(const Model& model, int b) {
   std::vector<Vec3> out;
@@ -153,9 +153,9 @@ VecX moved(const Model& model, const VecX& a, const VecX& du, double h) {
   return q;
 }
 
-// Whether every spatial joint is on its drawn branch (spatial.md §2.4): the rows f_i·h_j, g_i·h_j
-// also vanish with the axis flipped (h_j = −h_i) and the twist row g_i·f_j at a half-turn, with
-// Eᵀ of full rank there, so a projection from a random start may land on them. They are not
+// Whether every spatial joint is on its drawn branch (docs/spatial.md §2.4): the rows f_i·h_j,
+// g_i·h_j also vanish with the axis flipped (h_j = −h_i) and the twist row g_i·f_j at a half-turn,
+// with Eᵀ of full rank there, so a projection from a random start may land on them. They are not
 // assemblies of the joint as built: h_i·h_j > 0 and f_i·f_j > 0 (joints with a twist row).
 bool on_drawn_branch(const Model& model, const VecX& q) {
   for (const Joint& j : model.joints) {
@@ -1033,7 +1033,7 @@ double spatial_limit_coordinate(const Model& model, int joint, const VecX& q) {
   return x - kTwoPi * std::round((x - mid) / kTwoPi);
 }
 
-// A spatial design position (spatial.md §6.3–6.4): (A1) without the inputs (assemble: Ipopt in
+// A spatial design position (docs/spatial.md §6.3–6.4): (A1) without the inputs (assemble: Ipopt in
 // local coordinates, limits not applied), then the inputs reached by continuation from that
 // pose on its assembly mode and branch (continue_to_locks with the secant predictor: the
 // mass-metric Gauss–Newton in velocity space, q ⊕ δu), else by one projection onto the inputs.
@@ -1195,7 +1195,7 @@ void find_checked_loops(ValidationContext& c, ValidationReport& rep) {
 }
 
 // Generic rank: at the assembled design pose (the positions raise it to their max later). Idle
-// bodies (spatial.md §4.1): those mobility finds at the assembled design pose.
+// bodies (docs/spatial.md §4.1): those mobility finds at the assembled design pose.
 void design_pose_mobility(ValidationContext& c, ValidationReport& rep) {
   VecX q = c.q_design;
   AssemblyOptions ao;

@@ -213,7 +213,7 @@ struct JointEvaluator {
 };
 
 // Knife edge (nonholonomic): nᵀ v_P = 0 with n = R(φ) perp(a) (a: blade direction, body frame).
-//   f = 0 (no geometric residual: design §3);
+//   f = 0 (no geometric residual: docs/design.md §3);
 //   Eᵀ = nᵀ ∂r_P/∂u;
 //   Dᵀ = ṅᵀ ∂r_P/∂u + nᵀ d/dt(∂r_P/∂u), ṅ = φ̇ perp(n)                                   (L3)
 template <typename EtT>

@@ -19,7 +19,7 @@ constexpr SpatialRowSpec kLineF{P::dot2, 0, 0, "line f"}, kLineG{P::dot2, 1, 0, 
 constexpr SpatialRowSpec kNormal{P::dot2, 2, 0, "n"};
 constexpr SpatialRowSpec kLength{P::length, 0, 0, "length"}, kScrew{P::screw, 0, 0, "screw"};
 
-// Indexed by SpatialJointType (model.hpp), spatial.md §2.4.
+// Indexed by SpatialJointType (model.hpp), docs/spatial.md §2.4.
 const std::array<SpatialJointSpec, 11> kSpecs{{
     {"spherical", 3, {kX, kY, kZ}, SpatialCoordinate::none},
     {"revolute", 5, {kX, kY, kZ, kF, kG}, SpatialCoordinate::angle},
@@ -34,7 +34,7 @@ const std::array<SpatialJointSpec, 11> kSpecs{{
     {"screw", 5, {kLineF, kLineG, kF, kG, kScrew}, SpatialCoordinate::angle},
 }};
 
-// The rate of a row as Σ_b (g_b·v_b + h_b·w_b) and its time derivative (spatial.md §2.2);
+// The rate of a row as Σ_b (g_b·v_b + h_b·w_b) and its time derivative (docs/spatial.md §2.2);
 // index 0 is body i, 1 body j.
 struct RowTerms {
   double f = 0.0;

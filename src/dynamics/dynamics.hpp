@@ -116,7 +116,7 @@ class Dynamics {
   void compute_F() { cs_.basis(ws_.constraints.Et, b_, col_, F_); }
 
   // Largest entry of F in the mass metric, |F_dk| √M_dd / √M_ii (i = independent k): it grows
-  // without bound as the chart's dependent block degrades (design §4: the chart monitor).
+  // without bound as the chart's dependent block degrades (docs/design.md §4: the chart monitor).
   double chart_spread() const {
     const VecX& s = ws_.free.A_sqrt;  // 1/√M_kk
     double m = 0.0;
@@ -203,7 +203,8 @@ class Dynamics {
     } else {
       ws_.constraints.poses.update(model_, state_.q);
     }
-    // 2. u = F v; then Dᵀ u and Ḟ v (design §4: Eᵀ Ḟ v = −Dᵀ u, independent rows of Ḟ zero).
+    // 2. u = F v; then Dᵀ u and Ḟ v (docs/design.md §4: Eᵀ Ḟ v = −Dᵀ u, independent rows of
+    // Ḟ zero).
     state_.u.noalias() = F_ * v;
     compute_constraint_rate(model_, state_, ws_.constraints.poses, ws_.constraints.Dtu);  // Dᵀ u
     b_ = -ws_.constraints.Dtu;

@@ -17,7 +17,7 @@ void compute_multipliers(const MatX& Et, const VecX& R, VecX& lambda) {
   lambda = cod.solve(R);
 }
 
-// Dual dynamics (design §4). From ṗ = Q̂ + R with ṗ = M u̇ + Ṁ u and Fᵀ R = 0 (eq. (64)):
+// Dual dynamics (docs/design.md §4). From ṗ = Q̂ + R with ṗ = M u̇ + Ṁ u and Fᵀ R = 0 (eq. (64)):
 //   (L1) u = F v, u̇ = F v̇ + Ḟ v,
 //   (L2) Fᵀ M F v̇ = Fᵀ (Q̂ − Ṁ u − M Ḟ v), i.e. H v̇ = … with H from eq. (68).
 ProjectionStatus compute_dual_dynamics(const Model& model, const State& state, Workspace& ws,

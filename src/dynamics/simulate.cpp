@@ -882,7 +882,7 @@ class Simulation {
 
   // Residual left by the step (before correction), with Eᵀ at the same q. Quaternions are
   // renormalised first (|e| = 1 is a first integral of q̇ = B̃u; only the step's error moves
-  // it; f and R do not depend on |e|, spatial.md §6.3).
+  // it; f and R do not depend on |e|, docs/spatial.md §6.3).
   void book_step_residual(VecX& y) {
     auto qy = y.head(nq_);
     SparseEt& Et = dyn_.ws_.constraints.Et;

@@ -1,5 +1,5 @@
 // The spatial sections of a mechanism file (`dimension: 3`, docs/file-format.md "Spatial
-// mechanisms", spatial.md §5): bodies with a position and an orientation, 3-vector points and
+// mechanisms", docs/spatial.md §5): bodies with a position and an orientation, 3-vector points and
 // axes, the eleven spatial joint types of constraints/spatial_joints.hpp, spatial loads and
 // measures. Parameters, units, `--set`, drivers, design-position inputs, `analysis` and `initial`
 // are read by the planar code (mechanism_file.cpp), shared through the Reader.
@@ -406,7 +406,7 @@ void Reader::read_spatial_joints(const YAML::Node& root) {
     const Mat3 Ri = design_rotation(model_, s.pi.body), Rj = design_rotation(model_, s.pj.body);
     const Vec3 Pi = design_world(model_, s.pi), Pj = design_world(model_, s.pj);
 
-    // The joint frame A (columns f, g, h) in world at the design pose (spatial.md §2.5).
+    // The joint frame A (columns f, g, h) in world at the design pose (docs/spatial.md §2.5).
     Mat3 A = Ri;  // spherical, distance, fixed without an axis: body i's axes
     if (s.type == T::universal) {
       const YAML::Node axes = require(item, "axes", element);
@@ -498,9 +498,9 @@ void Reader::read_spatial_joints(const YAML::Node& root) {
 }
 
 // ---- nonholonomic constraints ------------------------------------------------------------------
-// rolling-disc (spatial.md §3): {name, type, body, radius, axis (body frame), centre (a point of
-// the body, default its centre of mass), plane: {point, normal} (world; default the origin, +z), t1
-// (world, in the plane; default the world axis least aligned with the normal, projected)}.
+// rolling-disc (docs/spatial.md §3): {name, type, body, radius, axis (body frame), centre (a point
+// of the body, default its centre of mass), plane: {point, normal} (world; default the origin,
+// +z), t1 (world, in the plane; default the world axis least aligned with the normal, projected)}.
 void Reader::read_spatial_nonholonomic(const YAML::Node& root) {
   const YAML::Node node = list(root, "nonholonomic");
   if (!node || node.IsNull()) return;

@@ -92,7 +92,7 @@ double spring_deflection(const Model& model, const JointSpringDamper& l, double 
 
 // A world force F at ρ from the centre of mass (or a world moment n, with F = 0): Q = (F, Rᵀ(ρ×F
 // + n)), eq. (8) with δq̃ = B δq = (δr, δπ), δπ = 2G(e)δe the body-frame virtual rotation
-// (eq. (7), spatial.md §1.4).
+// (eq. (7), docs/spatial.md §1.4).
 void add_wrench(const SpatialFrame& k, const Vec3& F, const Vec3& moment, VecX& Q) {
   add_spatial_row(k, F, moment, 1.0, Q);
 }

@@ -4,7 +4,7 @@
 
 namespace orthomech::test {
 
-// The RSSR's rocker angle φ(θ) (mechanisms/rssr.yaml, spatial.md (M1)): crank r1 about world z
+// The RSSR's rocker angle φ(θ) (mechanisms/rssr.yaml, docs/spatial.md (M1)): crank r1 about world z
 // through A0 = 0, rocker r2 about world x through B0 = (p, 0, h), coupler L; φ from world y about
 // x; P cos φ + Q sin φ + S = 0 on the file's branch, φ = atan2(Q, P) + acos(−S/√(P² + Q²)).
 inline double rssr_rocker_angle(double theta) {

@@ -1,5 +1,5 @@
 #pragma once
-// Initial conditions (design §5, issue 4): the user's design position is only a guess.
+// Initial conditions (docs/design.md §5, issue 4): the user's design position is only a guess.
 //
 // Positions. `assemble` projects the guess q₀ onto the constraint manifold with Ipopt:
 //   min ½ (q − q₀)ᵀ W (q − q₀)   s.t.  f(q) = 0 (eq. (20)),  s_k(q) = value_k (locked inputs),

@@ -1,5 +1,5 @@
 #pragma once
-// Kinetostatics of a driven mechanism over a cycle (design §6, issue 3).
+// Kinetostatics of a driven mechanism over a cycle (docs/design.md §6, issue 3).
 //
 // A driver prescribes one input s(q) (a joint coordinate) as a function of time. With d its
 // Jacobian row and F the dual-form basis of admissible velocities (n_a = 1):
@@ -8,13 +8,13 @@
 //   (Fᵀd) τ = H v̇ + Fᵀ(M Ḟ v + Ṁ u − Q̂)            → τ, the drive force/torque           (C3)
 //   E λ = R = M u̇ + Ṁ u − Q̂ − d τ                  → λ, minimum-norm                     (C4)
 // (C3) is Fᵀ of the equation of motion M u̇ + Ṁu = Q̂ + dτ + Eλ (Fᵀ E = 0); (C4) is the rest. A
-// reaction component cᵀλ is unique iff c ⟂ null(E) (design §3); with redundant constraints
+// reaction component cᵀλ is unique iff c ⟂ null(E) (docs/design.md §3); with redundant constraints
 // λ is the minimum-norm solution and the other components are reported as indeterminate.
 // dᵀF → 0 is a dead point of the driver: it is located (bisection on the input) and reported,
 // never divided by.
 //
 // Idle degrees of freedom (Mobility::idle: a body's own motion that moves no other body, e.g. the
-// spin of a coupler between two spherical joints about the line through them; spatial.md §4.1,
+// spin of a coupler between two spherical joints about the line through them; docs/spatial.md §4.1,
 // §6.5) are held at zero rate instead of being left to the driver: with I the idle rows
 // (idle_rows: vᵀM for each idle motion v, so that the held velocity is mass-orthogonal to it)
 // and F the basis of null(Eᵀ) (n_a = 1 + k columns), the held basis is F z with (I F) z = 0 and
@@ -408,7 +408,7 @@ bool compute_driven(const Model& model, int driver_joint, double sdot, double sd
 // ---- Summary (peaks and RMS) -----------------------------------------------------------------
 // The magnitude of one joint's force (|(Fx, Fy)| in the global frame), moment |M| or scalar
 // reaction (gear λ), built from the global reaction components. Indeterminate when any of its
-// components is (the value is then the minimum-norm choice, design §3).
+// components is (the value is then the minimum-norm choice, docs/design.md §3).
 struct ReactionMagnitude {
   std::string name;  // "A.|F|", "slide.|M|", "gear.|lambda|"
   std::string unit;  // "N" or "N*m"

@@ -31,9 +31,9 @@ struct Mobility {
   // ChartEngine::select chooses from the same Eᵀ, A and options, which simulate's start reuses
   // instead of a second QR. Empty on the sparse path.
   Chart chart;
-  // Idle degrees of freedom (spatial.md §4.1, §6.5): a body held by two or more joints that can
-  // move while every other body is at rest, e.g. a coupler between two spherical joints spinning
-  // about the line through them. Each counts in `dof`.
+  // Idle degrees of freedom (docs/spatial.md §4.1, §6.5): a body held by two or more joints that
+  // can move while every other body is at rest, e.g. a coupler between two spherical joints
+  // spinning about the line through them. Each counts in `dof`.
   struct Idle {
     std::string body;
     int count = 0;  // independent directions of that body's own motion
@@ -53,7 +53,7 @@ inline constexpr int kSparseMobilityFrom = 600;
 // The indices (Model::bodies) of the bodies of m.idle.
 [[nodiscard]] std::vector<int> idle_body_indices(const Model& model, const Mobility& m);
 
-// The own motions of the bodies `idle` at q (spatial.md §4.1, §6.5): for each, a basis of the
+// The own motions of the bodies `idle` at q (docs/spatial.md §4.1, §6.5): for each, a basis of the
 // null space of Eᵀ restricted to its columns (scaled by √A_kk, rows normalised, as the rank test
 // of compute_mobility), every other body at rest. One column (size n) per motion, scaled to a
 // unit angular rate (1 rad/s; a motion without rotation: unit speed). n × 0 without idle bodies.

@@ -1,6 +1,6 @@
 #pragma once
 #include <vector>
-// Position solvers on f(q) = 0 (design §5), Eigen only. Results are data, not exceptions.
+// Position solvers on f(q) = 0 (docs/design.md §5), Eigen only. Results are data, not exceptions.
 #include <string>
 
 #include "orthomech/model/model.hpp"

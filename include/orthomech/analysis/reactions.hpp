@@ -1,7 +1,7 @@
 #pragma once
-// Joint reactions from the constraint multipliers λ (design §3): the force (and moment) that each
-// joint applies to its first body from its second, in the world frame and in the joint's frame,
-// with named components. Used by `cycle` (kinetostatics), `simulate` and `crosscheck`.
+// Joint reactions from the constraint multipliers λ (docs/design.md §3): the force (and moment)
+// that each joint applies to its first body from its second, in the world frame and in the joint's
+// frame, with named components. Used by `cycle` (kinetostatics), `simulate` and `crosscheck`.
 #include <string>
 #include <vector>
 

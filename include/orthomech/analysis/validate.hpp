@@ -1,6 +1,6 @@
 #pragma once
-// Validation of design positions (design §1 job 3, issue 4). For every design position of the
-// file (input values, optionally a target point/angle with a tolerance):
+// Validation of design positions (docs/design.md §1 job 3, issue 4). For every design position of
+// the file (input values, optionally a target point/angle with a tolerance):
 //   - assembly (analysis/assembly.hpp) and how far the design pose had to move;
 //   - the assembly modes at the inputs (multi-start mass-metric projections, clustered), which
 //     mode the position is on (with a target: the mode that meets it best);
@@ -15,11 +15,11 @@
 //   - defects of the set: circuit (positions on different circuits), branch (a dead or change
 //     point between consecutive positions on a circuit), order (the input not monotone in the
 //     given order).
-// Spatial mechanisms (dimension 3, spatial.md): the same report, with positions moved through
+// Spatial mechanisms (dimension 3, docs/spatial.md): the same report, with positions moved through
 // q ⊕ δu (quaternions, nq ≠ n), the inputs locked on the spatial joints' coordinates (wrapped
-// angles), idle degrees of freedom (spatial.md §4.1) reported as mobility does and held at zero
-// rate (mass-orthogonal) in η, the circuit trace and the mode comparison, and assembly modes on
-// the drawn branch of every joint axis (h_i·h_j > 0, f_i·f_j > 0 for twist rows). Spatial
+// angles), idle degrees of freedom (docs/spatial.md §4.1) reported as mobility does and held at
+// zero rate (mass-orthogonal) in η, the circuit trace and the mode comparison, and assembly modes
+// on the drawn branch of every joint axis (h_i·h_j > 0, f_i·f_j > 0 for twist rows). Spatial
 // targets: a point at a world position, optionally the orientation of its body (the whole frame,
 // or one body axis along a world direction; DesignTarget). Spatial transmission loops (RSSR,
 // RSSP, ...): Sutherland & Roth's transmission index, find_spatial_transmission_loops.

@@ -1,5 +1,5 @@
 #pragma once
-// Constraints (paper §3, design §3): every joint supplies, analytically,
+// Constraints (paper §3, docs/design.md §3): every joint supplies, analytically,
 //   f(q)            the geometric residual, eq. (20)  (holonomic joints),
 //   Eᵀ(q)           the constraint matrix acting on u, eq. (23): Eᵀ u = 0,
 //   Dᵀ(q, u)        its time derivative along the motion, Dᵀ = d/dt Eᵀ, eq. (76),

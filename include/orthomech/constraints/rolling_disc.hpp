@@ -1,9 +1,9 @@
 #pragma once
-// The rolling disc (spatial.md §3), a nonholonomic constraint of a spatial body: its three rows
-// t1, t2, n (model.hpp: RollingDisc), defined here in one place. With a = R a′ the symmetry axis,
-// c = k·a, s = |k × a| = √(1 − c²), m = (k − c a)/s (in the disc plane, from the contact point P
-// up to the centre), ρ_P = ρ_c − ρ_d m the contact point from the centre of mass (ρ_c = R c′ the
-// disc centre):
+// The rolling disc (docs/spatial.md §3), a nonholonomic constraint of a spatial body: its three
+// rows t1, t2, n (model.hpp: RollingDisc), defined here in one place. With a = R a′ the symmetry
+// axis, c = k·a, s = |k × a| = √(1 − c²), m = (k − c a)/s (in the disc plane, from the contact
+// point P up to the centre), ρ_P = ρ_c − ρ_d m the contact point from the centre of mass
+// (ρ_c = R c′ the disc centre):
 //   Eᵀ row  [ nᵀ | (Rᵀ(ρ_P × n))ᵀ ]                                              (D0)
 //   Dᵀ row  [ 0  | (Rᵀ(ρ̇_P × n − w × (ρ_P × n)))ᵀ ],   Dᵀu = (ρ̇_P × n)·w
 // for n = t1, t2, k, with ρ̇_P = w × ρ_c − ρ_d ṁ (the contact point moves on the disc:

@@ -1,5 +1,5 @@
 #pragma once
-// Spatial joints (spatial.md §2): every joint type is a list of rows, each one of five
+// Spatial joints (docs/spatial.md §2): every joint type is a list of rows, each one of five
 // primitives, defined once in the table below (its rows, their names, and which coordinate the
 // joint has). The primitives, for body i (first of `connects`) and j (second), P_i, P_j the joint
 // points, a_i, a_j body-fixed unit vectors (columns of the joint frames), d = r_Pj − r_Pi:
@@ -35,7 +35,7 @@ struct SpatialJointSpec {
   SpatialCoordinate coordinate;
 };
 
-// The one table of spatial joint types, indexed by SpatialJointType (spatial.md §2.4).
+// The one table of spatial joint types, indexed by SpatialJointType (docs/spatial.md §2.4).
 [[nodiscard]] const SpatialJointSpec& spatial_joint_spec(SpatialJointType type);
 // The type whose name is `name`; false if there is none.
 [[nodiscard]] bool find_spatial_joint_type(const std::string& name, SpatialJointType& type);
@@ -67,7 +67,7 @@ void evaluate_spatial_joint(const Model& model, const SpatialJoint& joint, const
 [[nodiscard]] SpatialScalar spatial_joint_coordinate(const Model& model, const SpatialJoint& joint,
                                                      const VecX& q, const VecX* u);
 
-// The reaction of a spatial joint (spatial.md (S7)): the wrench that body j exerts on body i
+// The reaction of a spatial joint (docs/spatial.md (S7)): the wrench that body j exerts on body i
 // through the joint's rows with multipliers λ (its rows only), F = (Eλ)_{v_i} and the moment about
 // the joint point, world components: about P_i, or about P_j for point-on-line, point-on-plane
 // and distance (where the moment vanishes). When body i is the ground, minus body j's share. Also

@@ -1,6 +1,6 @@
 #pragma once
-// The built-in cross-check of the two formulations (design §4, §8; issue 5): at states along a
-// motion, the dual (F-based) and the primal (E-based) forms must give the same projections,
+// The built-in cross-check of the two formulations (docs/design.md §4, §8; issue 5): at states
+// along a motion, the dual (F-based) and the primal (E-based) forms must give the same projections,
 // accelerations and reactions, and the paper's identities must hold. With a rank-deficient E
 // (redundant constraints) G is singular and the primal form is undefined: only the dual checks
 // run, and the result says why the primal ones were skipped.

@@ -1,5 +1,5 @@
 #pragma once
-// Forward dynamics of the constrained system (issue 5; paper §7; design §4–5).
+// Forward dynamics of the constrained system (issue 5; paper §7; docs/design.md §4–5).
 //
 // Initial conditions: the design position is projected onto f(q) = 0 (mass-metric Gauss–Newton,
 // analysis/positions.hpp; it can switch to Ipopt's `assemble` once that exists), then the

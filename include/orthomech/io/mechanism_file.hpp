@@ -1,5 +1,5 @@
 #pragma once
-// The mechanism file (design §9, docs/file-format.md): YAML with declared units, read with
+// The mechanism file (docs/design.md §9, docs/file-format.md): YAML with declared units, read with
 // yaml-cpp into a validated Model (SI inside). Every problem is one InputError naming
 // file:line:column and the element; nothing is half-built.
 #include <string>

@@ -1,5 +1,5 @@
 #pragma once
-// Each body kind defined in one place (paper §2; spatial.md §1, §6.3): its coordinates q (nq)
+// Each body kind defined in one place (paper §2; docs/spatial.md §1, §6.3): its coordinates q (nq)
 // and velocity parameters u (nu, translations first, then rotations), q ⊕ h·du, q₁ ⊖ q₀,
 // q̇ = B̃u (eq. (19)), its blocks of M and A = M⁻¹, its kinetic energy, its velocity-dependent
 // forces (the −C p u term of eq. (16)), the rates of its momenta (analysis/shaking.hpp) and its
@@ -120,7 +120,7 @@ struct SpatialKind {
   static constexpr BodyLayout layout = body_layout(BodyKind::spatial);
   static constexpr int nq = layout.nq, nu = layout.nu;
   static constexpr const char* velocity_names[nu] = {"vx", "vy", "vz", "wx", "wy", "wz"};
-  // q ⊕ h·du: r += h v; e ← e ⊗ exp(½ h ω), renormalised (spatial.md §6.3). Exact for a
+  // q ⊕ h·du: r += h v; e ← e ⊗ exp(½ h ω), renormalised (docs/spatial.md §6.3). Exact for a
   // constant body-frame ω, so q ⊕ t·u is a motion with u̇ = 0.
   static void integrate(const Body& b, VecX& q, const VecX& du, double h) {
     q.segment<3>(b.q_offset) += h * du.segment<3>(b.u_offset);

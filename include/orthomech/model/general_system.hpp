@@ -1,5 +1,5 @@
 #pragma once
-// A free system given by functions (design §2: "a general free system with configuration-
+// A free system given by functions (docs/design.md §2: "a general free system with configuration-
 // dependent M(q) … must fit the same interface"), e.g. a tree in joint coordinates such as
 // Andrews' squeezer in the test set's relative coordinates. Holonomic, q̇ = u (B̃ = I).
 //

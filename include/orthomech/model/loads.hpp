@@ -1,7 +1,7 @@
 #pragma once
 // Loads: generalized forces Q(q, u, t) of the free system, eq. (8): δW = Qᵀ δq̃.
 // For planar bodies Q̂ = Q (no nonholonomic term, eq. (16), and ∂T/∂q = 0, eq. (11)); spatial
-// bodies add the velocity term of eq. (16), −ω × Jω in their rotation rows (spatial.md (S5)),
+// bodies add the velocity term of eq. (16), −ω × Jω in their rotation rows (docs/spatial.md (S5)),
 // which does no work (ωᵀ(ω × Jω) = 0), kept apart from the loads (add_velocity_terms).
 #include "orthomech/model/model.hpp"
 #include "orthomech/model/state.hpp"

@@ -1,7 +1,7 @@
 #pragma once
 // Measures and inputs: scalar functions s(q) of the position, with their Jacobian row
 // d = ∂s/∂u (so ṡ = d u) and convective term ḋ u (so s̈ = d u̇ + ḋ u). Drivers use the same
-// functions for the input (design §6).
+// functions for the input (docs/design.md §6).
 #include "orthomech/model/free_system.hpp"
 #include "orthomech/model/model.hpp"
 

@@ -2,8 +2,8 @@
 // The Model: an immutable description of a mechanism (house style: never mutated by
 // algorithms). It is built and validated once, by io/mechanism_file or by ModelBuilder in code.
 //
-// Free system (paper §2, design §2). Coordinates q (size nq) and velocity parameters u (size n),
-// q̇ = B̃(q) u (eq. (19)). Kinds of free system:
+// Free system (paper §2, docs/design.md §2). Coordinates q (size nq) and velocity parameters u
+// (size n), q̇ = B̃(q) u (eq. (19)). Kinds of free system:
 //   - planar rigid body: q = (x, y, φ) of the centre of mass and the body-frame angle, u = q̇,
 //     M = diag(m, m, J_c);
 //   - planar particle:   q = (x, y), u = q̇, M = diag(m, m).
@@ -11,7 +11,7 @@
 // M(q), model/general_system.hpp);
 //   - spatial rigid body: q = (r, e), r the world position of the centre of mass and e a unit
 //     quaternion (scalar first), u = (v, ω) with v = ṙ and ω the body-frame angular velocity,
-//     q̇ = B̃u with B̃ = blockdiag(I₃, ½G(e)ᵀ), M = diag(m I₃, J) (spatial.md §1; nq 7, n 6).
+//     q̇ = B̃u with B̃ = blockdiag(I₃, ½G(e)ᵀ), M = diag(m I₃, J) (docs/spatial.md §1; nq 7, n 6).
 // A model is all planar (dimension 2) or all spatial (dimension 3).
 // See model/free_system.hpp and model/spatial.hpp.
 #include <Eigen/Core>
@@ -98,7 +98,7 @@ struct SpatialPointRef {
   std::string label;
 };
 
-// ---- Joints (design §3). Each supplies f (eq. (20)), Eᵀ (eq. (23)) and Dᵀ (eq. (76)). ----------
+// ---- Joints (docs/design.md §3). Each supplies f (eq. (20)), Eᵀ (eq. (23)) and Dᵀ (eq. (76)). ---
 // Sign convention: λ of a joint is the force (and moment) that body j exerts on body i, in the
 // world frame, for f = (point on i) − (point on j). docs/notation.md.
 struct Revolute {  // rows: x, y.  f = r_i + R_i s_i − r_j − R_j s_j
@@ -126,7 +126,7 @@ struct Distance {  // rows: length.  f = (|r_Pj − r_Pi|² − L²) / (2L): a m
   PointRef pi, pj;
   double length = 1.0;
 };
-// Spatial joints (spatial.md §2.4): every type is a list of rows built from the primitives of
+// Spatial joints (docs/spatial.md §2.4): every type is a list of rows built from the primitives of
 // constraints/spatial_joints.hpp (point components, dot-1, dot-2, distance, twist angle); the
 // table of rows per type is defined there, in one place. Body i is the first of `connects`.
 enum class SpatialJointType {
@@ -146,8 +146,8 @@ struct SpatialJoint {
   SpatialJointType type = SpatialJointType::spherical;
   SpatialPointRef pi, pj;
   // The joint frame (columns f, g, h; h the axis) in body i's frame and in body j's frame: the
-  // same world frame at the design position (spatial.md §2.5). Universal: pin 1 = f of frame_i,
-  // pin 2 = g of frame_j.
+  // same world frame at the design position (docs/spatial.md §2.5). Universal: pin 1 = f of
+  // frame_i, pin 2 = g of frame_j.
   Mat3 frame_i = Mat3::Identity();
   Mat3 frame_j = Mat3::Identity();
   // Reference direction of body j for the joint angle (revolute, cylindrical, screw): the angle is
@@ -181,7 +181,7 @@ struct Joint {
   [[nodiscard]] std::vector<std::string> component_names() const;  // e.g. {"x", "y"}
 };
 
-// ---- Nonholonomic constraints (design §3): Eᵀ rows only, no geometric residual. ------------
+// ---- Nonholonomic constraints (docs/design.md §3): Eᵀ rows only, no geometric residual. ---------
 // Knife edge (Chaplygin sled): the point `at` of a rigid body cannot move across the blade,
 // whose direction is axis_local in the body frame: nᵀ v_P = 0 with n = R(φ) perp(axis). One row;
 // f = 0 (positions are never corrected along it); λ is the lateral force of the ground on the
@@ -194,8 +194,8 @@ struct KnifeEdge {
   SourceLocation where;
 };
 
-// Rolling disc (spatial.md §3): a thin disc of a spatial body rolls without slipping on a fixed
-// plane (point O, unit normal k; tangents t1, t2 = k × t1). With a = R axis_local, c = k·a,
+// Rolling disc (docs/spatial.md §3): a thin disc of a spatial body rolls without slipping on a
+// fixed plane (point O, unit normal k; tangents t1, t2 = k × t1). With a = R axis_local, c = k·a,
 // s = √(1 − c²), m = (k − c a)/s and ρ_P = R centre_local − radius·m (contact point P from the
 // centre of mass): the disc's material point at P has zero velocity, nᵀ(v + w × ρ_P) = 0 for
 // n = t1, t2 (nonholonomic, f = 0) and n = k (holonomic: f = k·(r_C − O) − radius·s, the height
@@ -215,7 +215,7 @@ struct RollingDisc {
   SourceLocation where;
 };
 
-// ---- Loads (design §9). Each gives a generalized force Q (eq. (8)). ---------------------------
+// ---- Loads (docs/design.md §9). Each gives a generalized force Q (eq. (8)). ---------------------
 struct Gravity {
   Vec2 g = Vec2(0.0, -9.81);
 };
@@ -254,7 +254,7 @@ struct RotarySpringDamper {  // moment T = k (φ_j − φ_i − θ0) + c (φ̇_j
   int bi = kGround, bj = kGround;
   double stiffness = 0.0, free_angle = 0.0, damping = 0.0;
 };
-// Spatial loads (spatial.md §1.4, §5): Q = (F_world, n_body) per body.
+// Spatial loads (docs/spatial.md §1.4, §5): Q = (F_world, n_body) per body.
 struct SpatialGravity {
   Vec3 g = Vec3(0.0, 0.0, -9.81);
 };
@@ -333,7 +333,7 @@ struct Measure {
   SourceLocation where;
 };
 
-// ---- Drivers: a prescribed input (a joint coordinate), design §6. ---------------------------
+// ---- Drivers: a prescribed input (a joint coordinate), docs/design.md §6. -----------------------
 enum class Profile { constant_speed, harmonic, polynomial };
 struct Driver {
   std::string name;

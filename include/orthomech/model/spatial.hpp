@@ -1,5 +1,5 @@
 #pragma once
-// Spatial rigid bodies (spatial.md §1): unit quaternions (scalar first, Hamilton product), the
+// Spatial rigid bodies (docs/spatial.md §1): unit quaternions (scalar first, Hamilton product), the
 // rotation matrix, B̃ and B of eq. (2), eq. (3) and eq. (19), the exponential map q ⊕ h·u, and the
 // kinematics of a spatial body's frame and points shared by joints, loads and measures.
 //
@@ -23,7 +23,7 @@ using Mat34 = Eigen::Matrix<double, 3, 4>;
   return S;
 }
 
-// R(e) = I + (2/|e|²)(e₀ ε̃ + ε̃²), exactly orthogonal for any e ≠ 0 (spatial.md (S1)).
+// R(e) = I + (2/|e|²)(e₀ ε̃ + ε̃²), exactly orthogonal for any e ≠ 0 (docs/spatial.md (S1)).
 [[nodiscard]] inline Mat3 rotation_matrix(const Quat& e) {
   const Vec3 eps = e.tail<3>();
   const Mat3 E = skew(eps);
@@ -31,7 +31,7 @@ using Mat34 = Eigen::Matrix<double, 3, 4>;
 }
 
 // G(e) = [−ε, e₀I − ε̃]: ω = 2 G(e) ė (body frame), ė = ½ G(e)ᵀ ω; u = B q̇ with
-// B = blockdiag(I₃, 2G(e)), eq. (2) (spatial.md (S3)).
+// B = blockdiag(I₃, 2G(e)), eq. (2) (docs/spatial.md (S3)).
 [[nodiscard]] inline Mat34 quaternion_G(const Quat& e) {
   Mat34 G;
   G.col(0) = -e.tail<3>();
@@ -49,7 +49,7 @@ using Mat34 = Eigen::Matrix<double, 3, 4>;
 }
 
 // exp(½ θ): the unit quaternion of the rotation by the rotation vector θ (body frame);
-// series below |θ| = 1e-8 (spatial.md §6.3).
+// series below |θ| = 1e-8 (docs/spatial.md §6.3).
 [[nodiscard]] inline Quat quaternion_exp(const Vec3& theta) {
   const double a = theta.norm();
   Quat e;
@@ -131,8 +131,8 @@ struct SpatialPoint {
   return p;
 }
 
-// The generic row rule (spatial.md (R1)–(R3)): a row whose rate is Σ_b (g_b·v_b + h_b·w_b), with
-// world vectors g_b, h_b, has Eᵀ columns [g_bᵀ | (R_bᵀh_b)ᵀ] and Dᵀ columns
+// The generic row rule (docs/spatial.md (R1)–(R3)): a row whose rate is Σ_b (g_b·v_b + h_b·w_b),
+// with world vectors g_b, h_b, has Eᵀ columns [g_bᵀ | (R_bᵀh_b)ᵀ] and Dᵀ columns
 // [ġ_bᵀ | (R_bᵀ(ḣ_b − w_b × h_b))ᵀ] in body b's six columns; `scale` multiplies both.
 template <typename Row>
 void add_spatial_row(const SpatialFrame& k, const Vec3& g, const Vec3& h, double scale, Row&& row) {

@@ -1,6 +1,6 @@
 #pragma once
-// Charts for the dual form (design §4). A global basis F of admissible velocities does not exist
-// in general (paper §5, last paragraph), so F is built by coordinate partitioning in charts:
+// Charts for the dual form (docs/design.md §4). A global basis F of admissible velocities does not
+// exist in general (paper §5, last paragraph), so F is built by coordinate partitioning in charts:
 //   - `rows`: r = rank(Eᵀ) independent constraint rows (the others are redundant),
 //   - `dependent`: r velocity components D whose block E_RDᵀ is best conditioned,
 //   - `independent`: the n_a = n − r others, I; the chart's coordinates are v = u_I.
@@ -72,7 +72,7 @@ struct Chart {
   [[nodiscard]] int rank() const { return static_cast<int>(rows.size()); }
 };
 
-// Scaled rank-revealing factorisation of Eᵀ, preallocated (design §4).
+// Scaled rank-revealing factorisation of Eᵀ, preallocated (docs/design.md §4).
 class ChartSelector {
  public:
   ChartSelector(int nc, int n);

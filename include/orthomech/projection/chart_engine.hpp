@@ -1,7 +1,7 @@
 #pragma once
-// The chart engine (design §4): the one implementation of charts of the dual form, used by every
-// command — `cycle`, `validate` and `crosscheck` through compute_basis (projection/dual.hpp), and
-// `simulate` through its own instance. A chart (rows R, dependent components D, independent
+// The chart engine (docs/design.md §4): the one implementation of charts of the dual form, used by
+// every command — `cycle`, `validate` and `crosscheck` through compute_basis (projection/dual.hpp),
+// and `simulate` through its own instance. A chart (rows R, dependent components D, independent
 // components I; projection/chart.hpp) gives
 //   F = P [I; −(E_RDᵀ)⁻¹ E_RIᵀ].
 // The engine

@@ -1,5 +1,5 @@
 #pragma once
-// Dual (F-based) form, the centre of the tool (paper §5–6; design §4).
+// Dual (F-based) form, the centre of the tool (paper §5–6; docs/design.md §4).
 #include "orthomech/model/state.hpp"
 #include "orthomech/projection/workspace.hpp"
 

@@ -8,7 +8,7 @@
 //
 // It solves c(q) = 0, c = [f_rows(q); g(q)]: chosen rows of f (eq. (20)) and extra rows g given by
 // the caller (locks, a tangent row, …), by minimum-norm steps in velocity space,
-//   Δu = −W Cᵀ (C W Cᵀ)⁺ c,   q ← q ⊕ Δu   (spatial.md §6.3: nq ≠ n for spatial bodies),
+//   Δu = −W Cᵀ (C W Cᵀ)⁺ c,   q ← q ⊕ Δu   (docs/spatial.md §6.3: nq ≠ n for spatial bodies),
 // with C = [E_rowsᵀ; ∂g/∂u] and W the mass metric A = M⁻¹ (eq. (6), at the start q) or the
 // identity (then Δu = −C⁺ c by a complete orthogonal decomposition of C, without squaring its
 // condition). The pseudo-inverse takes redundant rows (an overconstrained mechanism) as they

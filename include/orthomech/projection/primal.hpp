@@ -1,5 +1,5 @@
 #pragma once
-// Primal (E-based) form, the cross-check (paper §3–4, §6; design §4).
+// Primal (E-based) form, the cross-check (paper §3–4, §6; docs/design.md §4).
 #include "orthomech/model/state.hpp"
 #include "orthomech/projection/workspace.hpp"
 

@@ -92,7 +92,7 @@ struct DualWorkspace {
   MatX MFdot;     // n × n_a: M Ḟ
   MatX betaFdot;  // n × n_a: β Ḟ = Ḟ − F H⁻¹ Fᵀ M Ḟ
   MatX small;     // n_a × n_a: scratch
-  MatX Fdot;      // n × n_a: Ḟ from Eᵀ Ḟ = −Dᵀ F (design §4)
+  MatX Fdot;      // n × n_a: Ḟ from Eᵀ Ḟ = −Dᵀ F (docs/design.md §4)
   MatX Theta;     // n × n: Θ = Ḟ H⁻¹ Fᵀ, eq. (83)
   MatX theta;     // n × n: θ = ψ̇ = β Θ + Θᵀ βᵀ, eq. (84)
   VecX dq;        // n: scratch of the chart position corrector

@@ -1,11 +1,11 @@
 // `assemble` with locks and limits on spatial joint coordinates (issue 12, item 6 leftovers): the
 // lock row reads the (P5) angle modulo 2π nearest the lock ((L4) in assembly.cpp), the start is the
 // design pose moved to the locks on its branch. Oracles, written here from the geometry alone:
-//  - the RSSR's input–output relation (spatial.md (M1)), the file's branch (+acos);
-//  - the spatial slider-crank's x_C(φ) (spatial.md (M2));
+//  - the RSSR's input–output relation (docs/spatial.md (M1)), the file's branch (+acos);
+//  - the spatial slider-crank's x_C(φ) (docs/spatial.md (M2));
 //  - Hooke's joint: tan θ2 = cos β tan θ1, θ2 in θ1's half-plane (mechanisms/hooke-joint.yaml);
 //  - Bennett's closure θ3 = −θ1, θ4 = −θ2, tan(θ1/2) tan(θ2/2) = sin((β+α)/2)/sin((β−α)/2)
-//    (spatial.md §4.2), 3 redundant equations;
+//    (docs/spatial.md §4.2), 3 redundant equations;
 //  - a KKT check of (A1) with a limit active: W x = Cᵀλ with C by central differences in x.
 #include <gtest/gtest.h>
 
@@ -126,7 +126,7 @@ TEST(SpatialLocks, BennettLockSatisfiesItsClosureWithThreeRedundantEquations) {
     EXPECT_NEAR(wrap(joint_coordinate(m, m.find_joint("J3"), r.q) + t1), 0.0, kClosedForm) << deg;
     EXPECT_NEAR(wrap(joint_coordinate(m, m.find_joint("J4"), r.q) + t2), 0.0, kClosedForm) << deg;
   }
-  // The file's values (spatial.md §4.2).
+  // The file's values (docs/spatial.md §4.2).
   const AssemblyResult r = assemble_locked(m, "J1", 20 * kDeg);
   EXPECT_NEAR(measure(m, "theta2", r.q), 172.6144863489 * kDeg, 1e-11);
 }

@@ -1,4 +1,4 @@
-// `cycle` with an idle degree of freedom held at zero rate (issue 13 item 1; spatial.md §4.1,
+// `cycle` with an idle degree of freedom held at zero rate (issue 13 item 1; docs/spatial.md §4.1,
 // §6.5): the RSSR of mechanisms/rssr.yaml with joint B spherical (an S–S coupler whose spin about
 // AB moves no other body: DOF 2, one idle). Independent oracles:
 //  - the universal-joint file (no idle spin) with the coupler's axial inertia J_a extrapolated to
@@ -53,7 +53,7 @@ Model rssr(bool spherical, double axial) {
   return m;
 }
 
-using test::rssr_rocker_angle;  // spatial.md (M1), the file's branch
+using test::rssr_rocker_angle;  // docs/spatial.md (M1), the file's branch
 
 TEST(SpatialIdleCycle, SsCouplerIsDrivenWithItsSpinHeld) {
   const Model m = rssr(true, 1e-6);

@@ -1,5 +1,5 @@
 // `cycle` on spatial mechanisms (issue 13 item 1), against independent oracles:
-//  - RSSR rocker angle and rate against the closed form (spatial.md (M1)) at every position;
+//  - RSSR rocker angle and rate against the closed form (docs/spatial.md (M1)) at every position;
 //  - power balance: drive power = Σ (m v·v̇ + ωᵀJω̇) − Σ m g·v, written in the test from the
 //    bodies' data (body-frame ω: the gyroscopic term does no work);
 //  - a Lagrange-multiplier solve of [M −E −d; Eᵀ 0 0; dᵀ 0 0] with Q̂ (gravity and −ω×Jω) built

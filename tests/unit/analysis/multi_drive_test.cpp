@@ -1,4 +1,4 @@
-// Several drivers (issue 13 item 3) on the Stewart platform (spatial.md §4.7), against oracles
+// Several drivers (issue 13 item 3) on the Stewart platform (docs/spatial.md §4.7), against oracles
 // written here: the closed-form inverse kinematics of positions (l_i = |p + R P_i − B_i|) and
 // velocities (l̇_i = n_iᵀ(v + ω × R P_i)), forward kinematics at the reference pose of §4.7, the
 // Jacobian-transpose equilibrium of the platform under its payload, and the power balance.

@@ -1,8 +1,8 @@
-// The double-wishbone suspension (mechanisms/double-wishbone.yaml, spatial.md §4.8) and the
+// The double-wishbone suspension (mechanisms/double-wishbone.yaml, docs/spatial.md §4.8) and the
 // camber and toe measures (docs/file-format.md "Spatial mechanisms", Measures). Oracles, all
 // written here: a loop solve of the §4.8 geometry by our own Newton in four unknowns (the
 // upper-arm angle and the upright's rotation vector), with Rodrigues' formula and the points
-// typed from spatial.md; the parallelogram linkage, whose upright translates (camber = toe = 0
+// typed from docs/spatial.md; the parallelogram linkage, whose upright translates (camber = toe = 0
 // exactly); the first-order toe change of a tie-rod length change from the geometry of the
 // kingpin axis; central differences of the measures along q ⊕ t u.
 #include <gtest/gtest.h>
@@ -29,7 +29,7 @@ namespace {
 constexpr double kDeg = std::numbers::pi / 180.0;
 
 // ---- the independent loop solve --------------------------------------------------------------
-struct Geometry {  // spatial.md §4.8, m: x forward, y outboard (left wheel), z up
+struct Geometry {  // docs/spatial.md §4.8, m: x forward, y outboard (left wheel), z up
   Vec3 LAf, LAr, LBJ, UAf, UAr, UBJ, TRi, TRo, WC;
 };
 const Geometry kWishbone{{0.15, 0.25, 0.15},  {-0.15, 0.25, 0.15}, {0.0, 0.70, 0.12},
@@ -167,8 +167,9 @@ TEST(DoubleWishbone, CamberToeAndTravelEqualAnIndependentLoopSolve) {
   EXPECT_GT(max_toe, 1.0 * kDeg);
 }
 
-// spatial.md §4.8 (i): equal, parallel arms and a tie rod parallel to them: the upright translates
-// on a circle, camber and toe stay 0 while the wheel travels as the independent solve says.
+// docs/spatial.md §4.8 (i): equal, parallel arms and a tie rod parallel to them: the upright
+// translates on a circle, camber and toe stay 0 while the wheel travels as the independent
+// solve says.
 TEST(DoubleWishbone, ParallelogramKeepsCamberAndToeZero) {
   const Model m =
       load_mechanism(test::source_path("tests/data/spatial/double-wishbone-parallelogram.yaml"));
@@ -182,7 +183,7 @@ TEST(DoubleWishbone, ParallelogramKeepsCamberAndToeZero) {
   });
 }
 
-// spatial.md §4.8 (ii): at fixed ψ the ball joints stay where they are, so a tie-rod length
+// docs/spatial.md §4.8 (ii): at fixed ψ the ball joints stay where they are, so a tie-rod length
 // change δ turns the upright about the kingpin axis k (LBJ → UBJ) by dγ = δ/((ρ × e)·k), ρ the
 // outer tie-rod point from LBJ, e the tie rod's unit vector; toe changes by (dt/dγ) dγ with
 // dt/dγ = (s_y (k × s)_x − s_x (k × s)_y)/(s_x² + s_y²): Δtoe = δ/ℓ, ℓ = (ρ × e)·k/(dt/dγ), the

@@ -4,7 +4,7 @@
 // written here (the crank-rocker's 30/80/60 mm links on a 70 mm ground, pins on the bodies' x
 // axes) and the locked angle; a loop that cannot close is reported, not thrown; Bennett's
 // linkage (3 redundant equations) locked from a start off the manifold, against its closure
-// θ3 = −θ1, θ4 = −θ2, tan(θ1/2) tan(θ2/2) = sin((β+α)/2)/sin((β−α)/2) (spatial.md §4.2).
+// θ3 = −θ1, θ4 = −θ2, tan(θ1/2) tan(θ2/2) = sin((β+α)/2)/sin((β−α)/2) (docs/spatial.md §4.2).
 #include "orthomech/analysis/positions.hpp"
 
 #include <gtest/gtest.h>

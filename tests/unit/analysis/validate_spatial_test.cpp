@@ -1,12 +1,12 @@
 // validate on spatial mechanisms (issue 13 item 2) against independent oracles:
-//  - RSSR positions against the closed form (M1) of spatial.md §4.1 (rocker angle φ(θ)), its dead
-//    points of the rocker input from dφ/dθ = 0 of (M1), solved in the test by bisection;
+//  - RSSR positions against the closed form (M1) of docs/spatial.md §4.1 (rocker angle φ(θ)), its
+//    dead points of the rocker input from dφ/dθ = 0 of (M1), solved in the test by bisection;
 //  - Bennett positions against the closure tan(θ1/2) tan(θ2/2) = sin((β+α)/2)/sin((β−α)/2) and its
-//    DOF 1 with 3 redundant equations at every position (spatial.md §4.2);
+//    DOF 1 with 3 redundant equations at every position (docs/spatial.md §4.2);
 //  - σ_min and η against an SVD of the Jacobian built in the test by central differences of f and
 //    of the input through q ⊕ h·e_k (integrate_positions), with the mass matrix assembled in the
 //    test from the bodies' masses and inertia tensors;
-//  - the idle spin of an S–S coupler (spatial.md §4.1): held by the row e_ωx of the coupler
+//  - the idle spin of an S–S coupler (docs/spatial.md §4.1): held by the row e_ωx of the coupler
 //    (its long axis), written in the test.
 #include <gtest/gtest.h>
 
@@ -71,7 +71,7 @@ DesignPosition position(const std::string& name, int joint, double value) {
   return d;
 }
 
-// The mass matrix from the bodies' data (spatial.md §1.4: M_b = diag(m I₃, J)).
+// The mass matrix from the bodies' data (docs/spatial.md §1.4: M_b = diag(m I₃, J)).
 MatX mass_matrix(const Model& m) {
   MatX M = MatX::Zero(m.n, m.n);
   for (const Body& b : m.bodies) {
@@ -240,7 +240,7 @@ TEST(SpatialValidate, RssrHasFourAssemblyModesAtACrankAngle) {
 }
 
 // An S–S coupler (the universal joint B replaced by a spherical one) has an idle spin about AB
-// (spatial.md §4.1): DOF 2, one of them idle, so one input fixes the position; η is taken with
+// (docs/spatial.md §4.1): DOF 2, one of them idle, so one input fixes the position; η is taken with
 // the spin held (the row e_ωx of the coupler, its long axis, written here) and the circuit closes.
 TEST(SpatialValidate, IdleSpinIsReportedAndHeld) {
   Model m = test::load_bundled("rssr");
@@ -398,7 +398,7 @@ TEST(SpatialValidate, ParallelogramChangePointsDistanceAndBranchDefect) {
 
 // ---- spatial slider-crank ----------------------------------------------------------------------
 
-// With the slide as the input, the dead points are the extremes of (M2) (spatial.md §4.4):
+// With the slide as the input, the dead points are the extremes of (M2) (docs/spatial.md §4.4):
 // x_C² = 0.09 − |(0.1, 0.12) + 0.08 (cos φ, sin φ)|², extreme when the crank points along
 // ±(0.1, 0.12): x_C = √(0.09 − (|(0.1, 0.12)| ± 0.08)²). A prismatic (slide) input in metres.
 TEST(SpatialValidate, SliderCrankSlideInputDeadPointsFromM2) {
@@ -436,7 +436,7 @@ TEST(SpatialValidate, SliderCrankSlideInputDeadPointsFromM2) {
 // ---- Bennett -----------------------------------------------------------------------------------
 
 // θ1 = 20°, 75°, 140°: θ2 from tan(θ1/2) tan(θ2/2) = sin 45°/sin 15°; DOF 1 and 3 redundant
-// equations at every position (spatial.md §4.2); σ_min of rank 17 against differences.
+// equations at every position (docs/spatial.md §4.2); σ_min of rank 17 against differences.
 TEST(SpatialValidate, BennettPositionsClosureAndThreeRedundantEquations) {
   Model m = test::load_bundled("bennett");
   const int J1 = m.find_joint("J1"), J2 = m.find_joint("J2");

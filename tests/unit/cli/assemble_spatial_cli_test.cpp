@@ -24,9 +24,9 @@ using nlohmann::json;
 using test::CliResult;
 using test::run_cli;
 
-// RSSR (spatial.md §4.1): the rocker turns about the world x axis through B0 = (300, 0, 200) mm,
-// so its point B keeps x = 300 mm and a constant distance from B0 along any motion; every
-// quaternion stays unit.
+// RSSR (docs/spatial.md §4.1): the rocker turns about the world x axis through
+// B0 = (300, 0, 200) mm, so its point B keeps x = 300 mm and a constant distance from B0 along any
+// motion; every quaternion stays unit.
 TEST(SpatialCli, SimulateWritesPosesAndPointsIn3d) {
   const CliResult r = run_cli({"simulate", test::bundled_file("rssr"), "--t-end", "0.5", "--rtol",
                                "1e-11", "--positions", "--json", "-v"});
@@ -119,7 +119,7 @@ TEST(SpatialCli, CommandsNotYetSpatialRefuseWithExitTwo) {
 }
 
 // assemble on a spatial file with a lock on a spatial joint's coordinate: exit 0, the rocker at
-// (M1) (spatial.md §4.1) on the file's branch, in the file's degrees; limits are bounds (the
+// (M1) (docs/spatial.md §4.1) on the file's branch, in the file's degrees; limits are bounds (the
 // crank limited to [0°, 20°] from its drawn 30° ends at 20°); an unreachable lock is exit 3
 // naming it; a joint without a coordinate is exit 2.
 TEST(SpatialCli, AssembleLocksSpatialJointsAndHonoursLimits) {

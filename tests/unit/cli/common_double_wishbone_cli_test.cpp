@@ -1,6 +1,6 @@
-// The commands on mechanisms/double-wishbone.yaml (spatial.md §4.8): `info` reports its mobility
-// (n = 18, n_c = 17, rank 17, DOF 1, no redundant row: the count a reader makes from the joint
-// list, revolutes 5 + 5, ball joints 3 + 3, the tie rod 1), `assemble` finds the drawn pose
+// The commands on mechanisms/double-wishbone.yaml (docs/spatial.md §4.8): `info` reports its
+// mobility (n = 18, n_c = 17, rank 17, DOF 1, no redundant row: the count a reader makes from the
+// joint list, revolutes 5 + 5, ball joints 3 + 3, the tie rod 1), `assemble` finds the drawn pose
 // closed with camber and toe 0, and `crosscheck` passes.
 #include <gtest/gtest.h>
 

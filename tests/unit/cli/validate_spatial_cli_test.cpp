@@ -48,7 +48,7 @@ TEST(SpatialValidateCli, EverySpatialFileRunsWithPlanarChecksNotApplicable) {
     }
   }
   // The files' design positions (their comment blocks): DOF 1 at each, 3 redundant equations in
-  // the Bennett linkage and Hooke's joint (spatial.md §4.2, §4.5), none in the slider-crank.
+  // the Bennett linkage and Hooke's joint (docs/spatial.md §4.2, §4.5), none in the slider-crank.
   for (const auto& [name, redundant] : {std::pair<const char*, size_t>{"bennett", 3},
                                         {"hooke-joint", 3},
                                         {"spatial-slider-crank", 0}}) {
@@ -139,8 +139,9 @@ TEST(SpatialValidateCli, SpatialJointLimitsNameTheJoint) {
   EXPECT_TRUE(doc["min_loop_transmission_index"].is_null());
 }
 
-// The RSSR with a spherical joint at B (an S–S coupler): an idle spin about AB (spatial.md §4.1),
-// DOF 2 with one idle, so the crank alone fixes the position (exit 0), and the report says so.
+// The RSSR with a spherical joint at B (an S–S coupler): an idle spin about AB
+// (docs/spatial.md §4.1), DOF 2 with one idle, so the crank alone fixes the position (exit 0),
+// and the report says so.
 TEST(SpatialValidateCli, IdleSpinIsReported) {
   std::ifstream in(test::bundled_file("rssr"));
   std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());

@@ -1,4 +1,4 @@
-// Every joint's f, Eᵀ and Dᵀ against central finite differences (issue 2 §2, design §3).
+// Every joint's f, Eᵀ and Dᵀ against central finite differences (issue 2 §2, docs/design.md §3).
 // For planar bodies B̃ = I, so Eᵀ = ∂f/∂q and Dᵀ = d/dt Eᵀ(q + t u) at t = 0.
 #include "orthomech/constraints/joints.hpp"
 

@@ -1,7 +1,7 @@
-// The rolling disc's rows (spatial.md §3, (D0)) against independent oracles: central differences
-// taken through integrate_positions (q ⊕ t·u, the exponential map), at random poses where the
-// disc neither touches the plane nor rolls: row n's Eᵀ = ∂f/∂q·B̃; every row's Eᵀu = the velocity
-// along n of the body point that is the contact point at this instant (a fixed body point,
+// The rolling disc's rows (docs/spatial.md §3, (D0)) against independent oracles: central
+// differences taken through integrate_positions (q ⊕ t·u, the exponential map), at random poses
+// where the disc neither touches the plane nor rolls: row n's Eᵀ = ∂f/∂q·B̃; every row's Eᵀu = the
+// velocity along n of the body point that is the contact point at this instant (a fixed body point,
 // differentiated along the motion); Dᵀ = dEᵀ/dt; Dᵀu row by row = Dᵀ·u; row n's Dᵀu = f̈. The
 // height f against the lowest rim point found by a search over the rim.
 #include "orthomech/constraints/rolling_disc.hpp"

@@ -1,4 +1,4 @@
-// Spatial joints (spatial.md §2): every row's Eᵀ, Dᵀ and Dᵀu against central differences taken
+// Spatial joints (docs/spatial.md §2): every row's Eᵀ, Dᵀ and Dᵀu against central differences taken
 // through integrate_positions (q ⊕ t·u, the exponential map), at random poses that do not
 // satisfy the joint, for body pairs (i, j), (ground, j) and (i, ground). Also the joint
 // coordinates (angle, slide) and the rows' zeros at the design position.
@@ -104,7 +104,7 @@ INSTANTIATE_TEST_SUITE_P(AllTypes, SpatialJointRows, ::testing::ValuesIn(all_cas
                          });
 
 // At the design position every joint's rows vanish (the frames coincide, the points coincide,
-// the distance is its length), and Eᵀ has full row rank (spatial.md §2.4: rank = rows).
+// the distance is its length), and Eᵀ has full row rank (docs/spatial.md §2.4: rank = rows).
 TEST(SpatialJointRows, VanishAtTheDesignPositionWithFullRank) {
   for (SpatialJointType t : kAll) {
     const Model m = two_body_model(t, 0);
@@ -121,7 +121,7 @@ TEST(SpatialJointRows, VanishAtTheDesignPositionWithFullRank) {
 }
 
 // Relative degrees of freedom: the null space of Eᵀ restricted to body j with body i the ground
-// (spatial.md §2.4, "rel. DOF").
+// (docs/spatial.md §2.4, "rel. DOF").
 TEST(SpatialJointRows, RelativeDegreesOfFreedom) {
   const std::pair<SpatialJointType, int> expected[] = {
       {SpatialJointType::spherical, 3},      {SpatialJointType::revolute, 1},
@@ -199,7 +199,7 @@ TEST(SpatialJointCoordinate, AngleAndSlideAgainstKnownMotionsAndDifferences) {
 namespace orthomech {
 namespace {
 
-// Reactions (spatial.md §2.6, (S7)): for random multipliers at the assembled design position,
+// Reactions (docs/spatial.md §2.6, (S7)): for random multipliers at the assembled design position,
 // (1) the wrench equals body i's columns of Eλ (Eᵀ from the row writer) reduced to the joint
 // point, (2) the rows are self-equilibrated (body j gets the opposite wrench), and (3) each joint
 // transmits only what it should: the components of the table are zero.

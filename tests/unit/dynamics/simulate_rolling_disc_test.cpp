@@ -1,4 +1,4 @@
-// The rolling disc under `simulate` (spatial.md §3.1): steady circular rolling (D1) reproduced
+// The rolling disc under `simulate` (docs/spatial.md §3.1): steady circular rolling (D1) reproduced
 // from its closed form for two cases (tilt constant, the centre on its circle, heading Ω t,
 // w·a = s_r, energy constant) in both dynamics forms; the contact force equals the closed form
 // F = m Ω V e2 + m g k (normal force m g, friction m Ω V toward the circle's centre); the file
@@ -128,14 +128,14 @@ Deviation deviation(const SimulateResult& r, const Steady& st, size_t first) {
   return d;
 }
 
-TEST(RollingDiscDynamics, ClosedFormOfTheSteadyMotion) {  // spatial.md §3.1's numbers
+TEST(RollingDiscDynamics, ClosedFormOfTheSteadyMotion) {  // docs/spatial.md §3.1's numbers
   const Steady a{20 * std::numbers::pi / 180, 3.0}, b{-35 * std::numbers::pi / 180, 5.0};
   EXPECT_NEAR(a.spin(), -7.763541035340376, 1e-13);
   EXPECT_NEAR(a.speed(), -0.7763541035340377, 1e-14);
   EXPECT_NEAR(a.radius(), -0.25878470117801256, 1e-14);
   EXPECT_NEAR(b.spin(), 8.68073423615713, 1e-13);
   EXPECT_NEAR(b.radius(), 0.17361468472314262, 1e-14);
-  // ω_body of case a (spatial.md: (0, −2.81907786, −7.76354104) rad/s).
+  // ω_body of case a (docs/spatial.md: (0, −2.81907786, −7.76354104) rad/s).
   const Model m = disc_model(a);
   const State s = initial_state(m, a);
   EXPECT_NEAR(s.u(3), 0.0, 1e-14);

@@ -1,4 +1,4 @@
-// Spatial rigid bodies in the dynamics (spatial.md §1, §4.6; issue 12 item 2):
+// Spatial rigid bodies in the dynamics (docs/spatial.md §1, §4.6; issue 12 item 2):
 //   - eq. (10) evaluated numerically from B(q) and B̃(q) (differences in the 7 coordinates of
 //     a body) gives −C p u = the gyroscopic term −ω × Jω that compute_applied_forces adds;
 //   - a torque-free asymmetric body conserves energy and world angular momentum and, spun about
@@ -55,7 +55,7 @@ TEST(SpatialBody, EquationTenFromDifferencesOfBIsTheGyroscopicTerm) {
   State s(m);
   s.q = m.design_q();
   s.u << 0.3, -0.2, 0.5, 1.1, -2.3, 0.7;
-  // ∂B^h_r/∂q^s by central differences in the raw coordinates (spatial.md §1.2, item 3).
+  // ∂B^h_r/∂q^s by central differences in the raw coordinates (docs/spatial.md §1.2, item 3).
   const double h = 1e-6;
   std::array<Eigen::Matrix<double, 6, 7>, 7> dB;
   for (int c = 0; c < 7; ++c) {
@@ -152,8 +152,8 @@ TEST(SpatialBody, TorqueFreeAsymmetricBodyConservesEnergyAndMomentumAndFlips) {
   for (const SimulationSample& smp : stable.samples) EXPECT_GT(smp.u(5), 4.99);
 }
 
-// Heavy symmetric top (spatial.md §4.6): tip fixed by a spherical joint at the origin, centre of
-// mass at l along the symmetry axis (body z), nutation θ from the vertical, spin component
+// Heavy symmetric top (docs/spatial.md §4.6): tip fixed by a spherical joint at the origin, centre
+// of mass at l along the symmetry axis (body z), nutation θ from the vertical, spin component
 // ω₃ = w·axis. Steady precession Ω solves Ω (C ω₃ − A_O Ω cos θ) = m g l (M3).
 struct Top {
   double m = 1.0, l = 0.1, A_cm = 0.002, C = 0.004, g = 9.81;
@@ -196,7 +196,7 @@ Model heavy_top(const Top& top) {
 TEST(SpatialBody, HeavyTopPrecessesSteadilyAtBothRoots) {
   const Top top;
   const Model m = heavy_top(top);
-  EXPECT_NEAR(top.root(-1), 2.632555771914, 1e-11);  // spatial.md §4.6
+  EXPECT_NEAR(top.root(-1), 2.632555771914, 1e-11);  // docs/spatial.md §4.6
   EXPECT_NEAR(top.root(+1), 35.857462174061, 1e-11);
   for (int sign : {-1, +1}) {
     const double Omega = top.root(sign);
@@ -275,7 +275,7 @@ Model bennett() {
   return load_mechanism(std::string(ORTHOMECH_SOURCE_DIR) + "/mechanisms/bennett.yaml");
 }
 
-// The Bennett linkage swinging under gravity (mechanisms/bennett.yaml, spatial.md §4.2) passes
+// The Bennett linkage swinging under gravity (mechanisms/bennett.yaml, docs/spatial.md §4.2) passes
 // the positions where E loses rank (the folded positions, θ1 ≈ ±180°) with the spatial passage
 // (local coordinates q_a ⊕ x), and stays on its branch: the closure relation
 // tan(θ1/2) tan(θ2/2) = sin((β+α)/2)/sin((β−α)/2) holds all along, energy is conserved.
@@ -357,7 +357,7 @@ namespace {
 // (C2') V across two steps can be mistaken for a point: at rtol 1e-5 with outputs every 10 ms
 // the run listed 41 change points, 5 of them there, before the passage checked that σ̂'s
 // tangents at its ends meet near 0 (measured). Oracle: the folds, where E loses rank, are the
-// positions θ1 = 180° or θ2 = 180° (spatial.md §4.2), 36 of them in 20 s (the tight runs'
+// positions θ1 = 180° or θ2 = 180° (docs/spatial.md §4.2), 36 of them in 20 s (the tight runs'
 // count); the sample nearest each recorded point is within 0.72° of a fold (measured), against
 // the bound 5° (the spurious ones were 29.7° off).
 TEST(SpatialBody, BennettRecordsOnlyItsFoldsAsChangePoints) {

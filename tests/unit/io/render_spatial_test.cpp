@@ -184,8 +184,8 @@ TEST_P(RenderRssr, JointMarkersAtTheProjectedClosedFormPixels) {
   expect_rssr_joints_at(GetParam(), {}, kDesignTheta, kDesignPhi);
 }
 
-// --input locks the driver's spatial joint (assemble with a lock on the crank angle): the joints
-// at the pixels of (M1) at θ = 90°, φ = 208.8717849220° (spatial.md §4.1), on the file's branch;
+// --input locks the driver's spatial joint (assemble with a lock on the crank angle): the joints at
+// the pixels of (M1) at θ = 90°, φ = 208.8717849220° (docs/spatial.md §4.1), on the file's branch;
 // --position p30 locks the file's design position (θ = 30°).
 TEST_P(RenderRssr, InputAndPositionDrawTheClosedFormPoseThere) {
   expect_rssr_joints_at(GetParam(), {"--input", "90deg"}, 90.0, 208.8717849220);

@@ -1,8 +1,8 @@
 // The spatial file format (`dimension: 3`, docs/file-format.md "Spatial mechanisms"): the model
 // the reader builds is checked against an independent computation written here (rotation
 // matrices by explicit formulas, points and joint frames from the file's numbers, the RSSR
-// closed form of spatial.md (M1)), and every bundled spatial mechanism against its stated
-// mobility (spatial.md §4).
+// closed form of docs/spatial.md (M1)), and every bundled spatial mechanism against its stated
+// mobility (docs/spatial.md §4).
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -71,10 +71,10 @@ double max_residual(const Model& m, const VecX& q) {
   return f.cwiseAbs().maxCoeff();
 }
 
-// RSSR closed form (spatial.md (M1)), SI: φ(θ) on the branch of the file.
+// RSSR closed form (docs/spatial.md (M1)), SI: φ(θ) on the branch of the file.
 using test::rssr_rocker_angle;  // (M1)
 
-// ---- RSSR (mechanisms/rssr.yaml = spatial.md §5) ----------------------------------------------
+// ---- RSSR (mechanisms/rssr.yaml = docs/spatial.md §5) -------------------------------------------
 TEST(SpatialFile, RssrBodiesPointsAndFramesMatchAnIndependentComputation) {
   const Model m = load_mechanism(test::source_path("mechanisms/rssr.yaml"));
   ASSERT_EQ(m.dimension, 3);
@@ -171,7 +171,7 @@ TEST(SpatialFile, BundledMechanismsCloseAndHaveTheirMobility) {
   }
 }
 
-// The files' joint measures read the angles their headers state (spatial.md §4).
+// The files' joint measures read the angles their headers state (docs/spatial.md §4).
 TEST(SpatialFile, BundledMechanismsMeasuresReadTheirDesignAngles) {
   {
     const Model m = load_mechanism(test::source_path("mechanisms/bennett.yaml"));
@@ -439,7 +439,8 @@ TEST(SpatialFile, HookeJointVelocityRatioIsTheClosedForm) {
     hold.locked_value = t1;
     ASSERT_EQ(project_positions(m, q, hold).status, SolveStatus::converged) << degrees;
     // θ2 of pin 2 from its design direction: tan θ2 = cos β tan θ1, whose derivative is the
-    // ratio below (spatial.md §4.5 writes tan θ1/cos β: the relation with the shafts exchanged).
+    // ratio below (docs/spatial.md §4.5: the plan's tan θ1/cos β is the relation with the shafts
+    // exchanged).
     EXPECT_NEAR(std::tan(measure(m, "theta2", q)), std::cos(beta) * std::tan(t1), 1e-10) << degrees;
     const VecX u = velocity_with_rates(m, q, {{"theta1", 1.0}});
     const double ratio = std::cos(beta) / (1 - std::pow(std::sin(beta) * std::sin(t1), 2));
@@ -490,8 +491,9 @@ TEST(SpatialFile, HeavyTopInitialRatesAreTheSteadyPrecession) {
 }
 
 // Bennett's closure tan(θ1/2) tan(θ2/2) = sin((β+α)/2)/sin((β−α)/2) at the angles of
-// spatial.md §4.2. The loop is closed by a minimum-norm Gauss–Newton written here (least squares
-// on all rows and the held crank: the redundant rows stay consistent), from the design pose.
+// docs/spatial.md §4.2. The loop is closed by a minimum-norm Gauss–Newton written here (least
+// squares on all rows and the held crank: the redundant rows stay consistent), from the
+// design pose.
 TEST(SpatialFile, BennettFollowsItsClosure) {
   const Model m = load_mechanism(test::source_path("mechanisms/bennett.yaml"));
   const MeasureKind crank = JointCoordinate{m.find_joint("J1")};
