@@ -127,13 +127,14 @@ struct Report {
   const Vec3& about;
   Dimension drive;  // moment (revolute driver) or force
   std::string written;
+  // The output units of the file's unit system, for both renderings.
+  const OutputUnit mass_u = output_unit(Dimension::mass, U);
+  const OutputUnit length_u = output_unit(Dimension::length, U);
+  const OutputUnit inertia_u = output_unit(Dimension::inertia, U);
+  const OutputUnit force_u = output_unit(Dimension::force, U);
+  const OutputUnit moment_u = output_unit(Dimension::moment, U);
 
   [[nodiscard]] nlohmann::json json() const {
-    const OutputUnit mass_u = output_unit(Dimension::mass, U);
-    const OutputUnit length_u = output_unit(Dimension::length, U);
-    const OutputUnit inertia_u = output_unit(Dimension::inertia, U);
-    const OutputUnit force_u = output_unit(Dimension::force, U);
-    const OutputUnit moment_u = output_unit(Dimension::moment, U);
     nlohmann::json j;
     j["mechanism"] = model.name;
     j["file"] = model.file;
@@ -167,11 +168,6 @@ struct Report {
   }
 
   [[nodiscard]] std::string text() const {
-    const OutputUnit mass_u = output_unit(Dimension::mass, U);
-    const OutputUnit length_u = output_unit(Dimension::length, U);
-    const OutputUnit inertia_u = output_unit(Dimension::inertia, U);
-    const OutputUnit force_u = output_unit(Dimension::force, U);
-    const OutputUnit moment_u = output_unit(Dimension::moment, U);
     std::ostringstream out;
     out << "mechanism       " << model.name << "  (" << model.file << ")\n";
     out << "status          " << to_string(r.status) << ", objective " << fmt(r.objective_before)

@@ -647,6 +647,20 @@ class Simulation {
     return dyn_.cs_.estimate_sigma_min(sigma_w_) / sigma_ref_;
   }
 
+  // The two constraint rates of the polarisation H(u, x) = (D(u + x)ᵀ(u + x) − D(u − x)ᵀ(u − x))/4
+  // with x = α rate_x_, α = |u|/|rate_x_| (x scaled to |u| against cancellation): rate_plus_ and
+  // rate_minus_ at (qq, uu ± x). Returns α. Allocation-free after the first call.
+  double polarised_rates(const VecX& qq, const VecX& uu) {
+    const double alpha = uu.norm() / rate_x_.norm();
+    rate_state_.q = qq;
+    rate_rotations_.update(model_, qq);
+    rate_state_.u = uu + alpha * rate_x_;
+    compute_constraint_rate(model_, rate_state_, rate_rotations_, rate_plus_);
+    rate_state_.u = uu - alpha * rate_x_;
+    compute_constraint_rate(model_, rate_state_, rate_rotations_, rate_minus_);
+    return alpha;
+  }
+
   // (C1) σ̂ and its rate dσ̂/dt at (q, u) in the current chart (factorised at q): the rate of a
   // simple singular value is ŷᵀ (dB̃/dt) ŵ with its unit singular vectors [Stewart & Sun 1990,
   // §IV.2], and (dEᵀ/dt) x = H(u, x) is the constraints' second derivative, bilinear in (u, x);
@@ -665,13 +679,7 @@ class Simulation {
       const int d = c.dependent[static_cast<size_t>(k)];
       rate_x_(d) = dyn_.ws_.free.A_sqrt(d) * sigma_w_(k) / wn;  // x = S_D ŵ
     }
-    const double alpha = un / rate_x_.norm();
-    rate_state_.q = qq;
-    rate_rotations_.update(model_, qq);
-    rate_state_.u = uu + alpha * rate_x_;
-    compute_constraint_rate(model_, rate_state_, rate_rotations_, rate_plus_);
-    rate_state_.u = uu - alpha * rate_x_;
-    compute_constraint_rate(model_, rate_state_, rate_rotations_, rate_minus_);
+    const double alpha = polarised_rates(qq, uu);
     double d = 0.0;
     for (int i = 0; i < rank_; ++i) {
       const int row = c.rows[static_cast<size_t>(i)];
@@ -720,13 +728,7 @@ class Simulation {
     const double un = uu.norm();
     if (!(un > 0.0)) return sigma;
     rate_x_ /= sigma_abs;  // x = A E y / σ_abs
-    const double alpha = un / rate_x_.norm();
-    rate_state_.q = q_;
-    rate_rotations_.update(model_, q_);
-    rate_state_.u = uu + alpha * rate_x_;
-    compute_constraint_rate(model_, rate_state_, rate_rotations_, rate_plus_);
-    rate_state_.u = uu - alpha * rate_x_;
-    compute_constraint_rate(model_, rate_state_, rate_rotations_, rate_minus_);
+    const double alpha = polarised_rates(q_, uu);
     rate = 0.25 * g_y_.dot(rate_plus_ - rate_minus_) / (alpha * sigma_ref_);
     return sigma;
   }

@@ -383,6 +383,36 @@ void spatial_pose_edits(const std::string& text, const YAML::Node& bodies,
   }
 }
 
+// The file as an edit sees it: the text without a UTF-8 byte order mark (the YAML parser's
+// offsets start after it; the mark is put back on the result), its YAML tree, how often each
+// node is reached (an alias reaches one twice), and its bodies, checked against the model's.
+struct EditedFile {
+  bool has_bom = false;
+  std::string text;
+  YAML::Node root;
+  std::map<int, int> uses;
+  YAML::Node bodies;
+  std::string with_bom(const std::string& out) const { return has_bom ? kBom + out : out; }
+  static inline const std::string kBom = "\xEF\xBB\xBF";
+};
+
+EditedFile load_edited_file(const std::string& file_text, const std::string& origin,
+                            const Model& model) {
+  EditedFile f;
+  f.has_bom = file_text.rfind(EditedFile::kBom, 0) == 0;
+  f.text = f.has_bom ? file_text.substr(EditedFile::kBom.size()) : file_text;
+  try {
+    f.root = YAML::Load(f.text);
+  } catch (const YAML::Exception& e) {
+    throw InputError({origin, e.mark.line + 1, e.mark.column + 1}, "YAML", e.msg);
+  }
+  count_uses(f.root, f.uses);
+  f.bodies = f.root["bodies"];
+  if (!f.bodies || !f.bodies.IsSequence() || f.bodies.size() != model.bodies.size())
+    throw InputError({origin, 0, 0}, "file", "the bodies in the file do not match the model");
+  return f;
+}
+
 }  // namespace
 
 std::string replace_design_poses(const std::string& file_text, const std::string& origin,
@@ -393,24 +423,14 @@ std::string replace_design_poses(const std::string& file_text, const std::string
 PoseEdit edit_design_poses(const std::string& file_text, const std::string& origin,
                            const Model& model, const VecX& q) {
   check_argument(q.size() == model.nq, "edit_design_poses", "q", "must have model.nq coordinates");
-  // A UTF-8 byte order mark is kept as it is; the YAML parser's offsets start after it.
-  static const std::string bom = "\xEF\xBB\xBF";
-  const bool has_bom = file_text.rfind(bom, 0) == 0;
-  const std::string text = has_bom ? file_text.substr(bom.size()) : file_text;
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::Exception& e) {
-    throw InputError({origin, e.mark.line + 1, e.mark.column + 1}, "YAML", e.msg);
-  }
-  std::map<int, int> uses;
-  count_uses(root, uses);
+  const EditedFile file = load_edited_file(file_text, origin, model);
+  const std::string& text = file.text;
+  const std::map<int, int>& uses = file.uses;
+  const YAML::Node& root = file.root;
+  const YAML::Node& bodies = file.bodies;
   std::vector<Vec3> frames;
   const double length = unit_factor(root["units"], "length", origin);
   const double angle = unit_factor(root["units"], "angle", origin);
-  const YAML::Node bodies = root["bodies"];
-  if (!bodies || !bodies.IsSequence() || bodies.size() != model.bodies.size())
-    throw InputError({origin, 0, 0}, "file", "the bodies in the file do not match the model");
   // Rounding noise of the assembled pose (a slider's y on a horizontal guide, 1e-18 m; the frame
   // origin of a crank turning about it) is written as 0 (io/noise.hpp): lengths against the
   // largest coordinate of the mechanism, angles against half a turn.
@@ -426,7 +446,7 @@ PoseEdit edit_design_poses(const std::string& file_text, const std::string& orig
       scale = std::max(scale, f.origin.cwiseAbs().maxCoeff());
     verify_spatial(verify_written(out, origin, model, frames), origin, model, q, spatial_frames,
                    scale);
-    return {has_bom ? bom + out : out, replaced};
+    return {file.with_bom(out), replaced};
   }
   NoiseFloor noise;
   for (const Body& body : model.bodies) {
@@ -473,7 +493,7 @@ PoseEdit edit_design_poses(const std::string& file_text, const std::string& orig
         throw InputError({origin, m.line + 1, m.column + 1}, "body '" + body.name + "'",
                          "cannot locate the pose numbers in the file text (quoted or unusual "
                          "YAML); --write needs plain numbers");
-      if (uses[m.pos] != 1)
+      if (const auto use = uses.find(m.pos); use == uses.end() || use->second != 1)
         throw InputError({origin, m.line + 1, m.column + 1}, "body '" + body.name + "'",
                          "the pose is shared with another place through a YAML anchor and alias; "
                          "--write edits numbers in place and would change the other uses too: "
@@ -498,7 +518,7 @@ PoseEdit edit_design_poses(const std::string& file_text, const std::string& orig
   }
   const std::string out = apply(text, edits);
   (void)verify_written(out, origin, model, frames);
-  return {has_bom ? bom + out : out, replaced};
+  return {file.with_bom(out), replaced};
 }
 
 namespace {
@@ -534,20 +554,10 @@ void mass_edits(const std::string& text, const YAML::Node& item, const std::map<
 std::string edit_mass_properties(const std::string& file_text, const std::string& origin,
                                  const Model& model, const std::vector<MassEdit>& changes) {
   check_argument(model.dimension == 2, "edit_mass_properties", "model", "must be planar");
-  static const std::string bom = "\xEF\xBB\xBF";
-  const bool has_bom = file_text.rfind(bom, 0) == 0;
-  const std::string text = has_bom ? file_text.substr(bom.size()) : file_text;
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::Exception& e) {
-    throw InputError({origin, e.mark.line + 1, e.mark.column + 1}, "YAML", e.msg);
-  }
-  std::map<int, int> uses;
-  count_uses(root, uses);
-  const YAML::Node bodies = root["bodies"];
-  if (!bodies || !bodies.IsSequence() || bodies.size() != model.bodies.size())
-    throw InputError({origin, 0, 0}, "file", "the bodies in the file do not match the model");
+  const EditedFile file = load_edited_file(file_text, origin, model);
+  const std::string& text = file.text;
+  const std::map<int, int>& uses = file.uses;
+  const YAML::Node& bodies = file.bodies;
   const UnitSystem u = unit_system(model.units);
   std::vector<Edit> edits;
   for (const MassEdit& c : changes) {
@@ -591,7 +601,7 @@ std::string edit_mass_properties(const std::string& file_text, const std::string
     throw InputError({origin, 1, 1}, "file",
                      "the edited file would not read back with the new mass properties; nothing "
                      "was written");
-  return has_bom ? bom + out : out;
+  return file.with_bom(out);
 }
 
 }  // namespace orthomech
