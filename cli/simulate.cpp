@@ -554,6 +554,7 @@ nlohmann::json result_json(const Model& model, const UnitSystem& system, const S
                              : res.status == SimulateStatus::completed  ? "held"
                                                                         : "unknown"}};
   j["limits_left"] = limits_json(model, res, U);
+  j["load_switches"] = res.load_switches;
   j["max_residual_length"] = U.length.from_si(res.max_residual_length);
   j["max_residual_angle"] = U.angle.from_si(res.max_residual_angle);
   j["max_velocity_residual"] = res.max_velocity_residual;
@@ -625,6 +626,11 @@ int run_simulate(const SimulateCliOptions& opt) {
       "{} chart switches: the dual form changed its independent velocities {} times (bookkeeping "
       "of the method; the results do not depend on it)",
       model.file, res.chart_switches.size());
+  if (res.load_switches > 0)
+    spdlog::info(
+        "{}: the loads switched by active_while switched {} times (events, each located "
+        "to {:.3g} of the run's time span)",
+        model.file, res.load_switches, kEventTimeTolerance);
 
   const bool ok = res.status == SimulateStatus::completed;
   if (opt.json) {

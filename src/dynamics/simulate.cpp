@@ -13,6 +13,7 @@
 
 #include "dynamics.hpp"
 #include "integrator.hpp"
+#include "load_events.hpp"
 #include "orthomech/analysis/assembly.hpp"
 #include "orthomech/analysis/cycle_metrics.hpp"
 #include "orthomech/analysis/mobility.hpp"
@@ -45,6 +46,8 @@ const char* to_string(SimulateStatus s) {
       return "energy_drift";
     case SimulateStatus::stopped:
       return "stopped";
+    case SimulateStatus::sliding:
+      return "sliding";
   }
   return "?";
 }
@@ -95,6 +98,7 @@ bool parse_integrator(const std::string& name, Integrator& out) {
 namespace {
 
 using detail::Dynamics;
+using detail::LoadEvents;
 using detail::SingularEvaluation;
 using detail::time_text;
 
@@ -325,6 +329,7 @@ class Simulation {
         grid_slack_(1e-12 * std::max(1.0, std::abs(T1_))),
         end_slack_(1e-14 * std::max(1.0, std::abs(T1_))),
         t_last_accept_(initial.t),
+        events_(model, options.t_end),
         rate_x_(VecX::Zero(model.n)),
         rate_plus_(VecX::Zero(model.nc)),
         rate_minus_(VecX::Zero(model.nc)),
@@ -377,7 +382,12 @@ class Simulation {
     double spread = 0.0;                      // the chart's spread (dual form; 0: unknown)
     VecX x;
     Chart chart;
+    std::vector<std::uint8_t> load_on;  // the switched loads' modes (State::load_on)
   };
+  // What the switched loads ask of the run after a step (dynamics/load_events.hpp): nothing, a
+  // restart of the integrator at the step's end (the loads switched there), or the location of
+  // a crossing inside the undone step.
+  enum class LoadEventRequest { none, restart, locate };
 
   // ---- 2. The start: chart, F and velocities ------------------------------------------------
 
@@ -513,6 +523,8 @@ class Simulation {
     saved_prev_.spread = primal_ ? 0.0 : dyn_.chart_spread();
     saved_prev_.x = x_;
     saved_prev_.chart = dyn_.cs_.chart();
+    events_.start(model_, q_, dyn_.state_.u, dyn_.state_.load_on);
+    saved_prev_.load_on = dyn_.state_.load_on;
   }
 
   // ---- The integrator's callbacks -------------------------------------------------------------
@@ -809,12 +821,43 @@ class Simulation {
       dyn_.chart_ready_ = true;
       limit_next_step(t, spread, chart_changed);
     }
+    // The switched loads: a step across which one of their switching values changed sign is
+    // undone and the crossing located, unless it is within the tolerance already.
+    const LoadEvents::StepEnd event =
+        events_.step_end(model_, t_last_accept_, t, q_, dyn_.state_.u);
+    // (The step's start must be the saved step end to go back to; it is, but for a step after
+    // an undone crossing of a change point: there the step is kept and the loads switched.)
+    const bool undoable = saved_prev_.valid && saved_prev_.t == t_last_accept_;
+    if (event == LoadEvents::StepEnd::locate && undoable) {
+      events_.open_bracket(t_last_accept_, t);
+      event_request_ = LoadEventRequest::locate;
+      return false;
+    }
     book_energy(t, y);
     const bool request = monitor_change_points(t, y, sigma_end, rate_end, chart_changed);
+    const bool switched = event != LoadEvents::StepEnd::smooth;
+    if (switched && !switch_loads(t)) return false;
+    if (!switched) events_.keep_step_end();
     // The bounds count every accepted step; a step that raised a change-point request ends the
     // segment anyway, and a bound met there stops the first step after the request is served.
     const bool go_on = within_bounds(t);
-    return go_on && !request;
+    if (switched && !go_on) event_request_ = LoadEventRequest::none;
+    return go_on && !request && !switched;
+  }
+
+  // The loads switch at the step's end t (kept: its state is saved as saved_prev), and the
+  // integrator restarts there. False when they chatter (the run stops, status sliding).
+  bool switch_loads(double t) {
+    std::string why;
+    if (!events_.switch_at(model_, t, dyn_.state_.load_on, why)) {
+      failure_status_ = SimulateStatus::sliding;
+      stop_message_ = why;
+      return false;
+    }
+    ++result_.load_switches;
+    if (saved_prev_.valid && saved_prev_.t == t) saved_prev_.load_on = dyn_.state_.load_on;
+    event_request_ = LoadEventRequest::restart;
+    return true;
   }
 
   // Joints outside their `limits:` at q (SimulateResult::limits_left): every corrected step end
@@ -1123,6 +1166,7 @@ class Simulation {
     saved_prev_.rate = rate;
     saved_prev_.spread = spread_now_;
     saved_prev_.x = y;
+    saved_prev_.load_on = dyn_.state_.load_on;
     saved_prev_.chart = dyn_.cs_.chart();
     if (sigma >= kFarPassQuality && sigma <= kFarPassQualityMax) far_ = saved_prev_;
     monitor_ = {true, t, sigma, rate};
@@ -1219,6 +1263,10 @@ class Simulation {
       // An output time at a stop (accept stopped the integrator before its output there).
       if (std::abs(t_now_ - grid_time(next_out_)) <= grid_slack_ && grid_pending())
         emit(t_now_, x_);
+      if (!st.completed && event_request_ == LoadEventRequest::restart) {
+        event_request_ = LoadEventRequest::none;  // the loads switched: the integrator restarts
+        if (!request_.pending) continue;
+      }
       if (!st.completed) return st;
     }
     st.completed = true;
@@ -1594,6 +1642,12 @@ class Simulation {
     // Energy balance at the landing, as after every step.
     dyn_.state_.q = B.q;
     dyn_.state_.u = B.u;
+    // A switching value that changed sign across the passage: the loads switch at the landing.
+    if (events_.step_end(model_, p.t_a, p.t_b, B.q, B.u) != LoadEvents::StepEnd::smooth) {
+      if (switch_loads(p.t_b)) event_request_ = LoadEventRequest::none;
+    } else {
+      events_.keep_step_end();
+    }
     const double E = kinetic_energy(model_, dyn_.state_) + potential_energy(model_, B.q) - p.W_b;
     result_.energy_max_drift = std::max(result_.energy_max_drift, std::abs(E - energy0_));
     if (std::abs(t_now_ - grid_time(next_out_)) <= grid_slack_ && grid_pending()) emit(t_now_, x_);
@@ -1607,9 +1661,14 @@ class Simulation {
   void drive() {
     try {
       while (true) {
+        if (event_request_ == LoadEventRequest::locate) {
+          if (!locate_load_event()) break;
+          continue;
+        }
         if (!request_.pending) {
           const detail::OdeStats st = run_to(T1_, 0.0);
           if (st.completed && !request_.pending) break;
+          if (event_request_ == LoadEventRequest::locate) continue;
           if (!request_.pending) {
             failure_ = !stop_message_.empty() ? stop_message_ : st.message;
             if (stop_message_.empty() && result_.uncorrected_steps > 0)
@@ -1638,6 +1697,41 @@ class Simulation {
     }
   }
 
+  // A switching value changed sign inside the step just undone (dynamics/load_events.hpp):
+  // from the bracket's lower end (the saved step end before it), integrations to the regula
+  // falsi point until the bracket is within the tolerance; the step that then crosses switches
+  // the loads (accept) and the run goes on from there. False: the run stops (failure_ set).
+  bool locate_load_event() {
+    const long switches = result_.load_switches;
+    while (true) {
+      event_request_ = LoadEventRequest::none;
+      if (t_now_ != saved_prev_.t) restore(saved_prev_);  // back to the bracket's lower end
+      const double target = events_.next_time();
+      const detail::OdeStats st = run_to(target, 0.0);
+      if (result_.load_switches > switches || request_.pending) {
+        events_.abandon();  // (switch_at has reset it when it switched)
+        return true;
+      }
+      if (event_request_ == LoadEventRequest::locate) continue;  // crossed before the target
+      if (!st.completed) {
+        failure_ = !stop_message_.empty() ? stop_message_ : st.message;
+        return false;
+      }
+      // Reached the target without a change of sign: the lower end moves up (or, at the
+      // bracket's upper end, the crossing is not there any more: the run goes on).
+      if (target >= events_.bracket_high()) {
+        events_.abandon();
+        return true;
+      }
+      if (!events_.reached(target)) {
+        failure_ = "cannot locate the switch of a load switched by active_while between t = " +
+                   time_text(model_, events_.bracket_low()) + " and " +
+                   time_text(model_, events_.bracket_high());
+        return false;
+      }
+    }
+  }
+
   // (C2') undo the steps that crossed the point unannounced: back to the saved state, its
   // outputs after it removed.
   void rewind() {
@@ -1655,6 +1749,7 @@ class Simulation {
     t_last_accept_ = back.t;
     dyn_.cs_.set_chart(back.chart);
     dyn_.chart_ready_ = false;
+    dyn_.state_.load_on = back.load_on;
     while (!result_.samples.empty() && result_.samples.back().t > t_now_ + grid_slack_)
       result_.samples.pop_back();
     while (!result_.chart_switches.empty() && result_.chart_switches.back().t > t_now_)
@@ -1668,6 +1763,14 @@ class Simulation {
     // F at the restored position: a passage from here starts from u = F v, and F_ is still
     // that of the undone steps' last evaluation.
     if (!primal_) dyn_.evaluate_dual(t_now_, x_.head(nq_), x_.segment(nq_, na_));
+    if (!events_.empty()) {  // the switching values there
+      if (primal_) {
+        dyn_.state_.q = x_.head(nq_);
+        dyn_.mass_at(dyn_.state_.q);
+        dyn_.velocity_from_momentum(x_.segment(nq_, n_));
+      }
+      events_.restored(model_, x_.head(nq_), dyn_.state_.u);
+    }
   }
 
   [[nodiscard]] std::string change_point_name(double t_star) const {
@@ -1740,7 +1843,7 @@ class Simulation {
         std::min(kApproachFraction, 1.0 - kApproachTarget * pass_quality_ / rq.sigma);
     const double dist = rq.t_star - t_now_;
     const detail::OdeStats sa = run_to(t_now_ + fraction * dist, kApproachStep * dist);
-    if (!sa.completed && !request_.pending) {
+    if (!sa.completed && !request_.pending && event_request_ != LoadEventRequest::locate) {
       failure_ = !stop_message_.empty() ? stop_message_ : sa.message;
       return false;
     }
@@ -1798,9 +1901,10 @@ class Simulation {
                   "rtol %.3g allows",
                   drift, result_.energy_drift_limit, options_.rtol);
     result_.status = SimulateStatus::energy_drift;
-    result_.message = std::string(text) +
-                      ": the motion does not meet its tolerance (a load switched by active_while, "
-                      "or another discontinuity of the forces, defeats the step-size control)";
+    result_.message =
+        std::string(text) +
+        ": the motion does not meet its tolerance (a discontinuity of the forces that "
+        "is not an event defeats the step-size control)";
   }
 
   // A run stopped early: its status and message, and the final sample at the stop time (the
@@ -1869,6 +1973,8 @@ class Simulation {
   int far_retries_ = 0;              // passages tried from far_ for the point ahead
   bool truncation_failure_ = false;  // the last passage failed its energy balance
   double t_last_accept_, h_last_ = 0.0;
+  LoadEvents events_;
+  LoadEventRequest event_request_ = LoadEventRequest::none;
   // chart_quality_rate's work space.
   VecX sigma_left_, rate_x_, rate_plus_, rate_minus_;
   VecX g_y_, g_z_, g_Ety_;  // primal_quality_rate's eigenvector, G⁻¹ y, E y

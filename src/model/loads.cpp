@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <numbers>
 
+#include "orthomech/check.hpp"
 #include "orthomech/constraints/joints.hpp"
 #include "orthomech/constraints/spatial_joints.hpp"
 #include "orthomech/model/body_kinds.hpp"
@@ -106,6 +108,13 @@ void add_angle(const Model& model, int body, double value, VecX& Q) {
 
 bool load_active(const Model& model, const Load& load, const State& st) {
   if (load.active_while.measure < 0) return true;
+  if (!st.load_on.empty()) {  // held by simulate's events: load is one of model.loads
+    const std::ptrdiff_t k = &load - model.loads.data();
+    check_argument(k >= 0 && static_cast<size_t>(k) < model.loads.size() &&
+                       st.load_on.size() == model.loads.size(),
+                   "load_active", "state.load_on", "must hold one entry per load of the model");
+    return st.load_on[static_cast<size_t>(k)] != 0;
+  }
   const Measure& m = model.measures[static_cast<size_t>(load.active_while.measure)];
   const double rate = compute_scalar(model, m.kind, st.q, &st.u).rate;
   return load.active_while.sign > 0 ? rate > 0.0 : rate < 0.0;

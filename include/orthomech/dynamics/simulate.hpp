@@ -96,17 +96,21 @@ struct SimulateOptions {
 
 // completed: the run reached t_end and its energy balance held within its limit;
 // energy_drift: it reached t_end but T + V − W drifted beyond what the tolerance allows
-//   (energy_drift_limit): the motion cannot be vouched for (e.g. a load switched on and off by
-//   `active_while`, which no step-size control resolves);
+//   (energy_drift_limit): the motion cannot be vouched for (e.g. a force that jumps with the
+//   state other than by `active_while`, whose switches are events);
 // stopped: a bound of SimulateOptions (max_steps, control) stopped it before t_end (stop says
-//   which); the samples up to the stop are kept.
+//   which); the samples up to the stop are kept;
+// sliding: loads switched by `active_while` chatter (each switch turns their measure's rate back,
+//   holding it at 0: a Coulomb torque written with active_while that sticks), so the motion from
+//   there is not determined; the samples up to it are kept.
 enum class SimulateStatus {
   completed,
   failed_assembly,
   failed_step,
   singular,
   energy_drift,
-  stopped
+  stopped,
+  sliding
 };
 [[nodiscard]] const char* to_string(SimulateStatus s);
 
@@ -178,6 +182,7 @@ struct SimulateResult {
   long steps = 0;
   long uncorrected_steps = 0;  // steps left uncorrected next to a change point
   long rewinds = 0;            // steps undone because they crossed a change point unannounced
+  long load_switches = 0;      // events: loads switched on or off by `active_while`
   long evaluations = 0;        // right-hand side evaluations
   long rejected_steps = 0;     // rejected step attempts (rkf78, rosenbrock4)
   long jacobians = 0;          // Jacobians by finite differences (rosenbrock4)
@@ -188,6 +193,11 @@ struct SimulateResult {
 inline constexpr double kEnergyDriftFactor = 1e4;
 inline constexpr double kEnergyDriftFloor = 1e-6;
 [[nodiscard]] double energy_drift_limit(double rtol);
+
+// A switch of a load by `active_while` (an event, SimulateResult::load_switches) is located
+// within kEventTimeTolerance · max(t_end, 1 s) after the first time its measure's rate has the
+// new sign (docs/theory.md "Switched loads as events").
+inline constexpr double kEventTimeTolerance = 1e-10;
 
 // "" when the request fits its bounds; else why not, naming the options (t_end / max_step needs
 // more steps than max_steps allows). simulate() returns status `stopped` for such a request

@@ -18,7 +18,9 @@ void add_load(const Model& model, const Load& load, const State& state, VecX& Q)
 [[nodiscard]] double potential_energy(const Model& model, const VecX& q);
 // Power dissipated by dampers (≥ 0).
 [[nodiscard]] double dissipated_power(const Model& model, const State& state);
-// Whether a load acts at this state (its `active_while` condition on a measure's velocity).
+// Whether a load acts at this state: its `active_while` condition on a measure's velocity, or,
+// when the state holds load_on (simulate's events), what that says (load must then be an element
+// of model.loads).
 [[nodiscard]] bool load_active(const Model& model, const Load& load, const State& state);
 // Factor of a table at the current position (1 when empty).
 [[nodiscard]] double table_factor(const Model& model, const Table& table, const VecX& q);

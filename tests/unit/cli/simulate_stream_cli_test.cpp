@@ -155,6 +155,7 @@ struct Reference {
            {"furthest", u.from_si(e.value_furthest)},
            {"steps", e.steps}});
     }
+    j["load_switches"] = res.load_switches;
     j["max_residual_length"] = length(res.max_residual_length);
     j["max_residual_angle"] = angle(res.max_residual_angle);
     j["max_velocity_residual"] = res.max_velocity_residual;

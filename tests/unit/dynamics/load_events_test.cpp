@@ -1,0 +1,180 @@
+// Loads switched by `active_while` as events of simulate (dynamics/load_events.hpp, issue 49
+// item 3). Oracles written in the test:
+//   - a block on a spring with a one-sided force −F0 while it moves right: its motion is a cosine
+//     about x = L0 (force off) or L0 − F0/k (force on) in each half period π/ω, so every
+//     position and the force's work −F0 Σ(distance moved right) have a closed form;
+//   - a pendulum with a Coulomb pin torque ∓T written as two switched torques: between two
+//     turning points the energy falls by T times the angle swept, V(φ_{k+1}) + T|φ_{k+1} − φ_k| =
+//     V(φ_k), which gives every turning angle without integrating; it sticks (a sliding mode the
+//     run refuses to go on through) where the gravity torque at a turning point is below T.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "orthomech/dynamics/simulate.hpp"
+#include "orthomech/io/mechanism_file.hpp"
+
+namespace orthomech {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// Block 1 kg on a horizontal guide, spring k = 100 N/m of free length 1 m to the ground point O,
+// released at rest at x = 1.5 m; the press force −10 N acts while x grows.
+const char* const kPressBlock = R"(orthomech: 1
+name: one-sided-block
+units: {length: m, angle: rad, mass: kg, time: s, force: N}
+ground:
+  points: {O: [0, 0]}
+bodies:
+  - {name: block, mass: 1, inertia: 0.1, pose: [1.5, 0, 0], points: {P: [0, 0]}}
+joints:
+  - {name: guide, type: prismatic, connects: [ground.O, block.P], axis: [1, 0]}
+loads:
+  - {name: spring, type: spring-damper, connects: [ground.O, block.P], stiffness: 100, free_length: 1, damping: 0}
+  - {name: press, type: force, point: block.P, force: [-10, 0], active_while: {measure: x, velocity: positive}}
+measures:
+  - {name: x, type: point, point: block.P, component: x}
+)";
+
+// The block's x(t): from each turning point x_a, a cosine about the centre of its half period.
+double block_x(double t) {
+  const double k = 100.0, m = 1.0, F0 = 10.0, L0 = 1.0, w = std::sqrt(k / m);
+  const double half = kPi / w;
+  double xa = 1.5;
+  for (int i = 0;; ++i) {
+    const double centre = i % 2 == 1 ? L0 - F0 / k : L0;  // odd halves move right (force on)
+    if (t <= (i + 1) * half) return centre + (xa - centre) * std::cos(w * (t - i * half));
+    xa = 2.0 * centre - xa;
+  }
+}
+
+TEST(SimulateEvents, OneSidedForceOnASpringBlockMeetsItsClosedForm) {
+  const Model model = parse_mechanism(kPressBlock, "one-sided-block");
+  for (DynamicsForm form : {DynamicsForm::dual, DynamicsForm::primal}) {
+    SCOPED_TRACE(form == DynamicsForm::dual ? "dual" : "primal");
+    SimulateOptions o;
+    o.form = form;
+    o.t_end = 1.5;  // four switches, at π/10, 2π/10, 3π/10, 4π/10 s
+    o.dt_out = 0.01;
+    o.rtol = 1e-10;
+    o.atol = 1e-12;
+    const SimulateResult r = simulate(model, o);
+    ASSERT_EQ(r.status, SimulateStatus::completed) << r.message;
+    EXPECT_EQ(r.load_switches, 4);
+    double worst = 0.0;
+    for (const SimulationSample& s : r.samples)
+      worst = std::max(worst, std::abs(s.measures[0] - block_x(s.t)));
+    EXPECT_LT(worst, 1e-7);
+    // The force's work: −F0 times the distance moved right, (1.3 − 0.5) + (1.1 − 0.7) m.
+    EXPECT_NEAR(r.final.work, -10.0 * 1.2, 1e-6);
+    EXPECT_LT(r.energy_max_drift, 1e-8 * r.energy_scale);
+  }
+}
+
+// Pendulum: link of 1 m, 1 kg, centre of mass 0.5 m from the pin, released at rest horizontal;
+// Coulomb pin torque T = 1 N*m as two torques switched by the swing's rate.
+std::string coulomb_pendulum(double torque) {
+  const std::string T = std::to_string(torque);
+  return std::string(R"(orthomech: 1
+name: coulomb-pendulum-test
+units: {length: m, angle: rad, mass: kg, time: s, force: N}
+ground:
+  points: {O: [0, 0]}
+bodies:
+  - {name: bob, mass: 1, inertia: 0.0833333333333333, com: [0.5, 0], pose: [0, 0, 0], points: {O: [0, 0]}}
+joints:
+  - {name: O, type: revolute, connects: [ground.O, bob.O]}
+loads:
+  - {name: weight, type: gravity, g: [0, -9.81]}
+  - {name: friction_up, type: torque, body: bob, torque: -)") +
+         T + R"(, active_while: {measure: swing, velocity: positive}}
+  - {name: friction_down, type: torque, body: bob, torque: )" +
+         T + R"(, active_while: {measure: swing, velocity: negative}}
+measures:
+  - {name: swing, type: joint, joint: O}
+)";
+}
+
+// V(φ) = m g l_c sin φ; the next turning angle after φ_k (where the gravity torque exceeds T, so
+// the swing starts towards the bottom −π/2): the first root of V(φ) + T|φ − φ_k| − V(φ_k) in
+// the swing's direction (it falls from 0 first), found by a scan and bisection.
+double next_turning_angle(double phi_k, double T) {
+  const double mgl = 1.0 * 9.81 * 0.5;
+  const double dir = phi_k > -kPi / 2.0 ? -1.0 : 1.0;
+  auto residual = [&](double phi) {
+    return mgl * std::sin(phi) + T * std::abs(phi - phi_k) - mgl * std::sin(phi_k);
+  };
+  double a = phi_k + dir * 1e-6, b = a;
+  while (residual(b) < 0.0 && std::abs(b - phi_k) < 2.0 * kPi) {
+    a = b;
+    b += dir * 1e-3;
+  }
+  for (int i = 0; i < 200; ++i) {
+    const double m = 0.5 * (a + b);
+    (residual(m) < 0.0 ? a : b) = m;
+  }
+  return 0.5 * (a + b);
+}
+
+// The turning angles of the run: the extreme samples between sign changes of the rate.
+std::vector<double> turning_angles(const SimulateResult& r) {
+  std::vector<double> out;
+  for (size_t i = 1; i + 1 < r.samples.size(); ++i) {
+    const double a = r.samples[i - 1].measures[0], b = r.samples[i].measures[0],
+                 c = r.samples[i + 1].measures[0];
+    if ((b - a) * (c - b) < 0.0) out.push_back(b);
+  }
+  return out;
+}
+
+TEST(SimulateEvents, CoulombPendulumTurnsWhereTheEnergyLostToFrictionSays) {
+  const Model model = parse_mechanism(coulomb_pendulum(1.0), "coulomb-pendulum-test");
+  SimulateOptions o;
+  o.t_end = 2.5;    // two turns (at about 0.94 s and 1.80 s); it sticks at about 2.63 s
+  o.dt_out = 1e-4;  // a sample within 5e-5 s of each turn: |Δφ| ≤ ½ φ̈ (5e-5)² < 2e-8 rad
+  o.rtol = 1e-10;
+  o.atol = 1e-12;
+  const SimulateResult r = simulate(model, o);
+  ASSERT_EQ(r.status, SimulateStatus::completed) << r.message;
+  const std::vector<double> turns = turning_angles(r);
+  ASSERT_GE(turns.size(), 2u);
+  // One switch at the start (the rate leaves 0: friction_down on) and one per turn (both loads).
+  EXPECT_EQ(r.load_switches, static_cast<long>(turns.size()) + 1);
+  double phi = 0.0;
+  for (const double turn : turns) {
+    phi = next_turning_angle(phi, 1.0);
+    EXPECT_NEAR(turn, phi, 1e-6);
+  }
+  // T + V − W held although the pin torque flips at every turn.
+  EXPECT_LT(r.energy_max_drift, 1e-8 * r.energy_scale);
+}
+
+TEST(SimulateEvents, CoulombPendulumThatSticksStopsAsSlidingWhereGravityIsBelowTheFriction) {
+  // T = 2 N*m: the turning angles shrink until the gravity torque there, m g l_c |cos φ|, is
+  // below T; the switched torques then chatter and the run stops (status sliding) at the
+  // sticking angle instead of stepping for ever (or drifting, as before events).
+  const Model model = parse_mechanism(coulomb_pendulum(2.0), "coulomb-pendulum-test");
+  SimulateOptions o;
+  o.t_end = 20.0;
+  o.dt_out = 1e-3;
+  const SimulateResult r = simulate(model, o);
+  ASSERT_EQ(r.status, SimulateStatus::sliding) << r.message;
+  EXPECT_NE(r.message.find("chatter"), std::string::npos) << r.message;
+  EXPECT_LT(r.final.t, o.t_end);
+  // The oracle's sequence of turning angles up to the first whose gravity torque is below T.
+  double phi = 0.0;
+  int turns = 0;
+  while (turns < 100) {
+    phi = next_turning_angle(phi, 2.0);
+    ++turns;
+    if (9.81 * 0.5 * std::abs(std::cos(phi)) <= 2.0) break;
+  }
+  EXPECT_NEAR(r.final.measures[0], phi, 1e-5);
+  EXPECT_EQ(static_cast<int>(turning_angles(r).size()), turns - 1);
+}
+
+}  // namespace
+}  // namespace orthomech
