@@ -16,6 +16,7 @@
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <numeric>
 #include <sstream>
 #include <stdexcept>
 #include <vector>
@@ -513,6 +514,24 @@ nlohmann::json limits_json(const Model& model, const SimulateResult& res, const 
   return a;
 }
 
+// The impacts on end stops: joint, stop, time, speeds (the coordinate's unit per time unit) and
+// the energy lost.
+nlohmann::json impacts_json(const Model& model, const SimulateResult& res, const SimulateUnits& U) {
+  nlohmann::json a = nlohmann::json::array();
+  for (const SimulateResult::StopImpact& i : res.impacts) {
+    const OutputUnit u = joint_unit(model, i.joint, U);
+    auto speed = [&](double v) { return u.from_si(v) * U.time.si; };
+    a.push_back({{"t", U.time.from_si(i.t)},
+                 {"joint", model.joints[static_cast<size_t>(i.joint)].name},
+                 {"stop", i.side > 0 ? "lower" : "upper"},
+                 {"speed_unit", u.name + "/" + U.time.name},
+                 {"speed_before", speed(i.speed_before)},
+                 {"speed_after", speed(i.speed_after)},
+                 {"energy_loss", U.energy.from_si(i.energy_loss)}});
+  }
+  return a;
+}
+
 // A located warning per joint that left its limits.
 void warn_limits(const Model& model, const SimulateResult& res, const SimulateUnits& U) {
   for (const LimitExit& e : res.limits_left) {
@@ -521,7 +540,8 @@ void warn_limits(const Model& model, const SimulateResult& res, const SimulateUn
     spdlog::warn(
         "{}: joint '{}' leaves its limits [{:.6g}, {:.6g}] {} at t = {:.6g} {} ({:.6g} {}), "
         "furthest "
-        "{:.6g} {} at t = {:.6g} {}: simulate does not stop a joint at its limits (no end stops)",
+        "{:.6g} {} at t = {:.6g} {}: simulate stops a joint at its limits only with end_stops: "
+        "{{restitution: e}}",
         joint.where.str(), joint.name, u.from_si(joint.limits->x()), u.from_si(joint.limits->y()),
         u.name, U.time.from_si(e.t_first), U.time.name, u.from_si(e.value_first), u.name,
         u.from_si(e.value_furthest), u.name, U.time.from_si(e.t_furthest), U.time.name);
@@ -555,6 +575,7 @@ nlohmann::json result_json(const Model& model, const UnitSystem& system, const S
                                                                         : "unknown"}};
   j["limits_left"] = limits_json(model, res, U);
   j["load_switches"] = res.load_switches;
+  j["impacts"] = impacts_json(model, res, U);
   j["max_residual_length"] = U.length.from_si(res.max_residual_length);
   j["max_residual_angle"] = U.angle.from_si(res.max_residual_angle);
   j["max_velocity_residual"] = res.max_velocity_residual;
@@ -626,6 +647,14 @@ int run_simulate(const SimulateCliOptions& opt) {
       "{} chart switches: the dual form changed its independent velocities {} times (bookkeeping "
       "of the method; the results do not depend on it)",
       model.file, res.chart_switches.size());
+  if (!res.impacts.empty())
+    spdlog::info(
+        "{}: {} impacts on end stops, {:.6g} {} of kinetic energy lost in them", model.file,
+        res.impacts.size(),
+        U.energy.from_si(std::accumulate(
+            res.impacts.begin(), res.impacts.end(), 0.0,
+            [](double a, const SimulateResult::StopImpact& i) { return a + i.energy_loss; })),
+        U.energy.name);
   if (res.load_switches > 0)
     spdlog::info(
         "{}: the loads switched by active_while switched {} times (events, each located "

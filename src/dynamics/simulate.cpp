@@ -12,8 +12,8 @@
 #include <vector>
 
 #include "dynamics.hpp"
+#include "events.hpp"
 #include "integrator.hpp"
-#include "load_events.hpp"
 #include "orthomech/analysis/assembly.hpp"
 #include "orthomech/analysis/cycle_metrics.hpp"
 #include "orthomech/analysis/mobility.hpp"
@@ -48,6 +48,8 @@ const char* to_string(SimulateStatus s) {
       return "stopped";
     case SimulateStatus::sliding:
       return "sliding";
+    case SimulateStatus::resting:
+      return "resting";
   }
   return "?";
 }
@@ -98,8 +100,9 @@ bool parse_integrator(const std::string& name, Integrator& out) {
 namespace {
 
 using detail::Dynamics;
-using detail::LoadEvents;
+using detail::Events;
 using detail::SingularEvaluation;
+using detail::StopHit;
 using detail::time_text;
 
 detail::OdeStepper ode_stepper(Integrator i) {
@@ -341,7 +344,9 @@ class Simulation {
         window_t_(initial.t),
         t_now_(initial.t) {
     for (size_t j = 0; j < model.joints.size(); ++j)
-      if (model.joints[j].limits) limited_.push_back(static_cast<int>(j));
+      // (A joint with end stops stays within them, to the events' tolerance.)
+      if (model.joints[j].limits && !model.joints[j].stop_restitution)
+        limited_.push_back(static_cast<int>(j));
     limit_exits_.resize(limited_.size());
     result_.components = reaction_components(model);
   }
@@ -384,10 +389,10 @@ class Simulation {
     Chart chart;
     std::vector<std::uint8_t> load_on;  // the switched loads' modes (State::load_on)
   };
-  // What the switched loads ask of the run after a step (dynamics/load_events.hpp): nothing, a
-  // restart of the integrator at the step's end (the loads switched there), or the location of
-  // a crossing inside the undone step.
-  enum class LoadEventRequest { none, restart, locate };
+  // What the events ask of the run after a step (dynamics/events.hpp): nothing, a
+  // restart of the integrator at the step's end (loads switched or an impact there), or the
+  // location of a crossing inside the undone step.
+  enum class EventRequest { none, restart, locate };
 
   // ---- 2. The start: chart, F and velocities ------------------------------------------------
 
@@ -823,41 +828,81 @@ class Simulation {
     }
     // The switched loads: a step across which one of their switching values changed sign is
     // undone and the crossing located, unless it is within the tolerance already.
-    const LoadEvents::StepEnd event =
-        events_.step_end(model_, t_last_accept_, t, q_, dyn_.state_.u);
+    const Events::StepEnd event = events_.step_end(model_, t_last_accept_, t, q_, dyn_.state_.u);
     // (The step's start must be the saved step end to go back to; it is, but for a step after
     // an undone crossing of a change point: there the step is kept and the loads switched.)
     const bool undoable = saved_prev_.valid && saved_prev_.t == t_last_accept_;
-    if (event == LoadEvents::StepEnd::locate && undoable) {
+    if (event == Events::StepEnd::locate && undoable) {
       events_.open_bracket(t_last_accept_, t);
-      event_request_ = LoadEventRequest::locate;
+      event_request_ = EventRequest::locate;
       return false;
     }
     book_energy(t, y);
     const bool request = monitor_change_points(t, y, sigma_end, rate_end, chart_changed);
-    const bool switched = event != LoadEvents::StepEnd::smooth;
-    if (switched && !switch_loads(t)) return false;
+    const bool switched = event != Events::StepEnd::smooth;
+    if (switched && !apply_events(t, y)) return false;
     if (!switched) events_.keep_step_end();
     // The bounds count every accepted step; a step that raised a change-point request ends the
     // segment anyway, and a bound met there stops the first step after the request is served.
     const bool go_on = within_bounds(t);
-    if (switched && !go_on) event_request_ = LoadEventRequest::none;
+    if (switched && !go_on) event_request_ = EventRequest::none;
     return go_on && !request && !switched;
   }
 
-  // The loads switch at the step's end t (kept: its state is saved as saved_prev), and the
-  // integrator restarts there. False when they chatter (the run stops, status sliding).
-  bool switch_loads(double t) {
+  // The events at the step's end t (kept: its state is saved as saved_prev): the loads switch,
+  // the stops met give their impacts (y's velocity changes), and the integrator restarts there.
+  // False when the events chatter (the run stops, status sliding or resting).
+  bool apply_events(double t, VecX& y) {
     std::string why;
-    if (!events_.switch_at(model_, t, dyn_.state_.load_on, why)) {
-      failure_status_ = SimulateStatus::sliding;
+    const std::vector<std::uint8_t> modes_before = dyn_.state_.load_on;  // (an event: rare)
+    const Events::Chatter chatter = events_.switch_at(model_, t, dyn_.state_.load_on, hits_, why);
+    if (chatter != Events::Chatter::none) {
+      failure_status_ =
+          chatter == Events::Chatter::stop ? SimulateStatus::resting : SimulateStatus::sliding;
       stop_message_ = why;
       return false;
     }
-    ++result_.load_switches;
-    if (saved_prev_.valid && saved_prev_.t == t) saved_prev_.load_on = dyn_.state_.load_on;
-    event_request_ = LoadEventRequest::restart;
+    ++events_applied_;
+    if (dyn_.state_.load_on != modes_before) ++result_.load_switches;
+    for (const StopHit& hit : hits_) impact(t, hit, y);
+    if (saved_prev_.valid && saved_prev_.t == t) {
+      saved_prev_.load_on = dyn_.state_.load_on;
+      saved_prev_.x = y;
+    }
+    event_request_ = EventRequest::restart;
     return true;
+  }
+
+  // An impact on an end stop, Newton's law with restitution e in the mass metric: the admissible
+  // velocity v⁺ closest to v⁻ in H = FᵀMF with ġ⁺ = −e ġ⁻, where ġ = cᵀv, c = σ Fᵀdᵀ (d the
+  // joint coordinate's gradient, σ = +1 at the lower stop, −1 at the upper):
+  //   v⁺ = v⁻ − (1 + e) (cᵀv⁻)/(cᵀH⁻¹c) H⁻¹c,  ΔT = ½ (1 − e²) (cᵀv⁻)²/(cᵀH⁻¹c),
+  // the loss booked as work of the non-conservative forces (W), so T + V − W stays level.
+  // Nothing happens when the joint already moves away from the stop (ġ⁻ ≥ 0).
+  void impact(double t, const StopHit& hit, VecX& y) {
+    const Joint& joint = model_.joints[static_cast<size_t>(hit.joint)];
+    const double e = *joint.stop_restitution;
+    stop_d_.resize(n_);
+    (void)compute_scalar(model_, JointCoordinate{hit.joint}, q_, nullptr, stop_d_);
+    dyn_.compute_H();
+    const VecX v = primal_ ? project_velocity(dyn_.MF_, dyn_.H_llt_, dyn_.state_.u)
+                           : VecX(y.segment(nq_, na_));
+    stop_c_.noalias() = dyn_.F_.transpose() * stop_d_;
+    stop_c_ *= hit.side;
+    const double approach = stop_c_.dot(v);
+    if (!(approach < 0.0)) return;
+    stop_Hc_ = dyn_.H_llt_.solve(stop_c_);
+    const double k = stop_c_.dot(stop_Hc_);
+    if (!(k > 0.0)) return;
+    const VecX v_after = v - ((1.0 + e) * approach / k) * stop_Hc_;
+    const double loss = 0.5 * (1.0 - e * e) * approach * approach / k;
+    y(nx_ - 1) -= loss;
+    dyn_.state_.u.noalias() = dyn_.F_ * v_after;
+    if (primal_)
+      dyn_.momentum_from_velocity(y.segment(nq_, n_));
+    else
+      y.segment(nq_, na_) = v_after;
+    result_.impacts.push_back({t, hit.joint, hit.side, -approach, stop_c_.dot(v_after), loss});
   }
 
   // Joints outside their `limits:` at q (SimulateResult::limits_left): every corrected step end
@@ -1263,8 +1308,8 @@ class Simulation {
       // An output time at a stop (accept stopped the integrator before its output there).
       if (std::abs(t_now_ - grid_time(next_out_)) <= grid_slack_ && grid_pending())
         emit(t_now_, x_);
-      if (!st.completed && event_request_ == LoadEventRequest::restart) {
-        event_request_ = LoadEventRequest::none;  // the loads switched: the integrator restarts
+      if (!st.completed && event_request_ == EventRequest::restart) {
+        event_request_ = EventRequest::none;  // the loads switched: the integrator restarts
         if (!request_.pending) continue;
       }
       if (!st.completed) return st;
@@ -1642,14 +1687,16 @@ class Simulation {
     // Energy balance at the landing, as after every step.
     dyn_.state_.q = B.q;
     dyn_.state_.u = B.u;
-    // A switching value that changed sign across the passage: the loads switch at the landing.
-    if (events_.step_end(model_, p.t_a, p.t_b, B.q, B.u) != LoadEvents::StepEnd::smooth) {
-      if (switch_loads(p.t_b)) event_request_ = LoadEventRequest::none;
+    const double E = kinetic_energy(model_, dyn_.state_) + potential_energy(model_, B.q) - p.W_b;
+    result_.energy_max_drift = std::max(result_.energy_max_drift, std::abs(E - energy0_));
+    // An event across the passage: applied at the landing (q_, F and u there first).
+    if (events_.step_end(model_, p.t_a, p.t_b, B.q, B.u) != Events::StepEnd::smooth) {
+      q_ = B.q;
+      dyn_.evaluate_dual(p.t_b, x_.head(nq_), x_.segment(nq_, na_));
+      if (apply_events(p.t_b, x_)) event_request_ = EventRequest::none;
     } else {
       events_.keep_step_end();
     }
-    const double E = kinetic_energy(model_, dyn_.state_) + potential_energy(model_, B.q) - p.W_b;
-    result_.energy_max_drift = std::max(result_.energy_max_drift, std::abs(E - energy0_));
     if (std::abs(t_now_ - grid_time(next_out_)) <= grid_slack_ && grid_pending()) emit(t_now_, x_);
   }
 
@@ -1661,14 +1708,14 @@ class Simulation {
   void drive() {
     try {
       while (true) {
-        if (event_request_ == LoadEventRequest::locate) {
-          if (!locate_load_event()) break;
+        if (event_request_ == EventRequest::locate) {
+          if (!locate_event()) break;
           continue;
         }
         if (!request_.pending) {
           const detail::OdeStats st = run_to(T1_, 0.0);
           if (st.completed && !request_.pending) break;
-          if (event_request_ == LoadEventRequest::locate) continue;
+          if (event_request_ == EventRequest::locate) continue;
           if (!request_.pending) {
             failure_ = !stop_message_.empty() ? stop_message_ : st.message;
             if (stop_message_.empty() && result_.uncorrected_steps > 0)
@@ -1697,22 +1744,23 @@ class Simulation {
     }
   }
 
-  // A switching value changed sign inside the step just undone (dynamics/load_events.hpp):
+  // A switching value changed sign inside the step just undone (dynamics/events.hpp):
   // from the bracket's lower end (the saved step end before it), integrations to the regula
   // falsi point until the bracket is within the tolerance; the step that then crosses switches
-  // the loads (accept) and the run goes on from there. False: the run stops (failure_ set).
-  bool locate_load_event() {
-    const long switches = result_.load_switches;
+  // the loads or gives the impact (accept) and the run goes on from there. False: the run stops
+  // (failure_ set).
+  bool locate_event() {
+    const long applied = events_applied_;
     while (true) {
-      event_request_ = LoadEventRequest::none;
+      event_request_ = EventRequest::none;
       if (t_now_ != saved_prev_.t) restore(saved_prev_);  // back to the bracket's lower end
       const double target = events_.next_time();
       const detail::OdeStats st = run_to(target, 0.0);
-      if (result_.load_switches > switches || request_.pending) {
+      if (events_applied_ > applied || request_.pending) {
         events_.abandon();  // (switch_at has reset it when it switched)
         return true;
       }
-      if (event_request_ == LoadEventRequest::locate) continue;  // crossed before the target
+      if (event_request_ == EventRequest::locate) continue;  // crossed before the target
       if (!st.completed) {
         failure_ = !stop_message_.empty() ? stop_message_ : st.message;
         return false;
@@ -1843,7 +1891,7 @@ class Simulation {
         std::min(kApproachFraction, 1.0 - kApproachTarget * pass_quality_ / rq.sigma);
     const double dist = rq.t_star - t_now_;
     const detail::OdeStats sa = run_to(t_now_ + fraction * dist, kApproachStep * dist);
-    if (!sa.completed && !request_.pending && event_request_ != LoadEventRequest::locate) {
+    if (!sa.completed && !request_.pending && event_request_ != EventRequest::locate) {
       failure_ = !stop_message_.empty() ? stop_message_ : sa.message;
       return false;
     }
@@ -1973,8 +2021,11 @@ class Simulation {
   int far_retries_ = 0;              // passages tried from far_ for the point ahead
   bool truncation_failure_ = false;  // the last passage failed its energy balance
   double t_last_accept_, h_last_ = 0.0;
-  LoadEvents events_;
-  LoadEventRequest event_request_ = LoadEventRequest::none;
+  Events events_;
+  std::vector<StopHit> hits_;
+  long events_applied_ = 0;         // the stops met at an event
+  VecX stop_d_, stop_c_, stop_Hc_;  // an impact's gradient d, c = σ Fᵀ dᵀ, H⁻¹ c
+  EventRequest event_request_ = EventRequest::none;
   // chart_quality_rate's work space.
   VecX sigma_left_, rate_x_, rate_plus_, rate_minus_;
   VecX g_y_, g_z_, g_Ety_;  // primal_quality_rate's eigenvector, G⁻¹ y, E y

@@ -179,15 +179,17 @@ void Reader::read_joints(const YAML::Node& root) {
                    type + " joint needs rigid bodies");
     };
     if (type == "revolute") {
-      expect_map(item, element, {"name", "type", "connects", "limits", "friction"});
+      expect_map(item, element, {"name", "type", "connects", "limits", "end_stops", "friction"});
       auto [a, b] = connects(item, element);
       j.kind = Revolute{a, b};
       j.limits = joint_limits(item, element, units_.angle, Quantity::angle);
+      j.stop_restitution = end_stops(item, element);
       j.friction = joint_friction(item, element, units_.length);
       if (j.friction) no_particles(a, b);  // the friction moment acts on both bodies' angles
     } else if (type == "prismatic" || type == "fixed") {
       if (type == "prismatic")
-        expect_map(item, element, {"name", "type", "connects", "axis", "angle", "limits"});
+        expect_map(item, element,
+                   {"name", "type", "connects", "axis", "angle", "limits", "end_stops"});
       else
         expect_map(item, element, {"name", "type", "connects", "angle"});
       auto [a, b] = connects(item, element);
@@ -198,6 +200,7 @@ void Reader::read_joints(const YAML::Node& root) {
       if (type == "prismatic") {
         j.kind = Prismatic{a, b, unit_axis(item, element), phi0};
         j.limits = joint_limits(item, element, units_.length, Quantity::length);
+        j.stop_restitution = end_stops(item, element);
       } else {
         j.kind = Fixed{a, b, phi0};
       }

@@ -216,6 +216,19 @@ class Reader {
     if (!(v[0] <= v[1])) fail(l, element, "limits must be [min, max] with min ≤ max");
     return Vec2(v[0], v[1]);
   }
+  // `end_stops: {restitution: e}` (0 ≤ e ≤ 1) of a joint with `limits`, or nothing.
+  std::optional<double> end_stops(const YAML::Node& item, const std::string& element) const {
+    const YAML::Node s = item["end_stops"];
+    if (!s) return std::nullopt;
+    if (!item["limits"])
+      fail(s, element, "end_stops need the joint's limits: [min, max] (the stops are there)");
+    expect_map(s, element + ": end_stops", {"restitution"});
+    const double e = number_field(s, "restitution", element);
+    if (!(e >= 0.0 && e <= 1.0))
+      fail(s["restitution"], element,
+           "end_stops restitution must be in [0, 1], got " + s["restitution"].Scalar());
+    return e;
+  }
   Vec2 vec2(const YAML::Node& node, const std::string& element, const std::string& field,
             double scale, Quantity quantity = Quantity::general) const {
     const auto v = numbers(node, element, field, 2, scale, quantity);

@@ -397,7 +397,8 @@ void Reader::read_spatial_joints(const YAML::Node& root) {
     if (s.type == T::universal) keys.emplace_back("axes");
     if (s.type == T::screw) keys.emplace_back("pitch");
     if (s.type == T::distance) keys.emplace_back("length");
-    if (spec.coordinate != SpatialCoordinate::none) keys.emplace_back("limits");
+    if (spec.coordinate != SpatialCoordinate::none)
+      keys.insert(keys.end(), {"limits", "end_stops"});
     expect_map(item, element, keys);
     Joint j;
     j.name = name;
@@ -453,10 +454,12 @@ void Reader::read_spatial_joints(const YAML::Node& root) {
         fail(item["length"] ? item["length"] : item, element,
              "length must be positive (the two points coincide at the design pose: give it)");
     }
-    if (spec.coordinate != SpatialCoordinate::none)
+    if (spec.coordinate != SpatialCoordinate::none) {
       j.limits = joint_limits(
           item, element, spec.coordinate == SpatialCoordinate::angle ? units_.angle : units_.length,
           spec.coordinate == SpatialCoordinate::angle ? Quantity::angle : Quantity::length);
+      j.stop_restitution = end_stops(item, element);
+    }
 
     // The joint's points must satisfy its point rows at the design pose, or the reader warns.
     const Vec3 d = Pj - Pi, h = A.col(2);

@@ -103,6 +103,9 @@ struct SimulateOptions {
 // sliding: loads switched by `active_while` chatter (each switch turns their measure's rate back,
 //   holding it at 0: a Coulomb torque written with active_while that sticks), so the motion from
 //   there is not determined; the samples up to it are kept.
+// resting: a joint with end stops comes to rest against one (impacts at ever shorter intervals);
+//   a resting contact is not modelled yet, so the motion from there is not determined; the
+//   samples up to it are kept.
 enum class SimulateStatus {
   completed,
   failed_assembly,
@@ -110,7 +113,8 @@ enum class SimulateStatus {
   singular,
   energy_drift,
   stopped,
-  sliding
+  sliding,
+  resting
 };
 [[nodiscard]] const char* to_string(SimulateStatus s);
 
@@ -183,9 +187,18 @@ struct SimulateResult {
   long uncorrected_steps = 0;  // steps left uncorrected next to a change point
   long rewinds = 0;            // steps undone because they crossed a change point unannounced
   long load_switches = 0;      // events: loads switched on or off by `active_while`
-  long evaluations = 0;        // right-hand side evaluations
-  long rejected_steps = 0;     // rejected step attempts (rkf78, rosenbrock4)
-  long jacobians = 0;          // Jacobians by finite differences (rosenbrock4)
+  // Events: impacts on end stops (`end_stops`), in time order: the joint, +1 at its lower stop
+  // or −1 at its upper one, the speed of its coordinate towards the stop before (> 0) and away
+  // from it after (e times it), the kinetic energy lost (J).
+  struct StopImpact {
+    double t = 0.0;
+    int joint = -1, side = 0;
+    double speed_before = 0.0, speed_after = 0.0, energy_loss = 0.0;
+  };
+  std::vector<StopImpact> impacts;
+  long evaluations = 0;     // right-hand side evaluations
+  long rejected_steps = 0;  // rejected step attempts (rkf78, rosenbrock4)
+  long jacobians = 0;       // Jacobians by finite differences (rosenbrock4)
 };
 
 // The relative energy drift a run at relative tolerance `rtol` may show: kEnergyDriftFactor ·

@@ -174,6 +174,9 @@ struct Joint {
   // Range [min, max] of the joint coordinate (revolute: φ_j − φ_i, rad; prismatic: slide, m),
   // from `limits:` in the file; bounds of `assemble` (analysis/assembly.hpp).
   std::optional<Vec2> limits;
+  // End stops at the limits (`end_stops: {restitution: e}`): simulate's motion meets them as
+  // impacts, the approach speed reversed and multiplied by e ∈ [0, 1] (dynamics/events.hpp).
+  std::optional<double> stop_restitution;
   std::optional<JointFriction> friction;
   SourceLocation where;
   [[nodiscard]] int rows() const;

@@ -14,7 +14,7 @@ struct State {
   VecX q;  // coordinates, eq. (3)
   VecX u;  // velocity parameters, eq. (19)
   // Per Model::loads: whether a load switched by `active_while` acts (1) or not (0), held between
-  // the events that switch it (simulate, dynamics/load_events.hpp). Empty (the default, and every
+  // the events that switch it (simulate, dynamics/events.hpp). Empty (the default, and every
   // analysis but simulate): it acts while its measure's velocity has its sign at the evaluation.
   std::vector<std::uint8_t> load_on;
   State() = default;

@@ -156,6 +156,7 @@ struct Reference {
            {"steps", e.steps}});
     }
     j["load_switches"] = res.load_switches;
+    j["impacts"] = json::array();  // (no end stops in the bundled files streamed here)
     j["max_residual_length"] = length(res.max_residual_length);
     j["max_residual_angle"] = angle(res.max_residual_angle);
     j["max_velocity_residual"] = res.max_velocity_residual;

@@ -1,12 +1,16 @@
-// Loads switched by `active_while` as events of simulate (dynamics/load_events.hpp, issue 49
-// item 3). Oracles written in the test:
+// The events of simulate (dynamics/events.hpp, issue 49 item 3): loads switched by
+// `active_while` and impacts on end stops. Oracles written in the test:
 //   - a block on a spring with a one-sided force −F0 while it moves right: its motion is a cosine
 //     about x = L0 (force off) or L0 − F0/k (force on) in each half period π/ω, so every
 //     position and the force's work −F0 Σ(distance moved right) have a closed form;
 //   - a pendulum with a Coulomb pin torque ∓T written as two switched torques: between two
 //     turning points the energy falls by T times the angle swept, V(φ_{k+1}) + T|φ_{k+1} − φ_k| =
 //     V(φ_k), which gives every turning angle without integrating; it sticks (a sliding mode the
-//     run refuses to go on through) where the gravity torque at a turning point is below T.
+//     run refuses to go on through) where the gravity torque at a turning point is below T;
+//   - a pendulum falling onto an end stop: it meets the stop first at the speed the energy gives,
+//     ½ J_O ω₀² = m g l_c (sin φ₀ − sin φ_s), rebounds at e times its speed, and (no loss in
+//     flight) comes back at the speed it left; the energy lost in all its impacts when it comes to
+//     rest is the whole drop m g l_c (sin φ₀ − sin φ_s).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -20,6 +24,17 @@ namespace orthomech {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
+
+// A run to t_end with outputs every dt_out at rtol 1e-10, atol 1e-12.
+SimulateOptions tight(double t_end, double dt_out, DynamicsForm form = DynamicsForm::dual) {
+  SimulateOptions o;
+  o.form = form;
+  o.t_end = t_end;
+  o.dt_out = dt_out;
+  o.rtol = 1e-10;
+  o.atol = 1e-12;
+  return o;
+}
 
 // Block 1 kg on a horizontal guide, spring k = 100 N/m of free length 1 m to the ground point O,
 // released at rest at x = 1.5 m; the press force −10 N acts while x grows.
@@ -55,12 +70,7 @@ TEST(SimulateEvents, OneSidedForceOnASpringBlockMeetsItsClosedForm) {
   const Model model = parse_mechanism(kPressBlock, "one-sided-block");
   for (DynamicsForm form : {DynamicsForm::dual, DynamicsForm::primal}) {
     SCOPED_TRACE(form == DynamicsForm::dual ? "dual" : "primal");
-    SimulateOptions o;
-    o.form = form;
-    o.t_end = 1.5;  // four switches, at π/10, 2π/10, 3π/10, 4π/10 s
-    o.dt_out = 0.01;
-    o.rtol = 1e-10;
-    o.atol = 1e-12;
+    SimulateOptions o = tight(1.5, 0.01, form);  // four switches, at π/10, 2π/10, 3π/10, 4π/10 s
     const SimulateResult r = simulate(model, o);
     ASSERT_EQ(r.status, SimulateStatus::completed) << r.message;
     EXPECT_EQ(r.load_switches, 4);
@@ -74,28 +84,34 @@ TEST(SimulateEvents, OneSidedForceOnASpringBlockMeetsItsClosedForm) {
   }
 }
 
-// Pendulum: link of 1 m, 1 kg, centre of mass 0.5 m from the pin, released at rest horizontal;
-// Coulomb pin torque T = 1 N*m as two torques switched by the swing's rate.
-std::string coulomb_pendulum(double torque) {
-  const std::string T = std::to_string(torque);
-  return std::string(R"(orthomech: 1
-name: coulomb-pendulum-test
+// Pendulum: link of 1 m, 1 kg, centre of mass 0.5 m from the pin, released at rest horizontal,
+// under gravity; its pin joint's extra keys and extra loads as given (angles in rad).
+std::string pendulum(const std::string& pin_keys, const std::string& loads) {
+  return R"(orthomech: 1
+name: pendulum-test
 units: {length: m, angle: rad, mass: kg, time: s, force: N}
 ground:
   points: {O: [0, 0]}
 bodies:
   - {name: bob, mass: 1, inertia: 0.0833333333333333, com: [0.5, 0], pose: [0, 0, 0], points: {O: [0, 0]}}
 joints:
-  - {name: O, type: revolute, connects: [ground.O, bob.O]}
+  - {name: O, type: revolute, connects: [ground.O, bob.O])" +
+         pin_keys + R"(}
 loads:
   - {name: weight, type: gravity, g: [0, -9.81]}
-  - {name: friction_up, type: torque, body: bob, torque: -)") +
-         T + R"(, active_while: {measure: swing, velocity: positive}}
-  - {name: friction_down, type: torque, body: bob, torque: )" +
-         T + R"(, active_while: {measure: swing, velocity: negative}}
-measures:
+)" + loads +
+         R"(measures:
   - {name: swing, type: joint, joint: O}
 )";
+}
+
+// The Coulomb pin torque T as two torques switched by the swing's rate.
+std::string coulomb_pendulum(double torque) {
+  const std::string T = std::to_string(torque);
+  return pendulum("", "  - {name: friction_up, type: torque, body: bob, torque: -" + T +
+                          ", active_while: {measure: swing, velocity: positive}}\n"
+                          "  - {name: friction_down, type: torque, body: bob, torque: " +
+                          T + ", active_while: {measure: swing, velocity: negative}}\n");
 }
 
 // V(φ) = m g l_c sin φ; the next turning angle after φ_k (where the gravity torque exceeds T, so
@@ -131,12 +147,10 @@ std::vector<double> turning_angles(const SimulateResult& r) {
 }
 
 TEST(SimulateEvents, CoulombPendulumTurnsWhereTheEnergyLostToFrictionSays) {
-  const Model model = parse_mechanism(coulomb_pendulum(1.0), "coulomb-pendulum-test");
-  SimulateOptions o;
-  o.t_end = 2.5;    // two turns (at about 0.94 s and 1.80 s); it sticks at about 2.63 s
-  o.dt_out = 1e-4;  // a sample within 5e-5 s of each turn: |Δφ| ≤ ½ φ̈ (5e-5)² < 2e-8 rad
-  o.rtol = 1e-10;
-  o.atol = 1e-12;
+  const Model model = parse_mechanism(coulomb_pendulum(1.0), "pendulum-test");
+  // Two turns (at about 0.94 s and 1.80 s; it sticks at about 2.63 s); a sample within 5e-5 s of
+  // each turn: |Δφ| ≤ ½ φ̈ (5e-5)² < 2e-8 rad.
+  const SimulateOptions o = tight(2.5, 1e-4);
   const SimulateResult r = simulate(model, o);
   ASSERT_EQ(r.status, SimulateStatus::completed) << r.message;
   const std::vector<double> turns = turning_angles(r);
@@ -156,7 +170,7 @@ TEST(SimulateEvents, CoulombPendulumThatSticksStopsAsSlidingWhereGravityIsBelowT
   // T = 2 N*m: the turning angles shrink until the gravity torque there, m g l_c |cos φ|, is
   // below T; the switched torques then chatter and the run stops (status sliding) at the
   // sticking angle instead of stepping for ever (or drifting, as before events).
-  const Model model = parse_mechanism(coulomb_pendulum(2.0), "coulomb-pendulum-test");
+  const Model model = parse_mechanism(coulomb_pendulum(2.0), "pendulum-test");
   SimulateOptions o;
   o.t_end = 20.0;
   o.dt_out = 1e-3;
@@ -174,6 +188,78 @@ TEST(SimulateEvents, CoulombPendulumThatSticksStopsAsSlidingWhereGravityIsBelowT
   }
   EXPECT_NEAR(r.final.measures[0], phi, 1e-5);
   EXPECT_EQ(static_cast<int>(turning_angles(r).size()), turns - 1);
+}
+
+// Without friction, with end stops at [−60°, 60°] of its pin and restitution e.
+std::string pendulum_on_stops(double e) {
+  return pendulum(", limits: [-1.0471975511965976, 1.0471975511965976], end_stops: {restitution: " +
+                      std::to_string(e) + "}",
+                  "");
+}
+
+constexpr double kStop = -kPi / 3.0;
+// J_O = 1/12 + 1/4 kg m²; the fall from 0 to −60°: m g l_c sin 60°.
+constexpr double kJO = 0.0833333333333333 + 0.25;
+const double kDrop = 9.81 * 0.5 * std::sin(kPi / 3.0);
+
+TEST(SimulateEvents, PendulumOnAnEndStopReboundsAtRestitutionAndComesToRest) {
+  const Model model = parse_mechanism(pendulum_on_stops(0.5), "pendulum-test");
+  const double omega0 = std::sqrt(2.0 * kDrop / kJO);
+  for (DynamicsForm form : {DynamicsForm::dual, DynamicsForm::primal}) {
+    SCOPED_TRACE(form == DynamicsForm::dual ? "dual" : "primal");
+    const SimulateOptions o = tight(10.0, 1e-3, form);
+    const SimulateResult r = simulate(model, o);
+    // The bounces shrink by e each: it comes to rest against the stop (not modelled: resting).
+    ASSERT_EQ(r.status, SimulateStatus::resting) << r.message;
+    EXPECT_LT(r.final.t, o.t_end);
+    ASSERT_GE(r.impacts.size(), 12u);
+    EXPECT_NEAR(r.impacts[0].speed_before, omega0, 1e-7 * omega0);
+    double lost = 0.0;
+    for (size_t k = 0; k < r.impacts.size(); ++k) {
+      const auto& i = r.impacts[k];
+      EXPECT_EQ(i.side, 1);  // the lower stop
+      EXPECT_NEAR(i.speed_after, 0.5 * i.speed_before, 1e-12 * omega0);
+      // The loss is the kinetic energy the speed change takes: ½ J_O (ω⁻² − ω⁺²).
+      EXPECT_NEAR(i.energy_loss,
+                  0.5 * kJO * (i.speed_before * i.speed_before - i.speed_after * i.speed_after),
+                  1e-9 * kDrop);
+      // Conservative flight: it comes back at the speed it left.
+      if (k + 1 < r.impacts.size() && i.speed_after > 1e-4 * omega0) {
+        EXPECT_NEAR(r.impacts[k + 1].speed_before, i.speed_after, 1e-7 * omega0) << k;
+      }
+      lost += i.energy_loss;
+    }
+    EXPECT_NEAR(lost, kDrop, 1e-6 * kDrop);
+    EXPECT_NEAR(r.final.measures[0], kStop, 1e-6);
+    for (const SimulationSample& smp : r.samples) {
+      ASSERT_GE(smp.measures[0], kStop - 1e-8) << smp.t;
+    }
+    // T + V − W level through the impacts (their losses are in W).
+    EXPECT_LT(r.energy_max_drift, 1e-7 * r.energy_scale);
+  }
+}
+
+TEST(SimulateEvents, ElasticEndStopKeepsTheEnergyAndTheSwingWithinTheLimits) {
+  const Model model = parse_mechanism(pendulum_on_stops(1.0), "pendulum-test");
+  const double omega0 = std::sqrt(2.0 * kDrop / kJO);
+  const SimulateOptions o = tight(3.0, 1e-3);
+  const SimulateResult r = simulate(model, o);
+  ASSERT_EQ(r.status, SimulateStatus::completed) << r.message;
+  ASSERT_GE(r.impacts.size(), 3u);
+  for (const auto& i : r.impacts) {
+    EXPECT_NEAR(i.speed_before, omega0, 1e-7 * omega0);
+    EXPECT_NEAR(i.speed_after, omega0, 1e-7 * omega0);
+    EXPECT_NEAR(i.energy_loss, 0.0, 1e-12);
+  }
+  // Back to the start's height (φ = 0) after the first impact, and never beyond the stop.
+  double top = -10.0, bottom = 10.0;
+  for (const SimulationSample& smp : r.samples) {
+    if (smp.t > r.impacts[0].t) top = std::max(top, smp.measures[0]);
+    bottom = std::min(bottom, smp.measures[0]);
+  }
+  EXPECT_NEAR(top, 0.0, 1e-5);  // (a sample within 5e-4 s of the top: ½ φ̈ (5e-4)² < 2e-6)
+  EXPECT_GE(bottom, kStop - 1e-8);
+  EXPECT_LT(r.energy_max_drift, 1e-8 * r.energy_scale);
 }
 
 }  // namespace
