@@ -1016,6 +1016,17 @@ void CycleRun::summary_friction(std::ostream& out) const {
   out << "friction  dissipated " << fmt(energy_u.from_si(friction.dissipated), 5) << " "
       << energy_u.name << " over the sweep (drive RMS " << fmt(drive_u.from_si(summary[0].rms), 5)
       << " " << drive_u.name << " with friction)\n";
+  if (std::isfinite(friction.efficiency))
+    out << "friction  efficiency " << fmt(friction.efficiency, 5)
+        << " = W0/W: the drive's net work "
+        << fmt(energy_u.from_si(friction.drive_work_frictionless), 5) << " " << energy_u.name
+        << " without friction, " << fmt(energy_u.from_si(friction.drive_work), 5) << " "
+        << energy_u.name << " with it\n";
+  else
+    out << "friction  efficiency not applicable: the loads take no net work from the drive over "
+           "the sweep (W0 = "
+        << fmt(energy_u.from_si(friction.drive_work_frictionless), 5) << " " << energy_u.name
+        << ")\n";
   for (size_t i = 0; i < friction.pins.size(); ++i)
     if (!friction.determinate[i])
       out << "friction  " << model.joints[static_cast<size_t>(friction.pins[i].joint)].name
@@ -1034,11 +1045,16 @@ void CycleRun::add_friction_json(nlohmann::json& j) const {
                     {"radius", length_u.from_si(p.radius)},
                     {"determinate", bool(friction.determinate[i])}});
   }
-  j["friction"] = {{"joints", pins},
-                   {"dissipated", energy_u.from_si(friction.dissipated)},
-                   {"unit", energy_u.name},
-                   {"iterations_max", friction.iterations_max},
-                   {"converged", friction.converged}};
+  j["friction"] = {
+      {"joints", pins},
+      {"dissipated", energy_u.from_si(friction.dissipated)},
+      {"drive_work", energy_u.from_si(friction.drive_work)},
+      {"drive_work_frictionless", energy_u.from_si(friction.drive_work_frictionless)},
+      {"efficiency", std::isfinite(friction.efficiency) ? nlohmann::json(friction.efficiency)
+                                                        : nlohmann::json(nullptr)},
+      {"unit", energy_u.name},
+      {"iterations_max", friction.iterations_max},
+      {"converged", friction.converged}};
 }
 
 // The box of every traced point's path.

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -34,18 +35,32 @@ FrictionSeries friction_series(const Model& model, const CycleResult& result, bo
   }
   // ∫ P dt over consecutive reported positions (and from the last back to the first, one
   // period later, on a full cycle).
-  std::size_t last = n;
+  auto integral = [&](const std::vector<double>& P) {
+    double sum = 0.0;
+    std::size_t last = n;
+    for (std::size_t k = 0; k < n; ++k) {
+      if (!s.reported[k]) continue;
+      if (last < n)
+        sum += 0.5 * (P[last] + P[k]) * (result.points[k].time - result.points[last].time);
+      last = k;
+    }
+    if (cyclic && n >= 3 && s.reported[0] && s.reported[n - 1])
+      sum += 0.5 * (P[n - 1] + P[0]) * (result.points[1].time - result.points[0].time);
+    return sum;
+  };
+  s.dissipated = integral(s.power);
+  // The drive's power τ ṡ with and without friction.
+  std::vector<double> with(n, 0.0), without(n, 0.0);
   for (std::size_t k = 0; k < n; ++k) {
-    if (!s.reported[k]) continue;
-    if (last < n)
-      s.dissipated +=
-          0.5 * (s.power[last] + s.power[k]) * (result.points[k].time - result.points[last].time);
-    last = k;
+    const DrivenPointView p = result.points[k];
+    with[k] = p.drive * p.input_rate;
+    without[k] = p.drive_frictionless * p.input_rate;
   }
-  if (cyclic && n >= 3 && s.reported[0] && s.reported[n - 1]) {
-    const double dt = result.points[1].time - result.points[0].time;
-    s.dissipated += 0.5 * (s.power[n - 1] + s.power[0]) * dt;
-  }
+  s.drive_work = integral(with);
+  s.drive_work_frictionless = integral(without);
+  s.efficiency = s.drive_work_frictionless > 0.0 && s.drive_work > 0.0
+                     ? s.drive_work_frictionless / s.drive_work
+                     : std::numeric_limits<double>::quiet_NaN();
   return s;
 }
 

@@ -23,6 +23,11 @@ struct FrictionSeries {
   std::vector<bool> reported;
   std::vector<bool> determinate;  // per pin
   double dissipated = 0.0;        // J
+  // The drive's net work over the sweep with and without friction (∫ τ ṡ dt, the same rule), J,
+  // and the mechanical efficiency η = W₀ / W: the share of the drive's work that is not lost in
+  // the pins (NaN where W₀ ≤ 0: a sweep whose loads take no net work has no efficiency).
+  double drive_work = 0.0, drive_work_frictionless = 0.0;
+  double efficiency = 0.0;
   int iterations_max = 0;
   bool converged = true;
 };

@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -47,6 +48,47 @@ TEST(CycleFriction, DissipatedEnergyIsTheDrivesWorkOverATurn) {
   const SeriesSummary plain_drive = summarize_cycle(ref, {}, "N*m")[0];
   EXPECT_NEAR(sums[0].rms, plain_drive.rms, 1e-12 * plain_drive.rms);
   EXPECT_NEAR(sums[0].max.value, plain_drive.max.value, 1e-12 * plain_drive.peak);
+}
+
+TEST(CycleFriction, EfficiencyIsTheLoadsWorkOverTheDrivesWork) {
+  // A process torque T = 100 N*mm resisting the rocker while it swings up (active_while): over a
+  // turn it takes T times the rocker's swing, which the cosine law gives at the two dead centres
+  // (A0B = b + a = 110 mm and b − a = 50 mm, B0B = 60 mm, A0B0 = 70 mm). That is the frictionless
+  // drive's net work W0; with friction the drive's work W is measured by compute_cycle_metrics'
+  // own rule, and η = W0 / W. (The switched torque's jumps cost the trapezoid rule half a step's
+  // swing each: 3600 positions hold W0 to 2e-3.)
+  const std::string path = test::source_path("mechanisms/crank-rocker.yaml");
+  std::vector<FileChange> changes = {parse_file_change(
+      "loads=[{name: weight, type: gravity, g: [0, -9810]}, {name: process, type: torque, body: "
+      "rocker, torque: -100, active_while: {measure: rocker_angle, velocity: positive}}]")};
+  for (const char* j : {"A0", "A", "B", "B0"})
+    changes.push_back(
+        parse_file_change(std::string("joints.") + j + ".friction={coefficient: 0.15, radius: 4}"));
+  const Model model = load_mechanism(path, changes);
+  const int positions = 3600;
+  const CycleResult res = test::full_cycle(model, positions);
+  ASSERT_EQ(res.status, CycleStatus::completed) << res.message;
+  const FrictionSeries s = friction_series(model, res, true);
+  auto beta = [](double L) {
+    return std::acos((70.0 * 70.0 + 60.0 * 60.0 - L * L) / (2 * 70 * 60));
+  };
+  const double swing = beta(110.0) - beta(50.0);  // rad
+  const double W0 = 0.1 * swing;                  // J (100 N*mm = 0.1 N*m)
+  EXPECT_NEAR(s.drive_work_frictionless, W0, 2e-3 * W0);
+  CycleMetricsOptions mo;
+  mo.driver_joint = model.find_joint("A0");
+  const CycleMetrics metrics = compute_cycle_metrics(model, res, mo);
+  const double W = metrics.power.mean * positions * (res.points[1].time - res.points[0].time);
+  EXPECT_NEAR(s.drive_work, W, 1e-9 * W);
+  EXPECT_NEAR(s.drive_work - s.drive_work_frictionless, s.dissipated, 1e-6 * s.dissipated);
+  EXPECT_NEAR(s.efficiency, W0 / W, 2e-3 * W0 / W);
+  EXPECT_GT(s.efficiency, 0.0);
+  EXPECT_LT(s.efficiency, 1.0);
+  // Without the process torque the loads take no net work: no efficiency.
+  std::vector<FileChange> frictional(changes.begin() + 1, changes.end());
+  const Model idle = load_mechanism(path, frictional);
+  const FrictionSeries idle_s = friction_series(idle, test::full_cycle(idle, 720), true);
+  EXPECT_TRUE(std::isnan(idle_s.efficiency));
 }
 
 }  // namespace
