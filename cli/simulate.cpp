@@ -605,6 +605,9 @@ void write_text(std::ostream& out, const Model& model, const SimulateCliOptions&
   if (res.rejected_steps > 0) out << ", " << res.rejected_steps << " rejected";
   if (res.jacobians > 0) out << ", " << res.jacobians << " Jacobians";
   out << "), " << res.passages.size() << " change points passed\n";
+  if (res.load_switches > 0 || !res.impacts.empty())
+    out << "events      " << res.load_switches << " load switches (active_while), "
+        << res.impacts.size() << " impacts on end stops\n";
   const std::string eu = " " + U.energy.name;
   out << "energy      initial " << g(U.energy.from_si(res.energy_initial)) << eu << ", final "
       << g(U.energy.from_si(res.energy_final)) << eu << ", max drift "

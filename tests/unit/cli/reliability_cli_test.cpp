@@ -202,6 +202,40 @@ TEST(ReliabilityCli, SwitchedLoadsEndWithAnHonestEnergyBalance) {
   }
 }
 
+TEST(ReliabilityCli, EndStopsHoldTheJointAndTheTableCountsTheEvents) {
+  // The frictionless pendulum of SimulateSaysWhereAJointLeavesItsLimits, with end stops at the
+  // same limits: it never passes −60° (within the events' tolerance), it warns of no exit, it
+  // ends `resting` (exit 3), and the table's events line counts what the JSON lists.
+  const std::vector<std::string> args = {"simulate", data_file("coulomb-pendulum.yaml"),
+                                         "--t-end",  "3",
+                                         "--dt-out", "0.001",
+                                         "--set",    "loads.friction_up.torque=0",
+                                         "--set",    "loads.friction_down.torque=0",
+                                         "--set",    "joints.O.limits=[-60, 60]",
+                                         "--set",    "joints.O.end_stops={restitution: 0.5}"};
+  std::vector<std::string> json_args = args;
+  json_args.emplace_back("--json");
+  const auto r = run_cli(json_args);
+  EXPECT_EQ(r.status, 3) << r.err;
+  EXPECT_FALSE(has(r.err, "leaves its limits")) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["status"], "resting");
+  EXPECT_TRUE(j["limits_left"].empty());
+  const auto& impacts = j["impacts"];
+  ASSERT_GE(impacts.size(), 12u);
+  EXPECT_EQ(impacts[0]["stop"], "lower");
+  EXPECT_NEAR(impacts[0]["speed_after"].get<double>(),
+              0.5 * impacts[0]["speed_before"].get<double>(), 1e-9);
+  for (const auto& swing : j["samples"]["measures"]["swing"])
+    EXPECT_GE(swing.get<double>(), -60.0 - 1e-6);
+  const auto text = run_cli(args);
+  // (The two torques set to 0 still switch with the rate: load_switches counts them.)
+  EXPECT_TRUE(has(text.out, "events      " + std::to_string(j["load_switches"].get<long>()) +
+                                " load switches (active_while), " + std::to_string(impacts.size()) +
+                                " impacts on end stops"))
+      << text.out.substr(0, 600);
+}
+
 TEST(ReliabilityCli, SimulateSaysWhereAJointLeavesItsLimits) {
   // The frictionless pendulum from −30° swings down through −90°: with limits [−60°, 60°] on
   // its pin it leaves them once it passes −60°. The oracle: the first output sample beyond −60°
