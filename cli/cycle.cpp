@@ -466,6 +466,7 @@ struct CycleRun {
   void summary_traces(std::ostream& out) const;
   void summary_shaking(std::ostream& out) const;
   void summary_friction(std::ostream& out) const;
+  void summary_friction_bound(std::ostream& out) const;
   void summary_indeterminate(std::ostream& out) const;
 };
 
@@ -1005,7 +1006,6 @@ void CycleRun::summary_shaking(std::ostream& out) const {
 void CycleRun::summary_friction(std::ostream& out) const {
   if (friction.pins.empty()) return;
   const OutputUnit drive_u = unit_of(drive_unit_si);
-  const OutputUnit moment_u = output_unit(Dimension::moment, U);
   for (const SeriesSummary& s : friction_summary) {
     if (s.samples == 0) continue;
     const OutputUnit u = unit_of(s.unit);
@@ -1032,7 +1032,26 @@ void CycleRun::summary_friction(std::ostream& out) const {
       out << "friction  " << model.joints[static_cast<size_t>(friction.pins[i].joint)].name
           << ": not determined (its force is statically indeterminate; the minimum-norm force's "
              "friction is reported)\n";
-  (void)moment_u;
+  summary_friction_bound(out);
+}
+
+// The least friction over the admissible splits of the redundant reactions.
+void CycleRun::summary_friction_bound(std::ostream& out) const {
+  const FrictionSeries::LowerBound& b = friction.bound;
+  if (!b.computed) return;
+  if (b.unsolved > 0) {
+    out << "friction  least over the admissible splits: not found at " << b.unsolved
+        << " positions (Ipopt did not converge)\n";
+    return;
+  }
+  const long positions = std::count(b.reported.begin(), b.reported.end(), true);
+  out << "friction  least over the admissible splits of the redundant reactions: dissipated "
+      << fmt(energy_u.from_si(b.dissipated), 5) << " " << energy_u.name << ", drive's net work "
+      << fmt(energy_u.from_si(b.drive_work), 5) << " " << energy_u.name << " (over " << positions
+      << " of " << r.points.size() << " positions"
+      << (positions < static_cast<long>(r.points.size())
+              ? ": those bridged next to change points are left out)\n"
+              : ")\n");
 }
 
 // The pins' friction in the JSON document.
@@ -1054,7 +1073,16 @@ void CycleRun::add_friction_json(nlohmann::json& j) const {
                                                         : nlohmann::json(nullptr)},
       {"unit", energy_u.name},
       {"iterations_max", friction.iterations_max},
-      {"converged", friction.converged}};
+      {"converged", friction.converged},
+      {"lower_bound", nullptr}};
+  const FrictionSeries::LowerBound& b = friction.bound;
+  auto number = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); };
+  if (b.computed)
+    j["friction"]["lower_bound"] = {
+        {"dissipated", number(energy_u.from_si(b.dissipated))},
+        {"drive_work", number(energy_u.from_si(b.drive_work))},
+        {"positions", std::count(b.reported.begin(), b.reported.end(), true)},
+        {"unsolved", b.unsolved}};
 }
 
 // The box of every traced point's path.
@@ -1163,8 +1191,9 @@ int run_cycle_command(const CycleCliOptions& opt) {
   c.shaking = shaking_series(model, r, parse_point(model, opt.shaking_about, "--shaking-about"));
   ShakingSummaries shaking = summarize_shaking(model, r, c.shaking);
   c.shaking_summary = std::move(shaking.magnitudes);
-  c.friction = friction_series(
-      model, r, co.full_cycle && r.status == CycleStatus::completed && r.reversals == 0);
+  c.friction =
+      friction_series(model, r, co.driver.joint,
+                      co.full_cycle && r.status == CycleStatus::completed && r.reversals == 0);
   c.friction_summary = summarize_friction(model, r, c.friction, c.drive_unit_si);
   for (SeriesSummary& s : shaking.components) c.component_summary.push_back(std::move(s));
   CycleMetricsOptions mo;

@@ -1,6 +1,7 @@
 #include "orthomech/analysis/cycle_friction.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <limits>
 #include <string>
@@ -9,7 +10,62 @@
 
 namespace orthomech {
 
-FrictionSeries friction_series(const Model& model, const CycleResult& result, bool cyclic) {
+namespace {
+
+// ∫ P dt over consecutive reported positions (and from the last back to the first, one period
+// later, on a full cycle).
+double sweep_integral(const CycleResult& result, const std::vector<bool>& reported,
+                      const std::vector<double>& P, bool cyclic) {
+  const std::size_t n = result.points.size();
+  double sum = 0.0;
+  std::size_t last = n;
+  for (std::size_t k = 0; k < n; ++k) {
+    if (!reported[k]) continue;
+    if (last < n)
+      sum += 0.5 * (P[last] + P[k]) * (result.points[k].time - result.points[last].time);
+    last = k;
+  }
+  if (cyclic && n >= 3 && reported[0] && reported[n - 1])
+    sum += 0.5 * (P[n - 1] + P[0]) * (result.points[1].time - result.points[0].time);
+  return sum;
+}
+
+// The least dissipation at every reported position (FrictionSeries::LowerBound).
+FrictionSeries::LowerBound lower_bound(const Model& model, const CycleResult& result,
+                                       int driver_joint, const FrictionSeries& s, bool cyclic) {
+  FrictionSeries::LowerBound b;
+  b.computed = true;
+  const std::size_t n = result.points.size();
+  constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+  b.drive.assign(n, nan);
+  b.power.assign(n, nan);
+  std::vector<double> work_rate(n, nan);
+  b.reported.assign(n, false);
+  for (std::size_t k = 0; k < n; ++k) {
+    const DrivenPointView p = result.points[k];
+    // (A bridged position's values are interpolated on the branch: they fix no equation of
+    // motion to split.)
+    if (!s.reported[k] || p.bridge >= 0) continue;
+    b.reported[k] = true;
+    const DissipationBound one =
+        least_dissipation(model, s.pins, driver_joint, p.q, p.u, p.lambda, p.drive);
+    if (!one.solved) {
+      ++b.unsolved;
+      continue;
+    }
+    b.drive[k] = one.drive;
+    b.power[k] = one.power;
+    work_rate[k] = one.drive * p.input_rate;
+  }
+  b.dissipated = b.unsolved ? nan : sweep_integral(result, b.reported, b.power, cyclic);
+  b.drive_work = b.unsolved ? nan : sweep_integral(result, b.reported, work_rate, cyclic);
+  return b;
+}
+
+}  // namespace
+
+FrictionSeries friction_series(const Model& model, const CycleResult& result, int driver_joint,
+                               bool cyclic) {
   FrictionSeries s;
   s.pins = friction_pins(model);
   if (s.pins.empty()) return s;
@@ -33,20 +89,8 @@ FrictionSeries friction_series(const Model& model, const CycleResult& result, bo
     if (p.friction_iterations < 0) s.converged = false;
     s.iterations_max = std::max(s.iterations_max, p.friction_iterations);
   }
-  // ∫ P dt over consecutive reported positions (and from the last back to the first, one
-  // period later, on a full cycle).
   auto integral = [&](const std::vector<double>& P) {
-    double sum = 0.0;
-    std::size_t last = n;
-    for (std::size_t k = 0; k < n; ++k) {
-      if (!s.reported[k]) continue;
-      if (last < n)
-        sum += 0.5 * (P[last] + P[k]) * (result.points[k].time - result.points[last].time);
-      last = k;
-    }
-    if (cyclic && n >= 3 && s.reported[0] && s.reported[n - 1])
-      sum += 0.5 * (P[n - 1] + P[0]) * (result.points[1].time - result.points[0].time);
-    return sum;
+    return sweep_integral(result, s.reported, P, cyclic);
   };
   s.dissipated = integral(s.power);
   // The drive's power τ ṡ with and without friction.
@@ -58,9 +102,12 @@ FrictionSeries friction_series(const Model& model, const CycleResult& result, bo
   }
   s.drive_work = integral(with);
   s.drive_work_frictionless = integral(without);
-  s.efficiency = s.drive_work_frictionless > 0.0 && s.drive_work > 0.0
+  // (W₀ at rounding level, against W: no net work taken by the loads.)
+  s.efficiency = s.drive_work_frictionless > 1e-9 * std::abs(s.drive_work) && s.drive_work > 0.0
                      ? s.drive_work_frictionless / s.drive_work
                      : std::numeric_limits<double>::quiet_NaN();
+  if (std::find(s.determinate.begin(), s.determinate.end(), false) != s.determinate.end())
+    s.bound = lower_bound(model, result, driver_joint, s, cyclic);
   return s;
 }
 
@@ -82,6 +129,15 @@ std::vector<SeriesSummary> summarize_friction(const Model& model, const CycleRes
     out.push_back(std::move(s));
   }
   out.push_back(summarize_values(result, "friction power", "W", series.power, series.reported));
+  if (series.bound.computed) {
+    std::vector<bool> solved(n);
+    for (std::size_t k = 0; k < n; ++k)
+      solved[k] = series.bound.reported[k] && std::isfinite(series.bound.drive[k]);
+    out.push_back(summarize_values(result, "drive at least friction", drive_unit,
+                                   series.bound.drive, solved));
+    out.push_back(
+        summarize_values(result, "least friction power", "W", series.bound.power, solved));
+  }
   return out;
 }
 

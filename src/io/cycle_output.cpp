@@ -232,6 +232,14 @@ std::vector<ExtraColumn> friction_columns(const Model& model, const CycleResult&
         {model.joints[static_cast<size_t>(series.pins[i].joint)].name + " friction moment",
          Dimension::moment, series.moment[i], series.reported, true});
   cols.push_back({"friction power", Dimension::power, series.power, series.reported, true});
+  if (series.bound.computed) {
+    std::vector<bool> solved(series.reported.size());
+    for (size_t k = 0; k < solved.size(); ++k)
+      solved[k] = series.bound.reported[k] && std::isfinite(series.bound.drive[k]);
+    cols.push_back({"drive at least friction", angular ? Dimension::moment : Dimension::force,
+                    series.bound.drive, solved, true});
+    cols.push_back({"least friction power", Dimension::power, series.bound.power, solved, true});
+  }
   return cols;
 }
 

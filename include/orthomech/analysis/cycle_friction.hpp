@@ -7,6 +7,7 @@
 
 #include "orthomech/analysis/cycle.hpp"
 #include "orthomech/analysis/friction.hpp"
+#include "orthomech/analysis/friction_bound.hpp"
 #include "orthomech/model/model.hpp"
 
 namespace orthomech {
@@ -30,9 +31,24 @@ struct FrictionSeries {
   double efficiency = 0.0;
   int iterations_max = 0;
   bool converged = true;
+  // Where some pin's force is not determined (redundant constraints): the least dissipation over
+  // every admissible split of the redundant reactions at each reported position
+  // (least_dissipation) but those bridged next to a change point (their values are interpolated
+  // on the branch, and the minimum-norm forces diverge there), and over those positions the least
+  // energy dissipated and the least net work of the drive (the splits at different positions are
+  // independent, so the sum of the least values is the least sum). NaN where not reported or not
+  // solved (`unsolved` counts them; the sweep's values are then NaN too).
+  struct LowerBound {
+    bool computed = false;
+    std::vector<bool> reported;                 // per position
+    std::vector<double> drive, power;           // per position: the drive (N·m or N) and power (W)
+    double dissipated = 0.0, drive_work = 0.0;  // J
+    int unsolved = 0;
+  } bound;
 };
+// `driver_joint`: the driven joint of the sweep (the bound's equation of motion).
 [[nodiscard]] FrictionSeries friction_series(const Model& model, const CycleResult& result,
-                                             bool cyclic);
+                                             int driver_joint, bool cyclic);
 
 /// Their summaries (summarize_values): "drive without friction" (`drive_unit`), each pin's
 /// "<joint> friction moment" (N*m) and "friction power" (W). Empty without friction.

@@ -28,7 +28,7 @@ TEST(CycleFriction, DissipatedEnergyIsTheDrivesWorkOverATurn) {
   const Model model = load_mechanism(path, changes);
   const CycleResult res = test::full_cycle(model, 720);
   ASSERT_EQ(res.status, CycleStatus::completed) << res.message;
-  const FrictionSeries s = friction_series(model, res, true);
+  const FrictionSeries s = friction_series(model, res, model.find_joint("A0"), true);
   ASSERT_EQ(s.pins.size(), 4u);
   EXPECT_TRUE(s.converged);
   EXPECT_TRUE(s.determinate[0] && s.determinate[3]);
@@ -68,7 +68,7 @@ TEST(CycleFriction, EfficiencyIsTheLoadsWorkOverTheDrivesWork) {
   const int positions = 3600;
   const CycleResult res = test::full_cycle(model, positions);
   ASSERT_EQ(res.status, CycleStatus::completed) << res.message;
-  const FrictionSeries s = friction_series(model, res, true);
+  const FrictionSeries s = friction_series(model, res, model.find_joint("A0"), true);
   auto beta = [](double L) {
     return std::acos((70.0 * 70.0 + 60.0 * 60.0 - L * L) / (2 * 70 * 60));
   };
@@ -87,7 +87,8 @@ TEST(CycleFriction, EfficiencyIsTheLoadsWorkOverTheDrivesWork) {
   // Without the process torque the loads take no net work: no efficiency.
   std::vector<FileChange> frictional(changes.begin() + 1, changes.end());
   const Model idle = load_mechanism(path, frictional);
-  const FrictionSeries idle_s = friction_series(idle, test::full_cycle(idle, 720), true);
+  const FrictionSeries idle_s =
+      friction_series(idle, test::full_cycle(idle, 720), idle.find_joint("A0"), true);
   EXPECT_TRUE(std::isnan(idle_s.efficiency));
 }
 

@@ -386,9 +386,17 @@ TEST(CycleCli, PinFrictionIsReportedAndFlaggedWhereNotDetermined) {
       run_cli({"cycle", bundled("triple-crank"), "--set",
                "joints.O2.friction={coefficient: 0.1, radius: 2}", "--json", "-q"});
   ASSERT_EQ(redundant.status, 0) << redundant.err;
-  const auto f = nlohmann::json::parse(redundant.out)["friction"]["joints"];
+  const auto rj = nlohmann::json::parse(redundant.out)["friction"];
+  const auto f = rj["joints"];
   ASSERT_EQ(f.size(), 1u);
   EXPECT_FALSE(f[0]["determinate"].get<bool>());
+  // With it, the least friction over the admissible splits: at most the minimum-norm split's.
+  EXPECT_TRUE(j["friction"]["lower_bound"].is_null()) << "the crank-rocker has one split";
+  ASSERT_TRUE(rj["lower_bound"].is_object()) << rj.dump();
+  EXPECT_EQ(rj["lower_bound"]["unsolved"], 0);
+  EXPECT_GT(rj["lower_bound"]["positions"].get<int>(), 300);
+  EXPECT_GT(rj["lower_bound"]["dissipated"].get<double>(), 0.0);
+  EXPECT_LT(rj["lower_bound"]["dissipated"].get<double>(), rj["dissipated"].get<double>());
   const CliResult sim = run_cli({"simulate", bundled("crank-rocker"), "--t-end", "0.01", "--set",
                                  "joints.A0.friction={coefficient: 0.1, radius: 2}"});
   EXPECT_EQ(sim.status, 0) << sim.err;
