@@ -532,6 +532,19 @@ nlohmann::json impacts_json(const Model& model, const SimulateResult& res, const
   return a;
 }
 
+// The resting contacts on end stops: joint, stop, from and to (null: still resting at the end).
+nlohmann::json contacts_json(const Model& model, const SimulateResult& res,
+                             const SimulateUnits& U) {
+  nlohmann::json a = nlohmann::json::array();
+  for (const SimulateResult::StopContact& c : res.contacts)
+    a.push_back(
+        {{"joint", model.joints[static_cast<size_t>(c.joint)].name},
+         {"stop", c.side > 0 ? "lower" : "upper"},
+         {"t_from", U.time.from_si(c.t_from)},
+         {"t_to", std::isnan(c.t_to) ? nlohmann::json() : nlohmann::json(U.time.from_si(c.t_to))}});
+  return a;
+}
+
 // A located warning per joint that left its limits.
 void warn_limits(const Model& model, const SimulateResult& res, const SimulateUnits& U) {
   for (const LimitExit& e : res.limits_left) {
@@ -576,6 +589,7 @@ nlohmann::json result_json(const Model& model, const UnitSystem& system, const S
   j["limits_left"] = limits_json(model, res, U);
   j["load_switches"] = res.load_switches;
   j["impacts"] = impacts_json(model, res, U);
+  j["contacts"] = contacts_json(model, res, U);
   j["max_residual_length"] = U.length.from_si(res.max_residual_length);
   j["max_residual_angle"] = U.angle.from_si(res.max_residual_angle);
   j["max_velocity_residual"] = res.max_velocity_residual;
@@ -605,9 +619,19 @@ void write_text(std::ostream& out, const Model& model, const SimulateCliOptions&
   if (res.rejected_steps > 0) out << ", " << res.rejected_steps << " rejected";
   if (res.jacobians > 0) out << ", " << res.jacobians << " Jacobians";
   out << "), " << res.passages.size() << " change points passed\n";
-  if (res.load_switches > 0 || !res.impacts.empty())
+  if (res.load_switches > 0 || !res.impacts.empty()) {
     out << "events      " << res.load_switches << " load switches (active_while), "
-        << res.impacts.size() << " impacts on end stops\n";
+        << res.impacts.size() << " impacts on end stops";
+    if (!res.contacts.empty()) out << ", " << res.contacts.size() << " resting contacts";
+    out << "\n";
+  }
+  for (const SimulateResult::StopContact& c : res.contacts)
+    out << "resting     joint '" << model.joints[static_cast<size_t>(c.joint)].name << "' on its "
+        << (c.side > 0 ? "lower" : "upper") << " stop from t = " << g(U.time.from_si(c.t_from), 9)
+        << " " << U.time.name
+        << (std::isnan(c.t_to) ? std::string(" to the end")
+                               : " to " + g(U.time.from_si(c.t_to), 9) + " " + U.time.name)
+        << "\n";
   const std::string eu = " " + U.energy.name;
   out << "energy      initial " << g(U.energy.from_si(res.energy_initial)) << eu << ", final "
       << g(U.energy.from_si(res.energy_final)) << eu << ", max drift "

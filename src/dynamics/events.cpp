@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <stdexcept>
+#include <string>
 
 #include "orthomech/analysis/cycle_metrics.hpp"
 #include "orthomech/model/measures.hpp"
@@ -24,7 +26,44 @@ Events::Events(const Model& model, double span)
     values_.push_back({-1, -1, static_cast<int>(j), -1, joint.limits->y()});
   }
   last_.assign(values_.size(), 0.0);
-  end_ = lo_ = hi_ = last_;
+  end_ = lo_ = hi_ = contact_ = last_;
+}
+
+size_t Events::stop_index(const StopHit& stop) const {
+  for (size_t i = 0; i < values_.size(); ++i)
+    if (values_[i].joint == stop.joint && values_[i].sign == stop.side) return i;
+  throw std::logic_error("Events: joint " + std::to_string(stop.joint) + " has no such end stop");
+}
+
+void Events::hold(const StopHit& stop, double contact) {
+  const size_t i = stop_index(stop);
+  values_[i].held = true;
+  values_[i].shift = 0.0;
+  contact_[i] = contact;
+  last_[i] = contact;
+  held_.push_back({stop.joint, stop.side, false});
+  in_a_row_ = 0;
+  stop_in_run_ = false;
+}
+
+void Events::set_held(const std::vector<StopHit>& held) {
+  for (Value& w : values_) w.held = false;
+  held_.clear();
+  for (const StopHit& h : held) {
+    values_[stop_index(h)].held = true;
+    held_.push_back({h.joint, h.side, false});
+  }
+}
+
+void Events::set_contact_forces(const std::vector<double>& contact) {
+  for (size_t k = 0; k < held_.size() && k < contact.size(); ++k)
+    contact_[stop_index(held_[k])] = contact[k];
+}
+
+void Events::modes_from_values(std::vector<std::uint8_t>& load_on) const {
+  for (size_t i = 0; i < values_.size(); ++i)
+    if (values_[i].load >= 0)
+      load_on[static_cast<size_t>(values_[i].load)] = last_[i] > 0.0 ? 1 : 0;
 }
 
 void Events::evaluate(const Model& model, const VecX& q, const VecX& u,
@@ -34,8 +73,10 @@ void Events::evaluate(const Model& model, const VecX& q, const VecX& u,
     if (w.load >= 0) {
       const Measure& m = model.measures[static_cast<size_t>(w.measure)];
       s[i] = w.sign * compute_scalar(model, m.kind, q, &u).rate;
+    } else if (w.held) {
+      s[i] = contact_[i];
     } else {
-      s[i] = w.sign * (limit_coordinate(model, w.joint, q) - w.limit);
+      s[i] = w.sign * (limit_coordinate(model, w.joint, q) - w.limit) + w.shift;
     }
   }
 }
@@ -66,7 +107,16 @@ Events::StepEnd Events::step_end(const Model& model, double t0, double t1, const
   return t1 - t0 <= tolerance_ ? StepEnd::switch_here : StepEnd::locate;
 }
 
-void Events::keep_step_end() { last_ = end_; }
+void Events::keep_step_end() {
+  last_ = end_;
+  for (size_t i = 0; i < values_.size(); ++i) {  // a released stop out of its margin: armed
+    Value& w = values_[i];
+    if (w.shift > 0.0 && last_[i] > 2.0 * w.shift) {
+      last_[i] -= w.shift;
+      w.shift = 0.0;
+    }
+  }
+}
 
 void Events::restored(const Model& model, const VecX& q, const VecX& u) {
   if (!values_.empty()) evaluate(model, q, u, last_);
@@ -80,20 +130,35 @@ Events::Chatter Events::switch_at(const Model& model, double t, std::vector<std:
     const Value& w = values_[i];
     if (w.load >= 0) {
       load_on[static_cast<size_t>(w.load)] = end_[i] > 0.0 ? 1 : 0;
+    } else if (w.held) {
+      // The contact force reached zero: the joint leaves the stop, just outside it.
+      hits.push_back({w.joint, w.sign, true});
+      values_[i].held = false;
+      values_[i].shift = kReleaseMargin;
+      std::erase_if(held_,
+                    [&](const StopHit& h) { return h.joint == w.joint && h.side == w.sign; });
+      end_[i] = kReleaseMargin;
     } else {
-      hits.push_back({w.joint, w.sign});
+      hits.push_back({w.joint, w.sign, false});
+      resting_ = {w.joint, w.sign, false};
       // At the stop (to the tolerance's penetration): counted as outside, so that a motion that
       // goes on into the stop after the impact (e = 0, pushed) meets it again.
       end_[i] = std::numeric_limits<double>::min();
     }
   }
   last_ = end_;
-  in_a_row_ = t - t_last_event_ <= kChatterGap * span_ ? in_a_row_ + 1 : 1;
+  const bool impact =
+      std::any_of(hits.begin(), hits.end(), [](const StopHit& h) { return !h.release; });
+  const bool in_run = t - t_last_event_ <= kChatterGap * span_;
+  in_a_row_ = in_run ? in_a_row_ + 1 : 1;
+  stop_in_run_ = (in_run && stop_in_run_) || impact;
   t_last_event_ = t;
   kept_side_ = 0;
   iterations_ = 0;
   if (in_a_row_ < kMaxChatter) return Chatter::none;
-  const Chatter what = hits.empty() ? Chatter::loads : Chatter::stop;
+  // (Loads switched by the rebounds of a joint coming to rest on its stop chatter with it: the
+  // stop's.)
+  const Chatter what = stop_in_run_ ? Chatter::stop : Chatter::loads;
   message = chatter_message(model, t, what);
   return what;
 }
@@ -114,8 +179,8 @@ std::string Events::chatter_message(const Model& model, double t, Chatter what) 
   if (what == Chatter::stop)
     return "joint " + names + " comes to rest against its end stop (impacts at ever shorter " +
            "intervals, " + text +
-           "): a resting contact on an end stop is not modelled yet, so the motion from here is "
-           "not determined";
+           ") where no contact force can hold it (the stop would have to pull at once): the " +
+           "motion from here is not determined";
   return "the loads switched by active_while (" + names +
          ") chatter: each switch turns their measure's rate back (" + text +
          "), which holds it at 0 (a sliding mode, as a Coulomb friction torque written with "

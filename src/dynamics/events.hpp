@@ -43,12 +43,17 @@ inline constexpr int kMaxEventIterations = 100;
 // row: a chatter.
 inline constexpr double kChatterGap = 1e-7;
 inline constexpr int kMaxChatter = 12;
+// How far past a stop just released the joint may go back before it meets the stop again
+// (m or rad): far below any tolerance of the positions, far above the distance's rounding.
+inline constexpr double kReleaseMargin = 1e-9;
 
 // An end stop met at an event: the joint, and +1 at its lower limit (the coordinate must grow
-// away from it) or −1 at its upper one.
+// away from it) or −1 at its upper one; `release`: a stop held as a resting contact whose
+// contact force reached zero (the joint leaves it) rather than an impact.
 struct StopHit {
   int joint = -1;
   int side = 0;
+  bool release = false;
 };
 
 class Events {
@@ -84,6 +89,24 @@ class Events {
   // The run went back to a saved step end at (q, u): its values become the last step end's.
   void restored(const Model& model, const VecX& q, const VecX& u);
 
+  // ---- Resting contacts (a stop held as a constraint) ----
+  // While a stop is held its switching value is its contact force (the Simulation computes it,
+  // set_contact_forces), not its distance: the stop is released when the force reaches zero
+  // from above (switch_at lists it with `release`).
+  // The stop that chattered (the last one hit in the run of events that ended in Chatter::stop).
+  [[nodiscard]] StopHit resting_stop() const { return resting_; }
+  // Holds `stop` from here, its contact force `contact` (> 0); the chatter count starts again.
+  void hold(const StopHit& stop, double contact);
+  [[nodiscard]] bool holding() const { return !held_.empty(); }
+  [[nodiscard]] const std::vector<StopHit>& held() const { return held_; }
+  // The held stops as they were at a saved step end (restore).
+  void set_held(const std::vector<StopHit>& held);
+  // The held stops' contact forces (in held() order) at the state about to be evaluated.
+  void set_contact_forces(const std::vector<double>& contact);
+  // Each switched load on iff its last value is > 0 (the loads' modes after a resting contact
+  // begins: a rate held at exactly 0 switches its load off, load_active's rule).
+  void modes_from_values(std::vector<std::uint8_t>& load_on) const;
+
   // ---- The crossing's location (after StepEnd::locate) ----
   // The bracket [t_lo, t_hi] from the last step end and the candidate end just rejected.
   void open_bracket(double t_lo, double t_hi);
@@ -105,7 +128,13 @@ class Events {
     int joint = -1;               // stop: the joint
     int sign = 0;                 // load: active_while's sign; stop: +1 lower, −1 upper
     double limit = 0.0;           // stop: the limit
+    bool held = false;            // stop: held as a resting contact (value: its contact force)
+    // stop: after a release, the value is the distance plus kReleaseMargin until the distance
+    // exceeds twice it (the joint leaves the stop with zero speed and acceleration: within the
+    // margin the distance's rounding would meet the stop again and again).
+    double shift = 0.0;
   };
+  [[nodiscard]] size_t stop_index(const StopHit& stop) const;
   void evaluate(const Model& model, const VecX& q, const VecX& u, std::vector<double>& s) const;
   // Whether value i crosses between a and b: a load's changes sign, a stop's reaches 0 from
   // above (leaving a stop is no event).
@@ -120,9 +149,14 @@ class Events {
   double t_lo_ = 0.0, t_hi_ = 0.0;
   std::vector<double> lo_, hi_;
   int kept_side_ = 0, iterations_ = 0;
-  // Events: the last one's time, how many in a row within kChatterGap.
+  // Events: the last one's time, how many in a row within kChatterGap, whether a stop was hit
+  // in that run (then a chatter is the stop's: resting_).
   double t_last_event_ = -1e300;
   int in_a_row_ = 0;
+  bool stop_in_run_ = false;
+  StopHit resting_;
+  std::vector<StopHit> held_;
+  std::vector<double> contact_;  // per value: a held stop's contact force
 };
 
 }  // namespace orthomech::detail

@@ -29,6 +29,7 @@
 #include "orthomech/projection/dual.hpp"
 #include "orthomech/projection/free_system_stage.hpp"
 #include "orthomech/projection/primal.hpp"
+#include "stop_contacts.hpp"
 
 namespace orthomech {
 
@@ -102,6 +103,7 @@ namespace {
 using detail::Dynamics;
 using detail::Events;
 using detail::SingularEvaluation;
+using detail::StopContacts;
 using detail::StopHit;
 using detail::time_text;
 
@@ -333,6 +335,7 @@ class Simulation {
         end_slack_(1e-14 * std::max(1.0, std::abs(T1_))),
         t_last_accept_(initial.t),
         events_(model, options.t_end),
+        contacts_(model),
         rate_x_(VecX::Zero(model.n)),
         rate_plus_(VecX::Zero(model.nc)),
         rate_minus_(VecX::Zero(model.nc)),
@@ -388,6 +391,7 @@ class Simulation {
     VecX x;
     Chart chart;
     std::vector<std::uint8_t> load_on;  // the switched loads' modes (State::load_on)
+    std::vector<StopHit> held;          // the stops held as resting contacts (Events::held)
   };
   // What the events ask of the run after a step (dynamics/events.hpp): nothing, a
   // restart of the integrator at the step's end (loads switched or an impact there), or the
@@ -530,6 +534,7 @@ class Simulation {
     saved_prev_.chart = dyn_.cs_.chart();
     events_.start(model_, q_, dyn_.state_.u, dyn_.state_.load_on);
     saved_prev_.load_on = dyn_.state_.load_on;
+    saved_prev_.held = events_.held();
   }
 
   // ---- The integrator's callbacks -------------------------------------------------------------
@@ -547,6 +552,19 @@ class Simulation {
       dy.segment(nq_, na_) = dyn_.vdot_;
     }
     dy(nx_ - 1) = dyn_.nonconservative_power();
+    if (events_.holding()) {  // resting contacts (dynamics/stop_contacts.hpp): no work
+      if (primal_)
+        contacts_.apply(dyn_, true, events_.held(), dy.segment(nq_, n_), contact_mu_);
+      else
+        contacts_.apply(dyn_, false, events_.held(), dy.segment(nq_, na_), contact_mu_);
+    }
+  }
+
+  // The held stops' contact forces at the state (t, y) (an evaluation there): their switching
+  // values (dynamics/events.hpp).
+  void contact_forces_at(double t, const VecX& y) {
+    rhs(y, contact_dy_, t);
+    events_.set_contact_forces(contact_mu_);
   }
 
   // With projected stages the right-hand side depends on q through the chart's independent
@@ -828,6 +846,7 @@ class Simulation {
     }
     // The switched loads: a step across which one of their switching values changed sign is
     // undone and the crossing located, unless it is within the tolerance already.
+    if (events_.holding()) contact_forces_at(t, y);
     const Events::StepEnd event = events_.step_end(model_, t_last_accept_, t, q_, dyn_.state_.u);
     // (The step's start must be the saved step end to go back to; it is, but for a step after
     // an undone crossing of a change point: there the step is kept and the loads switched.)
@@ -856,7 +875,8 @@ class Simulation {
     std::string why;
     const std::vector<std::uint8_t> modes_before = dyn_.state_.load_on;  // (an event: rare)
     const Events::Chatter chatter = events_.switch_at(model_, t, dyn_.state_.load_on, hits_, why);
-    if (chatter != Events::Chatter::none) {
+    if (chatter == Events::Chatter::loads ||
+        (chatter == Events::Chatter::stop && !rest_on_stop(t, y))) {
       failure_status_ =
           chatter == Events::Chatter::stop ? SimulateStatus::resting : SimulateStatus::sliding;
       stop_message_ = why;
@@ -864,13 +884,60 @@ class Simulation {
     }
     ++events_applied_;
     if (dyn_.state_.load_on != modes_before) ++result_.load_switches;
-    for (const StopHit& hit : hits_) impact(t, hit, y);
+    if (chatter == Events::Chatter::none)
+      for (const StopHit& hit : hits_) {
+        if (hit.release)
+          end_contact(t, hit);
+        else
+          impact(t, hit, y);
+      }
     if (saved_prev_.valid && saved_prev_.t == t) {
       saved_prev_.load_on = dyn_.state_.load_on;
+      saved_prev_.held = events_.held();
       saved_prev_.x = y;
     }
     event_request_ = EventRequest::restart;
     return true;
+  }
+
+  // A joint come to rest on its stop (the impacts' chatter) is held there as a resting contact
+  // (dynamics/stop_contacts.hpp): its speed towards or away from the stop taken away (a plastic
+  // impact, e = 0, its loss booked), the switched loads' modes taken from their rates there, and
+  // the contact force that holds it computed. False when that force would pull at once: the
+  // contact cannot hold it (the run stops, status resting).
+  bool rest_on_stop(double t, VecX& y) {
+    const StopHit stop = events_.resting_stop();
+    impact(t, stop, y, Approach::either_way);
+    events_.hold(stop, 1.0);
+    if (static_cast<int>(events_.held().size()) == na_) {  // locked: at rest exactly
+      y.segment(nq_, primal_ ? n_ : na_).setZero();
+      dyn_.state_.u.setZero();
+      if (!result_.impacts.empty() && result_.impacts.back().t == t)
+        result_.impacts.back().speed_after = 0.0;
+    }
+    contact_forces_at(t, y);
+    events_.restored(model_, q_, dyn_.state_.u);
+    events_.modes_from_values(dyn_.state_.load_on);
+    contact_forces_at(t, y);  // with the loads' modes there
+    if (!(contact_mu_.back() > 0.0)) {
+      std::vector<StopHit> others = events_.held();
+      others.pop_back();
+      events_.set_held(others);
+      return false;
+    }
+    events_.restored(model_, q_, dyn_.state_.u);
+    result_.contacts.push_back(
+        {t, std::numeric_limits<double>::quiet_NaN(), stop.joint, stop.side});
+    return true;
+  }
+
+  // A held stop released at t (its contact force reached zero).
+  void end_contact(double t, const StopHit& hit) {
+    for (auto it = result_.contacts.rbegin(); it != result_.contacts.rend(); ++it)
+      if (it->joint == hit.joint && it->side == hit.side && std::isnan(it->t_to)) {
+        it->t_to = t;
+        return;
+      }
   }
 
   // An impact on an end stop, Newton's law with restitution e in the mass metric: the admissible
@@ -879,9 +946,10 @@ class Simulation {
   //   v⁺ = v⁻ − (1 + e) (cᵀv⁻)/(cᵀH⁻¹c) H⁻¹c,  ΔT = ½ (1 − e²) (cᵀv⁻)²/(cᵀH⁻¹c),
   // the loss booked as work of the non-conservative forces (W), so T + V − W stays level.
   // Nothing happens when the joint already moves away from the stop (ġ⁻ ≥ 0).
-  void impact(double t, const StopHit& hit, VecX& y) {
+  enum class Approach { towards, either_way };
+  void impact(double t, const StopHit& hit, VecX& y, Approach when = Approach::towards) {
     const Joint& joint = model_.joints[static_cast<size_t>(hit.joint)];
-    const double e = *joint.stop_restitution;
+    const double e = when == Approach::towards ? *joint.stop_restitution : 0.0;
     stop_d_.resize(n_);
     (void)compute_scalar(model_, JointCoordinate{hit.joint}, q_, nullptr, stop_d_);
     dyn_.compute_H();
@@ -890,7 +958,7 @@ class Simulation {
     stop_c_.noalias() = dyn_.F_.transpose() * stop_d_;
     stop_c_ *= hit.side;
     const double approach = stop_c_.dot(v);
-    if (!(approach < 0.0)) return;
+    if (!(approach < 0.0) && when == Approach::towards) return;
     stop_Hc_ = dyn_.H_llt_.solve(stop_c_);
     const double k = stop_c_.dot(stop_Hc_);
     if (!(k > 0.0)) return;
@@ -1212,6 +1280,7 @@ class Simulation {
     saved_prev_.spread = spread_now_;
     saved_prev_.x = y;
     saved_prev_.load_on = dyn_.state_.load_on;
+    saved_prev_.held = events_.held();
     saved_prev_.chart = dyn_.cs_.chart();
     if (sigma >= kFarPassQuality && sigma <= kFarPassQualityMax) far_ = saved_prev_;
     monitor_ = {true, t, sigma, rate};
@@ -1798,6 +1867,11 @@ class Simulation {
     dyn_.cs_.set_chart(back.chart);
     dyn_.chart_ready_ = false;
     dyn_.state_.load_on = back.load_on;
+    events_.set_held(back.held);
+    while (!result_.contacts.empty() && result_.contacts.back().t_from > t_now_)
+      result_.contacts.pop_back();
+    for (SimulateResult::StopContact& c : result_.contacts)
+      if (c.t_to > t_now_) c.t_to = std::numeric_limits<double>::quiet_NaN();
     while (!result_.samples.empty() && result_.samples.back().t > t_now_ + grid_slack_)
       result_.samples.pop_back();
     while (!result_.chart_switches.empty() && result_.chart_switches.back().t > t_now_)
@@ -1817,6 +1891,7 @@ class Simulation {
         dyn_.mass_at(dyn_.state_.q);
         dyn_.velocity_from_momentum(x_.segment(nq_, n_));
       }
+      if (events_.holding()) contact_forces_at(t_now_, x_);
       events_.restored(model_, x_.head(nq_), dyn_.state_.u);
     }
   }
@@ -2023,6 +2098,9 @@ class Simulation {
   double t_last_accept_, h_last_ = 0.0;
   Events events_;
   std::vector<StopHit> hits_;
+  StopContacts contacts_;
+  std::vector<double> contact_mu_;  // the held stops' contact forces at the last evaluation
+  VecX contact_dy_;                 // contact_forces_at's evaluation
   long events_applied_ = 0;         // the stops met at an event
   VecX stop_d_, stop_c_, stop_Hc_;  // an impact's gradient d, c = σ Fᵀ dᵀ, H⁻¹ c
   EventRequest event_request_ = EventRequest::none;

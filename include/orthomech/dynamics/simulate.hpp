@@ -103,9 +103,10 @@ struct SimulateOptions {
 // sliding: loads switched by `active_while` chatter (each switch turns their measure's rate back,
 //   holding it at 0: a Coulomb torque written with active_while that sticks), so the motion from
 //   there is not determined; the samples up to it are kept.
-// resting: a joint with end stops comes to rest against one (impacts at ever shorter intervals);
-//   a resting contact is not modelled yet, so the motion from there is not determined; the
-//   samples up to it are kept.
+// resting: a joint with end stops came to rest against one (impacts at ever shorter intervals)
+//   where its contact could not hold it (the stop would have to pull at once): the motion from
+//   there is not determined; the samples up to it are kept. (A joint that comes to rest pressed
+//   against its stop is held there, SimulateResult::contacts, and the run goes on.)
 enum class SimulateStatus {
   completed,
   failed_assembly,
@@ -196,6 +197,14 @@ struct SimulateResult {
     double speed_before = 0.0, speed_after = 0.0, energy_loss = 0.0;
   };
   std::vector<StopImpact> impacts;
+  // Resting contacts: a joint that came to rest against its end stop (impacts at ever shorter
+  // intervals) held there as a constraint, from `t_from` until its contact force would pull
+  // (`t_to`; NaN when it still rests at the run's end); the stop's side as in StopImpact.
+  struct StopContact {
+    double t_from = 0.0, t_to = 0.0;
+    int joint = -1, side = 0;
+  };
+  std::vector<StopContact> contacts;
   long evaluations = 0;     // right-hand side evaluations
   long rejected_steps = 0;  // rejected step attempts (rkf78, rosenbrock4)
   long jacobians = 0;       // Jacobians by finite differences (rosenbrock4)

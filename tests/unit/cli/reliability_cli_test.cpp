@@ -205,7 +205,8 @@ TEST(ReliabilityCli, SwitchedLoadsEndWithAnHonestEnergyBalance) {
 TEST(ReliabilityCli, EndStopsHoldTheJointAndTheTableCountsTheEvents) {
   // The frictionless pendulum of SimulateSaysWhereAJointLeavesItsLimits, with end stops at the
   // same limits: it never passes −60° (within the events' tolerance), it warns of no exit, it
-  // ends `resting` (exit 3), and the table's events line counts what the JSON lists.
+  // comes to rest on its lower stop and is held there to the end (completed, exit 0: a resting
+  // contact), and the table's events line counts what the JSON lists.
   const std::vector<std::string> args = {"simulate", data_file("coulomb-pendulum.yaml"),
                                          "--t-end",  "3",
                                          "--dt-out", "0.001",
@@ -216,10 +217,15 @@ TEST(ReliabilityCli, EndStopsHoldTheJointAndTheTableCountsTheEvents) {
   std::vector<std::string> json_args = args;
   json_args.emplace_back("--json");
   const auto r = run_cli(json_args);
-  EXPECT_EQ(r.status, 3) << r.err;
+  EXPECT_EQ(r.status, 0) << r.err;
   EXPECT_FALSE(has(r.err, "leaves its limits")) << r.err;
   const auto j = nlohmann::json::parse(r.out);
-  EXPECT_EQ(j["status"], "resting");
+  EXPECT_EQ(j["status"], "completed");
+  ASSERT_EQ(j["contacts"].size(), 1u) << j["contacts"];
+  EXPECT_EQ(j["contacts"][0]["joint"], "O");
+  EXPECT_EQ(j["contacts"][0]["stop"], "lower");
+  EXPECT_TRUE(j["contacts"][0]["t_to"].is_null());
+  EXPECT_EQ(j["energy"]["balance"], "held");
   EXPECT_TRUE(j["limits_left"].empty());
   const auto& impacts = j["impacts"];
   ASSERT_GE(impacts.size(), 12u);
@@ -232,8 +238,9 @@ TEST(ReliabilityCli, EndStopsHoldTheJointAndTheTableCountsTheEvents) {
   // (The two torques set to 0 still switch with the rate: load_switches counts them.)
   EXPECT_TRUE(has(text.out, "events      " + std::to_string(j["load_switches"].get<long>()) +
                                 " load switches (active_while), " + std::to_string(impacts.size()) +
-                                " impacts on end stops"))
+                                " impacts on end stops, 1 resting contacts"))
       << text.out.substr(0, 600);
+  EXPECT_TRUE(has(text.out, "resting     joint 'O' on its lower stop from t = ")) << text.out;
 }
 
 TEST(ReliabilityCli, SimulateSaysWhereAJointLeavesItsLimits) {

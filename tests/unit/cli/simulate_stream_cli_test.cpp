@@ -157,6 +157,7 @@ struct Reference {
     }
     j["load_switches"] = res.load_switches;
     j["impacts"] = json::array();  // (no end stops in the bundled files streamed here)
+    j["contacts"] = json::array();
     j["max_residual_length"] = length(res.max_residual_length);
     j["max_residual_angle"] = angle(res.max_residual_angle);
     j["max_velocity_residual"] = res.max_velocity_residual;
