@@ -1371,7 +1371,8 @@ def check_file(path, override=None):
 
 FILES = ["crank-rocker.yaml", "double-rocker.yaml", "slider-crank.yaml", "watt-six-bar.yaml",
          "stephenson-six-bar.yaml", "quick-return.yaml", "n-four-bar-2.yaml", "n-four-bar-40.yaml",
-         "pendulum.yaml", "andrews-squeezer.yaml", "triple-crank.yaml"]
+         "pendulum.yaml", "andrews-squeezer.yaml", "triple-crank.yaml",
+         "wiper-drive.yaml", "knuckle-press.yaml"]  # (the last two written by hand: checked only)
 
 
 def check_all():

@@ -354,6 +354,75 @@ TEST(CycleCli, BadOptionsAreCommandLineErrors) {
 // Pin friction from the file (--set here): the JSON `friction` object, the drive without friction
 // equal to the plain file's drive, the extra lines of the table; in a redundant mechanism the
 // friction of a pin whose force is indeterminate is flagged, and simulate says it ignores it.
+// The knuckle press's ram height at a cylinder length (mechanisms/knuckle-press.yaml): the knee
+// K = (x, 600 − √(300² − x²)) with |C − K| = length (C = (700, 330)) by bisection, and the ram
+// 600 − 2√(300² − x²) below the straight toggle.
+double press_ram_y(double length) {
+  auto knee_y = [](double x) { return 600.0 - std::sqrt(300.0 * 300.0 - x * x); };
+  double lo = 0.0, hi = 299.0;  // |C − K| falls as x grows
+  for (int it = 0; it < 200; ++it) {
+    const double x = 0.5 * (lo + hi);
+    (std::hypot(x - 700.0, knee_y(x) - 330.0) > length ? lo : hi) = x;
+  }
+  const double x = 0.5 * (lo + hi);
+  return 600.0 - 2.0 * std::sqrt(300.0 * 300.0 - x * x);
+}
+
+TEST(CycleCli, WiperDriveTakesTheBladeDragsWorkAndItsPinsDissipate) {
+  // Issue 49's wiper: the blade's drag (1.5 N*m against the rocker's rotation) takes twice the
+  // drag times the rocker's swing per turn, the swing from the law of cosines at the dead centres
+  // (A0B = 250 ± 40 mm, B0B = 60, A0B0 = 240): the frictionless drive's net work W0; with friction
+  // in every pin the drive's work W is W0 plus what the pins dissipate, and eta = W0/W.
+  const CliResult r = run_cli({"cycle", bundled("wiper-drive"), "--json", "-q"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  auto beta = [](double L) {
+    return std::acos((240.0 * 240.0 + 60.0 * 60.0 - L * L) / (2.0 * 240.0 * 60.0));
+  };
+  const double swing = beta(290.0) - beta(210.0);  // rad
+  const double W0 = 2.0 * 1500.0 * swing;          // N*mm
+  const auto& f = j["friction"];
+  EXPECT_EQ(f["unit"], "N*mm");
+  EXPECT_NEAR(f["drive_work_frictionless"].get<double>(), W0, 1e-4 * W0);
+  const double W = f["drive_work"].get<double>(), D = f["dissipated"].get<double>();
+  EXPECT_NEAR(W - f["drive_work_frictionless"].get<double>(), D, 1e-6 * D);
+  EXPECT_NEAR(f["efficiency"].get<double>(), f["drive_work_frictionless"].get<double>() / W, 1e-12);
+  EXPECT_GT(f["efficiency"].get<double>(), 0.8);
+  EXPECT_LT(f["efficiency"].get<double>(), 1.0);
+  for (const auto& pin : f["joints"]) EXPECT_TRUE(pin["determinate"].get<bool>()) << pin;
+  EXPECT_TRUE(f["lower_bound"].is_null());
+  const auto& rocker = j["strokes"][0];
+  ASSERT_EQ(rocker["name"], "rocker_angle");
+  const double deg = 180.0 / std::numbers::pi;
+  EXPECT_NEAR(rocker["min"]["value"].get<double>(), 180.0 - beta(290.0) * deg, 1e-4);
+  EXPECT_NEAR(rocker["max"]["value"].get<double>(), 180.0 - beta(210.0) * deg, 1e-4);
+  EXPECT_GT(j["peaks"]["shaking force"]["peak"].get<double>(), 0.0) << j["peaks"];
+}
+
+TEST(CycleCli, KnucklePressFormingWorkIsTheForceTimesItsStroke) {
+  // The forming force (20 kN, factor 1 below a ram height of 6 mm, 0 above 6.5 mm, linear between)
+  // acts on the down-stroke only: over a cycle the loads take F (6 − y_min + 0.25 mm), y_min the
+  // ram's height at the cylinder's longest (680 mm): the frictionless drive's net work.
+  const CliResult r =
+      run_cli({"cycle", bundled("knuckle-press"), "--steps", "3600", "--json", "-q"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  const double y_min = press_ram_y(680.0), y_max = press_ram_y(540.0);
+  const double W0 = 20000.0 * (6.0 - y_min + 0.25);  // N*mm
+  const auto& f = j["friction"];
+  EXPECT_NEAR(f["drive_work_frictionless"].get<double>(), W0, 1e-4 * W0);
+  EXPECT_GT(f["efficiency"].get<double>(), 0.8);
+  EXPECT_LT(f["efficiency"].get<double>(), 1.0);
+  bool found = false;
+  for (const auto& s : j["strokes"]) {
+    if (s["name"] != "ram_y") continue;
+    found = true;
+    EXPECT_NEAR(s["min"]["value"].get<double>(), y_min, 1e-6);
+    EXPECT_NEAR(s["max"]["value"].get<double>(), y_max, 1e-6);
+  }
+  EXPECT_TRUE(found);
+}
+
 TEST(CycleCli, PinFrictionIsReportedAndFlaggedWhereNotDetermined) {
   std::vector<std::string> args = {"cycle", bundled("crank-rocker"), "--steps", "72"};
   for (const char* j : {"A0", "A", "B", "B0"}) {

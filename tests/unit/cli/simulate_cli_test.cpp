@@ -96,3 +96,53 @@ TEST(SimulateCli, MissingTEndIsBadInput) {
 
 }  // namespace
 }  // namespace orthomech
+
+namespace orthomech {
+namespace {
+
+TEST(SimulateCli, KnucklePressFormsAndRestsOnItsCylindersEndStop) {
+  // Issue 49's press in free motion: a 8 kN cylinder pressure against a throttle (a damper of
+  // 40 N*s/mm along the cylinder) presses the ram down through the forming force; the cylinder
+  // meets its end stop at 680 mm (restitution 0.2), comes to rest on it and is held there, the
+  // ram at the height the toggle's geometry gives at 680 mm: 600 − 2√(300² − x_K²) with
+  // |C − K| = 680 mm (bisection here). Both forms, the same contact time; the balance held.
+  auto knee_y = [](double x) { return 600.0 - std::sqrt(300.0 * 300.0 - x * x); };
+  double lo = 0.0, hi = 299.0;
+  for (int it = 0; it < 200; ++it) {
+    const double x = 0.5 * (lo + hi);
+    (std::hypot(x - 700.0, knee_y(x) - 330.0) > 680.0 ? lo : hi) = x;
+  }
+  const double x_k = 0.5 * (lo + hi);
+  const double y_min = 600.0 - 2.0 * std::sqrt(300.0 * 300.0 - x_k * x_k);
+  const std::string loads =
+      "loads=[{name: weight, type: gravity, g: [0, -9810]}, {name: forming, type: force, point: "
+      "ram.P, force: [0, 20000], table: {measure: ram_y, points: [[0, 1], [6, 1], [6.5, 0]]}, "
+      "active_while: {measure: ram_y, velocity: negative}}, {name: pressure, type: force, point: "
+      "rod.K, force: [8000, 0], frame: body}, {name: throttle, type: spring-damper, connects: "
+      "[barrel.C, rod.K], stiffness: 0, damping: 40}]";
+  double t_from[2] = {0.0, 0.0};
+  int k = 0;
+  for (const char* form : {"dual", "primal"}) {
+    SCOPED_TRACE(form);
+    const auto r = run_cli({"simulate", test::bundled_file("knuckle-press"), "--t-end", "1",
+                            "--form", form, "--set", loads, "--json", "-q"});
+    ASSERT_EQ(r.status, 0) << r.err;
+    const auto j = nlohmann::json::parse(r.out);
+    EXPECT_EQ(j["status"], "completed");
+    EXPECT_EQ(j["energy"]["balance"], "held");
+    EXPECT_GE(j["impacts"].size(), 1u);
+    EXPECT_GE(j["load_switches"].get<long>(), 1);
+    ASSERT_EQ(j["contacts"].size(), 1u) << j["contacts"];
+    EXPECT_EQ(j["contacts"][0]["joint"], "cylinder");
+    EXPECT_EQ(j["contacts"][0]["stop"], "upper");
+    EXPECT_TRUE(j["contacts"][0]["t_to"].is_null());
+    t_from[k++] = j["contacts"][0]["t_from"].get<double>();
+    EXPECT_NEAR(j["final"]["measures"]["cylinder_length"].get<double>(), 680.0, 1e-9);
+    EXPECT_NEAR(j["final"]["measures"]["ram_y"].get<double>(), y_min, 1e-9);
+    EXPECT_EQ(j["final"]["measures"]["ram_v"].get<double>(), 0.0);
+  }
+  EXPECT_NEAR(t_from[0], t_from[1], 1e-6);
+}
+
+}  // namespace
+}  // namespace orthomech
