@@ -933,11 +933,9 @@ class Simulation {
 
   // A held stop released at t (its contact force reached zero).
   void end_contact(double t, const StopHit& hit) {
-    for (auto it = result_.contacts.rbegin(); it != result_.contacts.rend(); ++it)
-      if (it->joint == hit.joint && it->side == hit.side && std::isnan(it->t_to)) {
-        it->t_to = t;
-        return;
-      }
+    // (At most one contact of a stop is open: the first open one is the last.)
+    for (SimulateResult::StopContact& c : result_.contacts)
+      if (c.joint == hit.joint && c.side == hit.side && std::isnan(c.t_to)) c.t_to = t;
   }
 
   // An impact on an end stop, Newton's law with restitution e in the mass metric: the admissible
