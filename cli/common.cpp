@@ -222,7 +222,8 @@ void warn_friction_not_applied(const Model& model, const std::string& command) {
   for (const Joint& j : model.joints)
     if (j.friction)
       spdlog::warn(
-          "{}: joint '{}': {} does not apply joint friction yet (cycle does): its results "
+          "{}: joint '{}': {} does not apply joint friction yet (cycle and simulate do): its "
+          "results "
           "are frictionless",
           j.where.str(), j.name, command);
 }

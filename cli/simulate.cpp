@@ -588,6 +588,7 @@ nlohmann::json result_json(const Model& model, const UnitSystem& system, const S
                                                                         : "unknown"}};
   j["limits_left"] = limits_json(model, res, U);
   j["load_switches"] = res.load_switches;
+  j["friction_switches"] = res.friction_switches;
   j["impacts"] = impacts_json(model, res, U);
   j["contacts"] = contacts_json(model, res, U);
   j["max_residual_length"] = U.length.from_si(res.max_residual_length);
@@ -619,10 +620,12 @@ void write_text(std::ostream& out, const Model& model, const SimulateCliOptions&
   if (res.rejected_steps > 0) out << ", " << res.rejected_steps << " rejected";
   if (res.jacobians > 0) out << ", " << res.jacobians << " Jacobians";
   out << "), " << res.passages.size() << " change points passed\n";
-  if (res.load_switches > 0 || !res.impacts.empty()) {
+  if (res.load_switches > 0 || !res.impacts.empty() || res.friction_switches > 0) {
     out << "events      " << res.load_switches << " load switches (active_while), "
         << res.impacts.size() << " impacts on end stops";
     if (!res.contacts.empty()) out << ", " << res.contacts.size() << " resting contacts";
+    if (res.friction_switches > 0)
+      out << ", " << res.friction_switches << " reversals of pin friction";
     out << "\n";
   }
   for (const SimulateResult::StopContact& c : res.contacts)
@@ -657,7 +660,6 @@ void write_text(std::ostream& out, const Model& model, const SimulateCliOptions&
 
 int run_simulate(const SimulateCliOptions& opt) {
   const Model model = load(opt.file, opt.sets);
-  warn_friction_not_applied(model, "simulate");
   const UnitSystem system = resolve_units(model, opt.units);
   SimulateOptions so = simulate_options(model, opt);
   SimulateUnits U(model, reaction_components(model), system);

@@ -6,6 +6,7 @@
 #include <Eigen/Cholesky>
 #include <string>
 
+#include "orthomech/analysis/friction.hpp"
 #include "orthomech/analysis/reactions.hpp"
 #include "orthomech/constraints/joints.hpp"
 #include "orthomech/constraints/sparse_et.hpp"
@@ -78,7 +79,8 @@ class Dynamics {
         Qnc_(VecX::Zero(model.n)),
         lambda_(VecX::Zero(model.nc)),
         dq_(VecX::Zero(model.n)),
-        chart_q_(VecX::Zero(model.nq)) {
+        chart_q_(VecX::Zero(model.nq)),
+        pins_(friction_pins(model)) {
     v_stage_.resize(na_);
   }
 
@@ -97,7 +99,8 @@ class Dynamics {
   // defines it (free_system.hpp): Q_ncᵀ u − dissipated power for bodies.
   double nonconservative_power() {
     return orthomech::free_system(model_).nonconservative_power(model_, state_, ws_.free.Q,
-                                                                ws_.free.Mdot, Qnc_);
+                                                                ws_.free.Mdot, Qnc_) +
+           friction_power_;
   }
 
   // λ (size nc): λ_R = (E_RD)⁻¹ c_D on the chart's rows, 0 on the others: the unique λ of
@@ -222,6 +225,7 @@ class Dynamics {
     vdot_ = H_llt_.solve(rhs_);  // H v̇ = Fᵀ (Q̂ − Ṁ u − M Ḟ v)
     udot_ = Fdv_;
     udot_.noalias() += F_ * vdot_;
+    if (friction_on()) friction_dual();
   }
 
   // Primal form at (t, q, p), Theorem 7. Expanding αᵀ = I − π A, Ω = E G⁻¹ Dᵀ and
@@ -268,8 +272,94 @@ class Dynamics {
     b_ += ws_.constraints.Dtu;
     solve_G(b_, lambda_);
     lambda_ = -lambda_;  // (L3)
+    if (friction_on()) friction_primal();
     pdot_ = ws_.free.Q;
     pdot_.noalias() += E.transpose() * lambda_;  // eq. (99) as (L3)
+  }
+
+  // ---- Pin friction (analysis/friction.hpp; issue 49 item 3) --------------------------------
+  // With pin_sign_ set (per friction pin, the sign of its relative rate, held between the
+  // events where it changes), each evaluation adds the pins' Coulomb moments μ r |F| against
+  // their relative rotation, F from the multipliers the moments change: a fixed point from the
+  // frictionless multipliers, as cycle's (at most kFrictionIterations passes, until λ moves by
+  // less than kFrictionTolerance of its size). Q̂ then includes the moments (the samples'
+  // reactions do too) and friction_power_ is their power (≤ 0), part of nonconservative_power.
+  [[nodiscard]] bool friction_on() {
+    friction_power_ = 0.0;
+    return !pins_.empty() && pin_sign_.size() == pins_.size();
+  }
+  // Q_f(λ) into Qf_.
+  void friction_loads(const VecX& lambda) {
+    Qf_.setZero(n_);
+    for (size_t j = 0; j < pins_.size(); ++j) {
+      const FrictionPin& p = pins_[j];
+      const double t = p.coefficient * p.radius * lambda.segment<2>(p.row).norm() * pin_sign_[j];
+      if (p.u_second >= 0) Qf_(p.u_second) -= t;
+      if (p.u_first >= 0) Qf_(p.u_first) += t;
+    }
+  }
+  [[nodiscard]] bool friction_settled() const {
+    const double size = lambda_.cwiseAbs().maxCoeff();
+    return (lambda_ - lambda_prev_).cwiseAbs().maxCoeff() <= kFrictionTolerance * size;
+  }
+  // The dual form's multipliers from u̇: E λ = M u̇ + Ṁ u − Q̂ (minimum norm when redundant).
+  void dual_multipliers() {
+    if (ws_.free.diagonal_mass)
+      R_ = ws_.free.M_diag.cwiseProduct(udot_) - ws_.free.Q;
+    else
+      R_ = ws_.free.M * udot_ - ws_.free.Q;
+    if (!ws_.free.constant_mass) R_.noalias() += ws_.free.Mdot * state_.u;
+    if (r_ == nc_) {
+      solve_transposed(R_, lambda_);
+    } else {
+      ws_.constraints.Et.to_dense(Et_dense_);
+      compute_multipliers(Et_dense_, R_, lambda_);
+    }
+  }
+  void friction_dual() {
+    Q0_ = ws_.free.Q;
+    dual_multipliers();
+    for (int it = 0; it < kFrictionIterations; ++it) {
+      friction_loads(lambda_);
+      ws_.free.Q = Q0_ + Qf_;
+      tmp_ = ws_.free.Q;
+      if (!ws_.free.constant_mass) tmp_.noalias() -= ws_.free.Mdot * state_.u;
+      if (ws_.free.diagonal_mass)
+        tmp_ -= ws_.free.M_diag.cwiseProduct(Fdv_);
+      else
+        tmp_.noalias() -= ws_.free.M * Fdv_;
+      rhs_.noalias() = F_.transpose() * tmp_;
+      vdot_ = H_llt_.solve(rhs_);
+      udot_ = Fdv_;
+      udot_.noalias() += F_ * vdot_;
+      lambda_prev_ = lambda_;
+      dual_multipliers();
+      if (friction_settled()) break;
+    }
+    friction_power_ = Qf_.dot(state_.u);
+  }
+  void friction_primal() {
+    const SparseEt::Matrix& E = ws_.constraints.Et.matrix();  // Eᵀ
+    Q0_ = ws_.free.Q;
+    for (int it = 0; it < kFrictionIterations; ++it) {
+      friction_loads(lambda_);
+      ws_.free.Q = Q0_ + Qf_;
+      tmp_ = ws_.free.Q;
+      if (!ws_.free.constant_mass) tmp_.noalias() -= ws_.free.Mdot * state_.u;
+      if (ws_.free.diagonal_mass) {
+        tmp_.array() *= ws_.free.A_diag.array();
+        b_.noalias() = E * tmp_;
+      } else {
+        col_.noalias() = ws_.free.A * tmp_;
+        b_.noalias() = E * col_;
+      }
+      b_ += ws_.constraints.Dtu;
+      lambda_prev_ = lambda_;
+      solve_G(b_, lambda_);
+      lambda_ = -lambda_;
+      if (friction_settled()) break;
+    }
+    friction_power_ = Qf_.dot(state_.u);
   }
 
   // G = Eᵀ A E at ws_.constraints.Et: dense Cholesky, or for large diagonal-mass systems formed
@@ -403,6 +493,12 @@ class Dynamics {
   // (the step's acceptance, the stage projection) clears it or sets it anew.
   bool chart_ready_ = false;
   VecX chart_q_;
+  // Pin friction: the model's friction pins, their held signs (empty: no friction applied, as
+  // in crosscheck's probes), the last evaluation's friction power and scratch.
+  std::vector<FrictionPin> pins_;
+  std::vector<double> pin_sign_;
+  double friction_power_ = 0.0;
+  VecX Q0_, Qf_, R_, lambda_prev_;
 };
 
 }  // namespace orthomech::detail

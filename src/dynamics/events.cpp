@@ -8,6 +8,7 @@
 #include <string>
 
 #include "orthomech/analysis/cycle_metrics.hpp"
+#include "orthomech/analysis/friction.hpp"
 #include "orthomech/model/measures.hpp"
 
 namespace orthomech::detail {
@@ -25,9 +26,23 @@ Events::Events(const Model& model, double span)
     values_.push_back({-1, -1, static_cast<int>(j), 1, joint.limits->x()});
     values_.push_back({-1, -1, static_cast<int>(j), -1, joint.limits->y()});
   }
+  const std::vector<FrictionPin> pins = friction_pins(model);
+  for (size_t k = 0; k < pins.size(); ++k) {
+    Value w;
+    w.pin = static_cast<int>(k);
+    w.joint = pins[k].joint;
+    w.u_first = pins[k].u_first;
+    w.u_second = pins[k].u_second;
+    values_.push_back(w);
+  }
+  pin_sign_.assign(pins.size(), 0.0);
   last_.assign(values_.size(), 0.0);
   end_ = lo_ = hi_ = contact_ = last_;
 }
+
+namespace {
+double sign_of(double x) { return x > 0.0 ? 1.0 : x < 0.0 ? -1.0 : 0.0; }
+}  // namespace
 
 size_t Events::stop_index(const StopHit& stop) const {
   for (size_t i = 0; i < values_.size(); ++i)
@@ -73,6 +88,8 @@ void Events::evaluate(const Model& model, const VecX& q, const VecX& u,
     if (w.load >= 0) {
       const Measure& m = model.measures[static_cast<size_t>(w.measure)];
       s[i] = w.sign * compute_scalar(model, m.kind, q, &u).rate;
+    } else if (w.pin >= 0) {
+      s[i] = (w.u_second < 0 ? 0.0 : u(w.u_second)) - (w.u_first < 0 ? 0.0 : u(w.u_first));
     } else if (w.held) {
       s[i] = contact_[i];
     } else {
@@ -83,6 +100,7 @@ void Events::evaluate(const Model& model, const VecX& q, const VecX& u,
 
 bool Events::crosses(size_t i, double a, double b) const {
   if (values_[i].load >= 0) return (a > 0.0) != (b > 0.0);
+  if (values_[i].pin >= 0) return sign_of(a) != sign_of(b);
   return a > 0.0 && !(b > 0.0);
 }
 
@@ -90,6 +108,8 @@ void Events::start(const Model& model, const VecX& q, const VecX& u,
                    std::vector<std::uint8_t>& load_on) {
   if (values_.empty()) return;
   evaluate(model, q, u, last_);
+  for (size_t i = 0; i < values_.size(); ++i)
+    if (values_[i].pin >= 0) pin_sign_[static_cast<size_t>(values_[i].pin)] = sign_of(last_[i]);
   if (!loads_switched_) return;
   load_on.assign(model.loads.size(), 1);
   for (size_t i = 0; i < values_.size(); ++i)
@@ -125,11 +145,15 @@ void Events::restored(const Model& model, const VecX& q, const VecX& u) {
 Events::Chatter Events::switch_at(const Model& model, double t, std::vector<std::uint8_t>& load_on,
                                   std::vector<StopHit>& hits, std::string& message) {
   hits.clear();
+  bool pin_switched = false;
   for (size_t i = 0; i < values_.size(); ++i) {
     if (!crosses(i, last_[i], end_[i])) continue;
     const Value& w = values_[i];
     if (w.load >= 0) {
       load_on[static_cast<size_t>(w.load)] = end_[i] > 0.0 ? 1 : 0;
+    } else if (w.pin >= 0) {
+      pin_sign_[static_cast<size_t>(w.pin)] = sign_of(end_[i]);
+      pin_switched = true;
     } else if (w.held) {
       // The contact force reached zero: the joint leaves the stop, just outside it.
       hits.push_back({w.joint, w.sign, true});
@@ -152,13 +176,16 @@ Events::Chatter Events::switch_at(const Model& model, double t, std::vector<std:
   const bool in_run = t - t_last_event_ <= kChatterGap * span_;
   in_a_row_ = in_run ? in_a_row_ + 1 : 1;
   stop_in_run_ = (in_run && stop_in_run_) || impact;
+  pin_in_run_ = (in_run && pin_in_run_) || pin_switched;
   t_last_event_ = t;
   kept_side_ = 0;
   iterations_ = 0;
   if (in_a_row_ < kMaxChatter) return Chatter::none;
   // (Loads switched by the rebounds of a joint coming to rest on its stop chatter with it: the
   // stop's.)
-  const Chatter what = stop_in_run_ ? Chatter::stop : Chatter::loads;
+  const Chatter what = stop_in_run_  ? Chatter::stop
+                       : pin_in_run_ ? Chatter::sticks
+                                     : Chatter::loads;
   message = chatter_message(model, t, what);
   return what;
 }
@@ -169,13 +196,23 @@ std::string Events::chatter_message(const Model& model, double t, Chatter what) 
                 kChatterGap * span_ * kMaxChatter, t);
   std::string names;
   for (const Value& w : values_) {
-    if ((what == Chatter::loads) != (w.load >= 0)) continue;
+    const bool kind = what == Chatter::loads    ? w.load >= 0
+                      : what == Chatter::sticks ? w.pin >= 0
+                                                : (w.load < 0 && w.pin < 0);
+    if (!kind) continue;
     const std::string name = "'" +
                              (w.load >= 0 ? model.loads[static_cast<size_t>(w.load)].name
                                           : model.joints[static_cast<size_t>(w.joint)].name) +
                              "'";
     if (names.find(name) == std::string::npos) names += (names.empty() ? "" : ", ") + name;
   }
+  if (what == Chatter::sticks)
+    return "the friction in joint " + names +
+           " sticks: its relative rate comes back through zero at once after each change of "
+           "sign (" +
+           text +
+           "), the joint held by its static friction; stick-slip is not modelled yet, so the "
+           "motion from here is not determined";
   if (what == Chatter::stop)
     return "joint " + names + " comes to rest against its end stop (impacts at ever shorter " +
            "intervals, " + text +

@@ -65,7 +65,7 @@ class Events {
     locate        // something did within a longer step: undo it and locate the crossing
   };
   // How a chatter ended the run (Events::switch_at).
-  enum class Chatter { none, loads, stop };
+  enum class Chatter { none, loads, stop, sticks };
 
   Events(const Model& model, double span);
 
@@ -103,6 +103,10 @@ class Events {
   void set_held(const std::vector<StopHit>& held);
   // The held stops' contact forces (in held() order) at the state about to be evaluated.
   void set_contact_forces(const std::vector<double>& contact);
+  // The friction pins' signs (analysis/friction.hpp's pins, in order): the sign of each one's
+  // relative rate, held between the events where it changes (the friction moment opposes it).
+  [[nodiscard]] const std::vector<double>& pin_signs() const { return pin_sign_; }
+  void set_pin_signs(const std::vector<double>& signs) { pin_sign_ = signs; }
   // Each switched load on iff its last value is > 0 (the loads' modes after a resting contact
   // begins: a rate held at exactly 0 switches its load off, load_active's rule).
   void modes_from_values(std::vector<std::uint8_t>& load_on) const;
@@ -133,6 +137,8 @@ class Events {
     // exceeds twice it (the joint leaves the stop with zero speed and acceleration: within the
     // margin the distance's rounding would meet the stop again and again).
     double shift = 0.0;
+    int pin = -1;  // friction pin: its index; the value is its relative rate
+    int u_first = -1, u_second = -1;
   };
   [[nodiscard]] size_t stop_index(const StopHit& stop) const;
   void evaluate(const Model& model, const VecX& q, const VecX& u, std::vector<double>& s) const;
@@ -153,7 +159,8 @@ class Events {
   // in that run (then a chatter is the stop's: resting_).
   double t_last_event_ = -1e300;
   int in_a_row_ = 0;
-  bool stop_in_run_ = false;
+  bool stop_in_run_ = false, pin_in_run_ = false;
+  std::vector<double> pin_sign_;
   StopHit resting_;
   std::vector<StopHit> held_;
   std::vector<double> contact_;  // per value: a held stop's contact force

@@ -392,6 +392,7 @@ class Simulation {
     Chart chart;
     std::vector<std::uint8_t> load_on;  // the switched loads' modes (State::load_on)
     std::vector<StopHit> held;          // the stops held as resting contacts (Events::held)
+    std::vector<double> pin_sign;       // the friction pins' held signs (Events::pin_signs)
   };
   // What the events ask of the run after a step (dynamics/events.hpp): nothing, a
   // restart of the integrator at the step's end (loads switched or an impact there), or the
@@ -533,8 +534,10 @@ class Simulation {
     saved_prev_.x = x_;
     saved_prev_.chart = dyn_.cs_.chart();
     events_.start(model_, q_, dyn_.state_.u, dyn_.state_.load_on);
+    dyn_.pin_sign_ = events_.pin_signs();
     saved_prev_.load_on = dyn_.state_.load_on;
     saved_prev_.held = events_.held();
+    saved_prev_.pin_sign = events_.pin_signs();
   }
 
   // ---- The integrator's callbacks -------------------------------------------------------------
@@ -874,8 +877,10 @@ class Simulation {
   bool apply_events(double t, VecX& y) {
     std::string why;
     const std::vector<std::uint8_t> modes_before = dyn_.state_.load_on;  // (an event: rare)
+    const std::vector<double> signs_before = dyn_.pin_sign_;
     const Events::Chatter chatter = events_.switch_at(model_, t, dyn_.state_.load_on, hits_, why);
-    if (chatter == Events::Chatter::loads ||
+    dyn_.pin_sign_ = events_.pin_signs();
+    if (chatter == Events::Chatter::loads || chatter == Events::Chatter::sticks ||
         (chatter == Events::Chatter::stop && !rest_on_stop(t, y))) {
       failure_status_ =
           chatter == Events::Chatter::stop ? SimulateStatus::resting : SimulateStatus::sliding;
@@ -884,6 +889,7 @@ class Simulation {
     }
     ++events_applied_;
     if (dyn_.state_.load_on != modes_before) ++result_.load_switches;
+    if (dyn_.pin_sign_ != signs_before) ++result_.friction_switches;
     if (chatter == Events::Chatter::none)
       for (const StopHit& hit : hits_) {
         if (hit.release)
@@ -894,6 +900,7 @@ class Simulation {
     if (saved_prev_.valid && saved_prev_.t == t) {
       saved_prev_.load_on = dyn_.state_.load_on;
       saved_prev_.held = events_.held();
+      saved_prev_.pin_sign = events_.pin_signs();
       saved_prev_.x = y;
     }
     event_request_ = EventRequest::restart;
@@ -1279,6 +1286,7 @@ class Simulation {
     saved_prev_.x = y;
     saved_prev_.load_on = dyn_.state_.load_on;
     saved_prev_.held = events_.held();
+    saved_prev_.pin_sign = events_.pin_signs();
     saved_prev_.chart = dyn_.cs_.chart();
     if (sigma >= kFarPassQuality && sigma <= kFarPassQualityMax) far_ = saved_prev_;
     monitor_ = {true, t, sigma, rate};
@@ -1866,6 +1874,8 @@ class Simulation {
     dyn_.chart_ready_ = false;
     dyn_.state_.load_on = back.load_on;
     events_.set_held(back.held);
+    events_.set_pin_signs(back.pin_sign);
+    dyn_.pin_sign_ = back.pin_sign;
     while (!result_.contacts.empty() && result_.contacts.back().t_from > t_now_)
       result_.contacts.pop_back();
     for (SimulateResult::StopContact& c : result_.contacts)

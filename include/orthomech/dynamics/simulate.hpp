@@ -188,6 +188,8 @@ struct SimulateResult {
   long uncorrected_steps = 0;  // steps left uncorrected next to a change point
   long rewinds = 0;            // steps undone because they crossed a change point unannounced
   long load_switches = 0;      // events: loads switched on or off by `active_while`
+  // Events: a pin with friction whose relative rate changed sign (its moment reversed).
+  long friction_switches = 0;
   // Events: impacts on end stops (`end_stops`), in time order: the joint, +1 at its lower stop
   // or −1 at its upper one, the speed of its coordinate towards the stop before (> 0) and away
   // from it after (e times it), the kinetic energy lost (J).

@@ -469,7 +469,10 @@ TEST(CycleCli, PinFrictionIsReportedAndFlaggedWhereNotDetermined) {
   const CliResult sim = run_cli({"simulate", bundled("crank-rocker"), "--t-end", "0.01", "--set",
                                  "joints.A0.friction={coefficient: 0.1, radius: 2}"});
   EXPECT_EQ(sim.status, 0) << sim.err;
-  EXPECT_NE(sim.err.find("does not apply joint friction"), std::string::npos) << sim.err;
+  EXPECT_EQ(sim.err.find("does not apply joint friction"), std::string::npos) << sim.err;
+  const CliResult cross = run_cli({"crosscheck", bundled("crank-rocker"), "--t-end", "0.01",
+                                   "--set", "joints.A0.friction={coefficient: 0.1, radius: 2}"});
+  EXPECT_NE(cross.err.find("does not apply joint friction"), std::string::npos) << cross.err;
 }
 
 }  // namespace

@@ -144,5 +144,40 @@ TEST(SimulateCli, KnucklePressFormsAndRestsOnItsCylindersEndStop) {
   EXPECT_NEAR(t_from[0], t_from[1], 1e-6);
 }
 
+TEST(SimulateCli, WiperDriveRunsFreeWithFrictionInEveryPinTheSameInBothForms) {
+  // Issue 49's wiper in free motion: a motor torque falling with speed (4 N*m less a rotary
+  // damper) against the blade's switched drag and Coulomb friction in every pin. The two forms
+  // integrate different equations (dual: v̇ on the chart; primal: the momenta): the same motion,
+  // the same events, the balance held with the pins' dissipation booked.
+  const std::string loads =
+      "loads=[{name: drag_up, type: torque, body: rocker, torque: -1500, active_while: {measure: "
+      "rocker_angle, velocity: positive}}, {name: drag_down, type: torque, body: rocker, torque: "
+      "1500, active_while: {measure: rocker_angle, velocity: negative}}, {name: motor, type: "
+      "torque, body: crank, torque: 4000}, {name: motor_curve, type: rotary-spring-damper, "
+      "bodies: [ground, crank], stiffness: 0, damping: 5}]";
+  nlohmann::json runs[2];
+  int k = 0;
+  for (const char* form : {"dual", "primal"}) {
+    SCOPED_TRACE(form);
+    const auto r =
+        run_cli({"simulate", test::bundled_file("wiper-drive"), "--t-end", "3", "--form", form,
+                 "--rtol", "1e-10", "--atol", "1e-12", "--set", loads, "--json", "-q"});
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(r.err.find("does not apply joint friction"), std::string::npos) << r.err;
+    runs[k] = nlohmann::json::parse(r.out);
+    EXPECT_EQ(runs[k]["status"], "completed");
+    EXPECT_EQ(runs[k]["energy"]["balance"], "held");
+    EXPECT_GT(runs[k]["friction_switches"].get<long>(), 4);
+    ++k;
+  }
+  EXPECT_EQ(runs[0]["friction_switches"], runs[1]["friction_switches"]);
+  EXPECT_EQ(runs[0]["load_switches"], runs[1]["load_switches"]);
+  const double crank0 = runs[0]["final"]["measures"]["crank_angle"].get<double>();
+  EXPECT_GT(crank0, 720.0) << "two turns at least";
+  EXPECT_NEAR(runs[1]["final"]["measures"]["crank_angle"].get<double>(), crank0, 1e-5);
+  EXPECT_NEAR(runs[1]["final"]["work"].get<double>(), runs[0]["final"]["work"].get<double>(),
+              1e-6 * std::abs(runs[0]["final"]["work"].get<double>()));
+}
+
 }  // namespace
 }  // namespace orthomech

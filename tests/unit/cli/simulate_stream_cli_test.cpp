@@ -156,6 +156,7 @@ struct Reference {
            {"steps", e.steps}});
     }
     j["load_switches"] = res.load_switches;
+    j["friction_switches"] = res.friction_switches;
     j["impacts"] = json::array();  // (no end stops in the bundled files streamed here)
     j["contacts"] = json::array();
     j["max_residual_length"] = length(res.max_residual_length);

@@ -10,7 +10,9 @@
 //   - a pendulum falling onto an end stop: it meets the stop first at the speed the energy gives,
 //     ½ J_O ω₀² = m g l_c (sin φ₀ − sin φ_s), rebounds at e times its speed, and (no loss in
 //     flight) comes back at the speed it left; the energy lost in all its impacts when it comes to
-//     rest is the whole drop m g l_c (sin φ₀ − sin φ_s).
+//     rest is the whole drop m g l_c (sin φ₀ − sin φ_s);
+//   - a pendulum with Coulomb friction in its pin against its 1-DOF equation written here (the pin
+//     force depends on the acceleration: a fixed point per evaluation, RK4), and where it sticks.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -270,6 +272,99 @@ TEST(SimulateEvents, ElasticEndStopKeepsTheEnergyAndTheSwingWithinTheLimits) {
   EXPECT_NEAR(top, 0.0, 1e-5);  // (a sample within 5e-4 s of the top: ½ φ̈ (5e-4)² < 2e-6)
   EXPECT_GE(bottom, kStop - 1e-8);
   EXPECT_LT(r.energy_max_drift, 1e-8 * r.energy_scale);
+}
+
+}  // namespace
+}  // namespace orthomech
+
+namespace orthomech {
+namespace {
+
+// The pendulum of the tests above with Coulomb friction in its pin (`friction:`, μ r): the
+// oracle is its 1-DOF equation written here, J_O φ̈ = −m g l_c cos φ − μ r |F| sgn φ̇, with the
+// pin force F = m (a_G − g) that depends on φ̈ itself (a_G = l_c (−sin φ φ̈ − cos φ φ̇²,
+// cos φ φ̈ − sin φ φ̇²)), solved by fixed point at each evaluation and integrated by RK4.
+struct FrictionPendulum {
+  double mu_r = 0.0;
+  double phi = 0.0, w = 0.0;
+  [[nodiscard]] double accel(double p, double v) const {
+    const double m = 1.0, l = 0.5, J = 1.0 / 3.0, g = 9.81;
+    double a = -m * g * l * std::cos(p) / J;
+    if (v == 0.0) return a;
+    for (int it = 0; it < 200; ++it) {
+      const double ax = l * (-std::sin(p) * a - std::cos(p) * v * v);
+      const double ay = l * (std::cos(p) * a - std::sin(p) * v * v);
+      const double F = m * std::hypot(ax, ay + g);
+      const double next = (-m * g * l * std::cos(p) - mu_r * F * (v > 0.0 ? 1.0 : -1.0)) / J;
+      const bool done = std::abs(next - a) <= 1e-15 * std::abs(next);
+      a = next;
+      if (done) break;
+    }
+    return a;
+  }
+  void step(double h) {
+    const double k1p = w, k1w = accel(phi, w);
+    const double k2p = w + 0.5 * h * k1w, k2w = accel(phi + 0.5 * h * k1p, w + 0.5 * h * k1w);
+    const double k3p = w + 0.5 * h * k2w, k3w = accel(phi + 0.5 * h * k2p, w + 0.5 * h * k2w);
+    const double k4p = w + h * k3w, k4w = accel(phi + h * k3p, w + h * k3w);
+    phi += h / 6.0 * (k1p + 2 * k2p + 2 * k3p + k4p);
+    w += h / 6.0 * (k1w + 2 * k2w + 2 * k3w + k4w);
+  }
+};
+
+std::string friction_pendulum(double mu, double radius) {
+  return pendulum(", friction: {coefficient: " + std::to_string(mu) +
+                      ", radius: " + std::to_string(radius) + "}",
+                  "");
+}
+
+TEST(SimulateEvents, PinFrictionPendulumFollowsItsOneDofEquation) {
+  const Model model = parse_mechanism(friction_pendulum(0.2, 0.05), "pendulum-test");
+  for (DynamicsForm form : {DynamicsForm::dual, DynamicsForm::primal}) {
+    SCOPED_TRACE(form == DynamicsForm::dual ? "dual" : "primal");
+    const SimulateOptions o = tight(2.0, 0.01, form);
+    const SimulateResult r = simulate(model, o);
+    ASSERT_EQ(r.status, SimulateStatus::completed) << r.message;
+    FrictionPendulum oracle{0.2 * 0.05};
+    const double h = 1e-5;
+    long taken = 0;  // (steps counted, not times summed: a step too many is ω h)
+    double worst = 0.0;
+    for (const SimulationSample& smp : r.samples) {
+      for (const long due = std::lround(smp.t / h); taken < due; ++taken) oracle.step(h);
+      worst = std::max(worst, std::abs(smp.measures[0] - oracle.phi));
+    }
+    EXPECT_LT(worst, 1e-6);
+    // The moment reverses at every turning point (and once at the start, from rest).
+    EXPECT_GE(r.friction_switches, 3);
+    // The pin dissipates: W < 0, and T + V − W stays level.
+    EXPECT_LT(r.final.work, -1e-3);
+    EXPECT_LT(r.energy_max_drift, 1e-8 * r.energy_scale);
+  }
+}
+
+TEST(SimulateEvents, PinFrictionPendulumSticksWhereGravityIsBelowTheStaticMoment) {
+  // μ r = 0.15 m: at rest the pin carries m g, so the friction can hold the pendulum wherever
+  // m g l_c |cos φ| ≤ μ r m g, |cos φ| ≤ 0.3: the first turning point there is where it sticks
+  // (a sliding mode of the reversing moment: the run stops, status sliding).
+  const Model model = parse_mechanism(friction_pendulum(0.5, 0.3), "pendulum-test");
+  FrictionPendulum oracle{0.15};
+  double turning = 0.0;
+  for (int steps = 0; steps < 1000000; ++steps) {
+    const double w0 = oracle.w;
+    oracle.step(1e-5);
+    if (steps > 0 && (w0 > 0.0) != (oracle.w > 0.0) && std::abs(std::cos(oracle.phi)) <= 0.3) {
+      turning = oracle.phi;
+      break;
+    }
+  }
+  ASSERT_NE(turning, 0.0);
+  for (DynamicsForm form : {DynamicsForm::dual, DynamicsForm::primal}) {
+    SCOPED_TRACE(form == DynamicsForm::dual ? "dual" : "primal");
+    const SimulateResult r = simulate(model, tight(10.0, 0.01, form));
+    ASSERT_EQ(r.status, SimulateStatus::sliding) << r.message;
+    EXPECT_NE(r.message.find("the friction in joint 'O' sticks"), std::string::npos) << r.message;
+    EXPECT_NEAR(r.final.measures[0], turning, 1e-6);
+  }
 }
 
 }  // namespace
