@@ -539,7 +539,9 @@ nlohmann::json contacts_json(const Model& model, const SimulateResult& res,
   for (const SimulateResult::StopContact& c : res.contacts)
     a.push_back(
         {{"joint", model.joints[static_cast<size_t>(c.joint)].name},
-         {"stop", c.side > 0 ? "lower" : "upper"},
+         {"stop", c.side > 0   ? "lower"
+                  : c.side < 0 ? "upper"
+                               : "stuck"},
          {"t_from", U.time.from_si(c.t_from)},
          {"t_to", std::isnan(c.t_to) ? nlohmann::json() : nlohmann::json(U.time.from_si(c.t_to))}});
   return a;
@@ -629,9 +631,12 @@ void write_text(std::ostream& out, const Model& model, const SimulateCliOptions&
     out << "\n";
   }
   for (const SimulateResult::StopContact& c : res.contacts)
-    out << "resting     joint '" << model.joints[static_cast<size_t>(c.joint)].name << "' on its "
-        << (c.side > 0 ? "lower" : "upper") << " stop from t = " << g(U.time.from_si(c.t_from), 9)
-        << " " << U.time.name
+    out << (c.side == 0 ? "stuck       joint '" : "resting     joint '")
+        << model.joints[static_cast<size_t>(c.joint)].name
+        << (c.side > 0   ? "' on its lower stop"
+            : c.side < 0 ? "' on its upper stop"
+                         : "' by its pin friction")
+        << " from t = " << g(U.time.from_si(c.t_from), 9) << " " << U.time.name
         << (std::isnan(c.t_to) ? std::string(" to the end")
                                : " to " + g(U.time.from_si(c.t_to), 9) + " " + U.time.name)
         << "\n";

@@ -45,6 +45,11 @@ double sign_of(double x) { return x > 0.0 ? 1.0 : x < 0.0 ? -1.0 : 0.0; }
 }  // namespace
 
 size_t Events::stop_index(const StopHit& stop) const {
+  if (stop.pin >= 0) {
+    for (size_t i = 0; i < values_.size(); ++i)
+      if (values_[i].pin == stop.pin) return i;
+    throw std::logic_error("Events: no friction pin " + std::to_string(stop.pin));
+  }
   for (size_t i = 0; i < values_.size(); ++i)
     if (values_[i].joint == stop.joint && values_[i].sign == stop.side) return i;
   throw std::logic_error("Events: joint " + std::to_string(stop.joint) + " has no such end stop");
@@ -56,7 +61,8 @@ void Events::hold(const StopHit& stop, double contact) {
   values_[i].shift = 0.0;
   contact_[i] = contact;
   last_[i] = contact;
-  held_.push_back({stop.joint, stop.side, false});
+  held_.push_back({stop.joint, stop.side, false, stop.pin});
+  if (stop.pin >= 0) pin_sign_[static_cast<size_t>(stop.pin)] = 0.0;  // stuck: no kinetic friction
   in_a_row_ = 0;
   stop_in_run_ = false;
 }
@@ -66,7 +72,7 @@ void Events::set_held(const std::vector<StopHit>& held) {
   held_.clear();
   for (const StopHit& h : held) {
     values_[stop_index(h)].held = true;
-    held_.push_back({h.joint, h.side, false});
+    held_.push_back({h.joint, h.side, false, h.pin});
   }
 }
 
@@ -88,7 +94,7 @@ void Events::evaluate(const Model& model, const VecX& q, const VecX& u,
     if (w.load >= 0) {
       const Measure& m = model.measures[static_cast<size_t>(w.measure)];
       s[i] = w.sign * compute_scalar(model, m.kind, q, &u).rate;
-    } else if (w.pin >= 0) {
+    } else if (w.pin >= 0 && !w.held) {
       s[i] = (w.u_second < 0 ? 0.0 : u(w.u_second)) - (w.u_first < 0 ? 0.0 : u(w.u_first));
     } else if (w.held) {
       s[i] = contact_[i];
@@ -100,7 +106,7 @@ void Events::evaluate(const Model& model, const VecX& q, const VecX& u,
 
 bool Events::crosses(size_t i, double a, double b) const {
   if (values_[i].load >= 0) return (a > 0.0) != (b > 0.0);
-  if (values_[i].pin >= 0) return sign_of(a) != sign_of(b);
+  if (values_[i].pin >= 0 && !values_[i].held) return sign_of(a) != sign_of(b);
   return a > 0.0 && !(b > 0.0);
 }
 
@@ -151,16 +157,24 @@ Events::Chatter Events::switch_at(const Model& model, double t, std::vector<std:
     const Value& w = values_[i];
     if (w.load >= 0) {
       load_on[static_cast<size_t>(w.load)] = end_[i] > 0.0 ? 1 : 0;
+    } else if (w.pin >= 0 && w.held) {
+      // Its static friction no longer holds it: it slips (the Simulation sets its sign).
+      hits.push_back({w.joint, 1, true, w.pin});
+      values_[i].held = false;
+      std::erase_if(held_, [&](const StopHit& h) { return h.pin == w.pin; });
+      end_[i] = 0.0;
     } else if (w.pin >= 0) {
       pin_sign_[static_cast<size_t>(w.pin)] = sign_of(end_[i]);
       pin_switched = true;
+      sticking_ = {w.joint, 1, false, w.pin};
     } else if (w.held) {
       // The contact force reached zero: the joint leaves the stop, just outside it.
       hits.push_back({w.joint, w.sign, true});
       values_[i].held = false;
       values_[i].shift = kReleaseMargin;
-      std::erase_if(held_,
-                    [&](const StopHit& h) { return h.joint == w.joint && h.side == w.sign; });
+      std::erase_if(held_, [&](const StopHit& h) {
+        return h.pin < 0 && h.joint == w.joint && h.side == w.sign;
+      });
       end_[i] = kReleaseMargin;
     } else {
       hits.push_back({w.joint, w.sign, false});

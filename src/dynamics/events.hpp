@@ -54,6 +54,10 @@ struct StopHit {
   int joint = -1;
   int side = 0;
   bool release = false;
+  // A friction pin held stuck (its index among the model's friction pins; side +1): its joint's
+  // relative angle held like a stop's coordinate, while the moment that takes stays inside the
+  // static bound μ r |F|.
+  int pin = -1;
 };
 
 class Events {
@@ -95,6 +99,11 @@ class Events {
   // from above (switch_at lists it with `release`).
   // The stop that chattered (the last one hit in the run of events that ended in Chatter::stop).
   [[nodiscard]] StopHit resting_stop() const { return resting_; }
+  // The pin that chattered (the last one reversed in the run of events that ended in
+  // Chatter::sticks), as a hold: {joint, +1, false, pin}. A held pin's switching value is the
+  // margin of its static friction, μ r |F| − |μ| (the Simulation computes it), and it is
+  // released (switch_at lists it with `release`) when that reaches zero.
+  [[nodiscard]] StopHit sticking_pin() const { return sticking_; }
   // Holds `stop` from here, its contact force `contact` (> 0); the chatter count starts again.
   void hold(const StopHit& stop, double contact);
   [[nodiscard]] bool holding() const { return !held_.empty(); }
@@ -161,7 +170,7 @@ class Events {
   int in_a_row_ = 0;
   bool stop_in_run_ = false, pin_in_run_ = false;
   std::vector<double> pin_sign_;
-  StopHit resting_;
+  StopHit resting_, sticking_;
   std::vector<StopHit> held_;
   std::vector<double> contact_;  // per value: a held stop's contact force
 };

@@ -531,10 +531,12 @@ class Simulation {
     saved_prev_.sigma = primal_ ? primal_quality_rate(T0_, dyn_.state_.u, saved_prev_.rate)
                                 : chart_quality_rate(q_, dyn_.state_.u, saved_prev_.rate);
     saved_prev_.spread = primal_ ? 0.0 : dyn_.chart_spread();
-    saved_prev_.x = x_;
     saved_prev_.chart = dyn_.cs_.chart();
     events_.start(model_, q_, dyn_.state_.u, dyn_.state_.load_on);
     dyn_.pin_sign_ = events_.pin_signs();
+    for (size_t j = 0; j < dyn_.pin_sign_.size(); ++j)  // a pin at rest: stuck if it can be
+      if (dyn_.pin_sign_[j] == 0.0) (void)stick_pin(T0_, x_, pin_hold(j));
+    saved_prev_.x = x_;
     saved_prev_.load_on = dyn_.state_.load_on;
     saved_prev_.held = events_.held();
     saved_prev_.pin_sign = events_.pin_signs();
@@ -565,9 +567,24 @@ class Simulation {
 
   // The held stops' contact forces at the state (t, y) (an evaluation there): their switching
   // values (dynamics/events.hpp).
+  // A stop's value is its contact force; a stuck pin's the margin of its static friction,
+  // μ r |F| − |μ| (F from the multipliers with the holding moments).
   void contact_forces_at(double t, const VecX& y) {
     rhs(y, contact_dy_, t);
-    events_.set_contact_forces(contact_mu_);
+    const std::vector<StopHit>& held = events_.held();
+    contact_value_ = contact_mu_;
+    bool pins = false;
+    for (const StopHit& h : held) pins = pins || h.pin >= 0;
+    if (pins) {
+      if (!primal_) dyn_.dual_multipliers();  // (Q̂ and u̇ include the holding moments)
+      for (size_t k = 0; k < held.size(); ++k) {
+        if (held[k].pin < 0) continue;
+        const FrictionPin& p = dyn_.pins_[static_cast<size_t>(held[k].pin)];
+        contact_value_[k] = p.coefficient * p.radius * dyn_.lambda_.segment<2>(p.row).norm() -
+                            std::abs(contact_mu_[k]);
+      }
+    }
+    events_.set_contact_forces(contact_value_);
   }
 
   // With projected stages the right-hand side depends on q through the chart's independent
@@ -878,9 +895,12 @@ class Simulation {
     std::string why;
     const std::vector<std::uint8_t> modes_before = dyn_.state_.load_on;  // (an event: rare)
     const std::vector<double> signs_before = dyn_.pin_sign_;
+    const std::vector<StopHit> held_before = events_.held();
+    const std::vector<double> mu_before = contact_mu_;
     const Events::Chatter chatter = events_.switch_at(model_, t, dyn_.state_.load_on, hits_, why);
     dyn_.pin_sign_ = events_.pin_signs();
-    if (chatter == Events::Chatter::loads || chatter == Events::Chatter::sticks ||
+    if (chatter == Events::Chatter::loads ||
+        (chatter == Events::Chatter::sticks && !stick_pin(t, y, events_.sticking_pin())) ||
         (chatter == Events::Chatter::stop && !rest_on_stop(t, y))) {
       failure_status_ =
           chatter == Events::Chatter::stop ? SimulateStatus::resting : SimulateStatus::sliding;
@@ -890,9 +910,15 @@ class Simulation {
     ++events_applied_;
     if (dyn_.state_.load_on != modes_before) ++result_.load_switches;
     if (dyn_.pin_sign_ != signs_before) ++result_.friction_switches;
+    // A pin whose rate passed through zero sticks there if its static friction can hold it.
+    for (size_t j = 0; j < signs_before.size() && j < dyn_.pin_sign_.size(); ++j)
+      if (dyn_.pin_sign_[j] != signs_before[j] && dyn_.pin_sign_[j] != 0.0)
+        (void)stick_pin(t, y, pin_hold(j));
     if (chatter == Events::Chatter::none)
       for (const StopHit& hit : hits_) {
-        if (hit.release)
+        if (hit.release && hit.pin >= 0)
+          slip_pin(t, hit, held_before, mu_before);
+        else if (hit.release)
           end_contact(t, hit);
         else
           impact(t, hit, y);
@@ -938,6 +964,54 @@ class Simulation {
     return true;
   }
 
+  // A pin whose friction reverses at ever shorter intervals (its rate comes back through zero at
+  // once) is stuck: held at zero relative rate (its rate taken away, a plastic projection with
+  // its loss booked) by a moment μ that its static friction bounds, |μ| ≤ μ r |F|. False when
+  // the friction cannot hold it at all (the run stops, status sliding).
+  bool stick_pin(double t, VecX& y, const StopHit& pin) {
+    const VecX y_before = y, u_before = dyn_.state_.u;
+    const std::vector<StopHit> held_before = events_.held();
+    const std::vector<double> signs_before = events_.pin_signs();
+    impact(t, pin, y, Approach::stick);
+    events_.hold(pin, 1.0);
+    dyn_.pin_sign_ = events_.pin_signs();
+    if (static_cast<int>(events_.held().size()) == na_) {  // locked: at rest exactly
+      y.segment(nq_, primal_ ? n_ : na_).setZero();
+      dyn_.state_.u.setZero();
+    }
+    contact_forces_at(t, y);
+    if (!(contact_value_.back() > 0.0)) {  // it cannot hold: as it was
+      y = y_before;
+      dyn_.state_.u = u_before;
+      events_.set_held(held_before);
+      events_.set_pin_signs(signs_before);
+      dyn_.pin_sign_ = signs_before;
+      if (events_.holding()) contact_forces_at(t, y);
+      return false;
+    }
+    events_.restored(model_, q_, dyn_.state_.u);
+    result_.contacts.push_back({t, std::numeric_limits<double>::quiet_NaN(), pin.joint, 0});
+    return true;
+  }
+
+  // The hold of friction pin j (Events: a stuck pin, side +1).
+  [[nodiscard]] StopHit pin_hold(size_t j) const {
+    return {dyn_.pins_[j].joint, 1, false, static_cast<int>(j)};
+  }
+
+  // A stuck pin whose holding moment reached its static bound slips, away from that moment
+  // (its kinetic friction then opposes the slip).
+  void slip_pin(double t, const StopHit& hit, const std::vector<StopHit>& held_before,
+                const std::vector<double>& mu_before) {
+    std::vector<double> signs = events_.pin_signs();
+    for (size_t k = 0; k < held_before.size() && k < mu_before.size(); ++k)
+      if (held_before[k].pin == hit.pin)
+        signs[static_cast<size_t>(hit.pin)] = mu_before[k] > 0.0 ? -1.0 : 1.0;
+    events_.set_pin_signs(signs);
+    dyn_.pin_sign_ = signs;
+    end_contact(t, {hit.joint, 0});
+  }
+
   // A held stop released at t (its contact force reached zero).
   void end_contact(double t, const StopHit& hit) {
     // (At most one contact of a stop is open: the first open one is the last.)
@@ -951,7 +1025,9 @@ class Simulation {
   //   v⁺ = v⁻ − (1 + e) (cᵀv⁻)/(cᵀH⁻¹c) H⁻¹c,  ΔT = ½ (1 − e²) (cᵀv⁻)²/(cᵀH⁻¹c),
   // the loss booked as work of the non-conservative forces (W), so T + V − W stays level.
   // Nothing happens when the joint already moves away from the stop (ġ⁻ ≥ 0).
-  enum class Approach { towards, either_way };
+  // towards: an impact (recorded); either_way: the plastic one where a resting contact begins
+  // (recorded); stick: a pin's relative rate taken away where it sticks (its loss booked only).
+  enum class Approach { towards, either_way, stick };
   void impact(double t, const StopHit& hit, VecX& y, Approach when = Approach::towards) {
     const Joint& joint = model_.joints[static_cast<size_t>(hit.joint)];
     const double e = when == Approach::towards ? *joint.stop_restitution : 0.0;
@@ -975,7 +1051,8 @@ class Simulation {
       dyn_.momentum_from_velocity(y.segment(nq_, n_));
     else
       y.segment(nq_, na_) = v_after;
-    result_.impacts.push_back({t, hit.joint, hit.side, -approach, stop_c_.dot(v_after), loss});
+    if (when != Approach::stick)
+      result_.impacts.push_back({t, hit.joint, hit.side, -approach, stop_c_.dot(v_after), loss});
   }
 
   // Joints outside their `limits:` at q (SimulateResult::limits_left): every corrected step end
@@ -2107,10 +2184,11 @@ class Simulation {
   Events events_;
   std::vector<StopHit> hits_;
   StopContacts contacts_;
-  std::vector<double> contact_mu_;  // the held stops' contact forces at the last evaluation
-  VecX contact_dy_;                 // contact_forces_at's evaluation
-  long events_applied_ = 0;         // the stops met at an event
-  VecX stop_d_, stop_c_, stop_Hc_;  // an impact's gradient d, c = σ Fᵀ dᵀ, H⁻¹ c
+  std::vector<double> contact_mu_;     // the held stops' contact forces at the last evaluation
+  std::vector<double> contact_value_;  // their switching values (contact_forces_at)
+  VecX contact_dy_;                    // contact_forces_at's evaluation
+  long events_applied_ = 0;            // the stops met at an event
+  VecX stop_d_, stop_c_, stop_Hc_;     // an impact's gradient d, c = σ Fᵀ dᵀ, H⁻¹ c
   EventRequest event_request_ = EventRequest::none;
   // chart_quality_rate's work space.
   VecX sigma_left_, rate_x_, rate_plus_, rate_minus_;

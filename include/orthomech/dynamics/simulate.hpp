@@ -201,7 +201,9 @@ struct SimulateResult {
   std::vector<StopImpact> impacts;
   // Resting contacts: a joint that came to rest against its end stop (impacts at ever shorter
   // intervals) held there as a constraint, from `t_from` until its contact force would pull
-  // (`t_to`; NaN when it still rests at the run's end); the stop's side as in StopImpact.
+  // (`t_to`; NaN when it still rests at the run's end); the stop's side as in StopImpact, or 0
+  // for a pin stuck by its friction (held at zero relative rate until the moment it needs
+  // reaches μ r |F|).
   struct StopContact {
     double t_from = 0.0, t_to = 0.0;
     int joint = -1, side = 0;

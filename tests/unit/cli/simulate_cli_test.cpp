@@ -181,3 +181,33 @@ TEST(SimulateCli, WiperDriveRunsFreeWithFrictionInEveryPinTheSameInBothForms) {
 
 }  // namespace
 }  // namespace orthomech
+
+namespace orthomech {
+namespace {
+
+TEST(SimulateCli, APinStuckByItsFrictionIsListedAndPrinted) {
+  // The pendulum of tests/data/reliability with its switched torques replaced by friction in its
+  // pin, enough to hold it near the bottom: it sticks at a turning point and stays stuck.
+  const std::vector<std::string> args = {
+      "simulate", test::source_path("tests/data/reliability/coulomb-pendulum.yaml"),
+      "--t-end",  "10",
+      "--set",    "loads=[{name: weight, type: gravity}]",
+      "--set",    "joints.O.friction={coefficient: 0.5, radius: 0.3}"};
+  std::vector<std::string> json_args = args;
+  json_args.insert(json_args.end(), {"--json", "-q"});
+  const auto r = run_cli(json_args);
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["status"], "completed");
+  ASSERT_EQ(j["contacts"].size(), 1u) << j["contacts"];
+  EXPECT_EQ(j["contacts"][0]["joint"], "O");
+  EXPECT_EQ(j["contacts"][0]["stop"], "stuck");
+  EXPECT_TRUE(j["contacts"][0]["t_to"].is_null());
+  const auto text = run_cli(args);
+  ASSERT_EQ(text.status, 0) << text.err;
+  EXPECT_NE(text.out.find("stuck       joint 'O' by its pin friction from t = "), std::string::npos)
+      << text.out.substr(0, 800);
+}
+
+}  // namespace
+}  // namespace orthomech

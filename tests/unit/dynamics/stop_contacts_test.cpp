@@ -134,5 +134,88 @@ TEST(StopContacts, AnArmRestsOnItsStopUntilTheWhirlingLinkLiftsIt) {
   }
 }
 
+// The same arm, shorter (0.1 m), without stops but with Coulomb friction in its pin O
+// (μ r = 0.1 m): released at rest, it sticks at once (its friction can hold it) and stays stuck
+// while the moment that holds it stays within μ r |F_O|. The arm static, the moments about O
+// balance as above, μ = m₁ g l₁/2 + l₁ m₂ (g + a_Gy), and the pin carries
+// F_O = (m₂ a_Gx, (m₁ + m₂) g + m₂ a_Gy): it slips where |μ| reaches μ r |F_O|.
+const char* const kArmOnItsFriction = R"(orthomech: 1
+name: arm-on-its-friction
+units: {length: m, angle: rad, mass: kg, time: s, force: N}
+ground:
+  points: {O: [0, 0]}
+bodies:
+  - {name: arm, mass: 1, inertia: 0.000833333333333333, com: [0.05, 0], pose: [0, 0, 0], points: {O: [0, 0], A: [0.1, 0]}}
+  - {name: link, mass: 1, inertia: 0.0833333333333333, com: [0.5, 0], pose: [0.1, 0, -1.5707963267948966], points: {A: [0, 0]}}
+joints:
+  - {name: O, type: revolute, connects: [ground.O, arm.O], friction: {coefficient: 0.5, radius: 0.2}}
+  - {name: A, type: revolute, connects: [arm.A, link.A]}
+loads:
+  - {name: weight, type: gravity, g: [0, -9.81]}
+measures:
+  - {name: arm_angle, type: joint, joint: O}
+  - {name: link_angle, type: angle, body: link}
+initial:
+  rates: {arm_angle: 0, link_angle: 12}
+)";
+
+// μ r |F_O| − |μ| while the arm is stuck.
+double friction_margin(const Link& s) {
+  const double a = Link::accel(s.theta);
+  const double a_gx = 0.5 * (-std::sin(s.theta) * a - std::cos(s.theta) * s.omega * s.omega);
+  const double a_gy = 0.5 * (std::cos(s.theta) * a - std::sin(s.theta) * s.omega * s.omega);
+  const double mu = kG * 0.1 / 2.0 + 0.1 * (kG + a_gy);
+  return 0.1 * std::hypot(a_gx, 2.0 * kG + a_gy) - std::abs(mu);
+}
+
+double slip_time() {
+  Link s;
+  const double h = 1e-5;
+  double t = 0.0;
+  while (true) {
+    Link next = s;
+    next.step(h);
+    if (friction_margin(next) <= 0.0) break;
+    s = next;
+    t += h;
+  }
+  double lo = 0.0, hi = h;
+  for (int it = 0; it < 60; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    Link m = s;
+    m.step(mid);
+    (friction_margin(m) > 0.0 ? lo : hi) = mid;
+  }
+  return t + 0.5 * (lo + hi);
+}
+
+TEST(StopContacts, AnArmStuckByItsPinFrictionSlipsWhereTheMomentReachesTheStaticBound) {
+  const Model model = parse_mechanism(kArmOnItsFriction, "arm-on-its-friction");
+  const double t_slip = slip_time();
+  ASSERT_GT(t_slip, 0.1);
+  ASSERT_LT(t_slip, 0.5);
+  for (DynamicsForm form : {DynamicsForm::dual, DynamicsForm::primal}) {
+    SCOPED_TRACE(form == DynamicsForm::dual ? "dual" : "primal");
+    SimulateOptions o;
+    o.form = form;
+    o.t_end = 0.4;
+    o.dt_out = 1e-3;
+    o.rtol = 1e-10;
+    o.atol = 1e-12;
+    const SimulateResult r = simulate(model, o);
+    ASSERT_EQ(r.status, SimulateStatus::completed) << r.message;
+    ASSERT_GE(r.contacts.size(), 1u);
+    const SimulateResult::StopContact& c = r.contacts[0];
+    EXPECT_EQ(c.side, 0) << "stuck by its friction";
+    EXPECT_LT(c.t_from, 1e-5) << "it sticks at once";
+    EXPECT_NEAR(c.t_to, t_slip, 1e-7) << "it slips where the moment reaches the bound";
+    for (const SimulationSample& smp : r.samples)
+      if (smp.t > c.t_from && smp.t < c.t_to) {
+        EXPECT_NEAR(smp.measures[0], 0.0, 1e-9) << smp.t;
+      }
+    EXPECT_LT(r.energy_max_drift, 1e-8 * r.energy_scale);
+  }
+}
+
 }  // namespace
 }  // namespace orthomech
