@@ -910,9 +910,10 @@ class Simulation {
     ++events_applied_;
     if (dyn_.state_.load_on != modes_before) ++result_.load_switches;
     if (dyn_.pin_sign_ != signs_before) ++result_.friction_switches;
-    // A pin whose rate passed through zero sticks there if its static friction can hold it.
+    // A sliding pin whose rate passed through zero sticks there if its static friction can hold
+    // it (not one that has just slipped, signs_before 0: its margin is spent).
     for (size_t j = 0; j < signs_before.size() && j < dyn_.pin_sign_.size(); ++j)
-      if (dyn_.pin_sign_[j] != signs_before[j] && dyn_.pin_sign_[j] != 0.0)
+      if (signs_before[j] != 0.0 && dyn_.pin_sign_[j] != signs_before[j])
         (void)stick_pin(t, y, pin_hold(j));
     if (chatter == Events::Chatter::none)
       for (const StopHit& hit : hits_) {
