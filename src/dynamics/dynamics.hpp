@@ -215,6 +215,12 @@ class Dynamics {
     // 3. Free system, H (eq. (68)) and v̇.
     free_system();
     compute_H();
+    dual_accelerations();
+    if (friction_on()) friction_dual();
+  }
+
+  // v̇ from H v̇ = Fᵀ (Q̂ − Ṁ u − M Ḟ v) and u̇ = F v̇ + Ḟ v, with H, F, Ḟ v and Q̂ at hand.
+  void dual_accelerations() {
     tmp_ = ws_.free.Q;
     if (!ws_.free.constant_mass) tmp_.noalias() -= ws_.free.Mdot * state_.u;
     if (ws_.free.diagonal_mass)
@@ -225,7 +231,6 @@ class Dynamics {
     vdot_ = H_llt_.solve(rhs_);  // H v̇ = Fᵀ (Q̂ − Ṁ u − M Ḟ v)
     udot_ = Fdv_;
     udot_.noalias() += F_ * vdot_;
-    if (friction_on()) friction_dual();
   }
 
   // Primal form at (t, q, p), Theorem 7. Expanding αᵀ = I − π A, Ω = E G⁻¹ Dᵀ and
@@ -258,11 +263,19 @@ class Dynamics {
       compute_constraint_rate(model_, state_, ws_.constraints.poses, ws_.constraints.Dtu);
     }
     free_system();
+    factor_G();
+    primal_multipliers();
+    if (friction_on()) friction_primal();
+    pdot_ = ws_.free.Q;
+    pdot_.noalias() += ws_.constraints.Et.matrix().transpose() * lambda_;  // eq. (99) as (L3)
+  }
+
+  // (L3)'s λ = −G⁻¹ (Eᵀ A (Q̂ − Ṁ u) + Dᵀ u), with G factorised and Q̂, Dᵀu at hand.
+  void primal_multipliers() {
+    const SparseEt::Matrix& E = ws_.constraints.Et.matrix();  // Eᵀ
     tmp_ = ws_.free.Q;
     if (!ws_.free.constant_mass) tmp_.noalias() -= ws_.free.Mdot * state_.u;
-    factor_G();
-    const SparseEt::Matrix& E = ws_.constraints.Et.matrix();  // Eᵀ
-    if (ws_.free.diagonal_mass) {                             // A = diag(A_diag)
+    if (ws_.free.diagonal_mass) {  // A = diag(A_diag)
       tmp_.array() *= ws_.free.A_diag.array();
       b_.noalias() = E * tmp_;
     } else {
@@ -272,9 +285,6 @@ class Dynamics {
     b_ += ws_.constraints.Dtu;
     solve_G(b_, lambda_);
     lambda_ = -lambda_;  // (L3)
-    if (friction_on()) friction_primal();
-    pdot_ = ws_.free.Q;
-    pdot_.noalias() += E.transpose() * lambda_;  // eq. (99) as (L3)
   }
 
   // ---- Pin friction (analysis/friction.hpp; issue 49 item 3) --------------------------------
@@ -311,7 +321,7 @@ class Dynamics {
     if (!ws_.free.constant_mass) R_.noalias() += ws_.free.Mdot * state_.u;
     if (r_ == nc_) {
       solve_transposed(R_, lambda_);
-    } else {
+    } else {  // minimum-norm (redundant): on the dense Eᵀ (a small mechanism's)
       ws_.constraints.Et.to_dense(Et_dense_);
       compute_multipliers(Et_dense_, R_, lambda_);
     }
@@ -322,16 +332,7 @@ class Dynamics {
     for (int it = 0; it < kFrictionIterations; ++it) {
       friction_loads(lambda_);
       ws_.free.Q = Q0_ + Qf_;
-      tmp_ = ws_.free.Q;
-      if (!ws_.free.constant_mass) tmp_.noalias() -= ws_.free.Mdot * state_.u;
-      if (ws_.free.diagonal_mass)
-        tmp_ -= ws_.free.M_diag.cwiseProduct(Fdv_);
-      else
-        tmp_.noalias() -= ws_.free.M * Fdv_;
-      rhs_.noalias() = F_.transpose() * tmp_;
-      vdot_ = H_llt_.solve(rhs_);
-      udot_ = Fdv_;
-      udot_.noalias() += F_ * vdot_;
+      dual_accelerations();
       lambda_prev_ = lambda_;
       dual_multipliers();
       if (friction_settled()) break;
@@ -339,24 +340,12 @@ class Dynamics {
     friction_power_ = Qf_.dot(state_.u);
   }
   void friction_primal() {
-    const SparseEt::Matrix& E = ws_.constraints.Et.matrix();  // Eᵀ
     Q0_ = ws_.free.Q;
     for (int it = 0; it < kFrictionIterations; ++it) {
       friction_loads(lambda_);
       ws_.free.Q = Q0_ + Qf_;
-      tmp_ = ws_.free.Q;
-      if (!ws_.free.constant_mass) tmp_.noalias() -= ws_.free.Mdot * state_.u;
-      if (ws_.free.diagonal_mass) {
-        tmp_.array() *= ws_.free.A_diag.array();
-        b_.noalias() = E * tmp_;
-      } else {
-        col_.noalias() = ws_.free.A * tmp_;
-        b_.noalias() = E * col_;
-      }
-      b_ += ws_.constraints.Dtu;
       lambda_prev_ = lambda_;
-      solve_G(b_, lambda_);
-      lambda_ = -lambda_;
+      primal_multipliers();
       if (friction_settled()) break;
     }
     friction_power_ = Qf_.dot(state_.u);
@@ -435,18 +424,7 @@ class Dynamics {
     if (primal) {
       s.lambda = lambda_;
     } else {
-      // R = M u̇ + Ṁ u − Q̂ = E λ.
-      if (ws_.free.diagonal_mass)
-        tmp_ = ws_.free.M_diag.cwiseProduct(udot_) - ws_.free.Q;
-      else
-        tmp_ = ws_.free.M * udot_ - ws_.free.Q;
-      if (!ws_.free.constant_mass) tmp_ += ws_.free.Mdot * state_.u;
-      if (r_ == nc_)
-        solve_transposed(tmp_, lambda_);
-      else {  // minimum-norm (redundant): on the dense Eᵀ (a small mechanism's)
-        ws_.constraints.Et.to_dense(Et_dense_);
-        compute_multipliers(Et_dense_, tmp_, lambda_);
-      }
+      dual_multipliers();  // R = M u̇ + Ṁ u − Q̂ = E λ
       s.lambda = lambda_;
     }
     compute_reactions(model_, state_.q, s.lambda, s.reactions);
@@ -483,7 +461,7 @@ class Dynamics {
   // the first factor_G that uses them, so that the dual form holds no n × n_c matrix.
   MatX AEt_, G_;
   Eigen::LLT<MatX> G_llt_;
-  MatX Et_dense_;          // fill_sample's minimum-norm multipliers (redundant constraints) only
+  MatX Et_dense_;  // dual_multipliers' minimum-norm multipliers (redundant constraints) only
   WeightedGram G_sparse_;  // G = Eᵀ A E on its pattern (large diagonal-mass systems)
   bool sparse_G_ = false;
   bool G_analyzed_ = false;  // G_sparse_ has G's (fixed) pattern

@@ -54,11 +54,14 @@ void StopContacts::dual(Dynamics& dyn, Eigen::Ref<VecX> rate) {
   S_.noalias() = C_.transpose() * W_;
   g_.noalias() = C_.transpose() * dyn.vdot_;
   g_ += a_;
-  mu_ = S_.ldlt().solve(-g_);
-  if (h == dyn.na_)  // locked: v̇ = −C⁻ᵀ a (exactly 0 at rest)
-    dyn.vdot_ = C_.transpose().partialPivLu().solve(-a_);
-  else
+  S_ldlt_.compute(S_);
+  mu_ = S_ldlt_.solve(-g_);
+  if (h == dyn.na_) {  // locked: v̇ = −C⁻ᵀ a (exactly 0 at rest)
+    lu_.compute(C_.transpose());
+    dyn.vdot_ = lu_.solve(-a_);
+  } else {
     dyn.vdot_.noalias() += W_ * mu_;
+  }
   dyn.udot_ = dyn.Fdv_;
   dyn.udot_.noalias() += dyn.F_ * dyn.vdot_;
   rate = dyn.vdot_;
@@ -97,7 +100,8 @@ void StopContacts::primal(Dynamics& dyn, Eigen::Ref<VecX> rate) {
     times_A(C_.col(i), w_);
     for (Eigen::Index k = 0; k < h; ++k) S_(k, i) = sigma_(k) * D_.col(k).dot(w_);
   }
-  mu_ = S_.partialPivLu().solve(-g_);
+  lu_.compute(S_);
+  mu_ = lu_.solve(-g_);
   const bool at_rest = dyn.state_.u.isZero(0.0);
   if (h == dyn.na_ && at_rest) {  // locked at rest: ṗ = M u̇ = 0 exactly
     dyn.pdot_.setZero();

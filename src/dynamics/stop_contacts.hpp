@@ -18,6 +18,8 @@
 // the frictionless motion. As many held stops as degrees of freedom lock the mechanism: at rest
 // its rates' derivative is then set to exactly zero (rounding would otherwise switch loads held
 // on the sign of a rate).
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
 #include <vector>
 
 #include "dynamics.hpp"
@@ -45,6 +47,10 @@ class StopContacts {
   VecX sigma_;       // h: the sides
   MatX C_, W_, S_;   // dual: na × h, H⁻¹C, CᵀH⁻¹C; primal: Δṗ (n × h), S
   VecX g_, mu_, d_, z_, w_;
+  // S's and Cᵀ's factorisations (held on to: the right-hand side evaluates them at every stage
+  // while a stop is held).
+  Eigen::LDLT<MatX> S_ldlt_;
+  Eigen::PartialPivLU<MatX> lu_;
 };
 
 }  // namespace orthomech::detail

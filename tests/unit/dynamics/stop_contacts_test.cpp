@@ -63,16 +63,17 @@ struct Link {
   }
 };
 
-// The oracle's release time: RK4 steps of 1e-5 s to the step where μ changes sign, then
-// bisection on the step's length.
-double release_time() {
+// The first time a margin of the link's state reaches zero: RK4 steps of 1e-5 s to the step
+// where it changes sign, then bisection on that step's length.
+template <class Margin>
+double first_zero(Margin margin) {
   Link s;
   const double h = 1e-5;
   double t = 0.0;
   while (true) {
     Link next = s;
     next.step(h);
-    if (next.contact() <= 0.0) break;
+    if (margin(next) <= 0.0) break;
     s = next;
     t += h;
   }
@@ -81,9 +82,14 @@ double release_time() {
     const double mid = 0.5 * (lo + hi);
     Link m = s;
     m.step(mid);
-    (m.contact() > 0.0 ? lo : hi) = mid;
+    (margin(m) > 0.0 ? lo : hi) = mid;
   }
   return t + 0.5 * (lo + hi);
+}
+
+// The oracle's release time: where the contact moment μ reaches zero.
+double release_time() {
+  return first_zero([](const Link& s) { return s.contact(); });
 }
 
 TEST(StopContacts, AnArmRestsOnItsStopUntilTheWhirlingLinkLiftsIt) {
@@ -168,26 +174,7 @@ double friction_margin(const Link& s) {
   return 0.1 * std::hypot(a_gx, 2.0 * kG + a_gy) - std::abs(mu);
 }
 
-double slip_time() {
-  Link s;
-  const double h = 1e-5;
-  double t = 0.0;
-  while (true) {
-    Link next = s;
-    next.step(h);
-    if (friction_margin(next) <= 0.0) break;
-    s = next;
-    t += h;
-  }
-  double lo = 0.0, hi = h;
-  for (int it = 0; it < 60; ++it) {
-    const double mid = 0.5 * (lo + hi);
-    Link m = s;
-    m.step(mid);
-    (friction_margin(m) > 0.0 ? lo : hi) = mid;
-  }
-  return t + 0.5 * (lo + hi);
-}
+double slip_time() { return first_zero(friction_margin); }
 
 TEST(StopContacts, AnArmStuckByItsPinFrictionSlipsWhereTheMomentReachesTheStaticBound) {
   const Model model = parse_mechanism(kArmOnItsFriction, "arm-on-its-friction");
