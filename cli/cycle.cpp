@@ -777,6 +777,7 @@ nlohmann::json CycleRun::strokes_json() const {
                         {"max", extreme_json(st.max, u)},
                         {"range", u.from_si(st.range)},
                         {"unit", u.name}};
+    if (st.maxima > 0) e["maxima"] = st.maxima;
     if (st.time_ratio)
       e["time_ratio"] = {{"forward_over_return", *st.time_ratio},
                          {"forward_time", time_u.from_si(st.forward_time)},
@@ -972,6 +973,7 @@ void CycleRun::summary_metrics(std::ostream& out) const {
         << fmt(u.from_si(st.max.value), 7) << " " << u.name << " (stroke "
         << fmt(u.from_si(st.range), 7) << ")";
     if (st.time_ratio) out << ", time ratio forward/return " << fmt(*st.time_ratio, 6);
+    if (st.maxima > 1) out << ", " << st.maxima << " maxima per cycle: no time ratio";
     out << "\n";
   }
 }

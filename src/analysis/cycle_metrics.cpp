@@ -50,7 +50,36 @@ SeriesExtreme refined_extreme(const CycleResult& r, const std::vector<double>& y
   return e;
 }
 
-// Extremes, range and time ratio of the series y over the positions (all of them).
+// The turning maxima of the periodic samples y over one cycle, walked from its smallest sample
+// kmin round to it again: a maximum counts once y has fallen from it by more than the hysteresis
+// kTurningHysteresis × range (and a minimum once y has risen by as much), so that rounding noise
+// on a flat stretch is not a turning point.
+int maxima_per_cycle(const std::vector<double>& y, size_t kmin, double range) {
+  const double h = kTurningHysteresis * range;
+  const size_t n = y.size();
+  int maxima = 0;
+  bool rising = true;
+  double extreme = y[kmin];
+  for (size_t i = 1; i <= n; ++i) {
+    const double v = y[(kmin + i) % n];
+    if (rising) {
+      if (v > extreme)
+        extreme = v;
+      else if (v < extreme - h)
+        ++maxima, rising = false, extreme = v;
+    } else {
+      if (v < extreme)
+        extreme = v;
+      else if (v > extreme + h)
+        rising = true, extreme = v;
+    }
+  }
+  return std::max(maxima, 1);
+}
+
+// Extremes, range and time ratio of the series y over the positions (all of them). The time ratio
+// only of a series with one maximum (and so one minimum) per cycle: with more, "from the minimum
+// to the maximum" is not one stroke.
 StrokeMetric stroke(const CycleResult& r, std::string name, std::string unit,
                     const std::vector<double>& y, bool cyclic, double period) {
   StrokeMetric s;
@@ -61,7 +90,8 @@ StrokeMetric stroke(const CycleResult& r, std::string name, std::string unit,
   s.min = refined_extreme(r, y, kmin, cyclic, period);
   s.max = refined_extreme(r, y, kmax, cyclic, period);
   s.range = s.max.value - s.min.value;
-  if (cyclic && s.range > 0.0) {
+  if (cyclic && s.range > 0.0) s.maxima = maxima_per_cycle(y, kmin, s.range);
+  if (cyclic && s.range > 0.0 && s.maxima == 1) {
     // Forward: from the minimum to the maximum, in time, round the period.
     double forward = std::fmod(s.max.time - s.min.time, period);
     if (forward < 0.0) forward += period;

@@ -46,8 +46,12 @@ struct StrokeMetric {
   std::string name;  // joint or measure name
   std::string unit;  // SI unit of the value ("m", "rad", …)
   SeriesExtreme min, max;
-  double range = 0.0;                // max − min: the stroke
-  std::optional<double> time_ratio;  // forward (min → max) / return (max → min); full cycles only
+  double range = 0.0;  // max − min: the stroke
+  // Full cycles: the turning maxima per cycle (0: not a full cycle). The time ratio forward
+  // (min → max) / return (max → min) only where it is 1: with several maxima per cycle there is no
+  // one forward stroke, and no ratio is given.
+  int maxima = 0;
+  std::optional<double> time_ratio;
   double forward_time = 0.0, return_time = 0.0;
 };
 
@@ -73,7 +77,10 @@ struct CycleMetrics {
 [[nodiscard]] double limit_coordinate(const Model& model, int joint, const VecX& q);
 // Whether the joint is outside its limits at q by more than kLimitSlack (none: false).
 [[nodiscard]] bool outside_limits(const Model& model, int joint, const VecX& q);
-inline constexpr double kLimitSlack = 1e-9;  // rad or m: a joint at its limit is inside
+inline constexpr double kLimitSlack = 1e-9;
+// A turning point of a stroke counts once the series has come back from it by this share of its
+// range (a wiggle below one part per million of the stroke is not a second maximum).
+inline constexpr double kTurningHysteresis = 1e-6;  // rad or m: a joint at its limit is inside
 
 struct CycleMetricsOptions {
   int driver_joint = -1;

@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "orthomech/io/mechanism_file.hpp"
 #include "support/fixtures.hpp"
 
 namespace orthomech {
@@ -117,6 +118,7 @@ TEST(CycleMetrics, CrankRockerAgainstTheFourBarsClosedForms) {
   double turn = std::fmod(th_fold - th_ext, 2.0 * kPi);  // extended → folded (crank forward)
   if (turn < 0) turn += 2.0 * kPi;
   const double ratio = turn / (2.0 * kPi - turn);
+  EXPECT_EQ(it->maxima, 1);
   ASSERT_TRUE(it->time_ratio.has_value());
   const double got = *it->time_ratio;
   // Which of the two is "forward" depends on the rocker's sense: either ratio or its inverse.
@@ -134,6 +136,49 @@ TEST(CycleMetrics, CrankRockerAgainstTheFourBarsClosedForms) {
   const double w = m.power.mean_speed;
   EXPECT_NEAR(*m.power.flywheel_inertia, m.power.energy_fluctuation / (0.05 * w * w), 1e-15);
   EXPECT_TRUE(m.limits.empty());  // no joint has limits
+}
+
+// A time ratio only for one maximum per cycle (issue 51 item 1). A crank turns a gear at twice
+// its speed (gear ratio 2, both pivoted on the ground): the gear's point P at radius 30 mm has
+// x = 100 + 30 cos(2θ + φ₀), two maxima per turn of the crank, so no time ratio; the crank's own
+// point T (x = 40 cos θ) has one maximum and, at constant speed, the time ratio π / π = 1.
+TEST(CycleMetrics, TimeRatioOnlyForOneMaximumPerCycle) {
+  const Model model = parse_mechanism(R"(orthomech: 1
+units: {length: mm, angle: deg, mass: kg, time: s, force: N}
+ground:
+  points: {O: [0, 0], G0: [100, 0]}
+bodies:
+  - {name: crank, mass: 1, inertia: 100, pose: [0, 0, 0], points: {O: [0, 0], T: [40, 0]}}
+  - {name: gear, mass: 1, inertia: 100, pose: [100, 0, 0], points: {G0: [0, 0], P: [30, 0]}}
+joints:
+  - {name: O, type: revolute, connects: [ground.O, crank.O]}
+  - {name: G0, type: revolute, connects: [ground.G0, gear.G0]}
+  - {name: mesh, type: gear, bodies: [crank, gear], ratio: 2}
+drivers:
+  - {name: motor, joint: O, speed: 60 rpm}
+)",
+                                      "gear-pair.yaml", {});
+  const CycleResult result = test::full_cycle(model, 360);
+  ASSERT_EQ(result.status, CycleStatus::completed);
+  CycleMetricsOptions options;
+  options.driver_joint = model.find_joint("O");
+  const CycleMetrics m = compute_cycle_metrics(model, result, options);
+  auto find = [&](const std::string& name) {
+    const auto it = std::find_if(m.strokes.begin(), m.strokes.end(),
+                                 [&](const StrokeMetric& s) { return s.name == name; });
+    EXPECT_NE(it, m.strokes.end()) << name;
+    return it;
+  };
+  const auto p = find("gear.P.x"), t = find("crank.T.x");
+  ASSERT_NE(p, m.strokes.end());
+  ASSERT_NE(t, m.strokes.end());
+  EXPECT_NEAR(p->range, 0.060, 1e-9);
+  EXPECT_EQ(p->maxima, 2);
+  EXPECT_FALSE(p->time_ratio.has_value());
+  EXPECT_NEAR(t->range, 0.080, 1e-9);
+  EXPECT_EQ(t->maxima, 1);
+  ASSERT_TRUE(t->time_ratio.has_value());
+  EXPECT_NEAR(*t->time_ratio, 1.0, 1e-6);
 }
 
 }  // namespace
