@@ -68,6 +68,36 @@ const char* to_string(NloptOutcomeKind k) {
   return "?";
 }
 
+void classify_outcome(int code, NloptOutcome& out) {
+  const auto r = static_cast<nlopt_result>(code);
+  switch (r) {
+    case NLOPT_SUCCESS:
+    case NLOPT_STOPVAL_REACHED:
+    case NLOPT_FTOL_REACHED:
+    case NLOPT_XTOL_REACHED:
+      out.kind = NloptOutcomeKind::converged;
+      out.message = "converged";
+      break;
+    case NLOPT_MAXEVAL_REACHED:
+    case NLOPT_MAXTIME_REACHED:
+      out.kind = NloptOutcomeKind::max_evaluations;
+      out.message = "evaluation limit reached";
+      break;
+    case NLOPT_ROUNDOFF_LIMITED:
+      out.kind = NloptOutcomeKind::roundoff;
+      out.message = "roundoff limited";
+      break;
+    case NLOPT_INVALID_ARGS:
+      out.kind = NloptOutcomeKind::invalid;
+      out.message = "invalid arguments (bounds or start)";
+      break;
+    default:
+      out.kind = NloptOutcomeKind::failed;
+      out.message = "NLopt failed (code " + std::to_string(static_cast<int>(r)) + ")";
+      break;
+  }
+}
+
 NloptOutcome minimize_bounded(const std::function<double(const Eigen::VectorXd&)>& f,
                               const Eigen::VectorXd& x0, const Eigen::VectorXd& lower,
                               const Eigen::VectorXd& upper, const NloptSettings& settings) {
@@ -127,32 +157,7 @@ NloptOutcome minimize_bounded(const std::function<double(const Eigen::VectorXd&)
     out.message = "the objective returned NaN";
     return out;
   }
-  switch (r) {
-    case NLOPT_SUCCESS:
-    case NLOPT_STOPVAL_REACHED:
-    case NLOPT_FTOL_REACHED:
-    case NLOPT_XTOL_REACHED:
-      out.kind = NloptOutcomeKind::converged;
-      out.message = "converged";
-      break;
-    case NLOPT_MAXEVAL_REACHED:
-    case NLOPT_MAXTIME_REACHED:
-      out.kind = NloptOutcomeKind::max_evaluations;
-      out.message = "evaluation limit reached";
-      break;
-    case NLOPT_ROUNDOFF_LIMITED:
-      out.kind = NloptOutcomeKind::roundoff;
-      out.message = "roundoff limited";
-      break;
-    case NLOPT_INVALID_ARGS:
-      out.kind = NloptOutcomeKind::invalid;
-      out.message = "invalid arguments (bounds or start)";
-      break;
-    default:
-      out.kind = NloptOutcomeKind::failed;
-      out.message = "NLopt failed (code " + std::to_string(static_cast<int>(r)) + ")";
-      break;
-  }
+  classify_outcome(static_cast<int>(r), out);
   return out;
 }
 

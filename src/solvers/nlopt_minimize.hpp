@@ -93,5 +93,8 @@ struct MultistartOutcome {
                                                   unsigned long long seed);
 
 [[nodiscard]] const char* to_string(NloptOutcomeKind k);
+// Sets out.kind and out.message from an nlopt_result `code` (the run ended without an error of
+// the objective's).
+void classify_outcome(int code, NloptOutcome& out);
 
 }  // namespace orthomech::solvers
