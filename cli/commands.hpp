@@ -24,6 +24,9 @@ void register_render(CLI::App& app, const GlobalOptions& globals, int& exit_code
 void register_sweep(CLI::App& app, const GlobalOptions& globals, int& exit_code);
 // `synthesize TASK`: four-bars from the motion, path or law wanted, validated (synthesize.cpp).
 void register_synthesize(CLI::App& app, const GlobalOptions& globals, int& exit_code);
+// `optimize FILE --study OPT`: design variables for the best objective under constraints
+// (optimize.cpp).
+void register_optimize(CLI::App& app, const GlobalOptions& globals, int& exit_code);
 // `balance FILE`: counterweights that cancel or reduce the shaking force (balance.cpp).
 void register_balance(CLI::App& app, const GlobalOptions& globals, int& exit_code);
 }  // namespace orthomech::cli

@@ -8,11 +8,14 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <sstream>
 #include <vector>
 
 #include "orthomech/io/mechanism_file.hpp"
 #include "orthomech/io/noise.hpp"
+#include "orthomech/io/study_db.hpp"
 #include "orthomech/io/units.hpp"
 
 namespace orthomech::cli {
@@ -178,6 +181,45 @@ std::vector<double> coordinates_out(const Model& model, const VecX& v, const Uni
 
 OutputUnit mass_metric_unit(const UnitSystem& units) {
   return {"sqrt(" + units.mass + ")*" + units.length, std::sqrt(units.mass_si) * units.length_si};
+}
+
+nlohmann::json number_or_null(double v) {
+  return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json();
+}
+
+std::unique_ptr<StudyDatabase> open_study_database(const std::string& out, bool resume,
+                                                   const std::string& mechanism,
+                                                   const std::string& study_text,
+                                                   const Study& study,
+                                                   const VariantResult& columns) {
+  std::vector<std::string> parameters, metrics;
+  for (const auto& p : study.parameters) parameters.push_back(p.name);
+  for (const auto& [name, value] : columns.metrics) metrics.push_back(name);
+  std::error_code ec;
+  std::filesystem::create_directories(out, ec);
+  if (ec) {
+    spdlog::error("{}: cannot create the directory: {}", out, ec.message());
+    return nullptr;
+  }
+  try {
+    return std::make_unique<StudyDatabase>(std::filesystem::path(out) / "study.sqlite", resume,
+                                           std::vector<std::pair<std::string, std::string>>{
+                                               {"mechanism", mechanism}, {"study", study_text}},
+                                           parameters, metrics);
+  } catch (const std::runtime_error& e) {
+    spdlog::error("{}", e.what());
+    return nullptr;
+  }
+}
+
+std::string read_input_file(const std::string& path, const std::string& what) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec))
+    throw InputError({path, 0, 0}, what, "cannot open the file: no such file");
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
 }
 
 nlohmann::json units_json(const UnitSystem& u) {

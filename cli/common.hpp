@@ -3,6 +3,7 @@
 // No math here (house style: cli/ holds no math).
 #include <CLI/CLI.hpp>
 #include <iosfwd>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -13,6 +14,12 @@
 namespace CLI {
 class App;
 }
+
+namespace orthomech {
+class StudyDatabase;
+struct Study;
+struct VariantResult;
+}  // namespace orthomech
 
 namespace orthomech::cli {
 
@@ -89,5 +96,16 @@ void add_units_option(CLI::App* cmd, std::string& choice);
                                const std::string& option);
 // The `units` object of every JSON document: the unit name of each kind of quantity.
 [[nodiscard]] nlohmann::json units_json(const UnitSystem& units);
+// A number of a study summary: null for NaN (no value) and ±inf.
+[[nodiscard]] nlohmann::json number_or_null(double v);
+// Creates `out` if missing and opens (or, with `resume`, reopens) its study.sqlite for the study
+// (`mechanism` and `study_text` its identity) with the parameters' columns and the metric columns
+// of `columns` (a variant that has them all). nullptr after logging why not (exit 2).
+[[nodiscard]] std::unique_ptr<StudyDatabase> open_study_database(
+    const std::string& out, bool resume, const std::string& mechanism,
+    const std::string& study_text, const Study& study, const VariantResult& columns);
+// The whole text of an input file (a mechanism or study file given on the command line). Throws
+// InputError naming the path and `what` when it is not a regular file.
+[[nodiscard]] std::string read_input_file(const std::string& path, const std::string& what);
 
 }  // namespace orthomech::cli

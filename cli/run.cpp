@@ -26,16 +26,13 @@ struct Command {
   Register add;
 };
 // Every subcommand, in the order `orthomech --help` lists them.
-constexpr Command kCommands[] = {{"info", register_info},
-                                 {"cycle", register_cycle},
-                                 {"assemble", register_assemble},
-                                 {"validate", register_validate},
-                                 {"simulate", register_simulate},
-                                 {"crosscheck", register_crosscheck},
-                                 {"render", register_render},
-                                 {"sweep", register_sweep},
-                                 {"synthesize", register_synthesize},
-                                 {"balance", register_balance}};
+constexpr Command kCommands[] = {
+    {"info", register_info},         {"cycle", register_cycle},
+    {"assemble", register_assemble}, {"validate", register_validate},
+    {"simulate", register_simulate}, {"crosscheck", register_crosscheck},
+    {"render", register_render},     {"sweep", register_sweep},
+    {"optimize", register_optimize}, {"synthesize", register_synthesize},
+    {"balance", register_balance}};
 
 // The subcommand the command line names (its first word after the global flags -q, -v), or
 // nullptr when it names none of them (help, version, a mistyped command: every subcommand is

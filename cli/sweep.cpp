@@ -47,20 +47,6 @@ struct StopSweep {
 // grow with the study (a grid of 1e9 variants holds one block, not 8 GB of indices).
 constexpr long kPendingBlock = 4096;
 
-std::string read_file(const std::string& path, const std::string& what) {
-  std::error_code ec;
-  if (!fs::is_regular_file(path, ec))
-    throw InputError({path, 0, 0}, what, "cannot open the file: no such file");
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
-nlohmann::json number_or_null(double v) {
-  return std::isnan(v) ? nlohmann::json() : nlohmann::json(v);
-}
-
 // The summary: counts by status; per metric the nominal value and, for Monte Carlo, the
 // statistics and sensitivities; for a grid, the best variants.
 nlohmann::json summarize(const Study& study, const StudyDatabase& db,
@@ -217,8 +203,8 @@ int serve_sweep(const SweepCliOptions& opt, MpiSession& mpi) {
     mpi.finish();
     return kOk;
   }
-  const std::string mechanism = read_file(opt.file, "file");
-  Study study = parse_study(read_file(opt.study, "study"), opt.study, mechanism, opt.file);
+  const std::string mechanism = read_input_file(opt.file, "file");
+  Study study = parse_study(read_input_file(opt.study, "study"), opt.study, mechanism, opt.file);
   attach_nominal_paths(study, mechanism, opt.file);
   serve_variants(mechanism, opt.file, study);
   mpi.finish();
@@ -231,14 +217,18 @@ int run_sweep_command(const SweepCliOptions& opt) {
   if (mpi && mpi->rank() != 0) return serve_sweep(opt, *mpi);
   MpiStartGuard guard{mpi ? &*mpi : nullptr};
 
-  const std::string mechanism = read_file(opt.file, "file");
+  const std::string mechanism = read_input_file(opt.file, "file");
   {  // the nominal file must be valid: its errors are the file's, with their line
     const Model model = load(opt.file);
     require_planar(model, "sweep");
     (void)model;
   }
-  const std::string study_text = read_file(opt.study, "study");
+  const std::string study_text = read_input_file(opt.study, "study");
   Study study = parse_study(study_text, opt.study, mechanism, opt.file);
+  if (study.kind == StudyKind::optimize) {
+    spdlog::error("{}: an optimize study: run it with `orthomech optimize`", opt.study);
+    return kBadInput;
+  }
   attach_nominal_paths(study, mechanism, opt.file);  // the deviations' reference, computed once
 
   // The nominal design fixes the metric columns.
@@ -251,28 +241,11 @@ int run_sweep_command(const SweepCliOptions& opt) {
                   nominal.message);
     return kNumerical;
   }
-  std::vector<std::string> parameters, metrics;
-  for (const auto& p : study.parameters) parameters.push_back(p.name);
-  for (const auto& [name, value] : nominal.metrics) metrics.push_back(name);
   // (A parameter named as a column, up to case, was refused by the study's reader at its line.)
-
   const fs::path out = opt.out;
-  std::error_code ec;
-  fs::create_directories(out, ec);
-  if (ec) {
-    spdlog::error("{}: cannot create the directory: {}", opt.out, ec.message());
-    return kBadInput;
-  }
-  std::unique_ptr<StudyDatabase> db;
-  try {
-    db = std::make_unique<StudyDatabase>(out / "study.sqlite", opt.resume,
-                                         std::vector<std::pair<std::string, std::string>>{
-                                             {"mechanism", mechanism}, {"study", study_text}},
-                                         parameters, metrics);
-  } catch (const std::runtime_error& e) {
-    spdlog::error("{}", e.what());
-    return kBadInput;
-  }
+  const std::unique_ptr<StudyDatabase> db =
+      open_study_database(opt.out, opt.resume, mechanism, study_text, study, nominal);
+  if (!db) return kBadInput;
   const long total = variant_count(study);
   const std::vector<long> stored = db->stored();
   spdlog::info("{}: {} variants, {} stored, {} to compute", opt.study, total, stored.size(),

@@ -941,7 +941,7 @@ YAML::Node list_item(const YAML::Node& list, const std::string& segment) {
 //
 // With `read` given, nothing is written: the text of the single value at the path goes to *read.
 SetNodes apply_change(YAML::Node& root, const FileChange& change, const std::string& origin,
-                      std::string* read = nullptr) {
+                      std::string* read = nullptr, YAML::Mark* read_mark = nullptr) {
   SetNodes written{
       origin + (read ? ": " + change.path : ": --set " + change.path + "=" + change.value), {}};
   const auto fail = [&](const std::string& element, const std::string& message) {
@@ -996,6 +996,7 @@ SetNodes apply_change(YAML::Node& root, const FileChange& change, const std::str
     if (last && read) {
       if (!child.IsScalar()) fail(here, "'" + here + "' is not a single value");
       *read = child.Scalar();
+      if (read_mark) *read_mark = child.Mark();
       return written;
     }
     if (last) {
@@ -1047,6 +1048,39 @@ std::string file_value(const std::string& text, const std::string& origin,
   std::string value;
   (void)apply_change(root, {path, ""}, origin, &value);
   return value;
+}
+
+std::string with_file_values(const std::string& text, const std::string& origin,
+                             const std::vector<FileChange>& changes) {
+  // Each value's place in the text: its node's mark and the plain scalar's length there.
+  struct Edit {
+    size_t at = 0, length = 0;
+    const FileChange* change = nullptr;
+  };
+  std::vector<Edit> edits;
+  for (const FileChange& c : changes) {
+    YAML::Node root = YAML::Load(text);
+    std::string value;
+    YAML::Mark mark;
+    (void)apply_change(root, {c.path, ""}, origin, &value, &mark);
+    const auto at = static_cast<size_t>(mark.pos);
+    if (mark.pos < 0 || text.compare(at, value.size(), value) != 0)
+      throw InputError({origin, mark.line + 1, mark.column + 1}, c.path,
+                       "the value is not written as plain text (quoted or over several lines): "
+                       "it cannot be replaced in place");
+    edits.push_back({at, value.size(), &c});
+  }
+  std::sort(edits.begin(), edits.end(), [](const Edit& a, const Edit& b) { return a.at > b.at; });
+  std::string out = text;
+  for (size_t k = 0; k < edits.size(); ++k) {
+    if (k > 0 && edits[k].at + edits[k].length > edits[k - 1].at)
+      throw InputError({origin, 0, 0}, edits[k].change->path, "two paths name one value");
+    out.replace(edits[k].at, edits[k].length, edits[k].change->value);
+  }
+  for (const FileChange& c : changes)
+    if (file_value(out, origin, c.path) != c.value)
+      throw InputError({origin, 0, 0}, c.path, "the value did not read back as written");
+  return out;
 }
 
 FileChange parse_file_change(const std::string& text) {

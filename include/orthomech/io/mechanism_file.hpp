@@ -24,6 +24,12 @@ struct FileChange {
 [[nodiscard]] std::string file_value(const std::string& text, const std::string& origin,
                                      const std::string& path);
 
+// The text with the value at each change's path replaced in place by the change's value (every
+// other byte kept: comments, order, units), checked by reading each value back. The values must
+// be written as plain scalars there. Throws InputError naming origin and path.
+[[nodiscard]] std::string with_file_values(const std::string& text, const std::string& origin,
+                                           const std::vector<FileChange>& changes);
+
 // Reads and validates a mechanism file, with `changes` applied in order. Throws InputError.
 [[nodiscard]] Model load_mechanism(const std::string& path,
                                    const std::vector<FileChange>& changes = {});

@@ -12,18 +12,22 @@
 #include <utility>
 #include <vector>
 
+#include "orthomech/study/measure_metrics.hpp"
+
 namespace orthomech {
 
-enum class StudyKind { grid, monte_carlo };
+enum class StudyKind { grid, monte_carlo, optimize };
 
 struct StudyParameter {
   std::string path;  // FileChange path: bodies.crank.points.A.0, a parameter name, …
   std::string name;  // column name (default: the path)
-  enum class Law { values, normal, uniform } law = Law::values;
-  std::vector<double> values;  // grid: the values in order
-  double mean = 0.0;           // normal and uniform: the nominal value (default: the file's)
-  double sigma = 0.0;          // normal: standard deviation (0: always the mean)
-  double tolerance = 0.0;      // uniform: mean ± tolerance
+  enum class Law { values, normal, uniform, bounds } law = Law::values;
+  std::vector<double> values;       // grid: the values in order
+  double mean = 0.0;                // normal and uniform: the nominal value (default: the file's);
+                                    // bounds (optimize): the start (default: the file's)
+  double lower = 0.0, upper = 0.0;  // bounds: the design variable's box
+  double sigma = 0.0;               // normal: standard deviation (0: always the mean)
+  double tolerance = 0.0;           // uniform: mean ± tolerance
 };
 
 // What is computed per variant (the study file's `metrics:`; absent: the cycle alone).
@@ -33,6 +37,8 @@ struct StudyMetrics {
   bool assemble = false;  // assemble(design pose): success 0/1 and the mass-metric distance
   std::vector<std::string> deviation;  // traced points "body.point" ("body.origin"): max and
                                        // RMS distance from the nominal design's path
+  // The study file's `expressions:` (study/measure_metrics.hpp), columns after the blocks'.
+  std::vector<MetricExpression> expressions;
 };
 
 // The nominal design's traced paths (the file unchanged), computed once per study: the cycle's
@@ -42,6 +48,23 @@ struct NominalPaths {
   std::string message;
   std::vector<double> input;
   std::vector<std::vector<double>> x, y;  // per point, per position
+};
+
+// An optimisation's goal (study: optimize; study/optimize.hpp). The objective and each
+// constraint are expression columns of the variants: `objective` and `constraint.1`, … .
+struct OptimizeConstraint {
+  std::string text;  // the expression constrained
+  enum class Kind { at_least, at_most, equal } kind = Kind::at_least;
+  double bound = 0.0;
+  double tolerance = 0.0;  // equal: |value − bound| ≤ tolerance
+};
+struct OptimizeGoal {
+  std::string objective;  // the expression minimised (or maximised)
+  bool maximize = false;
+  std::vector<OptimizeConstraint> constraints;
+  enum class Algorithm { cobyla, isres } algorithm = Algorithm::cobyla;
+  long evaluations = 200;   // the budget
+  double tolerance = 1e-4;  // a step below this share of every variable's span ends the search
 };
 
 struct Study {
@@ -54,6 +77,7 @@ struct Study {
   bool best_largest = false;               // … smallest first unless `order: max`
   int best_count = 5;
   StudyMetrics metrics;
+  OptimizeGoal goal;  // study: optimize
   // The nominal paths of the deviation metrics (attach_nominal_paths); when empty, each variant
   // computes them itself (same values, twice the work).
   std::shared_ptr<const NominalPaths> nominal;

@@ -139,25 +139,13 @@ TEST(CycleMetrics, CrankRockerAgainstTheFourBarsClosedForms) {
 }
 
 // A time ratio only for one maximum per cycle (issue 51 item 1). A crank turns a gear at twice
-// its speed (gear ratio 2, both pivoted on the ground): the gear's point P at radius 30 mm has
+// its speed (tests/data/cycle/gear-pair.yaml: gear ratio 2, both pivoted on the ground): the
+// gear's point P at radius 30 mm has
 // x = 100 + 30 cos(2θ + φ₀), two maxima per turn of the crank, so no time ratio; the crank's own
 // point T (x = 40 cos θ) has one maximum and, at constant speed, the time ratio π / π = 1.
 TEST(CycleMetrics, TimeRatioOnlyForOneMaximumPerCycle) {
-  const Model model = parse_mechanism(R"(orthomech: 1
-units: {length: mm, angle: deg, mass: kg, time: s, force: N}
-ground:
-  points: {O: [0, 0], G0: [100, 0]}
-bodies:
-  - {name: crank, mass: 1, inertia: 100, pose: [0, 0, 0], points: {O: [0, 0], T: [40, 0]}}
-  - {name: gear, mass: 1, inertia: 100, pose: [100, 0, 0], points: {G0: [0, 0], P: [30, 0]}}
-joints:
-  - {name: O, type: revolute, connects: [ground.O, crank.O]}
-  - {name: G0, type: revolute, connects: [ground.G0, gear.G0]}
-  - {name: mesh, type: gear, bodies: [crank, gear], ratio: 2}
-drivers:
-  - {name: motor, joint: O, speed: 60 rpm}
-)",
-                                      "gear-pair.yaml", {});
+  const Model model =
+      load_mechanism(std::string(ORTHOMECH_SOURCE_DIR) + "/tests/data/cycle/gear-pair.yaml");
   const CycleResult result = test::full_cycle(model, 360);
   ASSERT_EQ(result.status, CycleStatus::completed);
   CycleMetricsOptions options;

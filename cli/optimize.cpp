@@ -1,0 +1,209 @@
+// `orthomech optimize FILE --study OPT.yaml --out DIR`: design optimisation (docs/cli.md
+// "optimize"): the study's design variables searched by NLopt for the best objective under the
+// constraints (study/optimize.hpp), every evaluation one SQLite row committed as it finishes, the
+// CSV of the evaluations, the optimal mechanism file and a summary with the convergence.
+#include "orthomech/study/optimize.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <CLI/CLI.hpp>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "commands.hpp"
+#include "common.hpp"
+#include "orthomech/io/file_writer.hpp"
+#include "orthomech/io/mechanism_file.hpp"
+#include "orthomech/io/study_db.hpp"
+#include "run_bounds.hpp"
+
+namespace orthomech::cli {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct OptimizeCliOptions {
+  std::string file, study, out;
+  bool json = false;
+  double time_limit = 0.0;  // s of wall clock; 0: none
+};
+
+// The summary document: the outcome, the optimum (variables, objective, constraints, every
+// metric) and the convergence (each evaluation that improved the best feasible objective).
+nlohmann::json summarize(const Study& study, const OptimizeResult& r, const std::string& optimum) {
+  nlohmann::json j;
+  j["study"] = "optimize";
+  j["algorithm"] = study.goal.algorithm == OptimizeGoal::Algorithm::isres ? "isres" : "cobyla";
+  j["outcome"] = r.outcome;
+  j["message"] = r.message;
+  j["evaluations"] = r.evaluations;
+  j["found"] = r.found;
+  long feasible = 0;
+  for (const OptimizeStep& s : r.steps) feasible += s.feasible ? 1 : 0;
+  j["feasible_evaluations"] = feasible;
+  j["objective"] = {{study.goal.maximize ? "maximize" : "minimize", study.goal.objective}};
+  nlohmann::json convergence = nlohmann::json::array();
+  for (const OptimizeStep& s : r.steps)
+    if (s.best == s.evaluation)
+      convergence.push_back({{"evaluation", s.evaluation}, {"objective", s.objective}});
+  j["convergence"] = convergence;
+  if (r.found) {
+    nlohmann::json variables = nlohmann::json::object(), metrics = nlohmann::json::object();
+    for (size_t k = 0; k < study.parameters.size(); ++k)
+      variables[study.parameters[k].name] = r.best.values[k];
+    for (const auto& [name, value] : r.best.metrics) metrics[name] = number_or_null(value);
+    nlohmann::json constraints = nlohmann::json::array();
+    for (size_t k = 0; k < study.goal.constraints.size(); ++k) {
+      const OptimizeConstraint& c = study.goal.constraints[k];
+      nlohmann::json e = {{"metric", c.text}};
+      e[c.kind == OptimizeConstraint::Kind::at_least  ? "min"
+        : c.kind == OptimizeConstraint::Kind::at_most ? "max"
+                                                      : "equal"] = c.bound;
+      if (c.kind == OptimizeConstraint::Kind::equal) e["tolerance"] = c.tolerance;
+      const auto v = metrics.find("constraint." + std::to_string(k + 1));
+      e["value"] = v == metrics.end() ? nlohmann::json() : *v;
+      constraints.push_back(e);
+    }
+    j["optimum"] = {
+        {"evaluation", r.best.index}, {"variables", variables}, {"objective", metrics["objective"]},
+        {"constraints", constraints}, {"metrics", metrics},     {"file", optimum}};
+  }
+  return j;
+}
+
+void print_summary(const nlohmann::json& j, const fs::path& out) {
+  std::ostringstream o;
+  o << "optimize (" << j["algorithm"].get<std::string>() << "): " << j["outcome"].get<std::string>()
+    << " after " << j["evaluations"].get<long>() << " evaluations ("
+    << j["feasible_evaluations"].get<long>() << " feasible)\n";
+  o << "objective: " << j["objective"].begin().key() << " "
+    << j["objective"].begin()->get<std::string>() << "\n";
+  o << "convergence (evaluation: best feasible objective):\n";
+  for (const auto& c : j["convergence"])
+    o << "  " << c["evaluation"].get<long>() << ": " << c["objective"].get<double>() << "\n";
+  if (j.contains("optimum")) {
+    const auto& opt = j["optimum"];
+    o << "optimum (evaluation " << opt["evaluation"].get<long>() << "):\n";
+    for (const auto& [name, v] : opt["variables"].items())
+      o << "  " << name << " = " << v.get<double>() << "\n";
+    o << "  objective = " << opt["objective"] << "\n";
+    for (const auto& c : opt["constraints"]) o << "  constraint " << c.dump() << "\n";
+    o << "optimal file: " << opt["file"].get<std::string>() << "\n";
+  } else {
+    o << "no feasible design was found\n";
+  }
+  o << "evaluations: " << (out / "evaluations.csv").string() << ", "
+    << (out / "study.sqlite").string() << "\n";
+  std::cout << o.str();
+}
+
+int run_optimize_command(const OptimizeCliOptions& opt) {
+  const std::string mechanism = read_input_file(opt.file, "file");
+  {  // the nominal file must be valid: its errors are the file's, with their line
+    const Model model = load(opt.file);
+    require_planar(model, "optimize");
+  }
+  const std::string study_text = read_input_file(opt.study, "study");
+  const Study study = parse_study(study_text, opt.study, mechanism, opt.file);
+  if (study.kind != StudyKind::optimize) {
+    spdlog::error("{}: the study is a {} study: run it with `orthomech sweep`", opt.study,
+                  study.kind == StudyKind::grid ? "grid" : "monte-carlo");
+    return kBadInput;
+  }
+  // The columns: those of the start design (the file with the starts of the variables).
+  const VariantResult start =
+      evaluate_variant(mechanism, opt.file, study, -1, variant_values(study, 0));
+  if (start.metrics.empty()) {
+    spdlog::error("{}: the start design cannot be evaluated ({}): {}", opt.file, start.status,
+                  start.message);
+    return kNumerical;
+  }
+  const fs::path out = opt.out;
+  const std::unique_ptr<StudyDatabase> db =
+      open_study_database(opt.out, false, mechanism, study_text, study, start);
+  if (!db) return kBadInput;
+  const InterruptScope interrupts;
+  const RunControl control = run_control("optimize", opt.time_limit);
+  RunMonitor monitor(control, 0);
+  StopReason stop = StopReason::none;
+  const auto store = [&](const VariantResult& r, const OptimizeStep& step) {
+    db->insert(r);
+    spdlog::debug("evaluation {}: {} objective {} violation {}", step.evaluation, r.status,
+                  step.objective, step.violation);
+    stop = monitor.tick(double(step.evaluation + 1) / double(study.goal.evaluations));
+  };
+  OptimizeResult result;
+  try {
+    result =
+        run_optimize(mechanism, opt.file, study, store, [&] { return stop != StopReason::none; });
+  } catch (const std::runtime_error& e) {  // the database (a full disk): the rows stored are kept
+    end_progress();
+    spdlog::error("{}", e.what());
+    return kBadInput;
+  }
+  end_progress();
+  if (stop != StopReason::none)
+    spdlog::error(
+        "optimize: {}; the best design so far is kept",
+        monitor.stop_message(stop, double(result.evaluations) / double(study.goal.evaluations),
+                             "evaluation", ""));
+  std::string optimum;
+  try {
+    if (result.found) {
+      std::vector<FileChange> changes;
+      for (size_t j = 0; j < study.parameters.size(); ++j)
+        changes.push_back({study.parameters[j].path, value_text(result.best.values[j])});
+      optimum = (out / "optimum.yaml").string();
+      write_file(optimum, with_file_values(mechanism, opt.file, changes));
+    }
+    const nlohmann::json summary = summarize(study, result, optimum);
+    write_file(out / "evaluations.csv", study_csv(*db));
+    write_file(out / "summary.json", summary.dump(2) + "\n");
+    if (opt.json)
+      std::cout << summary.dump(2) << "\n";
+    else
+      print_summary(summary, out);
+  } catch (const std::runtime_error& e) {
+    spdlog::error("{}", e.what());
+    return kBadInput;
+  }
+  if (stop != StopReason::none) return kStopped;
+  if (!result.found) {
+    spdlog::error("optimize: no evaluation met the constraints ({} evaluations)",
+                  result.evaluations);
+    return kNumerical;
+  }
+  return kOk;
+}
+
+}  // namespace
+
+void register_optimize(CLI::App& app, const GlobalOptions& globals, int& exit_code) {
+  auto opt = std::make_shared<OptimizeCliOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "optimize", "design optimisation: the best variables under constraints on any metric");
+  cmd->add_option("file", opt->file, "mechanism file (YAML)")->required();
+  cmd->add_option("--study", opt->study, "optimize study file (YAML, docs/cli.md \"optimize\")")
+      ->required();
+  cmd->add_option("--out,-o", opt->out,
+                  "directory of study.sqlite, evaluations.csv, summary.json and optimum.yaml")
+      ->required();
+  cmd->add_flag("--json", opt->json, "the summary as one JSON document on stdout");
+  cmd->add_option("--time-limit", opt->time_limit,
+                  "wall-clock limit in seconds (default: none): the search stops there, keeps the "
+                  "best design so far and exits 5")
+      ->check(finite_range(0.0, 1e9, true));
+  auto log = std::make_shared<LogFlags>();
+  add_log_flags(cmd, *log);
+  cmd->callback([opt, log, &globals, &exit_code] {
+    setup_logging(globals, *log);
+    exit_code = run_optimize_command(*opt);
+  });
+}
+
+}  // namespace orthomech::cli

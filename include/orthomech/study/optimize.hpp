@@ -1,0 +1,52 @@
+#pragma once
+// Design optimisation (issue 51 item 2; docs/cli.md "optimize"): a `study: optimize` file's
+// bounded design variables (any `--set` path or parameter), one objective and inequality and
+// equality constraints, each an expression of the variant's metric columns
+// (study/measure_metrics.hpp), searched by NLopt — COBYLA (local, derivative-free; the default)
+// or ISRES (global, seeded). Each evaluation is a variant of the study (evaluate_variant): a
+// variant that is not valid, does not assemble, stops at a dead point or has no value of a
+// metric the goal uses is infeasible — never the end of the run.
+//
+// The search runs in the unit box (x_j = (v_j − lower_j) / (upper_j − lower_j)); a constraint
+// g(v) ≥ b becomes (b − g) / s ≤ 0 with s = max(|b|, 1), g ≤ b becomes (g − b) / s ≤ 0 and
+// |g − b| ≤ t the two of them with b ± t; an infeasible variant gets every constraint value 1
+// and the worst objective seen so far. The result is the best feasible evaluation: constraints
+// met within kOptimizeFeasibility × s.
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "orthomech/study/study.hpp"
+
+namespace orthomech {
+
+inline constexpr double kOptimizeFeasibility = 1e-6;
+
+// One evaluation as the search saw it.
+struct OptimizeStep {
+  long evaluation = 0;     // 0-based, in the order the optimiser asked
+  bool feasible = false;   // completed, every goal column a number, every constraint met
+  double objective = 0.0;  // the objective column (NaN: none)
+  double violation = 0.0;  // the largest scaled constraint value above 0 (0: met; 1: infeasible)
+  long best = -1;          // the best feasible evaluation so far (−1: none yet)
+  double best_objective = 0.0;
+};
+
+struct OptimizeResult {
+  bool found = false;   // a feasible evaluation was found
+  VariantResult best;   // … the best one (its values are the optimal design variables)
+  std::string outcome;  // how the search ended: converged, evaluation limit, stopped, …
+  std::string message;
+  long evaluations = 0;
+  std::vector<OptimizeStep> steps;
+};
+
+// Runs the search, calling `done` with each evaluated variant and its step as it finishes (the
+// caller stores it: a database row, progress), and `stop` before each evaluation (true: end the
+// search there, outcome "stopped"). Never throws for a bad variant.
+[[nodiscard]] OptimizeResult run_optimize(
+    const std::string& mechanism, const std::string& origin, const Study& study,
+    const std::function<void(const VariantResult&, const OptimizeStep&)>& done,
+    const std::function<bool()>& stop = {});
+
+}  // namespace orthomech

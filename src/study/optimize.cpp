@@ -1,0 +1,163 @@
+#include "orthomech/study/optimize.hpp"
+
+#include <Eigen/Core>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "../solvers/nlopt_constrained.hpp"
+
+namespace orthomech {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// A search stopped by the caller's `stop` (not an error: the best so far is kept).
+struct Stopped : std::runtime_error {
+  Stopped() : std::runtime_error("stopped") {}
+};
+
+double column(const VariantResult& r, const std::string& name) {
+  for (const auto& [n, v] : r.metrics)
+    if (n == name) return v;
+  return kNaN;
+}
+
+double scale(const OptimizeConstraint& c) { return std::max(std::abs(c.bound), 1.0); }
+
+// The scaled constraint values (≤ 0 where met) of a variant with every goal column.
+std::vector<double> constraint_values(const OptimizeGoal& goal, const VariantResult& r) {
+  std::vector<double> g;
+  for (size_t k = 0; k < goal.constraints.size(); ++k) {
+    const OptimizeConstraint& c = goal.constraints[k];
+    const double v = column(r, "constraint." + std::to_string(k + 1)), s = scale(c);
+    switch (c.kind) {
+      case OptimizeConstraint::Kind::at_least:
+        g.push_back((c.bound - v) / s);
+        break;
+      case OptimizeConstraint::Kind::at_most:
+        g.push_back((v - c.bound) / s);
+        break;
+      case OptimizeConstraint::Kind::equal:
+        g.push_back((v - c.bound - c.tolerance) / s);
+        g.push_back((c.bound - c.tolerance - v) / s);
+        break;
+    }
+  }
+  return g;
+}
+
+int constraint_count(const OptimizeGoal& goal) {
+  int m = 0;
+  for (const OptimizeConstraint& c : goal.constraints)
+    m += c.kind == OptimizeConstraint::Kind::equal ? 2 : 1;
+  return m;
+}
+
+class Search {
+ public:
+  Search(const std::string& mechanism, const std::string& origin, const Study& study,
+         const std::function<void(const VariantResult&, const OptimizeStep&)>& done,
+         const std::function<bool()>& stop)
+      : mechanism_(mechanism), origin_(origin), study_(study), done_(done), stop_(stop) {}
+
+  OptimizeResult run() {
+    const size_t n = study_.parameters.size();
+    Eigen::VectorXd x0(n), lo = Eigen::VectorXd::Zero(n), hi = Eigen::VectorXd::Ones(n);
+    for (size_t j = 0; j < n; ++j) {
+      const StudyParameter& p = study_.parameters[j];
+      x0(j) = (p.mean - p.lower) / (p.upper - p.lower);
+    }
+    solvers::ConstrainedSettings settings;
+    settings.method = study_.goal.algorithm == OptimizeGoal::Algorithm::isres
+                          ? solvers::ConstrainedMethod::isres
+                          : solvers::ConstrainedMethod::cobyla;
+    settings.xtol_abs = study_.goal.tolerance;
+    settings.max_evaluations = static_cast<int>(study_.goal.evaluations);
+    settings.seed = study_.seed;
+    const solvers::NloptOutcome o =
+        solvers::minimize_constrained([this](const Eigen::VectorXd& x) { return evaluate(x); },
+                                      constraint_count(study_.goal), x0, lo, hi, settings);
+    result_.evaluations = static_cast<long>(result_.steps.size());
+    result_.outcome = solvers::to_string(o.kind);
+    result_.message = o.message;
+    if (o.kind == solvers::NloptOutcomeKind::callback_error && o.error) {
+      try {
+        std::rethrow_exception(o.error);
+      } catch (const Stopped&) {
+        result_.outcome = "stopped";
+        result_.message = "stopped before the search ended";
+      } catch (...) {
+        throw;  // an internal error of the evaluation: not a variant's outcome
+      }
+    }
+    return result_;
+  }
+
+ private:
+  const std::string& mechanism_;
+  const std::string& origin_;
+  const Study& study_;
+  const std::function<void(const VariantResult&, const OptimizeStep&)>& done_;
+  const std::function<bool()>& stop_;
+  OptimizeResult result_;
+  double worst_ = kNaN;  // the worst objective (minimised sense) of the feasible-or-not runs
+
+  solvers::ConstrainedValue evaluate(const Eigen::VectorXd& x) {
+    if (stop_ && stop_()) throw Stopped();
+    std::vector<double> values(x.size());
+    for (Eigen::Index j = 0; j < x.size(); ++j) {
+      const StudyParameter& p = study_.parameters[static_cast<size_t>(j)];
+      values[static_cast<size_t>(j)] =
+          std::clamp(p.lower + x(j) * (p.upper - p.lower), p.lower, p.upper);
+    }
+    OptimizeStep step;
+    step.evaluation = static_cast<long>(result_.steps.size());
+    const VariantResult r = evaluate_variant(mechanism_, origin_, study_, step.evaluation, values);
+    const double sign = study_.goal.maximize ? -1.0 : 1.0;
+    step.objective = column(r, "objective");
+    std::vector<double> g = constraint_values(study_.goal, r);
+    const bool numbers = r.status == "completed" && std::isfinite(step.objective) &&
+                         std::all_of(g.begin(), g.end(), [](double v) { return std::isfinite(v); });
+    solvers::ConstrainedValue out;
+    if (numbers) {
+      step.violation = 0.0;
+      for (double v : g) step.violation = std::max(step.violation, v);
+      step.feasible = step.violation <= kOptimizeFeasibility;
+      out.objective = sign * step.objective;
+      worst_ = std::isnan(worst_) ? out.objective : std::max(worst_, out.objective);
+      out.constraints = std::move(g);
+    } else {
+      step.violation = 1.0;
+      out.objective = std::isnan(worst_) ? 0.0 : worst_;
+      out.constraints.assign(static_cast<size_t>(constraint_count(study_.goal)), 1.0);
+    }
+    const OptimizeStep* previous = result_.steps.empty() ? nullptr : &result_.steps.back();
+    step.best = previous ? previous->best : -1;
+    step.best_objective = previous ? previous->best_objective : kNaN;
+    if (step.feasible && (step.best < 0 || sign * step.objective < sign * step.best_objective)) {
+      step.best = step.evaluation;
+      step.best_objective = step.objective;
+      result_.found = true;
+      result_.best = r;
+    }
+    result_.steps.push_back(step);
+    if (done_) done_(r, step);
+    return out;
+  }
+};
+
+}  // namespace
+
+OptimizeResult run_optimize(
+    const std::string& mechanism, const std::string& origin, const Study& study,
+    const std::function<void(const VariantResult&, const OptimizeStep&)>& done,
+    const std::function<bool()>& stop) {
+  if (study.kind != StudyKind::optimize)
+    throw std::invalid_argument("run_optimize: the study is not an optimize study");
+  return Search(mechanism, origin, study, done, stop).run();
+}
+
+}  // namespace orthomech

@@ -1,0 +1,135 @@
+// `orthomech optimize` (docs/cli.md "optimize", issue 51's Done-when): the wiper drive sized for a
+// 75° swing with the least peak drive torque and a worst transmission angle of at least 40°
+// (examples/wiper-optimize.yaml). Oracles: the optimum's swing against the law of cosines for
+// its crank a, coupler b and rocker c (ground d = 240 mm: the limit positions have A0B = b ± a,
+// and ψ(l) = π − acos((d² + c² − l²) / (2dc))), and its worst transmission angle against
+// cos μ = (b² + c² − (d ∓ a)²) / (2bc); `cycle` on the written optimum.yaml shows
+// the same swing and transmission angle; an impossible constraint is exit 3 without an optimum
+// file; `sweep` refuses an optimize study and `optimize` a grid.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <numbers>
+#include <string>
+
+#include "support/cli_runner.hpp"
+
+namespace orthomech {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using test::run_cli;
+
+std::string example(const std::string& name) {
+  return (fs::path(test::bundled_file("wiper-drive")).parent_path().parent_path() / "examples" /
+          name)
+      .string();
+}
+
+constexpr double d = 240;
+
+double worst_transmission_deg(double a, double b, double c) {
+  double worst = 90.0;
+  for (const double l : {d - a, d + a}) {
+    const double mu = std::acos((b * b + c * c - l * l) / (2 * b * c)) * 180.0 / std::numbers::pi;
+    worst = std::min(worst, std::min(mu, 180.0 - mu));
+  }
+  return worst;
+}
+
+double swing_deg(double a, double b, double c) {
+  const auto psi = [&](double l) {
+    return std::numbers::pi - std::acos((d * d + c * c - l * l) / (2 * d * c));
+  };
+  return std::abs(psi(b + a) - psi(b - a)) * 180.0 / std::numbers::pi;
+}
+
+TEST(OptimizeCli, WiperDriveFor75DegreesOfSwing) {
+  const test::TempDir dir("orthomech_optimize_");
+  const std::string out = (dir.path / "wiper").string();
+  const auto r = run_cli({"optimize", test::bundled_file("wiper-drive"), "--study",
+                          example("wiper-optimize.yaml"), "--out", out, "--json"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const json j = json::parse(r.out);
+  ASSERT_TRUE(j["found"].get<bool>());
+  const json& opt = j["optimum"];
+  const double a = opt["variables"]["crank"], b = opt["variables"]["coupler"],
+               c = opt["variables"]["rocker"];
+  const double swing = opt["metrics"]["swing"];
+  EXPECT_NEAR(swing, 75.0, 0.05 + 1e-6);
+  EXPECT_NEAR(swing, swing_deg(a, b, c), 2e-3) << "a = " << a << ", b = " << b << ", c = " << c;
+  const double mu = opt["metrics"]["transmission.min"];
+  EXPECT_GE(mu, 40.0 - 40e-6);
+  EXPECT_NEAR(mu, worst_transmission_deg(a, b, c), 1e-3);
+  // The nominal drive (a = 40, b = 250, c = 60: a swing of 89°, μ 29.5°) is not feasible; the
+  // optimum's torque is the objective.
+  const double peak = opt["metrics"]["drive.peak"];
+  EXPECT_DOUBLE_EQ(opt["objective"].get<double>(), peak);
+  EXPECT_TRUE(fs::exists(fs::path(out) / "evaluations.csv"));
+  EXPECT_TRUE(fs::exists(fs::path(out) / "study.sqlite"));
+  EXPECT_EQ(json::parse(test::read_text(fs::path(out) / "summary.json")), j);
+
+  // `cycle` on the optimal file shows the swing and the transmission angle.
+  const auto cyc =
+      run_cli({"cycle", (fs::path(out) / "optimum.yaml").string(), "--steps", "180", "--json"});
+  ASSERT_EQ(cyc.status, 0) << cyc.err;
+  const json cj = json::parse(cyc.out);
+  bool found = false;
+  for (const auto& s : cj["strokes"])
+    if (s["name"] == "rocker_angle") {
+      found = true;
+      EXPECT_NEAR(s["range"].get<double>(), swing, 1e-9);
+    }
+  EXPECT_TRUE(found);
+  // The best of every evaluation in the CSV is the optimum (rows: header + evaluations).
+  std::ifstream csv(fs::path(out) / "evaluations.csv");
+  long lines = 0;
+  for (std::string line; std::getline(csv, line);) ++lines;
+  EXPECT_EQ(lines, j["evaluations"].get<long>() + 1);
+
+  // The directory holds a study now: a second run there is refused.
+  const auto again = run_cli({"optimize", test::bundled_file("wiper-drive"), "--study",
+                              example("wiper-optimize.yaml"), "--out", out});
+  EXPECT_EQ(again.status, 2) << again.err;
+}
+
+TEST(OptimizeCli, NoFeasibleDesignIsExit3AndWrongStudiesExit2) {
+  const test::TempDir dir("orthomech_optimize_");
+  const std::string study = (dir.path / "o.yaml").string();
+  std::ofstream(study) << R"(study: optimize
+steps: 60
+parameters:
+  - {name: crank, path: bodies.crank.points.A.0, bounds: [20, 40]}
+objective: {minimize: drive.peak}
+constraints:
+  - {metric: range(rocker_angle), min: 170}
+evaluations: 12
+)";
+  const auto r = run_cli({"optimize", test::bundled_file("crank-rocker"), "--study", study, "--out",
+                          (dir.path / "a").string(), "--json"});
+  EXPECT_EQ(r.status, 3) << r.err;
+  const json j = json::parse(r.out);
+  EXPECT_FALSE(j["found"].get<bool>());
+  EXPECT_EQ(j["feasible_evaluations"].get<long>(), 0);
+  EXPECT_FALSE(fs::exists(dir.path / "a" / "optimum.yaml"));
+  EXPECT_TRUE(fs::exists(dir.path / "a" / "evaluations.csv"));
+
+  const auto sweep = run_cli({"sweep", test::bundled_file("crank-rocker"), "--study", study,
+                              "--out", (dir.path / "b").string()});
+  EXPECT_EQ(sweep.status, 2);
+  EXPECT_NE(sweep.err.find("orthomech optimize"), std::string::npos) << sweep.err;
+  const std::string grid = (dir.path / "g.yaml").string();
+  std::ofstream(grid) << "study: grid\nparameters:\n  - {path: bodies.crank.mass, values: [1]}\n";
+  const auto o = run_cli({"optimize", test::bundled_file("crank-rocker"), "--study", grid, "--out",
+                          (dir.path / "c").string()});
+  EXPECT_EQ(o.status, 2);
+  EXPECT_NE(o.err.find("orthomech sweep"), std::string::npos) << o.err;
+}
+
+}  // namespace
+}  // namespace orthomech
