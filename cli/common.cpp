@@ -17,6 +17,7 @@
 #include "orthomech/io/noise.hpp"
 #include "orthomech/io/study_db.hpp"
 #include "orthomech/io/units.hpp"
+#include "orthomech/study/study.hpp"
 
 namespace orthomech::cli {
 
@@ -201,11 +202,14 @@ std::unique_ptr<StudyDatabase> open_study_database(const std::string& out, bool 
     spdlog::error("{}: cannot create the directory: {}", out, ec.message());
     return nullptr;
   }
+  // The same study: the same mechanism and study file, a Monte Carlo study's samples aside.
+  std::vector<std::pair<std::string, std::string>> identity{
+      {"mechanism", mechanism}, {"study", study_identity(study_text, "study")}};
+  if (study.kind == StudyKind::monte_carlo)
+    identity.emplace_back("samples", std::to_string(study.samples));
   try {
     return std::make_unique<StudyDatabase>(std::filesystem::path(out) / "study.sqlite", resume,
-                                           std::vector<std::pair<std::string, std::string>>{
-                                               {"mechanism", mechanism}, {"study", study_text}},
-                                           parameters, metrics);
+                                           identity, parameters, metrics);
   } catch (const std::runtime_error& e) {
     spdlog::error("{}", e.what());
     return nullptr;

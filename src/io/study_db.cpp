@@ -61,6 +61,33 @@ struct StudyDatabase::Impl {
   }
 };
 
+namespace {
+
+std::string value_of(const std::vector<std::pair<std::string, std::string>>& rows,
+                     const std::string& key) {
+  for (const auto& row : rows)
+    if (row.first == key) return row.second;
+  return "";
+}
+
+// The stored study is the expected one but for a smaller `samples` (an extended Monte Carlo
+// study): every other key equal, both sample counts numbers, the stored one at most the new one.
+bool extends(const std::vector<std::pair<std::string, std::string>>& stored,
+             const std::vector<std::pair<std::string, std::string>>& expected) {
+  if (stored.size() != expected.size()) return false;
+  for (size_t k = 0; k < stored.size(); ++k)
+    if (stored[k].first != expected[k].first ||
+        (stored[k].first != "samples" && stored[k].second != expected[k].second))
+      return false;
+  try {
+    return std::stol(value_of(stored, "samples")) <= std::stol(value_of(expected, "samples"));
+  } catch (const std::logic_error&) {
+    return false;
+  }
+}
+
+}  // namespace
+
 StudyDatabase::StudyDatabase(const std::filesystem::path& file, bool resume,
                              const std::vector<std::pair<std::string, std::string>>& identity,
                              const std::vector<std::string>& parameters,
@@ -107,6 +134,13 @@ StudyDatabase::StudyDatabase(const std::filesystem::path& file, bool resume,
       if (sqlite3_step(put) != SQLITE_DONE) impl_->fail("cannot store the study");
       sqlite3_reset(put);
     }
+    sqlite3_finalize(put);
+  } else if (stored != expected && extends(stored, expected)) {
+    // A Monte Carlo study resumed with more samples: the stored variants are its first ones.
+    sqlite3_stmt* put = impl_->prepare("UPDATE study SET value = ? WHERE key = 'samples'");
+    const std::string samples = value_of(expected, "samples");
+    sqlite3_bind_text(put, 1, samples.c_str(), -1, SQLITE_TRANSIENT);
+    if (sqlite3_step(put) != SQLITE_DONE) impl_->fail("cannot store the study");
     sqlite3_finalize(put);
   } else if (stored != expected) {
     std::string differ;

@@ -550,6 +550,25 @@ Study parse_study(const std::string& text, const std::string& origin, const std:
   }
 }
 
+std::string study_identity(const std::string& text, const std::string& origin) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    throw InputError({origin, e.mark.line + 1, e.mark.column + 1}, "YAML", e.msg);
+  }
+  if (!root.IsMap() || !root["study"] || !root["study"].IsScalar() ||
+      root["study"].Scalar() != "monte-carlo" || !root["samples"] || !root["samples"].IsScalar())
+    return text;
+  const YAML::Node samples = root["samples"];
+  const std::string value = samples.Scalar();
+  const auto at = static_cast<size_t>(std::max(0, samples.Mark().pos));
+  if (samples.Mark().pos < 0 || text.compare(at, value.size(), value) != 0) return text;
+  std::string identity = text;
+  identity.replace(at, value.size(), "N");
+  return identity;
+}
+
 Study load_study(const std::string& path, const std::string& mechanism,
                  const std::string& mechanism_origin) {
   std::ifstream in(path, std::ios::binary);

@@ -352,6 +352,37 @@ metrics: {cycle: true, assemble: true}
   EXPECT_LT(completed, 16);  // a non-Grashof crank does not turn: its cycle is not completed
 }
 
+// Issue 51 item 4: a Monte Carlo study resumed with more samples computes only the new variants,
+// and its files equal one run with the larger sample count (variant k's draws depend only on the
+// seed and k). Fewer samples, or another seed, is another study (exit 2).
+TEST(SweepCli, AMonteCarloStudyExtendedEqualsOneRunWithMoreSamples) {
+  Dir dir;
+  const std::string mech = test::bundled_file("crank-rocker");
+  const std::string small = dir.write("small.yaml", monte_carlo(6, "0.05", "0.1"));
+  const std::string large = dir.write("large.yaml", monte_carlo(10, "0.05", "0.1"));
+  ASSERT_EQ(run_cli({"sweep", mech, "--study", small, "--out", dir.file("a")}).status, 0);
+  const std::string first = test::read_text(dir.path / "a" / "variants.csv");
+  const auto extended =
+      run_cli({"sweep", mech, "--study", large, "--out", dir.file("a"), "--resume", "-v"});
+  ASSERT_EQ(extended.status, 0) << extended.err;
+  EXPECT_NE(extended.err.find("10 variants, 6 stored, 4 to compute"), std::string::npos)
+      << extended.err;
+  ASSERT_EQ(run_cli({"sweep", mech, "--study", large, "--out", dir.file("b")}).status, 0);
+  const std::string whole = test::read_text(dir.path / "b" / "variants.csv");
+  EXPECT_EQ(test::read_text(dir.path / "a" / "variants.csv"), whole);
+  EXPECT_EQ(whole.substr(0, first.size()), first);  // the first six rows as they were
+  EXPECT_EQ(csv(whole).size(), 11u);
+  const auto fewer = run_cli({"sweep", mech, "--study", small, "--out", dir.file("a"), "--resume"});
+  EXPECT_EQ(fewer.status, 2);
+  EXPECT_NE(fewer.err.find("samples differ"), std::string::npos) << fewer.err;
+  std::string reseeded = monte_carlo(12, "0.05", "0.1");
+  reseeded.replace(reseeded.find("seed: 11"), 8, "seed: 12");
+  const auto other = run_cli({"sweep", mech, "--study", dir.write("seed.yaml", reseeded), "--out",
+                              dir.file("a"), "--resume"});
+  EXPECT_EQ(other.status, 2);
+  EXPECT_NE(other.err.find("holds another study"), std::string::npos) << other.err;
+}
+
 TEST(SweepCli, BadStudiesAndOutputsAreExitTwo) {
   Dir dir;
   const std::string mech = test::bundled_file("crank-rocker");
