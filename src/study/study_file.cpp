@@ -561,7 +561,7 @@ std::string study_identity(const std::string& text, const std::string& origin) {
       root["study"].Scalar() != "monte-carlo" || !root["samples"] || !root["samples"].IsScalar())
     return text;
   const YAML::Node samples = root["samples"];
-  const std::string value = samples.Scalar();
+  const std::string& value = samples.Scalar();
   const auto at = static_cast<size_t>(std::max(0, samples.Mark().pos));
   if (samples.Mark().pos < 0 || text.compare(at, value.size(), value) != 0) return text;
   std::string identity = text;
