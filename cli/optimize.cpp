@@ -161,7 +161,9 @@ int run_optimize_command(const OptimizeCliOptions& opt) {
       optimum = (out / "optimum.yaml").string();
       write_file(optimum, with_file_values(mechanism, opt.file, changes));
     }
-    const nlohmann::json summary = summarize(study, result, optimum);
+    nlohmann::json summary = summarize(study, result, optimum);
+    summary["complete"] = stop == StopReason::none;  // stopped: the best of the evaluations so far
+    if (stop != StopReason::none) summary["stop"] = to_string(stop);
     write_file(out / "evaluations.csv", study_csv(*db));
     write_file(out / "summary.json", summary.dump(2) + "\n");
     if (opt.json)

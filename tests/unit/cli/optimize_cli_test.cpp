@@ -98,6 +98,28 @@ TEST(OptimizeCli, WiperDriveFor75DegreesOfSwing) {
   EXPECT_EQ(again.status, 2) << again.err;
 }
 
+// A time limit stops the search after the evaluation that passes it: exit 5, the summary marked
+// incomplete, the best design so far written (the crank-rocker's start is feasible).
+TEST(OptimizeCli, ATimeLimitKeepsTheBestSoFar) {
+  const test::TempDir dir("orthomech_optimize_");
+  const std::string study = (dir.path / "o.yaml").string();
+  std::ofstream(study) << R"(study: optimize
+steps: 60
+parameters:
+  - {name: crank, path: bodies.crank.points.A.0, bounds: [20, 40]}
+objective: {minimize: drive.peak}
+)";
+  const auto r = run_cli({"optimize", test::bundled_file("crank-rocker"), "--study", study, "--out",
+                          (dir.path / "a").string(), "--time-limit", "1e-9", "--json"});
+  EXPECT_EQ(r.status, 5) << r.err;
+  const json j = json::parse(r.out);
+  EXPECT_FALSE(j["complete"].get<bool>());
+  EXPECT_EQ(j["stop"], "time_limit");
+  EXPECT_EQ(j["outcome"], "stopped");
+  EXPECT_EQ(j["evaluations"].get<long>(), 1);
+  EXPECT_TRUE(fs::exists(dir.path / "a" / "optimum.yaml"));
+}
+
 TEST(OptimizeCli, NoFeasibleDesignIsExit3AndWrongStudiesExit2) {
   const test::TempDir dir("orthomech_optimize_");
   const std::string study = (dir.path / "o.yaml").string();
