@@ -98,17 +98,21 @@ TEST(OptimizeCli, WiperDriveFor75DegreesOfSwing) {
   EXPECT_EQ(again.status, 2) << again.err;
 }
 
+// The crank-rocker's crank length between 20 and 40 mm, the least peak drive torque; `extra`
+// appended (constraints, a budget).
+std::string crank_study(const std::string& extra) {
+  return "study: optimize\nsteps: 60\nparameters:\n"
+         "  - {name: crank, path: bodies.crank.points.A.0, bounds: [20, 40]}\n"
+         "objective: {minimize: drive.peak}\n" +
+         extra;
+}
+
 // A time limit stops the search after the evaluation that passes it: exit 5, the summary marked
 // incomplete, the best design so far written (the crank-rocker's start is feasible).
 TEST(OptimizeCli, ATimeLimitKeepsTheBestSoFar) {
   const test::TempDir dir("orthomech_optimize_");
   const std::string study = (dir.path / "o.yaml").string();
-  std::ofstream(study) << R"(study: optimize
-steps: 60
-parameters:
-  - {name: crank, path: bodies.crank.points.A.0, bounds: [20, 40]}
-objective: {minimize: drive.peak}
-)";
+  std::ofstream(study) << crank_study("");
   const auto r = run_cli({"optimize", test::bundled_file("crank-rocker"), "--study", study, "--out",
                           (dir.path / "a").string(), "--time-limit", "1e-9", "--json"});
   EXPECT_EQ(r.status, 5) << r.err;
@@ -123,15 +127,8 @@ objective: {minimize: drive.peak}
 TEST(OptimizeCli, NoFeasibleDesignIsExit3AndWrongStudiesExit2) {
   const test::TempDir dir("orthomech_optimize_");
   const std::string study = (dir.path / "o.yaml").string();
-  std::ofstream(study) << R"(study: optimize
-steps: 60
-parameters:
-  - {name: crank, path: bodies.crank.points.A.0, bounds: [20, 40]}
-objective: {minimize: drive.peak}
-constraints:
-  - {metric: range(rocker_angle), min: 170}
-evaluations: 12
-)";
+  std::ofstream(study) << crank_study(
+      "constraints:\n  - {metric: range(rocker_angle), min: 170}\nevaluations: 12\n");
   const auto r = run_cli({"optimize", test::bundled_file("crank-rocker"), "--study", study, "--out",
                           (dir.path / "a").string(), "--json"});
   EXPECT_EQ(r.status, 3) << r.err;
