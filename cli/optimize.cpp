@@ -155,11 +155,11 @@ int run_optimize_command(const OptimizeCliOptions& opt) {
   std::string optimum;
   try {
     if (result.found) {
-      std::vector<FileChange> changes;
-      for (size_t j = 0; j < study.parameters.size(); ++j)
-        changes.push_back({study.parameters[j].path, value_text(result.best.values[j])});
+      std::string note;
+      const std::string text = variant_file(mechanism, opt.file, study, result.best, &note);
+      if (!note.empty()) spdlog::warn("{}: {}", (out / "optimum.yaml").string(), note);
       optimum = (out / "optimum.yaml").string();
-      write_file(optimum, with_file_values(mechanism, opt.file, changes));
+      write_file(optimum, text);
     }
     nlohmann::json summary = summarize(study, result, optimum);
     summary["complete"] = stop == StopReason::none;  // stopped: the best of the evaluations so far

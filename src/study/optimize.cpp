@@ -7,6 +7,10 @@
 #include <stdexcept>
 
 #include "../solvers/nlopt_constrained.hpp"
+#include "orthomech/analysis/cycle.hpp"
+#include "orthomech/error.hpp"
+#include "orthomech/io/mechanism_file.hpp"
+#include "orthomech/io/mechanism_writer.hpp"
 
 namespace orthomech {
 
@@ -150,6 +154,35 @@ class Search {
 };
 
 }  // namespace
+
+std::string variant_file(const std::string& mechanism, const std::string& origin,
+                         const Study& study, const VariantResult& variant, std::string* note) {
+  std::vector<FileChange> changes;
+  for (size_t j = 0; j < study.parameters.size(); ++j)
+    changes.push_back({study.parameters[j].path, value_text(variant.values[j])});
+  const std::string text = with_file_values(mechanism, origin, changes);
+  const Model model = parse_mechanism(text, origin, {});
+  const Driver* driver = nullptr;
+  for (const Driver& d : model.drivers)
+    if (d.name == model.analysis.driver) driver = &d;
+  if (!driver && !model.drivers.empty()) driver = &model.drivers.front();
+  if (!driver) return text;
+  CycleOptions co;
+  co.driver = *driver;
+  co.steps = 2;  // the start is what is wanted
+  const CycleResult c = run_cycle(model, co);
+  if (c.points.empty()) {
+    if (note)
+      *note = "the poses are as drawn: the cycle's start was not computed (" + c.message + ")";
+    return text;
+  }
+  try {
+    return edit_design_poses(text, origin, model, c.points[0].q).text;
+  } catch (const InputError& e) {
+    if (note) *note = std::string("the poses are as drawn: ") + e.what();
+    return text;
+  }
+}
 
 OptimizeResult run_optimize(
     const std::string& mechanism, const std::string& origin, const Study& study,

@@ -49,4 +49,14 @@ struct OptimizeResult {
     const std::function<void(const VariantResult&, const OptimizeStep&)>& done,
     const std::function<bool()>& stop = {});
 
+// The mechanism file of a variant (the study's text with the variant's values written in place
+// at their paths, every other byte kept) with its design poses closed: the bodies at the start
+// of the variant's cycle (the driver at its drawn input, the joints assembled), so that the file
+// reads back without "does not close as drawn". When that start cannot be computed, or a pose
+// cannot be edited in place, the poses are left as drawn and `note` says why. Throws InputError
+// when a value cannot be written in place (io/mechanism_file.hpp with_file_values).
+[[nodiscard]] std::string variant_file(const std::string& mechanism, const std::string& origin,
+                                       const Study& study, const VariantResult& variant,
+                                       std::string* note = nullptr);
+
 }  // namespace orthomech

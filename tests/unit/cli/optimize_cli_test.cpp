@@ -78,6 +78,7 @@ TEST(OptimizeCli, WiperDriveFor75DegreesOfSwing) {
   const auto cyc =
       run_cli({"cycle", (fs::path(out) / "optimum.yaml").string(), "--steps", "180", "--json"});
   ASSERT_EQ(cyc.status, 0) << cyc.err;
+  EXPECT_EQ(cyc.err.find("does not close as drawn"), std::string::npos) << cyc.err;
   const json cj = json::parse(cyc.out);
   bool found = false;
   for (const auto& s : cj["strokes"])
