@@ -160,7 +160,7 @@ std::string variant_file(const std::string& mechanism, const std::string& origin
   std::vector<FileChange> changes;
   for (size_t j = 0; j < study.parameters.size(); ++j)
     changes.push_back({study.parameters[j].path, value_text(variant.values[j])});
-  const std::string text = with_file_values(mechanism, origin, changes);
+  std::string text = with_file_values(mechanism, origin, changes);
   const Model model = parse_mechanism(text, origin, {});
   const Driver* driver = nullptr;
   for (const Driver& d : model.drivers)
