@@ -109,30 +109,8 @@ NloptOutcome minimize_constrained(const ConstrainedEvaluation& f, int constraint
   double value = HUGE_VAL;
   if (r > 0) r = nlopt_optimize(opt, x.data(), &value);
   nlopt_destroy(opt);
-  out.code = static_cast<int>(r);
-  out.evaluations = ctx.evaluations;
-  out.error = ctx.error;
-  if (std::isfinite(value)) {
-    for (unsigned i = 0; i < n; ++i) out.x(i) = x[i];
-    out.value = value;
-  }
-  if (ctx.error) {
-    out.kind = NloptOutcomeKind::callback_error;
-    try {
-      std::rethrow_exception(ctx.error);
-    } catch (const std::exception& e) {
-      out.message = std::string("the evaluation threw: ") + e.what();
-    } catch (...) {
-      out.message = "the evaluation threw a non-standard exception";
-    }
-    return out;
-  }
-  if (ctx.nan) {
-    out.kind = NloptOutcomeKind::callback_error;
-    out.message = "the evaluation returned NaN";
-    return out;
-  }
-  classify_outcome(out.code, out);
+  finish_outcome(static_cast<int>(r), value, x, ctx.evaluations, ctx.error, ctx.nan, "evaluation",
+                 out);
   return out;
 }
 

@@ -68,7 +68,32 @@ const char* to_string(NloptOutcomeKind k) {
   return "?";
 }
 
-void classify_outcome(int code, NloptOutcome& out) {
+void finish_outcome(int code, double value, const std::vector<double>& x, int evaluations,
+                    const std::exception_ptr& error, bool nan, const char* what,
+                    NloptOutcome& out) {
+  out.code = code;
+  out.evaluations = evaluations;
+  out.error = error;
+  if (std::isfinite(value)) {
+    for (size_t i = 0; i < x.size(); ++i) out.x(static_cast<Eigen::Index>(i)) = x[i];
+    out.value = value;
+  }
+  if (error) {
+    out.kind = NloptOutcomeKind::callback_error;
+    try {
+      std::rethrow_exception(error);
+    } catch (const std::exception& e) {
+      out.message = std::string("the ") + what + " threw: " + e.what();
+    } catch (...) {
+      out.message = std::string("the ") + what + " threw a non-standard exception";
+    }
+    return;
+  }
+  if (nan) {
+    out.kind = NloptOutcomeKind::callback_error;
+    out.message = std::string("the ") + what + " returned NaN";
+    return;
+  }
   const auto r = static_cast<nlopt_result>(code);
   switch (r) {
     case NLOPT_SUCCESS:
@@ -134,30 +159,8 @@ NloptOutcome minimize_bounded(const std::function<double(const Eigen::VectorXd&)
   double value = HUGE_VAL;
   if (r > 0) r = nlopt_optimize(opt, x.data(), &value);
   nlopt_destroy(opt);
-  out.code = static_cast<int>(r);
-  out.evaluations = ctx.evaluations;
-  out.error = ctx.error;
-  if (std::isfinite(value)) {
-    for (unsigned i = 0; i < n; ++i) out.x(i) = x[i];
-    out.value = value;
-  }
-  if (ctx.error) {
-    out.kind = NloptOutcomeKind::callback_error;
-    try {
-      std::rethrow_exception(ctx.error);
-    } catch (const std::exception& e) {
-      out.message = std::string("the objective threw: ") + e.what();
-    } catch (...) {
-      out.message = "the objective threw a non-standard exception";
-    }
-    return out;
-  }
-  if (ctx.nan) {
-    out.kind = NloptOutcomeKind::callback_error;
-    out.message = "the objective returned NaN";
-    return out;
-  }
-  classify_outcome(static_cast<int>(r), out);
+  finish_outcome(static_cast<int>(r), value, x, ctx.evaluations, ctx.error, ctx.nan, "objective",
+                 out);
   return out;
 }
 

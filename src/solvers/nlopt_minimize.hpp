@@ -93,8 +93,10 @@ struct MultistartOutcome {
                                                   unsigned long long seed);
 
 [[nodiscard]] const char* to_string(NloptOutcomeKind k);
-// Sets out.kind and out.message from an nlopt_result `code` (the run ended without an error of
-// the objective's).
-void classify_outcome(int code, NloptOutcome& out);
+// Fills `out` from a finished run: the nlopt_result `code`, NLopt's final point x and `value`
+// (kept when finite), the evaluations, and — before the code — an exception the `what`
+// ("objective") threw or a NaN it returned (callback_error).
+void finish_outcome(int code, double value, const std::vector<double>& x, int evaluations,
+                    const std::exception_ptr& error, bool nan, const char* what, NloptOutcome& out);
 
 }  // namespace orthomech::solvers
