@@ -63,6 +63,12 @@ bool is_function(const std::string& f) {
   return std::find(s.begin(), s.end(), "." + f) != s.end();
 }
 
+std::invalid_argument unknown_metric(const std::string& name, const MetricColumns& columns) {
+  std::string list;
+  for (const auto& [n, v] : columns) list += (list.empty() ? "" : ", ") + n;
+  return std::invalid_argument("unknown metric '" + name + "' (the study's metrics: " + list + ")");
+}
+
 }  // namespace
 
 const std::vector<std::string>& measure_metric_suffixes() {
@@ -154,9 +160,8 @@ double evaluate_metric_expression(const std::string& text, const MetricColumns& 
       while (close < text.size() && text[close] == ' ') ++close;
       const std::string argument = text.substr(a, b - a);
       if (b > a && close < text.size() && text[close] == ')') {
-        const auto k = column_of(argument + "." + name)
-                           ? column_of(argument + "." + name)
-                           : column_of("measure." + argument + "." + name);
+        std::optional<size_t> k = column_of(argument + "." + name);
+        if (!k) k = column_of("measure." + argument + "." + name);
         if (k) {
           rewritten += variable(*k);
           i = close + 1;
@@ -174,10 +179,7 @@ double evaluate_metric_expression(const std::string& text, const MetricColumns& 
     if (const auto k = column_of(name)) {
       rewritten += variable(*k);
     } else if (name.find_first_of(".|") != std::string::npos) {
-      std::string list;
-      for (const auto& [n, v] : columns) list += (list.empty() ? "" : ", ") + n;
-      throw std::invalid_argument("unknown metric '" + name + "' (the study's metrics: " + list +
-                                  ")");
+      throw unknown_metric(name, columns);
     } else {
       rewritten += name;  // a function or constant of the arithmetic, or an unknown name
     }
@@ -189,10 +191,7 @@ double evaluate_metric_expression(const std::string& text, const MetricColumns& 
   try {
     return e.evaluate(rewritten);
   } catch (const detail::UnknownName& u) {
-    std::string list;
-    for (const auto& [n, v] : columns) list += (list.empty() ? "" : ", ") + n;
-    throw std::invalid_argument("unknown metric '" + u.name + "' (the study's metrics: " + list +
-                                ")");
+    throw unknown_metric(u.name, columns);
   }
 }
 

@@ -107,7 +107,7 @@ class Search {
   const std::function<void(const VariantResult&, const OptimizeStep&)>& done_;
   const std::function<bool()>& stop_;
   OptimizeResult result_;
-  double worst_ = kNaN;  // the worst objective (minimised sense) of the feasible-or-not runs
+  double worst_ = kNaN;  // the worst objective (minimised sense) of the variants with numbers
 
   solvers::ConstrainedValue evaluate(const Eigen::VectorXd& x) {
     if (stop_ && stop_()) throw Stopped();
@@ -157,15 +157,9 @@ class Search {
 
 std::string variant_file(const std::string& mechanism, const std::string& origin,
                          const Study& study, const VariantResult& variant, std::string* note) {
-  std::vector<FileChange> changes;
-  for (size_t j = 0; j < study.parameters.size(); ++j)
-    changes.push_back({study.parameters[j].path, value_text(variant.values[j])});
-  std::string text = with_file_values(mechanism, origin, changes);
+  std::string text = with_file_values(mechanism, origin, variant_changes(study, variant.values));
   const Model model = parse_mechanism(text, origin, {});
-  const Driver* driver = nullptr;
-  for (const Driver& d : model.drivers)
-    if (d.name == model.analysis.driver) driver = &d;
-  if (!driver && !model.drivers.empty()) driver = &model.drivers.front();
+  const Driver* driver = study_driver(model);
   if (!driver) return text;
   CycleOptions co;
   co.driver = *driver;

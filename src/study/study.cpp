@@ -46,11 +46,6 @@ std::uint64_t splitmix64(std::uint64_t x) {
 }
 
 // ---- one variant's metrics ---------------------------------------------------------------------
-const Driver* study_driver(const Model& model) {
-  for (const Driver& d : model.drivers)
-    if (d.name == model.analysis.driver) return &d;
-  return model.drivers.empty() ? nullptr : &model.drivers.front();
-}
 
 // The cycle's summary in the file's units, named as in `cycle --json` (peaks.drive.max →
 // drive.max; peaks."A.|F|".peak → A.|F|.peak; power.mean; the worst transmission angle of the
@@ -342,6 +337,19 @@ void attach_nominal_paths(Study& study, const std::string& mechanism, const std:
   study.nominal = std::make_shared<const NominalPaths>(nominal_paths(mechanism, origin, study));
 }
 
+const Driver* study_driver(const Model& model) {
+  for (const Driver& d : model.drivers)
+    if (d.name == model.analysis.driver) return &d;
+  return model.drivers.empty() ? nullptr : &model.drivers.front();
+}
+
+std::vector<FileChange> variant_changes(const Study& study, const std::vector<double>& values) {
+  std::vector<FileChange> changes;
+  for (size_t j = 0; j < study.parameters.size(); ++j)
+    changes.push_back({study.parameters[j].path, value_text(values[j])});
+  return changes;
+}
+
 VariantResult evaluate_variant(const std::string& mechanism, const std::string& origin,
                                const Study& study, long index, const std::vector<double>& values) {
   VariantResult r;
@@ -349,9 +357,7 @@ VariantResult evaluate_variant(const std::string& mechanism, const std::string& 
   r.values = values;
   const StudyMetrics& want = study.metrics;
   try {
-    std::vector<FileChange> changes;
-    for (size_t j = 0; j < study.parameters.size(); ++j)
-      changes.push_back({study.parameters[j].path, value_text(values[j])});
+    const std::vector<FileChange> changes = variant_changes(study, values);
     Model model;
     try {
       model = parse_mechanism(mechanism, origin, changes);

@@ -113,6 +113,13 @@ void attach_nominal_paths(Study& study, const std::string& mechanism, const std:
 // The FileChange text of a value: shortest decimal that reads back to the same double.
 [[nodiscard]] std::string value_text(double value);
 
+// The `--set` changes of a variant: each parameter's path and the value_text of its value.
+struct FileChange;
+[[nodiscard]] std::vector<FileChange> variant_changes(const Study& study,
+                                                      const std::vector<double>& values);
+// The driver a study sweeps: the file's `analysis: driver`, else its first (nullptr: none).
+[[nodiscard]] const Driver* study_driver(const Model& model);
+
 // One variant's outcome: status "completed", "stopped_at_dead_point", "failed" (the cycle could
 // not be computed or stopped) or "invalid" (the changed file is not a valid mechanism); the
 // cycle's message; metrics by name in the file's units (NaN where there is none). Without a cycle

@@ -62,6 +62,10 @@ TEST(OptimizeCli, WiperDriveFor75DegreesOfSwing) {
                c = opt["variables"]["rocker"];
   const double swing = opt["metrics"]["swing"];
   EXPECT_NEAR(swing, 75.0, 0.05 + 1e-6);
+  // 180 positions 2° apart: the parabola-refined extremes of the swing are within 2e-3° of the
+  // closed form (measured −1.3e-5°); the worst transmission angle is at θ = 0° or 180°, both
+  // samples of the grid (it starts at 90°), so it is the closed form to rounding
+  // (measured 3.6e-11°).
   EXPECT_NEAR(swing, swing_deg(a, b, c), 2e-3) << "a = " << a << ", b = " << b << ", c = " << c;
   const double mu = opt["metrics"]["transmission.min"];
   EXPECT_GE(mu, 40.0 - 40e-6);

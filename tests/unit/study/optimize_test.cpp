@@ -67,12 +67,17 @@ tolerance: 1e-8
                                         });
   ASSERT_TRUE(r.found) << r.outcome << ": " << r.message;
   const double a_star = crank_for_swing(60.0);
+  // The search's own step limit is 1e-8 of the 65 mm span; what is left is the cycle's swing
+  // (parabola-refined extremes at 360 steps, within 1e-4° of S below) over S'(a*) ≈ 2°/mm:
+  // about 1e-5 mm, bounded here by 2e-3 mm.
   EXPECT_NEAR(r.best.values[0], a_star, 2e-3) << "a* = " << a_star;
   double swing = 0.0;
   for (const auto& [name, value] : r.best.metrics)
     if (name == "rocker_angle.range") swing = value;
   EXPECT_GE(swing, 60.0 * (1.0 - kOptimizeFeasibility));
-  EXPECT_NEAR(swing, swing_deg(r.best.values[0]), 1e-4);  // the cycle's swing is the closed form
+  // The cycle's swing is the closed form up to the refinement of its extremes (an O(h³) error of
+  // the parabola through three samples 1° apart; measured −2.0e-5° at a*).
+  EXPECT_NEAR(swing, swing_deg(r.best.values[0]), 1e-4);
   EXPECT_EQ(calls, r.evaluations);
   EXPECT_EQ(r.steps.back().best, r.best.index);
 }
