@@ -130,7 +130,7 @@ void require_planar(const Model& model, const std::string& command) {
   throw InputError({model.file, 0, 0}, "dimension: 3",
                    "'" + command +
                        "' is not available for spatial mechanisms yet (info, assemble, simulate, "
-                       "crosscheck, cycle, validate and render are)");
+                       "crosscheck, cycle, validate, render, sweep and optimize are)");
 }
 
 void add_units_option(CLI::App* cmd, std::string& choice) {

@@ -792,7 +792,8 @@ nlohmann::json CycleRun::limits_json() const {
   for (const LimitExcursion& l : metrics.limits) {
     const Joint& lj = model.joints[static_cast<size_t>(l.joint)];
     const OutputUnit u = output_unit(
-        std::holds_alternative<Revolute>(lj.kind) ? Dimension::angle : Dimension::length, U);
+        joint_coordinate_kind(lj) == CoordinateKind::angle ? Dimension::angle : Dimension::length,
+        U);
     limits.push_back({{"joint", lj.name},
                       {"limits", {u.from_si(lj.limits->x()), u.from_si(lj.limits->y())}},
                       {"first", extreme_json(l.first, u)},
@@ -898,7 +899,7 @@ void CycleRun::summary_events(std::ostream& out) const {
   out << "limits          " << (metrics.limits.empty() ? "kept" : "") << "\n";
   for (const LimitExcursion& l : metrics.limits) {
     const Joint& lj = model.joints[static_cast<size_t>(l.joint)];
-    const bool rev = std::holds_alternative<Revolute>(lj.kind);
+    const bool rev = joint_coordinate_kind(lj) == CoordinateKind::angle;
     out << "  joint '" << lj.name << "' leaves its limits [" << format_input(lj.limits->x(), rev, U)
         << ", " << format_input(lj.limits->y(), rev, U) << "] at input "
         << format_input(wrapped(l.first.input), angular, U) << " and reaches "

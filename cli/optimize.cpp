@@ -106,7 +106,6 @@ int run_optimize_command(const OptimizeCliOptions& opt) {
   const std::string mechanism = read_input_file(opt.file, "file");
   {  // the nominal file must be valid: its errors are the file's, with their line
     const Model model = load(opt.file);
-    require_planar(model, "optimize");
   }
   const std::string study_text = read_input_file(opt.study, "study");
   const Study study = parse_study(study_text, opt.study, mechanism, opt.file);

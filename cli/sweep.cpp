@@ -220,7 +220,6 @@ int run_sweep_command(const SweepCliOptions& opt) {
   const std::string mechanism = read_input_file(opt.file, "file");
   {  // the nominal file must be valid: its errors are the file's, with their line
     const Model model = load(opt.file);
-    require_planar(model, "sweep");
     (void)model;
   }
   const std::string study_text = read_input_file(opt.study, "study");

@@ -224,7 +224,8 @@ CycleMetrics compute_cycle_metrics(const Model& model, const CycleResult& r,
     pw.mean_speed /= static_cast<double>(reg.size());  // ω̄: mean |ṡ| over the positions
     const bool angular =
         opt.driver_joint >= 0 &&
-        std::holds_alternative<Revolute>(model.joints[static_cast<size_t>(opt.driver_joint)].kind);
+        joint_coordinate_kind(model.joints[static_cast<size_t>(opt.driver_joint)]) ==
+            CoordinateKind::angle;
     if (opt.speed_fluctuation && *opt.speed_fluctuation > 0.0 && angular && pw.mean_speed > 0.0)
       pw.flywheel_inertia =
           pw.energy_fluctuation / (*opt.speed_fluctuation * pw.mean_speed * pw.mean_speed);

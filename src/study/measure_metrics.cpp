@@ -9,6 +9,7 @@
 #include <variant>
 
 #include "../io/expressions.hpp"
+#include "orthomech/constraints/joints.hpp"
 #include "orthomech/io/units.hpp"
 #include "orthomech/model/measures.hpp"
 
@@ -81,8 +82,8 @@ void measure_metrics(const Model& model, const CycleResult& c, const CycleMetric
                      int driver_joint, MetricColumns& out) {
   const UnitSystem U = unit_system(model.units);
   const bool angular =
-      driver_joint >= 0 &&
-      std::holds_alternative<Revolute>(model.joints[static_cast<size_t>(driver_joint)].kind);
+      driver_joint >= 0 && joint_coordinate_kind(model.joints[static_cast<size_t>(driver_joint)]) ==
+                               CoordinateKind::angle;
   const OutputUnit in = output_unit(angular ? Dimension::angle : Dimension::length, U);
   auto stroke_of = [&](const std::string& name) -> const StrokeMetric* {
     for (const StrokeMetric& st : metrics.strokes)

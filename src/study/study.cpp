@@ -26,6 +26,7 @@
 #include "orthomech/analysis/cycle.hpp"
 #include "orthomech/analysis/cycle_metrics.hpp"
 #include "orthomech/analysis/validate.hpp"
+#include "orthomech/constraints/joints.hpp"
 #include "orthomech/error.hpp"
 #include "orthomech/io/mechanism_file.hpp"
 #include "orthomech/io/render.hpp"
@@ -53,8 +54,8 @@ std::uint64_t splitmix64(std::uint64_t x) {
 void cycle_metrics(const Model& model, const CycleResult& c, int driver_joint,
                    std::vector<std::pair<std::string, double>>& out) {
   const UnitSystem U = unit_system(model.units);
-  const bool angular =
-      std::holds_alternative<Revolute>(model.joints[static_cast<size_t>(driver_joint)].kind);
+  const bool angular = joint_coordinate_kind(model.joints[static_cast<size_t>(driver_joint)]) ==
+                       CoordinateKind::angle;
   const std::vector<ReactionMagnitude> magnitudes = reaction_magnitudes(c);
   const std::vector<SeriesSummary> summary = summarize_cycle(c, magnitudes, angular ? "N*m" : "N");
   for (const SeriesSummary& s : summary) {
@@ -122,13 +123,17 @@ double flag(bool pass) { return pass ? 1.0 : 0.0; }
 //   validate.P.change_point       σ_min ≥ min_sigma (not at a change point)
 //   validate.P.dof                the inputs fix the position (DOF ≤ inputs)
 //   validate.P.dead_point         η ≥ min_sigma (not at a dead point of the inputs)
-//   validate.P.transmission       every four-bar loop's transmission angle within the bounds
+//   validate.P.transmission       every four-bar loop's transmission angle within the bounds (a
+//                                 spatial mechanism: every spatial loop's Sutherland–Roth index)
 //   validate.P.pressure           every slider-crank loop's pressure angle within the bound
 void validate_metrics(const Model& model, std::vector<std::pair<std::string, double>>& out) {
   const ValidateOptions options;
   const ValidationReport rep = validate_design_positions(model, options);
   const bool four_bars = !find_four_bar_loops(model, -1).empty();
   const bool slider_cranks = !find_slider_crank_loops(model).empty();
+  const bool spatial_loops =
+      std::any_of(rep.positions.begin(), rep.positions.end(),
+                  [](const PositionReport& p) { return !p.spatial_loops.empty(); });
   out.emplace_back("validate.pass", flag(rep.pass()));
   const bool ordered = !rep.input.empty() && model.design_positions.size() >= 2;
   out.emplace_back("validate.order", ordered ? flag(!rep.order_defect) : kNaN);
@@ -149,10 +154,13 @@ void validate_metrics(const Model& model, std::vector<std::pair<std::string, dou
     out.emplace_back(prefix + "dead_point",
                      eta ? flag(*p.singular.eta >= options.min_sigma) : kNaN);
     const auto all_ok = [](const auto& loops) {
-      return flag(std::all_of(loops.begin(), loops.end(), [](const auto& l) { return l.ok; }));
+      return std::all_of(loops.begin(), loops.end(), [](const auto& l) { return l.ok; });
     };
-    if (four_bars) out.emplace_back(prefix + "transmission", a ? all_ok(p.four_bars) : kNaN);
-    if (slider_cranks) out.emplace_back(prefix + "pressure", a ? all_ok(p.slider_cranks) : kNaN);
+    if (four_bars || spatial_loops)
+      out.emplace_back(prefix + "transmission",
+                       a ? flag(all_ok(p.four_bars) && all_ok(p.spatial_loops)) : kNaN);
+    if (slider_cranks)
+      out.emplace_back(prefix + "pressure", a ? flag(all_ok(p.slider_cranks)) : kNaN);
   }
 }
 
@@ -169,10 +177,11 @@ void assemble_metrics(const Model& model, std::vector<std::pair<std::string, dou
                    ok ? a.distance / (std::sqrt(U.mass_si) * U.length_si) : kNaN);
 }
 
-// The traced paths of a cycle: the world position of each point at each position (m).
+// The traced paths of a cycle: the world position of each point at each position (m; z = 0 for
+// a planar mechanism).
 struct Paths {
   std::vector<double> input;
-  std::vector<std::vector<double>> x, y;
+  std::vector<std::vector<double>> x, y, z;
 };
 Paths cycle_paths(const Model& model, const CycleResult& c, const std::vector<std::string>& names) {
   const TracePoints points = resolve_trace_points(model, names);
@@ -183,12 +192,15 @@ Paths cycle_paths(const Model& model, const CycleResult& c, const std::vector<st
     q.emplace_back(v.q);
     p.input.push_back(v.input);
   }
-  for (const PointTrace& t : trace_paths(model, points.points, q, p.input)) {
+  for (const PointTrace& t : trace_paths(model, points, q, p.input)) {
     p.x.emplace_back();
     p.y.emplace_back();
-    for (const Vec2& r : t.path) {
+    p.z.emplace_back();
+    for (size_t k = 0; k < t.path.size(); ++k) {
+      const Vec3 r = t.at(k);
       p.x.back().push_back(r.x());
       p.y.back().push_back(r.y());
+      p.z.back().push_back(r.z());
     }
   }
   return p;
@@ -208,8 +220,8 @@ bool same_inputs(const std::vector<double>& variant, const std::vector<double>& 
 }
 
 // Deviation of each traced point's path from the nominal design's, at the same inputs s_k:
-//   e_k = |P(s_k) − P_nominal(s_k)|,  deviation.P.max = max_k e_k,
-//   deviation.P.rms = √(Σ_k e_k² / m)                                                        (S1)
+//   e_k = |P(s_k) − P_nominal(s_k)| (in space for a spatial mechanism),  deviation.P.max = max_k
+//   e_k, deviation.P.rms = √(Σ_k e_k² / m) (S1)
 // over the m positions of the nominal's grid that the variant's cycle reached (all of them when
 // it completed), in the file's length unit. The variant's own cycle is used when its inputs are
 // the nominal's (a revolute's up to whole turns); else (its design position has another input) a
@@ -219,8 +231,9 @@ void deviation_metrics(const Model& model, const CycleResult& c, const CycleOpti
                        const NominalPaths& nominal, const std::vector<std::string>& names,
                        std::vector<std::pair<std::string, double>>& out) {
   const double length = unit_system(model.units).length_si;
-  const bool angular = std::holds_alternative<Revolute>(
-      model.joints[static_cast<size_t>(options.driver.joint)].kind);
+  const bool angular =
+      joint_coordinate_kind(model.joints[static_cast<size_t>(options.driver.joint)]) ==
+      CoordinateKind::angle;
   std::vector<double> max(names.size(), kNaN), rms(names.size(), kNaN);
   if (nominal.available && !c.points.empty()) {
     Paths p = cycle_paths(model, c, names);
@@ -236,7 +249,8 @@ void deviation_metrics(const Model& model, const CycleResult& c, const CycleOpti
       for (size_t j = 0; j < names.size(); ++j) {
         double e_max = 0.0, e2 = 0.0;
         for (size_t k = 0; k < p.input.size(); ++k) {
-          const double e = std::hypot(p.x[j][k] - nominal.x[j][k], p.y[j][k] - nominal.y[j][k]);
+          const double e = std::hypot(p.x[j][k] - nominal.x[j][k], p.y[j][k] - nominal.y[j][k],
+                                      p.z[j][k] - nominal.z[j][k]);
           e_max = std::max(e_max, e);
           e2 += e * e;
         }
@@ -324,6 +338,7 @@ NominalPaths nominal_paths(const std::string& mechanism, const std::string& orig
     n.input = std::move(p.input);
     n.x = std::move(p.x);
     n.y = std::move(p.y);
+    n.z = std::move(p.z);
     n.available = true;
   } catch (const std::exception& e) {
     n.available = false;

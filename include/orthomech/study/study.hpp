@@ -47,7 +47,7 @@ struct NominalPaths {
   bool available = false;  // false: the nominal cycle gave no positions (message says why)
   std::string message;
   std::vector<double> input;
-  std::vector<std::vector<double>> x, y;  // per point, per position
+  std::vector<std::vector<double>> x, y, z;  // per point, per position, m (z 0 when planar)
 };
 
 // An optimisation's goal (study: optimize; study/optimize.hpp). The objective and each

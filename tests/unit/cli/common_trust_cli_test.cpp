@@ -797,5 +797,33 @@ TEST(Trust, CycleSaysWhereAJointLeavesItsLimits) {
       << text.out;
 }
 
+// The same on a spatial revolute (the RSSR's rocker limited to [100°, 200°]): the limits and the
+// excursion are angles in the file's degrees, as the rocker_angle measure of cycle.csv.
+TEST(CommonTrustCli, CycleReportsASpatialJointsLimitExcursionInDegrees) {
+  TempDir dir;
+  const std::string limited =
+      variant(dir, bundled("rssr"), "limited.yaml",
+              "{name: B0, type: revolute, connects: [ground.B0, rocker.O], axis: [1, 0, 0]}",
+              "{name: B0, type: revolute, connects: [ground.B0, rocker.O], axis: [1, 0, 0], "
+              "limits: [100, 200]}");
+  ::setenv("ORTHOMECH_GNUPLOT", "none", 1);
+  const CliResult r = run_cli({"cycle", limited, "--out", dir.path.string(), "--json"});
+  const CliResult text = run_cli({"cycle", limited});
+  ::unsetenv("ORTHOMECH_GNUPLOT");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const json j = json::parse(r.out);
+  ASSERT_EQ(j["limits"].size(), 1u);
+  EXPECT_EQ(j["limits"][0]["limits"], json::array({100.0, 200.0}));
+  const auto rows = read_csv(dir.path / "cycle.csv");
+  const size_t rocker = column(rows[0], "rocker_angle [deg]");
+  double furthest = 0;
+  for (size_t k = 1; k < rows.size(); ++k)
+    furthest = std::max(furthest, std::stod(rows[k][rocker]));
+  EXPECT_GT(furthest, 200.0);
+  EXPECT_NEAR(j["limits"][0]["furthest"]["value"].get<double>(), furthest, 1e-6);
+  EXPECT_NE(text.out.find("joint 'B0' leaves its limits [100 deg, 200 deg]"), std::string::npos)
+      << text.out;
+}
+
 }  // namespace
 }  // namespace orthomech

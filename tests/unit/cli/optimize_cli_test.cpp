@@ -5,7 +5,8 @@
 // and ψ(l) = π − acos((d² + c² − l²) / (2dc))), and its worst transmission angle against
 // cos μ = (b² + c² − (d ∓ a)²) / (2bc); `cycle` on the written optimum.yaml shows
 // the same swing and transmission angle; an impossible constraint is exit 3 without an optimum
-// file; `sweep` refuses an optimize study and `optimize` a grid.
+// file; `sweep` refuses an optimize study and `optimize` a grid. A spatial file: the RSSR's crank
+// sized for a rocker swing, checked against the swing's closed form.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -17,6 +18,7 @@
 #include <string>
 
 #include "support/cli_runner.hpp"
+#include "support/spatial_oracles.hpp"
 
 namespace orthomech {
 namespace {
@@ -153,6 +155,48 @@ TEST(OptimizeCli, NoFeasibleDesignIsExit3AndWrongStudiesExit2) {
                           (dir.path / "c").string()});
   EXPECT_EQ(o.status, 2);
   EXPECT_NE(o.err.find("orthomech sweep"), std::string::npos) << o.err;
+}
+
+// A spatial mechanism: the RSSR's crank length r1 for a rocker swing of 110° ± 0.01°. The swing of
+// r1 is the closed form (support/spatial_oracles.hpp), increasing over [80, 120] mm: one r1 does
+// it, found here by bisection.
+TEST(OptimizeCli, SpatialRssrCrankForARockerSwing) {
+  const test::TempDir dir("orthomech_optimize_");
+  const std::string study = (dir.path / "o.yaml").string();
+  std::ofstream(study) << "study: optimize\nparameters:\n"
+                          "  - {name: crank, path: bodies.crank.points.A.0, bounds: [80, 120]}\n"
+                          "objective: {minimize: drive.peak}\n"
+                          "constraints:\n"
+                          "  - {metric: range(rocker_angle), equal: 110, tolerance: 0.01}\n";
+  const std::string out = (dir.path / "rssr").string();
+  const auto r =
+      run_cli({"optimize", test::bundled_file("rssr"), "--study", study, "--out", out, "--json"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const json j = json::parse(r.out);
+  ASSERT_TRUE(j["found"].get<bool>()) << r.out;
+  const double r1 = j["optimum"]["variables"]["crank"];
+  const double deg = 180.0 / std::numbers::pi;
+  // The swing at 360 positions is within 5e-4° of the closed form (tests/unit/study/
+  // spatial_study_test.cpp): the constraint holds to its tolerance on the closed form too.
+  const double swing = test::rssr_swing(r1 / 1000) * deg;
+  EXPECT_NEAR(swing, 110.0, 0.01 + 5e-4) << "r1 = " << r1;
+  double lo = 80, hi = 120;
+  for (int i = 0; i < 60; ++i)
+    (test::rssr_swing(0.5 * (lo + hi) / 1000) * deg < 110.0 ? lo : hi) = 0.5 * (lo + hi);
+  const double slope = (test::rssr_swing(0.101) - test::rssr_swing(0.099)) * deg / 2;  // °/mm
+  EXPECT_NEAR(r1, 0.5 * (lo + hi), (0.01 + 5e-4) / slope) << "slope " << slope << " °/mm";
+  // The written optimum closes as drawn and sweeps the same swing.
+  const auto cyc = run_cli({"cycle", (fs::path(out) / "optimum.yaml").string(), "--json"});
+  ASSERT_EQ(cyc.status, 0) << cyc.err;
+  EXPECT_EQ(cyc.err.find("does not close as drawn"), std::string::npos) << cyc.err;
+  const json cj = json::parse(cyc.out);
+  bool found = false;
+  for (const auto& s : cj["strokes"])
+    if (s["name"] == "rocker_angle") {
+      found = true;
+      EXPECT_NEAR(s["range"].get<double>(), j["optimum"]["metrics"]["rocker_angle.range"], 1e-9);
+    }
+  EXPECT_TRUE(found);
 }
 
 }  // namespace
