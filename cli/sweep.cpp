@@ -20,6 +20,7 @@
 #include "orthomech/io/file_writer.hpp"
 #include "orthomech/io/mechanism_file.hpp"
 #include "orthomech/io/study_db.hpp"
+#include "orthomech/io/study_report.hpp"
 #include "orthomech/study/distributed.hpp"
 #include "orthomech/study/study.hpp"
 #include "run_bounds.hpp"
@@ -32,6 +33,8 @@ namespace fs = std::filesystem;
 
 struct SweepCliOptions {
   std::string file, study, out;
+  std::string report, figures;              // --report FILE.html, --figures DIR
+  std::vector<std::string> report_metrics;  // --report-metrics A,B,…
   int jobs = 0;
   bool resume = false, json = false;
   double time_limit = 0.0;  // s of wall clock; 0: none
@@ -68,15 +71,7 @@ nlohmann::json summarize(const Study& study, const StudyDatabase& db,
   std::vector<std::vector<double>> values;
   values.reserve(rows.size());
   for (const auto& r : rows) values.push_back(r.values);
-  const auto metric_column = [&](size_t m) {
-    const std::string& name = db.metrics()[m];
-    const bool check = name.rfind("validate.", 0) == 0 || name.rfind("assemble.", 0) == 0;
-    std::vector<double> y;
-    y.reserve(rows.size());
-    for (const auto& r : rows)
-      y.push_back(r.status == "completed" || check ? r.metrics[m] : std::nan(""));
-    return y;
-  };
+  const auto metric_column = [&](size_t m) { return summarized_metric(rows, m, db.metrics()[m]); };
   if (study.kind == StudyKind::monte_carlo) {
     nlohmann::json metrics = nlohmann::json::array();
     for (size_t m = 0; m < db.metrics().size(); ++m) {
@@ -107,17 +102,10 @@ nlohmann::json summarize(const Study& study, const StudyDatabase& db,
     nlohmann::json best = nlohmann::json::array();
     if (it != names.end()) {
       const size_t m = static_cast<size_t>(it - names.begin());
-      std::vector<const StudyDatabase::Row*> ranked;
-      for (const auto& r : rows)
-        if (r.status == "completed" && !std::isnan(r.metrics[m])) ranked.push_back(&r);
-      std::stable_sort(ranked.begin(), ranked.end(), [&](const auto* a, const auto* b) {
-        return study.best_largest ? a->metrics[m] > b->metrics[m] : a->metrics[m] < b->metrics[m];
-      });
-      for (size_t k = 0; k < ranked.size() && k < static_cast<size_t>(study.best_count); ++k) {
-        nlohmann::json e = {{"variant", ranked[k]->index},
-                            {study.best_metric, ranked[k]->metrics[m]}};
-        for (size_t p = 0; p < db.parameters().size(); ++p)
-          e[db.parameters()[p]] = ranked[k]->values[p];
+      for (const StudyDatabase::Row* row :
+           best_rows(rows, m, study.best_largest, study.best_count)) {
+        nlohmann::json e = {{"variant", row->index}, {study.best_metric, row->metrics[m]}};
+        for (size_t p = 0; p < db.parameters().size(); ++p) e[db.parameters()[p]] = row->values[p];
         best.push_back(e);
       }
     }
@@ -134,7 +122,7 @@ std::string fixed(double v) {
   return buffer;
 }
 
-void print_summary(const nlohmann::json& j, const fs::path& out) {
+std::string summary_text(const nlohmann::json& j, const fs::path& out) {
   std::ostringstream o;
   o << "study       " << j["study"].get<std::string>() << ", " << j["variants"].get<long>()
     << " variants:";
@@ -181,7 +169,24 @@ void print_summary(const nlohmann::json& j, const fs::path& out) {
       o << "\n";
     }
   }
-  std::cout << o.str();
+  return o.str();
+}
+
+// --report and --figures: the page and the figures of the stored study (io/study_report.hpp).
+void write_report(const SweepCliOptions& opt, const Study& study, const StudyDatabase& db,
+                  const std::string& mechanism, const std::string& summary) {
+  if (opt.report.empty() && opt.figures.empty()) return;
+  StudyReportRequest request;
+  request.title = opt.study + " on " + opt.file;
+  request.summary = summary;
+  request.metrics = opt.report_metrics;
+  const StudyReport report = study_report_of(study, db, mechanism, opt.file, request);
+  if (!opt.report.empty()) write_file(opt.report, study_report_html(report));
+  if (!opt.figures.empty()) {
+    fs::create_directories(opt.figures);
+    for (const StudyFigure& f : study_report_figures(report))
+      write_file(fs::path(opt.figures) / f.file, f.svg);
+  }
 }
 
 // Under mpirun: rank 0 releases the other ranks with "stop" when it returns before the study
@@ -235,6 +240,14 @@ int run_sweep_command(const SweepCliOptions& opt) {
   nominal_study.parameters.clear();
   const VariantResult nominal = evaluate_variant(mechanism, opt.file, nominal_study, -1, {});
   const bool needs_cycle = study.metrics.cycle || !study.metrics.deviation.empty();
+  for (const std::string& m : opt.report_metrics)  // refused before any variant is computed
+    if (std::none_of(nominal.metrics.begin(), nominal.metrics.end(),
+                     [&](const auto& c) { return c.first == m; })) {
+      std::string list;
+      for (const auto& [name, value] : nominal.metrics) list += (list.empty() ? "" : ", ") + name;
+      spdlog::error("--report-metrics: unknown metric '{}' (the study's metrics: {})", m, list);
+      return kBadInput;
+    }
   if (nominal.metrics.empty() || (needs_cycle && nominal.positions == 0)) {
     spdlog::error("{}: the nominal design cannot be swept ({}): {}", opt.file, nominal.status,
                   nominal.message);
@@ -324,9 +337,11 @@ int run_sweep_command(const SweepCliOptions& opt) {
   nlohmann::json summary = summarize(study, *db, nominal);
   summary["complete"] = stop == StopReason::none;  // a stopped sweep: the stored variants only
   if (stop != StopReason::none) summary["stop"] = to_string(stop);
+  const std::string text = summary_text(summary, out);
   try {
     write_file(out / "variants.csv", study_csv(*db));
     write_file(out / "summary.json", summary.dump(2) + "\n");
+    write_report(opt, study, *db, mechanism, text);
   } catch (const std::runtime_error& e) {
     spdlog::error("{}", e.what());
     return kBadInput;
@@ -334,7 +349,7 @@ int run_sweep_command(const SweepCliOptions& opt) {
   if (opt.json)
     std::cout << summary.dump(2) << "\n";
   else
-    print_summary(summary, out);
+    std::cout << text;
   return stop == StopReason::none ? kOk : kStopped;
 }
 
@@ -353,6 +368,15 @@ void register_sweep(CLI::App& app, const GlobalOptions& globals, int& exit_code)
   cmd->add_flag("--resume", opt->resume,
                 "continue the study stored in --out (computes only the variants not stored)");
   cmd->add_flag("--json", opt->json, "the summary as one JSON document on stdout");
+  cmd->add_option("--report", opt->report,
+                  "write the study report, one offline HTML page: scatter plots of parameters "
+                  "against metrics, histograms, sensitivities, the best variants' cycles");
+  cmd->add_option("--figures", opt->figures,
+                  "write the report's figures as SVG files into this directory (for papers)");
+  cmd->add_option("--report-metrics", opt->report_metrics,
+                  "the metrics the report shows (default: the best metric, the expressions, then "
+                  "the metrics that vary, 8 in all)")
+      ->delimiter(',');
   cmd->add_option("--time-limit", opt->time_limit,
                   "wall-clock limit in seconds (default: none): the sweep stops there, keeps the "
                   "variants stored and exits 5 (continue with --resume)")

@@ -419,6 +419,49 @@ VariantResult evaluate_variant(const std::string& mechanism, const std::string& 
   return r;
 }
 
+VariantCycle variant_cycle(const std::string& mechanism, const std::string& origin,
+                           const Study& study, long index, const std::vector<double>& values) {
+  VariantCycle v;
+  v.variant = index;
+  Model model;
+  try {
+    model = parse_mechanism(mechanism, origin, variant_changes(study, values));
+  } catch (const InputError& e) {
+    v.status = "invalid";
+    v.message = e.what();
+    return v;
+  }
+  const Driver* driver = study_driver(model);
+  if (!driver) {
+    v.status = "invalid";
+    v.message = "the mechanism has no driver to sweep";
+    return v;
+  }
+  const CycleResult c = run_cycle(model, study_cycle_options(model, *driver, study));
+  v.status = c.status == CycleStatus::completed ? "completed" : "failed";
+  v.message = c.message;
+  const UnitSystem U = unit_system(model.units);
+  const Joint& joint = model.joints[static_cast<size_t>(driver->joint)];
+  const bool angular = joint_coordinate_kind(joint) == CoordinateKind::angle;
+  const OutputUnit in = output_unit(angular ? Dimension::angle : Dimension::length, U);
+  const OutputUnit drive = output_unit(angular ? Dimension::moment : Dimension::force, U);
+  v.input_label = "input " + joint.name + " [" + in.name + "]";
+  v.series.push_back({"drive", drive.name, {}});
+  std::vector<OutputUnit> units;
+  for (const Measure& m : model.measures) {
+    units.push_back(output_unit(dimension_of(m.unit), U));
+    v.series.push_back({m.name, units.back().name, {}});
+  }
+  for (const DrivenPointView p : c.points) {
+    v.input.push_back(in.from_si(p.input));
+    v.series[0].values.push_back(drive_reported(p) ? drive.from_si(p.drive) : kNaN);
+    for (size_t i = 0; i < model.measures.size(); ++i)
+      v.series[i + 1].values.push_back(
+          measure_reported(model, p, i) ? units[i].from_si(p.measures[i]) : kNaN);
+  }
+  return v;
+}
+
 void run_variants(const std::string& mechanism, const std::string& origin, const Study& study,
                   const std::vector<long>& pending, int jobs,
                   const std::function<void(const VariantResult&)>& done) {

@@ -138,6 +138,24 @@ struct VariantResult {
                                              const std::string& origin, const Study& study,
                                              long index, const std::vector<double>& values);
 
+// A variant's cycle (the study report's click-through): its input and, over its positions, the
+// drive and every measure in the file's units (NaN where one is not reported). status and message
+// as VariantResult's; no positions when the file is invalid or has no driver.
+struct VariantCycle {
+  long variant = 0;
+  std::string status, message;
+  std::string input_label;  // "input A0 [deg]"
+  std::vector<double> input;
+  struct Series {
+    std::string name, unit;
+    std::vector<double> values;
+  };
+  std::vector<Series> series;
+};
+[[nodiscard]] VariantCycle variant_cycle(const std::string& mechanism, const std::string& origin,
+                                         const Study& study, long index,
+                                         const std::vector<double>& values);
+
 // Evaluates the variants in `pending` on `jobs` OpenMP threads (0: all cores), calling `done`
 // with each result as it finishes, one call at a time (any order). Results do not depend on the
 // number of threads.

@@ -94,13 +94,12 @@ double angle_gap_deg(double a_deg, double b_deg) {
   return std::abs(std::remainder(a_deg - b_deg, 360.0));
 }
 
+// examples/rssr-study.yaml: the crank 90 … 110 mm, its swing as the expression `swing`.
 TEST(SpatialStudy, RssrSwingFollowsTheClosedForm) {
-  const std::vector<VariantResult> v = run_study("rssr", R"(study: grid
-parameters:
-  - {name: crank, path: bodies.crank.points.A.0, values: [90, 100, 110]}
-)");
-  const double r1s[] = {90, 100, 110};
-  ASSERT_EQ(v.size(), 3u);
+  const std::vector<VariantResult> v = run_study(
+      "rssr", test::read_text(std::string(ORTHOMECH_SOURCE_DIR) + "/examples/rssr-study.yaml"));
+  const double r1s[] = {90, 95, 100, 105, 110};
+  ASSERT_EQ(v.size(), 5u);
   for (size_t k = 0; k < v.size(); ++k) {
     ASSERT_EQ(v[k].status, "completed") << v[k].message;
     const auto m = by_name(v[k]);
@@ -111,6 +110,7 @@ parameters:
     // (measured ≤ 1.0e-4° and ≤ 8.1e-5°); the crank angle at an extreme within 0.02° (measured
     // ≤ 4.5e-3°; a sample off would be 1°).
     EXPECT_NEAR(m.at("rocker_angle.range"), (hi.phi - lo.phi) * kDeg, 5e-4) << "r1 " << r1s[k];
+    EXPECT_EQ(m.at("swing"), m.at("rocker_angle.range"));
     EXPECT_NEAR(m.at("rocker_angle.max"), hi.phi * kDeg, 5e-4) << "r1 " << r1s[k];
     EXPECT_LT(angle_gap_deg(m.at("rocker_angle.max_at"), hi.theta * kDeg), 0.02)
         << "r1 " << r1s[k] << ": " << m.at("rocker_angle.max_at") << " vs " << hi.theta * kDeg;

@@ -5,9 +5,13 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
+#include <string>
 #include <vector>
+
+#include "support/cli_runner.hpp"
 
 namespace orthomech {
 namespace {
@@ -131,6 +135,47 @@ TEST(StudyVariants, MonteCarloDrawsDependOnSeedAndIndexOnly) {
   // The FileChange text reads back to the same double.
   for (double v : {0.1, 1.0 / 3.0, -2.5e-7, 30.012345678901234})
     EXPECT_EQ(std::stod(value_text(v)), v);
+}
+
+// A variant's cycle (the report's click-through) is the variant's: its drive spans the drive.max
+// and drive.min of evaluate_variant (the cycle summary's extremes of the same sweep) and its
+// rocker_angle the measure's M.max (a stroke: parabola-refined, so at most the refined extreme
+// and within 0.1° of it at 72 positions 5° apart); an invalid variant has no positions.
+TEST(StudyVariants, VariantCycleIsTheVariantsSweep) {
+  const std::string file = test::bundled_file("crank-rocker");
+  const std::string mechanism = test::read_text(file);
+  const Study study = parse_study(R"(study: grid
+steps: 72
+parameters:
+  - {name: crank, path: bodies.crank.points.A.0, values: [26, 32]}
+  - {name: mass, path: bodies.crank.mass, values: [0.03]}
+)",
+                                  "s.yaml", mechanism, file);
+  for (long k = 0; k < 2; ++k) {
+    const VariantResult r = evaluate_variant(mechanism, file, study, k, variant_values(study, k));
+    const VariantCycle c = variant_cycle(mechanism, file, study, k, variant_values(study, k));
+    ASSERT_EQ(c.status, "completed") << c.message;
+    EXPECT_EQ(static_cast<long>(c.input.size()), r.positions);
+    EXPECT_EQ(c.input_label, "input A0 [deg]");
+    ASSERT_EQ(c.series.front().name, "drive");
+    const auto metric = [&](const std::string& name) {
+      for (const auto& [n, v] : r.metrics)
+        if (n == name) return v;
+      return std::nan("");
+    };
+    const auto& drive = c.series.front().values;
+    EXPECT_DOUBLE_EQ(*std::max_element(drive.begin(), drive.end()), metric("drive.max"));
+    EXPECT_DOUBLE_EQ(*std::min_element(drive.begin(), drive.end()), metric("drive.min"));
+    for (const VariantCycle::Series& s : c.series)
+      if (s.name == "rocker_angle") {
+        const double top = *std::max_element(s.values.begin(), s.values.end());
+        EXPECT_LE(top, metric("rocker_angle.max") + 1e-12);
+        EXPECT_GT(top, metric("rocker_angle.max") - 0.1);
+      }
+  }
+  const VariantCycle bad = variant_cycle(mechanism, file, study, 2, {30, -1});  // mass −1 kg
+  EXPECT_EQ(bad.status, "invalid");
+  EXPECT_TRUE(bad.input.empty());
 }
 
 }  // namespace
