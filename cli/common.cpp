@@ -207,6 +207,8 @@ std::unique_ptr<StudyDatabase> open_study_database(const std::string& out, bool 
       {"mechanism", mechanism}, {"study", study_identity(study_text, "study")}};
   if (study.kind == StudyKind::monte_carlo)
     identity.emplace_back("samples", std::to_string(study.samples));
+  if (study.kind == StudyKind::optimize)  // the budget of evaluations, which may grow as well
+    identity.emplace_back("samples", std::to_string(study.goal.evaluations));
   try {
     return std::make_unique<StudyDatabase>(std::filesystem::path(out) / "study.sqlite", resume,
                                            identity, parameters, metrics);

@@ -29,7 +29,7 @@ namespace fs = std::filesystem;
 
 struct OptimizeCliOptions {
   std::string file, study, out;
-  bool json = false;
+  bool json = false, resume = false;
   double time_limit = 0.0;  // s of wall clock; 0: none
 };
 
@@ -124,13 +124,36 @@ int run_optimize_command(const OptimizeCliOptions& opt) {
   }
   const fs::path out = opt.out;
   const std::unique_ptr<StudyDatabase> db =
-      open_study_database(opt.out, false, mechanism, study_text, study, start);
+      open_study_database(opt.out, opt.resume, mechanism, study_text, study, start);
   if (!db) return kBadInput;
+  // --resume: the stored evaluations, replayed by the search (run_optimize).
+  std::vector<VariantResult> stored;
+  for (const StudyDatabase::Row& row : db->rows()) {
+    if (row.index != static_cast<long>(stored.size())) {
+      spdlog::error(
+          "{}: the stored evaluations are not 0, 1, … in order (evaluation {} is "
+          "missing): not an optimize run to resume",
+          (out / "study.sqlite").string(), stored.size());
+      return kBadInput;
+    }
+    VariantResult r;
+    r.index = row.index;
+    r.values = row.values;
+    r.status = row.status;
+    r.message = row.message;
+    for (size_t m = 0; m < db->metrics().size(); ++m)
+      r.metrics.emplace_back(db->metrics()[m], row.metrics[m]);
+    stored.push_back(std::move(r));
+  }
+  if (!stored.empty())
+    spdlog::info("{}: {} evaluations stored, replayed before the search goes on", opt.study,
+                 stored.size());
   const InterruptScope interrupts;
   const RunControl control = run_control("optimize", opt.time_limit);
   RunMonitor monitor(control, 0);
   StopReason stop = StopReason::none;
   const auto store = [&](const VariantResult& r, const OptimizeStep& step) {
+    if (step.replayed) return;
     db->insert(r);
     spdlog::debug("evaluation {}: {} objective {} violation {}", step.evaluation, r.status,
                   step.objective, step.violation);
@@ -138,11 +161,15 @@ int run_optimize_command(const OptimizeCliOptions& opt) {
   };
   OptimizeResult result;
   try {
-    result =
-        run_optimize(mechanism, opt.file, study, store, [&] { return stop != StopReason::none; });
+    result = run_optimize(
+        mechanism, opt.file, study, store, [&] { return stop != StopReason::none; }, stored);
   } catch (const std::runtime_error& e) {  // the database (a full disk): the rows stored are kept
     end_progress();
     spdlog::error("{}", e.what());
+    return kBadInput;
+  } catch (const std::invalid_argument& e) {  // --resume of evaluations not this search's
+    end_progress();
+    spdlog::error("{}: {}", (out / "study.sqlite").string(), e.what());
     return kBadInput;
   }
   end_progress();
@@ -195,6 +222,9 @@ void register_optimize(CLI::App& app, const GlobalOptions& globals, int& exit_co
                   "directory of study.sqlite, evaluations.csv, summary.json and optimum.yaml")
       ->required();
   cmd->add_flag("--json", opt->json, "the summary as one JSON document on stdout");
+  cmd->add_flag("--resume", opt->resume,
+                "continue the search stored in --out (its evaluations replayed, not computed "
+                "again): the result of one uninterrupted run");
   cmd->add_option("--time-limit", opt->time_limit,
                   "wall-clock limit in seconds (default: none): the search stops there, keeps the "
                   "best design so far and exits 5")

@@ -64,8 +64,13 @@ class Search {
  public:
   Search(const std::string& mechanism, const std::string& origin, const Study& study,
          const std::function<void(const VariantResult&, const OptimizeStep&)>& done,
-         const std::function<bool()>& stop)
-      : mechanism_(mechanism), origin_(origin), study_(study), done_(done), stop_(stop) {}
+         const std::function<bool()>& stop, const std::vector<VariantResult>& stored)
+      : mechanism_(mechanism),
+        origin_(origin),
+        study_(study),
+        done_(done),
+        stop_(stop),
+        stored_(stored) {}
 
   OptimizeResult run() {
     const size_t n = study_.parameters.size();
@@ -106,11 +111,31 @@ class Search {
   const Study& study_;
   const std::function<void(const VariantResult&, const OptimizeStep&)>& done_;
   const std::function<bool()>& stop_;
+  const std::vector<VariantResult>& stored_;
   OptimizeResult result_;
   double worst_ = kNaN;  // the worst objective (minimised sense) of the variants with numbers
 
-  solvers::ConstrainedValue evaluate(const Eigen::VectorXd& x) {
+  // Evaluation k: the stored one when there is one (at the same values), else computed.
+  VariantResult variant(long k, const std::vector<double>& values, OptimizeStep& step) {
+    if (k < static_cast<long>(stored_.size())) {
+      const VariantResult& r = stored_[static_cast<size_t>(k)];
+      if (r.values != values) {
+        std::string at;
+        for (size_t j = 0; j < values.size(); ++j)
+          at += (j ? ", " : "") + study_.parameters[j].name + " = " + value_text(values[j]) +
+                " (stored " + (j < r.values.size() ? value_text(r.values[j]) : "none") + ")";
+        throw std::invalid_argument("evaluation " + std::to_string(k) +
+                                    " of the stored study was at other values (" + at +
+                                    "): the stored evaluations are not this search's");
+      }
+      step.replayed = true;
+      return r;
+    }
     if (stop_ && stop_()) throw Stopped();
+    return evaluate_variant(mechanism_, origin_, study_, k, values);
+  }
+
+  solvers::ConstrainedValue evaluate(const Eigen::VectorXd& x) {
     std::vector<double> values(x.size());
     for (Eigen::Index j = 0; j < x.size(); ++j) {
       const StudyParameter& p = study_.parameters[static_cast<size_t>(j)];
@@ -119,7 +144,7 @@ class Search {
     }
     OptimizeStep step;
     step.evaluation = static_cast<long>(result_.steps.size());
-    const VariantResult r = evaluate_variant(mechanism_, origin_, study_, step.evaluation, values);
+    const VariantResult r = variant(step.evaluation, values, step);
     const double sign = study_.goal.maximize ? -1.0 : 1.0;
     step.objective = column(r, "objective");
     std::vector<double> g = constraint_values(study_.goal, r);
@@ -181,10 +206,10 @@ std::string variant_file(const std::string& mechanism, const std::string& origin
 OptimizeResult run_optimize(
     const std::string& mechanism, const std::string& origin, const Study& study,
     const std::function<void(const VariantResult&, const OptimizeStep&)>& done,
-    const std::function<bool()>& stop) {
+    const std::function<bool()>& stop, const std::vector<VariantResult>& stored) {
   if (study.kind != StudyKind::optimize)
     throw std::invalid_argument("run_optimize: the study is not an optimize study");
-  return Search(mechanism, origin, study, done, stop).run();
+  return Search(mechanism, origin, study, done, stop, stored).run();
 }
 
 }  // namespace orthomech

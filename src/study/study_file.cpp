@@ -557,10 +557,11 @@ std::string study_identity(const std::string& text, const std::string& origin) {
   } catch (const YAML::Exception& e) {
     throw InputError({origin, e.mark.line + 1, e.mark.column + 1}, "YAML", e.msg);
   }
-  if (!root.IsMap() || !root["study"] || !root["study"].IsScalar() ||
-      root["study"].Scalar() != "monte-carlo" || !root["samples"] || !root["samples"].IsScalar())
-    return text;
-  const YAML::Node samples = root["samples"];
+  if (!root.IsMap() || !root["study"] || !root["study"].IsScalar()) return text;
+  const std::string kind = root["study"].Scalar();
+  const char* key = kind == "monte-carlo" ? "samples" : kind == "optimize" ? "evaluations" : "";
+  if (*key == '\0' || !root[key] || !root[key].IsScalar()) return text;
+  const YAML::Node samples = root[key];
   const std::string& value = samples.Scalar();
   const auto at = static_cast<size_t>(std::max(0, samples.Mark().pos));
   if (samples.Mark().pos < 0 || text.compare(at, value.size(), value) != 0) return text;

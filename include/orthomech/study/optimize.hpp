@@ -30,6 +30,7 @@ struct OptimizeStep {
   double violation = 0.0;  // the largest scaled constraint value above 0 (0: met; 1: infeasible)
   long best = -1;          // the best feasible evaluation so far (−1: none yet)
   double best_objective = 0.0;
+  bool replayed = false;  // taken from `stored` (run_optimize), not computed again
 };
 
 struct OptimizeResult {
@@ -42,12 +43,20 @@ struct OptimizeResult {
 };
 
 // Runs the search, calling `done` with each evaluated variant and its step as it finishes (the
-// caller stores it: a database row, progress), and `stop` before each evaluation (true: end the
-// search there, outcome "stopped"). Never throws for a bad variant.
+// caller stores it: a database row, progress), and `stop` before each evaluation that is
+// computed (true: end the search there, outcome "stopped"). Never throws for a bad variant.
+//
+// Resuming (`optimize --resume`): `stored` are the evaluations of an earlier run of the same
+// study, in order. The search is deterministic (COBYLA has no randomness, ISRES draws from its
+// seed) and a stored evaluation gives it the same numbers as computing it again (the database
+// holds the doubles exactly), so it asks for the same points: evaluation k < stored.size() is
+// taken from stored[k] (its step `replayed`), the search going on from there exactly as one
+// uninterrupted run. Throws std::invalid_argument when the search asks for other values than a
+// stored evaluation's (the stored evaluations are not this search's).
 [[nodiscard]] OptimizeResult run_optimize(
     const std::string& mechanism, const std::string& origin, const Study& study,
     const std::function<void(const VariantResult&, const OptimizeStep&)>& done,
-    const std::function<bool()>& stop = {});
+    const std::function<bool()>& stop = {}, const std::vector<VariantResult>& stored = {});
 
 // The mechanism file of a variant (the study's text with the variant's values written in place
 // at their paths, every other byte kept) with its design poses closed: the bodies at the start

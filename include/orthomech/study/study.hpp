@@ -91,10 +91,12 @@ struct Study {
 [[nodiscard]] Study parse_study(const std::string& text, const std::string& origin,
                                 const std::string& mechanism, const std::string& mechanism_origin);
 
-// What makes a stored study the same study (`sweep --resume`): the study file's text, with a
-// Monte Carlo study's `samples` value written as N — a Monte Carlo study is extended by resuming
-// it with more samples (variant k's draws depend only on the seed and k, so the first variants
-// are the ones stored). Throws InputError as parse_study for a text it cannot read.
+// What makes a stored study the same study (`sweep --resume`, `optimize --resume`): the study
+// file's text, with a Monte Carlo study's `samples` value (an optimize study's `evaluations`)
+// written as N — a Monte Carlo study is extended by resuming it with more samples (variant k's
+// draws depend only on the seed and k, so the first variants are the ones stored), a search by
+// resuming it with a larger budget (its first evaluations are the ones stored). Throws InputError
+// as parse_study for a text it cannot read.
 [[nodiscard]] std::string study_identity(const std::string& text, const std::string& origin);
 
 // The nominal design's paths of the study's deviation points (run_cycle of the unchanged file,

@@ -131,6 +131,60 @@ TEST(OptimizeCli, ATimeLimitKeepsTheBestSoFar) {
   EXPECT_TRUE(fs::exists(dir.path / "a" / "optimum.yaml"));
 }
 
+// A search stopped by its time limit and resumed ends as one uninterrupted run: the same
+// summary (but `complete`), the same evaluations.csv and optimum.yaml; the stored evaluations are
+// replayed, not computed (the second run logs how many). A larger budget continues it as well.
+TEST(OptimizeCli, AStoppedSearchResumedEqualsOneRun) {
+  const test::TempDir dir("orthomech_optimize_");
+  const std::string study = (dir.path / "o.yaml").string();
+  std::ofstream(study) << crank_study("constraints:\n  - {metric: range(rocker_angle), min: 50}\n");
+  const std::string once = (dir.path / "once").string(), split = (dir.path / "split").string();
+  const auto a = run_cli(
+      {"optimize", test::bundled_file("crank-rocker"), "--study", study, "--out", once, "--json"});
+  ASSERT_EQ(a.status, 0) << a.err;
+  const auto b1 = run_cli({"optimize", test::bundled_file("crank-rocker"), "--study", study,
+                           "--out", split, "--time-limit", "1e-9", "--json"});
+  ASSERT_EQ(b1.status, 5) << b1.err;
+  const auto again = run_cli(
+      {"optimize", test::bundled_file("crank-rocker"), "--study", study, "--out", split, "--json"});
+  EXPECT_EQ(again.status, 2) << "an existing study without --resume: " << again.err;
+  const auto b2 = run_cli({"optimize", test::bundled_file("crank-rocker"), "--study", study,
+                           "--out", split, "--resume", "--json", "--verbose"});
+  ASSERT_EQ(b2.status, 0) << b2.err;
+  EXPECT_NE(b2.err.find("1 evaluations stored, replayed"), std::string::npos) << b2.err;
+  json ja = json::parse(a.out), jb = json::parse(b2.out);
+  EXPECT_TRUE(jb["complete"].get<bool>());
+  ja["optimum"].erase("file");
+  jb["optimum"].erase("file");
+  EXPECT_EQ(ja, jb);
+  EXPECT_EQ(test::read_text(fs::path(once) / "evaluations.csv"),
+            test::read_text(fs::path(split) / "evaluations.csv"));
+  EXPECT_EQ(test::read_text(fs::path(once) / "optimum.yaml"),
+            test::read_text(fs::path(split) / "optimum.yaml"));
+  // A search ended by its budget (5 evaluations) resumed with a larger one (60): as one run
+  // with 60.
+  const std::string small = (dir.path / "small").string();
+  std::ofstream(study) << crank_study(
+      "constraints:\n  - {metric: range(rocker_angle), min: 50}\nevaluations: 5\n");
+  const auto c1 = run_cli(
+      {"optimize", test::bundled_file("crank-rocker"), "--study", study, "--out", small, "--json"});
+  ASSERT_EQ(c1.status, 0) << c1.err;
+  EXPECT_EQ(json::parse(c1.out)["evaluations"].get<long>(), 5);
+  std::ofstream(study) << crank_study(
+      "constraints:\n  - {metric: range(rocker_angle), min: 50}\nevaluations: 60\n");
+  const auto c2 = run_cli({"optimize", test::bundled_file("crank-rocker"), "--study", study,
+                           "--out", small, "--resume", "--json"});
+  ASSERT_EQ(c2.status, 0) << c2.err;
+  json jc = json::parse(c2.out);
+  jc["optimum"].erase("file");
+  EXPECT_EQ(jc, ja) << c2.out;  // the search converges within 60 (and within 200, run a)
+  // Another study in the directory: refused.
+  std::ofstream(study) << crank_study("constraints:\n  - {metric: range(rocker_angle), min: 55}\n");
+  const auto other = run_cli({"optimize", test::bundled_file("crank-rocker"), "--study", study,
+                              "--out", split, "--resume"});
+  EXPECT_EQ(other.status, 2) << other.err;
+}
+
 TEST(OptimizeCli, NoFeasibleDesignIsExit3AndWrongStudiesExit2) {
   const test::TempDir dir("orthomech_optimize_");
   const std::string study = (dir.path / "o.yaml").string();

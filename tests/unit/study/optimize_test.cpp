@@ -12,7 +12,9 @@
 
 #include <cmath>
 #include <numbers>
+#include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "support/cli_runner.hpp"
 
@@ -123,6 +125,47 @@ TEST(Optimize, StopEndsTheSearchWithTheBestSoFar) {
   EXPECT_EQ(r.outcome, "stopped");
   EXPECT_EQ(r.evaluations, 3);
   EXPECT_TRUE(r.found);
+}
+
+// Resuming: the search given its first k evaluations (as a stored study would) asks for the same
+// points, computes only the others and ends where one uninterrupted run does — for the local
+// method and for the seeded global one. Stored evaluations at other values are refused.
+TEST(Optimize, AResumedSearchReplaysItsStoredEvaluations) {
+  for (const char* algorithm : {"cobyla", "isres"}) {
+    const Study s = study(std::string(R"(objective: {minimize: range(rocker_angle)}
+constraints:
+  - {metric: range(rocker_angle), min: 50}
+steps: 60
+evaluations: 60
+algorithm: )") + algorithm +
+                          "\n");
+    std::vector<VariantResult> all;
+    const OptimizeResult once =
+        run_optimize(mechanism(), "crank-rocker.yaml", s,
+                     [&](const VariantResult& v, const OptimizeStep&) { all.push_back(v); });
+    ASSERT_TRUE(once.found) << algorithm;
+    ASSERT_GT(all.size(), 8u) << algorithm;
+    const std::vector<VariantResult> stored(all.begin(), all.begin() + 8);
+    long computed = 0, replayed = 0;
+    const OptimizeResult resumed = run_optimize(
+        mechanism(), "crank-rocker.yaml", s,
+        [&](const VariantResult& v, const OptimizeStep& step) {
+          (step.replayed ? replayed : computed) += 1;
+          EXPECT_EQ(step.replayed, v.index < 8) << algorithm << " evaluation " << v.index;
+        },
+        {}, stored);
+    EXPECT_EQ(replayed, 8) << algorithm;
+    EXPECT_EQ(computed, static_cast<long>(all.size()) - 8) << algorithm;
+    EXPECT_EQ(resumed.evaluations, once.evaluations) << algorithm;
+    EXPECT_EQ(resumed.best.index, once.best.index) << algorithm;
+    EXPECT_EQ(resumed.best.values, once.best.values) << algorithm;
+    EXPECT_EQ(resumed.outcome, once.outcome) << algorithm;
+    std::vector<VariantResult> wrong = stored;
+    wrong[5].values[0] += 1e-9;
+    EXPECT_THROW((void)run_optimize(mechanism(), "crank-rocker.yaml", s, {}, {}, wrong),
+                 std::invalid_argument)
+        << algorithm;
+  }
 }
 
 TEST(Optimize, TheStudyFileIsCheckedAtItsLines) {
