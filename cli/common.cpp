@@ -5,6 +5,7 @@
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -13,9 +14,11 @@
 #include <sstream>
 #include <vector>
 
+#include "orthomech/io/file_writer.hpp"
 #include "orthomech/io/mechanism_file.hpp"
 #include "orthomech/io/noise.hpp"
 #include "orthomech/io/study_db.hpp"
+#include "orthomech/io/study_report.hpp"
 #include "orthomech/io/units.hpp"
 #include "orthomech/study/study.hpp"
 
@@ -216,6 +219,40 @@ std::unique_ptr<StudyDatabase> open_study_database(const std::string& out, bool 
     spdlog::error("{}", e.what());
     return nullptr;
   }
+}
+
+void add_study_report_options(CLI::App* cmd, StudyReportOptions& options) {
+  cmd->add_option("--report", options.html,
+                  "write the study report, one offline HTML page: scatter plots of parameters "
+                  "against metrics, histograms, sensitivities, the best variants' cycles");
+  cmd->add_option("--figures", options.figures,
+                  "write the report's figures as SVG files into this directory (for papers)");
+  cmd->add_option("--report-metrics", options.metrics,
+                  "the metrics the report shows (default: the best metric, the expressions, then "
+                  "the metrics that vary, 8 in all)")
+      ->delimiter(',');
+}
+
+std::vector<std::string> unknown_report_metrics(const StudyReportOptions& options,
+                                                const VariantResult& columns) {
+  std::vector<std::string> unknown;
+  for (const std::string& m : options.metrics)
+    if (std::none_of(columns.metrics.begin(), columns.metrics.end(),
+                     [&](const auto& c) { return c.first == m; })) {
+      std::string list;
+      for (const auto& [name, value] : columns.metrics) list += (list.empty() ? "" : ", ") + name;
+      spdlog::error("--report-metrics: unknown metric '{}' (the study's metrics: {})", m, list);
+      unknown.push_back(m);
+    }
+  return unknown;
+}
+
+void write_study_report(const StudyReportOptions& options, const StudyReport& report) {
+  if (!options.html.empty()) write_file(options.html, study_report_html(report));
+  if (options.figures.empty()) return;
+  std::filesystem::create_directories(options.figures);
+  for (const StudyFigure& f : study_report_figures(report))
+    write_file(std::filesystem::path(options.figures) / f.file, f.svg);
 }
 
 std::string read_input_file(const std::string& path, const std::string& what) {

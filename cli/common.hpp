@@ -19,6 +19,7 @@ namespace orthomech {
 class StudyDatabase;
 struct Study;
 struct VariantResult;
+struct StudyReport;
 }  // namespace orthomech
 
 namespace orthomech::cli {
@@ -104,6 +105,19 @@ void add_units_option(CLI::App* cmd, std::string& choice);
 [[nodiscard]] std::unique_ptr<StudyDatabase> open_study_database(
     const std::string& out, bool resume, const std::string& mechanism,
     const std::string& study_text, const Study& study, const VariantResult& columns);
+// The study report's options of `sweep` and `optimize` (docs/cli.md "The study report").
+struct StudyReportOptions {
+  std::string html, figures;         // --report FILE.html, --figures DIR
+  std::vector<std::string> metrics;  // --report-metrics A,B,…
+};
+void add_study_report_options(CLI::App* cmd, StudyReportOptions& options);
+// The report's metrics that the study does not have (columns: a variant's), each logged with the
+// study's metrics; empty when all are there.
+[[nodiscard]] std::vector<std::string> unknown_report_metrics(const StudyReportOptions& options,
+                                                              const VariantResult& columns);
+// Writes the page and the figures of `report` as the options ask (nothing when neither is given).
+// Throws std::runtime_error naming a file that cannot be written.
+void write_study_report(const StudyReportOptions& options, const StudyReport& report);
 // The whole text of an input file (a mechanism or study file given on the command line). Throws
 // InputError naming the path and `what` when it is not a regular file.
 [[nodiscard]] std::string read_input_file(const std::string& path, const std::string& what);

@@ -7,10 +7,12 @@
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -19,6 +21,7 @@
 #include "orthomech/io/file_writer.hpp"
 #include "orthomech/io/mechanism_file.hpp"
 #include "orthomech/io/study_db.hpp"
+#include "orthomech/io/study_report.hpp"
 #include "run_bounds.hpp"
 
 namespace orthomech::cli {
@@ -30,6 +33,7 @@ namespace fs = std::filesystem;
 struct OptimizeCliOptions {
   std::string file, study, out;
   bool json = false, resume = false;
+  StudyReportOptions report;
   double time_limit = 0.0;  // s of wall clock; 0: none
 };
 
@@ -76,7 +80,7 @@ nlohmann::json summarize(const Study& study, const OptimizeResult& r, const std:
   return j;
 }
 
-void print_summary(const nlohmann::json& j, const fs::path& out) {
+std::string summary_text(const nlohmann::json& j, const fs::path& out) {
   std::ostringstream o;
   o << "optimize (" << j["algorithm"].get<std::string>() << "): " << j["outcome"].get<std::string>()
     << " after " << j["evaluations"].get<long>() << " evaluations ("
@@ -98,8 +102,30 @@ void print_summary(const nlohmann::json& j, const fs::path& out) {
     o << "no feasible design was found\n";
   }
   o << "evaluations: " << (out / "evaluations.csv").string() << ", "
-    << (out / "study.sqlite").string() << "\n";
-  std::cout << o.str();
+    << (out / "study.sqlite").string()
+    << "; convergence plot: " << (out / "convergence.svg").string() << "\n";
+  return o.str();
+}
+
+// The search's evaluations for the convergence plot, and its best feasible ones (the optimum
+// first, at most `count`) for the report.
+std::vector<ConvergencePoint> convergence_of(const OptimizeResult& r) {
+  std::vector<ConvergencePoint> points;
+  for (const OptimizeStep& s : r.steps)
+    points.push_back({s.evaluation, s.objective, s.feasible,
+                      s.best >= 0 ? s.best_objective : std::numeric_limits<double>::quiet_NaN()});
+  return points;
+}
+std::vector<long> best_feasible(const OptimizeResult& r, bool maximize, size_t count) {
+  std::vector<const OptimizeStep*> feasible;
+  for (const OptimizeStep& s : r.steps)
+    if (s.feasible) feasible.push_back(&s);
+  std::stable_sort(feasible.begin(), feasible.end(), [&](const auto* a, const auto* b) {
+    return maximize ? a->objective > b->objective : a->objective < b->objective;
+  });
+  std::vector<long> best;
+  for (size_t k = 0; k < feasible.size() && k < count; ++k) best.push_back(feasible[k]->evaluation);
+  return best;
 }
 
 int run_optimize_command(const OptimizeCliOptions& opt) {
@@ -122,6 +148,7 @@ int run_optimize_command(const OptimizeCliOptions& opt) {
                   start.message);
     return kNumerical;
   }
+  if (!unknown_report_metrics(opt.report, start).empty()) return kBadInput;
   const fs::path out = opt.out;
   const std::unique_ptr<StudyDatabase> db =
       open_study_database(opt.out, opt.resume, mechanism, study_text, study, start);
@@ -192,10 +219,21 @@ int run_optimize_command(const OptimizeCliOptions& opt) {
     if (stop != StopReason::none) summary["stop"] = to_string(stop);
     write_file(out / "evaluations.csv", study_csv(*db));
     write_file(out / "summary.json", summary.dump(2) + "\n");
+    const std::string text = summary_text(summary, out);
+    StudyReportRequest request;
+    request.title = opt.study + " on " + opt.file;
+    request.summary = text;
+    request.metrics = opt.report.metrics;
+    request.best = best_feasible(result, study.goal.maximize, 5);
+    request.convergence = convergence_of(result);
+    request.objective = study.goal.objective;
+    const StudyReport report = study_report_of(study, *db, mechanism, opt.file, request);
+    write_file(out / "convergence.svg", convergence_svg(report));
+    write_study_report(opt.report, report);
     if (opt.json)
       std::cout << summary.dump(2) << "\n";
     else
-      print_summary(summary, out);
+      std::cout << text;
   } catch (const std::runtime_error& e) {
     spdlog::error("{}", e.what());
     return kBadInput;
@@ -225,6 +263,7 @@ void register_optimize(CLI::App& app, const GlobalOptions& globals, int& exit_co
   cmd->add_flag("--resume", opt->resume,
                 "continue the search stored in --out (its evaluations replayed, not computed "
                 "again): the result of one uninterrupted run");
+  add_study_report_options(cmd, opt->report);
   cmd->add_option("--time-limit", opt->time_limit,
                   "wall-clock limit in seconds (default: none): the search stops there, keeps the "
                   "best design so far and exits 5")

@@ -33,8 +33,7 @@ namespace fs = std::filesystem;
 
 struct SweepCliOptions {
   std::string file, study, out;
-  std::string report, figures;              // --report FILE.html, --figures DIR
-  std::vector<std::string> report_metrics;  // --report-metrics A,B,…
+  StudyReportOptions report;
   int jobs = 0;
   bool resume = false, json = false;
   double time_limit = 0.0;  // s of wall clock; 0: none
@@ -175,18 +174,12 @@ std::string summary_text(const nlohmann::json& j, const fs::path& out) {
 // --report and --figures: the page and the figures of the stored study (io/study_report.hpp).
 void write_report(const SweepCliOptions& opt, const Study& study, const StudyDatabase& db,
                   const std::string& mechanism, const std::string& summary) {
-  if (opt.report.empty() && opt.figures.empty()) return;
+  if (opt.report.html.empty() && opt.report.figures.empty()) return;
   StudyReportRequest request;
   request.title = opt.study + " on " + opt.file;
   request.summary = summary;
-  request.metrics = opt.report_metrics;
-  const StudyReport report = study_report_of(study, db, mechanism, opt.file, request);
-  if (!opt.report.empty()) write_file(opt.report, study_report_html(report));
-  if (!opt.figures.empty()) {
-    fs::create_directories(opt.figures);
-    for (const StudyFigure& f : study_report_figures(report))
-      write_file(fs::path(opt.figures) / f.file, f.svg);
-  }
+  request.metrics = opt.report.metrics;
+  write_study_report(opt.report, study_report_of(study, db, mechanism, opt.file, request));
 }
 
 // Under mpirun: rank 0 releases the other ranks with "stop" when it returns before the study
@@ -240,14 +233,7 @@ int run_sweep_command(const SweepCliOptions& opt) {
   nominal_study.parameters.clear();
   const VariantResult nominal = evaluate_variant(mechanism, opt.file, nominal_study, -1, {});
   const bool needs_cycle = study.metrics.cycle || !study.metrics.deviation.empty();
-  for (const std::string& m : opt.report_metrics)  // refused before any variant is computed
-    if (std::none_of(nominal.metrics.begin(), nominal.metrics.end(),
-                     [&](const auto& c) { return c.first == m; })) {
-      std::string list;
-      for (const auto& [name, value] : nominal.metrics) list += (list.empty() ? "" : ", ") + name;
-      spdlog::error("--report-metrics: unknown metric '{}' (the study's metrics: {})", m, list);
-      return kBadInput;
-    }
+  if (!unknown_report_metrics(opt.report, nominal).empty()) return kBadInput;  // before any variant
   if (nominal.metrics.empty() || (needs_cycle && nominal.positions == 0)) {
     spdlog::error("{}: the nominal design cannot be swept ({}): {}", opt.file, nominal.status,
                   nominal.message);
@@ -368,15 +354,7 @@ void register_sweep(CLI::App& app, const GlobalOptions& globals, int& exit_code)
   cmd->add_flag("--resume", opt->resume,
                 "continue the study stored in --out (computes only the variants not stored)");
   cmd->add_flag("--json", opt->json, "the summary as one JSON document on stdout");
-  cmd->add_option("--report", opt->report,
-                  "write the study report, one offline HTML page: scatter plots of parameters "
-                  "against metrics, histograms, sensitivities, the best variants' cycles");
-  cmd->add_option("--figures", opt->figures,
-                  "write the report's figures as SVG files into this directory (for papers)");
-  cmd->add_option("--report-metrics", opt->report_metrics,
-                  "the metrics the report shows (default: the best metric, the expressions, then "
-                  "the metrics that vary, 8 in all)")
-      ->delimiter(',');
+  add_study_report_options(cmd, opt->report);
   cmd->add_option("--time-limit", opt->time_limit,
                   "wall-clock limit in seconds (default: none): the sweep stops there, keeps the "
                   "variants stored and exits 5 (continue with --resume)")

@@ -222,6 +222,57 @@ std::string cycle_plot(const VariantCycle& c, const VariantCycle::Series& series
   return s + "\"/></svg>";
 }
 
+std::string convergence_plot(const StudyReport& r) {
+  // The objective's axis spans the feasible evaluations (an infeasible one next to a dead point
+  // can be orders of magnitude off); infeasible ones outside it are not drawn, but counted.
+  std::vector<double> n, y;
+  for (const ConvergencePoint& c : r.convergence) {
+    n.push_back(static_cast<double>(c.evaluation));
+    if (c.feasible) y.push_back(c.objective);
+    y.push_back(c.best);
+  }
+  if (std::none_of(y.begin(), y.end(), [](double v) { return std::isfinite(v); }))
+    for (const ConvergencePoint& c : r.convergence) y.push_back(c.objective);
+  const double w = 2 * kPanelW + 40, h = kPanelH + 40;
+  const Axis x = axis_of(n, kLeft, w - 8), v = axis_of(y, h - kBottom, kTop);
+  std::string s = svg_open("convergence", w, h, "");
+  s += frame(x, v);
+  long outside = 0;
+  for (const ConvergencePoint& c : r.convergence)
+    if (std::isfinite(c.objective) && (c.objective < v.lo || c.objective > v.hi)) ++outside;
+  s +=
+      text_at(x.p0, 11,
+              r.objective + " per evaluation (open: infeasible" +
+                  (outside > 0 ? "; " + std::to_string(outside) + " off the axis" : std::string()) +
+                  "); line: the best feasible",
+              "start");
+  s += text_at(0.5 * (x.p0 + x.p1), h - 4, "evaluation", "middle");
+  for (const ConvergencePoint& c : r.convergence)
+    if (std::isfinite(c.objective) && c.objective >= v.lo && c.objective <= v.hi)
+      s += "<circle class=\"evaluation\" data-evaluation=\"" + std::to_string(c.evaluation) +
+           "\" data-objective=\"" + exact(c.objective) + "\" data-feasible=\"" +
+           (c.feasible ? "yes" : "no") + "\" cx=\"" + px(x.at(static_cast<double>(c.evaluation))) +
+           "\" cy=\"" + px(v.at(c.objective)) + "\" r=\"2.5\" fill=\"" +
+           (c.feasible ? "#1f5fa8" : "none") + "\" stroke=\"" + (c.feasible ? "none" : "#999") +
+           "\"><title>evaluation " + std::to_string(c.evaluation) + ": " + num(c.objective) +
+           (c.feasible ? "" : " (infeasible)") + "</title></circle>";
+  // The best so far as a step line from its first feasible evaluation.
+  std::string points;
+  bool started = false;
+  double last = std::numeric_limits<double>::quiet_NaN();
+  for (const ConvergencePoint& c : r.convergence) {
+    if (!std::isfinite(c.best)) continue;
+    const double at = x.at(static_cast<double>(c.evaluation));
+    if (started) points += px(at) + "," + px(v.at(last)) + " ";
+    points += px(at) + "," + px(v.at(c.best)) + " ";
+    started = true;
+    last = c.best;
+  }
+  return s + "<polyline class=\"best\" data-final=\"" + exact(last) +
+         "\" fill=\"none\" stroke=\"#d62728\" stroke-width=\"1.5\" points=\"" + points +
+         "\"/></svg>";
+}
+
 // ---- 3. Sections --------------------------------------------------------------------------------
 
 void check_shape(const StudyReport& r) {
@@ -258,6 +309,11 @@ std::string sensitivity_section(const StudyReport& r) {
   std::string s = "<h2>Sensitivities</h2>\n<div id=\"sensitivities\" class=\"row\">\n";
   for (size_t m = 0; m < r.metrics.size(); ++m) s += sensitivity_svg(r, m) + "\n";
   return s + "</div>\n";
+}
+
+std::string convergence_section(const StudyReport& r) {
+  if (r.convergence.empty()) return "";
+  return "<h2>Convergence</h2>\n<div class=\"row\">" + convergence_plot(r) + "</div>\n";
 }
 
 std::string best_section(const StudyReport& r) {
@@ -315,15 +371,18 @@ constexpr const char* kScript =
 std::vector<std::string> default_report_metrics(const Study& study, const StudyDatabase& db,
                                                 const std::vector<StudyDatabase::Row>& rows) {
   std::vector<std::string> chosen;
+  const auto& names = db.metrics();
   const auto add = [&](const std::string& name) {
-    const auto& names = db.metrics();
     if (chosen.size() < kDefaultReportMetrics &&
         std::find(names.begin(), names.end(), name) != names.end() &&
         std::find(chosen.begin(), chosen.end(), name) == chosen.end())
       chosen.push_back(name);
   };
   if (!study.best_metric.empty()) add(study.best_metric);
-  for (const MetricExpression& e : study.metrics.expressions) add(e.name);
+  // The expressions (an optimize goal's objective and constraints among them), except one that is
+  // a column by another name (`constraint.1` of `{metric: transmission.min}`): that column.
+  for (const MetricExpression& e : study.metrics.expressions)
+    add(std::find(names.begin(), names.end(), e.text) != names.end() ? e.text : e.name);
   const auto varies = [&](size_t m) {
     double lo = std::numeric_limits<double>::infinity(), hi = -lo;
     for (const double v : summarized_metric(rows, m, db.metrics()[m]))
@@ -411,9 +470,21 @@ StudyReport study_report_of(const Study& study, const StudyDatabase& db,
       r.statistics.push_back(st);
     }
   }
+  r.convergence = request.convergence;
+  r.objective = request.objective;
   const auto& names = db.metrics();
   const auto best = std::find(names.begin(), names.end(), study.best_metric);
-  if (study.kind == StudyKind::grid && best != names.end()) {
+  if (!request.best.empty()) {  // a search's, as given
+    r.best_metric = "objective";
+    for (const long v : request.best) {
+      const auto row = std::find_if(rows.begin(), rows.end(),
+                                    [&](const StudyDatabase::Row& w) { return w.index == v; });
+      if (row == rows.end()) continue;
+      r.best.push_back(v);
+      if (static_cast<long>(r.cycles.size()) < request.cycles)
+        r.cycles.push_back(variant_cycle(mechanism, origin, study, v, row->values));
+    }
+  } else if (study.kind == StudyKind::grid && best != names.end()) {
     r.best_metric = study.best_metric;
     for (const auto* row : best_rows(rows, static_cast<size_t>(best - names.begin()),
                                      study.best_largest, study.best_count)) {
@@ -423,6 +494,10 @@ StudyReport study_report_of(const Study& study, const StudyDatabase& db,
     }
   }
   return r;
+}
+
+std::string convergence_svg(const StudyReport& report) {
+  return "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n" + convergence_plot(report) + "\n";
 }
 
 int histogram_bins(long n) {
@@ -464,7 +539,8 @@ std::string study_report_html(const StudyReport& r) {
           std::to_string(r.variants.size()) + " variants shown (metrics in the file's units)</p>\n";
   html += "<details><summary>the summary</summary><pre id=\"summary\">" + escape_html(r.summary) +
           "</pre></details>\n";
-  html += best_section(r) + scatter_section(r) + histogram_section(r) + sensitivity_section(r);
+  html += convergence_section(r) + best_section(r) + scatter_section(r) + histogram_section(r) +
+          sensitivity_section(r);
   html += "<script>" + std::string(kScript) + "</script>\n</body>\n</html>\n";
   return html;
 }
@@ -490,6 +566,7 @@ std::vector<StudyFigure> study_report_figures(const StudyReport& r) {
       scatter += "<g transform=\"translate(" + px(kPanelW * static_cast<double>(p)) + "," +
                  px(kPanelH * static_cast<double>(m)) + ")\">" + scatter_panel(r, p, m) + "</g>";
   out.push_back({"scatter.svg", scatter + "</svg>\n"});
+  if (!r.convergence.empty()) out.push_back({"convergence.svg", convergence_svg(r)});
   for (size_t m = 0; m < r.metrics.size(); ++m) {
     out.push_back({file_name("histogram-", r.metrics[m].name), xml + histogram_svg(r, m) + "\n"});
     if (!r.statistics.empty())

@@ -15,7 +15,10 @@
 // `svg.sensitivity[data-metric]` with `rect.bar[data-parameter][data-effect]`; the best variants
 // are rows `tr.variant[data-variant]` of `#best`; clicking one (or a best point) shows its
 // `div.cycle[data-variant]` (display block; the others none), whose `svg.cycle-plot` holds a
-// `polyline.series[data-name][data-min][data-max]` per series with one point per position. The
+// `polyline.series[data-name][data-min][data-max]` per series with one point per position; a
+// search's convergence is `svg.convergence` with a `circle.evaluation[data-evaluation]
+// [data-objective][data-feasible]` per evaluation with an objective and `polyline.best
+// [data-final]` (the best feasible objective at the end). The
 // data-* numbers are exact (the shortest text that reads back to the same double).
 #include <cstddef>
 #include <optional>
@@ -43,6 +46,15 @@ struct StudyReportStatistics {
   std::vector<std::optional<Sensitivity>> sensitivity;  // per parameter (none: it is constant)
 };
 
+// One evaluation of a search (optimize): its objective (NaN: none), whether it was feasible, and
+// the best feasible objective so far (NaN: none yet).
+struct ConvergencePoint {
+  long evaluation = 0;
+  double objective = 0.0;
+  bool feasible = false;
+  double best = 0.0;
+};
+
 struct StudyReport {
   std::string title;           // "examples/tolerance-study.yaml on mechanisms/crank-rocker.yaml"
   std::string kind;            // "grid", "monte-carlo", "optimize"
@@ -52,9 +64,11 @@ struct StudyReport {
   std::vector<StudyReportColumn> metrics;     // the reported metrics, a value per row
   // Per reported metric (Monte Carlo): the quantiles and sensitivities; empty otherwise.
   std::vector<StudyReportStatistics> statistics;
-  std::string best_metric;           // how the best variants are ranked ("" none)
-  std::vector<long> best;            // the best variants, best first
-  std::vector<VariantCycle> cycles;  // the cycles of (some of) the best variants
+  std::string best_metric;                    // how the best variants are ranked ("" none)
+  std::vector<long> best;                     // the best variants, best first
+  std::vector<VariantCycle> cycles;           // the cycles of (some of) the best variants
+  std::vector<ConvergencePoint> convergence;  // a search's evaluations (optimize), else empty
+  std::string objective;                      // the objective's text ("drive.peak")
 };
 
 // What the study's rows give for a metric's summary: the values of the rows whose cycle
@@ -77,7 +91,16 @@ struct StudyReportRequest {
   std::string title, summary;
   std::vector<std::string> metrics;
   long cycles = 5;
+  // A search (optimize): the best variants as given (the optimum first; a grid's come from its
+  // best metric), its evaluations and its objective's text.
+  std::vector<long> best;
+  std::vector<ConvergencePoint> convergence;
+  std::string objective;
 };
+
+// The convergence of a search as a standalone SVG document: every evaluation's objective (a
+// point; feasible ones filled) and the best feasible objective so far (a step line).
+[[nodiscard]] std::string convergence_svg(const StudyReport& report);
 [[nodiscard]] StudyReport study_report_of(const Study& study, const StudyDatabase& db,
                                           const std::string& mechanism, const std::string& origin,
                                           const StudyReportRequest& request);
@@ -98,7 +121,7 @@ struct HistogramBin {
 
 // The same figures as standalone SVG documents for papers: file name ("scatter.svg",
 // "histogram-METRIC.svg", "sensitivity-METRIC.svg" with the metric's characters outside
-// [A-Za-z0-9._-] as '_') and text.
+// [A-Za-z0-9._-] as '_', and "convergence.svg" of a search) and text.
 struct StudyFigure {
   std::string file, svg;
 };

@@ -15,7 +15,10 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <numbers>
+#include <regex>
+#include <sstream>
 #include <string>
+#include <vector>
 
 #include "support/cli_runner.hpp"
 #include "support/spatial_oracles.hpp"
@@ -98,6 +101,47 @@ TEST(OptimizeCli, WiperDriveFor75DegreesOfSwing) {
   long lines = 0;
   for (std::string line; std::getline(csv, line);) ++lines;
   EXPECT_EQ(lines, j["evaluations"].get<long>() + 1);
+
+  // The convergence plot: a point per evaluation with an objective (those off the axis counted in
+  // its caption), each the objective column of evaluations.csv; none feasible below the optimum;
+  // the best-so-far line ends at the optimum's objective.
+  const std::string plot = test::read_text(fs::path(out) / "convergence.svg");
+  const std::regex point(
+      R"re(class="evaluation" data-evaluation="(\d+)" data-objective="([^"]+)" data-feasible="(\w+)")re");
+  std::vector<double> objective_column;
+  {
+    std::ifstream rows(fs::path(out) / "evaluations.csv");
+    std::string header;
+    std::getline(rows, header);
+    size_t at = 0;
+    std::stringstream h(header);
+    for (std::string name; std::getline(h, name, ',') && name != "objective";) ++at;
+    for (std::string row; std::getline(rows, row);) {
+      std::stringstream cells(row);
+      std::string cell;
+      for (size_t k = 0; k <= at; ++k) std::getline(cells, cell, ',');
+      objective_column.push_back(cell.empty() ? std::nan("") : std::stod(cell));
+    }
+  }
+  long drawn = 0;
+  for (std::sregex_iterator it(plot.begin(), plot.end(), point), end; it != end; ++it) {
+    const auto k = static_cast<size_t>(std::stol((*it)[1]));
+    ASSERT_LT(k, objective_column.size());
+    EXPECT_EQ(std::stod((*it)[2]), objective_column[k]) << "evaluation " << k;
+    if ((*it)[3] == "yes") {
+      EXPECT_GE(std::stod((*it)[2]), peak) << "evaluation " << k;
+    }
+    ++drawn;
+  }
+  std::smatch off;
+  long beyond = 0;
+  if (std::regex_search(plot, off, std::regex("; (\\d+) off the axis"))) beyond = std::stol(off[1]);
+  EXPECT_EQ(drawn + beyond, std::count_if(objective_column.begin(), objective_column.end(),
+                                          [](double v) { return std::isfinite(v); }));
+  std::smatch line;
+  ASSERT_TRUE(
+      std::regex_search(plot, line, std::regex(R"re(class="best" data-final="([^"]+)")re")));
+  EXPECT_EQ(std::stod(line[1]), peak);
 
   // The directory holds a study now: a second run there is refused.
   const auto again = run_cli({"optimize", test::bundled_file("wiper-drive"), "--study",
