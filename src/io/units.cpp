@@ -113,6 +113,22 @@ const UnitTable& table_of(const std::string& kind) {
   return force;
 }
 
+}  // namespace
+
+std::optional<BaseUnit> base_unit(const std::string& name) {
+  const std::pair<const char*, Dimension> kinds[] = {{"length", Dimension::length},
+                                                     {"angle", Dimension::angle},
+                                                     {"mass", Dimension::mass},
+                                                     {"time", Dimension::time},
+                                                     {"force", Dimension::force}};
+  for (const auto& [kind, dimension] : kinds)
+    for (const auto& [n, f] : table_of(kind))
+      if (n == name) return BaseUnit{dimension, f};
+  return std::nullopt;
+}
+
+namespace {
+
 double factor_of(const std::string& kind, const std::string& name) {
   for (const auto& [n, f] : table_of(kind))
     if (n == name) return f;

@@ -97,12 +97,12 @@ void cycle_metrics(const Model& model, const CycleResult& c, int driver_joint,
 
 // The study's expressions over the columns so far, each a column in turn (NaN where one cannot
 // be evaluated: the study file's check evaluated them on the nominal design).
-void expression_metrics(const std::vector<MetricExpression>& expressions,
+void expression_metrics(const std::vector<MetricExpression>& expressions, const UnitSystem& units,
                         std::vector<std::pair<std::string, double>>& out) {
   for (const MetricExpression& e : expressions) {
     double v = kNaN;
     try {
-      v = evaluate_metric_expression(e.text, out);
+      v = evaluate_metric_expression(e.text, out, &units);
     } catch (const std::invalid_argument&) {
       v = kNaN;
     }
@@ -399,7 +399,10 @@ VariantResult evaluate_variant(const std::string& mechanism, const std::string& 
                                                                   : "failed";
       r.message = c.message;
       r.positions = static_cast<long>(c.points.size());
-      if (want.cycle && !c.points.empty()) cycle_metrics(model, c, driver->joint, r.metrics);
+      if (want.cycle && !c.points.empty()) {
+        cycle_metrics(model, c, driver->joint, r.metrics);
+        measure_at_metrics(model, c, driver->joint, want.at, r.metrics);
+      }
       if (!want.deviation.empty()) {
         const std::shared_ptr<const NominalPaths> nominal =
             study.nominal
@@ -410,7 +413,8 @@ VariantResult evaluate_variant(const std::string& mechanism, const std::string& 
     }
     if (want.assemble) assemble_metrics(model, r.metrics);
     if (want.validate) validate_metrics(model, r.metrics);
-    if (!r.metrics.empty()) expression_metrics(want.expressions, r.metrics);
+    if (!r.metrics.empty())
+      expression_metrics(want.expressions, unit_system(model.units), r.metrics);
   } catch (const std::exception& e) {
     r.status = "failed";
     r.message = std::string("internal error: ") + e.what();

@@ -104,6 +104,11 @@ class StudyReader {
     if (const YAML::Node m = root["metrics"]) s.metrics = metrics(m);
     if (const YAML::Node e = root["expressions"]) s.metrics.expressions = expressions(e);
     add_goal_expressions(root, s);
+    try {
+      s.metrics.at = measure_at_requests(s.metrics.expressions);
+    } catch (const std::invalid_argument& e) {
+      fail(root["expressions"] ? root["expressions"] : root, "expressions", e.what());
+    }
     check_metric_names(root, s);
     return s;
   }
@@ -487,6 +492,8 @@ void StudyReader::check_metric_names(const YAML::Node& root, const Study& s) con
   nominal.metrics.expressions.clear();
   VariantResult r = evaluate_variant(mechanism_, mechanism_origin_, nominal, 0, {});
   if (r.metrics.empty()) return;  // no column known: the nominal has none to compare with
+  // The file's units, for the expressions' numbers with a unit (the nominal read: it is valid).
+  const UnitSystem units = unit_system(parse_mechanism(mechanism_, mechanism_origin_, {}).units);
   const YAML::Node listed = root["expressions"];
   for (size_t k = 0; k < expressions.size(); ++k) {
     const MetricExpression& e = expressions[k];
@@ -500,7 +507,7 @@ void StudyReader::check_metric_names(const YAML::Node& root, const Study& s) con
       fail(listed, "expression '" + e.name + "'", "the name is a column of the study's table");
     double v = 0.0;
     try {
-      v = evaluate_metric_expression(e.text, r.metrics);
+      v = evaluate_metric_expression(e.text, r.metrics, &units);
     } catch (const std::invalid_argument& error) {
       YAML::Node at;
       const size_t own = expressions.size() - goal_nodes_.size();  // the file's expressions first

@@ -2,6 +2,7 @@
 // Quantities written with a unit, as on the command line ("300rpm", "30 deg") and in mechanism
 // files ("speed: 300 rpm"). Values are returned in SI.
 #include <cstddef>
+#include <optional>
 #include <string>
 
 #include "orthomech/model/model.hpp"
@@ -41,6 +42,14 @@ enum class Dimension {
   inertia,    // mass·length²
   frequency,  // 1/time
 };
+// A base unit by the name a file may declare ("mm", "deg", "kg", "ms", "kN"; docs/file-format.md
+// "units"): its dimension (length, angle, mass, time or force) and SI per unit; nullopt for any
+// other name. A study expression's `75deg` (study/measure_metrics.hpp).
+struct BaseUnit {
+  Dimension dimension = Dimension::none;
+  double si = 1.0;
+};
+[[nodiscard]] std::optional<BaseUnit> base_unit(const std::string& name);
 // A quantity's unit in a system: its name and its size in SI (value_out = value_SI / si).
 struct OutputUnit {
   std::string name;

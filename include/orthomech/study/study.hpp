@@ -39,6 +39,8 @@ struct StudyMetrics {
                                        // RMS distance from the nominal design's path
   // The study file's `expressions:` (study/measure_metrics.hpp), columns after the blocks'.
   std::vector<MetricExpression> expressions;
+  // Their `at(NAME, X)` (measure_at_requests), columns NAME@X after the cycle block's.
+  std::vector<MeasureAt> at;
 };
 
 // The nominal design's traced paths (the file unchanged), computed once per study: the cycle's

@@ -7,7 +7,8 @@
 //     40ω/√2 — a rate is not a stroke: no time ratio;
 //   - the gear's point P at 30 mm, a tracer (no measure): x = 100 + 30 cos 2θ, two maxima per turn
 //     — stroke 60, no time ratio (NaN).
-// Expressions: columns by name and f(NAME) against the same values computed here; refused names.
+// Expressions: columns by name and f(NAME) against the same values computed here; refused names;
+// at(NAME, X) against the closed forms.
 #include "orthomech/study/measure_metrics.hpp"
 
 #include <gtest/gtest.h>
@@ -170,6 +171,87 @@ TEST(MeasureMetrics, StudyExpressionsRefusedAtTheirLine) {
   EXPECT_NE(message(head + "expressions:\n  2x: 1\n").find("a letter first"), std::string::npos);
   EXPECT_NE(message(head + "expressions: [a]\n").find("mapping"), std::string::npos);
   EXPECT_EQ(message(head + "expressions:\n  s: range(tip_y)\n  t: s / 2\n"), "accepted");
+}
+
+// at(NAME, X): the measure at an input. The gear pair's tip y = L sin θ and its rate
+// ẏ = L ω cos θ (ω = 2π rad/s), at 72 positions 5° apart (h = 0.0873 rad): between samples the
+// cubic through the four positions around θ errs by at most |f⁗|/4! · 1.5h · 0.5h · 0.5h · 1.5h
+// = 0.0234 L h⁴ (the middle of an interval): 5.4e-5 mm for L = 40, and for the rate, whose
+// fourth derivative in θ is at most L ω, 3.4e-4 mm/s; a revolute input counts up to whole turns;
+// at a sample the measure itself.
+TEST(MeasureMetrics, AtIsTheMeasureAtAnInput) {
+  const std::string mech = gear_pair();
+  const Study study = parse_study(R"(study: grid
+steps: 72
+parameters:
+  - {path: bodies.crank.mass, values: [1]}
+expressions:
+  y_mid: at(tip_y, 32.5)
+  y_turn: at(tip_y, 392.5) - at(tip_y , -327.5)
+  y_sample: at(tip_y, 30)
+  vy: at(tip_vy, 102.5)
+  rise: at(tip_y, 90) - at(tip_y, 32.5)
+)",
+                                  "s.yaml", mech, "m.yaml");
+  ASSERT_EQ(study.metrics.at.size(), 6u);  // each (measure, input) once
+  EXPECT_EQ(study.metrics.at[0].column, "tip_y@32.5");
+  const VariantResult r = evaluate_variant(mech, "m.yaml", study, 0, variant_values(study, 0));
+  ASSERT_EQ(r.status, "completed") << r.message;
+  const auto m = columns_of(r.metrics);
+  const double deg = kPi / 180, L = 40, w = 2 * kPi, h = 5 * deg;
+  const double bound = 0.0234375 * std::pow(h, 4);  // per unit of |f⁗|
+  EXPECT_NEAR(m.at("y_mid"), L * std::sin(32.5 * deg), bound * L);
+  EXPECT_NEAR(m.at("tip_y@32.5"), m.at("y_mid"), 0.0);
+  EXPECT_NEAR(m.at("y_turn"), 0.0, 1e-12);  // 392.5° and −327.5° are 32.5° a turn away
+  EXPECT_NEAR(m.at("y_sample"), L * 0.5, 1e-9);
+  EXPECT_NEAR(m.at("vy"), L * w * std::cos(102.5 * deg), bound * L * w);
+  EXPECT_NEAR(m.at("rise"), L - L * std::sin(32.5 * deg), bound * L + 1e-9);
+  // Refused at the line: not a measure, not a number.
+  auto message = [&](const std::string& e) {
+    try {
+      (void)parse_study(
+          "study: grid\nparameters:\n  - {path: bodies.crank.mass, values: [1]}\nexpressions:\n"
+          "  x: " +
+              e + "\n",
+          "s.yaml", mech, "m.yaml");
+    } catch (const std::exception& error) {
+      return std::string(error.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_NE(message("at(tip_z, 30)").find("'tip_z' is not a measure"), std::string::npos)
+      << message("at(tip_z, 30)");
+  EXPECT_NE(message("at(tip_y, thirty)").find("input as a number"), std::string::npos)
+      << message("at(tip_y, thirty)");
+}
+
+// Numbers with a unit are the file's units of their kind (the gear pair is in mm and deg): 0.08 m
+// is 80 mm, π/6 rad is 30°; at(…, X) takes a unit for X too. Without the file's units (the
+// library call alone) a unit is an error, and a plain number stays as written.
+TEST(MeasureMetrics, NumbersWithUnitsAreInTheFilesUnits) {
+  const std::string mech = gear_pair();
+  const Study study = parse_study(R"(study: grid
+steps: 72
+parameters:
+  - {path: bodies.crank.mass, values: [1]}
+expressions:
+  stroke_error: range(tip_y) - 0.08m
+  spaced: 8 cm + 2mm
+  angle: 0.5235987755982988rad + 60deg
+  y30: at(tip_y, 0.5235987755982988 rad)
+  force: 2kN
+)",
+                                  "s.yaml", mech, "m.yaml");
+  const VariantResult r = evaluate_variant(mech, "m.yaml", study, 0, variant_values(study, 0));
+  ASSERT_EQ(r.status, "completed") << r.message;
+  const auto m = columns_of(r.metrics);
+  EXPECT_NEAR(m.at("stroke_error"), 0.0, 1e-9);  // the stroke 2 · 40 mm
+  EXPECT_NEAR(m.at("spaced"), 82.0, 1e-12);
+  EXPECT_NEAR(m.at("angle"), 90.0, 1e-12);
+  EXPECT_NEAR(m.at("y30"), 20.0, 1e-9);      // 30° is a sample: 40 sin 30°
+  EXPECT_NEAR(m.at("force"), 2000.0, 1e-9);  // the file's force unit is N
+  EXPECT_THROW((void)evaluate_metric_expression("75deg", {}), std::invalid_argument);
+  EXPECT_EQ(evaluate_metric_expression("1e3 + 2", {}), 1002.0);
 }
 
 }  // namespace
