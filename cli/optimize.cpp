@@ -33,6 +33,7 @@ namespace fs = std::filesystem;
 struct OptimizeCliOptions {
   std::string file, study, out;
   bool json = false, resume = false;
+  int jobs = 0;  // multistart: threads
   StudyReportOptions report;
   double time_limit = 0.0;  // s of wall clock; 0: none
 };
@@ -42,7 +43,9 @@ struct OptimizeCliOptions {
 nlohmann::json summarize(const Study& study, const OptimizeResult& r, const std::string& optimum) {
   nlohmann::json j;
   j["study"] = "optimize";
-  j["algorithm"] = study.goal.algorithm == OptimizeGoal::Algorithm::isres ? "isres" : "cobyla";
+  j["algorithm"] = study.goal.algorithm == OptimizeGoal::Algorithm::isres        ? "isres"
+                   : study.goal.algorithm == OptimizeGoal::Algorithm::multistart ? "multistart"
+                                                                                 : "cobyla";
   j["outcome"] = r.outcome;
   j["message"] = r.message;
   j["evaluations"] = r.evaluations;
@@ -156,13 +159,6 @@ int run_optimize_command(const OptimizeCliOptions& opt) {
   // --resume: the stored evaluations, replayed by the search (run_optimize).
   std::vector<VariantResult> stored;
   for (const StudyDatabase::Row& row : db->rows()) {
-    if (row.index != static_cast<long>(stored.size())) {
-      spdlog::error(
-          "{}: the stored evaluations are not 0, 1, … in order (evaluation {} is "
-          "missing): not an optimize run to resume",
-          (out / "study.sqlite").string(), stored.size());
-      return kBadInput;
-    }
     VariantResult r;
     r.index = row.index;
     r.values = row.values;
@@ -179,17 +175,24 @@ int run_optimize_command(const OptimizeCliOptions& opt) {
   const RunControl control = run_control("optimize", opt.time_limit);
   RunMonitor monitor(control, 0);
   StopReason stop = StopReason::none;
+  // Progress: the evaluations computed over the budget (a multistart's: of every search).
+  const double budget =
+      double(study.goal.evaluations) *
+      double(study.goal.algorithm == OptimizeGoal::Algorithm::multistart ? study.goal.starts : 1);
+  long computed = 0;
   const auto store = [&](const VariantResult& r, const OptimizeStep& step) {
     if (step.replayed) return;
     db->insert(r);
     spdlog::debug("evaluation {}: {} objective {} violation {}", step.evaluation, r.status,
                   step.objective, step.violation);
-    stop = monitor.tick(double(step.evaluation + 1) / double(study.goal.evaluations));
+    ++computed;
+    stop = monitor.tick(double(computed) / budget);
   };
   OptimizeResult result;
   try {
     result = run_optimize(
-        mechanism, opt.file, study, store, [&] { return stop != StopReason::none; }, stored);
+        mechanism, opt.file, study, store, [&] { return stop != StopReason::none; }, stored,
+        opt.jobs);
   } catch (const std::runtime_error& e) {  // the database (a full disk): the rows stored are kept
     end_progress();
     spdlog::error("{}", e.what());
@@ -201,10 +204,8 @@ int run_optimize_command(const OptimizeCliOptions& opt) {
   }
   end_progress();
   if (stop != StopReason::none)
-    spdlog::error(
-        "optimize: {}; the best design so far is kept",
-        monitor.stop_message(stop, double(result.evaluations) / double(study.goal.evaluations),
-                             "evaluation", ""));
+    spdlog::error("optimize: {}; the best design so far is kept",
+                  monitor.stop_message(stop, double(computed) / budget, "evaluation", ""));
   std::string optimum;
   try {
     if (result.found) {
@@ -263,6 +264,10 @@ void register_optimize(CLI::App& app, const GlobalOptions& globals, int& exit_co
   cmd->add_flag("--resume", opt->resume,
                 "continue the search stored in --out (its evaluations replayed, not computed "
                 "again): the result of one uninterrupted run");
+  cmd->add_option("--jobs,-j", opt->jobs,
+                  "threads of a multistart's searches (default: every core); the results do not "
+                  "depend on it")
+      ->check(CLI::Range(0, 4096));
   add_study_report_options(cmd, opt->report);
   cmd->add_option("--time-limit", opt->time_limit,
                   "wall-clock limit in seconds (default: none): the search stops there, keeps the "

@@ -1,9 +1,17 @@
 #include "orthomech/study/optimize.hpp"
 
+#include <omp.h>
+
 #include <Eigen/Core>
 #include <algorithm>
+#include <boost/random/mersenne_twister.hpp>
+#include <boost/random/uniform_real_distribution.hpp>
 #include <cmath>
+#include <cstdint>
+#include <exception>
 #include <limits>
+#include <mutex>
+#include <random>
 #include <stdexcept>
 
 #include "../solvers/nlopt_constrained.hpp"
@@ -60,25 +68,48 @@ int constraint_count(const OptimizeGoal& goal) {
   return m;
 }
 
+// Where a search starts in the unit box: the study's start, or (a multistart's search s ≥ 1) a
+// point drawn from the search's own stream.
+Eigen::VectorXd start_point(const Study& study, long search) {
+  const size_t n = study.parameters.size();
+  Eigen::VectorXd x0(n);
+  if (search == 0) {
+    for (size_t j = 0; j < n; ++j) {
+      const StudyParameter& p = study.parameters[j];
+      x0(j) = (p.mean - p.lower) / (p.upper - p.lower);
+    }
+    return x0;
+  }
+  std::seed_seq seq{static_cast<std::uint32_t>(study.seed),
+                    static_cast<std::uint32_t>(study.seed >> 32),
+                    static_cast<std::uint32_t>(search), static_cast<std::uint32_t>(search >> 32)};
+  boost::random::mt19937_64 engine(seq);
+  boost::random::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (size_t j = 0; j < n; ++j) x0(j) = unit(engine);
+  return x0;
+}
+
 class Search {
  public:
+  // Search number `search` of a multistart (0 otherwise): its evaluations numbered from `first`,
+  // `stored` its stored ones in order.
   Search(const std::string& mechanism, const std::string& origin, const Study& study,
          const std::function<void(const VariantResult&, const OptimizeStep&)>& done,
-         const std::function<bool()>& stop, const std::vector<VariantResult>& stored)
+         const std::function<bool()>& stop, const std::vector<VariantResult>& stored,
+         long search = 0, long first = 0)
       : mechanism_(mechanism),
         origin_(origin),
         study_(study),
         done_(done),
         stop_(stop),
-        stored_(stored) {}
+        stored_(stored),
+        search_(search),
+        first_(first) {}
 
   OptimizeResult run() {
     const size_t n = study_.parameters.size();
-    Eigen::VectorXd x0(n), lo = Eigen::VectorXd::Zero(n), hi = Eigen::VectorXd::Ones(n);
-    for (size_t j = 0; j < n; ++j) {
-      const StudyParameter& p = study_.parameters[j];
-      x0(j) = (p.mean - p.lower) / (p.upper - p.lower);
-    }
+    const Eigen::VectorXd x0 = start_point(study_, search_);
+    const Eigen::VectorXd lo = Eigen::VectorXd::Zero(n), hi = Eigen::VectorXd::Ones(n);
     solvers::ConstrainedSettings settings;
     settings.method = study_.goal.algorithm == OptimizeGoal::Algorithm::isres
                           ? solvers::ConstrainedMethod::isres
@@ -112,13 +143,14 @@ class Search {
   const std::function<void(const VariantResult&, const OptimizeStep&)>& done_;
   const std::function<bool()>& stop_;
   const std::vector<VariantResult>& stored_;
+  long search_ = 0, first_ = 0;
   OptimizeResult result_;
   double worst_ = kNaN;  // the worst objective (minimised sense) of the variants with numbers
 
   // Evaluation k: the stored one when there is one (at the same values), else computed.
   VariantResult variant(long k, const std::vector<double>& values, OptimizeStep& step) {
-    if (k < static_cast<long>(stored_.size())) {
-      const VariantResult& r = stored_[static_cast<size_t>(k)];
+    if (k - first_ < static_cast<long>(stored_.size())) {
+      const VariantResult& r = stored_[static_cast<size_t>(k - first_)];
       if (r.values != values) {
         std::string at;
         for (size_t j = 0; j < values.size(); ++j)
@@ -143,7 +175,7 @@ class Search {
           std::clamp(p.lower + x(j) * (p.upper - p.lower), p.lower, p.upper);
     }
     OptimizeStep step;
-    step.evaluation = static_cast<long>(result_.steps.size());
+    step.evaluation = first_ + static_cast<long>(result_.steps.size());
     const VariantResult r = variant(step.evaluation, values, step);
     const double sign = study_.goal.maximize ? -1.0 : 1.0;
     step.objective = column(r, "objective");
@@ -178,6 +210,86 @@ class Search {
   }
 };
 
+// The searches of a multistart merged: the steps in evaluation order with the best so far over
+// them, the best feasible evaluation (the lowest on a tie), the outcome.
+OptimizeResult merge_searches(const Study& study, std::vector<OptimizeResult>& searches) {
+  OptimizeResult out;
+  for (OptimizeResult& r : searches)
+    out.steps.insert(out.steps.end(), r.steps.begin(), r.steps.end());
+  std::sort(out.steps.begin(), out.steps.end(), [](const OptimizeStep& a, const OptimizeStep& b) {
+    return a.evaluation < b.evaluation;
+  });
+  const double sign = study.goal.maximize ? -1.0 : 1.0;
+  long best = -1;
+  double best_objective = kNaN;
+  for (OptimizeStep& s : out.steps) {
+    if (s.feasible && (best < 0 || sign * s.objective < sign * best_objective)) {
+      best = s.evaluation;
+      best_objective = s.objective;
+    }
+    s.best = best;
+    s.best_objective = best_objective;
+  }
+  long converged = 0, stopped = 0;
+  for (const OptimizeResult& r : searches) {
+    if (r.found && r.best.index == best) out.best = r.best;
+    converged += r.outcome == "stopped" ? 0 : 1;
+    stopped += r.outcome == "stopped" ? 1 : 0;
+  }
+  out.found = best >= 0;
+  out.evaluations = static_cast<long>(out.steps.size());
+  out.outcome = stopped > 0 ? "stopped" : "multistart completed";
+  out.message = std::to_string(searches.size()) + " searches, " + std::to_string(converged) +
+                " ended by themselves (converged or at their budget), " + std::to_string(stopped) +
+                " stopped";
+  return out;
+}
+
+OptimizeResult run_multistart(
+    const std::string& mechanism, const std::string& origin, const Study& study,
+    const std::function<void(const VariantResult&, const OptimizeStep&)>& done,
+    const std::function<bool()>& stop, const std::vector<VariantResult>& stored, int jobs) {
+  const long budget = study.goal.evaluations, count = study.goal.starts;
+  // Each search's stored evaluations: those numbered s × budget, s × budget + 1, … in order.
+  std::vector<std::vector<VariantResult>> slices(static_cast<size_t>(count));
+  for (const VariantResult& r : stored) {
+    const long s = r.index / budget;
+    if (r.index < 0 || s >= count ||
+        r.index != s * budget + static_cast<long>(slices[static_cast<size_t>(s)].size()))
+      throw std::invalid_argument("stored evaluation " + std::to_string(r.index) +
+                                  " is not the next of its search (search s numbers its "
+                                  "evaluations from s × " +
+                                  std::to_string(budget) + ")");
+    slices[static_cast<size_t>(s)].push_back(r);
+  }
+  std::mutex lock;
+  const std::function<void(const VariantResult&, const OptimizeStep&)> done_one =
+      [&](const VariantResult& r, const OptimizeStep& step) {
+        const std::lock_guard<std::mutex> hold(lock);
+        if (done) done(r, step);
+      };
+  const std::function<bool()> stop_one = [&] {
+    const std::lock_guard<std::mutex> hold(lock);
+    return stop && stop();
+  };
+  std::vector<OptimizeResult> searches(static_cast<size_t>(count));
+  std::exception_ptr failure;
+  const int threads = jobs > 0 ? jobs : omp_get_max_threads();
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads) if (threads != 1)
+  for (long s = 0; s < count; ++s) {
+    try {
+      searches[static_cast<size_t>(s)] = Search(mechanism, origin, study, done_one, stop_one,
+                                                slices[static_cast<size_t>(s)], s, s * budget)
+                                             .run();
+    } catch (...) {
+      const std::lock_guard<std::mutex> hold(lock);
+      if (!failure) failure = std::current_exception();
+    }
+  }
+  if (failure) std::rethrow_exception(failure);
+  return merge_searches(study, searches);
+}
+
 }  // namespace
 
 std::string variant_file(const std::string& mechanism, const std::string& origin,
@@ -206,10 +318,17 @@ std::string variant_file(const std::string& mechanism, const std::string& origin
 OptimizeResult run_optimize(
     const std::string& mechanism, const std::string& origin, const Study& study,
     const std::function<void(const VariantResult&, const OptimizeStep&)>& done,
-    const std::function<bool()>& stop, const std::vector<VariantResult>& stored) {
+    const std::function<bool()>& stop, const std::vector<VariantResult>& stored, int jobs) {
   if (study.kind != StudyKind::optimize)
     throw std::invalid_argument("run_optimize: the study is not an optimize study");
-  return Search(mechanism, origin, study, done, stop, stored).run();
+  if (study.goal.algorithm != OptimizeGoal::Algorithm::multistart) {
+    for (size_t k = 0; k < stored.size(); ++k)
+      if (stored[k].index != static_cast<long>(k))
+        throw std::invalid_argument("the stored evaluations are not 0, 1, … in order (evaluation " +
+                                    std::to_string(k) + " is missing)");
+    return Search(mechanism, origin, study, done, stop, stored).run();
+  }
+  return run_multistart(mechanism, origin, study, done, stop, stored, jobs);
 }
 
 }  // namespace orthomech

@@ -37,7 +37,7 @@ class StudyReader {
     expect_keys(
         root, "study",
         {"study", "samples", "seed", "steps", "parameters", "best", "metrics", "expressions",
-         "objective", "constraints", "algorithm", "evaluations", "tolerance"});
+         "objective", "constraints", "algorithm", "evaluations", "tolerance", "starts"});
     Study s;
     const YAML::Node kind = require(root, "study", "study");
     const std::string k = kind.IsScalar() ? kind.Scalar() : "";
@@ -62,7 +62,8 @@ class StudyReader {
         s.seed = static_cast<std::uint64_t>(integer(root["seed"], "study", "seed", 0, 1L << 62));
       goal(root, s.goal);
     } else {
-      for (const char* key : {"objective", "constraints", "algorithm", "evaluations", "tolerance"})
+      for (const char* key :
+           {"objective", "constraints", "algorithm", "evaluations", "tolerance", "starts"})
         if (root[key])
           fail(root[key], "study", std::string("'") + key + "' belongs to an optimize study");
     }
@@ -277,9 +278,18 @@ class StudyReader {
         g.algorithm = OptimizeGoal::Algorithm::cobyla;
       else if (name == "isres")
         g.algorithm = OptimizeGoal::Algorithm::isres;
+      else if (name == "multistart")
+        g.algorithm = OptimizeGoal::Algorithm::multistart;
       else
         fail(a, "study",
-             "algorithm must be 'cobyla' (local) or 'isres' (global), got '" + name + "'");
+             "algorithm must be 'cobyla' (local), 'isres' (global) or 'multistart' (COBYLA from "
+             "several starts, in parallel), got '" +
+                 name + "'");
+    }
+    if (const YAML::Node n = root["starts"]) {
+      if (g.algorithm != OptimizeGoal::Algorithm::multistart)
+        fail(n, "study", "'starts' belongs to algorithm: multistart");
+      g.starts = integer(n, "study", "starts", 1, 10'000);
     }
     if (root["evaluations"])
       g.evaluations = integer(root["evaluations"], "study", "evaluations", 1, 1'000'000);

@@ -53,10 +53,20 @@ struct OptimizeResult {
 // taken from stored[k] (its step `replayed`), the search going on from there exactly as one
 // uninterrupted run. Throws std::invalid_argument when the search asks for other values than a
 // stored evaluation's (the stored evaluations are not this search's).
+//
+// Multistart (`algorithm: multistart`): `starts` COBYLA searches, search s from the start (s = 0)
+// or from a point of the unit box drawn from its own stream (Boost.Random mt19937_64 seeded from
+// the study's seed and s), each with the budget `evaluations`, on `jobs` OpenMP threads (0: every
+// core). Search s numbers its evaluations from s × evaluations, so the evaluations, the steps
+// (in evaluation order, the best so far over every search before it in that order) and the result
+// (the best feasible objective, the lowest evaluation on a tie) are the same for any number of
+// threads; `done` and `stop` are called one at a time. `stored` then holds each search's stored
+// evaluations at their numbers (in evaluation order).
 [[nodiscard]] OptimizeResult run_optimize(
     const std::string& mechanism, const std::string& origin, const Study& study,
     const std::function<void(const VariantResult&, const OptimizeStep&)>& done,
-    const std::function<bool()>& stop = {}, const std::vector<VariantResult>& stored = {});
+    const std::function<bool()>& stop = {}, const std::vector<VariantResult>& stored = {},
+    int jobs = 0);
 
 // The mechanism file of a variant (the study's text with the variant's values written in place
 // at their paths, every other byte kept) with its design poses closed: the bodies at the start

@@ -64,8 +64,11 @@ struct OptimizeGoal {
   std::string objective;  // the expression minimised (or maximised)
   bool maximize = false;
   std::vector<OptimizeConstraint> constraints;
-  enum class Algorithm { cobyla, isres } algorithm = Algorithm::cobyla;
-  long evaluations = 200;   // the budget
+  // cobyla: one local search from the start; isres: global, seeded; multistart: `starts` COBYLA
+  // searches, the first from the start, the others from seeded points of the box, in parallel.
+  enum class Algorithm { cobyla, isres, multistart } algorithm = Algorithm::cobyla;
+  long starts = 8;          // multistart
+  long evaluations = 200;   // the budget (multistart: of each search)
   double tolerance = 1e-4;  // a step below this share of every variable's span ends the search
 };
 

@@ -229,6 +229,30 @@ TEST(OptimizeCli, AStoppedSearchResumedEqualsOneRun) {
   EXPECT_EQ(other.status, 2) << other.err;
 }
 
+// A multistart on one thread and on two writes the same files (the searches' evaluations are
+// numbered from s × evaluations whatever thread ran them).
+TEST(OptimizeCli, AMultistartWritesTheSameFilesOnAnyNumberOfThreads) {
+  const test::TempDir dir("orthomech_optimize_");
+  const std::string study = (dir.path / "o.yaml").string();
+  std::ofstream(study) << crank_study(
+      "constraints:\n  - {metric: range(rocker_angle), min: 50}\nalgorithm: multistart\n"
+      "starts: 3\nevaluations: 20\n");
+  std::string files[2][2];
+  for (const int jobs : {1, 2}) {
+    const std::string out = (dir.path / "j").string() + std::to_string(jobs);
+    const auto r = run_cli({"optimize", test::bundled_file("crank-rocker"), "--study", study,
+                            "--out", out, "-j", std::to_string(jobs), "--json"});
+    ASSERT_EQ(r.status, 0) << r.err;
+    const json j = json::parse(r.out);
+    EXPECT_EQ(j["algorithm"], "multistart");
+    EXPECT_TRUE(j["found"].get<bool>());
+    files[jobs - 1][0] = test::read_text(fs::path(out) / "evaluations.csv");
+    files[jobs - 1][1] = test::read_text(fs::path(out) / "optimum.yaml");
+  }
+  EXPECT_EQ(files[0][0], files[1][0]);
+  EXPECT_EQ(files[0][1], files[1][1]);
+}
+
 TEST(OptimizeCli, NoFeasibleDesignIsExit3AndWrongStudiesExit2) {
   const test::TempDir dir("orthomech_optimize_");
   const std::string study = (dir.path / "o.yaml").string();

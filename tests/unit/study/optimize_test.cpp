@@ -10,8 +10,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <set>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -168,6 +170,60 @@ algorithm: )") + algorithm +
   }
 }
 
+// Multistart: COBYLA from the start and from seeded points, in parallel. The same evaluations,
+// steps and optimum on one thread and on three (the searches number their evaluations from
+// s × budget; the best so far is taken in that order); the optimum is the law-of-cosines crank
+// (the smallest swing of at least 50°) as for one search; resumed from a part of the evaluations
+// of every search it ends as one run.
+TEST(Optimize, MultistartIsTheSameOnAnyNumberOfThreads) {
+  const double a_star = crank_for_swing(50.0);
+  const Study s = study(R"(objective: {minimize: range(rocker_angle)}
+constraints:
+  - {metric: range(rocker_angle), min: 50}
+steps: 90
+algorithm: multistart
+starts: 4
+seed: 5
+evaluations: 40
+)");
+  std::vector<VariantResult> all;
+  const auto collect = [&](const VariantResult& v, const OptimizeStep&) { all.push_back(v); };
+  const OptimizeResult one = run_optimize(mechanism(), "crank-rocker.yaml", s, collect, {}, {}, 1);
+  const OptimizeResult three = run_optimize(mechanism(), "crank-rocker.yaml", s, {}, {}, {}, 3);
+  ASSERT_TRUE(one.found) << one.outcome << ": " << one.message;
+  EXPECT_EQ(one.outcome, "multistart completed") << one.message;
+  ASSERT_EQ(one.steps.size(), three.steps.size());
+  for (size_t k = 0; k < one.steps.size(); ++k) {
+    EXPECT_EQ(one.steps[k].evaluation, three.steps[k].evaluation);
+    EXPECT_EQ(one.steps[k].objective, three.steps[k].objective) << k;
+    EXPECT_EQ(one.steps[k].best, three.steps[k].best) << k;
+  }
+  EXPECT_EQ(one.best.index, three.best.index);
+  EXPECT_EQ(one.best.values, three.best.values);
+  // Four searches, each numbered from s × 40; several of them start elsewhere than the file.
+  std::set<long> searches;
+  for (const OptimizeStep& step : one.steps) searches.insert(step.evaluation / 40);
+  EXPECT_EQ(searches.size(), 4u);
+  // The optimum: S(a*) = 50° (90 positions 4° apart: the cycle's swing within 0.05° of S).
+  EXPECT_NEAR(swing_deg(one.best.values[0]), 50.0, 0.05);
+  EXPECT_NEAR(one.best.values[0], a_star, 0.05);
+  // Resumed with the first 5 evaluations of every search stored (in evaluation order).
+  std::sort(all.begin(), all.end(),
+            [](const VariantResult& x, const VariantResult& y) { return x.index < y.index; });
+  std::vector<VariantResult> stored;
+  for (const VariantResult& v : all)
+    if (v.index % 40 < 5) stored.push_back(v);
+  long computed = 0;
+  const OptimizeResult resumed = run_optimize(
+      mechanism(), "crank-rocker.yaml", s,
+      [&](const VariantResult&, const OptimizeStep& step) { computed += step.replayed ? 0 : 1; },
+      {}, stored, 2);
+  EXPECT_EQ(computed, static_cast<long>(all.size() - stored.size()));
+  EXPECT_EQ(resumed.best.index, one.best.index);
+  EXPECT_EQ(resumed.best.values, one.best.values);
+  EXPECT_EQ(resumed.evaluations, one.evaluations);
+}
+
 TEST(Optimize, TheStudyFileIsCheckedAtItsLines) {
   auto message = [](const std::string& text) {
     try {
@@ -196,7 +252,14 @@ TEST(Optimize, TheStudyFileIsCheckedAtItsLines) {
                 .find("belongs to an 'equal'"),
             std::string::npos);
   EXPECT_NE(message(head + crank + "objective: {minimize: drive.peak}\nalgorithm: simplex\n")
-                .find("'cobyla' (local) or 'isres' (global)"),
+                .find("'cobyla' (local), 'isres' (global) or 'multistart'"),
+            std::string::npos);
+  EXPECT_NE(message(head + crank + "objective: {minimize: drive.peak}\nstarts: 4\n")
+                .find("'starts' belongs to algorithm: multistart"),
+            std::string::npos);
+  EXPECT_NE(message(head + crank +
+                    "objective: {minimize: drive.peak}\nalgorithm: multistart\nstarts: 0\n")
+                .find("starts"),
             std::string::npos);
   EXPECT_NE(message("study: grid\nparameters:\n  - {path: bodies.crank.mass, values: [1]}\n"
                     "objective: {minimize: drive.peak}\n")
