@@ -12,6 +12,7 @@
 #include <variant>
 
 #include "../io/expressions.hpp"
+#include "orthomech/analysis/multi_drive.hpp"
 #include "orthomech/constraints/joints.hpp"
 #include "orthomech/io/units.hpp"
 #include "orthomech/model/measures.hpp"
@@ -279,6 +280,28 @@ void measure_at_metrics(const Model& model, const CycleResult& c, int driver_joi
       }
     }
     out.emplace_back(request.column, value);
+  }
+}
+
+void multi_drive_measure_metrics(const Model& model, const MultiDriveResult& r,
+                                 MetricColumns& out) {
+  const UnitSystem U = unit_system(model.units);
+  const OutputUnit time = output_unit(Dimension::time, U);
+  for (size_t i = 0; i < model.measures.size(); ++i) {
+    const OutputUnit u = output_unit(dimension_of(model.measures[i].unit), U);
+    SeriesColumns s;
+    double squares = 0.0;
+    long samples = 0;
+    for (const MultiDrivenPoint& p : r.points) {
+      const double y = u.from_si(p.measures[i]);
+      if (!std::isfinite(y)) continue;
+      if (samples == 0 || y < s.min) s.min = y, s.min_at = time.from_si(p.time);
+      if (samples == 0 || y > s.max) s.max = y, s.max_at = time.from_si(p.time);
+      squares += y * y;
+      ++samples;
+    }
+    if (samples > 0) s.rms = std::sqrt(squares / static_cast<double>(samples));
+    append(model.measures[i].name, s, true, out);
   }
 }
 

@@ -16,6 +16,7 @@
 
 #include "../solvers/nlopt_constrained.hpp"
 #include "orthomech/analysis/cycle.hpp"
+#include "orthomech/analysis/multi_drive.hpp"
 #include "orthomech/error.hpp"
 #include "orthomech/io/mechanism_file.hpp"
 #include "orthomech/io/mechanism_writer.hpp"
@@ -296,19 +297,35 @@ std::string variant_file(const std::string& mechanism, const std::string& origin
                          const Study& study, const VariantResult& variant, std::string* note) {
   std::string text = with_file_values(mechanism, origin, variant_changes(study, variant.values));
   const Model model = parse_mechanism(text, origin, {});
-  const Driver* driver = study_driver(model);
-  if (!driver) return text;
-  CycleOptions co;
-  co.driver = *driver;
-  co.steps = 2;  // the start is what is wanted
-  const CycleResult c = run_cycle(model, co);
-  if (c.points.empty()) {
-    if (note)
-      *note = "the poses are as drawn: the cycle's start was not computed (" + c.message + ")";
+  // The start: of the several drivers' sweep (the design position with each driven joint at its
+  // law's value at t = 0), else of the one driver's cycle.
+  VecX start;
+  std::string why;
+  if (!study.drivers.empty()) {
+    MultiDriveOptions mo;
+    for (const std::string& name : study.drivers)
+      for (const Driver& d : model.drivers)
+        if (d.name == name) mo.drivers.push_back(d);
+    mo.steps = 2;  // the start is what is wanted
+    const MultiDriveResult m = run_multi_drive(model, mo);
+    if (!m.points.empty()) start = m.points[0].q;
+    why = m.message;
+  } else {
+    const Driver* driver = study_driver(model);
+    if (!driver) return text;
+    CycleOptions co;
+    co.driver = *driver;
+    co.steps = 2;  // the start is what is wanted
+    const CycleResult c = run_cycle(model, co);
+    if (!c.points.empty()) start = c.points[0].q;
+    why = c.message;
+  }
+  if (start.size() == 0) {
+    if (note) *note = "the poses are as drawn: the cycle's start was not computed (" + why + ")";
     return text;
   }
   try {
-    return edit_design_poses(text, origin, model, c.points[0].q).text;
+    return edit_design_poses(text, origin, model, start).text;
   } catch (const InputError& e) {
     if (note) *note = std::string("the poses are as drawn: ") + e.what();
     return text;

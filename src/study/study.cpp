@@ -25,6 +25,7 @@
 #include "orthomech/analysis/assembly.hpp"
 #include "orthomech/analysis/cycle.hpp"
 #include "orthomech/analysis/cycle_metrics.hpp"
+#include "orthomech/analysis/multi_drive.hpp"
 #include "orthomech/analysis/validate.hpp"
 #include "orthomech/constraints/joints.hpp"
 #include "orthomech/error.hpp"
@@ -38,6 +39,7 @@ namespace {
 
 constexpr long kMaxVariants = 1'000'000'000;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kInf = std::numeric_limits<double>::infinity();
 
 std::uint64_t splitmix64(std::uint64_t x) {
   x += 0x9E3779B97F4A7C15ULL;
@@ -265,6 +267,75 @@ void deviation_metrics(const Model& model, const CycleResult& c, const CycleOpti
   }
 }
 
+// The several drivers' sweep of a study (Study::drivers): the drivers found by name (those the
+// model has), t_end and the steps (0: run_multi_drive's default).
+MultiDriveOptions study_multi_drive_options(const Model& model, const Study& study) {
+  MultiDriveOptions mo;
+  for (const std::string& name : study.drivers)
+    for (const Driver& d : model.drivers)
+      if (d.name == name) mo.drivers.push_back(d);
+  mo.t_end = study.t_end;
+  if (study.steps > 0) mo.steps = study.steps;
+  return mo;
+}
+
+// A variant swept by several drivers (Study::drivers; run_multi_drive, as `cycle --drivers`): its
+// status, message and positions, and its metrics — per driver D drive.D.max, drive.D.min,
+// drive.D.peak, drive.D.rms; per joint J.|F|.peak (and J.|M|.peak) as the one-driver cycle's;
+// every measure's columns over time (multi_drive_measure_metrics).
+void multi_drive_variant(const Model& model, const Study& study, VariantResult& r) {
+  const MultiDriveOptions mo = study_multi_drive_options(model, study);
+  if (mo.drivers.size() != study.drivers.size()) {
+    r.status = "invalid";
+    r.message = "the variant has not every driver of the study";
+    return;
+  }
+  const MultiDriveResult m = run_multi_drive(model, mo);
+  r.status = m.status == MultiDriveStatus::completed         ? "completed"
+             : m.status == MultiDriveStatus::stopped         ? "stopped_at_dead_point"
+             : m.status == MultiDriveStatus::invalid_request ? "invalid"
+                                                             : "failed";
+  r.message = m.message;
+  r.positions = static_cast<long>(m.points.size());
+  if (m.points.empty()) return;
+  const UnitSystem U = unit_system(model.units);
+  for (size_t i = 0; i < mo.drivers.size(); ++i) {
+    const bool angular =
+        joint_coordinate_kind(model.joints[static_cast<size_t>(mo.drivers[i].joint)]) ==
+        CoordinateKind::angle;
+    const OutputUnit u = output_unit(angular ? Dimension::moment : Dimension::force, U);
+    double lo = kInf, hi = -kInf, squares = 0.0;
+    for (const MultiDrivenPoint& p : m.points) {
+      const double v = u.from_si(p.drives(static_cast<Eigen::Index>(i)));
+      lo = std::min(lo, v);
+      hi = std::max(hi, v);
+      squares += v * v;
+    }
+    const std::string name = "drive." + mo.drivers[i].name;
+    r.metrics.emplace_back(name + ".max", hi);
+    r.metrics.emplace_back(name + ".min", lo);
+    r.metrics.emplace_back(name + ".peak", std::max(std::abs(lo), std::abs(hi)));
+    r.metrics.emplace_back(name + ".rms",
+                           std::sqrt(squares / static_cast<double>(m.points.size())));
+  }
+  // The joints' magnitudes, grouped as the one-driver cycle groups them.
+  CycleResult shape;
+  shape.components = m.components;
+  shape.determinate = m.determinate;
+  for (const ReactionMagnitude& g : reaction_magnitudes(shape)) {
+    const OutputUnit u = output_unit(dimension_of(g.unit), U);
+    double peak = 0.0;
+    for (const MultiDrivenPoint& p : m.points) {
+      double s = 0.0;
+      for (const int c : g.components)
+        s += p.reactions[static_cast<size_t>(c)] * p.reactions[static_cast<size_t>(c)];
+      peak = std::max(peak, std::sqrt(s));
+    }
+    r.metrics.emplace_back(g.name + ".peak", u.from_si(peak));
+  }
+  multi_drive_measure_metrics(model, m, r.metrics);
+}
+
 CycleOptions study_cycle_options(const Model& model, const Driver& driver, const Study& study) {
   CycleOptions co;
   co.driver = driver;
@@ -382,8 +453,11 @@ VariantResult evaluate_variant(const std::string& mechanism, const std::string& 
       return r;
     }
     r.status = "completed";
-    // The cycle block: the summary and the traced points' deviations.
-    if (want.cycle || !want.deviation.empty()) {
+    // Several drivers: the sweep over time and its summary (the reader refused deviations).
+    if (want.cycle && !study.drivers.empty()) {
+      multi_drive_variant(model, study, r);
+      if (r.status == "invalid") return r;
+    } else if (want.cycle || !want.deviation.empty()) {  // the cycle block and the deviations
       const Driver* driver = study_driver(model);
       if (!driver) {
         r.status = "invalid";
@@ -423,6 +497,43 @@ VariantResult evaluate_variant(const std::string& mechanism, const std::string& 
   return r;
 }
 
+namespace {
+
+// variant_cycle of a study with several drivers: over time, each driver's drive and the measures.
+VariantCycle multi_drive_cycle(const Model& model, const Study& study, VariantCycle& v) {
+  const MultiDriveOptions mo = study_multi_drive_options(model, study);
+  const MultiDriveResult m = run_multi_drive(model, mo);
+  v.status = m.status == MultiDriveStatus::completed ? "completed" : "failed";
+  v.message = m.message;
+  const UnitSystem U = unit_system(model.units);
+  const OutputUnit time = output_unit(Dimension::time, U);
+  v.input_label = "time [" + time.name + "]";
+  std::vector<OutputUnit> units;
+  for (const Driver& d : mo.drivers) {
+    const bool angular =
+        joint_coordinate_kind(model.joints[static_cast<size_t>(d.joint)]) == CoordinateKind::angle;
+    units.push_back(output_unit(angular ? Dimension::moment : Dimension::force, U));
+    v.series.push_back({"drive." + d.name, units.back().name, {}});
+  }
+  for (const Measure& meas : model.measures) {
+    units.push_back(output_unit(dimension_of(meas.unit), U));
+    v.series.push_back({meas.name, units.back().name, {}});
+  }
+  for (const MultiDrivenPoint& p : m.points) {
+    v.input.push_back(time.from_si(p.time));
+    size_t k = 0;
+    for (Eigen::Index i = 0; i < p.drives.size(); ++i, ++k)
+      v.series[k].values.push_back(units[k].from_si(p.drives(i)));
+    for (const double y : p.measures) {
+      v.series[k].values.push_back(units[k].from_si(y));
+      ++k;
+    }
+  }
+  return v;
+}
+
+}  // namespace
+
 VariantCycle variant_cycle(const std::string& mechanism, const std::string& origin,
                            const Study& study, long index, const std::vector<double>& values) {
   VariantCycle v;
@@ -435,6 +546,7 @@ VariantCycle variant_cycle(const std::string& mechanism, const std::string& orig
     v.message = e.what();
     return v;
   }
+  if (!study.drivers.empty()) return multi_drive_cycle(model, study, v);
   const Driver* driver = study_driver(model);
   if (!driver) {
     v.status = "invalid";

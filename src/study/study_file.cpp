@@ -34,10 +34,10 @@ class StudyReader {
 
   Study read(const YAML::Node& root) {
     if (!root.IsMap()) fail(root, "study", "expected a mapping (study: grid, parameters: ...)");
-    expect_keys(
-        root, "study",
-        {"study", "samples", "seed", "steps", "parameters", "best", "metrics", "expressions",
-         "objective", "constraints", "algorithm", "evaluations", "tolerance", "starts"});
+    expect_keys(root, "study",
+                {"study", "samples", "seed", "steps", "parameters", "best", "metrics",
+                 "expressions", "objective", "constraints", "algorithm", "evaluations", "tolerance",
+                 "starts", "drivers", "t_end"});
     Study s;
     const YAML::Node kind = require(root, "study", "study");
     const std::string k = kind.IsScalar() ? kind.Scalar() : "";
@@ -69,6 +69,7 @@ class StudyReader {
     }
     if (root["steps"])
       s.steps = static_cast<int>(integer(root["steps"], "study", "steps", 2, kMaxCycleSteps));
+    drivers(root, s);
     const YAML::Node params = require(root, "parameters", "study");
     if (!params.IsSequence() || params.size() == 0)
       fail(params, "parameters", "expected a list of parameters (- {path: ..., values: [...]})");
@@ -110,6 +111,14 @@ class StudyReader {
     } catch (const std::invalid_argument& e) {
       fail(root["expressions"] ? root["expressions"] : root, "expressions", e.what());
     }
+    if (!s.drivers.empty() && !s.metrics.at.empty())
+      fail(root["expressions"] ? root["expressions"] : root, "expressions",
+           "at(" + s.metrics.at.front().measure +
+               ", …) needs the input of one driver; a study with several drivers has none");
+    if (!s.drivers.empty() && !s.metrics.deviation.empty())
+      fail(root["metrics"], "metrics",
+           "'deviation' compares paths at the inputs of one driver; a study with several drivers "
+           "has none");
     check_metric_names(root, s);
     return s;
   }
@@ -166,6 +175,37 @@ class StudyReader {
            "path '" + p.path + "' in " + mechanism_origin_ + ": " + e.message());
     }
   }
+  // drivers: [A, B] (the file's drivers, each once) and t_end: T (the file's time unit, > 0).
+  void drivers(const YAML::Node& root, Study& s) const {
+    const YAML::Node list = root["drivers"];
+    if (!list) {
+      if (root["t_end"]) fail(root["t_end"], "study", "'t_end' belongs to a study with 'drivers'");
+      return;
+    }
+    if (!list.IsSequence() || list.size() == 0)
+      fail(list, "drivers", "expected a list of the file's drivers ([left, right])");
+    const Model model = parse_mechanism(mechanism_, mechanism_origin_, {});
+    std::string known;
+    for (const Driver& d : model.drivers) known += (known.empty() ? "" : ", ") + d.name;
+    for (const auto& item : list) {
+      const std::string name = text(item, "drivers", "driver");
+      if (std::none_of(model.drivers.begin(), model.drivers.end(),
+                       [&](const Driver& d) { return d.name == name; }))
+        fail(item, "drivers",
+             "the file has no driver '" + name + "' (it has " +
+                 (known.empty() ? std::string("none") : known) + ")");
+      if (std::find(s.drivers.begin(), s.drivers.end(), name) != s.drivers.end())
+        fail(item, "drivers", "driver '" + name + "' is listed twice");
+      s.drivers.push_back(name);
+    }
+    if (const YAML::Node t = root["t_end"]) {
+      const double value = number(t, "study", "t_end");
+      if (!(value > 0.0) || !std::isfinite(value))
+        fail(t, "study", "t_end must be a positive time (the file's time unit)");
+      s.t_end = value * unit_system(model.units).time_si;
+    }
+  }
+
   // The file's value at the path, as a number (the nominal value of a tolerance).
   double nominal(const YAML::Node& item, const StudyParameter& p, const std::string& element,
                  const std::string& value) const {

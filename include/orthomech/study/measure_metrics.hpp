@@ -33,6 +33,12 @@ using MetricColumns = std::vector<std::pair<std::string, double>>;
 void measure_metrics(const Model& model, const CycleResult& c, const CycleMetrics& metrics,
                      int driver_joint, MetricColumns& out);
 
+// The same columns of a sweep by several drivers (study with `drivers:`): per measure NAME.min,
+// .max, .range, .rms from its samples and .min_at, .max_at the time of the extreme (the file's
+// time unit: there is no one input); .time_ratio NaN.
+struct MultiDriveResult;
+void multi_drive_measure_metrics(const Model& model, const MultiDriveResult& r, MetricColumns& out);
+
 // The suffixes of the columns measure_metrics writes (".min", …).
 [[nodiscard]] const std::vector<std::string>& measure_metric_suffixes();
 

@@ -77,6 +77,11 @@ struct Study {
   long samples = 0;        // Monte Carlo: number of variants
   std::uint64_t seed = 1;  // Monte Carlo
   int steps = 0;           // positions per cycle (0: the mechanism file's analysis steps)
+  // Several drivers (`drivers: [A, B]`, as `cycle --drivers`): each variant swept over time by
+  // these drivers of the file (run_multi_drive) for t_end seconds (0: one period of the slowest
+  // law), `steps` positions (0: 101); empty: the one driver's cycle.
+  std::vector<std::string> drivers;
+  double t_end = 0.0;
   std::vector<StudyParameter> parameters;
   std::string best_metric = "drive.peak";  // grid summary: ranked by this metric
   bool best_largest = false;               // … smallest first unless `order: max`
