@@ -24,8 +24,10 @@
 #include "../io/yaml_walk.hpp"
 #include "orthomech/analysis/assembly.hpp"
 #include "orthomech/analysis/cycle.hpp"
+#include "orthomech/analysis/cycle_friction.hpp"
 #include "orthomech/analysis/cycle_metrics.hpp"
 #include "orthomech/analysis/multi_drive.hpp"
+#include "orthomech/analysis/shaking.hpp"
 #include "orthomech/analysis/validate.hpp"
 #include "orthomech/constraints/joints.hpp"
 #include "orthomech/error.hpp"
@@ -49,6 +51,45 @@ std::uint64_t splitmix64(std::uint64_t x) {
 }
 
 // ---- one variant's metrics ---------------------------------------------------------------------
+
+// A summary's column name from its name in `cycle --json`'s peaks: "shaking force" →
+// shaking_force, "drive without friction" → drive_without_friction, "A friction moment" →
+// A.friction_moment (a joint's, as A.|F|).
+std::string summary_column(const std::string& name) {
+  const std::string moment = " friction moment";
+  if (name.size() > moment.size() &&
+      name.compare(name.size() - moment.size(), moment.size(), moment) == 0)
+    return name.substr(0, name.size() - moment.size()) + ".friction_moment";
+  std::string column = name;
+  std::replace(column.begin(), column.end(), ' ', '_');
+  return column;
+}
+
+// The shaking force and moment of the cycle (about the world origin, as `cycle`'s default):
+// shaking_force.peak, .rms, shaking_moment.peak, .rms; with pin friction in the file, as
+// `cycle`'s friction: friction.efficiency, friction.dissipated (the energy over the sweep) and
+// the peak and RMS of drive_without_friction, J.friction_moment, friction_power.
+void shaking_and_friction_metrics(const Model& model, const CycleResult& c, int driver_joint,
+                                  bool angular, std::vector<std::pair<std::string, double>>& out) {
+  const UnitSystem U = unit_system(model.units);
+  const auto add = [&](const SeriesSummary& s, Dimension d) {
+    const OutputUnit u = output_unit(d, U);
+    const std::string name = summary_column(s.name);
+    out.emplace_back(name + ".peak", s.samples > 0 ? u.from_si(s.peak) : kNaN);
+    out.emplace_back(name + ".rms", s.samples > 0 ? u.from_si(s.rms) : kNaN);
+  };
+  const ShakingSeries shaking = shaking_series(model, c, Vec3::Zero());
+  for (const SeriesSummary& s : summarize_shaking(model, c, shaking).magnitudes)
+    add(s, dimension_of(s.unit));
+  const FrictionSeries f = friction_series(model, c, driver_joint,
+                                           c.status == CycleStatus::completed && c.reversals == 0);
+  if (f.pins.empty()) return;
+  out.emplace_back("friction.efficiency", std::isfinite(f.efficiency) ? f.efficiency : kNaN);
+  out.emplace_back("friction.dissipated", output_unit(Dimension::moment, U).from_si(f.dissipated));
+  for (const SeriesSummary& s : summarize_friction(model, c, f, angular ? "N*m" : "N"))
+    add(s, s.name == "drive without friction" ? (angular ? Dimension::moment : Dimension::force)
+                                              : dimension_of(s.unit));
+}
 
 // The cycle's summary in the file's units, named as in `cycle --json` (peaks.drive.max →
 // drive.max; peaks."A.|F|".peak → A.|F|.peak; power.mean; the worst transmission angle of the
@@ -94,6 +135,7 @@ void cycle_metrics(const Model& model, const CycleResult& c, int driver_joint,
   if (four_bar) out.emplace_back("transmission.min", transmission);
   if (slider) out.emplace_back("pressure.max", pressure);
   out.emplace_back("dead_points", static_cast<double>(c.dead_points.size()));
+  shaking_and_friction_metrics(model, c, driver_joint, angular, out);
   measure_metrics(model, c, m, driver_joint, out);
 }
 
@@ -430,6 +472,10 @@ const Driver* study_driver(const Model& model) {
 }
 
 std::vector<FileChange> variant_changes(const Study& study, const std::vector<double>& values) {
+  if (values.size() != study.parameters.size())
+    throw std::invalid_argument(
+        "a variant needs a value per parameter: " + std::to_string(values.size()) + " values for " +
+        std::to_string(study.parameters.size()) + " parameters");
   std::vector<FileChange> changes;
   for (size_t j = 0; j < study.parameters.size(); ++j)
     changes.push_back({study.parameters[j].path, value_text(values[j])});

@@ -14,6 +14,7 @@
 #include <cmath>
 #include <fstream>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <numbers>
 #include <set>
 #include <sstream>
@@ -274,6 +275,53 @@ TEST(StudyFile, MetricBlocksAreCheckedWithTheirLine) {
   EXPECT_TRUE(s.metrics.cycle);
   EXPECT_FALSE(s.metrics.validate || s.metrics.assemble);
   EXPECT_TRUE(s.metrics.deviation.empty());
+}
+
+// The shaking and friction columns are `cycle --json`'s numbers for the same sweep (the wiper
+// drive: pin friction in every joint, the shaking force and moment about the origin): the
+// peaks' "shaking force", "shaking moment", "drive without friction", "A0 friction moment",
+// "friction power" and friction's efficiency and dissipated energy.
+TEST(StudyShakingAndFriction, ColumnsAreTheCyclesNumbers) {
+  const std::string file = test::bundled_file("wiper-drive");
+  const std::string mech = test::read_text(file);
+  const Study study = parse_study(
+      "study: grid\nparameters:\n  - {path: bodies.crank.mass, "
+      "values: [0.2]}\n",
+      "s.yaml", mech, file);
+  // The crank's own mass (0.2 kg in the file): the variant is the file.
+  const VariantResult r = evaluate_variant(mech, file, study, 0, variant_values(study, 0));
+  ASSERT_EQ(r.status, "completed") << r.message;
+  const auto cli = test::run_cli({"cycle", file, "--json"});
+  ASSERT_EQ(cli.status, 0) << cli.err;
+  const nlohmann::json j = nlohmann::json::parse(cli.out);
+  const std::pair<const char*, const char*> pairs[] = {
+      {"shaking force", "shaking_force"},
+      {"shaking moment", "shaking_moment"},
+      {"drive without friction", "drive_without_friction"},
+      {"A0 friction moment", "A0.friction_moment"},
+      {"friction power", "friction_power"}};
+  for (const auto& [peak, column] : pairs) {
+    const double p = j["peaks"][peak]["peak"], rms = j["peaks"][peak]["rms"];
+    EXPECT_NEAR(metric(r, std::string(column) + ".peak"), p, 1e-9 * std::abs(p)) << column;
+    EXPECT_NEAR(metric(r, std::string(column) + ".rms"), rms, 1e-9 * std::abs(rms)) << column;
+  }
+  const double eta = j["friction"]["efficiency"], lost = j["friction"]["dissipated"];
+  EXPECT_NEAR(metric(r, "friction.efficiency"), eta, 1e-12);
+  EXPECT_NEAR(metric(r, "friction.dissipated"), lost, 1e-9 * lost);
+  EXPECT_GT(eta, 0.5);
+  EXPECT_LT(eta, 1.0);
+  // Without friction in the file: no friction columns; the shaking ones still.
+  const Study plain =
+      parse_study("study: grid\nparameters:\n  - {path: bodies.crank.mass, values: [0.03]}\n",
+                  "s.yaml", crank_rocker_text(), "m.yaml");
+  const VariantResult q = evaluate_variant(crank_rocker_text(), "m.yaml", plain, 0, {0.03});
+  const auto m = by_name(q);
+  EXPECT_EQ(m.count("friction.efficiency"), 0u);
+  EXPECT_EQ(m.count("shaking_force.peak"), 1u);
+  // A variant without a value per parameter is a failed variant, not a crash.
+  const VariantResult bad = evaluate_variant(crank_rocker_text(), "m.yaml", plain, 0, {});
+  EXPECT_EQ(bad.status, "failed");
+  EXPECT_NE(bad.message.find("a value per parameter"), std::string::npos) << bad.message;
 }
 
 }  // namespace
