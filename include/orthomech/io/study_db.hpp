@@ -18,7 +18,8 @@ class StudyDatabase {
   // (variant, one column per parameter, status, message, one column per metric). An existing
   // file is reopened only with `resume`, and only when its `study` rows equal `identity` and its
   // columns the given ones — except a `samples` entry, which may grow (a Monte Carlo study
-  // extended, or a search given more evaluations: the stored count is updated). Throws std::runtime_error saying why not.
+  // extended, or a search given more evaluations: the stored count is updated). Throws
+  // std::runtime_error saying why not.
   StudyDatabase(const std::filesystem::path& file, bool resume,
                 const std::vector<std::pair<std::string, std::string>>& identity,
                 const std::vector<std::string>& parameters,
