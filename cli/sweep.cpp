@@ -34,6 +34,7 @@ namespace fs = std::filesystem;
 struct SweepCliOptions {
   std::string file, study, out;
   StudyReportOptions report;
+  std::vector<std::string> combine;  // --combine DIR,DIR: stored studies to join
   int jobs = 0;
   bool resume = false, json = false;
   double time_limit = 0.0;  // s of wall clock; 0: none
@@ -182,6 +183,94 @@ void write_report(const SweepCliOptions& opt, const Study& study, const StudyDat
   write_study_report(opt.report, study_report_of(study, db, mechanism, opt.file, request));
 }
 
+// The files of a stored study (`--out`): the CSV, the summary, the report; the summary printed.
+int write_study_files(const SweepCliOptions& opt, const Study& study, const StudyDatabase& db,
+                      const std::string& mechanism, nlohmann::json summary) {
+  const fs::path out = opt.out;
+  const std::string text = summary_text(summary, out);
+  try {
+    write_file(out / "variants.csv", study_csv(db));
+    write_file(out / "summary.json", summary.dump(2) + "\n");
+    write_report(opt, study, db, mechanism, text);
+  } catch (const std::runtime_error& e) {
+    spdlog::error("{}", e.what());
+    return kBadInput;
+  }
+  if (opt.json)
+    std::cout << summary.dump(2) << "\n";
+  else
+    std::cout << text;
+  return kOk;
+}
+
+// --combine DIR1,DIR2,…: the stored studies of the same mechanism file, with the study's columns,
+// joined into --out as one study: DIR1's variants first, renumbered 0, 1, … in that order; the
+// summary (quantiles, sensitivities or the best variants) over all of them. Nothing is computed.
+int combine_studies(const SweepCliOptions& opt, const Study& study, const std::string& study_text,
+                    const std::string& mechanism, const VariantResult& nominal) {
+  std::vector<std::string> parameters, metrics;
+  for (const auto& p : study.parameters) parameters.push_back(p.name);
+  for (const auto& [name, value] : nominal.metrics) metrics.push_back(name);
+  std::vector<StoredStudy> parts;
+  nlohmann::json sources = nlohmann::json::array();
+  for (const std::string& dir : opt.combine) {
+    try {
+      parts.push_back(read_stored_study(fs::path(dir) / "study.sqlite"));
+    } catch (const std::runtime_error& e) {
+      spdlog::error("--combine: {}", e.what());
+      return kBadInput;
+    }
+    const StoredStudy& s = parts.back();
+    const auto mech = std::find_if(s.identity.begin(), s.identity.end(),
+                                   [](const auto& kv) { return kv.first == "mechanism"; });
+    if (mech == s.identity.end() || mech->second != mechanism) {
+      spdlog::error(
+          "--combine: {}: a study of another mechanism file (combined studies have the "
+          "nominal file {})",
+          dir, opt.file);
+      return kBadInput;
+    }
+    if (s.parameters != parameters || s.metrics != metrics) {
+      spdlog::error(
+          "--combine: {}: other columns than {}'s ({} parameters, {} metrics there; {} "
+          "and {} here)",
+          dir, opt.study, s.parameters.size(), s.metrics.size(), parameters.size(), metrics.size());
+      return kBadInput;
+    }
+    sources.push_back({{"study", dir}, {"variants", s.rows.size()}});
+  }
+  std::error_code ec;
+  fs::create_directories(opt.out, ec);
+  std::unique_ptr<StudyDatabase> db;
+  try {  // a combined study is not a study to --resume: its identity says so
+    db = std::make_unique<StudyDatabase>(fs::path(opt.out) / "study.sqlite", false,
+                                         std::vector<std::pair<std::string, std::string>>{
+                                             {"mechanism", mechanism},
+                                             {"study", study_identity(study_text, "study")},
+                                             {"combined", sources.dump()}},
+                                         parameters, metrics);
+    long index = 0;
+    for (const StoredStudy& s : parts)
+      for (const StudyDatabase::Row& row : s.rows) {
+        VariantResult r;
+        r.index = index++;
+        r.values = row.values;
+        r.status = row.status;
+        r.message = row.message;
+        for (size_t m = 0; m < metrics.size(); ++m)
+          r.metrics.emplace_back(metrics[m], row.metrics[m]);
+        db->insert(r);
+      }
+  } catch (const std::runtime_error& e) {
+    spdlog::error("{}", e.what());
+    return kBadInput;
+  }
+  nlohmann::json summary = summarize(study, *db, nominal);
+  summary["complete"] = true;
+  summary["combined"] = sources;
+  return write_study_files(opt, study, *db, mechanism, summary);
+}
+
 // Under mpirun: rank 0 releases the other ranks with "stop" when it returns before the study
 // starts (it alone reports why), then finalises MPI.
 struct MpiStartGuard {
@@ -240,6 +329,7 @@ int run_sweep_command(const SweepCliOptions& opt) {
     return kNumerical;
   }
   // (A parameter named as a column, up to case, was refused by the study's reader at its line.)
+  if (!opt.combine.empty()) return combine_studies(opt, study, study_text, mechanism, nominal);
   const fs::path out = opt.out;
   const std::unique_ptr<StudyDatabase> db =
       open_study_database(opt.out, opt.resume, mechanism, study_text, study, nominal);
@@ -323,19 +413,8 @@ int run_sweep_command(const SweepCliOptions& opt) {
   nlohmann::json summary = summarize(study, *db, nominal);
   summary["complete"] = stop == StopReason::none;  // a stopped sweep: the stored variants only
   if (stop != StopReason::none) summary["stop"] = to_string(stop);
-  const std::string text = summary_text(summary, out);
-  try {
-    write_file(out / "variants.csv", study_csv(*db));
-    write_file(out / "summary.json", summary.dump(2) + "\n");
-    write_report(opt, study, *db, mechanism, text);
-  } catch (const std::runtime_error& e) {
-    spdlog::error("{}", e.what());
-    return kBadInput;
-  }
-  if (opt.json)
-    std::cout << summary.dump(2) << "\n";
-  else
-    std::cout << text;
+  const int written = write_study_files(opt, study, *db, mechanism, summary);
+  if (written != kOk) return written;
   return stop == StopReason::none ? kOk : kStopped;
 }
 
@@ -355,6 +434,10 @@ void register_sweep(CLI::App& app, const GlobalOptions& globals, int& exit_code)
                 "continue the study stored in --out (computes only the variants not stored)");
   cmd->add_flag("--json", opt->json, "the summary as one JSON document on stdout");
   add_study_report_options(cmd, opt->report);
+  cmd->add_option("--combine", opt->combine,
+                  "DIR,DIR,…: join these stored studies of the same mechanism file and columns "
+                  "into --out as one study (nothing computed): its summary over all variants")
+      ->delimiter(',');
   cmd->add_option("--time-limit", opt->time_limit,
                   "wall-clock limit in seconds (default: none): the sweep stops there, keeps the "
                   "variants stored and exits 5 (continue with --resume)")

@@ -5,6 +5,7 @@
 #include <sys/file.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -195,29 +196,83 @@ void StudyDatabase::insert(const VariantResult& r) {
   if (rc != SQLITE_DONE) impl_->fail("cannot store variant " + std::to_string(r.index));
 }
 
-std::vector<StudyDatabase::Row> StudyDatabase::rows() const {
-  sqlite3_stmt* q = impl_->prepare("SELECT * FROM variants ORDER BY variant");
-  std::vector<Row> out;
+namespace {
+
+// Every row of the variants table in variant order (`parameters` and `metrics` columns around
+// status and message).
+std::vector<StudyDatabase::Row> read_rows(sqlite3_stmt* q, size_t parameters, size_t metrics) {
+  std::vector<StudyDatabase::Row> out;
   const auto number = [&](int column) {
     return sqlite3_column_type(q, column) == SQLITE_NULL ? std::numeric_limits<double>::quiet_NaN()
                                                          : sqlite3_column_double(q, column);
   };
   while (sqlite3_step(q) == SQLITE_ROW) {
-    Row row;
+    StudyDatabase::Row row;
     int c = 0;
     row.index = static_cast<long>(sqlite3_column_int64(q, c++));
-    for (size_t j = 0; j < parameters_.size(); ++j) row.values.push_back(number(c++));
+    for (size_t j = 0; j < parameters; ++j) row.values.push_back(number(c++));
     const auto text = [&](int column) {
       const unsigned char* t = sqlite3_column_text(q, column);
       return t ? std::string(reinterpret_cast<const char*>(t)) : std::string();
     };
     row.status = text(c++);
     row.message = text(c++);
-    for (size_t m = 0; m < metrics_.size(); ++m) row.metrics.push_back(number(c++));
+    for (size_t m = 0; m < metrics; ++m) row.metrics.push_back(number(c++));
     out.push_back(std::move(row));
   }
   sqlite3_finalize(q);
   return out;
+}
+
+}  // namespace
+
+std::vector<StudyDatabase::Row> StudyDatabase::rows() const {
+  return read_rows(impl_->prepare("SELECT * FROM variants ORDER BY variant"), parameters_.size(),
+                   metrics_.size());
+}
+
+StoredStudy read_stored_study(const std::filesystem::path& file) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(file, ec))
+    throw std::runtime_error(file.string() + ": no study here (no such file)");
+  sqlite3* db = nullptr;
+  const auto fail = [&](const std::string& what) {
+    const std::string message =
+        file.string() + ": " + what + (db ? std::string(": ") + sqlite3_errmsg(db) : std::string());
+    if (db) sqlite3_close(db);
+    return std::runtime_error(message);
+  };
+  if (sqlite3_open_v2(file.string().c_str(), &db, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK)
+    throw fail("cannot open");
+  sqlite3_busy_timeout(db, 10000);
+  const auto prepare = [&](const char* sql) {
+    sqlite3_stmt* stmt = nullptr;
+    if (sqlite3_prepare_v2(db, sql, -1, &stmt, nullptr) != SQLITE_OK)
+      throw fail("not a study database");
+    return stmt;
+  };
+  StoredStudy s;
+  sqlite3_stmt* keys = prepare("SELECT key, value FROM study ORDER BY key");
+  while (sqlite3_step(keys) == SQLITE_ROW)
+    s.identity.emplace_back(reinterpret_cast<const char*>(sqlite3_column_text(keys, 0)),
+                            reinterpret_cast<const char*>(sqlite3_column_text(keys, 1)));
+  sqlite3_finalize(keys);
+  // The columns: variant, the parameters, status, message, the metrics.
+  sqlite3_stmt* info = prepare("PRAGMA table_info(variants)");
+  std::vector<std::string> columns;
+  while (sqlite3_step(info) == SQLITE_ROW)
+    columns.emplace_back(reinterpret_cast<const char*>(sqlite3_column_text(info, 1)));
+  sqlite3_finalize(info);
+  const auto status = std::find(columns.begin(), columns.end(), "status");
+  if (columns.size() < 3 || columns.front() != "variant" || status == columns.end() ||
+      status + 1 == columns.end() || *(status + 1) != "message")
+    throw fail("not a study database (its variants table has other columns)");
+  s.parameters.assign(columns.begin() + 1, status);
+  s.metrics.assign(status + 2, columns.end());
+  s.rows = read_rows(prepare("SELECT * FROM variants ORDER BY variant"), s.parameters.size(),
+                     s.metrics.size());
+  sqlite3_close(db);
+  return s;
 }
 
 std::string study_csv(const StudyDatabase& db) {

@@ -50,6 +50,16 @@ class StudyDatabase {
   std::vector<std::string> parameters_, metrics_;
 };
 
+// A stored study read back, read-only (`sweep --combine`): its `study` rows (what it is: the
+// mechanism and study texts, the columns, …), its parameter and metric columns and its rows in
+// variant order. Throws std::runtime_error naming the file when it is not a study database.
+struct StoredStudy {
+  std::vector<std::pair<std::string, std::string>> identity;
+  std::vector<std::string> parameters, metrics;
+  std::vector<StudyDatabase::Row> rows;
+};
+[[nodiscard]] StoredStudy read_stored_study(const std::filesystem::path& file);
+
 // The rows as CSV: variant, the parameters, status, the metrics, message (numbers with 17
 // significant digits, empty cells for missing values; pandas.read_csv reads it as is).
 [[nodiscard]] std::string study_csv(const StudyDatabase& db);

@@ -3,6 +3,8 @@
 // an uninterrupted one; σ = 0 gives the nominal design; bad study files are exit 2 at their line.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -381,6 +383,73 @@ TEST(SweepCli, AMonteCarloStudyExtendedEqualsOneRunWithMoreSamples) {
                               dir.file("a"), "--resume"});
   EXPECT_EQ(other.status, 2);
   EXPECT_NE(other.err.find("holds another study"), std::string::npos) << other.err;
+}
+
+// Two Monte Carlo studies of the same file (seeds 11 and 12) combined: one study of their 6 + 4
+// variants (the first's rows as they were, the second's renumbered 6 …), its quantiles those of
+// the 10 values (numpy's linear interpolation, computed here from the CSV); not a study to
+// --resume; a study of another mechanism file is refused.
+TEST(SweepCli, CombinedStudiesAreOneStudyOfAllTheirVariants) {
+  Dir dir;
+  const std::string mech = test::bundled_file("crank-rocker");
+  const std::string a = dir.write("a.yaml", monte_carlo(6, "0.05", "0.1"));
+  std::string reseeded = monte_carlo(4, "0.05", "0.1");
+  reseeded.replace(reseeded.find("seed: 11"), 8, "seed: 12");
+  const std::string b = dir.write("b.yaml", reseeded);
+  ASSERT_EQ(run_cli({"sweep", mech, "--study", a, "--out", dir.file("a")}).status, 0);
+  ASSERT_EQ(run_cli({"sweep", mech, "--study", b, "--out", dir.file("b")}).status, 0);
+  const auto r = run_cli({"sweep", mech, "--study", a, "--out", dir.file("ab"), "--combine",
+                          dir.file("a") + "," + dir.file("b"), "--json"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto rows_a = csv(test::read_text(dir.path / "a" / "variants.csv"));
+  const auto rows_b = csv(test::read_text(dir.path / "b" / "variants.csv"));
+  const auto rows = csv(test::read_text(dir.path / "ab" / "variants.csv"));
+  ASSERT_EQ(rows.size(), 11u);
+  EXPECT_EQ(rows[0], rows_a[0]);  // the header
+  for (size_t k = 1; k <= 6; ++k) EXPECT_EQ(rows[k], rows_a[k]);
+  for (size_t k = 1; k <= 4; ++k) {
+    std::vector<std::string> renumbered = rows_b[k];
+    renumbered[0] = std::to_string(5 + k);
+    EXPECT_EQ(rows[6 + k], renumbered);
+  }
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["variants"].get<long>(), 10);
+  ASSERT_EQ(j["combined"].size(), 2u);
+  EXPECT_EQ(j["combined"][1]["variants"].get<long>(), 4);
+  // The median and q95 of drive.peak over the 10 values.
+  const size_t col = std::find(rows[0].begin(), rows[0].end(), "drive.peak") - rows[0].begin();
+  std::vector<double> v;
+  for (size_t k = 1; k < rows.size(); ++k) v.push_back(std::stod(rows[k][col]));
+  std::sort(v.begin(), v.end());
+  const auto quantile = [&](double p) {
+    const double h = p * static_cast<double>(v.size() - 1);
+    const auto i = static_cast<size_t>(std::floor(h));
+    return i + 1 < v.size() ? v[i] + (h - static_cast<double>(i)) * (v[i + 1] - v[i]) : v[i];
+  };
+  bool found = false;
+  for (const auto& m : j["metrics"])
+    if (m["metric"] == "drive.peak") {
+      found = true;
+      EXPECT_NEAR(m["q50"].get<double>(), quantile(0.5), 1e-12 * quantile(0.5));
+      EXPECT_NEAR(m["q95"].get<double>(), quantile(0.95), 1e-12 * quantile(0.95));
+      EXPECT_EQ(m["n"].get<long>(), 10);
+    }
+  EXPECT_TRUE(found);
+  // Not a study to resume; another mechanism's study is refused.
+  const auto resume = run_cli({"sweep", mech, "--study", a, "--out", dir.file("ab"), "--resume"});
+  EXPECT_EQ(resume.status, 2) << resume.err;
+  std::string other_text = test::read_text(mech);
+  other_text.replace(other_text.find("speed: 300 rpm"), 14, "speed: 200 rpm");
+  const std::string other = dir.write("other.yaml", other_text);
+  ASSERT_EQ(run_cli({"sweep", other, "--study", a, "--out", dir.file("c")}).status, 0);
+  const auto mixed = run_cli({"sweep", mech, "--study", a, "--out", dir.file("ac"), "--combine",
+                              dir.file("a") + "," + dir.file("c")});
+  EXPECT_EQ(mixed.status, 2);
+  EXPECT_NE(mixed.err.find("a study of another mechanism file"), std::string::npos) << mixed.err;
+  const auto missing = run_cli(
+      {"sweep", mech, "--study", a, "--out", dir.file("ad"), "--combine", dir.file("nowhere")});
+  EXPECT_EQ(missing.status, 2);
+  EXPECT_NE(missing.err.find("no study here"), std::string::npos) << missing.err;
 }
 
 TEST(SweepCli, BadStudiesAndOutputsAreExitTwo) {
